@@ -1,0 +1,153 @@
+"""The ``sins`` command: a thin layer over :mod:`sins.pipeline`.
+
+Bad input ends in one line on stderr (``sins: error: …``) and exit status 2;
+never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from sins import __version__
+from sins.errors import SinsInputError
+
+_COLUMNS = (
+    ("final N m", "final_north_m", "{:.3f}"),
+    ("final E m", "final_east_m", "{:.3f}"),
+    ("final D m", "final_down_m", "{:.3f}"),
+    ("final hor m", "final_horizontal_m", "{:.3f}"),
+    ("max hor m", "max_horizontal_m", "{:.3f}"),
+    ("roll °", "final_roll_deg", "{:.4f}"),
+    ("pitch °", "final_pitch_deg", "{:.4f}"),
+    ("yaw °", "final_yaw_deg", "{:.4f}"),
+    ("m/h", "drift_rate_m_per_h", "{:.3f}"),
+    ("nmi/h", "drift_rate_nmi_per_h", "{:.4f}"),
+)
+
+
+def format_table(summaries: dict[str, dict[str, float]]) -> str:
+    """A fixed-width table: one row per strategy, the headline errors as columns."""
+    head = ["strategy"] + [c[0] for c in _COLUMNS]
+    rows = [[name] + [fmt.format(s[key]) for _, key, fmt in _COLUMNS] for name, s in summaries.items()]
+    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
+    line = lambda r: "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths)))  # noqa: E731
+    return "\n".join([line(head), *(line(r) for r in rows)])
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from sins import io, pipeline, scenario
+
+    path = pipeline.resolve_scenario(args.scenario)
+    sc = scenario.load(path)
+    result = pipeline.run_scenario(sc)
+    summaries = {name: run.summary.to_dict() for name, run in result.runs.items()}
+    n = len(result.imu)
+    print(
+        f"scenario {sc.name}: {sc.description or path}\n"
+        f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s), vertical channel {sc.vertical}; "
+        "errors are estimate - truth"
+    )
+    print(format_table(summaries))
+    if args.json:
+        io.write_json(args.json, {"scenario": _scenario_json(sc, path, n), "strategies": summaries})
+    return 0
+
+
+def _scenario_json(sc: Any, path: Path, n: int) -> dict[str, Any]:
+    return {
+        "name": sc.name,
+        "file": str(path),
+        "rate_hz": sc.rate_hz,
+        "samples": n,
+        "duration_s": n / sc.rate_hz,
+        "vertical": sc.vertical,
+    }
+
+
+def _cmd_integrate(args: argparse.Namespace) -> int:
+    from sins import io, pipeline
+
+    run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s)
+    summary = run.summary.to_dict()
+    print(f"{args.imu}: {len(run.solution.t) - 1} intervals against {args.truth}; errors are estimate - truth")
+    print(format_table({"none": summary}))
+    if args.json:
+        io.write_json(args.json, {"imu": str(args.imu), "truth": str(args.truth), **summary})
+    return 0
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from sins import io, pipeline, scenario, trajectory
+
+    path = pipeline.resolve_scenario(args.scenario)
+    sc = scenario.load(path)
+    truth, imu = pipeline.simulate(sc)
+    note = f"sins {__version__}: ideal IMU of scenario {sc.name} ({path})"
+    if args.form == "rate":
+        io.write_imu(args.imu, trajectory.ideal_rates(scenario.build_motion(sc), truth), comment=note)
+    else:
+        io.write_imu(args.imu, imu, comment=note)
+    io.write_truth(args.truth, truth, comment=note)
+    print(f"wrote {args.imu} ({args.form} form, {len(imu)} rows) and {args.truth} ({len(truth)} rows)")
+    return 0
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    from sins import pipeline, scenario
+
+    for name, path in pipeline.presets().items():
+        sc = scenario.load(path)
+        marker = " (default)" if name == pipeline.DEFAULT_SCENARIO else ""
+        print(f"{name:<16} {sc.description}{marker}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
+    parser.add_argument("--version", action="version", version=f"sins {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
+    p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
+    p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("integrate", help="integrate a recorded IMU CSV against its truth CSV")
+    p.add_argument("imu", type=Path, metavar="IMU.csv")
+    p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
+    p.add_argument("--json", type=Path, metavar="OUT.json")
+    p.add_argument("--vertical", choices=("free", "hold", "damp"), default="free",
+                   help="vertical channel: free inertial, held to, or damped towards the truth height")  # fmt: skip
+    p.add_argument("--vertical-tau-s", type=float, default=10.0, help="time constant of 'damp', s")
+    p.set_defaults(func=_cmd_integrate)
+
+    p = sub.add_parser("simulate", help="write a scenario's ideal IMU and truth as CSV")
+    p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
+    p.add_argument("--imu", type=Path, required=True, metavar="IMU.csv")
+    p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
+    p.add_argument("--form", choices=("increment", "rate"), default="increment")
+    p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("scenarios", help="list the preset scenarios shipped with sins")
+    p.set_defaults(func=_cmd_scenarios)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except SinsInputError as exc:
+        print(f"sins: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("sins: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

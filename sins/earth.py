@@ -1,0 +1,104 @@
+"""The Earth model: WGS84 ellipsoid, Somigliana normal gravity, Earth and transport rates.
+
+Every function takes and returns plain floats or numpy arrays (broadcasting)
+and returns components as tuples rather than stacked arrays, so that the same
+source compiles unchanged under numba inside the strapdown kernel.
+Latitude ``lat`` in radians, height ``h`` in metres above the ellipsoid.
+
+The compiled kernels (``strapdown``, ``trajectory``) inline the leaf functions
+``radii_from_sin2`` and ``normal_gravity_from_sin2``, which must stay free of
+calls to other Python functions. numba keys a cached kernel on the kernel's own
+file only: after editing this module, run ``make clean-cache``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+#: A float or a numpy array of floats; the functions broadcast like numpy ufuncs.
+Floats = Any
+
+#: WGS84 semi-major axis, m.
+A = 6378137.0
+#: WGS84 flattening.
+F = 1.0 / 298.257223563
+#: First eccentricity squared.
+E2 = F * (2.0 - F)
+#: Semi-minor axis, m.
+B = A * (1.0 - F)
+#: Earth's gravitational constant GM, m³/s².
+GM = 3.986004418e14
+#: Earth rotation rate, rad/s.
+OMEGA_IE = 7.292115e-5
+#: Normal gravity at the equator and at the poles, m/s² (WGS84).
+GAMMA_E = 9.7803253359
+GAMMA_P = 9.8321849378
+#: Standard gravity, m/s², the unit behind "mg" and "g" in scenario files.
+G0 = 9.80665
+
+_SOMIGLIANA_K = (B * GAMMA_P) / (A * GAMMA_E) - 1.0
+_M = OMEGA_IE**2 * A**2 * B / GM
+
+
+def radii(lat: Floats) -> tuple[Floats, Floats]:
+    """Meridian and prime-vertical radii of curvature ``(R_M, R_N)`` in metres."""
+    return radii_from_sin2(np.sin(lat) ** 2)
+
+
+def radii_from_sin2(sin2_lat: Floats) -> tuple[Floats, Floats]:
+    """:func:`radii` for callers that already hold ``sin²(lat)``."""
+    w = 1.0 - E2 * sin2_lat
+    r_n = A / np.sqrt(w)
+    return r_n * (1.0 - E2) / w, r_n
+
+
+def normal_gravity(lat: Floats, h: Floats) -> Floats:
+    """Magnitude of normal gravity (gravitation plus centrifugal), m/s².
+
+    Somigliana's closed formula on the ellipsoid with the standard second-order
+    height correction. The vector in NED is ``(0, 0, normal_gravity)``.
+    """
+    return normal_gravity_from_sin2(np.sin(lat) ** 2, h)
+
+
+def normal_gravity_from_sin2(sin2_lat: Floats, h: Floats) -> Floats:
+    """:func:`normal_gravity` for callers that already hold ``sin²(lat)``."""
+    gamma0 = GAMMA_E * (1.0 + _SOMIGLIANA_K * sin2_lat) / np.sqrt(1.0 - E2 * sin2_lat)
+    return gamma0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * sin2_lat) * h + 3.0 / (A * A) * h * h)
+
+
+def earth_rate_n(lat: Floats) -> tuple[Floats, Floats, Floats]:
+    """Earth rate ``omega_ie_n`` in NED as components ``(north, east, down)``, rad/s."""
+    return OMEGA_IE * np.cos(lat), 0.0 * lat, -OMEGA_IE * np.sin(lat)
+
+
+def transport_rate_n(
+    lat: Floats, h: Floats, v_north: Floats, v_east: Floats
+) -> tuple[Floats, Floats, Floats]:
+    """Transport rate ``omega_en_n`` as components ``(north, east, down)``, rad/s."""
+    r_m, r_n = radii(lat)
+    rn_h = r_n + h
+    return v_east / rn_h, -v_north / (r_m + h), -v_east * np.tan(lat) / rn_h
+
+
+def position_rates(
+    lat: Floats, h: Floats, v_north: Floats, v_east: Floats, v_down: Floats
+) -> tuple[Floats, Floats, Floats]:
+    """Time derivatives ``(dlat/dt, dlon/dt, dh/dt)`` of geodetic position (rad/s, m/s)."""
+    r_m, r_n = radii(lat)
+    return v_north / (r_m + h), v_east / ((r_n + h) * np.cos(lat)), -v_down
+
+
+def lla_to_ecef(lat: Floats, lon: Floats, h: Floats) -> tuple[Floats, Floats, Floats]:
+    """ECEF coordinates ``(x, y, z)`` in metres of a geodetic position."""
+    _, r_n = radii(lat)
+    c = np.cos(lat)
+    return (r_n + h) * c * np.cos(lon), (r_n + h) * c * np.sin(lon), (r_n * (1.0 - E2) + h) * np.sin(lat)
+
+
+def schuler_period(lat: Floats, h: Floats = 0.0) -> Floats:
+    """Schuler period ``2π sqrt(R/g)`` in seconds, with ``R`` the mean radius ``sqrt(R_M R_N)``."""
+    r_m, r_n = radii(lat)
+    return 2.0 * np.pi * np.sqrt(np.sqrt(r_m * r_n) / normal_gravity(lat, h))

@@ -1,0 +1,142 @@
+"""Runs: a scenario from file to drift summary, and a recorded IMU file against its truth.
+
+These are the library calls behind the CLI; each returns plain results that
+the CLI prints and writes.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from sins import io, scenario, strapdown, trajectory
+from sins.errors import SinsInputError
+from sins.metrics import DriftSummary, NavErrors, nav_errors, summarize
+from sins.scenario import Scenario
+from sins.series import ImuIncrements, ImuRates, NavSeries
+
+#: The scenario ``sins run`` uses without an argument.
+DEFAULT_SCENARIO = "car_drive"
+
+
+@dataclass(frozen=True)
+class StrategyRun:
+    """One integrated IMU stream and its errors against the truth."""
+
+    solution: NavSeries
+    errors: NavErrors
+    summary: DriftSummary
+
+
+@dataclass(frozen=True)
+class ScenarioRun:
+    """A scenario's truth, its IMU stream and one run per compensation strategy."""
+
+    scenario: Scenario
+    truth: NavSeries
+    imu: ImuIncrements
+    runs: dict[str, StrategyRun]
+
+
+def preset_dir() -> Path:
+    """The folder of the scenario presets shipped with the package."""
+    return Path(str(resources.files("sins") / "scenarios"))
+
+
+def presets() -> dict[str, Path]:
+    """Shipped preset scenarios by name."""
+    return {p.stem: p for p in sorted(preset_dir().glob("*.toml"))}
+
+
+def resolve_scenario(name_or_path: str | os.PathLike[str] | None) -> Path:
+    """A scenario path from a path, a preset name, or ``None`` (the default preset)."""
+    if name_or_path is None:
+        name_or_path = DEFAULT_SCENARIO
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        return path
+    known = presets()
+    if str(name_or_path) in known:
+        return known[str(name_or_path)]
+    raise SinsInputError(
+        f"{name_or_path}: no such scenario file or preset (presets: {', '.join(known) or 'none'})"
+    )
+
+
+def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
+    """Truth and exact ideal IMU of a scenario."""
+    try:
+        return trajectory.generate(scenario.build_motion(sc), sc.rate_hz)
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
+
+
+def navigate(
+    imu: ImuIncrements, truth: NavSeries, vertical: str = "free", vertical_tau_s: float = 10.0
+) -> StrategyRun:
+    """Integrate ``imu`` from the truth's state at ``imu.t[0]`` and compare with the truth.
+
+    For ``vertical`` "hold" or "damp" the reference height is the truth's.
+    """
+    start = truth if truth.t[0] == imu.t[0] else truth.interpolate(np.array([imu.t[0]]))
+    h_ref = None
+    if vertical != "free":
+        same = len(truth.t) == len(imu.t) and np.array_equal(truth.t, imu.t)
+        h_ref = truth.h if same else truth.interpolate(imu.t).h
+    solution = strapdown.integrate(
+        imu, strapdown.InitialState.from_series(start), vertical=vertical, h_ref=h_ref,
+        vertical_tau_s=vertical_tau_s,
+    )  # fmt: skip
+    errors = nav_errors(solution, truth)
+    return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
+
+
+def run_scenario(sc: Scenario) -> ScenarioRun:
+    """Simulate a scenario and integrate its IMU stream.
+
+    Compensation strategies join in a later release; today the one run is
+    ``"none"``: the IMU as simulated (ideal), integrated without correction.
+    """
+    truth, imu = simulate(sc)
+    run = navigate(imu, truth, sc.vertical, sc.vertical_tau_s)
+    return ScenarioRun(scenario=sc, truth=truth, imu=imu, runs={"none": run})
+
+
+def integrate_recording(
+    imu_path: str | os.PathLike[str],
+    truth_path: str | os.PathLike[str],
+    vertical: str = "free",
+    vertical_tau_s: float = 10.0,
+) -> StrategyRun:
+    """Integrate a recorded IMU file from its truth's first state; errors against the truth.
+
+    Increment form: the first row's interval starts at the truth's first time.
+    Rate form: the samples are integrated to increments between rows, and the
+    run starts at the first row's time, which must lie within the truth.
+    """
+    truth = io.read_truth(truth_path)
+    samples, table = io.read_imu(imu_path)
+    imu: ImuIncrements
+    if isinstance(samples, ImuRates):
+        if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
+            raise SinsInputError(
+                f"{imu_path}: first sample at {samples.t[0]:g} s is outside the truth's "
+                f"{truth.t[0]:g}..{truth.t[-1]:g} s"
+            )
+        if len(samples) < 2:
+            raise SinsInputError(f"{imu_path}: need at least two rate samples")
+        imu = samples.to_increments()
+    else:
+        imu = io.increments_from_table(table, float(truth.t[0]))
+    if imu.t[-1] > truth.t[-1] + 1e-9:
+        inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
+        if inside < 2:
+            raise SinsInputError(f"{imu_path}: no IMU interval ends within the truth's time span")
+        imu = ImuIncrements(t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1])
+    return navigate(imu, truth, vertical, vertical_tau_s)

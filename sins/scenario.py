@@ -1,0 +1,373 @@
+"""Scenario files (TOML) → frozen dataclasses → a motion.
+
+A scenario names how the vehicle moves (segments, waypoints or a recorded
+truth file), the IMU sample rate and how the vertical channel is treated.
+Units at this edge carry suffixes (``lat_deg``, ``rate_dps``, ``duration_s``);
+everything is converted to SI on reading. Any unknown key, wrong type or
+impossible value is refused with one line naming the file and the key.
+
+Example (see ``scenarios/`` for the presets)::
+
+    name = "car"
+    [imu]
+    rate_hz = 100
+    [initial]
+    lat_deg = 45.0
+    lon_deg = 7.6
+    alt_m = 250.0
+    yaw_deg = 30.0
+    [[segment]]
+    type = "accelerate"
+    duration_s = 10
+    to_speed_mps = 15
+    [[segment]]
+    type = "turn"
+    duration_s = 20
+    rate_dps = 4.5
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sins import earth, io, motion
+from sins.errors import SinsInputError
+
+_MISSING: Any = object()
+
+SEGMENT_TYPES = ("hold", "accelerate", "turn", "climb", "attitude")
+VERTICAL_MODES = ("free", "hold", "damp")
+DEFAULT_RAMP_S = 1.0
+
+
+@dataclass(frozen=True)
+class SegmentsSpec:
+    """Trajectory from motion segments (SI units)."""
+
+    start: motion.Start
+    segments: tuple[motion.Segment, ...]
+    oscillations: tuple[motion.Oscillation, ...] = ()
+
+
+@dataclass(frozen=True)
+class WaypointsSpec:
+    """Trajectory through waypoints: start position (rad, m), offsets (m, NED) and speeds (m/s)."""
+
+    lat: float
+    lon: float
+    h: float
+    points_ned: tuple[tuple[float, float, float], ...]
+    speeds: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class TruthFileSpec:
+    """Trajectory through a recorded truth CSV."""
+
+    path: Path
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario."""
+
+    name: str
+    description: str
+    source: Path | None
+    rate_hz: float
+    trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
+    vertical: str = "free"
+    vertical_tau_s: float = 10.0
+
+
+class _Keys:
+    """Typed access to one TOML table that remembers which keys were used."""
+
+    def __init__(self, source: str, where: str, table: Any) -> None:
+        self.source = source
+        self.where = where
+        if not isinstance(table, dict):
+            raise self.error(f"expected a table, got {_kind(table)}")
+        self.table = table
+        self.used: set[str] = set()
+
+    def error(self, message: str, key: str | None = None) -> SinsInputError:
+        place = f"{self.where}.{key}" if key and self.where else (key or self.where)
+        return SinsInputError(f"{self.source}: {place}: {message}" if place else f"{self.source}: {message}")
+
+    def has(self, key: str) -> bool:
+        return key in self.table
+
+    def get(self, key: str) -> Any:
+        self.used.add(key)
+        return self.table[key]
+
+    def number(
+        self,
+        key: str,
+        default: Any = _MISSING,
+        *,
+        low: float | None = None,
+        high: float | None = None,
+        low_open: bool = False,
+        high_open: bool = False,
+    ) -> float:
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error("missing required key", key)
+            return float(default)
+        value = self.get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.error(f"expected a number, got {_kind(value)} {value!r}", key)
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(f"must be finite, got {value!r}", key)
+        if low is not None and (value < low or (low_open and value == low)):
+            raise self.error(f"must be {'>' if low_open else '>='} {low:g}, got {value:g}", key)
+        if high is not None and (value > high or (high_open and value == high)):
+            raise self.error(f"must be {'<' if high_open else '<='} {high:g}, got {value:g}", key)
+        return value
+
+    def string(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> str:
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error("missing required key", key)
+            return str(default)
+        value = self.get(key)
+        if not isinstance(value, str):
+            raise self.error(f"expected a string, got {_kind(value)} {value!r}", key)
+        if choices and value not in choices:
+            raise self.error(f"must be one of {', '.join(choices)}; got {value!r}", key)
+        return value
+
+    def boolean(self, key: str, default: bool) -> bool:
+        if key not in self.table:
+            return default
+        value = self.get(key)
+        if not isinstance(value, bool):
+            raise self.error(f"expected true or false, got {_kind(value)} {value!r}", key)
+        return value
+
+    def tables(self, key: str) -> list[_Keys]:
+        if key not in self.table:
+            return []
+        value = self.get(key)
+        if not isinstance(value, list):
+            raise self.error(f"expected an array of tables ([[{key}]]), got {_kind(value)}", key)
+        return [_Keys(self.source, f"{key}[{i + 1}]", item) for i, item in enumerate(value)]
+
+    def sub(self, key: str) -> _Keys:
+        value = self.get(key) if key in self.table else {}
+        return _Keys(self.source, key, value)
+
+    def done(self, allowed: tuple[str, ...] = ()) -> None:
+        """Refuse keys that were never read (unknown or not valid in this context)."""
+        for key in self.table:
+            if key not in self.used and key not in allowed:
+                known = ", ".join(sorted(self.used | set(allowed))) or "none"
+                raise self.error(f"unknown key (keys used here: {known})", key)
+
+
+def _kind(value: Any) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "an array",
+            dict: "a table"}.get(type(value), type(value).__name__)  # fmt: skip
+
+
+def load(path: str | os.PathLike[str]) -> Scenario:
+    """Read and validate a scenario file.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and the key (or TOML line) at fault.
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise SinsInputError(f"{path}: no such scenario file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SinsInputError(f"{path}: invalid TOML: {exc}") from None
+    except OSError as exc:
+        raise SinsInputError(f"{path}: cannot read: {exc}") from None
+    return from_dict(data, source=path)
+
+
+def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
+    """Validate a parsed scenario table (what :func:`load` does after parsing)."""
+    name_of_source = str(source) if source else "<scenario>"
+    top = _Keys(name_of_source, "", data)
+    name = top.string("name", default=source.stem if source else "scenario")
+    description = top.string("description", default="")
+    imu = top.sub("imu")
+    rate_hz = imu.number("rate_hz", 100.0, low=1.0, high=100000.0)
+    imu.done()
+    nav = top.sub("navigation")
+    vertical = nav.string("vertical", "free", VERTICAL_MODES)
+    tau = nav.number("vertical_tau_s", 10.0, low=0.0, low_open=True)
+    nav.done()
+
+    kinds = [k for k in ("segment", "waypoint", "truth") if top.has(k)]
+    if len(kinds) != 1:
+        found = ", ".join(kinds) or "none"
+        raise top.error(
+            f"give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table (found {found})"
+        )
+    trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
+    if kinds[0] == "segment":
+        trajectory = _segments(top)
+    elif kinds[0] == "waypoint":
+        trajectory = _waypoints(top)
+    else:
+        truth = top.sub("truth")
+        file = truth.string("file")
+        truth.done()
+        base = source.parent if source else Path(".")
+        trajectory = TruthFileSpec(path=(base / file))
+        if top.has("initial"):
+            raise top.error("not used with a [truth] trajectory (the truth's first row is the start)", "initial")
+    top.done()
+    return Scenario(
+        name=name,
+        description=description,
+        source=source,
+        rate_hz=rate_hz,
+        trajectory=trajectory,
+        vertical=vertical,
+        vertical_tau_s=tau,
+    )
+
+
+def _position(init: _Keys) -> tuple[float, float, float]:
+    lat = init.number("lat_deg", low=-89.9, high=89.9)
+    lon = init.number("lon_deg", 0.0, low=-180.0, high=360.0)
+    alt = init.number("alt_m", 0.0, low=-1000.0, high=100000.0)
+    return math.radians(lat), math.radians(lon), alt
+
+
+def _segments(top: _Keys) -> SegmentsSpec:
+    init = top.sub("initial")
+    lat, lon, alt = _position(init)
+    start = motion.Start(
+        lat=lat,
+        lon=lon,
+        h=alt,
+        speed=init.number("speed_mps", 0.0, low=0.0),
+        roll=math.radians(init.number("roll_deg", 0.0, low=-180.0, high=180.0)),
+        pitch=math.radians(init.number("pitch_deg", 0.0, low=-90.0, high=90.0, low_open=True, high_open=True)),
+        yaw=math.radians(init.number("yaw_deg", 0.0, low=-360.0, high=360.0)),
+    )
+    init.done()
+    speed = start.speed
+    segments: list[motion.Segment] = []
+    for seg in top.tables("segment"):
+        kind = seg.string("type", choices=SEGMENT_TYPES)
+        duration = seg.number("duration_s", low=0.0, low_open=True)
+        ramp = 0.0
+        if kind != "hold":
+            ramp = seg.number("ramp_s", min(DEFAULT_RAMP_S, duration / 4), low=0.0, low_open=True)
+            if ramp > duration / 2:
+                raise seg.error(f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s")
+        plateau = duration - ramp
+        if kind == "hold":
+            segments.append(motion.Hold(duration))
+        elif kind == "accelerate":
+            delta = _exactly_one(seg, ("to_speed_mps", "delta_speed_mps"))
+            if delta == "to_speed_mps":
+                change = seg.number("to_speed_mps", low=0.0) - speed
+            else:
+                change = seg.number("delta_speed_mps")
+            if speed + change < -1e-9:
+                raise seg.error(f"the speed would become negative ({speed + change:g} m/s)", delta)
+            speed += change
+            segments.append(motion.Accelerate(duration, change, ramp))
+        elif kind == "turn":
+            which = _exactly_one(seg, ("rate_dps", "angle_deg"))
+            if which == "rate_dps":
+                rate = math.radians(seg.number("rate_dps", low=-360.0, high=360.0))
+            else:
+                rate = math.radians(seg.number("angle_deg")) / plateau
+            segments.append(motion.Turn(duration, rate, ramp, seg.boolean("coordinated", False)))
+        elif kind == "climb":
+            angle = seg.number("angle_deg", low=-89.0, high=89.0)
+            segments.append(motion.Climb(duration, math.radians(angle), ramp))
+        else:
+            d = [math.radians(seg.number(k, 0.0, low=-360.0, high=360.0)) for k in ("roll_deg", "pitch_deg", "yaw_deg")]
+            segments.append(motion.Rotate(duration, d[0], d[1], d[2], ramp))
+        seg.done()
+    if not segments:
+        raise top.error("needs at least one [[segment]]", "segment")
+    oscillations = []
+    for osc in top.tables("oscillation"):
+        channel = osc.string("channel", choices=("roll", "pitch", "yaw", "heave"))
+        if channel == "heave":
+            amplitude = osc.number("amplitude_m", low=0.0)
+        else:
+            amplitude = math.radians(osc.number("amplitude_deg", low=0.0, high=89.0))
+        oscillations.append(
+            motion.Oscillation(
+                channel=channel,
+                amplitude=amplitude,
+                period=osc.number("period_s", low=0.0, low_open=True),
+                phase=math.radians(osc.number("phase_deg", 0.0)),
+            )
+        )
+        osc.done()
+    return SegmentsSpec(start=start, segments=tuple(segments), oscillations=tuple(oscillations))
+
+
+def _exactly_one(seg: _Keys, keys: tuple[str, str]) -> str:
+    given = [k for k in keys if seg.has(k)]
+    if len(given) != 1:
+        raise seg.error(f"give exactly one of {' or '.join(keys)}")
+    return given[0]
+
+
+def _waypoints(top: _Keys) -> WaypointsSpec:
+    init = top.sub("initial")
+    lat, lon, alt = _position(init)
+    init.done()
+    if top.has("oscillation"):
+        raise top.error("oscillations are only for [[segment]] trajectories", "oscillation")
+    points, speeds = [], []
+    for wp in top.tables("waypoint"):
+        points.append((wp.number("north_m", 0.0), wp.number("east_m", 0.0), -wp.number("up_m", 0.0)))
+        speeds.append(wp.number("speed_mps", low=0.0, low_open=True))
+        wp.done()
+    if len(points) < 2:
+        raise top.error("needs at least two [[waypoint]] tables", "waypoint")
+    p = np.array(points)
+    gaps = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    if (gaps < 1e-3).any():
+        i = int(np.argmax(gaps < 1e-3)) + 2
+        raise top.error(f"waypoint {i} is at the same place as waypoint {i - 1}", "waypoint")
+    return WaypointsSpec(lat=lat, lon=lon, h=alt, points_ned=tuple(points), speeds=tuple(speeds))
+
+
+def build_motion(scenario: Scenario) -> motion.Motion:
+    """The continuous motion a scenario describes."""
+    spec = scenario.trajectory
+    if isinstance(spec, SegmentsSpec):
+        return motion.SegmentMotion.from_segments(spec.start, spec.segments, spec.oscillations)
+    if isinstance(spec, WaypointsSpec):
+        p = np.array(spec.points_ned)
+        # The path starts at the first waypoint; place it relative to [initial].
+        r_m, r_n = earth.radii(spec.lat)
+        lat0 = spec.lat + p[0, 0] / (r_m + spec.h)
+        lon0 = spec.lon + p[0, 1] / ((r_n + spec.h) * math.cos(spec.lat))
+        return motion.WaypointMotion.from_waypoints(lat0, lon0, spec.h - p[0, 2], p - p[0], np.array(spec.speeds))
+    truth = io.read_truth(spec.path)
+    if len(truth.t) < 4:
+        raise SinsInputError(f"{spec.path}: a truth trajectory needs at least 4 rows to define a motion")
+    return motion.RecordedMotion(
+        t=truth.t, lat0=float(truth.lat[0]), lon0=float(truth.lon[0]), h0=float(truth.h[0]), v_n=truth.v_n,
+        q_nb=truth.q_nb,
+    )  # fmt: skip
