@@ -34,7 +34,12 @@ def format_table(summaries: dict[str, dict[str, float]]) -> str:
     head = ["strategy"] + [c[0] for c in _COLUMNS]
     rows = [[name] + [fmt.format(s[key]) for _, key, fmt in _COLUMNS] for name, s in summaries.items()]
     widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
-    line = lambda r: "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths)))  # noqa: E731
+
+    def line(cells: list[str]) -> str:
+        return "  ".join(
+            c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths, strict=True))
+        )
+
     return "\n".join([line(head), *(line(r) for r in rows)])
 
 
@@ -45,7 +50,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     sc = scenario.load(path)
     result = pipeline.run_scenario(sc)
     summaries = {name: run.summary.to_dict() for name, run in result.runs.items()}
-    n = len(result.imu)
+    n = result.samples
     print(
         f"scenario {sc.name}: {sc.description or path}\n"
         f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s), vertical channel {sc.vertical}; "
@@ -73,7 +78,9 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
 
     run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s)
     summary = run.summary.to_dict()
-    print(f"{args.imu}: {len(run.solution.t) - 1} intervals against {args.truth}; errors are estimate - truth")
+    print(
+        f"{args.imu}: {len(run.solution.t) - 1} intervals against {args.truth}; errors are estimate - truth"
+    )
     print(format_table({"none": summary}))
     if args.json:
         io.write_json(args.json, {"imu": str(args.imu), "truth": str(args.truth), **summary})
@@ -87,12 +94,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     sc = scenario.load(path)
     truth, imu = pipeline.simulate(sc)
     note = f"sins {__version__}: ideal IMU of scenario {sc.name} ({path})"
-    if args.form == "rate":
-        io.write_imu(args.imu, trajectory.ideal_rates(scenario.build_motion(sc), truth), comment=note)
-    else:
-        io.write_imu(args.imu, imu, comment=note)
+    samples = trajectory.ideal_rates(scenario.build_motion(sc), truth) if args.form == "rate" else imu
+    io.write_imu(args.imu, samples, comment=note)
     io.write_truth(args.truth, truth, comment=note)
-    print(f"wrote {args.imu} ({args.form} form, {len(imu)} rows) and {args.truth} ({len(truth)} rows)")
+    print(f"wrote {args.imu} ({args.form} form, {len(samples)} rows) and {args.truth} ({len(truth)} rows)")
     return 0
 
 
@@ -120,8 +125,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("imu", type=Path, metavar="IMU.csv")
     p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
     p.add_argument("--json", type=Path, metavar="OUT.json")
-    p.add_argument("--vertical", choices=("free", "hold", "damp"), default="free",
-                   help="vertical channel: free inertial, held to, or damped towards the truth height")  # fmt: skip
+    p.add_argument(
+        "--vertical",
+        choices=("free", "hold", "damp"),
+        default="free",
+        help="vertical channel: free inertial, held to, or damped towards the truth height",
+    )
     p.add_argument("--vertical-tau-s", type=float, default=10.0, help="time constant of 'damp', s")
     p.set_defaults(func=_cmd_integrate)
 
@@ -143,6 +152,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args))
     except SinsInputError as exc:
         print(f"sins: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a full disk or a permission while writing
+        print(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("sins: interrupted", file=sys.stderr)

@@ -48,7 +48,7 @@ TRUTH_COLUMNS = ("t", "lat", "lon", "alt", "vn", "ve", "vd", "roll", "pitch", "y
 class Table:
     """A numeric CSV table: column names and a (rows, columns) float array.
 
-    ``first_data_line`` is the 1-based line number of the first data row, for messages.
+    ``first_data_line`` is the 1-based line number after the header, for messages.
     """
 
     path: Path
@@ -66,88 +66,138 @@ class Table:
 def read_table(path: str | os.PathLike[str], required: tuple[str, ...] = ()) -> Table:
     """Read a numeric CSV with a header; validate values and the time column.
 
+    The fast path is pyarrow's multi-threaded CSV reader (correctly rounded,
+    so values written by :func:`write_table` come back bit for bit); anything it
+    cannot take goes through a strict Python parser that either reads the file
+    (comment or blank lines in the body, say) or names the bad cell.
+
     Raises
     ------
     SinsInputError
         one line naming the file, and the line and column where it applies.
     """
     path = Path(path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SinsInputError(f"{path}: cannot read: {exc}") from None
-    lines = text.splitlines()
-    header_at = 0
-    while header_at < len(lines) and (not lines[header_at].strip() or lines[header_at].lstrip().startswith("#")):
-        header_at += 1
-    if header_at == len(lines):
-        raise SinsInputError(f"{path}: empty file, expected a header row")
-    columns = tuple(c.strip() for c in lines[header_at].split(","))
+    header_line, columns = _read_header(path)
     if len(set(columns)) != len(columns):
         dup = next(c for c in columns if columns.count(c) > 1)
-        raise SinsInputError(f"{path}:{header_at + 1}: column {dup!r} appears twice in the header")
+        raise SinsInputError(f"{path}:{header_line}: column {dup!r} appears twice in the header")
     for name in required:
         if name not in columns:
             raise SinsInputError(
-                f"{path}:{header_at + 1}: missing required column {name!r} (header has {', '.join(columns)})"
+                f"{path}:{header_line}: missing required column {name!r} (header has {', '.join(columns)})"
             )
-    first = header_at + 2
-    body = lines[header_at + 1 :]
-    if not any(line.strip() for line in body):
+    data = _read_fast(path, header_line, columns)
+    if data is None:
+        data = _read_slow(path, header_line, columns)
+    if len(data) == 0:
         raise SinsInputError(f"{path}: no data rows after the header")
-    try:
-        data = np.loadtxt(
-            body, delimiter=",", dtype=float, ndmin=2, comments="#", encoding=None
-        )
-    except ValueError:
-        data = None
-    if data is None or data.shape[1] != len(columns) or len(data) != _count_rows(body):
-        _locate_bad_value(path, body, first, columns)
-        raise SinsInputError(f"{path}: malformed rows")  # _locate_bad_value always raises first
     bad = ~np.isfinite(data)
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        line = first + _row_line_offsets(body)[r]
-        raise SinsInputError(f"{path}:{line}: column {columns[c]!r}: non-finite value {data[r, c]!r}")
+        raise SinsInputError(
+            f"{path}:{_line_of_row(path, header_line, int(r))}: column {columns[c]!r}: "
+            f"non-finite value {_text(data[r, c])}"
+        )
     if "t" in columns:
         t = data[:, columns.index("t")]
         dt = np.diff(t)
         if (dt <= 0).any():
             r = int(np.argmax(dt <= 0)) + 1
-            line = first + _row_line_offsets(body)[r]
             raise SinsInputError(
-                f"{path}:{line}: column 't': time {t[r]!r} does not increase (previous {t[r - 1]!r})"
+                f"{path}:{_line_of_row(path, header_line, r)}: column 't': time {_text(t[r])} "
+                f"does not increase (previous {_text(t[r - 1])})"
             )
-    return Table(path=path, columns=columns, data=data, first_data_line=first)
+    return Table(path=path, columns=columns, data=data, first_data_line=header_line + 1)
 
 
-def _count_rows(body: list[str]) -> int:
-    return sum(1 for line in body if line.strip() and not line.lstrip().startswith("#"))
+def _text(value: float) -> str:
+    return repr(float(value))
 
 
-def _row_line_offsets(body: list[str]) -> list[int]:
-    return [i for i, line in enumerate(body) if line.strip() and not line.lstrip().startswith("#")]
+def _open_text(path: Path) -> TextIO:
+    try:
+        return open(path, encoding="utf-8-sig")  # tolerate the byte-order mark spreadsheets write
+    except FileNotFoundError:
+        raise SinsInputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise SinsInputError(f"{path}: is a directory, expected a CSV file") from None
+    except OSError as exc:
+        raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
 
 
-def _locate_bad_value(path: Path, body: list[str], first: int, columns: tuple[str, ...]) -> None:
-    """Find the first bad cell the slow way and raise its one-line error."""
-    for i, line in enumerate(body):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        cells = line.split(",")
+def _data_lines(path: Path, header_line: int) -> Iterator[tuple[int, str]]:
+    """``(line number, text)`` of each data row (not blank, not a comment) after the header."""
+    with _open_text(path) as fh:
+        try:
+            for number, text in enumerate(fh, start=1):
+                if number > header_line and text.strip() and not text.lstrip().startswith("#"):
+                    yield number, text
+        except UnicodeDecodeError as exc:
+            raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+
+
+def _read_header(path: Path) -> tuple[int, tuple[str, ...]]:
+    """1-based line number of the header (after blank and ``#`` lines) and its column names."""
+    with _open_text(path) as fh:
+        try:
+            for number, text in enumerate(fh, start=1):
+                if text.strip() and not text.lstrip().startswith("#"):
+                    return number, tuple(c.strip() for c in text.split(","))
+        except UnicodeDecodeError as exc:
+            raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    raise SinsInputError(f"{path}: empty file, expected a header row")
+
+
+def _read_fast(path: Path, header_line: int, columns: tuple[str, ...]) -> Array | None:
+    """The data via pyarrow, or None when the file needs the careful parser."""
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    try:
+        table = pacsv.read_csv(
+            path,
+            read_options=pacsv.ReadOptions(skip_rows=header_line - 1),
+            convert_options=pacsv.ConvertOptions(
+                column_types=dict.fromkeys(columns, pa.float64()), null_values=[], strings_can_be_null=False
+            ),
+        )
+    except (pa.ArrowInvalid, pa.ArrowTypeError, UnicodeDecodeError, OSError):
+        return None
+    if tuple(table.column_names) != columns:
+        return None
+    data = np.empty((table.num_rows, len(columns)))
+    for i, column in enumerate(table.columns):
+        data[:, i] = column.to_numpy()
+    return data
+
+
+def _read_slow(path: Path, header_line: int, columns: tuple[str, ...]) -> Array:
+    """Parse row by row; raise naming the first bad cell."""
+    rows: list[list[float]] = []
+    for number, text in _data_lines(path, header_line):
+        cells = text.rstrip("\r\n").split(",")
         if len(cells) != len(columns):
-            raise SinsInputError(f"{path}:{first + i}: expected {len(columns)} values, found {len(cells)}")
+            raise SinsInputError(f"{path}:{number}: expected {len(columns)} values, found {len(cells)}")
+        row = []
         for name, cell in zip(columns, cells, strict=True):
             try:
-                float(cell)
+                if "_" in cell:  # Python's float() takes 1_000; other tools do not
+                    raise ValueError
+                row.append(float(cell))
             except ValueError:
                 raise SinsInputError(
-                    f"{path}:{first + i}: column {name!r}: not a number: {cell.strip()!r}"
+                    f"{path}:{number}: column {name!r}: not a number: {cell.strip()!r}"
                 ) from None
-    raise SinsInputError(f"{path}: could not parse the data rows")
+        rows.append(row)
+    return np.array(rows, dtype=float).reshape(len(rows), len(columns))
+
+
+def _line_of_row(path: Path, header_line: int, row: int) -> int:
+    """The file line holding data row ``row`` (0-based), counting blank and comment lines."""
+    for i, (number, _) in enumerate(_data_lines(path, header_line)):
+        if i == row:
+            return number
+    return header_line + 1 + row
 
 
 # --------------------------------------------------------------------------- IMU files
@@ -180,8 +230,8 @@ def read_imu(path: str | os.PathLike[str]) -> tuple[ImuRates | ImuIncrements, Ta
     truth's first time) use :func:`increments_from_table` instead.
     """
     path = Path(path)
-    header = _header(path)
-    form = imu_form(header, path, header_line=_header_line(path))
+    header_line, header = _read_header(path)
+    form = imu_form(header, path, header_line=header_line)
     cols = RATE_COLUMNS if form == "rate" else INCREMENT_COLUMNS
     table = read_table(path, required=cols)
     if form == "rate":
@@ -203,8 +253,8 @@ def increments_from_table(table: Table, t_start: float) -> ImuIncrements:
     d = table.data[:, idx]
     if not t_start < d[0, 0]:
         raise SinsInputError(
-            f"{table.path}:{table.first_data_line}: column 't': first increment ends at {d[0, 0]!r} s, "
-            f"not after the start time {t_start!r} s"
+            f"{table.path}:{_line_of_row(table.path, table.first_data_line - 1, 0)}: column 't': first "
+            f"increment ends at {_text(d[0, 0])} s, not after the start time {_text(t_start)} s"
         )
     return ImuIncrements(
         t=np.concatenate([[t_start], d[:, 0]]), dtheta_b=d[:, 1:4].copy(), dv_b=d[:, 4:7].copy()
@@ -244,10 +294,14 @@ def read_truth(path: str | os.PathLike[str]) -> NavSeries:
     lat = np.radians(d[:, 1])
     if (np.abs(lat) > np.pi / 2).any():
         r = int(np.argmax(np.abs(lat) > np.pi / 2))
-        line = table.first_data_line + r
-        raise SinsInputError(f"{table.path}:{line}: column 'lat': {d[r, 1]!r} is outside [-90, 90] degrees")
+        line = _line_of_row(table.path, table.first_data_line - 1, r)
+        raise SinsInputError(
+            f"{table.path}:{line}: column 'lat': {_text(d[r, 1])} is outside [-90, 90] degrees"
+        )
     q = rotation.quat_from_euler(np.radians(d[:, 7]), np.radians(d[:, 8]), np.radians(d[:, 9]))
-    return NavSeries(t=d[:, 0].copy(), lat=lat, lon=np.radians(d[:, 2]), h=d[:, 3].copy(), v_n=d[:, 4:7].copy(), q_nb=q)
+    return NavSeries(
+        t=d[:, 0].copy(), lat=lat, lon=np.radians(d[:, 2]), h=d[:, 3].copy(), v_n=d[:, 4:7].copy(), q_nb=q
+    )
 
 
 def write_truth(path: str | os.PathLike[str], truth: NavSeries, comment: str = "") -> None:
@@ -283,6 +337,8 @@ def _atomic(path: str | os.PathLike[str]) -> Iterator[TextIO]:
     directory = path.parent
     if not directory.is_dir():
         raise SinsInputError(f"{path}: directory {directory} does not exist")
+    if path.is_dir():
+        raise SinsInputError(f"{path}: is a directory, expected a file name to write")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
@@ -291,25 +347,3 @@ def _atomic(path: str | os.PathLike[str]) -> Iterator[TextIO]:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-
-
-def _header(path: Path) -> tuple[str, ...]:
-    line = _header_line(path)
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for i, text in enumerate(fh, start=1):
-            if i == line:
-                return tuple(c.strip() for c in text.split(","))
-    return ()
-
-
-def _header_line(path: Path) -> int:
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for i, text in enumerate(fh, start=1):
-                if text.strip() and not text.lstrip().startswith("#"):
-                    return i
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SinsInputError(f"{path}: cannot read: {exc}") from None
-    raise SinsInputError(f"{path}: empty file, expected a header row")

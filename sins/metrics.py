@@ -99,29 +99,105 @@ class DriftSummary:
         return asdict(self)
 
 
-def summarize(errors: NavErrors) -> DriftSummary:
-    """Final, maximum and RMS errors and the drift rate of an error series."""
-    hor = errors.horizontal_m
-    duration = float(errors.t[-1] - errors.t[0])
-    att_deg = np.degrees(errors.att_rpy_rad)
-    rate = float(hor[-1]) / (duration / 3600.0) if duration > 0 else 0.0
-    return DriftSummary(
-        duration_s=duration,
-        final_north_m=float(errors.pos_ned_m[-1, 0]),
-        final_east_m=float(errors.pos_ned_m[-1, 1]),
-        final_down_m=float(errors.pos_ned_m[-1, 2]),
-        final_horizontal_m=float(hor[-1]),
-        max_horizontal_m=float(hor.max()),
-        rms_horizontal_m=float(np.sqrt(np.mean(hor * hor))),
-        final_vn_mps=float(errors.vel_ned_mps[-1, 0]),
-        final_ve_mps=float(errors.vel_ned_mps[-1, 1]),
-        final_vd_mps=float(errors.vel_ned_mps[-1, 2]),
-        final_roll_deg=float(att_deg[-1, 0]),
-        final_pitch_deg=float(att_deg[-1, 1]),
-        final_yaw_deg=float(att_deg[-1, 2]),
-        max_roll_deg=float(np.abs(att_deg[:, 0]).max()),
-        max_pitch_deg=float(np.abs(att_deg[:, 1]).max()),
-        max_yaw_deg=float(np.abs(att_deg[:, 2]).max()),
-        drift_rate_m_per_h=rate,
-        drift_rate_nmi_per_h=rate / NAUTICAL_MILE_M,
+class DriftAccumulator:
+    """Summary statistics of an error series fed chunk by chunk, and a thinned copy of it.
+
+    The statistics use every sample; the copy keeps the samples whose running
+    index is a multiple of ``keep_every`` plus the last one, so long runs can
+    be summarised and plotted without holding them whole.
+    """
+
+    def __init__(self, keep_every: int = 1) -> None:
+        if keep_every < 1:
+            raise ValueError(f"keep_every must be >= 1, got {keep_every}")
+        self.keep_every = keep_every
+        self._count = 0
+        self._t0: float | None = None
+        self._last: NavErrors | None = None
+        self._max_hor = 0.0
+        self._sum_hor2 = 0.0
+        self._max_att = np.zeros(3)
+        self._kept: list[NavErrors] = []
+
+    def add(self, errors: NavErrors) -> None:
+        """Take the next chunk (times continue the previous chunk's)."""
+        n = len(errors.t)
+        if n == 0:
+            return
+        hor = errors.horizontal_m
+        if self._t0 is None:
+            self._t0 = float(errors.t[0])
+        self._max_hor = max(self._max_hor, float(hor.max()))
+        self._sum_hor2 += float(np.dot(hor, hor))
+        self._max_att = np.maximum(self._max_att, np.abs(errors.att_rpy_rad).max(axis=0))
+        keep = kept_indices(self._count, n, self.keep_every)
+        if keep.size:
+            self._kept.append(_take(errors, keep))
+        self._count += n
+        self._last = _take(errors, np.array([n - 1]))
+
+    def summary(self) -> DriftSummary:
+        """Final, maximum and RMS errors and the drift rate of everything added."""
+        if self._last is None or self._t0 is None:
+            raise ValueError("no errors were added")
+        last = self._last
+        duration = float(last.t[0]) - self._t0
+        final_hor = float(last.horizontal_m[0])
+        rate = final_hor / (duration / 3600.0) if duration > 0 else 0.0
+        att_deg = np.degrees(last.att_rpy_rad[0])
+        max_att_deg = np.degrees(self._max_att)
+        return DriftSummary(
+            duration_s=duration,
+            final_north_m=float(last.pos_ned_m[0, 0]),
+            final_east_m=float(last.pos_ned_m[0, 1]),
+            final_down_m=float(last.pos_ned_m[0, 2]),
+            final_horizontal_m=final_hor,
+            max_horizontal_m=self._max_hor,
+            rms_horizontal_m=float(np.sqrt(self._sum_hor2 / self._count)),
+            final_vn_mps=float(last.vel_ned_mps[0, 0]),
+            final_ve_mps=float(last.vel_ned_mps[0, 1]),
+            final_vd_mps=float(last.vel_ned_mps[0, 2]),
+            final_roll_deg=float(att_deg[0]),
+            final_pitch_deg=float(att_deg[1]),
+            final_yaw_deg=float(att_deg[2]),
+            max_roll_deg=float(max_att_deg[0]),
+            max_pitch_deg=float(max_att_deg[1]),
+            max_yaw_deg=float(max_att_deg[2]),
+            drift_rate_m_per_h=rate,
+            drift_rate_nmi_per_h=rate / NAUTICAL_MILE_M,
+        )
+
+    def kept(self) -> NavErrors:
+        """The thinned series, ending with the last sample added."""
+        parts = list(self._kept)
+        if self._last is not None and (self._count - 1) % self.keep_every != 0:
+            parts.append(self._last)
+        if not parts:
+            raise ValueError("no errors were added")
+        return NavErrors(
+            t=np.concatenate([p.t for p in parts]),
+            pos_ned_m=np.concatenate([p.pos_ned_m for p in parts]),
+            vel_ned_mps=np.concatenate([p.vel_ned_mps for p in parts]),
+            att_rpy_rad=np.concatenate([p.att_rpy_rad for p in parts]),
+        )
+
+
+def kept_indices(offset: int, n: int, every: int) -> NDArray[np.intp]:
+    """Indices ``i`` in ``range(n)`` whose running index ``offset + i`` is a multiple of ``every``."""
+    return np.arange((-offset) % every, n, every)
+
+
+def _take(errors: NavErrors, index: NDArray[np.integer]) -> NavErrors:
+    return NavErrors(
+        t=errors.t[index],
+        pos_ned_m=errors.pos_ned_m[index],
+        vel_ned_mps=errors.vel_ned_mps[index],
+        att_rpy_rad=errors.att_rpy_rad[index],
     )
+
+
+def summarize(errors: NavErrors) -> DriftSummary:
+    """Final, maximum and RMS errors and the drift rate of a whole error series."""
+    acc = DriftAccumulator()
+    acc.add(errors)
+    return acc.summary()

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import rotation
-from sins.earth import G0
+from sins.earth import E2, G0, radii
 
 Array = NDArray[np.float64]
 
@@ -165,7 +165,9 @@ class Channel:
             d1 = np.zeros(t.shape)
             d2 = np.zeros(t.shape)
         else:
-            value, d1, d2 = _evaluate_pieces(self.edges, self.base, self.rate_amp, self.value_amp, self.ramp, t)
+            value, d1, d2 = _evaluate_pieces(
+                self.edges, self.base, self.rate_amp, self.value_amp, self.ramp, t
+            )
         if self.sin_amplitude.size:
             w = 2.0 * np.pi / self.sin_period
             arg = np.outer(t, w) + self.sin_phase
@@ -298,8 +300,6 @@ def _build_channel(
     )
 
 
-
-
 @dataclass(frozen=True)
 class SegmentMotion:
     """Motion from channels: speed, course, flight-path angle, attitude offsets, heave.
@@ -355,7 +355,8 @@ class SegmentMotion:
                 continue
             if not 0 < seg.ramp <= seg.duration / 2:
                 raise ValueError(
-                    f"{where}: ramp must be in (0, duration/2] = (0, {seg.duration / 2:g}] s, got {seg.ramp:g}"
+                    f"{where}: ramp must be in (0, {seg.duration / 2:g}] s (half the duration), "
+                    f"got {seg.ramp:g}"
                 )
             ramp[i] = seg.ramp
             plateau = seg.duration - seg.ramp
@@ -497,31 +498,39 @@ def _attitude_from_velocity(v_n: Array, a_n: Array) -> tuple[Array, Array]:
 
 @dataclass(frozen=True)
 class WaypointMotion:
-    """A smooth path through local waypoints at given speeds.
+    """A smooth path through geodetic waypoints at given speeds.
 
-    The path is a piecewise quintic Hermite polynomial in local north/east/down
-    offsets (metres from the start, the tangent plane at the start), C2 at the
-    waypoints: each waypoint is passed at its speed along the chord of its
-    neighbours, with the acceleration of that chord-speed change. Body
-    attitude follows the velocity with zero roll. The velocity this gives is
-    integrated on the ellipsoid, so over tens of kilometres the geodetic path
-    departs from the flat offsets by the Earth's curvature (metres), not more.
-
-    Build it with :meth:`from_waypoints`.
+    The path is a piecewise quintic Hermite polynomial, C2 at the waypoints, in
+    geodetic coordinates scaled to metres at the first waypoint:
+    ``y = (lat - lat0)(R_M0 + h0)``, ``x = (lon - lon0)(R_N0 + h0) cos lat0``,
+    ``z = h0 - h``. Velocity and acceleration in NED follow exactly from the
+    latitude, longitude and height and their derivatives, so integrating the
+    velocity passes through every waypoint. Each waypoint is passed at its speed
+    along the chord of its neighbours. Body attitude follows the velocity with
+    zero roll. Build it with :meth:`from_waypoints`.
     """
 
     lat0: float
     lon0: float
     h0: float
     knots: Array  # (m,) times, s
-    coeffs: Array  # (m-1, 6, 3) power-series coefficients of each piece in (t - knot)
+    coeffs: Array  # (m-1, 6, 3) power-series coefficients of each piece in (t - knot), scaled metres
 
     @classmethod
     def from_waypoints(
         cls, lat0: float, lon0: float, h0: float, points_ned: Array, speeds: Array, t_start: float = 0.0
     ) -> WaypointMotion:
-        """Build from ``points_ned`` (m, 3) offsets in metres and ``speeds`` (m,) in m/s (> 0)."""
-        p = np.asarray(points_ned, dtype=float)
+        """Build from waypoints and speeds.
+
+        Parameters
+        ----------
+        lat0, lon0, h0 : the first waypoint, rad and m
+        points_ned : (m, 3) offsets in metres; north and east are converted to
+            latitude and longitude with the radii of curvature at the first
+            waypoint, down to height
+        speeds : (m,) speed at each waypoint, m/s, > 0
+        """
+        p = np.asarray(points_ned, dtype=float) - np.asarray(points_ned, dtype=float)[0]
         s = np.asarray(speeds, dtype=float)
         chord = np.diff(p, axis=0)
         dist = np.linalg.norm(chord, axis=1)
@@ -532,7 +541,9 @@ class WaypointMotion:
         direction[-1] = chord[-1]
         direction[1:-1] = p[2:] - p[:-2]
         direction /= np.linalg.norm(direction, axis=1, keepdims=True)
-        vel = s[:, None] * direction
+        # Physical velocity at the knots, in the scaled coordinates' units.
+        scale = _metric_scale(lat0, h0, lat0 + p[:, 0] / _radius_m(lat0, h0), h0 - p[:, 2])
+        vel = s[:, None] * direction / scale
         acc = np.zeros_like(p)
         if len(p) > 2:
             acc[1:-1] = (vel[2:] - vel[:-2]) / (knots[2:] - knots[:-2])[:, None]
@@ -552,14 +563,59 @@ class WaypointMotion:
     def breakpoints(self) -> Array:
         return self.knots
 
-    def kinematics(self, t: Array) -> Kinematics:
+    def geodetic(self, t: Array) -> tuple[Array, Array, Array]:
+        """Latitude, longitude (rad) and height (m) of the path at times ``t``."""
+        p = self._eval(t)[0]
+        r_m0, r_n0 = radii(self.lat0)
+        lat = self.lat0 + p[:, 0] / (r_m0 + self.h0)
+        lon = self.lon0 + p[:, 1] / ((r_n0 + self.h0) * np.cos(self.lat0))
+        return lat, lon, self.h0 - p[:, 2]
+
+    def _eval(self, t: Array) -> tuple[Array, Array, Array]:
         idx = np.clip(np.searchsorted(self.knots, t, side="right") - 1, 0, len(self.coeffs) - 1)
         x = (np.asarray(t, dtype=float) - self.knots[idx])[:, None]
         c = self.coeffs[idx]
-        v_n = c[:, 1] + x * (2 * c[:, 2] + x * (3 * c[:, 3] + x * (4 * c[:, 4] + x * 5 * c[:, 5])))
-        a_n = 2 * c[:, 2] + x * (6 * c[:, 3] + x * (12 * c[:, 4] + x * 20 * c[:, 5]))
+        p = c[:, 0] + x * (c[:, 1] + x * (c[:, 2] + x * (c[:, 3] + x * (c[:, 4] + x * c[:, 5]))))
+        dp = c[:, 1] + x * (2 * c[:, 2] + x * (3 * c[:, 3] + x * (4 * c[:, 4] + x * 5 * c[:, 5])))
+        d2p = 2 * c[:, 2] + x * (6 * c[:, 3] + x * (12 * c[:, 4] + x * 20 * c[:, 5]))
+        return p, dp, d2p
+
+    def kinematics(self, t: Array) -> Kinematics:
+        p, dp, d2p = self._eval(t)
+        r_m0, r_n0 = radii(self.lat0)
+        ky = 1.0 / (r_m0 + self.h0)
+        kx = 1.0 / ((r_n0 + self.h0) * np.cos(self.lat0))
+        lat, dlat, d2lat = self.lat0 + p[:, 0] * ky, dp[:, 0] * ky, d2p[:, 0] * ky
+        dlon, d2lon = dp[:, 1] * kx, d2p[:, 1] * kx
+        h, dh, d2h = self.h0 - p[:, 2], -dp[:, 2], -d2p[:, 2]
+        r_m, r_n = radii(lat)
+        sl, cl = np.sin(lat), np.cos(lat)
+        w = 1.0 - E2 * sl * sl
+        dr_n = r_n * E2 * sl * cl / w * dlat  # d(R_N)/dt
+        dr_m = 3.0 * r_m * E2 * sl * cl / w * dlat  # d(R_M)/dt
+        v_n = np.column_stack([dlat * (r_m + h), dlon * (r_n + h) * cl, -dh])
+        a_n = np.column_stack(
+            [
+                d2lat * (r_m + h) + dlat * (dr_m + dh),
+                d2lon * (r_n + h) * cl + dlon * ((dr_n + dh) * cl - (r_n + h) * sl * dlat),
+                -d2h,
+            ]
+        )
         q_nb, omega_nb_b = _attitude_from_velocity(v_n, a_n)
         return Kinematics(v_n=v_n, a_n=a_n, q_nb=q_nb, omega_nb_b=omega_nb_b)
+
+
+def _radius_m(lat: float, h: float) -> float:
+    return float(radii(lat)[0] + h)
+
+
+def _metric_scale(lat0: float, h0: float, lat: Array, h: Array) -> Array:
+    """Physical metres per scaled metre along north, east, down at ``lat``, ``h``."""
+    r_m0, r_n0 = radii(lat0)
+    r_m, r_n = radii(lat)
+    return np.column_stack(
+        [(r_m + h) / (r_m0 + h0), (r_n + h) * np.cos(lat) / ((r_n0 + h0) * np.cos(lat0)), np.ones_like(h)]
+    )
 
 
 def _quintic_hermite(p0: Array, v0: Array, a0: Array, p1: Array, v1: Array, a1: Array, h: float) -> Array:
@@ -620,6 +676,9 @@ class RecordedMotion:
             from scipy.interpolate import CubicSpline
             from scipy.spatial.transform import Rotation, RotationSpline
 
-            cached = (CubicSpline(self.t, self.v_n, axis=0), RotationSpline(self.t, Rotation.from_quat(self.q_nb)))
+            cached = (
+                CubicSpline(self.t, self.v_n, axis=0),
+                RotationSpline(self.t, Rotation.from_quat(self.q_nb)),
+            )
             object.__setattr__(self, "_cached_splines", cached)
         return cached

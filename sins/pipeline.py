@@ -15,7 +15,7 @@ import numpy as np
 
 from sins import io, scenario, strapdown, trajectory
 from sins.errors import SinsInputError
-from sins.metrics import DriftSummary, NavErrors, nav_errors, summarize
+from sins.metrics import DriftAccumulator, DriftSummary, NavErrors, kept_indices, nav_errors, summarize
 from sins.scenario import Scenario
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
@@ -34,11 +34,16 @@ class StrategyRun:
 
 @dataclass(frozen=True)
 class ScenarioRun:
-    """A scenario's truth, its IMU stream and one run per compensation strategy."""
+    """A scenario's truth and one run per compensation strategy.
+
+    Summaries use every sample; ``truth`` and each run's ``solution`` and
+    ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
+    sample, plus the last) so that hour-long runs stay small in memory.
+    """
 
     scenario: Scenario
+    samples: int
     truth: NavSeries
-    imu: ImuIncrements
     runs: dict[str, StrategyRun]
 
 
@@ -97,15 +102,56 @@ def navigate(
     return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
 
 
-def run_scenario(sc: Scenario) -> ScenarioRun:
-    """Simulate a scenario and integrate its IMU stream.
+def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
+    """Simulate a scenario and integrate its IMU stream, chunk by chunk.
 
     Compensation strategies join in a later release; today the one run is
     ``"none"``: the IMU as simulated (ideal), integrated without correction.
+    Memory stays bounded by the chunk size and the thinned series, whatever
+    the duration.
     """
-    truth, imu = simulate(sc)
-    run = navigate(imu, truth, sc.vertical, sc.vertical_tau_s)
-    return ScenarioRun(scenario=sc, truth=truth, imu=imu, runs={"none": run})
+    try:
+        motion = scenario.build_motion(sc)
+        first = trajectory.start_state(motion)
+        chunks = trajectory.generate_chunks(motion, sc.rate_hz)
+        keep_every = max(1, round(sc.rate_hz / keep_hz))
+        state = strapdown.start(strapdown.InitialState.from_series(first))
+        acc = DriftAccumulator(keep_every)
+        acc.add(nav_errors(first, first))
+        truth_kept, solution_kept = [first], [first]
+        samples = 0
+        h_prev = float(first.h[0])
+        for truth_c, imu_c in chunks:
+            h_ref = np.concatenate([[h_prev], truth_c.h]) if sc.vertical != "free" else None
+            solution_c, state = strapdown.advance(
+                state, imu_c, vertical=sc.vertical, h_ref=h_ref, vertical_tau_s=sc.vertical_tau_s
+            )
+            acc.add(nav_errors(solution_c, truth_c))
+            keep = kept_indices(samples + 1, len(truth_c.t), keep_every)
+            truth_kept.append(truth_c.at(keep))
+            solution_kept.append(solution_c.at(keep))
+            samples += len(truth_c.t)
+            h_prev = float(truth_c.h[-1])
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
+    if samples % keep_every:
+        truth_kept.append(truth_c.at(-1))
+        solution_kept.append(solution_c.at(-1))
+    run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
+    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run})
+
+
+def _join(parts: list[NavSeries]) -> NavSeries:
+    return NavSeries(
+        t=np.concatenate([p.t for p in parts]),
+        lat=np.concatenate([p.lat for p in parts]),
+        lon=np.concatenate([p.lon for p in parts]),
+        h=np.concatenate([p.h for p in parts]),
+        v_n=np.concatenate([p.v_n for p in parts]),
+        q_nb=np.concatenate([p.q_nb for p in parts]),
+    )
 
 
 def integrate_recording(
@@ -138,5 +184,7 @@ def integrate_recording(
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
         if inside < 2:
             raise SinsInputError(f"{imu_path}: no IMU interval ends within the truth's time span")
-        imu = ImuIncrements(t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1])
+        imu = ImuIncrements(
+            t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
+        )
     return navigate(imu, truth, vertical, vertical_tau_s)

@@ -26,7 +26,7 @@ def skew(v: ArrayLike) -> Array:
     ndarray, shape (..., 3, 3)
     """
     v = np.asarray(v, dtype=float)
-    out = np.zeros(v.shape[:-1] + (3, 3))
+    out = np.zeros((*v.shape[:-1], 3, 3))
     out[..., 0, 1] = -v[..., 2]
     out[..., 0, 2] = v[..., 1]
     out[..., 1, 0] = v[..., 2]
@@ -70,9 +70,9 @@ def quat_conjugate(q: ArrayLike) -> Array:
 
 def quat_normalize(q: ArrayLike) -> Array:
     """Scale to unit norm with a non-negative scalar part, shape (..., 4)."""
-    q = np.asarray(q, dtype=float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., 3:] < 0.0, -q, q)
+    a = np.asarray(q, dtype=float)
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    return np.where(a[..., 3:] < 0.0, -a, a)
 
 
 def quat_from_rotvec(rotvec: ArrayLike) -> Array:
@@ -92,9 +92,7 @@ def quat_from_rotvec(rotvec: ArrayLike) -> Array:
     # sin(x/2)/x by its Taylor series where x is small, to keep full precision.
     small = angle < 1e-4
     a2 = angle * angle
-    k = np.where(
-        small, 0.5 - a2 / 48.0 + a2 * a2 / 3840.0, np.sin(half) / np.where(small, 1.0, angle)
-    )
+    k = np.where(small, 0.5 - a2 / 48.0 + a2 * a2 / 3840.0, np.sin(half) / np.where(small, 1.0, angle))
     return np.concatenate([k * r, np.cos(half)], axis=-1)
 
 
@@ -105,7 +103,8 @@ def rotvec_from_quat(q: ArrayLike) -> Array:
     s = np.linalg.norm(v, axis=-1, keepdims=True)
     angle = 2.0 * np.arctan2(s, q[..., 3:])
     small = s < 1e-8
-    k = np.where(small, 2.0 / q[..., 3:], angle / np.where(small, 1.0, s))
+    w = q[..., 3:]
+    k = np.where(small, 2.0 / np.where(small, w, 1.0), angle / np.where(small, 1.0, s))
     return k * v
 
 
@@ -116,7 +115,7 @@ def dcm_from_quat(q: ArrayLike) -> Array:
     xx, yy, zz = x * x, y * y, z * z
     xy, xz, yz = x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z
-    out = np.empty(q.shape[:-1] + (3, 3))
+    out = np.empty((*q.shape[:-1], 3, 3))
     out[..., 0, 0] = 1.0 - 2.0 * (yy + zz)
     out[..., 0, 1] = 2.0 * (xy - wz)
     out[..., 0, 2] = 2.0 * (xz + wy)
@@ -138,7 +137,7 @@ def quat_from_dcm(C: ArrayLike) -> Array:
     tr = C[..., 0, 0] + C[..., 1, 1] + C[..., 2, 2]
     cand = np.stack([C[..., 0, 0], C[..., 1, 1], C[..., 2, 2], tr], axis=-1)
     best = np.argmax(cand, axis=-1)
-    q = np.empty(C.shape[:-2] + (4,))
+    q = np.empty((*C.shape[:-2], 4))
     # Each branch divides by the largest of 4w², 4x², 4y², 4z², never near zero.
     for i in range(4):
         sel = best == i
@@ -149,7 +148,12 @@ def quat_from_dcm(C: ArrayLike) -> Array:
             w = 0.5 * np.sqrt(1.0 + c[:, 0, 0] + c[:, 1, 1] + c[:, 2, 2])
             f = 0.25 / w
             q[sel] = np.stack(
-                [(c[:, 2, 1] - c[:, 1, 2]) * f, (c[:, 0, 2] - c[:, 2, 0]) * f, (c[:, 1, 0] - c[:, 0, 1]) * f, w],
+                [
+                    (c[:, 2, 1] - c[:, 1, 2]) * f,
+                    (c[:, 0, 2] - c[:, 2, 0]) * f,
+                    (c[:, 1, 0] - c[:, 0, 1]) * f,
+                    w,
+                ],
                 axis=-1,
             )
         else:
@@ -173,7 +177,7 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> Array:
     cr, sr = np.cos(roll), np.sin(roll)
     cp, sp = np.cos(pitch), np.sin(pitch)
     cy, sy = np.cos(yaw), np.sin(yaw)
-    out = np.empty(roll.shape + (3, 3))
+    out = np.empty((*roll.shape, 3, 3))
     out[..., 0, 0] = cp * cy
     out[..., 0, 1] = sr * sp * cy - cr * sy
     out[..., 0, 2] = cr * sp * cy + sr * sy
@@ -189,13 +193,23 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> Array:
 def euler_from_dcm(C: ArrayLike) -> tuple[Array, Array, Array]:
     """ZYX Euler angles ``(roll, pitch, yaw)`` in radians from ``C_nb``.
 
-    Roll and yaw are in (-π, π], pitch in [-π/2, π/2]. At pitch = ±90° the split
-    between roll and yaw is arbitrary; this returns one valid pair.
+    Roll and yaw are in [-π, π], pitch in [-π/2, π/2]. At pitch = ±90° only
+    yaw ∓ roll is defined; this returns roll = 0 and the matching yaw.
     """
     C = np.asarray(C, dtype=float)
-    pitch = np.arcsin(np.clip(-C[..., 2, 0], -1.0, 1.0))
-    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
-    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
+    return _euler(
+        C[..., 0, 0], C[..., 1, 0], C[..., 2, 0], C[..., 2, 1], C[..., 2, 2], C[..., 0, 1], C[..., 1, 1]
+    )
+
+
+def _euler(
+    c00: Array, c10: Array, c20: Array, c21: Array, c22: Array, c01: Array, c11: Array
+) -> tuple[Array, Array, Array]:
+    # atan2 keeps full precision near ±90°, where arcsin loses half the digits.
+    pitch = np.arctan2(-c20, np.hypot(c00, c10))
+    locked = np.hypot(c21, c22) < 1e-12
+    roll = np.where(locked, 0.0, np.arctan2(c21, c22))
+    yaw = np.where(locked, np.arctan2(-c01, c11), np.arctan2(c10, c00))
     return roll, pitch, yaw
 
 
@@ -223,14 +237,19 @@ def euler_from_quat(q: ArrayLike) -> tuple[Array, Array, Array]:
     """ZYX Euler angles ``(roll, pitch, yaw)`` in radians from a unit ``q_nb``.
 
     The same angles as :func:`euler_from_dcm` of :func:`dcm_from_quat`, from the
-    five matrix elements they need.
+    seven matrix elements they need.
     """
     q = np.asarray(q, dtype=float)
     x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    roll = np.arctan2(2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y))
-    pitch = np.arcsin(np.clip(-2.0 * (x * z - w * y), -1.0, 1.0))
-    yaw = np.arctan2(2.0 * (x * y + w * z), 1.0 - 2.0 * (y * y + z * z))
-    return roll, pitch, yaw
+    return _euler(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y + w * z),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+        2.0 * (x * y - w * z),
+        1.0 - 2.0 * (x * x + z * z),
+    )
 
 
 def rotate(q: ArrayLike, v: ArrayLike) -> Array:

@@ -126,7 +126,10 @@ class _Keys:
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(f"expected a number, got {_kind(value)} {value!r}", key)
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise self.error("number too large", key) from None
         if not math.isfinite(value):
             raise self.error(f"must be finite, got {value!r}", key)
         if low is not None and (value < low or (low_open and value == low)):
@@ -196,6 +199,10 @@ def load(path: str | os.PathLike[str]) -> Scenario:
         raise SinsInputError(f"{path}: no such scenario file") from None
     except tomllib.TOMLDecodeError as exc:
         raise SinsInputError(f"{path}: invalid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except IsADirectoryError:
+        raise SinsInputError(f"{path}: is a directory, expected a scenario file") from None
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot read: {exc}") from None
     return from_dict(data, source=path)
@@ -219,7 +226,8 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     if len(kinds) != 1:
         found = ", ".join(kinds) or "none"
         raise top.error(
-            f"give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table (found {found})"
+            "give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table "
+            f"(found {found})"
         )
     trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
     if kinds[0] == "segment":
@@ -233,7 +241,9 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
         base = source.parent if source else Path(".")
         trajectory = TruthFileSpec(path=(base / file))
         if top.has("initial"):
-            raise top.error("not used with a [truth] trajectory (the truth's first row is the start)", "initial")
+            raise top.error(
+                "not used with a [truth] trajectory (the truth's first row is the start)", "initial"
+            )
     top.done()
     return Scenario(
         name=name,
@@ -262,7 +272,9 @@ def _segments(top: _Keys) -> SegmentsSpec:
         h=alt,
         speed=init.number("speed_mps", 0.0, low=0.0),
         roll=math.radians(init.number("roll_deg", 0.0, low=-180.0, high=180.0)),
-        pitch=math.radians(init.number("pitch_deg", 0.0, low=-90.0, high=90.0, low_open=True, high_open=True)),
+        pitch=math.radians(
+            init.number("pitch_deg", 0.0, low=-90.0, high=90.0, low_open=True, high_open=True)
+        ),
         yaw=math.radians(init.number("yaw_deg", 0.0, low=-360.0, high=360.0)),
     )
     init.done()
@@ -275,7 +287,9 @@ def _segments(top: _Keys) -> SegmentsSpec:
         if kind != "hold":
             ramp = seg.number("ramp_s", min(DEFAULT_RAMP_S, duration / 4), low=0.0, low_open=True)
             if ramp > duration / 2:
-                raise seg.error(f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s")
+                raise seg.error(
+                    f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s"
+                )
         plateau = duration - ramp
         if kind == "hold":
             segments.append(motion.Hold(duration))
@@ -295,12 +309,17 @@ def _segments(top: _Keys) -> SegmentsSpec:
                 rate = math.radians(seg.number("rate_dps", low=-360.0, high=360.0))
             else:
                 rate = math.radians(seg.number("angle_deg")) / plateau
+                if abs(rate) > math.radians(360.0):
+                    raise seg.error(f"turns faster than 360 °/s over {plateau:g} s", "angle_deg")
             segments.append(motion.Turn(duration, rate, ramp, seg.boolean("coordinated", False)))
         elif kind == "climb":
             angle = seg.number("angle_deg", low=-89.0, high=89.0)
             segments.append(motion.Climb(duration, math.radians(angle), ramp))
         else:
-            d = [math.radians(seg.number(k, 0.0, low=-360.0, high=360.0)) for k in ("roll_deg", "pitch_deg", "yaw_deg")]
+            d = [
+                math.radians(seg.number(k, 0.0, low=-360.0, high=360.0))
+                for k in ("roll_deg", "pitch_deg", "yaw_deg")
+            ]
             segments.append(motion.Rotate(duration, d[0], d[1], d[2], ramp))
         seg.done()
     if not segments:
@@ -363,7 +382,7 @@ def build_motion(scenario: Scenario) -> motion.Motion:
         r_m, r_n = earth.radii(spec.lat)
         lat0 = spec.lat + p[0, 0] / (r_m + spec.h)
         lon0 = spec.lon + p[0, 1] / ((r_n + spec.h) * math.cos(spec.lat))
-        return motion.WaypointMotion.from_waypoints(lat0, lon0, spec.h - p[0, 2], p - p[0], np.array(spec.speeds))
+        return motion.WaypointMotion.from_waypoints(lat0, lon0, spec.h - p[0, 2], p, np.array(spec.speeds))
     truth = io.read_truth(spec.path)
     if len(truth.t) < 4:
         raise SinsInputError(f"{spec.path}: a truth trajectory needs at least 4 rows to define a motion")

@@ -44,7 +44,7 @@ class NavSeries:
         """``(roll, pitch, yaw)`` in radians, each (n,)."""
         return rotation.euler_from_quat(self.q_nb)
 
-    def at(self, index: int | slice | Array) -> NavSeries:
+    def at(self, index: int | slice | NDArray[np.integer]) -> NavSeries:
         """The states at ``index`` (an int keeps a length-1 series)."""
         if isinstance(index, int | np.integer):
             index = slice(index, index + 1 if index != -1 else None)
@@ -122,7 +122,7 @@ class ImuRates:
 
         Four-point cubic quadrature ``dt/24 (-x[k-1] + 13 x[k] + 13 x[k+1] - x[k+2])``
         on uniform interior intervals (fourth order), the trapezoid rule at the
-        two ends and wherever the step is not uniform.
+        two ends and wherever the step varies by more than 1 ppm.
         """
         if len(self.t) < 2:
             raise ValueError("rate-form IMU data need at least two samples to form an interval")
@@ -131,7 +131,10 @@ class ImuRates:
         for x in (self.omega_ib_b, self.f_ib_b):
             inc = 0.5 * (x[:-1] + x[1:]) * dt[:, None]
             if len(x) >= 4:
-                uniform = np.abs(dt[1:-1] - dt[:-2]) + np.abs(dt[2:] - dt[1:-1]) < 1e-9 * dt[1:-1]
+                # Uniform to the rounding of the time stamps, which grows with |t|
+                # (time-of-day or GPS-second stamps), plus one part per million.
+                tol = 1e-6 * dt[1:-1] + 8.0 * np.finfo(float).eps * np.abs(self.t[2:-1])
+                uniform = np.abs(dt[1:-1] - dt[:-2]) + np.abs(dt[2:] - dt[1:-1]) < tol
                 cubic = (dt[1:-1] / 24.0)[:, None] * (-x[:-3] + 13.0 * x[1:-2] + 13.0 * x[2:-1] - x[3:])
                 inc[1:-1] = np.where(uniform[:, None], cubic, inc[1:-1])
             out.append(inc)

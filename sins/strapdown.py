@@ -81,16 +81,18 @@ class InitialState:
         )
 
 
-@numba.njit(cache=True, fastmath=False)
+# Layout of the state array that carries an integration across calls.
+_LAT, _LON, _H, _V, _Q = 0, 1, 2, 3, 6
+_LAT_P, _H_P, _V_P, _DT_P, _DTH_P, _DV_P, _STEPS, _COUNTDOWN = 10, 11, 12, 15, 16, 19, 22, 23
+STATE_SIZE = 24
+
+
+@numba.njit(cache=True)
 def _kernel(
     t: Array,
     dtheta: Array,
     dv: Array,
-    lat0: float,
-    lon0: float,
-    h0: float,
-    v0: Array,
-    q0: Array,
+    state: Array,
     mode: int,
     h_ref: Array,
     k1: float,
@@ -101,27 +103,29 @@ def _kernel(
     out_h: Array,
     out_v: Array,
     out_q: Array,
-) -> None:
+) -> int:
+    """Advance ``state`` over the intervals of ``t``; write every ``every``-th new state.
+
+    Returns the number of rows written.
+    """
     n = dtheta.shape[0]
-    lat, lon, h = lat0, lon0, h0
-    vn, ve, vd = v0[0], v0[1], v0[2]
-    qx, qy, qz, qw = q0[0], q0[1], q0[2], q0[3]
-    lat_p, h_p, vn_p, ve_p, vd_p = lat, h, vn, ve, vd
-    dt_p = 0.0
-    ax = ay = az = 0.0  # previous Δθ
-    bx = by = bz = 0.0  # previous Δv
-    out_lat[0], out_lon[0], out_h[0] = lat, lon, h
-    out_v[0, 0], out_v[0, 1], out_v[0, 2] = vn, ve, vd
-    out_q[0, 0], out_q[0, 1], out_q[0, 2], out_q[0, 3] = qx, qy, qz, qw
-    row = 1
-    countdown = every
+    lat, lon, h = state[_LAT], state[_LON], state[_H]
+    vn, ve, vd = state[_V], state[_V + 1], state[_V + 2]
+    qx, qy, qz, qw = state[_Q], state[_Q + 1], state[_Q + 2], state[_Q + 3]
+    lat_p, h_p, dt_p = state[_LAT_P], state[_H_P], state[_DT_P]
+    vn_p, ve_p, vd_p = state[_V_P], state[_V_P + 1], state[_V_P + 2]
+    ax, ay, az = state[_DTH_P], state[_DTH_P + 1], state[_DTH_P + 2]  # previous Δθ
+    bx, by, bz = state[_DV_P], state[_DV_P + 1], state[_DV_P + 2]  # previous Δv
+    started = state[_STEPS] > 0.0
+    countdown = int(state[_COUNTDOWN])
+    row = 0
     for k in range(n):
         dt = t[k + 1] - t[k]
         gx, gy, gz = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
         ux, uy, uz = dv[k, 0], dv[k, 1], dv[k, 2]
 
         # Mid-interval navigation quantities by linear extrapolation of the last step.
-        e = 0.5 * dt / dt_p if k > 0 else 0.0
+        e = 0.5 * dt / dt_p if started else 0.0
         lat_m = lat + e * (lat - lat_p)
         h_m = h + e * (h - h_p)
         vn_m = vn + e * (vn - vn_p)
@@ -220,17 +224,32 @@ def _kernel(
         lat_p, h_p, vn_p, ve_p, vd_p, dt_p = lat, h, vn, ve, vd, dt
         lat, lon, h, vn, ve, vd = lat_new, lon_new, h_new, vn_new, ve_new, vd_new
         ax, ay, az, bx, by, bz = gx, gy, gz, ux, uy, uz
+        started = True
 
         countdown -= 1
         if countdown == 0:
             countdown = every
             out_lat[row], out_lon[row], out_h[row] = lat, lon, h
             out_v[row, 0], out_v[row, 1], out_v[row, 2] = vn, ve, vd
-            if qw < 0.0:
-                out_q[row, 0], out_q[row, 1], out_q[row, 2], out_q[row, 3] = -qx, -qy, -qz, -qw
-            else:
-                out_q[row, 0], out_q[row, 1], out_q[row, 2], out_q[row, 3] = qx, qy, qz, qw
+            sign = -1.0 if qw < 0.0 else 1.0
+            out_q[row, 0], out_q[row, 1], out_q[row, 2], out_q[row, 3] = (
+                sign * qx,
+                sign * qy,
+                sign * qz,
+                sign * qw,
+            )
             row += 1
+
+    state[_LAT], state[_LON], state[_H] = lat, lon, h
+    state[_V], state[_V + 1], state[_V + 2] = vn, ve, vd
+    state[_Q], state[_Q + 1], state[_Q + 2], state[_Q + 3] = qx, qy, qz, qw
+    state[_LAT_P], state[_H_P], state[_DT_P] = lat_p, h_p, dt_p
+    state[_V_P], state[_V_P + 1], state[_V_P + 2] = vn_p, ve_p, vd_p
+    state[_DTH_P], state[_DTH_P + 1], state[_DTH_P + 2] = ax, ay, az
+    state[_DV_P], state[_DV_P + 1], state[_DV_P + 2] = bx, by, bz
+    state[_STEPS] += n
+    state[_COUNTDOWN] = countdown
+    return row
 
 
 @numba.njit(cache=True, parallel=True)
@@ -238,11 +257,7 @@ def _batch_kernel(
     t: Array,
     dtheta: Array,
     dv: Array,
-    lat0: Array,
-    lon0: Array,
-    h0: Array,
-    v0: Array,
-    q0: Array,
+    state: Array,
     mode: int,
     h_ref: Array,
     k1: float,
@@ -256,7 +271,7 @@ def _batch_kernel(
 ) -> None:
     for j in numba.prange(dtheta.shape[0]):
         _kernel(
-            t, dtheta[j], dv[j], lat0[j], lon0[j], h0[j], v0[j], q0[j], mode, h_ref, k1, k2, every,
+            t, dtheta[j], dv[j], state[j], mode, h_ref, k1, k2, every,
             out_lat[j], out_lon[j], out_h[j], out_v[j], out_q[j],
         )  # fmt: skip
 
@@ -276,6 +291,66 @@ def _vertical_args(
         raise ValueError(f"vertical_tau_s must be positive, got {tau_s}")
     # Critically damped: s² + 2s/τ + 1/τ², far faster than the 570 s instability.
     return mode, h_ref, 2.0 / tau_s, 1.0 / tau_s**2
+
+
+def start(initial: InitialState, every: int = 1) -> Array:
+    """A fresh integration state at ``initial``, for :func:`advance`.
+
+    ``every`` is the decimation :func:`advance` will apply (the first state
+    written is the ``every``-th after the start).
+    """
+    if every < 1:
+        raise ValueError(f"every must be >= 1, got {every}")
+    state = np.zeros(STATE_SIZE)
+    state[_LAT], state[_LON], state[_H] = initial.lat, initial.lon, initial.h
+    state[_V : _V + 3] = initial.v_n
+    q = np.asarray(initial.q_nb, dtype=float)
+    state[_Q : _Q + 4] = q / np.linalg.norm(q)
+    state[_COUNTDOWN] = every
+    return state
+
+
+def advance(
+    state: Array,
+    imu: ImuIncrements,
+    *,
+    vertical: str = "free",
+    h_ref: Array | None = None,
+    vertical_tau_s: float = 10.0,
+    every: int = 1,
+) -> tuple[NavSeries, Array]:
+    """Integrate one chunk of an IMU stream, continuing from ``state``.
+
+    Chunks must follow each other (each chunk's ``imu.t[0]`` is the previous
+    chunk's last time); the result is identical to integrating in one call.
+
+    Parameters
+    ----------
+    state : (STATE_SIZE,) from :func:`start` or a previous :func:`advance`
+    imu : the chunk's increments, ``n`` intervals
+    vertical, vertical_tau_s : see the module docstring
+    h_ref : (n+1,) reference height at ``imu.t`` for "hold"/"damp", m
+    every : the decimation given to :func:`start`
+
+    Returns
+    -------
+    states : NavSeries of the kept states after the chunk's steps
+    state : the updated state (a new array)
+    """
+    n = len(imu.dtheta_b)
+    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s)
+    state = np.array(state, dtype=float)
+    first = int(state[_COUNTDOWN])
+    m = 0 if n < first else 1 + (n - first) // every
+    lat, lon, h, v, q = _alloc(m)
+    t = np.ascontiguousarray(imu.t, dtype=float)
+    rows = _kernel(
+        t, np.ascontiguousarray(imu.dtheta_b, dtype=float), np.ascontiguousarray(imu.dv_b, dtype=float),
+        state, mode, h_ref_arr, k1, k2, every, lat, lon, h, v, q,
+    )  # fmt: skip
+    assert rows == m
+    times = t[first::every][:m]
+    return NavSeries(t=times, lat=lat, lon=lon, h=h, v_n=v, q_nb=q), state
 
 
 def integrate(
@@ -302,23 +377,18 @@ def integrate(
     -------
     NavSeries at ``imu.t[::every]`` (``1 + n // every`` states)
     """
-    n = len(imu.dtheta_b)
-    if every < 1:
-        raise ValueError(f"every must be >= 1, got {every}")
-    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s)
-    m = 1 + n // every
-    out = _alloc(m)
-    _kernel(
-        np.ascontiguousarray(imu.t, dtype=float),
-        np.ascontiguousarray(imu.dtheta_b, dtype=float),
-        np.ascontiguousarray(imu.dv_b, dtype=float),
-        float(initial.lat), float(initial.lon), float(initial.h),
-        np.ascontiguousarray(initial.v_n, dtype=float),
-        np.ascontiguousarray(initial.q_nb, dtype=float),
-        mode, h_ref_arr, k1, k2, every, *out,
+    states, _ = advance(
+        start(initial, every), imu, vertical=vertical, h_ref=h_ref, vertical_tau_s=vertical_tau_s,
+        every=every,
     )  # fmt: skip
-    lat, lon, h, v, q = out
-    return NavSeries(t=np.asarray(imu.t)[::every][:m], lat=lat, lon=lon, h=h, v_n=v, q_nb=q)
+    return NavSeries(
+        t=np.concatenate([[imu.t[0]], states.t]),
+        lat=np.concatenate([[initial.lat], states.lat]),
+        lon=np.concatenate([[initial.lon], states.lon]),
+        h=np.concatenate([[initial.h], states.h]),
+        v_n=np.vstack([initial.v_n, states.v_n]),
+        q_nb=np.vstack([start(initial)[_Q : _Q + 4], states.q_nb]),
+    )
 
 
 def integrate_batch(
@@ -330,41 +400,40 @@ def integrate_batch(
     vertical: str = "free",
     h_ref: Array | None = None,
     vertical_tau_s: float = 10.0,
-    every: int = 1,
 ) -> list[NavSeries]:
-    """Integrate many IMU streams that share a time base and a start, in parallel.
+    """Integrate many IMU streams that share a time base and a start, in parallel threads.
 
     Parameters
     ----------
     t : (n+1,) sample times, s
     dtheta_b, dv_b : (m, n, 3) increments of ``m`` streams
-    initial, vertical, h_ref, vertical_tau_s, every : as :func:`integrate`
+    initial, vertical, h_ref, vertical_tau_s : as :func:`integrate`
 
     Returns
     -------
-    list of ``m`` NavSeries
+    list of ``m`` NavSeries at ``t``, identical to ``m`` calls of :func:`integrate`
     """
     dtheta_b = np.ascontiguousarray(dtheta_b, dtype=float)
     dv_b = np.ascontiguousarray(dv_b, dtype=float)
     if dtheta_b.ndim != 3 or dtheta_b.shape != dv_b.shape or dtheta_b.shape[2] != 3:
-        raise ValueError(f"dtheta_b and dv_b must both have shape (m, n, 3), got {dtheta_b.shape}, {dv_b.shape}")
+        raise ValueError(
+            f"dtheta_b and dv_b must both have shape (m, n, 3), got {dtheta_b.shape}, {dv_b.shape}"
+        )
     streams, n, _ = dtheta_b.shape
-    if every < 1:
-        raise ValueError(f"every must be >= 1, got {every}")
     mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s)
-    m = 1 + n // every
-    lat = np.empty((streams, m))
-    lon = np.empty((streams, m))
-    h = np.empty((streams, m))
-    v = np.empty((streams, m, 3))
-    q = np.empty((streams, m, 4))
+    state = np.tile(start(initial), (streams, 1))
+    lat = np.empty((streams, n + 1))
+    lon = np.empty((streams, n + 1))
+    h = np.empty((streams, n + 1))
+    v = np.empty((streams, n + 1, 3))
+    q = np.empty((streams, n + 1, 4))
+    lat[:, 0], lon[:, 0], h[:, 0] = initial.lat, initial.lon, initial.h
+    v[:, 0], q[:, 0] = initial.v_n, state[0, _Q : _Q + 4]
     _batch_kernel(
-        np.ascontiguousarray(t, dtype=float), dtheta_b, dv_b,
-        np.full(streams, initial.lat), np.full(streams, initial.lon), np.full(streams, initial.h),
-        np.tile(initial.v_n, (streams, 1)), np.tile(initial.q_nb, (streams, 1)),
-        mode, h_ref_arr, k1, k2, every, lat, lon, h, v, q,
+        np.ascontiguousarray(t, dtype=float), dtheta_b, dv_b, state, mode, h_ref_arr, k1, k2, 1,
+        lat[:, 1:], lon[:, 1:], h[:, 1:], v[:, 1:], q[:, 1:],
     )  # fmt: skip
-    tt = np.asarray(t)[::every][:m]
+    tt = np.asarray(t, dtype=float)
     return [NavSeries(t=tt, lat=lat[j], lon=lon[j], h=h[j], v_n=v[j], q_nb=q[j]) for j in range(streams)]
 
 

@@ -15,6 +15,8 @@ velocity on the ellipsoid with the same rule, in one compiled pass.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numba
 import numpy as np
 from numpy.typing import NDArray
@@ -121,7 +123,7 @@ def specific_force_and_rate(kin: Kinematics, lat: Array, h: Array) -> tuple[Arra
     ``f_ib_b = C_bn (a_n + (2 omega_ie_n + omega_en_n) × v_n - g_n)``.
     All inputs are time-major with ``n`` rows; ``lat`` in rad, ``h`` in m.
     """
-    return _ideal_imu(  # type: ignore[no-any-return]
+    return _ideal_imu(
         *(np.ascontiguousarray(a, dtype=float) for a in (kin.v_n, kin.a_n, kin.q_nb, kin.omega_nb_b, lat, h))
     )
 
@@ -134,6 +136,38 @@ def sample_times(motion: Motion, rate_hz: float) -> Array:
     if n < 1:
         raise ValueError(f"the motion lasts {motion.t_end - motion.t_start:g} s, shorter than one sample")
     return motion.t_start + np.arange(n + 1) / rate_hz
+
+
+def start_state(motion: Motion) -> NavSeries:
+    """The truth at the motion's start, as a length-1 series."""
+    kin = motion.kinematics(np.array([motion.t_start]))
+    return NavSeries(
+        t=np.array([motion.t_start]), lat=np.array([motion.lat0]), lon=np.array([motion.lon0]),
+        h=np.array([motion.h0]), v_n=kin.v_n, q_nb=kin.q_nb,
+    )  # fmt: skip
+
+
+def generate_chunks(
+    motion: Motion, rate_hz: float, chunk: int = CHUNK
+) -> Iterator[tuple[NavSeries, ImuIncrements]]:
+    """Truth and exact ideal IMU increments, ``chunk`` sample intervals at a time.
+
+    Yields ``(truth, imu)`` per chunk: ``imu`` covers the intervals
+    ``(t[k0], t[k1]]`` (``imu.t`` has ``k1 - k0 + 1`` times) and ``truth`` the
+    states at ``imu.t[1:]``. The start state is :func:`start_state`. Memory
+    stays bounded by the chunk, whatever the duration.
+    """
+    if chunk < 1:
+        raise ValueError(f"chunk must be >= 1, got {chunk}")
+    t = sample_times(motion, rate_hz)
+    n = len(t) - 1
+    breaks = np.asarray(motion.breakpoints(), dtype=float)
+    position = (motion.lat0, motion.lon0, motion.h0)
+    for k0 in range(0, n, chunk):
+        ts = t[k0 : min(n, k0 + chunk) + 1]
+        truth, imu = _chunk(motion, ts, breaks, *position)
+        position = (truth.lat[-1], truth.lon[-1], truth.h[-1])
+        yield truth, imu
 
 
 def generate(motion: Motion, rate_hz: float) -> tuple[NavSeries, ImuIncrements]:
@@ -149,25 +183,19 @@ def generate(motion: Motion, rate_hz: float) -> tuple[NavSeries, ImuIncrements]:
     truth : NavSeries at the ``n + 1`` sample times (the first is the start)
     imu : ImuIncrements over the ``n`` sample intervals
     """
-    t = sample_times(motion, rate_hz)
-    n = len(t) - 1
-    lat = np.empty(n + 1)
-    lon = np.empty(n + 1)
-    h = np.empty(n + 1)
-    v_n = np.empty((n + 1, 3))
-    q_nb = np.empty((n + 1, 4))
-    dtheta = np.empty((n, 3))
-    dv = np.empty((n, 3))
-    lat[0], lon[0], h[0] = motion.lat0, motion.lon0, motion.h0
-    breaks = np.asarray(motion.breakpoints(), dtype=float)
-    kin0 = motion.kinematics(t[:1])
-    v_n[0], q_nb[0] = kin0.v_n[0], kin0.q_nb[0]
-    for k0 in range(0, n, CHUNK):
-        k1 = min(n, k0 + CHUNK)
-        _chunk(motion, t[k0 : k1 + 1], breaks, lat, lon, h, v_n, q_nb, dtheta, dv, k0)
-    return NavSeries(t=t, lat=lat, lon=lon, h=h, v_n=v_n, q_nb=q_nb), ImuIncrements(
-        t=t, dtheta_b=dtheta, dv_b=dv
+    first = start_state(motion)
+    parts = list(generate_chunks(motion, rate_hz))
+    truths = [first] + [p[0] for p in parts]
+    join = lambda name: np.concatenate([getattr(x, name) for x in truths])  # noqa: E731
+    truth = NavSeries(
+        t=join("t"), lat=join("lat"), lon=join("lon"), h=join("h"), v_n=join("v_n"), q_nb=join("q_nb")
     )
+    imu = ImuIncrements(
+        t=truth.t,
+        dtheta_b=np.concatenate([p[1].dtheta_b for p in parts]),
+        dv_b=np.concatenate([p[1].dv_b for p in parts]),
+    )
+    return truth, imu
 
 
 def ideal_rates(motion: Motion, truth: NavSeries) -> ImuRates:
@@ -178,19 +206,9 @@ def ideal_rates(motion: Motion, truth: NavSeries) -> ImuRates:
 
 
 def _chunk(
-    motion: Motion,
-    ts: Array,
-    breaks: Array,
-    lat: Array,
-    lon: Array,
-    h: Array,
-    v_out: Array,
-    q_out: Array,
-    dtheta: Array,
-    dv: Array,
-    k0: int,
-) -> None:
-    """Fill rows ``k0 + 1 .. k0 + len(ts) - 1`` of the outputs (row ``k0`` holds the start)."""
+    motion: Motion, ts: Array, breaks: Array, lat0: float, lon0: float, h0: float
+) -> tuple[NavSeries, ImuIncrements]:
+    """Truth at ``ts[1:]`` and increments over the intervals of ``ts``, from the position at ``ts[0]``."""
     m = len(ts) - 1
     step = ts[1] - ts[0]
     # Sub-interval edges: the samples plus any breakpoint not within rounding of a sample.
@@ -205,22 +223,15 @@ def _chunk(
     width = np.diff(edges)
     # One evaluation at every edge, then every midpoint.
     kin = motion.kinematics(np.concatenate([edges, edges[:-1] + 0.5 * width]))
-    v = kin.v_n
+    lat_e, lon_e, h_e, lat_m, h_m = _integrate_position(width, kin.v_n, lat0, lon0, h0)
+    omega, f = specific_force_and_rate(kin, np.concatenate([lat_e, lat_m]), np.concatenate([h_e, h_m]))
 
-    def simpson(rate: Array) -> Array:
-        """Integrals over the sub-intervals of a quantity given at edges then midpoints."""
-        w = (width / 6.0).reshape((-1,) + (1,) * (rate.ndim - 1))
-        return w * (rate[: ne - 1] + 4.0 * rate[ne:] + rate[1:ne])
+    def simpson_sums(rate: Array) -> Array:
+        """Simpson integrals per sample interval of a quantity given at edges then midpoints."""
+        per_edge = (width / 6.0)[:, None] * (rate[: ne - 1] + 4.0 * rate[ne:] + rate[1:ne])
+        return np.add.reduceat(per_edge, sample_at[:-1], axis=0)
 
-    lat_e, lon_e, h_e, lat_m, h_m = _integrate_position(width, v, lat[k0], lon[k0], h[k0])
-    lat_all = np.concatenate([lat_e, lat_m])
-    h_all = np.concatenate([h_e, h_m])
-    omega, f = specific_force_and_rate(kin, lat_all, h_all)
-    starts = sample_at[:-1]
-    dtheta[k0 : k0 + m] = np.add.reduceat(simpson(omega), starts, axis=0)
-    dv[k0 : k0 + m] = np.add.reduceat(simpson(f), starts, axis=0)
-    rows = slice(k0 + 1, k0 + m + 1)
     at = sample_at[1:]
-    lat[rows], lon[rows], h[rows] = lat_e[at], lon_e[at], h_e[at]
-    v_out[rows] = v[at]
-    q_out[rows] = kin.q_nb[at]
+    truth = NavSeries(t=ts[1:], lat=lat_e[at], lon=lon_e[at], h=h_e[at], v_n=kin.v_n[at], q_nb=kin.q_nb[at])
+    assert len(truth.t) == m
+    return truth, ImuIncrements(t=ts, dtheta_b=simpson_sums(omega), dv_b=simpson_sums(f))

@@ -1,0 +1,368 @@
+"""The ``sins`` command: run, simulate + integrate round trips, bad input as one line and exit status 2."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sins import io, pipeline
+from sins.cli import main
+
+SUMMARY_KEYS = (
+    "final_north_m",
+    "final_east_m",
+    "final_down_m",
+    "final_horizontal_m",
+    "max_horizontal_m",
+    "final_roll_deg",
+    "final_pitch_deg",
+    "final_yaw_deg",
+)
+
+SHORT = """\
+name = "short"
+description = "three seconds"
+[imu]
+rate_hz = 100
+[initial]
+lat_deg = 45.0
+lon_deg = 7.0
+alt_m = 200.0
+speed_mps = 5.0
+[[segment]]
+type = "accelerate"
+duration_s = 2
+delta_speed_mps = 2
+[[segment]]
+type = "turn"
+duration_s = 1
+rate_dps = 3
+"""
+
+# About a minute of manoeuvres: speed change, coordinated turn, climb, attitude change, all at once
+# ramped, so that every IMU channel is exercised.
+MANOEUVRES = """\
+name = "manoeuvres"
+[imu]
+rate_hz = 100
+[initial]
+lat_deg = 45.0
+lon_deg = 7.0
+alt_m = 200.0
+speed_mps = 5.0
+yaw_deg = 30.0
+[[segment]]
+type = "accelerate"
+duration_s = 10
+to_speed_mps = 20
+ramp_s = 2
+[[segment]]
+type = "turn"
+duration_s = 20
+angle_deg = 90
+ramp_s = 3
+coordinated = true
+[[segment]]
+type = "climb"
+duration_s = 15
+angle_deg = 5
+ramp_s = 3
+[[segment]]
+type = "attitude"
+duration_s = 10
+roll_deg = 10
+pitch_deg = -3
+ramp_s = 2
+[[segment]]
+type = "hold"
+duration_s = 5
+"""
+
+
+def _assert_one_line_error(rc: int, out: str, err: str) -> None:
+    assert rc == 2, (rc, out, err)
+    assert err.startswith("sins: error: "), err
+    assert err.endswith("\n") and err.count("\n") == 1, err
+    assert "Traceback" not in out + err
+
+
+# --------------------------------------------------------------------------- fixtures
+
+
+@pytest.fixture(scope="module")
+def short_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """A short scenario and its simulated increment IMU and truth."""
+    d = tmp_path_factory.mktemp("short")
+    scenario = d / "short.toml"
+    scenario.write_text(SHORT, encoding="utf-8")
+    imu, truth = d / "imu.csv", d / "truth.csv"
+    assert main(["simulate", str(scenario), "--imu", str(imu), "--truth", str(truth)]) == 0
+    return {"dir": d, "scenario": scenario, "imu": imu, "truth": truth}
+
+
+@pytest.fixture(scope="module")
+def round_trips(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, float]]:
+    """Simulate the one-minute scenario in both IMU forms and integrate each back against the truth."""
+    d = tmp_path_factory.mktemp("manoeuvres")
+    scenario = d / "manoeuvres.toml"
+    scenario.write_text(MANOEUVRES, encoding="utf-8")
+    results = {}
+    for form in ("increment", "rate"):
+        imu, truth, out = d / f"imu_{form}.csv", d / f"truth_{form}.csv", d / f"{form}.json"
+        assert (
+            main(["simulate", str(scenario), "--imu", str(imu), "--truth", str(truth), "--form", form]) == 0
+        )
+        assert main(["integrate", str(imu), "--truth", str(truth), "--json", str(out)]) == 0
+        results[form] = json.loads(out.read_text(encoding="utf-8"))
+        results[form]["truth_rows"] = len(io.read_truth(truth).t)
+    return results
+
+
+# --------------------------------------------------------------------------- run
+
+
+def test_run_prints_table_and_writes_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(SHORT, encoding="utf-8")
+    out = tmp_path / "summary.json"
+    assert main(["run", str(scenario), "--json", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    lines = captured.out.splitlines()
+    header = next(line for line in lines if line.startswith("strategy"))
+    assert "final hor m" in header
+    assert any(line.startswith("none ") for line in lines)
+    assert "300 samples at 100 Hz (3 s)" in captured.out
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    assert doc["scenario"]["name"] == "short"
+    assert doc["scenario"]["samples"] == 300
+    assert set(doc["strategies"]) == {"none"}
+    none = doc["strategies"]["none"]
+    for key in SUMMARY_KEYS:
+        assert isinstance(none[key], float) and math.isfinite(none[key]), key
+    # An ideal IMU over 3 s drifts by far less than a millimetre (the 60 s round trip below measures 0.1 mm).
+    assert none["max_horizontal_m"] < 1e-3
+
+
+def test_run_preset_static(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    out = tmp_path / "static.json"
+    assert main(["run", "static", "--json", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "scenario static" in captured.out and "360000 samples at 100 Hz" in captured.out
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    assert doc["scenario"]["duration_s"] == 3600.0
+    none = doc["strategies"]["none"]
+    # Level and at rest with an ideal IMU the only error is the integrator's rounding, which the free
+    # vertical channel amplifies over the hour: measured 2e-6 m horizontal, 6e-5 m down. 1 mm is >10x that.
+    assert none["final_horizontal_m"] < 1e-3 and abs(none["final_down_m"]) < 1e-3
+
+
+def test_scenarios_lists_every_preset(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["scenarios"]) == 0
+    out = capsys.readouterr().out
+    names = [line.split()[0] for line in out.splitlines() if line.strip()]
+    shipped = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "scenarios").glob("*.toml"))
+    assert sorted(names) == shipped == sorted(pipeline.presets())
+    assert sum("(default)" in line for line in out.splitlines()) == 1
+
+
+# --------------------------------------------------------------------------- simulate + integrate
+
+
+def test_round_trip_increment_form(round_trips: dict[str, dict[str, float]]) -> None:
+    r = round_trips["increment"]
+    assert r["truth_rows"] == 6001 and r["duration_s"] == 60.0
+    # The ideal increments are exact to ~1e-10 (Simpson, see sins.trajectory) and the files carry 17
+    # digits, so what is left is the strapdown algorithm's own error at 100 Hz: measured 1e-4 m
+    # horizontally after 60 s of manoeuvres. 1 cm is 100 times that, and far below the metres a
+    # wrong sign or a missing Earth/transport-rate term would give over a minute.
+    assert r["final_horizontal_m"] < 1e-2 and r["max_horizontal_m"] < 1e-2
+    assert abs(r["final_down_m"]) < 1e-2  # measured 2.5e-4 m
+    for axis in ("roll", "pitch", "yaw"):
+        assert abs(r[f"final_{axis}_deg"]) < 1e-6  # measured < 3e-8 deg
+
+
+def test_round_trip_rate_form(round_trips: dict[str, dict[str, float]]) -> None:
+    r, ref = round_trips["rate"], round_trips["increment"]
+    assert r["truth_rows"] == 6001 and r["duration_s"] == 60.0
+    assert r["final_horizontal_m"] < 1e-2 and r["max_horizontal_m"] < 1e-2  # as for the increment form
+    # The 4th-order quadrature errs by ~h⁴·f'''' per interval inside and the two trapezoid end
+    # intervals by h³/12·f'' ≈ 1e-7 m/s; measured against the increment form: 5e-7 m in position and
+    # 5e-7 deg in attitude. Allow 20 times that.
+    for key in ("final_north_m", "final_east_m", "final_down_m"):
+        assert abs(r[key] - ref[key]) < 1e-5, key
+    for axis in ("roll", "pitch", "yaw"):
+        assert abs(r[f"final_{axis}_deg"]) < 1e-5  # measured < 4e-9 deg final, 5e-7 deg max
+        assert r[f"max_{axis}_deg"] < 1e-5
+
+
+def test_simulate_writes_readable_files(
+    short_files: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    samples, table = io.read_imu(short_files["imu"])
+    truth = io.read_truth(short_files["truth"])
+    assert len(truth.t) == 301 and len(samples) == 300
+    assert np.array_equal(table.column("t"), truth.t[1:])  # row k ends at the truth's (k+1)-th time
+    assert short_files["imu"].read_text(encoding="utf-8").startswith("# sins ")
+
+
+def test_simulate_reports_the_rows_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(SHORT, encoding="utf-8")
+    imu, truth = tmp_path / "imu.csv", tmp_path / "truth.csv"
+    assert main(["simulate", str(scenario), "--imu", str(imu), "--truth", str(truth), "--form", "rate"]) == 0
+    reported = [int(n) for n in re.findall(r"(\d+) rows", capsys.readouterr().out)]
+    assert reported == [len(io.read_imu(imu)[0]), len(io.read_truth(truth).t)]
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def _edit_csv(src: Path, dst: Path, edit) -> Path:
+    lines = src.read_text(encoding="utf-8").splitlines()
+    dst.write_text("\n".join(edit(lines)) + "\n", encoding="utf-8")
+    return dst
+
+
+def _set_cell(lines: list[str], row: int, col: int, value: str) -> list[str]:
+    """Data row ``row`` (0-based, after one comment line and the header)."""
+    cells = lines[2 + row].split(",")
+    cells[col] = value
+    lines[2 + row] = ",".join(cells)
+    return lines
+
+
+def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]]:
+    """argv and a fragment the message must contain, per bad input."""
+    imu, truth = f["imu"], f["truth"]
+    malformed = tmp / "malformed.toml"
+    malformed.write_text('name = "x"\n[[segment]\ntype = "hold"\n', encoding="utf-8")
+    unknown = tmp / "unknown.toml"
+    unknown.write_text(SHORT.replace("[imu]\n", "[imu]\nfilter = 3\n"), encoding="utf-8")
+    truth_file = tmp / "truth_missing.toml"
+    truth_file.write_text('[truth]\nfile = "gone.csv"\n', encoding="utf-8")
+    no_yaw = _edit_csv(
+        truth,
+        tmp / "no_yaw.csv",
+        lambda ls: [ln if ln.startswith("#") else ln.rsplit(",", 1)[0] for ln in ls],
+    )
+    nan = _edit_csv(imu, tmp / "nan.csv", lambda ls: _set_cell(ls, 10, 5, "nan"))
+    back = _edit_csv(imu, tmp / "back.csv", lambda ls: _set_cell(ls, 20, 0, "0.05"))
+    mixed = _edit_csv(imu, tmp / "mixed.csv", lambda ls: [ls[0], ls[1].replace("dtheta", "gyro"), *ls[2:]])
+    return {
+        "malformed-toml": (["run", str(malformed)], "invalid TOML"),
+        "unknown-key": (["run", str(unknown)], "imu.filter"),
+        "truth-file-missing": (["run", str(truth_file)], "gone.csv"),
+        "missing-column": (["integrate", str(imu), "--truth", str(no_yaw)], "'yaw'"),
+        "nan": (["integrate", str(nan), "--truth", str(truth)], f"{nan}:13: column 'dv_y'"),
+        "non-increasing-time": (["integrate", str(back), "--truth", str(truth)], f"{back}:23: column 't'"),
+        "mixed-forms": (["integrate", str(mixed), "--truth", str(truth)], "mixes rate columns"),
+        "nonexistent-imu": (["integrate", str(tmp / "nope.csv"), "--truth", str(truth)], "nope.csv"),
+        "nonexistent-truth": (["integrate", str(imu), "--truth", str(tmp / "nope.csv")], "nope.csv"),
+        "nonexistent-scenario": (["run", str(tmp / "nope.toml")], "nope.toml"),
+        "unknown-preset": (["run", "no_such_preset"], "no_such_preset"),
+        "json-nonexistent-dir": (
+            ["run", str(f["scenario"]), "--json", str(tmp / "nodir" / "x.json")],
+            "nodir",
+        ),
+        "integrate-json-nonexistent-dir": (
+            ["integrate", str(imu), "--truth", str(truth), "--json", str(tmp / "nodir" / "x.json")],
+            "does not exist",
+        ),
+        "simulate-nonexistent-dir": (
+            [
+                "simulate",
+                str(f["scenario"]),
+                "--imu",
+                str(tmp / "nodir" / "i.csv"),
+                "--truth",
+                str(tmp / "t.csv"),
+            ],
+            "does not exist",
+        ),
+        "imu-starts-at-truth-start": (
+            ["integrate", str(_shifted(imu, tmp)), "--truth", str(truth)],
+            "not after",
+        ),
+    }
+
+
+def _shifted(imu: Path, tmp: Path) -> Path:
+    """Increment rows whose first interval would end at the truth's first time (t = 0)."""
+
+    def edit(lines: list[str]) -> list[str]:
+        body = [line.split(",") for line in lines[2:]]
+        return lines[:2] + [",".join([repr(float(c[0]) - 0.01), *c[1:]]) for c in body]
+
+    return _edit_csv(imu, tmp / "shifted.csv", edit)
+
+
+BAD_IDS = [
+    "malformed-toml",
+    "unknown-key",
+    "truth-file-missing",
+    "missing-column",
+    "nan",
+    "non-increasing-time",
+    "mixed-forms",
+    "nonexistent-imu",
+    "nonexistent-truth",
+    "nonexistent-scenario",
+    "unknown-preset",
+    "json-nonexistent-dir",
+    "integrate-json-nonexistent-dir",
+    "simulate-nonexistent-dir",
+    "imu-starts-at-truth-start",
+]
+
+
+@pytest.mark.parametrize("case", BAD_IDS)
+def test_bad_input_in_process(
+    case: str, short_files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv, fragment = _bad_cases(short_files, tmp_path)[case]
+    rc = main(argv)
+    captured = capsys.readouterr()
+    _assert_one_line_error(rc, captured.out, captured.err)
+    assert fragment in captured.err
+    assert not (tmp_path / "nodir").exists()
+
+
+@pytest.mark.parametrize("case", ["nan", "malformed-toml", "mixed-forms"])
+def test_bad_input_subprocess(case: str, short_files: dict[str, Path], tmp_path: Path) -> None:
+    argv, fragment = _bad_cases(short_files, tmp_path)[case]
+    proc = subprocess.run(
+        [sys.executable, "-m", "sins.cli", *argv], capture_output=True, text=True, timeout=120, check=False
+    )
+    _assert_one_line_error(proc.returncode, proc.stdout, proc.stderr)
+    assert fragment in proc.stderr
+
+
+def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["integrate", "imu.csv"])  # --truth is required
+    assert info.value.code == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_json_onto_a_directory(
+    short_files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "out.json").mkdir()
+    rc = main(["integrate", str(short_files["imu"]), "--truth", str(short_files["truth"]),
+               "--json", str(tmp_path / "out.json")])  # fmt: skip
+    _assert_one_line_error(rc, "", capsys.readouterr().err)
+
+
+def test_scenario_not_utf8(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "latin1.toml"
+    path.write_bytes('name = "Zürich"\n'.encode("latin-1"))
+    rc = main(["run", str(path)])
+    _assert_one_line_error(rc, "", capsys.readouterr().err)
