@@ -5,9 +5,9 @@ and returns components as tuples rather than stacked arrays, so that the same
 source compiles unchanged under numba inside the strapdown kernel.
 Latitude ``lat`` in radians, height ``h`` in metres above the ellipsoid.
 
-The compiled kernels (``strapdown``, ``trajectory``) inline the leaf functions
-``radii_from_sin2`` and ``normal_gravity_from_sin2``, which must stay free of
-calls to other Python functions. numba keys a cached kernel on the kernel's own
+The compiled kernels (``strapdown``, ``trajectory``) inline the leaf function
+``radii_and_gravity_from_sin2``, which must stay free of calls to other Python
+functions. numba keys a cached kernel on the kernel's own
 file only: after editing this module, run ``make clean-cache``.
 """
 
@@ -44,14 +44,8 @@ _M = OMEGA_IE**2 * A**2 * B / GM
 
 def radii(lat: Floats) -> tuple[Floats, Floats]:
     """Meridian and prime-vertical radii of curvature ``(R_M, R_N)`` in metres."""
-    return radii_from_sin2(np.sin(lat) ** 2)
-
-
-def radii_from_sin2(sin2_lat: Floats) -> tuple[Floats, Floats]:
-    """:func:`radii` for callers that already hold ``sin²(lat)``."""
-    w = 1.0 - E2 * sin2_lat
-    r_n = A / np.sqrt(w)
-    return r_n * (1.0 - E2) / w, r_n
+    r_m, r_n, _ = radii_and_gravity_from_sin2(np.sin(lat) ** 2, 0.0)
+    return r_m, r_n
 
 
 def normal_gravity(lat: Floats, h: Floats) -> Floats:
@@ -60,13 +54,21 @@ def normal_gravity(lat: Floats, h: Floats) -> Floats:
     Somigliana's closed formula on the ellipsoid with the standard second-order
     height correction. The vector in NED is ``(0, 0, normal_gravity)``.
     """
-    return normal_gravity_from_sin2(np.sin(lat) ** 2, h)
+    return radii_and_gravity_from_sin2(np.sin(lat) ** 2, h)[2]
 
 
-def normal_gravity_from_sin2(sin2_lat: Floats, h: Floats) -> Floats:
-    """:func:`normal_gravity` for callers that already hold ``sin²(lat)``."""
-    gamma0 = GAMMA_E * (1.0 + _SOMIGLIANA_K * sin2_lat) / np.sqrt(1.0 - E2 * sin2_lat)
-    return gamma0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * sin2_lat) * h + 3.0 / (A * A) * h * h)
+def radii_and_gravity_from_sin2(sin2_lat: Floats, h: Floats) -> tuple[Floats, Floats, Floats]:
+    """``(R_M, R_N, normal_gravity)`` from ``sin²(lat)`` and height: the one Earth-shape formula.
+
+    A leaf function (numpy only, no calls into this module) so that the compiled
+    kernels inline it; :func:`radii` and :func:`normal_gravity` wrap it.
+    """
+    w = 1.0 - E2 * sin2_lat
+    inv_sqrt_w = 1.0 / np.sqrt(w)
+    r_n = A * inv_sqrt_w
+    gamma0 = GAMMA_E * (1.0 + _SOMIGLIANA_K * sin2_lat) * inv_sqrt_w
+    gamma = gamma0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * sin2_lat) * h + 3.0 / (A * A) * h * h)
+    return r_n * (1.0 - E2) / w, r_n, gamma
 
 
 def earth_rate_n(lat: Floats) -> tuple[Floats, Floats, Floats]:

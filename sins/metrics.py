@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -64,8 +65,41 @@ def nav_errors(estimate: NavSeries, truth: NavSeries) -> NavErrors:
             -(estimate.h - truth.h),
         ]
     )
-    att = rotation.wrap_angle(np.column_stack(estimate.euler()) - np.column_stack(truth.euler()))
+    att = euler_errors(estimate.q_nb, truth.q_nb)
     return NavErrors(t=estimate.t, pos_ned_m=pos, vel_ned_mps=estimate.v_n - truth.v_n, att_rpy_rad=att)
+
+
+@numba.njit(cache=True, nogil=True)
+def _euler_errors(q_est: Array, q_true: Array) -> Array:
+    n = q_est.shape[0]
+    out = np.empty((n, 3))
+    angles = np.empty((2, 3))
+    for k in range(n):
+        for j in range(2):
+            q = q_est[k] if j == 0 else q_true[k]
+            x, y, z, w = q[0], q[1], q[2], q[3]
+            c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
+            c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
+            angles[j, 1] = np.arctan2(-c20, np.hypot(c00, c10))
+            if np.hypot(c21, c22) < 1e-12:  # gimbal lock: roll 0, yaw takes the rest
+                angles[j, 0] = 0.0
+                angles[j, 2] = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
+            else:
+                angles[j, 0] = np.arctan2(c21, c22)
+                angles[j, 2] = np.arctan2(c10, c00)
+        for i in range(3):
+            d = angles[0, i] - angles[1, i]
+            out[k, i] = d - 2.0 * np.pi * np.round(d / (2.0 * np.pi))
+    return out
+
+
+def euler_errors(q_est: Array, q_true: Array) -> Array:
+    """Roll, pitch, yaw of ``q_est`` minus those of ``q_true``, wrapped to ±π, shape (n, 3).
+
+    The compiled equivalent of ``wrap_angle(euler_from_quat(q_est) - euler_from_quat(q_true))``
+    (:mod:`sins.rotation`), which ``tests/test_metrics.py`` holds it to.
+    """
+    return _euler_errors(np.ascontiguousarray(q_est, dtype=float), np.ascontiguousarray(q_true, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -104,12 +138,13 @@ class DriftAccumulator:
 
     The statistics use every sample; the copy keeps the samples whose running
     index is a multiple of ``keep_every`` plus the last one, so long runs can
-    be summarised and plotted without holding them whole.
+    be summarised and plotted without holding them whole. ``keep_every=0``
+    keeps no copy.
     """
 
     def __init__(self, keep_every: int = 1) -> None:
-        if keep_every < 1:
-            raise ValueError(f"keep_every must be >= 1, got {keep_every}")
+        if keep_every < 0:
+            raise ValueError(f"keep_every must be >= 0, got {keep_every}")
         self.keep_every = keep_every
         self._count = 0
         self._t0: float | None = None
@@ -130,9 +165,10 @@ class DriftAccumulator:
         self._max_hor = max(self._max_hor, float(hor.max()))
         self._sum_hor2 += float(np.dot(hor, hor))
         self._max_att = np.maximum(self._max_att, np.abs(errors.att_rpy_rad).max(axis=0))
-        keep = kept_indices(self._count, n, self.keep_every)
-        if keep.size:
-            self._kept.append(_take(errors, keep))
+        if self.keep_every:
+            keep = kept_indices(self._count, n, self.keep_every)
+            if keep.size:
+                self._kept.append(_take(errors, keep))
         self._count += n
         self._last = _take(errors, np.array([n - 1]))
 
@@ -169,6 +205,8 @@ class DriftAccumulator:
 
     def kept(self) -> NavErrors:
         """The thinned series, ending with the last sample added."""
+        if not self.keep_every:
+            raise ValueError("this accumulator keeps no series (keep_every=0)")
         parts = list(self._kept)
         if self._last is not None and (self._count - 1) % self.keep_every != 0:
             parts.append(self._last)
@@ -198,6 +236,6 @@ def _take(errors: NavErrors, index: NDArray[np.integer]) -> NavErrors:
 
 def summarize(errors: NavErrors) -> DriftSummary:
     """Final, maximum and RMS errors and the drift rate of a whole error series."""
-    acc = DriftAccumulator()
+    acc = DriftAccumulator(keep_every=0)
     acc.add(errors)
     return acc.summary()

@@ -77,7 +77,7 @@ class Motion(Protocol):
 # channels at every quadrature node of an hour-long run.
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _evaluate_pieces(
     edges: Array, base: Array, rate_amp: Array, value_amp: Array, ramp: Array, t: Array
 ) -> tuple[Array, Array, Array]:
@@ -431,7 +431,7 @@ class SegmentMotion:
         return Kinematics(v_n=v_n, a_n=a_n, q_nb=q_nb, omega_nb_b=omega_nb_b)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _segment_kinematics(
     s: Array, ds: Array, psi: Array, dpsi: Array, d2psi: Array, gam: Array, dgam: Array,
     roll_c: Array, droll_c: Array, dth: Array, ddth: Array, dps: Array, ddps: Array,

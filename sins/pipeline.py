@@ -7,9 +7,12 @@ the CLI prints and writes.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -18,6 +21,8 @@ from sins.errors import SinsInputError
 from sins.metrics import DriftAccumulator, DriftSummary, NavErrors, kept_indices, nav_errors, summarize
 from sins.scenario import Scenario
 from sins.series import ImuIncrements, ImuRates, NavSeries
+
+T = TypeVar("T")
 
 #: The scenario ``sins run`` uses without an argument.
 DEFAULT_SCENARIO = "car_drive"
@@ -113,7 +118,7 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
     try:
         motion = scenario.build_motion(sc)
         first = trajectory.start_state(motion)
-        chunks = trajectory.generate_chunks(motion, sc.rate_hz)
+        chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
         keep_every = max(1, round(sc.rate_hz / keep_hz))
         state = strapdown.start(strapdown.InitialState.from_series(first))
         acc = DriftAccumulator(keep_every)
@@ -141,6 +146,19 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
         solution_kept.append(solution_c.at(-1))
     run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run})
+
+
+def _prefetched(items: Iterator[T]) -> Iterator[T]:
+    """Yield from ``items``, producing the next one in a worker thread meanwhile.
+
+    The compiled kernels release the GIL, so generating chunk k+1 overlaps
+    integrating chunk k on a second core.
+    """
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        future = pool.submit(next, items, None)
+        while (item := future.result()) is not None:
+            future = pool.submit(next, items, None)
+            yield item
 
 
 def _join(parts: list[NavSeries]) -> NavSeries:

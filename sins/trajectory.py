@@ -30,11 +30,10 @@ Array = NDArray[np.float64]
 #: Sample intervals generated per chunk; bounds memory, not results.
 CHUNK = 16384
 
-_gravity = numba.njit(cache=True, inline="always")(earth.normal_gravity_from_sin2)
-_radii = numba.njit(cache=True, inline="always")(earth.radii_from_sin2)
+_earth = numba.njit(cache=True, inline="always")(earth.radii_and_gravity_from_sin2)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _ideal_imu(
     v_n: Array, a_n: Array, q_nb: Array, omega_nb_b: Array, lat: Array, h: Array
 ) -> tuple[Array, Array]:
@@ -44,7 +43,7 @@ def _ideal_imu(
     for k in range(n):
         vn, ve, vd = v_n[k, 0], v_n[k, 1], v_n[k, 2]
         slat, clat = np.sin(lat[k]), np.cos(lat[k])
-        r_m, r_n = _radii(slat * slat)
+        r_m, r_n, g = _earth(slat * slat, h[k])
         wie_n, wie_d = earth.OMEGA_IE * clat, -earth.OMEGA_IE * slat
         wen_n = ve / (r_n + h[k])
         wen_e = -vn / (r_m + h[k])
@@ -53,7 +52,7 @@ def _ideal_imu(
         c = (2.0 * wie_n + wen_n, wen_e, 2.0 * wie_d + wen_d)
         fn = a_n[k, 0] + c[1] * vd - c[2] * ve
         fe = a_n[k, 1] + c[2] * vn - c[0] * vd
-        fd = a_n[k, 2] + c[0] * ve - c[1] * vn - _gravity(slat * slat, h[k])
+        fd = a_n[k, 2] + c[0] * ve - c[1] * vn - g
         x, y, z, w = q_nb[k, 0], q_nb[k, 1], q_nb[k, 2], q_nb[k, 3]
         # C_bn = C_nbᵀ applied column by column.
         c00, c01, c02 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)
@@ -68,7 +67,7 @@ def _ideal_imu(
     return omega, force
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _integrate_position(
     width: Array, v: Array, lat0: float, lon0: float, h0: float
 ) -> tuple[Array, Array, Array, Array, Array]:
@@ -90,7 +89,7 @@ def _integrate_position(
     h_m = np.empty(ne - 1)
     lat[0], lon[0], h[0] = lat0, lon0, h0
     s0 = np.sin(lat0)
-    r_m0, r_n0 = _radii(s0 * s0)
+    r_m0, r_n0, _ = _earth(s0 * s0, 0.0)
     c0 = np.sqrt(1.0 - s0 * s0)
     for i in range(ne - 1):
         w = width[i]
@@ -99,9 +98,9 @@ def _integrate_position(
         hm = 0.5 * (h[i] + h1) - w * (vd0 - vd1) / 8.0
         dlat0 = v[i, 0] / (r_m0 + h[i])
         sm = np.sin(lat[i] + 0.5 * w * dlat0)
-        r_mm, r_nm = _radii(sm * sm)
+        r_mm, r_nm, _ = _earth(sm * sm, 0.0)
         s1 = np.sin(lat[i] + w * dlat0)
-        r_m1, r_n1 = _radii(s1 * s1)
+        r_m1, r_n1, _ = _earth(s1 * s1, 0.0)
         dlatm = v[ne + i, 0] / (r_mm + hm)
         dlat1 = v[i + 1, 0] / (r_m1 + h1)
         lat1 = lat[i] + w / 6.0 * (dlat0 + 4.0 * dlatm + dlat1)
