@@ -152,11 +152,6 @@ class Channel:
     sin_period: Array = field(default_factory=lambda: np.ones(0))
     sin_phase: Array = field(default_factory=lambda: np.zeros(0))
 
-    def end_value(self) -> float:
-        """Value after the last piece, without sinusoids."""
-        length = self.edges[-1] - self.edges[-2]
-        return float(self.base[-1] + self.rate_amp[-1] * (length - self.ramp[-1]))
-
     def evaluate(self, t: Array) -> tuple[Array, Array, Array]:
         """Value, first and second time derivative at times ``t``, shape (n,) each."""
         t = np.ascontiguousarray(t, dtype=float)
@@ -182,17 +177,6 @@ class Channel:
         active = (self.rate_amp != 0.0) | (self.value_amp != 0.0)
         pts = [self.edges, (t_a + self.ramp)[active], (t_b - self.ramp)[active]]
         return np.unique(np.concatenate(pts))
-
-
-def constant_channel(value: float, t_start: float, t_end: float) -> Channel:
-    """A channel that holds ``value`` over ``[t_start, t_end]``."""
-    return Channel(
-        edges=np.array([t_start, t_end]),
-        base=np.array([value]),
-        rate_amp=np.zeros(1),
-        value_amp=np.zeros(1),
-        ramp=np.zeros(1),
-    )
 
 
 # --------------------------------------------------------------------------- segment motion

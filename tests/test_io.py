@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import refusal
 from scipy.spatial.transform import Rotation
 
 from sins import io
-from sins.errors import SinsInputError
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
 SEED = 20240611
@@ -26,17 +26,6 @@ TRUTH_HEADER = ",".join(io.TRUTH_COLUMNS)
 def _write(path: Path, text: str) -> Path:
     path.write_text(text, encoding="utf-8")
     return path
-
-
-def _refusal(call, *fragments: str) -> str:
-    """Run ``call``, expect a one-line SinsInputError containing every fragment; return the message."""
-    with pytest.raises(SinsInputError) as info:
-        call()
-    message = str(info.value)
-    assert "\n" not in message and "\r" not in message, message
-    for fragment in fragments:
-        assert fragment in message, f"{fragment!r} not in {message!r}"
-    return message
 
 
 def _random_truth(rng: np.random.Generator, n: int = 300) -> NavSeries:
@@ -152,14 +141,14 @@ COMMENTS = "# recorded by a test\n# second comment line\n"  # two lines before t
 def test_missing_required_column(tmp_path: Path) -> None:
     header = RATE_HEADER.replace(",gyro_y", "")
     path = _write(tmp_path / "imu.csv", COMMENTS + header + "\n" + "\n".join(_rows(3, 6)) + "\n")
-    _refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:3:", "'gyro_y'")
-    _refusal(lambda: io.read_imu(path), f"{path}:3:", "'gyro_y'")
+    refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:3:", "'gyro_y'")
+    refusal(lambda: io.read_imu(path), f"{path}:3:", "'gyro_y'")
 
 
 def test_truth_missing_column(tmp_path: Path) -> None:
     header = TRUTH_HEADER.replace(",vd", "")
     path = _write(tmp_path / "truth.csv", header + "\n" + "\n".join(_rows(3, 9)) + "\n")
-    _refusal(lambda: io.read_truth(path), f"{path}:1:", "'vd'")
+    refusal(lambda: io.read_truth(path), f"{path}:1:", "'vd'")
 
 
 @pytest.mark.parametrize("comments", ["", COMMENTS], ids=["no-comments", "two-comment-lines"])
@@ -170,8 +159,8 @@ def test_non_numeric_cell(tmp_path: Path, comments: str) -> None:
     rows[3] = ",".join(cells)
     path = _write(tmp_path / "imu.csv", comments + RATE_HEADER + "\n" + "\n".join(rows) + "\n")
     line = comments.count("\n") + 1 + 4
-    _refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:{line}:", "'accel_x'", "abc")
-    _refusal(lambda: io.read_imu(path), f"{path}:{line}:", "'accel_x'", "abc")
+    refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:{line}:", "'accel_x'", "abc")
+    refusal(lambda: io.read_imu(path), f"{path}:{line}:", "'accel_x'", "abc")
 
 
 @pytest.mark.parametrize("bad", ["nan", "NaN", "inf", "-inf", "1e999"])
@@ -181,8 +170,8 @@ def test_non_finite_value(tmp_path: Path, bad: str) -> None:
     cells[3] = bad  # data row 3, column gyro_z
     rows[2] = ",".join(cells)
     path = _write(tmp_path / "imu.csv", COMMENTS + RATE_HEADER + "\n" + "\n".join(rows) + "\n")
-    _refusal(lambda: io.read_table(path), f"{path}:6:", "'gyro_z'", "non-finite")
-    _refusal(lambda: io.read_imu(path), f"{path}:6:", "'gyro_z'")
+    refusal(lambda: io.read_table(path), f"{path}:6:", "'gyro_z'", "non-finite")
+    refusal(lambda: io.read_imu(path), f"{path}:6:", "'gyro_z'")
 
 
 @pytest.mark.parametrize("bad_t", ["0.02", "0.01"], ids=["equal", "decreasing"])
@@ -190,8 +179,8 @@ def test_non_increasing_time(tmp_path: Path, bad_t: str) -> None:
     rows = _rows(5, 7)  # times 0.01 .. 0.05
     rows[2] = bad_t + rows[2][rows[2].index(",") :]  # data row 3 goes back to (or stays at) row 2's time
     path = _write(tmp_path / "imu.csv", COMMENTS + INC_HEADER + "\n" + "\n".join(rows) + "\n")
-    _refusal(lambda: io.read_table(path), f"{path}:6:", "'t'", "does not increase")
-    _refusal(lambda: io.read_imu(path), f"{path}:6:", "'t'")
+    refusal(lambda: io.read_table(path), f"{path}:6:", "'t'", "does not increase")
+    refusal(lambda: io.read_imu(path), f"{path}:6:", "'t'")
 
 
 @pytest.mark.parametrize("width", [6, 8], ids=["too-few", "too-many"])
@@ -199,79 +188,79 @@ def test_wrong_number_of_values(tmp_path: Path, width: int) -> None:
     rows = _rows(5, 7)
     rows[3] = ",".join(["0.04"] + ["1"] * (width - 1))
     path = _write(tmp_path / "imu.csv", COMMENTS + RATE_HEADER + "\n" + "\n".join(rows) + "\n")
-    _refusal(lambda: io.read_table(path), f"{path}:7:", f"expected 7 values, found {width}")
+    refusal(lambda: io.read_table(path), f"{path}:7:", f"expected 7 values, found {width}")
 
 
 @pytest.mark.parametrize("text", ["", "\n\n", "# only a comment\n"], ids=["empty", "blank", "comment-only"])
 def test_empty_file(tmp_path: Path, text: str) -> None:
     path = _write(tmp_path / "imu.csv", text)
-    _refusal(lambda: io.read_table(path), str(path), "empty")
-    _refusal(lambda: io.read_imu(path), str(path), "empty")
-    _refusal(lambda: io.read_truth(path), str(path), "empty")
+    refusal(lambda: io.read_table(path), str(path), "empty")
+    refusal(lambda: io.read_imu(path), str(path), "empty")
+    refusal(lambda: io.read_truth(path), str(path), "empty")
 
 
 def test_header_only(tmp_path: Path) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + INC_HEADER + "\n")
-    _refusal(lambda: io.read_table(path), str(path), "no data rows")
-    _refusal(lambda: io.read_imu(path), str(path), "no data rows")
+    refusal(lambda: io.read_table(path), str(path), "no data rows")
+    refusal(lambda: io.read_imu(path), str(path), "no data rows")
 
 
 def test_duplicate_column(tmp_path: Path) -> None:
     path = _write(
         tmp_path / "imu.csv", COMMENTS + RATE_HEADER + ",temp,temp\n" + "\n".join(_rows(2, 9)) + "\n"
     )
-    _refusal(lambda: io.read_table(path), f"{path}:3:", "'temp'", "twice")
+    refusal(lambda: io.read_table(path), f"{path}:3:", "'temp'", "twice")
 
 
 def test_mixed_imu_forms(tmp_path: Path) -> None:
     header = "t,gyro_x,gyro_y,gyro_z,dv_x,dv_y,dv_z"
     path = _write(tmp_path / "imu.csv", COMMENTS + header + "\n" + "\n".join(_rows(3, 7)) + "\n")
-    _refusal(lambda: io.read_imu(path), f"{path}:3:", "mixes", "gyro_x", "dv_x")
-    _refusal(lambda: io.imu_form(tuple(header.split(",")), path, 3), f"{path}:3:", "mixes")
+    refusal(lambda: io.read_imu(path), f"{path}:3:", "mixes", "gyro_x", "dv_x")
+    refusal(lambda: io.imu_form(tuple(header.split(",")), path, 3), f"{path}:3:", "mixes")
 
 
 def test_neither_imu_form(tmp_path: Path) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + "t,a,b\n" + "\n".join(_rows(3, 3)) + "\n")
-    _refusal(lambda: io.read_imu(path), f"{path}:3:", "not an IMU file")
+    refusal(lambda: io.read_imu(path), f"{path}:3:", "not an IMU file")
     assert io.imu_form(io.RATE_COLUMNS, path) == "rate"
     assert io.imu_form(io.INCREMENT_COLUMNS, path) == "increment"
 
 
 def test_nonexistent_file(tmp_path: Path) -> None:
     path = tmp_path / "missing" / "imu.csv"
-    _refusal(lambda: io.read_table(path), str(path), "no such file")
-    _refusal(lambda: io.read_imu(path), str(path), "no such file")
-    _refusal(lambda: io.read_truth(path), str(path), "no such file")
+    refusal(lambda: io.read_table(path), str(path), "no such file")
+    refusal(lambda: io.read_imu(path), str(path), "no such file")
+    refusal(lambda: io.read_truth(path), str(path), "no such file")
 
 
 def test_directory_instead_of_file(tmp_path: Path) -> None:
-    _refusal(lambda: io.read_table(tmp_path), str(tmp_path), "is a directory")
-    _refusal(lambda: io.read_imu(tmp_path), str(tmp_path), "is a directory")
+    refusal(lambda: io.read_table(tmp_path), str(tmp_path), "is a directory")
+    refusal(lambda: io.read_imu(tmp_path), str(tmp_path), "is a directory")
 
 
 def test_not_utf8(tmp_path: Path) -> None:
     path = tmp_path / "imu.csv"
     path.write_bytes(b"t,a\n0,\xff\xfe\n")
-    _refusal(lambda: io.read_table(path), str(path), "not UTF-8")
+    refusal(lambda: io.read_table(path), str(path), "not UTF-8")
 
 
 def test_truth_latitude_out_of_range(tmp_path: Path) -> None:
     rows = ["0,45,7,0,0,0,0,0,0,0", "1,95,7,0,0,0,0,0,0,0"]
     path = _write(tmp_path / "truth.csv", COMMENTS + TRUTH_HEADER + "\n" + "\n".join(rows) + "\n")
-    _refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'", "95")
+    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'", "95")
 
 
 def test_truth_latitude_line_number_after_a_blank_line(tmp_path: Path) -> None:
     text = TRUTH_HEADER + "\n0,45,7,0,0,0,0,0,0,0\n\n# pause\n1,95,7,0,0,0,0,0,0,0\n"
     path = _write(tmp_path / "truth.csv", text)
     # Other checks (non-numeric, non-finite, time) do count those lines; the latitude check says line 3.
-    _refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'")
+    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'")
 
 
 def test_line_numbers_skip_blank_and_comment_rows_in_the_body(tmp_path: Path) -> None:
     text = COMMENTS + "t,a\n0,1\n\n# a pause in the recording\n1,nan\n"
     path = _write(tmp_path / "t.csv", text)
-    _refusal(lambda: io.read_table(path), f"{path}:7:", "'a'")
+    refusal(lambda: io.read_table(path), f"{path}:7:", "'a'")
 
 
 def test_utf8_bom_is_accepted(tmp_path: Path) -> None:
@@ -283,14 +272,14 @@ def test_utf8_bom_is_accepted(tmp_path: Path) -> None:
 
 def test_underscore_number_is_located(tmp_path: Path) -> None:
     path = _write(tmp_path / "t.csv", "t,a\n0,1\n1,1_000\n")
-    _refusal(lambda: io.read_table(path), f"{path}:3:", "'a'")
+    refusal(lambda: io.read_table(path), f"{path}:3:", "'a'")
 
 
 def test_messages_show_plain_numbers(tmp_path: Path) -> None:
     nan = _write(tmp_path / "nan.csv", "t,a\n0,1\n1,nan\n")
     back = _write(tmp_path / "back.csv", "t,a\n0,1\n0,2\n")
     for path in (nan, back):
-        message = _refusal(lambda p=path: io.read_table(p), str(path))
+        message = refusal(lambda p=path: io.read_table(p), str(path))
         assert "np.float64" not in message
 
 
@@ -300,9 +289,9 @@ def test_messages_show_plain_numbers(tmp_path: Path) -> None:
 def test_write_into_nonexistent_directory(tmp_path: Path) -> None:
     target = tmp_path / "no" / "such" / "out.csv"
     truth = _random_truth(np.random.default_rng(SEED), n=4)
-    _refusal(lambda: io.write_table(target, ["t"], np.zeros((1, 1))), str(target), "does not exist")
-    _refusal(lambda: io.write_truth(target, truth), str(target))
-    _refusal(lambda: io.write_json(target.with_suffix(".json"), {"a": 1}), str(target.with_suffix(".json")))
+    refusal(lambda: io.write_table(target, ["t"], np.zeros((1, 1))), str(target), "does not exist")
+    refusal(lambda: io.write_truth(target, truth), str(target))
+    refusal(lambda: io.write_json(target.with_suffix(".json"), {"a": 1}), str(target.with_suffix(".json")))
     assert not (tmp_path / "no").exists()
 
 
@@ -355,7 +344,7 @@ def test_successful_write_replaces_existing_file(tmp_path: Path) -> None:
 
 def test_write_onto_a_directory_is_refused(tmp_path: Path) -> None:
     (tmp_path / "out.csv").mkdir()
-    _refusal(lambda: io.write_table(tmp_path / "out.csv", ["t"], np.zeros((1, 1))), "out.csv")
+    refusal(lambda: io.write_table(tmp_path / "out.csv", ["t"], np.zeros((1, 1))), "out.csv")
 
 
 # --------------------------------------------------------------------------- increments_from_table
@@ -365,7 +354,7 @@ def test_write_onto_a_directory_is_refused(tmp_path: Path) -> None:
 def test_increments_start_must_precede_first_row(tmp_path: Path, start: float) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + INC_HEADER + "\n" + "\n".join(_rows(3, 7)) + "\n")
     table = io.read_table(path, required=io.INCREMENT_COLUMNS)
-    _refusal(lambda: io.increments_from_table(table, start), f"{path}:4:", "'t'")
+    refusal(lambda: io.increments_from_table(table, start), f"{path}:4:", "'t'")
     inc = io.increments_from_table(table, 0.0)
     assert np.array_equal(inc.t, [0.0, 0.01, 0.02, 0.03])
 

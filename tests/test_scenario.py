@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import refusal
 from scipy.spatial.transform import Rotation
 
 from sins import io, motion, scenario, trajectory
-from sins.errors import SinsInputError
 
 SEED = 7_2024
 PRESET_DIR = Path(__file__).resolve().parents[1] / "scenarios"
@@ -75,16 +75,6 @@ def _edit(doc: dict[str, Any], change) -> dict[str, Any]:
     new = copy.deepcopy(doc)
     change(new)
     return new
-
-
-def _refusal(call, *fragments: str) -> str:
-    with pytest.raises(SinsInputError) as info:
-        call()
-    message = str(info.value)
-    assert "\n" not in message and "\r" not in message, message
-    for fragment in fragments:
-        assert fragment in message, f"{fragment!r} not in {message!r}"
-    return message
 
 
 def _wrap_deg(angle: float) -> float:
@@ -291,7 +281,7 @@ REFUSALS = [
 def test_refused(tmp_path: Path, doc: dict[str, Any], change, fragments: list[str]) -> None:
     path = tmp_path / "scenario.toml"
     path.write_text(_toml(_edit(doc, change)), encoding="utf-8")
-    message = _refusal(lambda: scenario.load(path), f"{path}: ", *fragments)
+    message = refusal(lambda: scenario.load(path), f"{path}: ", *fragments)
     # The key path comes right after the file name.
     key = fragments[0]
     if key.endswith(":"):
@@ -309,25 +299,25 @@ def test_base_documents_are_valid(tmp_path: Path) -> None:
 def test_malformed_toml(tmp_path: Path) -> None:
     path = tmp_path / "bad.toml"
     path.write_text('name = "x"\n[initial\nlat_deg = 45\n', encoding="utf-8")
-    _refusal(lambda: scenario.load(path), str(path), "invalid TOML")
+    refusal(lambda: scenario.load(path), str(path), "invalid TOML")
 
 
 def test_missing_scenario_file(tmp_path: Path) -> None:
     path = tmp_path / "nope.toml"
-    _refusal(lambda: scenario.load(path), str(path), "no such")
+    refusal(lambda: scenario.load(path), str(path), "no such")
 
 
 def test_scenario_not_utf8(tmp_path: Path) -> None:
     path = tmp_path / "latin1.toml"
     path.write_bytes('name = "Zürich"\n'.encode("latin-1"))
-    _refusal(lambda: scenario.load(path), str(path))
+    refusal(lambda: scenario.load(path), str(path))
 
 
 def test_huge_integer(tmp_path: Path) -> None:
     doc = _edit(BASE, lambda d: d["initial"].update(alt_m=10**400))
     path = tmp_path / "big.toml"
     path.write_text(_toml(doc), encoding="utf-8")
-    _refusal(lambda: scenario.load(path), str(path), "initial.alt_m")
+    refusal(lambda: scenario.load(path), str(path), "initial.alt_m")
 
 
 def test_truth_file_missing(tmp_path: Path) -> None:
@@ -336,7 +326,7 @@ def test_truth_file_missing(tmp_path: Path) -> None:
     path.write_text(_toml(doc), encoding="utf-8")
     sc = scenario.load(path)  # the file is only read when the motion is built
     # Relative to the scenario file's folder.
-    _refusal(lambda: scenario.build_motion(sc), str(tmp_path / "recordings" / "truth.csv"), "no such file")
+    refusal(lambda: scenario.build_motion(sc), str(tmp_path / "recordings" / "truth.csv"), "no such file")
 
 
 # --------------------------------------------------------------------------- recorded truth
@@ -383,7 +373,7 @@ def test_truth_table_too_short(tmp_path: Path) -> None:
         encoding="utf-8",
     )
     sc = scenario.from_dict({"truth": {"file": "truth.csv"}}, source=tmp_path / "rec.toml")
-    _refusal(lambda: scenario.build_motion(sc), str(path), "at least 4 rows")
+    refusal(lambda: scenario.build_motion(sc), str(path), "at least 4 rows")
 
 
 # --------------------------------------------------------------------------- segment semantics
