@@ -108,6 +108,36 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
         sc = scenario.load(path)
         marker = " (default)" if name == pipeline.DEFAULT_SCENARIO else ""
         print(f"{name:<16} {sc.description}{marker}")
+    print(f"rig procedures (sins calibrate RIG): {', '.join(pipeline.presets('rig'))}")
+    print(f"IMU models (--imu): {', '.join(pipeline.presets('imu'))}")
+    return 0
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from sins import calibration, io, pipeline, scenario
+
+    rig = scenario.load_rig(pipeline.resolve_scenario(args.rig, "rig"))
+    spec = scenario.load_imu(pipeline.resolve_scenario(args.imu, "imu"))
+    data = calibration.simulate_rig(rig, spec.model(run_seed=args.seed), seed=args.seed)
+    note = (
+        f"sins {__version__}: simulated rig {args.rig} with IMU {args.imu}, seed {args.seed}\n"
+        f"effects: {', '.join(spec.model(run_seed=args.seed).names) or 'none'}"
+    )
+    io.write_recording(args.out, data, comment=note)
+    print(
+        f"wrote {args.out}: {len(data)} rows, {data.t[-1] - data.t[0]:.1f} s at {rig.rate_hz:g} Hz, "
+        f"{len(data.phases)} phases"
+    )
+    return 0
+
+
+def _cmd_effects(args: argparse.Namespace) -> int:
+    from sins import imu, imu_spec
+
+    for name, spec in imu_spec.PARAMETERS.items():
+        params = ", ".join(f"{p.key} [{p.unit}]" for p in spec.params)
+        marker = "  (baseline)" if name in imu.BASELINE else ""
+        print(f"{name:<26} {spec.description}{marker}\n{'':<26} {params}")
     return 0
 
 
@@ -140,6 +170,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
     p.add_argument("--form", choices=("increment", "rate"), default="increment")
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("calibrate", help="simulate a calibration rig session and write the recording")
+    p.add_argument("rig", metavar="RIG.toml", help="rig file or preset (e.g. 24pos_ratetable)")
+    p.add_argument("--imu", required=True, metavar="IMU.toml", help="IMU file or preset (e.g. tactical)")
+    p.add_argument("--out", type=Path, required=True, metavar="RECORDING.csv")
+    p.add_argument("--seed", type=int, default=0, help="seeds the rig's errors and the IMU's run (default 0)")
+    p.set_defaults(func=_cmd_calibrate)
+
+    p = sub.add_parser("effects", help="list the IMU error effects, their parameters and units")
+    p.set_defaults(func=_cmd_effects)
 
     p = sub.add_parser("scenarios", help="list the preset scenarios shipped with sins")
     p.set_defaults(func=_cmd_scenarios)

@@ -57,23 +57,24 @@ def preset_dir() -> Path:
     return Path(str(resources.files("sins") / "scenarios"))
 
 
-def presets() -> dict[str, Path]:
-    """Shipped preset scenarios by name."""
-    return {p.stem: p for p in sorted(preset_dir().glob("*.toml"))}
+def presets(kind: str = "") -> dict[str, Path]:
+    """Shipped presets by name: scenarios (``kind=""``), ``"rig"`` procedures or ``"imu"`` models."""
+    return {p.stem: p for p in sorted((preset_dir() / kind).glob("*.toml"))}
 
 
-def resolve_scenario(name_or_path: str | os.PathLike[str] | None) -> Path:
-    """A scenario path from a path, a preset name, or ``None`` (the default preset)."""
+def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: str = "") -> Path:
+    """A file path from a path, a preset name of ``kind``, or ``None`` (the default scenario)."""
     if name_or_path is None:
         name_or_path = DEFAULT_SCENARIO
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         return path
-    known = presets()
+    known = presets(kind)
     if str(name_or_path) in known:
         return known[str(name_or_path)]
+    what = {"": "scenario", "rig": "rig", "imu": "IMU"}[kind]
     raise SinsInputError(
-        f"{name_or_path}: no such scenario file or preset (presets: {', '.join(known) or 'none'})"
+        f"{name_or_path}: no such {what} file or preset (presets: {', '.join(known) or 'none'})"
     )
 
 

@@ -28,6 +28,7 @@ Example (see ``scenarios/`` for the presets)::
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import tomllib
@@ -37,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from sins import earth, io, motion
+from sins import calibration, earth, imu, imu_spec, io, motion
 from sins.errors import SinsInputError
 
 _MISSING: Any = object()
@@ -150,6 +151,37 @@ class _Keys:
             raise self.error(f"must be one of {', '.join(choices)}; got {value!r}", key)
         return value
 
+    def numbers(self, key: str, default: Any = _MISSING) -> list[float]:
+        """A non-empty array of finite numbers."""
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error("missing required key", key)
+            return list(default)
+        value = self.get(key)
+        if not isinstance(value, list) or not value:
+            raise self.error(f"expected a non-empty array of numbers, got {_kind(value)}", key)
+        out = []
+        for i, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, int | float) or not math.isfinite(float(item)):
+                raise self.error(f"item {i + 1}: expected a finite number, got {item!r}", key)
+            out.append(float(item))
+        return out
+
+    def strings(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> list[str]:
+        """An array of strings, each among ``choices`` when given."""
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error("missing required key", key)
+            return list(default)
+        value = self.get(key)
+        if not isinstance(value, list):
+            raise self.error(f"expected an array of strings, got {_kind(value)}", key)
+        for i, item in enumerate(value):
+            if not isinstance(item, str) or (choices and item not in choices):
+                allowed = f" (one of {', '.join(choices)})" if choices else ""
+                raise self.error(f"item {i + 1}: expected a string{allowed}, got {item!r}", key)
+        return list(value)
+
     def boolean(self, key: str, default: bool) -> bool:
         if key not in self.table:
             return default
@@ -192,20 +224,23 @@ def load(path: str | os.PathLike[str]) -> Scenario:
         one line naming the file and the key (or TOML line) at fault.
     """
     path = Path(path)
+    return from_dict(_read_toml(path, "scenario"), source=path)
+
+
+def _read_toml(path: Path, what: str) -> dict[str, Any]:
     try:
         with open(path, "rb") as fh:
-            data = tomllib.load(fh)
+            return tomllib.load(fh)
     except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such scenario file") from None
+        raise SinsInputError(f"{path}: no such {what} file") from None
     except tomllib.TOMLDecodeError as exc:
         raise SinsInputError(f"{path}: invalid TOML: {exc}") from None
     except UnicodeDecodeError as exc:
         raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     except IsADirectoryError:
-        raise SinsInputError(f"{path}: is a directory, expected a scenario file") from None
+        raise SinsInputError(f"{path}: is a directory, expected a {what} file") from None
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot read: {exc}") from None
-    return from_dict(data, source=path)
 
 
 def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
@@ -390,3 +425,103 @@ def build_motion(scenario: Scenario) -> motion.Motion:
         t=truth.t, lat0=float(truth.lat[0]), lon0=float(truth.lon[0]), h0=float(truth.h[0]), v_n=truth.v_n,
         q_nb=truth.q_nb,
     )  # fmt: skip
+
+
+# --------------------------------------------------------------------------- IMU and rig files
+
+
+@dataclass(frozen=True)
+class ImuSpec:
+    """An IMU file: an optional grade's unit draw, explicit effects, withheld effect names."""
+
+    grade: str | None
+    unit_seed: int
+    effects: tuple[imu.Effect, ...]
+    withhold: tuple[str, ...]
+    source: Path | None = None
+
+    def model(self, run_seed: int | None = None) -> imu.ImuModel:
+        """The unit's error model for one power-on (``run_seed`` draws its turn-on bias)."""
+        base = imu_spec.draw_unit(self.grade, self.unit_seed, run_seed) if self.grade else imu.ImuModel()
+        return base.with_effects(*self.effects).without(*self.withhold)
+
+
+def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
+    """Read an IMU file::
+
+    grade = "tactical"          # optional: consumer | industrial | tactical | navigation
+    unit_seed = 1               # which unit of the grade
+    withhold = ["gyro.noise"]   # optional: effects switched off
+    [[effect]]                  # explicit effects, in familiar units (`sins effects`)
+    name = "gyro.scale_nonlinearity"
+    k2_ppm_per_dps = [50, 50, 50]
+    """
+    path = Path(path)
+    top = _Keys(str(path), "", _read_toml(path, "IMU"))
+    grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
+    unit_seed = int(top.number("unit_seed", 0, low=0))
+    withhold = tuple(top.strings("withhold", [], imu.EFFECT_NAMES))
+    effects = []
+    for table in top.tables("effect"):
+        name = table.string("name", choices=imu.EFFECT_NAMES)
+        params = {k: table.get(k) for k in table.table if k != "name"}
+        try:
+            effects.append(imu_spec.effect_from_params(name, params))
+        except (ValueError, TypeError) as exc:
+            raise table.error(str(exc)) from None
+    top.done()
+    if grade is None and not effects:
+        raise top.error("give a grade, [[effect]] tables, or both")
+    return ImuSpec(grade=grade, unit_seed=unit_seed, effects=tuple(effects), withhold=withhold, source=path)
+
+
+def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
+    """Read a rig file (``[rig]``, ``[positions]``, ``[rate_table]``, ``[temperature]``; see scenarios/)."""
+    path = Path(path)
+    top = _Keys(str(path), "", _read_toml(path, "rig"))
+    rig = top.sub("rig")
+    kwargs: dict[str, Any] = dict(
+        lat_deg=rig.number("lat_deg", 45.0, low=-89.9, high=89.9),
+        lon_deg=rig.number("lon_deg", 0.0, low=-180.0, high=360.0),
+        alt_m=rig.number("alt_m", 0.0, low=-1000.0, high=10000.0),
+        rate_hz=rig.number("rate_hz", 100.0, low=1.0, high=100000.0),
+        orientation_error_deg=rig.number("orientation_error_deg", 0.0, low=0.0, high=10.0),
+        rate_error_ppm=rig.number("rate_error_ppm", 0.0, low=0.0, high=1e5),
+    )
+    rig.done()
+    positions = top.sub("positions")
+    count = positions.number("count", 0)
+    if count not in (0, 6, 12, 24):
+        raise positions.error(f"must be 0, 6, 12 or 24, got {count:g}", "count")
+    kwargs["positions"] = int(count)
+    kwargs["position_dwell_s"] = positions.number("dwell_s", 20.0, low=0.0, low_open=True)
+    positions.done()
+    if top.has("rate_table"):
+        table = top.sub("rate_table")
+        rates = table.numbers("rates_dps")
+        if any(r <= 0 for r in rates):
+            raise table.error("rates are magnitudes (both signs are run): give positive values", "rates_dps")
+        kwargs["rate_table"] = calibration.RateTable(
+            rates_dps=tuple(rates),
+            axes=tuple(table.strings("axes", ["x", "y", "z"], ("x", "y", "z"))),
+            orientations=tuple(table.strings("orientations", ["up", "down"], ("up", "down"))),
+            dwell_s=table.number("dwell_s", 10.0, low=0.0, low_open=True),
+            accel_dps2=table.number("accel_dps2", 100.0, low=0.0, low_open=True),
+        )
+        table.done()
+    else:
+        kwargs["rate_table"] = None
+    if top.has("temperature"):
+        temp = top.sub("temperature")
+        times, temps = temp.numbers("times_s"), temp.numbers("temps_degc")
+        if len(times) != len(temps):
+            raise temp.error(f"times_s has {len(times)} values, temps_degc {len(temps)}")
+        if any(b <= a for a, b in itertools.pairwise(times)):
+            raise temp.error("must increase", "times_s")
+        kwargs["temperature"] = calibration.TemperatureProfile(tuple(times), tuple(temps))
+        temp.done()
+    top.done()
+    try:
+        return calibration.RigProcedure(**kwargs)
+    except ValueError as exc:
+        raise SinsInputError(f"{path}: {exc}") from None

@@ -139,3 +139,106 @@ class ImuRates:
                 inc[1:-1] = np.where(uniform[:, None], cubic, inc[1:-1])
             out.append(inc)
         return ImuIncrements(t=self.t, dtheta_b=out[0], dv_b=out[1])
+
+
+@dataclass(frozen=True)
+class RigPhase:
+    """One phase of a calibration session: rows ``start:stop`` of the recording.
+
+    ``kind`` is "static" (the IMU at rest in one orientation) or "rotation"
+    (turning). ``angle_rad`` is the known integrated rotation of a rotation
+    phase in body axes (rad) when the rig gives no per-sample reference rate,
+    as in a hand-turned Ferraris session; otherwise ``None``.
+    """
+
+    name: str
+    start: int
+    stop: int
+    kind: str
+    angle_rad: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class CalibrationData:
+    """IMU readings beside the rig's reference inputs, in rate form, body axes.
+
+    Attributes
+    ----------
+    t : (n,) s, increasing
+    gyro, accel : (n, 3) the IMU's readings, rad/s and m/s²
+    ref_gyro, ref_accel : (n, 3) the reference angular rate ``omega_ib_b`` and
+        specific force, rad/s and m/s²; NaN where the rig gives no per-sample
+        reference (then the phase's ``angle_rad`` may constrain the integral)
+    temp : (n,) °C, or None when not recorded
+    phases : the session's phases, in time order (may be empty)
+    source : where the data came from, for messages
+    """
+
+    t: Array
+    gyro: Array
+    accel: Array
+    ref_gyro: Array
+    ref_accel: Array
+    temp: Array | None = None
+    phases: tuple[RigPhase, ...] = ()
+    source: str = ""
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def rows(self, index: NDArray[np.integer] | slice) -> CalibrationData:
+        """The rows at ``index`` (phases are dropped: their row ranges no longer apply)."""
+        return CalibrationData(
+            t=self.t[index],
+            gyro=self.gyro[index],
+            accel=self.accel[index],
+            ref_gyro=self.ref_gyro[index],
+            ref_accel=self.ref_accel[index],
+            temp=None if self.temp is None else self.temp[index],
+            source=self.source,
+        )
+
+    def split(self, validation: float, *, by_phase: bool = True) -> tuple[CalibrationData, CalibrationData]:
+        """Fit and validation portions, in contiguous time blocks.
+
+        With ``by_phase`` and phases present, the last ``validation`` fraction
+        (rounded half up, at least one row and at most all but one) of every
+        phase of two or more rows is held back, so each orientation and rate is
+        seen in both portions yet no validation sample sits between fit samples
+        of the same phase; otherwise the last fraction of the whole recording
+        is. Phases are kept, re-indexed, in both portions.
+        """
+        if not 0.0 < validation < 1.0:
+            raise ValueError(f"validation fraction must be in (0, 1), got {validation}")
+        n = len(self.t)
+        blocks = [(p.start, p.stop) for p in self.phases] if by_phase and self.phases else [(0, n)]
+        held = np.zeros(n, dtype=bool)
+        for start, stop in blocks:
+            length = stop - start
+            # At least one row each way for any block of two or more rows.
+            held_rows = min(max(int(np.floor(validation * length + 0.5)), 1), length - 1) if length > 1 else 0
+            held[stop - held_rows : stop] = True
+        fit_rows, val_rows = np.flatnonzero(~held), np.flatnonzero(held)
+        if len(fit_rows) == 0 or len(val_rows) == 0:
+            raise ValueError(f"{self.source or 'recording'}: too short to split ({n} rows)")
+        return self._subset(fit_rows), self._subset(val_rows)
+
+    def _subset(self, rows: NDArray[np.integer]) -> CalibrationData:
+        """Rows (sorted) with the phases that survive, re-indexed."""
+        position = np.full(len(self.t) + 1, -1)
+        position[rows] = np.arange(len(rows))
+        phases = []
+        for p in self.phases:
+            kept = rows[(rows >= p.start) & (rows < p.stop)]
+            if kept.size:
+                # A rotation's known angle is for the whole phase: keep it only if the phase is whole.
+                whole = kept.size == p.stop - p.start
+                phases.append(
+                    RigPhase(p.name, int(position[kept[0]]), int(position[kept[-1]]) + 1, p.kind,
+                             p.angle_rad if whole else None)
+                )  # fmt: skip
+        part = self.rows(rows)
+        return CalibrationData(
+            t=part.t, gyro=part.gyro, accel=part.accel, ref_gyro=part.ref_gyro, ref_accel=part.ref_accel,
+            temp=part.temp, phases=tuple(phases), source=self.source,
+        )  # fmt: skip

@@ -167,10 +167,18 @@ def test_run_preset_static(capsys: pytest.CaptureFixture[str], tmp_path: Path) -
 def test_scenarios_lists_every_preset(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["scenarios"]) == 0
     out = capsys.readouterr().out
-    names = [line.split()[0] for line in out.splitlines() if line.strip()]
-    shipped = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "scenarios").glob("*.toml"))
+    lines = [line for line in out.splitlines() if line.strip()]
+    names = [line.split()[0] for line in lines[:-2]]  # the last two lines list rig and IMU presets
+    root = Path(__file__).resolve().parents[1] / "scenarios"
+    shipped = sorted(p.stem for p in root.glob("*.toml"))
     assert sorted(names) == shipped == sorted(pipeline.presets())
     assert sum("(default)" in line for line in out.splitlines()) == 1
+    assert lines[-2].startswith("rig procedures") and lines[-1].startswith("IMU models")
+    for kind, line in (("rig", lines[-2]), ("imu", lines[-1])):
+        listed = sorted(x.strip() for x in line.split(":", 1)[1].split(","))
+        assert (
+            listed == sorted(p.stem for p in (root / kind).glob("*.toml")) == sorted(pipeline.presets(kind))
+        )
 
 
 # --------------------------------------------------------------------------- simulate + integrate
@@ -366,3 +374,94 @@ def test_scenario_not_utf8(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     path.write_bytes('name = "Zürich"\n'.encode("latin-1"))
     rc = main(["run", str(path)])
     _assert_one_line_error(rc, "", capsys.readouterr().err)
+
+
+# --------------------------------------------------------------------------- calibrate, effects
+
+RIG = """\
+[rig]
+lat_deg = 48.0
+rate_hz = 50
+[positions]
+count = 6
+dwell_s = 2
+[rate_table]
+rates_dps = [20, 60]
+axes = ["x", "z"]
+orientations = ["up"]
+dwell_s = 1
+accel_dps2 = 120
+"""
+
+IMU = """\
+grade = "industrial"
+unit_seed = 4
+withhold = ["gyro.bias_instability"]
+[[effect]]
+name = "gyro.scale_nonlinearity"
+k2_ppm_per_dps = [30, 30, 30]
+"""
+
+
+def test_effects_lists_every_effect_with_units(capsys: pytest.CaptureFixture[str]) -> None:
+    from sins import imu
+
+    assert main(["effects"]) == 0
+    out = capsys.readouterr().out
+    for name in imu.EFFECT_NAMES:
+        assert name in out
+    for unit in ("°/h", "mg", "ppm", "°/√h", "µg/√Hz", "°/h/g"):
+        assert unit in out
+
+
+def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from sins import io
+
+    (tmp_path / "rig.toml").write_text(RIG)
+    (tmp_path / "imu.toml").write_text(IMU)
+    outs = []
+    for name, seed in (("a.csv", "7"), ("b.csv", "7"), ("c.csv", "8")):
+        rc = main(["calibrate", str(tmp_path / "rig.toml"), "--imu", str(tmp_path / "imu.toml"),
+                   "--out", str(tmp_path / name), "--seed", seed])  # fmt: skip
+        assert rc == 0
+        outs.append(io.read_recording(tmp_path / name))
+    a, b, c = outs
+    assert len(a.phases) == 6 + 2  # six positions, two table runs
+    np.testing.assert_array_equal(a.gyro, b.gyro)  # same seed, same recording
+    assert not np.array_equal(a.gyro, c.gyro)  # another run of the same unit
+    header = (tmp_path / "a.csv").read_text().splitlines()[1]
+    assert "gyro.scale_nonlinearity" in header and "gyro.bias_instability" not in header
+    # The preset names work too.
+    assert main(["calibrate", "24pos_ratetable", "--imu", "tactical", "--out", str(tmp_path / "p.csv")]) == 0
+
+
+@pytest.mark.parametrize(
+    "imu_text, fragment",
+    [
+        ('grade = "military"\n', "grade"),
+        ('[[effect]]\nname = "gyro.wobble"\n', "name"),
+        ('[[effect]]\nname = "gyro.bias"\nbias_dps = 1\n', "unknown parameter 'bias_dps'"),
+        ('[[effect]]\nname = "gyro.scale_misalignment"\nmatrix_ppm = [1, 2]\n', "shape"),
+        ("unit_seed = 1\n", "give a grade"),
+    ],
+)
+def test_bad_imu_files_give_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], imu_text: str, fragment: str
+) -> None:
+    (tmp_path / "rig.toml").write_text(RIG)
+    (tmp_path / "imu.toml").write_text(imu_text)
+    rc = main(["calibrate", str(tmp_path / "rig.toml"), "--imu", str(tmp_path / "imu.toml"),
+               "--out", str(tmp_path / "x.csv")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and err.startswith("sins: error: ")
+    assert fragment in err and "imu.toml" in err
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_bad_rig_file_gives_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "rig.toml").write_text(RIG.replace("count = 6", "count = 7"))
+    (tmp_path / "imu.toml").write_text(IMU)
+    rc = main(["calibrate", str(tmp_path / "rig.toml"), "--imu", str(tmp_path / "imu.toml"),
+               "--out", str(tmp_path / "x.csv")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 2 and "positions.count" in err and err.count("\n") == 1
