@@ -302,7 +302,9 @@ class SeedModelFit:
         return w, n
 
 
-def fit_seed_model(data: CalibrationData, *, g_sensitivity: bool = True) -> SeedModelFit:
+def fit_seed_model(
+    data: CalibrationData, *, g_sensitivity: bool = True, sensors: tuple[str, ...] = ("gyro", "accel")
+) -> SeedModelFit:
     """Least-squares fit of the seed model on a calibration recording.
 
     Every row with a finite reference is one observation per channel. A
@@ -311,7 +313,8 @@ def fit_seed_model(data: CalibrationData, *, g_sensitivity: bool = True) -> Seed
     integrated reading equals ``(I + B) angle + B0 T`` (``K`` is not
     identifiable there and must be off: ``g_sensitivity=False``), weighted as
     one sample. Standard errors are ``σ̂² (XᵀX)⁻¹`` with ``σ̂²`` the residual
-    variance, valid for white measurement noise.
+    variance, valid for white measurement noise. A sensor left out of
+    ``sensors`` gets zero coefficients and NaN standard errors.
 
     Raises
     ------
@@ -319,34 +322,40 @@ def fit_seed_model(data: CalibrationData, *, g_sensitivity: bool = True) -> Seed
         when the recording cannot determine the coefficients (too few distinct
         orientations or rates).
     """
+    for sensor in sensors:
+        if sensor not in ("gyro", "accel"):
+            raise ValueError(f"sensors must be gyro and/or accel, got {sensor!r}")
     ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
     w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
     ones = np.ones((len(w_ref), 1))
-    x_gyro = np.hstack([ones, w_ref, n_ref] if g_sensitivity else [ones, w_ref])
-    y_gyro = data.gyro[ok] - w_ref
-    dt = np.median(np.diff(data.t)) if len(data.t) > 1 else 1.0
-    extra_x, extra_y = [], []
-    for p in data.phases:
-        if p.angle_rad is None:
-            continue
-        if g_sensitivity:
-            raise ValueError(
-                f"phase {p.name!r} constrains only the integrated rate: fit with g_sensitivity=False"
-            )
-        span = data.t[p.stop - 1] - data.t[p.start] + dt
-        angle = np.asarray(p.angle_rad)
-        # Readings summed over the phase (rectangle rule at the sample interval) against the known angle.
-        total = data.gyro[p.start : p.stop].sum(axis=0) * dt
-        scale = 1.0 / (np.sqrt(p.stop - p.start) * dt)  # one-sample weight
-        extra_x.append(scale * np.concatenate([[span], angle]))
-        extra_y.append(scale * (total - angle))
-    if extra_x:
-        x_gyro = np.vstack([x_gyro, np.array(extra_x)])
-        y_gyro = np.vstack([y_gyro, np.array(extra_y)])
-    x_acc = np.hstack([ones, n_ref])
-    y_acc = data.accel[ok] - n_ref
-    coef_g, se_g, rms_g = _lstsq(x_gyro, y_gyro, "gyro", data.source)
-    coef_a, se_a, rms_a = _lstsq(x_acc, y_acc, "accel", data.source)
+    width = 7 if g_sensitivity else 4
+    coef_g, se_g, rms_g = np.zeros((width, 3)), np.full((width, 3), np.nan), np.full(3, np.nan)
+    if "gyro" in sensors:
+        x_gyro = np.hstack([ones, w_ref, n_ref] if g_sensitivity else [ones, w_ref])
+        y_gyro = data.gyro[ok] - w_ref
+        dt = np.median(np.diff(data.t)) if len(data.t) > 1 else 1.0
+        extra_x, extra_y = [], []
+        for p in data.phases:
+            if p.angle_rad is None:
+                continue
+            if g_sensitivity:
+                raise ValueError(
+                    f"phase {p.name!r} constrains only the integrated rate: fit with g_sensitivity=False"
+                )
+            span = data.t[p.stop - 1] - data.t[p.start] + dt
+            angle = np.asarray(p.angle_rad)
+            # Readings summed over the phase (rectangle rule at the sample interval) against the known angle.
+            total = data.gyro[p.start : p.stop].sum(axis=0) * dt
+            scale = 1.0 / (np.sqrt(p.stop - p.start) * dt)  # one-sample weight
+            extra_x.append(scale * np.concatenate([[span], angle]))
+            extra_y.append(scale * (total - angle))
+        if extra_x:
+            x_gyro = np.vstack([x_gyro, np.array(extra_x)])
+            y_gyro = np.vstack([y_gyro, np.array(extra_y)])
+        coef_g, se_g, rms_g = _lstsq(x_gyro, y_gyro, "gyro", data.source)
+    coef_a, se_a, rms_a = np.zeros((4, 3)), np.full((4, 3), np.nan), np.full(3, np.nan)
+    if "accel" in sensors:
+        coef_a, se_a, rms_a = _lstsq(np.hstack([ones, n_ref]), data.accel[ok] - n_ref, "accel", data.source)
     zeros = np.zeros((3, 3))
     return SeedModelFit(
         B0=coef_g[0], B=coef_g[1:4].T, K=coef_g[4:7].T if g_sensitivity else zeros,

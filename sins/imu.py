@@ -25,12 +25,14 @@ Rate form: the inputs are instantaneous samples; white noise has standard
 deviation ``density / sqrt(dt)``. Increment form: the output is the integral
 of the corrupted rate over each interval. The rate inside an interval is
 reconstructed from the neighbouring increments (a quadratic matching the three
-interval means, exact for inputs quadratic in time) and the error is
-integrated at the interval's two Gauss nodes, so linear effects are exact and
-nonlinear ones are integrated to O(dt⁴); white noise adds ``density·sqrt(dt)``
-per increment. Stochastic effects draw from a stream keyed by the seed and
-the effect's name only, so adding or withholding one effect leaves the others'
-draws unchanged.
+interval means, exact for inputs quadratic in time; linear and one-sided in
+the first and last interval) and the error is integrated at the interval's two
+Gauss nodes, so linear effects are exact and nonlinear ones are integrated to
+O(dt⁴); white noise adds ``density·sqrt(dt)`` per increment. A time offset
+delays everything about the measurement, its temperature included.
+Stochastic effects draw from a stream keyed by the seed and the effect's name
+only, so adding or withholding one effect leaves the others' draws unchanged;
+``seed=None`` means seed 0 (runs are reproducible unless a seed is given).
 """
 
 from __future__ import annotations
@@ -328,7 +330,7 @@ class BiasInstability(Effect):
         xi = rng.standard_normal((len(t) - 1, 3))
         phi = np.exp(-dt[:, None] / self.tau)
         drive = self.sigma * np.sqrt(1.0 - phi * phi) * xi
-        _ar1(phi, drive, out)
+        _ar1(phi, drive, out, _uniform(t))
         return out
 
 
@@ -393,19 +395,27 @@ BASELINE = ("gyro.bias", "accel.bias", "gyro.scale_misalignment", "accel.scale_m
             "gyro.g_sensitivity", "gyro.noise", "accel.noise")  # fmt: skip
 
 
-def _ar1(phi: Array, drive: Array, out: Array) -> None:
+def _ar1(phi: Array, drive: Array, out: Array, uniform: bool) -> None:
     """``out[k] = phi[k-1] out[k-1] + drive[k-1]`` (in place), vectorised over channels."""
     from scipy.signal import lfilter
 
     if len(phi) == 0:
         return
-    if (np.ptp(phi, axis=0) <= 1e-12 * phi.max(axis=0)).all():  # uniform steps: a linear filter does it in C
+    if uniform:  # one coefficient: a linear filter does it in C
         for i in range(3):
-            a = phi[0, i]
+            a = float(np.median(phi[:, i]))
             out[1:, i], _ = lfilter([1.0], [1.0, -a], drive[:, i], zi=[a * out[0, i]])
         return
     for k in range(1, len(out)):
         out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
+
+
+def _uniform(t: Array) -> bool:
+    """Steps equal to 1 ppm or to the rounding of the time stamps (which grows with |t|)."""
+    dt = np.diff(t)
+    if len(dt) == 0:
+        return True
+    return bool(np.ptp(dt) <= 1e-6 * np.median(dt) + 16.0 * np.finfo(float).eps * np.abs(t).max())
 
 
 def _stream(seed: int | None, name: str) -> np.random.Generator:
@@ -505,12 +515,7 @@ class ImuModel:
         n = len(dt)
         if n == 0:
             return imu
-        if temp is not None:
-            temp = np.asarray(temp, dtype=float)
-            if temp.shape != t.shape:
-                raise ValueError(
-                    f"temp must have one value per time of imu.t, shape {t.shape}, got {temp.shape}"
-                )
+        temp = _check_temp(temp, t)
         means = (imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None])
         mid = 0.5 * (t[:-1] + t[1:])
         node_s = (-0.5 / np.sqrt(3.0), 0.5 / np.sqrt(3.0))  # two-point Gauss nodes, in units of dt
@@ -527,13 +532,21 @@ class ImuModel:
                 else:
                     omega, omega_dot = _reconstruct(means[0], t, when - d)
                     f, _ = _reconstruct(means[1], t, when - d)
-                temp_n = None if temp is None else np.interp(when, t, temp)
+                # The channel measured at when - d: its temperature was that of then.
+                temp_n = None if temp is None else np.interp(when - d, t, temp)
                 cache[j, d] = Inputs(omega=omega, f=f, omega_dot=omega_dot, temp=temp_n)
             return cache[j, d]
 
         out = []
         for sensor, ideal in (("gyro", imu.dtheta_b), ("accel", imu.dv_b)):
             bias = self._stochastic(sensor, t, seed)
+            noise = self._get(sensor, Noise)
+            # White noise as each interval's mean rate: density / sqrt(dt) per interval.
+            noise_rate = (
+                noise.density / np.sqrt(dt)[:, None] * _stream(seed, noise.name).standard_normal((n, 3))
+                if noise is not None
+                else np.zeros((n, 3))
+            )
             sat = self._get(sensor, Saturation)
             deterministic = any(e.stage == "deterministic" for e in self._of(sensor))
             delay = self._delay(sensor)
@@ -541,28 +554,24 @@ class ImuModel:
             for d in np.unique(delay):
                 cols = delay == d
                 shifted = _shift_increments(ideal, t, d) if d else ideal
-                if not deterministic and sat is None:
-                    total[:, cols] = shifted[:, cols]
+                if sat is None:
+                    part = np.zeros_like(ideal)
+                    if deterministic:
+                        for j in range(len(nodes)):
+                            part += 0.5 * dt[:, None] * self._deterministic(sensor, node_inputs(j, float(d)))
+                    # The ideal part stays exact; only the errors come from the reconstruction.
+                    total[:, cols] = (shifted + part)[:, cols]
                     continue
+                # Saturation clips the whole reading (input, errors, biases, noise) at the nodes.
                 part = np.zeros_like(ideal)
                 for j, when in enumerate(nodes):
                     inputs = node_inputs(j, float(d))
-                    err = self._deterministic(sensor, inputs)
-                    if sat is None:
-                        part += 0.5 * dt[:, None] * err
-                    else:
-                        b = np.column_stack([np.interp(when, t, bias[:, i]) for i in range(3)])
-                        part += (
-                            0.5 * dt[:, None] * np.clip(inputs.of(sensor) + err + b, -sat.limit, sat.limit)
-                        )
-                # Without clipping the ideal part stays exact; only the errors come from the reconstruction.
-                total[:, cols] = (part if sat is not None else shifted + part)[:, cols]
+                    b = np.column_stack([np.interp(when, t, bias[:, i]) for i in range(3)])
+                    rate = inputs.of(sensor) + self._deterministic(sensor, inputs) + b + noise_rate
+                    part += 0.5 * dt[:, None] * np.clip(rate, -sat.limit, sat.limit)
+                total[:, cols] = part[:, cols]
             if sat is None:
-                total = total + 0.5 * (bias[:-1] + bias[1:]) * dt[:, None]
-            noise = self._get(sensor, Noise)
-            if noise is not None:
-                xi = _stream(seed, noise.name).standard_normal((n, 3))
-                total = total + noise.density * np.sqrt(dt)[:, None] * xi
+                total = total + (0.5 * (bias[:-1] + bias[1:]) + noise_rate) * dt[:, None]
             q = self._get(sensor, Quantization)
             if q is not None and (q.step > 0).any():
                 total = _quantize_carry(total, q.step * np.median(dt))
@@ -605,6 +614,17 @@ class ImuModel:
             step = np.where(q.step > 0, q.step * scale, 1.0)
             y = np.where(q.step > 0, np.round(y / step) * step, y)
         return y
+
+
+def _check_temp(temp: Array | None, t: Array) -> Array | None:
+    if temp is None:
+        return None
+    temp = np.asarray(temp, dtype=float)
+    if temp.shape != t.shape:
+        raise ValueError(f"temp must have one value per sample time, shape {t.shape}, got {temp.shape}")
+    if not np.isfinite(temp).all():
+        raise ValueError("temp must be finite")
+    return temp
 
 
 def _check_names(names: tuple[str, ...]) -> None:
