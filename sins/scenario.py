@@ -34,12 +34,15 @@ import os
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sins import calibration, earth, imu, imu_spec, io, motion
+from sins import earth, io, motion
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:  # the IMU and rig readers import these when called: `sins run` needs neither
+    from sins import calibration, imu
 
 _MISSING: Any = object()
 
@@ -442,6 +445,8 @@ class ImuSpec:
 
     def model(self, run_seed: int | None = None) -> imu.ImuModel:
         """The unit's error model for one power-on (``run_seed`` draws its turn-on bias)."""
+        from sins import imu, imu_spec
+
         base = imu_spec.draw_unit(self.grade, self.unit_seed, run_seed) if self.grade else imu.ImuModel()
         return base.with_effects(*self.effects).without(*self.withhold)
 
@@ -456,6 +461,8 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
     name = "gyro.scale_nonlinearity"
     k2_ppm_per_dps = [50, 50, 50]
     """
+    from sins import imu, imu_spec
+
     path = Path(path)
     top = _Keys(str(path), "", _read_toml(path, "IMU"))
     grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
@@ -477,6 +484,8 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
 
 def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
     """Read a rig file (``[rig]``, ``[positions]``, ``[rate_table]``, ``[temperature]``; see scenarios/)."""
+    from sins import calibration
+
     path = Path(path)
     top = _Keys(str(path), "", _read_toml(path, "rig"))
     rig = top.sub("rig")

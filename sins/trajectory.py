@@ -28,7 +28,7 @@ from sins.series import ImuIncrements, ImuRates, NavSeries
 Array = NDArray[np.float64]
 
 #: Sample intervals generated per chunk; bounds memory, not results.
-CHUNK = 16384
+CHUNK = 8192
 
 _earth = numba.njit(cache=True, inline="always")(earth.radii_and_gravity_from_sin2)
 
