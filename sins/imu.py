@@ -38,7 +38,7 @@ only, so adding or withholding one effect leaves the others' draws unchanged;
 from __future__ import annotations
 
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
 import numpy as np
@@ -86,19 +86,23 @@ class Inputs:
 # --------------------------------------------------------------------------- effects
 
 
-def _vec(x: Any, name: str) -> Array:
+def _array(shape: tuple[int, ...] = (3,), fill: float = 0.0, check: str = "") -> Any:
+    """A parameter field of ``shape`` (a scalar broadcasts to (3,)); ``check``: "", "positive", "nonneg"."""
+    return field(default_factory=lambda: np.full(shape, fill), metadata={"shape": shape, "check": check})
+
+
+def _as_parameter(x: Any, name: str, shape: tuple[int, ...], check: str) -> Array:
     a = np.asarray(x, dtype=float)
-    if a.shape == ():
+    if shape == (3,) and a.shape == ():
         a = np.full(3, float(a))
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise ValueError(f"{name}: expected 3 finite values, got {np.asarray(x).tolist()!r}")
-    return a
-
-
-def _mat(x: Any, name: str, shape: tuple[int, ...] = (3, 3)) -> Array:
-    a = np.asarray(x, dtype=float)
-    if a.shape != shape or not np.isfinite(a).all():
-        raise ValueError(f"{name}: expected a finite {'x'.join(map(str, shape))} array, got shape {a.shape}")
+    if a.shape != shape or np.isnan(a).any() or (check != "positive" and not np.isfinite(a).all()):
+        raise ValueError(
+            f"{name}: expected a finite {'x'.join(map(str, shape))} array, got {np.asarray(x).tolist()!r}"
+        )
+    if check == "positive" and (a <= 0).any():
+        raise ValueError(f"{name}: must be positive")
+    if check == "nonneg" and (a < 0).any():
+        raise ValueError(f"{name}: must be non-negative")
     return a
 
 
@@ -116,6 +120,11 @@ class Effect:
             raise ValueError(
                 f"{self.kind}: sensor must be one of {', '.join(self.sensors)}, got {self.sensor!r}"
             )
+        for f in fields(self):
+            if "shape" in f.metadata:
+                value = _as_parameter(getattr(self, f.name), f"{self.name}.{f.name}", f.metadata["shape"],
+                                      f.metadata["check"])  # fmt: skip
+                object.__setattr__(self, f.name, value)
 
     @property
     def name(self) -> str:
@@ -130,12 +139,8 @@ class Effect:
 class Bias(Effect):
     """Constant bias ``b`` (rad/s or m/s²); the turn-on part is drawn per run by the grade."""
 
-    value: Array = field(default_factory=lambda: np.zeros(3))
+    value: Array = _array()
     kind: ClassVar[str] = "bias"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "value", _vec(self.value, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         return np.broadcast_to(self.value, u.shape)
@@ -145,12 +150,8 @@ class Bias(Effect):
 class ScaleMisalignment(Effect):
     """``M u``: diagonal scale-factor errors, off-diagonal misalignment (the seed's ``B`` and ``A``)."""
 
-    matrix: Array = field(default_factory=lambda: np.zeros((3, 3)))
+    matrix: Array = _array((3, 3))
     kind: ClassVar[str] = "scale_misalignment"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "matrix", _mat(self.matrix, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         return u @ self.matrix.T
@@ -160,13 +161,9 @@ class ScaleMisalignment(Effect):
 class GSensitivity(Effect):
     """Gyro drift ``K f`` proportional to specific force (the seed's ``K``), rad/s per m/s²."""
 
-    matrix: Array = field(default_factory=lambda: np.zeros((3, 3)))
+    matrix: Array = _array((3, 3))
     kind: ClassVar[str] = "g_sensitivity"
     sensors: ClassVar[tuple[str, ...]] = ("gyro",)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "matrix", _mat(self.matrix, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         return inputs.f @ self.matrix.T
@@ -176,12 +173,8 @@ class GSensitivity(Effect):
 class ScaleNonlinearity(Effect):
     """``k2 u_i²`` on each channel's own axis; ``k2`` in 1/(rad/s) or 1/(m/s²)."""
 
-    k2: Array = field(default_factory=lambda: np.zeros(3))
+    k2: Array = _array()
     kind: ClassVar[str] = "scale_nonlinearity"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "k2", _vec(self.k2, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         return self.k2 * u * u
@@ -191,12 +184,8 @@ class ScaleNonlinearity(Effect):
 class ScaleAsymmetry(Effect):
     """``ka |u_i|``: different scale factors for positive and negative inputs (dimensionless)."""
 
-    ka: Array = field(default_factory=lambda: np.zeros(3))
+    ka: Array = _array()
     kind: ClassVar[str] = "scale_asymmetry"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "ka", _vec(self.ka, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         return self.ka * np.abs(u)
@@ -206,13 +195,9 @@ class ScaleAsymmetry(Effect):
 class G2Sensitivity(Effect):
     """Anisoelastic gyro drift ``Σ_jk G2[i, j, k] f_j f_k``, rad/s per (m/s²)²."""
 
-    tensor: Array = field(default_factory=lambda: np.zeros((3, 3, 3)))
+    tensor: Array = _array((3, 3, 3))
     kind: ClassVar[str] = "g2_sensitivity"
     sensors: ClassVar[tuple[str, ...]] = ("gyro",)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "tensor", _mat(self.tensor, self.name, (3, 3, 3)))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         f = inputs.f
@@ -223,15 +208,10 @@ class G2Sensitivity(Effect):
 class TemperatureBias(Effect):
     """``c1 (T - T0) + c2 (T - T0)²``; ``c1`` per °C, ``c2`` per °C², in the sensor's SI unit."""
 
-    c1: Array = field(default_factory=lambda: np.zeros(3))
-    c2: Array = field(default_factory=lambda: np.zeros(3))
+    c1: Array = _array()
+    c2: Array = _array()
     t0: float = 20.0
     kind: ClassVar[str] = "temperature_bias"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "c1", _vec(self.c1, self.name))
-        object.__setattr__(self, "c2", _vec(self.c2, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         if inputs.temp is None:
@@ -244,13 +224,9 @@ class TemperatureBias(Effect):
 class TemperatureScale(Effect):
     """``s1 (T - T0) u_i``: scale factor drifting with temperature, per °C."""
 
-    s1: Array = field(default_factory=lambda: np.zeros(3))
+    s1: Array = _array()
     t0: float = 20.0
     kind: ClassVar[str] = "temperature_scale"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "s1", _vec(self.s1, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         if inputs.temp is None:
@@ -263,13 +239,9 @@ class SizeEffect(Effect):
     """Accelerometer ``i`` sits at lever arm ``r_i`` (row ``i``, m) from the reference point:
     ``e_iᵀ (ω̇ × r_i + ω × (ω × r_i))``."""
 
-    lever_arms: Array = field(default_factory=lambda: np.zeros((3, 3)))
+    lever_arms: Array = _array((3, 3))
     kind: ClassVar[str] = "size_effect"
     sensors: ClassVar[tuple[str, ...]] = ("accel",)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "lever_arms", _mat(self.lever_arms, self.name))
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         w, wd = inputs.omega, inputs.omega_dot
@@ -284,43 +256,28 @@ class SizeEffect(Effect):
 class TimeOffset(Effect):
     """The channel reports its input ``delay`` seconds late (``u(t - delay)``)."""
 
-    delay: Array = field(default_factory=lambda: np.zeros(3))
+    delay: Array = _array()
     kind: ClassVar[str] = "time_offset"
     stage: ClassVar[str] = "delay"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "delay", _vec(self.delay, self.name))
 
 
 @dataclass(frozen=True)
 class Noise(Effect):
     """White noise of density ``density``: rad/√s (angle random walk) or m/s/√s (velocity random walk)."""
 
-    density: Array = field(default_factory=lambda: np.zeros(3))
+    density: Array = _array(check="nonneg")
     kind: ClassVar[str] = "noise"
     stage: ClassVar[str] = "noise"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "density", _vec(self.density, self.name))
 
 
 @dataclass(frozen=True)
 class BiasInstability(Effect):
     """First-order Gauss–Markov bias: stationary standard deviation ``sigma``, correlation time ``tau``, s."""
 
-    sigma: Array = field(default_factory=lambda: np.zeros(3))
-    tau: Array = field(default_factory=lambda: np.full(3, 100.0))
+    sigma: Array = _array(check="nonneg")
+    tau: Array = _array(fill=100.0, check="positive")
     kind: ClassVar[str] = "bias_instability"
     stage: ClassVar[str] = "stochastic"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "sigma", _vec(self.sigma, self.name))
-        object.__setattr__(self, "tau", _vec(self.tau, self.name))
-        if (self.tau <= 0).any():
-            raise ValueError(f"{self.name}: correlation time must be positive")
 
     def process(self, t: Array, rng: np.random.Generator) -> Array:
         """The bias at times ``t`` (n, 3), exact discretisation, started from its stationary law."""
@@ -338,13 +295,9 @@ class BiasInstability(Effect):
 class RateRandomWalk(Effect):
     """A bias that random-walks with density ``density``: rad/s/√s or m/s²/√s."""
 
-    density: Array = field(default_factory=lambda: np.zeros(3))
+    density: Array = _array(check="nonneg")
     kind: ClassVar[str] = "rate_random_walk"
     stage: ClassVar[str] = "stochastic"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "density", _vec(self.density, self.name))
 
     def process(self, t: Array, rng: np.random.Generator) -> Array:
         steps = self.density * np.sqrt(np.diff(t))[:, None] * rng.standard_normal((len(t) - 1, 3))
@@ -355,30 +308,18 @@ class RateRandomWalk(Effect):
 class Saturation(Effect):
     """Output clipped at ``± limit`` (rad/s or m/s²)."""
 
-    limit: Array = field(default_factory=lambda: np.full(3, np.inf))
+    limit: Array = _array(fill=np.inf, check="positive")
     kind: ClassVar[str] = "saturation"
     stage: ClassVar[str] = "clip"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "limit", _vec(np.where(np.isinf(self.limit), 1e300, self.limit), self.name))
-        if (self.limit <= 0).any():
-            raise ValueError(f"{self.name}: limit must be positive")
 
 
 @dataclass(frozen=True)
 class Quantization(Effect):
     """Output resolution ``step`` in rate units (rad/s, m/s²); increments use ``step · dt``."""
 
-    step: Array = field(default_factory=lambda: np.zeros(3))
+    step: Array = _array(check="nonneg")
     kind: ClassVar[str] = "quantization"
     stage: ClassVar[str] = "quantize"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "step", _vec(self.step, self.name))
-        if (self.step < 0).any():
-            raise ValueError(f"{self.name}: step must be non-negative")
 
 
 EFFECT_TYPES: tuple[type[Effect], ...] = (

@@ -109,6 +109,12 @@ class _Keys:
     def has(self, key: str) -> bool:
         return key in self.table
 
+    def _default(self, key: str, default: Any) -> Any:
+        """The default for an absent key, or the error for an absent required one."""
+        if default is _MISSING:
+            raise self.error("missing required key", key)
+        return default
+
     def get(self, key: str) -> Any:
         self.used.add(key)
         return self.table[key]
@@ -124,9 +130,7 @@ class _Keys:
         high_open: bool = False,
     ) -> float:
         if key not in self.table:
-            if default is _MISSING:
-                raise self.error("missing required key", key)
-            return float(default)
+            return float(self._default(key, default))
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(f"expected a number, got {_kind(value)} {value!r}", key)
@@ -144,9 +148,7 @@ class _Keys:
 
     def string(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> str:
         if key not in self.table:
-            if default is _MISSING:
-                raise self.error("missing required key", key)
-            return str(default)
+            return str(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, str):
             raise self.error(f"expected a string, got {_kind(value)} {value!r}", key)
@@ -157,9 +159,7 @@ class _Keys:
     def numbers(self, key: str, default: Any = _MISSING) -> list[float]:
         """A non-empty array of finite numbers."""
         if key not in self.table:
-            if default is _MISSING:
-                raise self.error("missing required key", key)
-            return list(default)
+            return list(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, list) or not value:
             raise self.error(f"expected a non-empty array of numbers, got {_kind(value)}", key)
@@ -173,9 +173,7 @@ class _Keys:
     def strings(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> list[str]:
         """An array of strings, each among ``choices`` when given."""
         if key not in self.table:
-            if default is _MISSING:
-                raise self.error("missing required key", key)
-            return list(default)
+            return list(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, list):
             raise self.error(f"expected an array of strings, got {_kind(value)}", key)
