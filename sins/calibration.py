@@ -303,7 +303,11 @@ class SeedModelFit:
 
 
 def fit_seed_model(
-    data: CalibrationData, *, g_sensitivity: bool = True, sensors: tuple[str, ...] = ("gyro", "accel")
+    data: CalibrationData,
+    *,
+    g_sensitivity: bool = True,
+    sensors: tuple[str, ...] = ("gyro", "accel"),
+    weights: Array | None = None,
 ) -> SeedModelFit:
     """Least-squares fit of the seed model on a calibration recording.
 
@@ -314,7 +318,9 @@ def fit_seed_model(
     identifiable there and must be off: ``g_sensitivity=False``), weighted as
     one sample. Standard errors are ``σ̂² (XᵀX)⁻¹`` with ``σ̂²`` the residual
     variance, valid for white measurement noise. A sensor left out of
-    ``sensors`` gets zero coefficients and NaN standard errors.
+    ``sensors`` gets zero coefficients and NaN standard errors. ``weights``
+    (n,), one per row, turn it into weighted least squares (both sides of each
+    row's equation scaled by the square root of its weight).
 
     Raises
     ------
@@ -328,11 +334,16 @@ def fit_seed_model(
     ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
     w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
     ones = np.ones((len(w_ref), 1))
+    root = (
+        np.ones((len(w_ref), 1))
+        if weights is None
+        else np.sqrt(np.asarray(weights, dtype=float)[ok])[:, None]
+    )
     width = 7 if g_sensitivity else 4
     coef_g, se_g, rms_g = np.zeros((width, 3)), np.full((width, 3), np.nan), np.full(3, np.nan)
     if "gyro" in sensors:
-        x_gyro = np.hstack([ones, w_ref, n_ref] if g_sensitivity else [ones, w_ref])
-        y_gyro = data.gyro[ok] - w_ref
+        x_gyro = root * np.hstack([ones, w_ref, n_ref] if g_sensitivity else [ones, w_ref])
+        y_gyro = root * (data.gyro[ok] - w_ref)
         dt = np.median(np.diff(data.t)) if len(data.t) > 1 else 1.0
         extra_x, extra_y = [], []
         for p in data.phases:
@@ -355,7 +366,8 @@ def fit_seed_model(
         coef_g, se_g, rms_g = _lstsq(x_gyro, y_gyro, "gyro", data.source)
     coef_a, se_a, rms_a = np.zeros((4, 3)), np.full((4, 3), np.nan), np.full(3, np.nan)
     if "accel" in sensors:
-        coef_a, se_a, rms_a = _lstsq(np.hstack([ones, n_ref]), data.accel[ok] - n_ref, "accel", data.source)
+        x_acc, y_acc = root * np.hstack([ones, n_ref]), root * (data.accel[ok] - n_ref)
+        coef_a, se_a, rms_a = _lstsq(x_acc, y_acc, "accel", data.source)
     zeros = np.zeros((3, 3))
     return SeedModelFit(
         B0=coef_g[0], B=coef_g[1:4].T, K=coef_g[4:7].T if g_sensitivity else zeros,
@@ -372,8 +384,12 @@ def _lstsq(x: Array, y: Array, sensor: str, source: str) -> tuple[Array, Array, 
         raise ValueError(
             f"{source or 'recording'}: {m} usable {sensor} samples for {p} coefficients per channel"
         )
-    coef, _, rank, sv = np.linalg.lstsq(x, y, rcond=None)
-    if rank < p or sv[-1] < 1e-9 * sv[0]:
+    coef, _, rank, _ = np.linalg.lstsq(x, y, rcond=None)
+    # Judge identifiability on unit-RMS columns: a rate seen only as the Earth's
+    # 7e-5 rad/s is collinear with the bias column, whatever its raw scale.
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    sv = np.linalg.svd(x / np.where(scale > 0, scale, 1.0), compute_uv=False)
+    if rank < p or sv[-1] < 1e-6 * sv[0]:
         raise ValueError(
             f"{source or 'recording'}: the {sensor} coefficients are not determined by this recording "
             "(add orientations or rates)"

@@ -141,6 +141,62 @@ def _cmd_effects(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from sins import compensation, io
+
+    data = io.read_recording(args.recording)
+    if args.strategy == "oracle":
+        raise SinsInputError(
+            "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
+        )
+    try:
+        strategy = compensation.make(args.strategy)
+        part = data
+        if args.validation:
+            part, _ = data.split(args.validation)
+        strategy.fit(part)
+    except ValueError as exc:
+        raise SinsInputError(f"{args.recording}: {exc}") from None
+    compensation.save(strategy, args.out)
+    held = f" (the last {args.validation:g} of each phase held back)" if args.validation else ""
+    print(f"fitted {args.strategy} on {len(part)} of {len(data)} rows of {args.recording}{held}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from sins import compensation, io
+
+    strategy = compensation.load(args.model)
+    data = io.read_recording(args.recording)
+    if args.last:
+        try:
+            _, data = data.split(args.last)
+        except ValueError as exc:
+            raise SinsInputError(f"{args.recording}: {exc}") from None
+    channels = compensation.residual_rms(strategy, data)
+    scope = f"the last {args.last:g} of each phase" if args.last else "the whole recording"
+    print(f"{args.model} ({strategy.name}) on {args.recording}, {scope}: RMS of reading - reference")
+    print(f"{'channel':<8} {'before':>12} {'after':>12}  unit")
+    for name, v in channels.items():
+        scale, unit = (
+            (180 / 3.141592653589793 * 3600, "°/h") if name.startswith("gyro") else (1 / 9.80665e-3, "mg")
+        )
+        print(f"{name:<8} {v['rms_before'] * scale:12.4f} {v['rms_after'] * scale:12.4f}  {unit}")
+    if args.json:
+        io.write_json(
+            args.json, {"model": str(args.model), "recording": str(args.recording), "channels": channels}
+        )
+    return 0
+
+
+def _fraction(text: str) -> float:
+    value = float(text)
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"must be a fraction in (0, 1), got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
     parser.add_argument("--version", action="version", version=f"sins {__version__}")
@@ -177,6 +233,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, metavar="RECORDING.csv")
     p.add_argument("--seed", type=int, default=0, help="seeds the rig's errors and the IMU's run (default 0)")
     p.set_defaults(func=_cmd_calibrate)
+
+    p = sub.add_parser("fit", help="fit a compensation strategy on a rig recording")
+    p.add_argument("recording", type=Path, metavar="RECORDING.csv")
+    p.add_argument("--strategy", required=True, help="none, regression or regression_robust")
+    p.add_argument(
+        "--validation", type=_fraction, metavar="FRACTION",
+        help="hold back the last FRACTION of every phase (of the whole recording if it has no phases)",
+    )  # fmt: skip
+    p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
+    p.set_defaults(func=_cmd_fit)
+
+    p = sub.add_parser("evaluate", help="RMS reading error per channel before and after a fitted model")
+    p.add_argument("model", type=Path, metavar="MODEL.json")
+    p.add_argument("recording", type=Path, metavar="RECORDING.csv")
+    p.add_argument(
+        "--last", type=_fraction, metavar="FRACTION",
+        help="judge only the last FRACTION of every phase (of the whole recording if it has no phases)",
+    )  # fmt: skip
+    p.add_argument("--json", type=Path, metavar="OUT.json")
+    p.set_defaults(func=_cmd_evaluate)
 
     p = sub.add_parser("effects", help="list the IMU error effects, their parameters and units")
     p.set_defaults(func=_cmd_effects)
