@@ -155,12 +155,17 @@ class _Timeline:
     def add(
         self, name: str, kind: str, duration: float, c_nb: Array, c_nb_ref: Array,
         table_rate: RateProfile, table_rate_ref: RateProfile,
+        pieces: list[tuple[float, float, str]] | None = None,
     ) -> None:  # fmt: skip
-        """A phase: the mounting ``C_nb`` (3, 3) of the truth and of the reference, and their table rates."""
+        """A phase (or, with ``pieces``, one phase per piece): the mounting ``C_nb`` (3, 3) of the truth
+        and of the reference, and their table rates."""
         m = round(duration * self.rate_hz)
         tt = self.time + np.arange(m) / self.rate_hz
         self.t.append(tt)
-        self.phases.append(RigPhase(name, self.n, self.n + m, kind))
+        for start, end, label in pieces or [(0.0, duration, "")]:
+            i0, i1 = round(start * self.rate_hz), min(round(end * self.rate_hz), m)
+            if i1 > i0:
+                self.phases.append(RigPhase(f"{name} {label}".strip(), self.n + i0, self.n + i1, kind))
         self.n += m
         self.time += m / self.rate_hz
         local = tt - tt[0]
@@ -184,13 +189,23 @@ def _still(local: Array) -> tuple[Array, Array]:
     return np.zeros_like(local), np.zeros_like(local)
 
 
-def _rate_profile(rates_rad: list[float], dwell: float, accel: float) -> tuple[RateProfile, float]:
-    """Table rate and angle for a run: from rest, ramp at ``accel`` to each rate, dwell, … back to rest."""
+def _rate_profile(
+    rates_rad: list[float], dwell: float, accel: float
+) -> tuple[RateProfile, float, list[tuple[float, float, str]]]:
+    """Table rate and angle for a run: from rest, ramp at ``accel`` to each rate, dwell, … back to rest.
+
+    Also returns the run's pieces ``(start, end, label)``: each ramp and each dwell.
+    """
     knots_t, knots_w = [0.0], [0.0]
+    pieces: list[tuple[float, float, str]] = []
     for w in [*rates_rad, 0.0]:
         ramp = abs(w - knots_w[-1]) / accel
-        knots_t += [knots_t[-1] + ramp, knots_t[-1] + ramp + (dwell if w != 0.0 else 0.0)]
+        t0 = knots_t[-1]
+        knots_t += [t0 + ramp, t0 + ramp + (dwell if w != 0.0 else 0.0)]
         knots_w += [w, w]
+        pieces.append((t0, t0 + ramp, f"ramp to {np.degrees(w):+g} °/s"))
+        if w != 0.0:
+            pieces.append((t0 + ramp, t0 + ramp + dwell, f"{np.degrees(w):+g} °/s"))
     kt, kw = np.array(knots_t), np.array(knots_w)
     # Exact angle of a piecewise-linear rate: trapezoids up to each knot, then the partial piece.
     kangle = np.concatenate([[0.0], np.cumsum(0.5 * (kw[1:] + kw[:-1]) * np.diff(kt))])
@@ -201,7 +216,7 @@ def _rate_profile(rates_rad: list[float], dwell: float, accel: float) -> tuple[R
         angle = kangle[i] + 0.5 * (kw[i] + w) * (local - kt[i])
         return w, angle
 
-    return profile, float(kt[-1])
+    return profile, float(kt[-1]), pieces
 
 
 def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = None) -> CalibrationData:
@@ -234,7 +249,7 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
                 c = _face_down(_AXES[axis], -1.0 if orient == "up" else 1.0)
                 true_c = _small_rotation(rng, sigma) @ c
                 rates = [s * np.radians(r) for r in rt.rates_dps for s in (1.0, -1.0)]
-                nominal, duration = _rate_profile(rates, rt.dwell_s, np.radians(rt.accel_dps2))
+                nominal, duration, pieces = _rate_profile(rates, rt.dwell_s, np.radians(rt.accel_dps2))
                 scale = 1.0 + rng.normal(0.0, procedure.rate_error_ppm * 1e-6)
 
                 def actual(
@@ -243,7 +258,7 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
                     w, angle = nominal(local)
                     return w * scale, angle * scale
 
-                line.add(f"table {axis} {orient}", "rotation", duration, true_c, c, actual, nominal)
+                line.add(f"table {axis} {orient}", "rotation", duration, true_c, c, actual, nominal, pieces)
     t = np.concatenate(line.t)
     omega, f = np.concatenate(line.omega), np.concatenate(line.f)
     temp = procedure.temperature.at(t)

@@ -11,7 +11,7 @@ Every strategy follows one interface (scikit-learn style):
 * ``predict_error(gyro, accel, temp)`` is ``readings - correct(readings)``, the
   error each channel is believed to carry.
 
-Strategies are registered by name in :data:`REGISTRY` and saved to a
+Strategies are made by name with :func:`make` (variants in :data:`VARIANTS`) and saved to a
 versioned JSON file with :func:`save` / :func:`load`; a file from another
 format version is refused with a clear message.
 """
@@ -188,29 +188,40 @@ def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes:
     return weights
 
 
-#: Strategy classes by name (``mlp`` and ``kohonen`` join them in a later release).
-REGISTRY: dict[str, type[Strategy]] = {
-    "none": NoCompensation,
-    "oracle": Oracle,
-    "regression": Regression,
-}
+def strategy_class(name: str) -> type[Strategy]:
+    """The class registered under ``name``; the learned ones import torch or minisom only when asked for."""
+    if name == "mlp":
+        from sins.mlp import MLP
 
-#: Named variants: registry name → (class, constructor parameters).
-VARIANTS: dict[str, tuple[type[Strategy], dict[str, Any]]] = {
-    "none": (NoCompensation, {}),
-    "regression": (Regression, {}),
-    "regression_robust": (Regression, {"robust": True}),
+        return MLP
+    if name == "kohonen":
+        from sins.kohonen import Kohonen
+
+        return Kohonen
+    classes: dict[str, type[Strategy]] = {"none": NoCompensation, "oracle": Oracle, "regression": Regression}
+    if name not in classes:
+        raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
+    return classes[name]
+
+
+#: Strategy variants by name: (registered class name, constructor parameters).
+VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
+    "none": ("none", {}),
+    "oracle": ("oracle", {}),
+    "regression": ("regression", {}),
+    "regression_robust": ("regression", {"robust": True}),
+    "mlp": ("mlp", {}),
+    "mlp_seed": ("mlp", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
+    "kohonen": ("kohonen", {}),
 }
 
 
 def make(name: str, **params: Any) -> Strategy:
     """A strategy by variant name (see :data:`VARIANTS`), with parameters overriding the variant's."""
-    if name == "oracle":
-        return Oracle(**params)
     if name not in VARIANTS:
-        raise ValueError(f"unknown strategy {name!r} (known: {', '.join(['oracle', *VARIANTS])})")
-    cls, defaults = VARIANTS[name]
-    return cls(**{**defaults, **params})
+        raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
+    cls_name, defaults = VARIANTS[name]
+    return strategy_class(cls_name)(**{**defaults, **params})
 
 
 # --------------------------------------------------------------------------- model files
@@ -246,10 +257,10 @@ def load(path: str | os.PathLike[str]) -> Strategy:
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
-    if name not in REGISTRY or name == "oracle":
+    if name not in ("none", "regression", "mlp", "kohonen"):
         raise SinsInputError(f"{path}: unknown strategy {name!r}")
     try:
-        strategy = REGISTRY[name](**doc.get("params", {}))
+        strategy = strategy_class(name)(**doc.get("params", {}))
         strategy.set_state(doc.get("state", {}))
     except (TypeError, ValueError) as exc:
         raise SinsInputError(f"{path}: malformed {name} model ({exc})") from None

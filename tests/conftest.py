@@ -19,3 +19,13 @@ def refusal(call: Callable[[], Any], *fragments: str) -> str:
     for fragment in fragments:
         assert fragment in message, f"{fragment!r} not in {message!r}"
     return message
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _torch_on_one_thread() -> None:
+    """Tests use one thread for torch (reproducible, and fair to a 2-core CI machine)."""
+    try:
+        import torch
+    except ImportError:
+        return
+    torch.set_num_threads(1)

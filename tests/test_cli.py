@@ -426,7 +426,10 @@ def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.Capt
         assert rc == 0
         outs.append(io.read_recording(tmp_path / name))
     a, b, c = outs
-    assert len(a.phases) == 6 + 2  # six positions, two table runs
+    # Six positions; two table runs of four rates, each rate a ramp and a dwell, then a ramp to rest.
+    assert sum(p.kind == "static" for p in a.phases) == 6
+    assert sum(p.kind == "rotation" for p in a.phases) == 2 * (4 * 2 + 1)
+    assert any(p.name == "table z up +60 °/s" for p in a.phases)
     np.testing.assert_array_equal(a.gyro, b.gyro)  # same seed, same recording
     assert not np.array_equal(a.gyro, c.gyro)  # another run of the same unit
     header = (tmp_path / "a.csv").read_text().splitlines()[1]

@@ -64,7 +64,7 @@ def test_robust_regression_resists_outliers_in_the_calibration_data():
     model = _unit("tactical", 5)
     data = calibration.simulate_rig(FAST, model, seed=5)
     rng = np.random.default_rng(0)
-    bad = rng.choice(len(data), len(data) // 50, replace=False)  # 2 % of the rows
+    bad = rng.choice(len(data), len(data) // 20, replace=False)  # 5 % of the rows
     gyro, accel = data.gyro.copy(), data.accel.copy()
     gyro[bad] += rng.normal(0.0, 0.05, (len(bad), 3))  # ~10,000 °/h glitches
     accel[bad] += rng.normal(0.0, 2.0, (len(bad), 3))  # ~200 mg glitches
@@ -80,8 +80,8 @@ def test_robust_regression_resists_outliers_in_the_calibration_data():
         compensation.residual_rms(compensation.make("regression_robust").fit(dirty_fit), clean_val),
         "rms_after",
     )
-    assert (plain > 1.04 * oracle).all()  # the outliers pull least squares (measured +13 % gyro, +7 % accel)
-    assert (robust < 1.01 * oracle).all()  # Huber weights put it back at the floor (measured +0.06 %)
+    assert (plain > 1.05 * oracle).all()  # the outliers pull least squares (measured +11 % gyro, +15 % accel)
+    assert (robust < 1.01 * oracle).all()  # Huber weights put it back at the floor (measured +0.01 %)
 
 
 def test_linear_strategy_corrects_increments_exactly():
@@ -187,3 +187,92 @@ def test_a_poorly_determined_fit_shows_in_its_standard_errors():
     # its scale factor's standard error is hundreds of times what the whole session gives.
     assert fit.B_se[2, 2] > 100 * whole.B_se[2, 2]
     assert fit.B_se[0, 0] < 2 * whole.B_se[0, 0]  # the x axis, which did turn, is unaffected
+
+
+# --------------------------------------------------------------------------- learned strategies
+
+NONLINEAR_RIG = calibration.RigProcedure(
+    position_dwell_s=10.0,
+    rate_table=calibration.RateTable(rates_dps=(10, 30, 60, 100, 150, 200), dwell_s=5.0),
+)
+
+
+@pytest.fixture(scope="module")
+def nonlinear_runs() -> list[dict[str, np.ndarray]]:
+    """Three tactical units with scale nonlinearity and g² sensitivity added; validation RMS per strategy."""
+    runs = []
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        model = _unit("tactical", seed).with_effects(
+            imu.ScaleNonlinearity("gyro", rng.normal(0.0, 3e-3, 3)),  # 3e-3 per rad/s: 1 % at 200 °/s
+            imu.ScaleNonlinearity("accel", rng.normal(0.0, 5e-4, 3)),
+            imu.G2Sensitivity("gyro", rng.normal(0.0, 2e-6, (3, 3, 3))),
+        )
+        fit, val = calibration.simulate_rig(NONLINEAR_RIG, model, seed=seed).split(0.3)
+        strategies = {name: compensation.make(name) for name in ("none", "regression", "mlp", "kohonen")}
+        strategies["oracle"] = compensation.Oracle(model)
+        runs.append(
+            {name: _after(compensation.residual_rms(s.fit(fit), val)) for name, s in strategies.items()}
+        )
+    return runs
+
+
+def _after(channels: dict[str, dict[str, float]]) -> np.ndarray:
+    return np.array([v["rms_after"] for v in channels.values()])
+
+
+def _systematic(run: dict[str, np.ndarray], name: str) -> np.ndarray:
+    """Residual beyond the oracle's (the unit's noise floor): sqrt(rms² − floor²)."""
+    return np.sqrt(np.maximum(run[name] ** 2 - run["oracle"] ** 2, 0.0))
+
+
+def test_mlp_leaves_at_most_half_the_residual_of_linear_regression(nonlinear_runs):
+    total = np.mean([r["mlp"] / r["regression"] for r in nonlinear_runs], axis=0)
+    # Gyros, where the nonlinear errors dominate: measured 0.06-0.30 of regression's residual.
+    assert (total[:3] <= 0.5).all()
+    # The accelerometers' errors here are mostly linear and regression already sits near the noise
+    # floor, so halving the *total* is out of reach (measured 0.18-0.97); what regression leaves
+    # beyond the floor, the network does halve.
+    systematic = np.mean(
+        [_systematic(r, "mlp") / _systematic(r, "regression") for r in nonlinear_runs], axis=0
+    )
+    assert (systematic <= 0.5).all()
+
+
+def test_kohonen_improves_on_none_fivefold_beyond_the_noise_floor(nonlinear_runs):
+    # In total RMS the accelerometers cannot improve 5x: their errors are only 1.3-3x their noise.
+    # The systematic part (beyond the oracle's floor) improves 7-12x on the gyros, more on the
+    # accelerometers.
+    ratios = [_systematic(r, "none") / np.maximum(_systematic(r, "kohonen"), 1e-15) for r in nonlinear_runs]
+    ratio = np.mean(ratios, axis=0)
+    assert (ratio >= 5.0).all()
+    assert (np.mean([r["none"] / r["kohonen"] for r in nonlinear_runs], axis=0)[:3] >= 3.0).all()
+
+
+@pytest.mark.parametrize("name", ["mlp", "kohonen", "mlp_seed"])
+def test_learned_strategies_save_load_and_correct_alike(tmp_path: Path, name: str):
+    data = calibration.simulate_rig(FAST, _unit("consumer", 6), seed=6)
+    small = data.rows(slice(0, len(data), 20))  # 2,600 rows: enough to learn something, fast
+    small = calibration.CalibrationData(small.t, small.gyro, small.accel, small.ref_gyro, small.ref_accel)
+    params = {"max_epochs": 3} if name == "mlp_seed" else {}
+    strategy = compensation.make(name, **params).fit(small)
+    path = tmp_path / f"{name}.json"
+    compensation.save(strategy, path)
+    again = compensation.load(path)
+    w1, f1 = strategy.correct(data.gyro, data.accel)
+    w2, f2 = again.correct(data.gyro, data.accel)
+    np.testing.assert_allclose(w2, w1, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(f2, f1, rtol=0, atol=1e-13)
+    before = _after(compensation.residual_rms(compensation.make("none"), data))
+    after = _after(compensation.residual_rms(strategy, data))
+    assert (after < before).mean() >= 0.5  # it learned something on most channels
+
+
+def test_seed_mode_stops_at_its_residual():
+    data = calibration.simulate_rig(FAST, _unit("consumer", 7), seed=7)
+    small = data.rows(slice(0, len(data), 40))
+    small = calibration.CalibrationData(small.t, small.gyro, small.accel, small.ref_gyro, small.ref_accel)
+    loose = compensation.make("mlp_seed", residual=1.0, max_epochs=50).fit(small)
+    assert loose.epochs_ == 1 and loose.final_error_ < 1.0  # ε below 1 after the first pass: stop
+    tight = compensation.make("mlp_seed", residual=1e-12, max_epochs=3).fit(small)
+    assert tight.epochs_ == 3 and tight.final_error_ > 1e-12  # never reached: stopped by max_epochs
