@@ -15,6 +15,8 @@ from typing import Any
 from sins import __version__
 from sins.errors import SinsInputError
 
+_CHANNELS = ("gyro.x", "gyro.y", "gyro.z", "accel.x", "accel.y", "accel.z")
+
 _COLUMNS = (
     ("final N m", "final_north_m", "{:.3f}"),
     ("final E m", "final_east_m", "{:.3f}"),
@@ -29,10 +31,8 @@ _COLUMNS = (
 )
 
 
-def format_table(summaries: dict[str, dict[str, float]]) -> str:
-    """A fixed-width table: one row per strategy, the headline errors as columns."""
-    head = ["strategy"] + [c[0] for c in _COLUMNS]
-    rows = [[name] + [fmt.format(s[key]) for _, key, fmt in _COLUMNS] for name, s in summaries.items()]
+def _fixed_width(head: list[str], rows: list[list[str]]) -> str:
+    """Columns padded to their widest cell: the first left-aligned, the rest right-aligned."""
     widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
 
     def line(cells: list[str]) -> str:
@@ -40,7 +40,14 @@ def format_table(summaries: dict[str, dict[str, float]]) -> str:
             c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths, strict=True))
         )
 
-    return "\n".join([line(head), *(line(r) for r in rows)])
+    return "\n".join(line(r) for r in [head, *rows])
+
+
+def format_table(summaries: dict[str, dict[str, Any]]) -> str:
+    """A fixed-width table: one row per strategy, the headline errors as columns."""
+    head = ["strategy"] + [c[0] for c in _COLUMNS]
+    rows = [[name] + [fmt.format(s[key]) for _, key, fmt in _COLUMNS] for name, s in summaries.items()]
+    return _fixed_width(head, rows)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -49,17 +56,38 @@ def _cmd_run(args: argparse.Namespace) -> int:
     path = pipeline.resolve_scenario(args.scenario)
     sc = scenario.load(path)
     result = pipeline.run_scenario(sc)
-    summaries = {name: run.summary.to_dict() for name, run in result.runs.items()}
+    summaries: dict[str, dict[str, Any]] = {name: run.summary.to_dict() for name, run in result.runs.items()}
     n = result.samples
+    imu_note = f", IMU {sc.imu_model.stem} (seed {sc.imu_seed})" if sc.imu_model else ", ideal IMU"
     print(
         f"scenario {sc.name}: {sc.description or path}\n"
-        f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s), vertical channel {sc.vertical}; "
+        f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s){imu_note}, vertical channel {sc.vertical}; "
         "errors are estimate - truth"
     )
     print(format_table(summaries))
+    residuals = {name: run.residual_rms for name, run in result.runs.items() if run.residual_rms is not None}
+    if residuals:
+        print("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
+        print(format_residuals(residuals))
+    for name, run in result.runs.items():
+        if run.residual_rms is not None:
+            summaries[name]["residual_rms"] = run.residual_rms
     if args.json:
         io.write_json(args.json, {"scenario": _scenario_json(sc, path, n), "strategies": summaries})
     return 0
+
+
+def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
+    """Strategy × channel residual RMS (°/h, mg) and the mean ratio to the oracle's."""
+    deg_h, mg = 180.0 / 3.141592653589793 * 3600.0, 1.0 / 9.80665e-3
+    head = ["strategy", *(f"{c} {'°/h' if c.startswith('gyro') else 'mg'}" for c in _CHANNELS), "× oracle"]
+    oracle = residuals.get("oracle")
+    rows = []
+    for name, ch in residuals.items():
+        cells = [f"{ch[c] * (deg_h if c.startswith('gyro') else mg):.3f}" for c in _CHANNELS]
+        ratio = sum(ch[c] / oracle[c] for c in _CHANNELS) / len(_CHANNELS) if oracle else float("nan")
+        rows.append([name, *cells, f"{ratio:.3f}"])
+    return _fixed_width(head, rows)
 
 
 def _scenario_json(sc: Any, path: Path, n: int) -> dict[str, Any]:

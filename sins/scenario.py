@@ -89,6 +89,19 @@ class Scenario:
     trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
     vertical: str = "free"
     vertical_tau_s: float = 10.0
+    imu_model: Path | None = None
+    imu_seed: int = 0
+    compensation: CompensationSpec | None = None
+
+
+@dataclass(frozen=True)
+class CompensationSpec:
+    """How a scenario's strategies are fitted: the rig session, its held-back fraction, the strategies."""
+
+    rig: Path
+    validation: float
+    seed: int
+    strategies: tuple[str, ...]
 
 
 class _Keys:
@@ -252,7 +265,25 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     description = top.string("description", default="")
     imu = top.sub("imu")
     rate_hz = imu.number("rate_hz", 100.0, low=1.0, high=100000.0)
+    base = source.parent if source else Path(".")
+    imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
+    imu_seed = int(imu.number("seed", 0, low=0))
     imu.done()
+    compensation = None
+    if top.has("compensation"):
+        comp = top.sub("compensation")
+        if imu_model is None:
+            raise comp.error("needs an IMU model to compensate: give [imu] model")
+        from sins.compensation import VARIANTS
+
+        names = comp.strings("strategies", ["none", "regression", "mlp", "kohonen"], tuple(VARIANTS))
+        compensation = CompensationSpec(
+            rig=_preset_or_path(comp, "rig", "rig", base),
+            validation=comp.number("validation", 0.3, low=0.0, high=1.0, low_open=True, high_open=True),
+            seed=int(comp.number("seed", 0, low=0)),
+            strategies=tuple(dict.fromkeys(["oracle", *names])),  # the oracle is every table's reference
+        )
+        comp.done()
     nav = top.sub("navigation")
     vertical = nav.string("vertical", "free", VERTICAL_MODES)
     tau = nav.number("vertical_tau_s", 10.0, low=0.0, low_open=True)
@@ -289,7 +320,22 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
         trajectory=trajectory,
         vertical=vertical,
         vertical_tau_s=tau,
+        imu_model=imu_model,
+        imu_seed=imu_seed,
+        compensation=compensation,
     )
+
+
+def _preset_or_path(keys: _Keys, key: str, kind: str, base: Path) -> Path:
+    """A file named by ``key``: a path relative to the scenario, or a preset name of ``kind``."""
+    value = keys.string(key)
+    path = base / value
+    if path.suffix == ".toml" or path.exists():
+        return path
+    preset = Path(__file__).parent / "scenarios" / kind / f"{value}.toml"
+    if preset.exists():
+        return preset
+    raise keys.error(f"no such file or {kind} preset: {value!r}", key)
 
 
 def _position(init: _Keys) -> tuple[float, float, float]:
