@@ -276,3 +276,109 @@ def test_seed_mode_stops_at_its_residual():
     assert loose.epochs_ == 1 and loose.final_error_ < 1.0  # ε below 1 after the first pass: stop
     tight = compensation.make("mlp_seed", residual=1e-12, max_epochs=3).fit(small)
     assert tight.epochs_ == 3 and tight.final_error_ > 1e-12  # never reached: stopped by max_epochs
+
+
+# --------------------------------------------------------------------------- strategies in scenarios
+
+LINEAR_IMU = """\
+[[effect]]
+name = "gyro.bias"
+bias_dph = [4.0, -3.0, 5.0]
+[[effect]]
+name = "accel.bias"
+bias_mg = [0.8, -1.1, 0.6]
+[[effect]]
+name = "gyro.scale_misalignment"
+matrix_ppm = [[300, 120, -80], [-150, -250, 60], [90, -40, 400]]
+[[effect]]
+name = "accel.scale_misalignment"
+matrix_ppm = [[250, -90, 70], [110, -300, -50], [-60, 80, 200]]
+[[effect]]
+name = "gyro.g_sensitivity"
+matrix_dph_per_g = [[1.0, -0.5, 0.3], [0.4, -1.2, 0.2], [-0.3, 0.6, 0.8]]
+[[effect]]
+name = "gyro.noise"
+arw_deg_per_rt_h = 0.05
+[[effect]]
+name = "accel.noise"
+vrw_ug_per_rt_hz = 50
+"""
+
+DRIVE = """\
+[imu]
+rate_hz = 100
+model = "{imu}"
+seed = {seed}
+[compensation]
+rig = "24pos_ratetable"
+validation = 0.3
+seed = {rig_seed}
+strategies = ["regression"]
+[navigation]
+vertical = "damp"
+[initial]
+lat_deg = 45.0
+lon_deg = 7.0
+alt_m = 200.0
+[[segment]]
+type = "accelerate"
+duration_s = 20
+to_speed_mps = 15
+[[segment]]
+type = "turn"
+duration_s = 30
+angle_deg = 90
+[[segment]]
+type = "hold"
+duration_s = 250
+[[segment]]
+type = "turn"
+duration_s = 30
+angle_deg = -120
+[[segment]]
+type = "hold"
+duration_s = 270
+"""
+
+
+def test_regression_drift_is_bounded_by_its_calibration_on_linear_errors(tmp_path: Path):
+    """Ten-minute drives of a unit with only the seed model's errors (the same on every power-on).
+
+    The issue's target, drift within 5 % of the oracle's, is not met with this 17-minute rig
+    session, and it should not be expected: the fitted gyro biases carry a standard error of
+    about 0.1 °/h (30 °/h of noise per sample over ~1e5 samples), which alone drifts
+    g·ε·t³/6 ≈ 170 m in ten minutes against the ~600 m the unit's own noise drives. Measured
+    ratios to the oracle: 1.76, 1.37, 0.96. What must hold: residual sensor error within 5 %
+    of the oracle's, and a drift far below the uncompensated one and within a factor 2 of the
+    oracle's.
+    """
+    from sins import pipeline, scenario
+
+    (tmp_path / "imu.toml").write_text(LINEAR_IMU)
+    ratios = []
+    for seed in range(3):
+        path = tmp_path / f"drive{seed}.toml"
+        path.write_text(DRIVE.format(imu=tmp_path / "imu.toml", seed=seed, rig_seed=10 + seed))
+        runs = pipeline.run_scenario(scenario.load(path)).runs
+        oracle = runs["oracle"].summary.final_horizontal_m
+        assert runs["none"].summary.final_horizontal_m > 5 * oracle
+        ratios.append(runs["regression"].summary.final_horizontal_m / oracle)
+        residual = np.array(list(runs["regression"].residual_rms.values()))
+        assert (residual <= 1.05 * np.array(list(runs["oracle"].residual_rms.values()))).all()
+    assert 0.5 < np.mean(ratios) < 2.0
+
+
+def test_run_json_has_every_strategy_with_residuals(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    (tmp_path / "imu.toml").write_text(LINEAR_IMU)
+    path = tmp_path / "drive.toml"
+    path.write_text(DRIVE.format(imu=tmp_path / "imu.toml", seed=0, rig_seed=1))
+    out = tmp_path / "run.json"
+    assert main(["run", str(path), "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "residual sensor error" in printed and "× oracle" in printed
+    strategies = json.loads(out.read_text())["strategies"]
+    assert list(strategies) == ["none", "oracle", "regression"]
+    for name in ("oracle", "regression"):
+        assert list(strategies[name]["residual_rms"]) == list(compensation.CHANNELS)
+        assert strategies[name]["final_horizontal_m"] > 0
+    assert "residual_rms" not in strategies["none"]  # "none" is the raw stream, not fitted on the rig
