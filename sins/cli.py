@@ -218,6 +218,37 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_check(args: argparse.Namespace) -> int:
+    from sins import quality
+
+    suite = quality.load_suite(args.suite)
+    if not args.update_baseline:
+        baseline = quality.read_baseline(args.baseline)  # refuse early, before the runs
+    measured = quality.measure(suite)
+    if args.update_baseline:
+        quality.write_baseline(args.baseline, measured, suite)
+        count = sum(len(m) for s in measured.values() for m in s.values())
+        print(f"wrote {args.baseline}: {count} metrics of {len(measured)} cases")
+        return 0
+    changes = quality.compare(baseline, measured, suite.tolerances)
+    rows = []
+    for c in changes:
+        rel = "" if c.relative is None else f"{100 * c.relative:+.2f} %"
+        fmt = lambda x: "-" if x is None else f"{x:.6g}"  # noqa: E731
+        rows.append([f"{c.case}/{c.strategy}", c.metric, fmt(c.baseline), fmt(c.value), rel, c.verdict])
+    print(_fixed_width(["case/strategy", "metric", "baseline", "now", "change", "verdict"], rows))
+    bad = [c for c in changes if c.verdict in ("regressed", "missing")]
+    tol = ", ".join(f"{k} {100 * v:g} %" for k, v in suite.tolerances.items())
+    if bad:
+        print(f"\n{len(bad)} of {len(changes)} metrics regressed or went missing (tolerances: {tol})")
+        for c in bad:
+            rel = "" if c.relative is None else f" by {100 * c.relative:+.2f} %"
+            print(f"  {c.case}/{c.strategy} {c.metric}: {c.verdict}{rel}")
+        return 1
+    print(f"\nall {len(changes)} metrics hold (tolerances: {tol})")
+    return 0
+
+
 def _fraction(text: str) -> float:
     value = float(text)
     if not 0.0 < value < 1.0:
@@ -281,6 +312,14 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.set_defaults(func=_cmd_evaluate)
+
+    p = sub.add_parser("check", help="the compensation-quality gate: a suite against its baseline")
+    p.add_argument("suite", type=Path, metavar="SUITE.toml")
+    p.add_argument("--baseline", type=Path, required=True, metavar="BASELINE.json")
+    p.add_argument(
+        "--update-baseline", action="store_true", help="write the measured metrics as the baseline"
+    )
+    p.set_defaults(func=_cmd_check)
 
     p = sub.add_parser("effects", help="list the IMU error effects, their parameters and units")
     p.set_defaults(func=_cmd_effects)

@@ -170,7 +170,7 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
     spec = scenario.load_imu(sc.imu_model)
     nav_model = spec.model(run_seed=sc.imu_seed)
     truth, ideal = simulate(sc)
-    temp = np.full(len(ideal.t), 20.0)  # a constant 20 °C cabin; strategies fitted with temperature need it
+    temp = np.interp(ideal.t, *sc.temperature)  # cabin temperature, °C (default a constant 20)
     corrupted = nav_model.corrupt_increments(ideal, temp=temp, seed=sc.imu_seed)
     strategies: dict[str, compensation.Strategy] = {"none": compensation.make("none")}
     residuals: dict[str, dict[str, float]] = {}

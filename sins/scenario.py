@@ -92,6 +92,7 @@ class Scenario:
     imu_model: Path | None = None
     imu_seed: int = 0
     compensation: CompensationSpec | None = None
+    temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))  # (times_s, temps_degc)
 
 
 @dataclass(frozen=True)
@@ -268,6 +269,12 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     base = source.parent if source else Path(".")
     imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
     imu_seed = int(imu.number("seed", 0, low=0))
+    temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))
+    if imu.has("temps_degc"):
+        times, temps = imu.numbers("times_s", [0.0]), imu.numbers("temps_degc")
+        if len(times) != len(temps) or any(b <= a for a, b in itertools.pairwise(times)):
+            raise imu.error("times_s must increase and match temps_degc in length", "times_s")
+        temperature = (tuple(times), tuple(temps))
     imu.done()
     compensation = None
     if top.has("compensation"):
@@ -323,6 +330,7 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
         imu_model=imu_model,
         imu_seed=imu_seed,
         compensation=compensation,
+        temperature=temperature,
     )
 
 

@@ -1,0 +1,166 @@
+"""The compensation-quality gate: a suite of scenarios × strategies checked against a baseline.
+
+A suite file lists cases, each a scenario with an IMU model and a
+``[compensation]`` table (so with fixed seeds); every case is run and, for
+each strategy, the headline metrics are collected: final and maximum
+horizontal error and, per channel, the residual sensor error on held-back rig
+data. All are errors, lower is better: a metric regresses when it grows by
+more than its relative tolerance plus a small absolute floor. Suite file::
+
+    [[case]]
+    name = "linear"
+    scenario = "linear.toml"      # relative to the suite file
+    [tolerance]                   # relative growth allowed, per metric family
+    horizontal = 0.10
+    residual = 0.05
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from sins.errors import SinsInputError
+
+#: Absolute floors below which a change is not judged (metres, SI residual units).
+FLOORS = {"horizontal": 0.5, "residual": 1e-9}
+DEFAULT_TOLERANCES = {"horizontal": 0.10, "residual": 0.05}
+BASELINE_FORMAT = "sins.quality-baseline"
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    scenario: Path
+
+
+@dataclass(frozen=True)
+class Suite:
+    source: Path
+    cases: tuple[Case, ...]
+    tolerances: dict[str, float]
+
+
+@dataclass(frozen=True)
+class Change:
+    """One metric of one strategy of one case, against the baseline."""
+
+    case: str
+    strategy: str
+    metric: str
+    baseline: float | None
+    value: float | None
+    verdict: str  # held | improved | regressed | new | missing
+
+    @property
+    def relative(self) -> float | None:
+        if self.baseline is None or self.value is None or self.baseline == 0:
+            return None
+        return self.value / self.baseline - 1.0
+
+
+def load_suite(path: str | os.PathLike[str]) -> Suite:
+    """Read a suite file (see the module docstring); one-line errors name the file and key."""
+    from sins.scenario import _Keys, _read_toml
+
+    path = Path(path)
+    top = _Keys(str(path), "", _read_toml(path, "suite"))
+    cases = []
+    for table in top.tables("case"):
+        name = table.string("name")
+        scenario = path.parent / table.string("scenario")
+        if not scenario.exists():
+            raise table.error(f"no such scenario file: {scenario}", "scenario")
+        table.done()
+        cases.append(Case(name, scenario))
+    if not cases:
+        raise top.error("needs at least one [[case]]", "case")
+    if len({c.name for c in cases}) != len(cases):
+        raise top.error("case names must be unique", "case")
+    tol = top.sub("tolerance")
+    tolerances = {k: tol.number(k, v, low=0.0) for k, v in DEFAULT_TOLERANCES.items()}
+    tol.done()
+    top.done()
+    return Suite(source=path, cases=tuple(cases), tolerances=tolerances)
+
+
+def measure(suite: Suite) -> dict[str, dict[str, dict[str, float]]]:
+    """Run every case: ``{case: {strategy: {metric: value}}}``."""
+    from sins import pipeline, scenario
+
+    out: dict[str, dict[str, dict[str, float]]] = {}
+    for case in suite.cases:
+        sc = scenario.load(case.scenario)
+        if sc.compensation is None:
+            raise SinsInputError(
+                f"{case.scenario}: a suite case needs an [imu] model and a [compensation] table"
+            )
+        result = pipeline.run_scenario(sc)
+        metrics: dict[str, dict[str, float]] = {}
+        for name, run in result.runs.items():
+            m = {
+                "final_horizontal_m": run.summary.final_horizontal_m,
+                "max_horizontal_m": run.summary.max_horizontal_m,
+            }
+            for channel, value in (run.residual_rms or {}).items():
+                m[f"residual_rms.{channel}"] = value
+            metrics[name] = m
+        out[case.name] = metrics
+    return out
+
+
+def _family(metric: str) -> str:
+    return "residual" if metric.startswith("residual") else "horizontal"
+
+
+def compare(
+    baseline: dict[str, dict[str, dict[str, float]]],
+    measured: dict[str, dict[str, dict[str, float]]],
+    tolerances: dict[str, float],
+) -> list[Change]:
+    """Every metric's verdict; a regression is growth beyond tolerance × baseline + floor."""
+    changes = []
+    for case in sorted(set(baseline) | set(measured)):
+        base_c, new_c = baseline.get(case, {}), measured.get(case, {})
+        for strategy in sorted(set(base_c) | set(new_c)):
+            base_s, new_s = base_c.get(strategy, {}), new_c.get(strategy, {})
+            for metric in sorted(set(base_s) | set(new_s)):
+                b, v = base_s.get(metric), new_s.get(metric)
+                if b is None:
+                    verdict = "new"
+                elif v is None:
+                    verdict = "missing"
+                else:
+                    family = _family(metric)
+                    slack = tolerances[family] * abs(b) + FLOORS[family]
+                    verdict = "regressed" if v > b + slack else "improved" if v < b - slack else "held"
+                changes.append(Change(case, strategy, metric, b, v, verdict))
+    return changes
+
+
+def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str, float]]]:
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SinsInputError(f"{path}: no such baseline (create it with --update-baseline)") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SinsInputError(f"{path}: not a baseline file ({exc})") from None
+    if (
+        not isinstance(doc, dict)
+        or doc.get("format") != BASELINE_FORMAT
+        or not isinstance(doc.get("cases"), dict)
+    ):
+        raise SinsInputError(f'{path}: not a sins quality baseline (no "format": "{BASELINE_FORMAT}")')
+    cases: dict[str, dict[str, dict[str, float]]] = doc["cases"]
+    return cases
+
+
+def write_baseline(path: str | os.PathLike[str], measured: dict[str, Any], suite: Suite) -> None:
+    from sins import __version__, io
+
+    io.write_json(path, {"format": BASELINE_FORMAT, "sins": __version__, "suite": str(suite.source.name),
+                         "cases": measured})  # fmt: skip
