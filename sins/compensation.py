@@ -18,7 +18,6 @@ format version is refused with a clear message.
 
 from __future__ import annotations
 
-import json
 import os
 from abc import ABC, abstractmethod
 from pathlib import Path
@@ -243,14 +242,7 @@ def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
 def load(path: str | os.PathLike[str]) -> Strategy:
     """Read a strategy written by :func:`save`; refuse other formats and versions in one line."""
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such model file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SinsInputError(f"{path}: not a sins model file ({exc})") from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise SinsInputError(f'{path}: not a sins model file (no "format": "{FORMAT_NAME}")')
+    doc = io.read_json_document(path, "model file", FORMAT_NAME)
     if doc.get("version") != FORMAT_VERSION:
         raise SinsInputError(
             f"{path}: model file format version {doc.get('version')!r} (written by sins {doc.get('sins')}); "

@@ -376,6 +376,28 @@ def write_json(path: str | os.PathLike[str], obj: Any) -> None:
         fh.write("\n")
 
 
+def read_json_document(
+    path: str | os.PathLike[str], what: str, format_name: str, missing_hint: str = ""
+) -> dict[str, Any]:
+    """A JSON object whose ``"format"`` is ``format_name``; one-line errors for anything else.
+
+    ``what`` names the kind of file in messages ("model file", "baseline");
+    ``missing_hint`` is added when the file does not exist.
+    """
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SinsInputError(
+            f"{path}: no such {what}{f' ({missing_hint})' if missing_hint else ''}"
+        ) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SinsInputError(f"{path}: not a sins {what} ({exc})") from None
+    if not isinstance(doc, dict) or doc.get("format") != format_name:
+        raise SinsInputError(f'{path}: not a sins {what} (no "format": "{format_name}")')
+    return doc
+
+
 @contextlib.contextmanager
 def _atomic(path: str | os.PathLike[str]) -> Iterator[TextIO]:
     path = Path(path)

@@ -17,7 +17,6 @@ more than its relative tolerance plus a small absolute floor. Suite file::
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -142,19 +141,12 @@ def compare(
 
 
 def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str, float]]]:
+    from sins import io
+
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such baseline (create it with --update-baseline)") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SinsInputError(f"{path}: not a baseline file ({exc})") from None
-    if (
-        not isinstance(doc, dict)
-        or doc.get("format") != BASELINE_FORMAT
-        or not isinstance(doc.get("cases"), dict)
-    ):
-        raise SinsInputError(f'{path}: not a sins quality baseline (no "format": "{BASELINE_FORMAT}")')
+    doc = io.read_json_document(path, "quality baseline", BASELINE_FORMAT, "create it with --update-baseline")
+    if not isinstance(doc.get("cases"), dict):
+        raise SinsInputError(f'{path}: a quality baseline needs a "cases" table')
     cases: dict[str, dict[str, dict[str, float]]] = doc["cases"]
     return cases
 
