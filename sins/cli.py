@@ -295,7 +295,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fit", help="fit a compensation strategy on a rig recording")
     p.add_argument("recording", type=Path, metavar="RECORDING.csv")
-    p.add_argument("--strategy", required=True, help="none, regression or regression_robust")
+    p.add_argument(
+        "--strategy", required=True,
+        help="none, regression, regression_robust, regression_extended, mlp, mlp_seed or kohonen",
+    )  # fmt: skip
     p.add_argument(
         "--validation", type=_fraction, metavar="FRACTION",
         help="hold back the last FRACTION of every phase (of the whole recording if it has no phases)",

@@ -187,6 +187,72 @@ def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes:
     return weights
 
 
+class ExtendedRegression(Strategy):
+    """Least squares with extra regressors a user switches on: squares of the inputs, temperature.
+
+    Each channel's error is linear in ``[1, ω, n]`` plus, with ``squares``,
+    ``[ω², n²]`` (element-wise: scale nonlinearity, and the diagonal of g²
+    sensitivity) and, with ``temperature`` and temperature in the data,
+    ``[T − T0, (T − T0)², (T − T0)·u]`` (temperature bias and scale). Fitted on
+    the reference inputs like the seed model; corrections invert it by
+    fixed-point iteration ``x ← reading − e(x)``.
+    """
+
+    name = "regression_extended"
+
+    def __init__(
+        self, squares: bool = True, temperature: bool = True, t0: float = 20.0, iterations: int = 6
+    ) -> None:
+        self.squares = squares
+        self.temperature = temperature
+        self.t0 = t0
+        self.iterations = iterations
+
+    def params(self) -> dict[str, Any]:
+        return {
+            "squares": self.squares,
+            "temperature": self.temperature,
+            "t0": self.t0,
+            "iterations": self.iterations,
+        }
+
+    def _design(self, w: Array, f: Array, temp: Array | None) -> list[Array]:
+        """Per channel, its regressors (n, p): the shared columns and its own temperature-scale term."""
+        cols = [np.ones((len(w), 1)), w, f]
+        if self.squares:
+            cols += [w * w, f * f]
+        shared = np.hstack(cols)
+        if not self.uses_temp_:
+            return [shared] * 6
+        if temp is None:
+            raise ValueError("this regression was fitted with temperature: give the temperature series")
+        d = (np.asarray(temp, dtype=float) - self.t0)[:, None]
+        u = np.hstack([w, f])
+        return [np.hstack([shared, d, d * d, d * u[:, [i]]]) for i in range(6)]
+
+    def fit(self, data: CalibrationData) -> ExtendedRegression:
+        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        self.uses_temp_ = bool(self.temperature and data.temp is not None)
+        temp = None if data.temp is None else data.temp[ok]
+        designs = self._design(data.ref_gyro[ok], data.ref_accel[ok], temp)
+        errors = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
+        coef = []
+        for i, x in enumerate(designs):
+            scale = np.sqrt(np.mean(x * x, axis=0))
+            scale = np.where(scale > 0, scale, 1.0)
+            c, *_ = np.linalg.lstsq(x / scale, errors[:, i], rcond=None)
+            coef.append(c / scale)
+        self.coef_ = np.array(coef)
+        return self
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        w, f = gyro.copy(), accel.copy()
+        for _ in range(self.iterations):
+            err = np.column_stack([x @ c for x, c in zip(self._design(w, f, temp), self.coef_, strict=True)])
+            w, f = gyro - err[:, :3], accel - err[:, 3:]
+        return w, f
+
+
 def strategy_class(name: str) -> type[Strategy]:
     """The class registered under ``name``; the learned ones import torch or minisom only when asked for."""
     if name == "mlp":
@@ -197,7 +263,10 @@ def strategy_class(name: str) -> type[Strategy]:
         from sins.kohonen import Kohonen
 
         return Kohonen
-    classes: dict[str, type[Strategy]] = {"none": NoCompensation, "oracle": Oracle, "regression": Regression}
+    classes: dict[str, type[Strategy]] = {
+        "none": NoCompensation, "oracle": Oracle, "regression": Regression,
+        "regression_extended": ExtendedRegression,
+    }  # fmt: skip
     if name not in classes:
         raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
     return classes[name]
@@ -209,6 +278,7 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "oracle": ("oracle", {}),
     "regression": ("regression", {}),
     "regression_robust": ("regression", {"robust": True}),
+    "regression_extended": ("regression_extended", {}),
     "mlp": ("mlp", {}),
     "mlp_seed": ("mlp", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
     "kohonen": ("kohonen", {}),
@@ -249,7 +319,7 @@ def load(path: str | os.PathLike[str]) -> Strategy:
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
-    if name not in ("none", "regression", "mlp", "kohonen"):
+    if name not in ("none", "regression", "regression_extended", "mlp", "kohonen"):
         raise SinsInputError(f"{path}: unknown strategy {name!r}")
     try:
         strategy = strategy_class(name)(**doc.get("params", {}))

@@ -382,3 +382,33 @@ def test_run_json_has_every_strategy_with_residuals(tmp_path: Path, capsys: pyte
         assert list(strategies[name]["residual_rms"]) == list(compensation.CHANNELS)
         assert strategies[name]["final_horizontal_m"] > 0
     assert "residual_rms" not in strategies["none"]  # "none" is the raw stream, not fitted on the rig
+
+
+def test_extended_regression_captures_squares_and_temperature(tmp_path: Path):
+    rig = calibration.RigProcedure(
+        position_dwell_s=8.0,
+        rate_table=calibration.RateTable(rates_dps=(10, 30, 60, 100, 150, 200), dwell_s=4.0),
+        temperature=calibration.TemperatureProfile((0.0, 800.0), (0.0, 40.0)),  # a chamber ramp
+    )
+    rng = np.random.default_rng(0)
+    model = _unit("tactical", 0).with_effects(
+        imu.ScaleNonlinearity("gyro", rng.normal(0.0, 3e-3, 3)),
+        imu.ScaleNonlinearity("accel", rng.normal(0.0, 5e-4, 3)),
+        imu.TemperatureBias("gyro", c1=[1e-6, -1e-6, 2e-6]),  # ~0.2 °/h per °C
+        imu.TemperatureScale("accel", s1=[1e-5, -2e-5, 1e-5]),  # 10-20 ppm per °C
+    )
+    fit, val = calibration.simulate_rig(rig, model, seed=0).split(0.3)
+    oracle = _after(compensation.residual_rms(compensation.Oracle(model), val))
+    plain = _after(compensation.residual_rms(compensation.make("regression").fit(fit), val))
+    extended = compensation.make("regression_extended").fit(fit)
+    after = _after(compensation.residual_rms(extended, val))
+    assert (plain[:3] > 3.0 * oracle[:3]).all()  # the linear model cannot represent k2·ω² (measured 3.4-17x)
+    np.testing.assert_allclose(after, oracle, rtol=0.01)  # with squares and temperature it can (1.000x)
+    path = tmp_path / "extended.json"
+    compensation.save(extended, path)
+    again = compensation.load(path)
+    np.testing.assert_array_equal(
+        again.correct(val.gyro, val.accel, val.temp)[0], extended.correct(val.gyro, val.accel, val.temp)[0]
+    )
+    with pytest.raises(ValueError, match="temperature"):
+        extended.correct(val.gyro, val.accel)
