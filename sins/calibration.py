@@ -310,11 +310,20 @@ class SeedModelFit:
 
     def correct(self, gyro: Array, accel: Array) -> tuple[Array, Array]:
         """Invert the fitted model: the inputs that give these readings (rate form)."""
-        a_inv = np.linalg.inv(np.eye(3) + self.A)
-        n = (accel - self.A0) @ a_inv.T
-        b_inv = np.linalg.inv(np.eye(3) + self.B)
-        w = (gyro - self.B0 - n @ self.K.T) @ b_inv.T
-        return w, n
+        return invert_seed_model(self.B0, self.B, self.K, self.A0, self.A, gyro, accel)
+
+
+def invert_seed_model(
+    B0: Array, B: Array, K: Array, A0: Array, A: Array, gyro: Array, accel: Array
+) -> tuple[Array, Array]:
+    """The angular rate and specific force (n, 3) that the seed model maps to these readings.
+
+    ``accel = n + A0 + A n`` is solved for ``n`` first; then
+    ``gyro = ω + B0 + B ω + K n`` for ``ω``.
+    """
+    n = (accel - A0) @ np.linalg.inv(np.eye(3) + A).T
+    w = (gyro - B0 - n @ K.T) @ np.linalg.inv(np.eye(3) + B).T
+    return w, n
 
 
 def fit_seed_model(

@@ -15,8 +15,6 @@ from typing import Any
 from sins import __version__
 from sins.errors import SinsInputError
 
-_CHANNELS = ("gyro.x", "gyro.y", "gyro.z", "accel.x", "accel.y", "accel.z")
-
 _COLUMNS = (
     ("final N m", "final_north_m", "{:.3f}"),
     ("final E m", "final_east_m", "{:.3f}"),
@@ -77,14 +75,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _display_unit(channel: str) -> tuple[float, str]:
+    """The SI size of one display unit of a channel, and its name: °/h for gyros, mg for accelerometers."""
+    from sins.imu import DEG_PER_H, MG
+
+    return (DEG_PER_H, "°/h") if channel.startswith("gyro") else (MG, "mg")
+
+
 def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
     """Strategy × channel residual RMS (°/h, mg) and the mean ratio to the oracle's."""
-    deg_h, mg = 180.0 / 3.141592653589793 * 3600.0, 1.0 / 9.80665e-3
-    head = ["strategy", *(f"{c} {'°/h' if c.startswith('gyro') else 'mg'}" for c in _CHANNELS), "× oracle"]
+    from sins.imu import CHANNELS as _CHANNELS
+
+    head = ["strategy", *(f"{c} {_display_unit(c)[1]}" for c in _CHANNELS), "× oracle"]
     oracle = residuals.get("oracle")
     rows = []
     for name, ch in residuals.items():
-        cells = [f"{ch[c] * (deg_h if c.startswith('gyro') else mg):.3f}" for c in _CHANNELS]
+        cells = [f"{ch[c] / _display_unit(c)[0]:.3f}" for c in _CHANNELS]
         ratio = sum(ch[c] / oracle[c] for c in _CHANNELS) / len(_CHANNELS) if oracle else float("nan")
         rows.append([name, *cells, f"{ratio:.3f}"])
     return _fixed_width(head, rows)
@@ -207,10 +213,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     print(f"{args.model} ({strategy.name}) on {args.recording}, {scope}: RMS of reading - reference")
     print(f"{'channel':<8} {'before':>12} {'after':>12}  unit")
     for name, v in channels.items():
-        scale, unit = (
-            (180 / 3.141592653589793 * 3600, "°/h") if name.startswith("gyro") else (1 / 9.80665e-3, "mg")
-        )
-        print(f"{name:<8} {v['rms_before'] * scale:12.4f} {v['rms_after'] * scale:12.4f}  {unit}")
+        size, unit = _display_unit(name)
+        print(f"{name:<8} {v['rms_before'] / size:12.4f} {v['rms_after'] / size:12.4f}  {unit}")
     if args.json:
         io.write_json(
             args.json, {"model": str(args.model), "recording": str(args.recording), "channels": channels}

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from sins import __version__, calibration, io
 from sins.errors import SinsInputError
-from sins.imu import ImuModel
+from sins.imu import CHANNELS, ImuModel
 from sins.series import CalibrationData, ImuIncrements, ImuRates
 
 Array = NDArray[np.float64]
@@ -126,8 +126,8 @@ class Oracle(Strategy):
         zero = np.zeros_like(w)
         for _ in range(self.iterations):
             inputs = Inputs(omega=w, f=f, omega_dot=zero, temp=temp)
-            w = gyro - self.model._deterministic("gyro", inputs)
-            f = accel - self.model._deterministic("accel", inputs)
+            w = gyro - self.model.deterministic_error("gyro", inputs)
+            f = accel - self.model.deterministic_error("accel", inputs)
         return w, f
 
     def get_state(self) -> dict[str, Any]:
@@ -160,9 +160,7 @@ class Regression(Strategy):
         return self
 
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
-        f = (accel - self.A0_) @ np.linalg.inv(np.eye(3) + self.A_).T
-        w = (gyro - self.B0_ - f @ self.K_.T) @ np.linalg.inv(np.eye(3) + self.B_).T
-        return w, f
+        return calibration.invert_seed_model(self.B0_, self.B_, self.K_, self.A0_, self.A_, gyro, accel)
 
 
 def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes: int = 5) -> Array:
@@ -330,9 +328,6 @@ def load(path: str | os.PathLike[str]) -> Strategy:
 
 
 # --------------------------------------------------------------------------- judging on recorded data
-
-
-CHANNELS = ("gyro.x", "gyro.y", "gyro.z", "accel.x", "accel.y", "accel.z")
 
 
 def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[str, float]]:

@@ -427,7 +427,7 @@ class ImuModel:
             y = np.empty_like(inputs.of(sensor))
             for d in np.unique(delay):
                 shifted = _shift_samples(inputs, t, d) if d else inputs
-                y_d = shifted.of(sensor) + self._deterministic(sensor, shifted)
+                y_d = shifted.of(sensor) + self.deterministic_error(sensor, shifted)
                 y[:, delay == d] = y_d[:, delay == d]
             y = y + self._stochastic(sensor, t, seed)
             noise = self._get(sensor, Noise)
@@ -499,7 +499,9 @@ class ImuModel:
                     part = np.zeros_like(ideal)
                     if deterministic:
                         for j in range(len(nodes)):
-                            part += 0.5 * dt[:, None] * self._deterministic(sensor, node_inputs(j, float(d)))
+                            part += (
+                                0.5 * dt[:, None] * self.deterministic_error(sensor, node_inputs(j, float(d)))
+                            )
                     # The ideal part stays exact; only the errors come from the reconstruction.
                     total[:, cols] = (shifted + part)[:, cols]
                     continue
@@ -508,7 +510,7 @@ class ImuModel:
                 for j, when in enumerate(nodes):
                     inputs = node_inputs(j, float(d))
                     b = np.column_stack([np.interp(when, t, bias[:, i]) for i in range(3)])
-                    rate = inputs.of(sensor) + self._deterministic(sensor, inputs) + b + noise_rate
+                    rate = inputs.of(sensor) + self.deterministic_error(sensor, inputs) + b + noise_rate
                     part += 0.5 * dt[:, None] * np.clip(rate, -sat.limit, sat.limit)
                 total[:, cols] = part[:, cols]
             if sat is None:
@@ -531,7 +533,8 @@ class ImuModel:
         off = self._get(sensor, TimeOffset)
         return np.zeros(3) if off is None else off.delay
 
-    def _deterministic(self, sensor: str, inputs: Inputs) -> Array:
+    def deterministic_error(self, sensor: str, inputs: Inputs) -> Array:
+        """The sum of the sensor's deterministic errors (n, 3) at these true inputs (no delay, no noise)."""
         u = inputs.of(sensor)
         err = np.zeros_like(u)
         for e in self._of(sensor):
