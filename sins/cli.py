@@ -51,28 +51,63 @@ def format_table(summaries: dict[str, dict[str, Any]]) -> str:
 def _cmd_run(args: argparse.Namespace) -> int:
     from sins import io, pipeline, scenario
 
+    _check_viewer_args(args)
     path = pipeline.resolve_scenario(args.scenario)
     sc = scenario.load(path)
     result = pipeline.run_scenario(sc)
     summaries: dict[str, dict[str, Any]] = {name: run.summary.to_dict() for name, run in result.runs.items()}
     n = result.samples
     imu_note = f", IMU {sc.imu_model.stem} (seed {sc.imu_seed})" if sc.imu_model else ", ideal IMU"
-    print(
+    report = [
         f"scenario {sc.name}: {sc.description or path}\n"
         f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s){imu_note}, vertical channel {sc.vertical}; "
-        "errors are estimate - truth"
-    )
-    print(format_table(summaries))
+        "errors are estimate - truth",
+        format_table(summaries),
+    ]
     residuals = {name: run.residual_rms for name, run in result.runs.items() if run.residual_rms is not None}
     if residuals:
-        print("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
-        print(format_residuals(residuals))
+        report.append("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
+        report.append(format_residuals(residuals))
+    print("\n".join(report))
     for name, run in result.runs.items():
         if run.residual_rms is not None:
             summaries[name]["residual_rms"] = run.residual_rms
     if args.json:
         io.write_json(args.json, {"scenario": _scenario_json(sc, path, n), "strategies": summaries})
+    _show(args, result, "\n".join(report))
     return 0
+
+
+def _check_viewer_args(args: argparse.Namespace) -> None:
+    """Refuse what cannot work before the run, not after it."""
+    if not (args.rerun or args.spawn or args.serve):
+        return
+    from sins import viz
+
+    if args.spawn and not viz.has_display():
+        raise SinsInputError(viz.NO_DISPLAY)
+    if args.rerun:
+        viz.check_rrd_path(args.rerun)
+
+
+def _show(args: argparse.Namespace, result: Any, summary: str) -> None:
+    """Hand the run to Rerun as the flags ask: save, spawn the native viewer, serve the web viewer."""
+    if not (args.rerun or args.spawn or args.serve):
+        return
+    from sins import viz
+
+    if args.rerun:
+        viz.save(result, args.rerun, summary=summary)
+        print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
+    if args.spawn:
+        viz.spawn(result, summary=summary)
+    if args.serve:
+        address = viz.serve(result, summary=summary, web_port=args.web_port)
+        print(f"serving the Rerun web viewer at {address}  (Ctrl-C stops)", flush=True)
+        import time
+
+        while True:  # the servers live as long as this process
+            time.sleep(3600)
 
 
 def _display_unit(channel: str) -> tuple[float, str]:
@@ -83,7 +118,7 @@ def _display_unit(channel: str) -> tuple[float, str]:
 
 
 def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
-    """Strategy × channel residual RMS (°/h, mg) and the mean ratio to the oracle's."""
+    """Strategy × channel residual RMS (°/h, mg) and the mean ratio to the oracle's (nan without one)."""
     from sins.imu import CHANNELS as _CHANNELS
 
     head = ["strategy", *(f"{c} {_display_unit(c)[1]}" for c in _CHANNELS), "× oracle"]
@@ -91,7 +126,9 @@ def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
     rows = []
     for name, ch in residuals.items():
         cells = [f"{ch[c] / _display_unit(c)[0]:.3f}" for c in _CHANNELS]
-        ratio = sum(ch[c] / oracle[c] for c in _CHANNELS) / len(_CHANNELS) if oracle else float("nan")
+        # Over the channels the oracle leaves any error on (a noiseless channel's floor is 0).
+        ratios = [ch[c] / oracle[c] for c in _CHANNELS if oracle and oracle[c] > 0]
+        ratio = sum(ratios) / len(ratios) if ratios else float("nan")
         rows.append([name, *cells, f"{ratio:.3f}"])
     return _fixed_width(head, rows)
 
@@ -268,6 +305,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
+    p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="save the run as a Rerun recording")
+    p.add_argument("--spawn", action="store_true", help="show the run in the native Rerun viewer")
+    p.add_argument(
+        "--serve", action="store_true",
+        help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
+    )  # fmt: skip
+    p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("integrate", help="integrate a recorded IMU CSV against its truth CSV")

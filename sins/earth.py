@@ -100,6 +100,21 @@ def lla_to_ecef(lat: Floats, lon: Floats, h: Floats) -> tuple[Floats, Floats, Fl
     return (r_n + h) * c * np.cos(lon), (r_n + h) * c * np.sin(lon), (r_n * (1.0 - E2) + h) * np.sin(lat)
 
 
+def local_ned(lat: Floats, lon: Floats, h: Floats, lat0: float, lon0: float, h0: float) -> Floats:
+    """Positions relative to ``(lat0, lon0, h0)`` in that point's north-east-down axes, (n, 3) m.
+
+    Exact (through ECEF), so a path hundreds of kilometres long keeps its shape.
+    """
+    x, y, z = lla_to_ecef(lat, lon, h)
+    x0, y0, z0 = lla_to_ecef(lat0, lon0, h0)
+    dx, dy, dz = np.asarray(x) - x0, np.asarray(y) - y0, np.asarray(z) - z0
+    s_lat, c_lat, s_lon, c_lon = np.sin(lat0), np.cos(lat0), np.sin(lon0), np.cos(lon0)
+    north = -s_lat * c_lon * dx - s_lat * s_lon * dy + c_lat * dz
+    east = -s_lon * dx + c_lon * dy
+    down = -c_lat * c_lon * dx - c_lat * s_lon * dy - s_lat * dz
+    return np.stack([north, east, down], axis=-1)
+
+
 def schuler_period(lat: Floats, h: Floats = 0.0) -> Floats:
     """Schuler period ``2π sqrt(R/g)`` in seconds, with ``R`` the mean radius ``sqrt(R_M R_N)``."""
     r_m, r_n = radii(lat)

@@ -44,6 +44,15 @@ class NavErrors:
     def horizontal_m(self) -> Array:
         return np.hypot(self.pos_ned_m[:, 0], self.pos_ned_m[:, 1])
 
+    def at(self, index: NDArray[np.integer] | slice) -> NavErrors:
+        """The errors at ``index``."""
+        return NavErrors(
+            t=self.t[index],
+            pos_ned_m=self.pos_ned_m[index],
+            vel_ned_mps=self.vel_ned_mps[index],
+            att_rpy_rad=self.att_rpy_rad[index],
+        )
+
 
 def nav_errors(estimate: NavSeries, truth: NavSeries) -> NavErrors:
     """Errors of ``estimate`` against ``truth``.
@@ -168,9 +177,9 @@ class DriftAccumulator:
         if self.keep_every:
             keep = kept_indices(self._count, n, self.keep_every)
             if keep.size:
-                self._kept.append(_take(errors, keep))
+                self._kept.append(errors.at(keep))
         self._count += n
-        self._last = _take(errors, np.array([n - 1]))
+        self._last = errors.at(np.array([n - 1]))
 
     def summary(self) -> DriftSummary:
         """Final, maximum and RMS errors and the drift rate of everything added."""
@@ -225,13 +234,18 @@ def kept_indices(offset: int, n: int, every: int) -> NDArray[np.intp]:
     return np.arange((-offset) % every, n, every)
 
 
-def _take(errors: NavErrors, index: NDArray[np.integer]) -> NavErrors:
-    return NavErrors(
-        t=errors.t[index],
-        pos_ned_m=errors.pos_ned_m[index],
-        vel_ned_mps=errors.vel_ned_mps[index],
-        att_rpy_rad=errors.att_rpy_rad[index],
-    )
+def thinned_indices(n: int, every: int) -> NDArray[np.intp]:
+    """Every ``every``-th index of ``range(n)`` from 0, plus the last: a thinned series ends where it ends."""
+    keep = kept_indices(0, n, every)
+    return keep if n == 0 or keep[-1] == n - 1 else np.append(keep, n - 1)
+
+
+def block_means(values: Array, every: int) -> Array:
+    """Means of consecutive blocks of ``every`` rows of ``values`` (n, k); the last block may be shorter."""
+    n = len(values)
+    starts = np.arange(0, n, every)
+    sums = np.add.reduceat(values, starts, axis=0) if n else values[:0]
+    return sums / np.diff(np.append(starts, n))[:, None]
 
 
 def summarize(errors: NavErrors) -> DriftSummary:

@@ -15,10 +15,20 @@ from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sins import io, scenario, strapdown, trajectory
 from sins.errors import SinsInputError
-from sins.metrics import DriftAccumulator, DriftSummary, NavErrors, kept_indices, nav_errors, summarize
+from sins.metrics import (
+    DriftAccumulator,
+    DriftSummary,
+    NavErrors,
+    block_means,
+    kept_indices,
+    nav_errors,
+    summarize,
+    thinned_indices,
+)
 from sins.scenario import Scenario
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
@@ -34,12 +44,17 @@ class StrategyRun:
 
     ``residual_rms`` (compensated scenarios): per channel, the RMS of the
     corrected reading's error on the rig data held back from the fit, SI units.
+    ``sensor_error`` (scenarios with an IMU model): the error of the stream
+    this run integrated (corrected reading − ideal), (m, 6) in rad/s and m/s²
+    in the order of :data:`sins.imu.CHANNELS`, as block means at the
+    scenario's ``sensor_t``.
     """
 
     solution: NavSeries
     errors: NavErrors
     summary: DriftSummary
     residual_rms: dict[str, float] | None = None
+    sensor_error: NDArray[np.float64] | None = None
 
 
 @dataclass(frozen=True)
@@ -48,13 +63,17 @@ class ScenarioRun:
 
     Summaries use every sample; ``truth`` and each run's ``solution`` and
     ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
-    sample, plus the last) so that hour-long runs stay small in memory.
+    sample, plus the last) so that hour-long runs stay small in memory, and the
+    runs' ``sensor_error`` are means over blocks of as many intervals, centred
+    at ``sensor_t``: a mean keeps the systematic error a plot can show and
+    averages down the noise it cannot.
     """
 
     scenario: Scenario
     samples: int
     truth: NavSeries
     runs: dict[str, StrategyRun]
+    sensor_t: NDArray[np.float64] | None = None
 
 
 def preset_dir() -> Path:
@@ -190,17 +209,19 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
             channels = compensation.residual_rms(judged, held)
             residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
     keep_every = max(1, round(sc.rate_hz / keep_hz))
+    keep = thinned_indices(len(truth.t), keep_every)
+    dt = np.diff(ideal.t)[:, None]
     runs = {}
     for name, strategy in strategies.items():
         corrected = strategy.correct_increments(corrupted, temp)
         run = navigate(corrected, truth, sc.vertical, sc.vertical_tau_s)
-        thin = slice(None, None, keep_every)
-        e = run.errors
-        errors = NavErrors(e.t[thin], e.pos_ned_m[thin], e.vel_ned_mps[thin], e.att_rpy_rad[thin])
-        runs[name] = StrategyRun(run.solution.at(thin), errors, run.summary, residuals.get(name))
-    return ScenarioRun(
-        scenario=sc, samples=len(ideal), truth=truth.at(slice(None, None, keep_every)), runs=runs
-    )
+        error = np.hstack([corrected.dtheta_b - ideal.dtheta_b, corrected.dv_b - ideal.dv_b]) / dt
+        runs[name] = StrategyRun(
+            run.solution.at(keep), run.errors.at(keep), run.summary, residuals.get(name),
+            block_means(error, keep_every),
+        )  # fmt: skip
+    sensor_t = block_means(0.5 * (ideal.t[:-1] + ideal.t[1:])[:, None], keep_every)[:, 0]
+    return ScenarioRun(scenario=sc, samples=len(ideal), truth=truth.at(keep), runs=runs, sensor_t=sensor_t)
 
 
 def _prefetched(items: Iterator[T]) -> Iterator[T]:

@@ -341,16 +341,52 @@ duration_s = 270
 """
 
 
-def test_regression_drift_is_bounded_by_its_calibration_on_linear_errors(tmp_path: Path):
-    """Ten-minute drives of a unit with only the seed model's errors (the same on every power-on).
+def test_regression_drifts_like_the_oracle_over_an_hour_on_the_seed_model_alone():
+    """The issue's drift target on a unit with only the seed's linear errors (no noise: DESIGN §4).
 
-    The issue's target, drift within 5 % of the oracle's, is not met with this 17-minute rig
-    session, and it should not be expected: the fitted gyro biases carry a standard error of
-    about 0.1 °/h (30 °/h of noise per sample over ~1e5 samples), which alone drifts
-    g·ε·t³/6 ≈ 170 m in ten minutes against the ~600 m the unit's own noise drives. Measured
-    ratios to the oracle: 1.76, 1.37, 0.96. What must hold: residual sensor error within 5 %
-    of the oracle's, and a drift far below the uncompensated one and within a factor 2 of the
-    oracle's.
+    Regression recovers the 33 coefficients so exactly that the hour's drift is the integrator's
+    own, like the oracle's; the uncompensated unit drifts kilometres, so a coefficient off by one
+    part in 10⁶ (0.2 °/h of bias) would show. With white noise added the rig's finite length
+    limits it instead: see the next test and tools/bench_rig_length.py.
+    """
+    from sins import strapdown
+    from sins.metrics import nav_errors, summarize
+
+    seg = [Turn(30, np.radians(3.0), 3.0), Hold(3570)]
+    drive = SegmentMotion.from_segments(Start(np.radians(45.0), 0.1, 200.0), seg)
+    truth, ideal = trajectory.generate(drive, 50.0)
+    start = strapdown.InitialState.from_series(truth)
+    ratios = []
+    for seed in range(3):
+        model = _unit("tactical", seed, noise=False)
+        corrupted = model.corrupt_increments(ideal)
+        fit, _ = calibration.simulate_rig(FAST, model, seed=seed).split(0.3)
+        drift = {}
+        for name, strategy in (
+            ("none", compensation.make("none")),
+            ("oracle", compensation.Oracle(model)),
+            ("regression", compensation.make("regression").fit(fit)),
+        ):
+            corrected = strategy.correct_increments(corrupted)
+            sol = strapdown.integrate(corrected, start, vertical="hold", h_ref=truth.h)
+            drift[name] = summarize(nav_errors(sol, truth)).final_horizontal_m
+        assert drift["none"] > 1000.0  # measured 497-1481 km
+        assert drift["oracle"] < 0.01  # the integrator's own error over the hour (measured 0.035 mm)
+        ratios.append(drift["regression"] / drift["oracle"])
+    assert abs(np.mean(ratios) - 1.0) < 0.05  # measured 1.00004, 1.00010, 0.99983
+
+
+def test_regression_drift_is_bounded_by_its_calibration_on_linear_errors(tmp_path: Path):
+    """Ten-minute drives of a unit with the seed model's errors plus white noise (the baseline).
+
+    Here the 5 % drift target is out of reach of a 17-minute rig session, and it should not be
+    expected: the fitted gyro biases carry a standard error of about 0.1 °/h (30 °/h of noise per
+    sample over ~1e5 samples), which alone drifts g·ε·t³/6 ≈ 170 m in ten minutes against the
+    ~600 m the unit's own noise drives. Measured ratios to the oracle: 1.76, 1.37, 0.96. The
+    excess shrinks as 1/T with the rig's length T (tools/bench_rig_length.py, one-hour drives,
+    20 units: 4.1× at 17 min, 2.0× at 65 min, 1.3× at 4.3 h, 0.96× at 17 h). What must hold: residual sensor
+    error within 5 % of the oracle's, and a drift far below the uncompensated one and within a
+    factor 2 of the oracle's.
     """
     from sins import pipeline, scenario
 

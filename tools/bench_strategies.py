@@ -85,7 +85,8 @@ def main() -> None:
                 fit = dataclasses.replace(fit, gyro=gyro, accel=accel)
             oracle_fit = compensation.residual_rms(compensation.Oracle(rig_model), held)
             oracle_rig = np.array([v["rms_after"] for v in oracle_fit.values()])
-            corrupted = drive_model.corrupt_increments(ideal, temp=temp, seed=seed)
+            # Another power-on: the drive's noise is not the rig's.
+            corrupted = drive_model.corrupt_increments(ideal, temp=temp, seed=10_000 + seed)
             fitted = {s: compensation.make(s).fit(fit) for s in STRATEGIES}
             fitted_all: dict[str, compensation.Strategy] = {
                 "oracle": compensation.Oracle(drive_model),

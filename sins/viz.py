@@ -1,0 +1,291 @@
+"""The bridge to the Rerun viewer: the only module that imports ``rerun``.
+
+What a run looks like in the viewer, against the ``sim_time`` timeline (seconds):
+
+- ``world/<run>/path`` and ``world/<run>/vehicle``: the truth's and each
+  strategy's trajectory as a 3D path in the start point's north-east-down
+  frame (metres from the start point), and the vehicle's pose along it
+  (``C_nb`` as a rotation, drawn as body axes);
+- ``errors/<quantity>/<strategy>``: horizontal and down position error (m),
+  velocity error magnitude (m/s), roll, pitch and yaw error (°);
+- ``imu/<channel>/<strategy>``: the error of the IMU stream each strategy
+  integrated (reading − ideal; ``none`` is the raw error) in °/h and mg;
+- ``scenario`` and ``summary``: the scenario's description and the run's table.
+
+Display series are the :class:`~sins.pipeline.ScenarioRun`'s thinned ones:
+navigation errors every ``round(rate / keep_hz)``-th sample plus the last
+(so the last logged error is the run's final error, exactly), IMU errors as
+block means over as many intervals. Whole series go out in one
+``send_columns`` call per entity.
+
+:func:`log_run` logs one more run beside those already in a recording (a
+campaign's Monte-Carlo members, say) under a path prefix of its own.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from numpy.typing import NDArray
+
+from sins import earth
+from sins.errors import SinsInputError
+from sins.imu import CHANNELS, DEG_PER_H, MG
+from sins.pipeline import ScenarioRun, StrategyRun
+from sins.series import NavSeries
+
+APPLICATION_ID = "sins"
+TIMELINE = "sim_time"
+
+#: Error panels: entity name, title, and how to get the series (estimate − truth) from a run.
+ERROR_PANELS = ("horizontal_m", "down_m", "velocity_mps", "roll_deg", "pitch_deg", "yaw_deg")
+_TITLES = {
+    "horizontal_m": "horizontal position error, m",
+    "down_m": "down position error, m",
+    "velocity_mps": "velocity error magnitude, m/s",
+    "roll_deg": "roll error, °",
+    "pitch_deg": "pitch error, °",
+    "yaw_deg": "yaw error, °",
+}
+_COLOURS = {
+    "truth": (230, 230, 230),
+    "none": (228, 26, 28),
+    "oracle": (77, 175, 74),
+    "regression": (55, 126, 184),
+    "regression_robust": (31, 120, 180),
+    "regression_extended": (0, 90, 160),
+    "mlp": (255, 127, 0),
+    "mlp_seed": (200, 100, 0),
+    "kohonen": (152, 78, 163),
+}
+_OTHER_COLOURS = ((166, 86, 40), (247, 129, 191), (153, 153, 153), (255, 255, 51))
+
+
+def colour(name: str) -> tuple[int, int, int]:
+    """A fixed colour per strategy, so every panel and every recording agree."""
+    if name in _COLOURS:
+        return _COLOURS[name]
+    return _OTHER_COLOURS[sum(name.encode()) % len(_OTHER_COLOURS)]
+
+
+def imu_entity(channel: str) -> str:
+    """``gyro.x`` → ``gyro_x_deg_per_h``; ``accel.x`` → ``accel_x_mg``."""
+    sensor, axis = channel.split(".")
+    return f"{sensor}_{axis}_{'deg_per_h' if sensor == 'gyro' else 'mg'}"
+
+
+def error_series(run: StrategyRun) -> dict[str, NDArray[np.float64]]:
+    """The logged error series of a run, by :data:`ERROR_PANELS` name."""
+    e = run.errors
+    att_deg = np.degrees(e.att_rpy_rad)
+    return {
+        "horizontal_m": e.horizontal_m,
+        "down_m": e.pos_ned_m[:, 2],
+        "velocity_mps": np.linalg.norm(e.vel_ned_mps, axis=1),
+        "roll_deg": att_deg[:, 0],
+        "pitch_deg": att_deg[:, 1],
+        "yaw_deg": att_deg[:, 2],
+    }
+
+
+def _time(t: NDArray[np.float64]) -> list[rr.TimeColumn]:
+    return [rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=np.float64))]
+
+
+def _join(*parts: str) -> str:
+    return "/".join(p.strip("/") for p in parts if p.strip("/"))
+
+
+def log_path(
+    rec: rr.RecordingStream,
+    name: str,
+    series: NavSeries,
+    origin: tuple[float, float, float],
+    *,
+    prefix: str = "",
+    axis_length_m: float = 1.0,
+) -> None:
+    """A trajectory as a 3D path in the start point's NED frame, and the vehicle's pose along it."""
+    ned = earth.local_ned(series.lat, series.lon, series.h, *origin)
+    base = _join(prefix, "world", name)
+    rgb = colour(name)
+    rec.log(f"{base}/path", rr.LineStrips3D([ned], colors=[rgb], radii=[-1.5]), static=True)
+    rec.log(f"{base}/vehicle", rr.TransformAxes3D(axis_length=axis_length_m), static=True)
+    rec.send_columns(
+        f"{base}/vehicle",
+        indexes=_time(series.t),
+        columns=rr.Transform3D.columns(translation=ned, quaternion=series.q_nb),  # both scalar-last
+    )
+
+
+def log_run(
+    rec: rr.RecordingStream,
+    name: str,
+    run: StrategyRun,
+    origin: tuple[float, float, float],
+    *,
+    sensor_t: NDArray[np.float64] | None = None,
+    prefix: str = "",
+    axis_length_m: float = 1.0,
+) -> None:
+    """One strategy's run: its path, its error series and (with ``sensor_t``) its IMU error signals."""
+    log_path(rec, name, run.solution, origin, prefix=prefix, axis_length_m=axis_length_m)
+    rgb = colour(name)
+    for panel, values in error_series(run).items():
+        entity = _join(prefix, "errors", panel, name)
+        rec.log(entity, rr.SeriesLines(names=[name], colors=[rgb]), static=True)
+        rec.send_columns(entity, indexes=_time(run.errors.t), columns=rr.Scalars.columns(scalars=values))
+    if run.sensor_error is not None and sensor_t is not None:
+        label = "raw" if name == "none" else name
+        for i, channel in enumerate(CHANNELS):
+            unit = DEG_PER_H if channel.startswith("gyro") else MG
+            entity = _join(prefix, "imu", imu_entity(channel), label)
+            rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
+            rec.send_columns(
+                entity,
+                indexes=_time(sensor_t),
+                columns=rr.Scalars.columns(scalars=run.sensor_error[:, i] / unit),
+            )
+
+
+def log_scenario_run(
+    rec: rr.RecordingStream, result: ScenarioRun, *, summary: str = "", prefix: str = ""
+) -> None:
+    """Everything of a scenario run: truth, every strategy, the description and the ``summary`` table."""
+    truth = result.truth
+    origin = (float(truth.lat[0]), float(truth.lon[0]), float(truth.h[0]))
+    extent = np.ptp(earth.local_ned(truth.lat, truth.lon, truth.h, *origin), axis=0).max()
+    axis_length_m = max(1.0, 0.03 * float(extent))
+    rec.log(_join(prefix, "world") or "/", rr.ViewCoordinates.RIGHT_HAND_Z_DOWN, static=True)  # NED
+    log_path(rec, "truth", truth, origin, prefix=prefix, axis_length_m=axis_length_m)
+    for name, run in result.runs.items():
+        log_run(rec, name, run, origin, sensor_t=result.sensor_t, prefix=prefix, axis_length_m=axis_length_m)
+    sc = result.scenario
+    description = (
+        f"# {sc.name}\n\n{sc.description or ''}\n\n"
+        f"- {result.samples} samples at {sc.rate_hz:g} Hz ({result.samples / sc.rate_hz:g} s)\n"
+        f"- IMU: {sc.imu_model.stem if sc.imu_model else 'ideal'}\n"
+        f"- vertical channel: {sc.vertical}\n"
+        f"- start: {np.degrees(origin[0]):.6f}° N, {np.degrees(origin[1]):.6f}° E, {origin[2]:.1f} m\n"
+        f"- paths in metres from the start, north-east-down; errors are estimate − truth\n"
+    )
+    rec.log(_join(prefix, "scenario"), rr.TextDocument(description, media_type="text/markdown"), static=True)
+    if summary:
+        text = f"```\n{summary}\n```"
+        rec.log(_join(prefix, "summary"), rr.TextDocument(text, media_type="text/markdown"), static=True)
+
+
+def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str = "") -> rrb.Blueprint:
+    """The 3D paths beside the error panels; IMU errors and the summary in tabs below the errors.
+
+    Every plot shows the whole run, not a window around the time cursor: drift is about the long run.
+    """
+    whole = rrb.TimeRangeBoundary.infinite()
+    axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
+    errors = [
+        rrb.TimeSeriesView(origin=_join(prefix, "errors", panel), name=_TITLES[panel], axis_x=axis)
+        for panel in ERROR_PANELS
+    ]
+    tabs: list[rrb.View] = list(errors[2:])
+    if with_imu:
+        tabs += [
+            rrb.TimeSeriesView(
+                origin=_join(prefix, "imu", imu_entity(ch)),
+                name=f"{ch} error, {'°/h' if ch.startswith('gyro') else 'mg'}",
+                axis_x=axis,
+            )
+            for ch in CHANNELS
+        ]
+    tabs += [
+        rrb.TextDocumentView(origin=_join(prefix, "summary"), name="summary"),
+        rrb.TextDocumentView(origin=_join(prefix, "scenario"), name="scenario"),
+    ]
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin=_join(prefix, "world") or "/", name="paths: m from start, NED"),
+            rrb.Vertical(errors[0], errors[1], rrb.Tabs(*tabs), row_shares=[2, 2, 3]),
+            column_shares=[3, 2],
+        ),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed"),
+    )
+
+
+def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id=result.scenario.name)
+    return rec, blueprint(list(result.runs), with_imu=result.sensor_t is not None)
+
+
+def check_rrd_path(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a Path if a recording can be written there, else a one-line error."""
+    path = Path(path)
+    if path.suffix != ".rrd":
+        raise SinsInputError(f"{path}: a Rerun recording's name must end in .rrd")
+    if not path.parent.is_dir():
+        raise SinsInputError(f"{path}: no such folder {path.parent}")
+    return path
+
+
+def save(result: ScenarioRun, path: str | os.PathLike[str], *, summary: str = "") -> Path:
+    """Write the run to a ``.rrd`` file (through a temporary name, so a failed run leaves none)."""
+    path = check_rrd_path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    rec, bp = _recording(result)
+    try:
+        rec.save(tmp, default_blueprint=bp)
+        log_scenario_run(rec, result, summary=summary)
+        rec.flush()
+        rec.disconnect()
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+NO_DISPLAY = (
+    "--spawn: no display to open the native viewer on (DISPLAY and WAYLAND_DISPLAY are unset); "
+    "use --rerun OUT.rrd to save a recording, or --serve for the web viewer"
+)
+
+
+def has_display() -> bool:
+    """Whether a native window can open here (always on macOS and Windows; X11 or Wayland elsewhere)."""
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def spawn(result: ScenarioRun, *, summary: str = "") -> None:
+    """Open the native viewer on the run (it stays open after this process ends)."""
+    if not has_display():
+        raise SinsInputError(NO_DISPLAY)
+    viewer = Path(sys.executable).with_name("rerun")  # the venv's viewer, whatever PATH says
+    rec, bp = _recording(result)
+    if viewer.exists():
+        rr.spawn(executable_path=str(viewer), recording=rec, default_blueprint=bp)
+    else:
+        rr.spawn(recording=rec, default_blueprint=bp)
+    log_scenario_run(rec, result, summary=summary)
+    rec.flush()
+
+
+def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_port: int = 9876) -> str:
+    """Serve the run to the web viewer; returns the address to open. Keep the process alive to serve."""
+    rec, bp = _recording(result)
+    try:
+        grpc_url = rec.serve_grpc(grpc_port=grpc_port, default_blueprint=bp)
+        rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=grpc_url)
+    except Exception as exc:  # rerun raises its own error types for a port in use
+        raise SinsInputError(f"--serve: cannot serve on ports {web_port}/{grpc_port}: {exc}") from None
+    log_scenario_run(rec, result, summary=summary)
+    rec.flush()
+    from urllib.parse import quote
+
+    return f"http://localhost:{web_port}/?url={quote(grpc_url, safe='')}"

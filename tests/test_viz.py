@@ -1,0 +1,237 @@
+"""The Rerun bridge: recordings read back, the logged figures equal the run's, refusals."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import refusal
+
+rr = pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
+
+from sins import earth, pipeline, scenario, viz  # noqa: E402
+from sins.cli import main  # noqa: E402
+from sins.imu import CHANNELS, DEG_PER_H, MG  # noqa: E402
+
+IMU = """\
+[[effect]]
+name = "gyro.bias"
+bias_dph = [4.0, -3.0, 5.0]
+[[effect]]
+name = "accel.bias"
+bias_mg = [0.8, -1.1, 0.6]
+[[effect]]
+name = "gyro.scale_misalignment"
+matrix_ppm = [[300, 120, -80], [-150, -250, 60], [90, -40, 400]]
+[[effect]]
+name = "gyro.noise"
+arw_deg_per_rt_h = 0.05
+"""
+
+RIG = """\
+[rig]
+rate_hz = 50
+[positions]
+count = 24
+dwell_s = 4
+[rate_table]
+rates_dps = [50, 200]
+dwell_s = 3
+"""
+
+SCENARIO = """\
+name = "viz_drive"
+description = "two minutes with a turn"
+[imu]
+rate_hz = 100
+model = "{imu}"
+seed = 3
+[compensation]
+rig = "{rig}"
+seed = 4
+strategies = ["oracle", "regression"]
+[navigation]
+vertical = "damp"
+[initial]
+lat_deg = 45.0
+lon_deg = 7.0
+alt_m = 200.0
+[[segment]]
+type = "accelerate"
+duration_s = 20
+to_speed_mps = 15
+[[segment]]
+type = "turn"
+duration_s = 30
+angle_deg = 90
+[[segment]]
+type = "hold"
+duration_s = 70.05
+"""
+
+
+def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
+    """Every time-indexed column of a recording: entity → {"t": seconds, component: values}."""
+    out: dict[str, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+    for chunk in rr.chunk.RrdReader(path).stream():
+        if chunk.is_static:
+            out[chunk.entity_path]["static"].append(np.array([1]))
+            continue
+        batch = chunk.to_record_batch()
+        t = batch.column("sim_time").to_numpy().astype("int64") / 1e9
+        out[chunk.entity_path]["t"].append(t)
+        for name in batch.schema.names:
+            if ":" in name:  # "Archetype:component"
+                values = np.array(batch.column(name).to_pylist(), dtype=float)
+                values = values[:, 0] if values.ndim == 2 and values.shape[1] == 1 else values
+                out[chunk.entity_path][name.split(":")[1]].append(values)
+    return {e: {k: np.concatenate(v) for k, v in cols.items()} for e, cols in out.items()}
+
+
+@pytest.fixture(scope="module")
+def drive(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, pipeline.ScenarioRun]:
+    folder = tmp_path_factory.mktemp("viz")
+    (folder / "imu.toml").write_text(IMU)
+    (folder / "rig.toml").write_text(RIG)
+    path = folder / "drive.toml"
+    path.write_text(SCENARIO.format(imu=folder / "imu.toml", rig=folder / "rig.toml"))
+    return path, pipeline.run_scenario(scenario.load(path))
+
+
+@pytest.fixture(scope="module")
+def recorded(drive: tuple[Path, pipeline.ScenarioRun], tmp_path_factory: pytest.TempPathFactory):
+    _, result = drive
+    out = viz.save(result, tmp_path_factory.mktemp("rrd") / "drive.rrd", summary="the table")
+    return result, _read(out)
+
+
+def test_entity_paths_and_row_counts(recorded) -> None:
+    result, logged = recorded
+    strategies = ["none", "oracle", "regression"]
+    assert list(result.runs) == strategies
+    n_nav, n_imu = len(result.truth.t), len(result.sensor_t)
+    assert n_nav == 1201 + 1  # 10 Hz of 120.05 s: every 10th of 12006 samples, and the last
+    expected = {f"/world/{s}/vehicle": n_nav for s in ["truth", *strategies]}
+    expected |= {f"/errors/{panel}/{s}": n_nav for panel in viz.ERROR_PANELS for s in strategies}
+    labels = ["raw" if s == "none" else s for s in strategies]
+    expected |= {f"/imu/{viz.imu_entity(ch)}/{label}": n_imu for ch in CHANNELS for label in labels}
+    for entity, rows in expected.items():
+        assert entity in logged, entity
+        assert len(logged[entity]["t"]) == rows, entity
+    for static in ("/world/truth/path", "/world/regression/path", "/scenario", "/summary", "/world"):
+        assert "static" in logged[static], static
+
+
+def test_logged_final_errors_equal_the_runs_metrics(recorded) -> None:
+    result, logged = recorded
+    for name, run in result.runs.items():
+        s = run.summary
+        final = {p: logged[f"/errors/{p}/{name}"]["scalars"][-1] for p in viz.ERROR_PANELS}
+        assert logged[f"/errors/horizontal_m/{name}"]["t"][-1] == pytest.approx(result.truth.t[-1], abs=1e-9)
+        assert final["horizontal_m"] == s.final_horizontal_m
+        assert final["down_m"] == s.final_down_m
+        speed = np.linalg.norm([s.final_vn_mps, s.final_ve_mps, s.final_vd_mps])
+        assert final["velocity_mps"] == pytest.approx(speed, rel=1e-12)
+        for axis in ("roll", "pitch", "yaw"):
+            wanted = getattr(s, f"final_{axis}_deg")
+            assert final[f"{axis}_deg"] == pytest.approx(wanted, rel=1e-12, abs=1e-15)
+        assert logged[f"/errors/horizontal_m/{name}"]["scalars"].max() == pytest.approx(
+            s.max_horizontal_m, rel=0.05
+        )  # the thinned series (10 of 100 Hz) sees nearly the true maximum of a slow drift
+
+
+def test_paths_start_at_the_origin_and_end_at_the_final_error(recorded) -> None:
+    result, logged = recorded
+    truth = logged["/world/truth/vehicle"]["translation"].reshape(-1, 3)
+    np.testing.assert_allclose(truth[0], 0.0, atol=1e-6)
+    for name, run in result.runs.items():
+        path = logged[f"/world/{name}/vehicle"]["translation"].reshape(-1, 3)
+        # Path separation at the end = the NED position error, up to the turn of the local frame over
+        # the ~1.4 km drive (1.4 km / R = 2.2e-4 rad: 2 cm on an 85 m error) and float32 storage.
+        np.testing.assert_allclose(path[-1] - truth[-1], run.errors.pos_ned_m[-1], rtol=0, atol=0.05)
+        quat = logged[f"/world/{name}/vehicle"]["quaternion"].reshape(-1, 4)
+        np.testing.assert_allclose(quat, run.solution.q_nb, rtol=0, atol=1e-6)  # stored as float32
+
+
+def test_imu_error_signals_are_the_block_means_of_the_stream(recorded) -> None:
+    result, logged = recorded
+    raw = logged["/imu/gyro_x_deg_per_h/raw"]["scalars"]
+    np.testing.assert_allclose(raw, result.runs["none"].sensor_error[:, 0] / DEG_PER_H)
+    # The raw gyro x error is its 4 °/h bias + scale·ω + noise; its mean over the run is near the bias.
+    assert np.mean(raw) == pytest.approx(4.0, abs=1.0)
+    oracle = logged["/imu/accel_y_mg/oracle"]["scalars"]
+    np.testing.assert_allclose(oracle, 0.0, atol=1e-9)  # the oracle removes all of a noiseless accel error
+    assert np.mean(logged["/imu/accel_y_mg/raw"]["scalars"]) == pytest.approx(-1.1, abs=0.05)
+    assert MG > 0
+
+
+def test_one_more_run_beside_others(drive, tmp_path: Path) -> None:
+    """A campaign logs extra runs under prefixes of their own into one recording."""
+    _, result = drive
+    path = tmp_path / "campaign.rrd"
+    rec = rr.RecordingStream(viz.APPLICATION_ID)
+    rec.save(path)
+    origin = (float(result.truth.lat[0]), float(result.truth.lon[0]), float(result.truth.h[0]))
+    for member in range(2):
+        viz.log_run(rec, "regression", result.runs["regression"], origin, prefix=f"campaign/{member}")
+    rec.flush()
+    rec.disconnect()
+    logged = _read(path)
+    for member in range(2):
+        assert len(logged[f"/campaign/{member}/errors/horizontal_m/regression"]["t"]) == len(result.truth.t)
+
+
+def test_local_ned_keeps_ecef_distances_and_matches_the_radii_to_first_order() -> None:
+    lat0, lon0, h0 = np.radians(45.0), np.radians(7.0), 200.0
+    lat = lat0 + np.array([1e-5, 0.0, 0.0, 3e-3])
+    lon = lon0 + np.array([0.0, 1e-5, 0.0, -2e-3])
+    h = h0 + np.array([0.0, 0.0, 10.0, 50.0])
+    ned = earth.local_ned(lat, lon, h, lat0, lon0, h0)
+    xyz = np.stack(earth.lla_to_ecef(lat, lon, h), axis=1) - np.array(earth.lla_to_ecef(lat0, lon0, h0))
+    np.testing.assert_allclose(np.linalg.norm(ned, axis=1), np.linalg.norm(xyz, axis=1), rtol=1e-12)
+    r_m, r_n = earth.radii(lat0)
+    np.testing.assert_allclose(ned[0], [(r_m + h0) * 1e-5, 0, 0], atol=1e-3)  # second order: ~R·dφ²
+    np.testing.assert_allclose(ned[1], [0, (r_n + h0) * np.cos(lat0) * 1e-5, 0], atol=1e-3)
+    np.testing.assert_allclose(ned[2], [0, 0, -10.0], atol=1e-9)
+
+
+def test_cli_saves_a_recording_and_refuses_what_cannot_work(
+    drive, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, _ = drive
+    out = tmp_path / "run.rrd"
+    assert main(["run", str(path), "--rerun", str(out)]) == 0
+    assert out.exists() and "wrote" in capsys.readouterr().out
+    assert not list(tmp_path.glob(".*tmp"))  # the temporary name is gone
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["run", str(path), "--spawn"]) == 2
+    err = capsys.readouterr()
+    assert err.out == ""  # refused before the run, not after it
+    assert err.err.count("\n") == 1 and "--rerun" in err.err and "--serve" in err.err
+
+    assert main(["run", str(path), "--rerun", str(tmp_path / "nowhere" / "x.rrd")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+    refusal(lambda: viz.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_serve_works_headless_and_gives_the_address(drive) -> None:
+    import urllib.request
+
+    _, result = drive
+    web, grpc = _free_port(), _free_port()
+    address = viz.serve(result, summary="the table", web_port=web, grpc_port=grpc)
+    assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
+    with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
+        assert page.status == 200 and b"<html" in page.read().lower()
