@@ -259,6 +259,55 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_gap(args: argparse.Namespace) -> int:
+    from sins import gap, imu, io, pipeline, scenario
+
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)
+    data = pipeline.gap_data(args.recording, args.truth)
+    model: tuple[str, ...] = imu.BASELINE
+    if args.model:
+        spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
+        model = tuple(e.name for e in spec.model().effects)
+    report = gap.diagnose(data, args.holdout, model)
+    _, held_rows = report.rows
+    print(
+        f"{args.recording}: {len(data)} rows, {held_rows} withheld (the last {args.holdout:g} of "
+        f"{'every phase' if data.phases else 'the recording'}); model: {', '.join(report.model)}"
+    )
+    head = ["channel", "unit", "before", "after", "noise floor", "before/floor", "after/floor"]
+    rows = []
+    for ch, v in report.channels.items():
+        size, unit = _display_unit(ch)
+        rows.append([
+            ch, unit, f"{v['rms_before'] / size:.4f}", f"{v['rms_after'] / size:.4f}",
+            f"{v['noise_floor'] / size:.4f}", f"{v['rms_before'] / v['noise_floor']:.3f}",
+            f"{v['rms_after'] / v['noise_floor']:.3f}",
+        ])  # fmt: skip
+    print("RMS of reading - model on the withheld rows")
+    print(_fixed_width(head, rows))
+    if report.where:
+        print("\nwhere the gap is (channels above their noise floor, largest first):")
+        for w in report.where:
+            print(f"  {w['channel']}: {w['excess']:.3f}x the floor; " + ("; ".join(w["concentrates"]) or "-"))
+    else:
+        print("\nno channel is significantly above its noise floor: the model explains the data")
+    print("\ncandidate effects (withheld log-likelihood gain less the BIC penalty; accepted if > 0):")
+    for e in report.effects[: args.top]:
+        mark = "accepted" if e.accepted else ""
+        print(f"  {e.name:<26} {e.score:14.1f}  {mark}")
+    print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
+    print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
+    if args.json:
+        io.write_json(args.json, {"recording": str(args.recording), **report.to_dict()})
+    if args.rerun:
+        viz.save_gap(report, args.rerun)
+        print(f"wrote {args.rerun}")
+    return 0
+
+
 def _cmd_check(args: argparse.Namespace) -> int:
     from sins import quality
 
@@ -371,6 +420,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--update-baseline", action="store_true", help="write the measured metrics as the baseline"
     )
     p.set_defaults(func=_cmd_check)
+
+    p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
+    p.add_argument("recording", type=Path, metavar="RECORDING.csv")
+    p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
+    p.add_argument("--model", metavar="MODEL.toml", help="the simulation's IMU model (default: the baseline)")
+    p.add_argument(
+        "--holdout", type=_fraction, default=0.3, metavar="FRACTION",
+        help="withhold the last FRACTION of every phase (default 0.3); every verdict is judged on it",
+    )  # fmt: skip
+    p.add_argument("--json", type=Path, metavar="REPORT.json")
+    p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the residuals before and after")
+    p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
+    p.set_defaults(func=_cmd_gap)
 
     p = sub.add_parser("effects", help="list the IMU error effects, their parameters and units")
     p.set_defaults(func=_cmd_effects)

@@ -30,7 +30,7 @@ from sins.metrics import (
     thinned_indices,
 )
 from sins.scenario import Scenario
-from sins.series import ImuIncrements, ImuRates, NavSeries
+from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 T = TypeVar("T")
 
@@ -282,3 +282,46 @@ def integrate_recording(
             t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
         )
     return navigate(imu, truth, vertical, vertical_tau_s)
+
+
+def gap_data(
+    recording: str | os.PathLike[str], truth: str | os.PathLike[str] | None = None
+) -> CalibrationData:
+    """Readings beside reference inputs for :func:`sins.gap.diagnose`.
+
+    Without ``truth``: a rig recording with ``ref_`` columns. With it: an IMU recording in rate form
+    whose reference inputs come from the truth trajectory through the exact ideal-IMU path (splines
+    through the truth, then the strapdown equations backwards).
+    """
+    from sins import motion
+
+    if truth is None:
+        table = io.read_table(recording)
+        if not any(c.startswith("ref_") for c in table.columns):
+            raise SinsInputError(
+                f"{recording}: no ref_ columns (a rig recording has them); for an IMU recording "
+                "pass its trajectory with --truth TRUTH.csv"
+            )
+        return io.read_recording(recording)
+    samples, table = io.read_imu(recording)
+    if not isinstance(samples, ImuRates):
+        raise SinsInputError(f"{recording}: the gap diagnosis needs the rate form (wx..wz, fx..fz columns)")
+    path = io.read_truth(truth)
+    if len(path.t) < 4:
+        raise SinsInputError(f"{truth}: a truth trajectory needs at least 4 rows")
+    inside = (samples.t >= path.t[0]) & (samples.t <= path.t[-1])
+    if inside.sum() < len(samples.t):
+        raise SinsInputError(
+            f"{recording}: rows from t={samples.t[~inside][0]:g} s lie outside the truth's "
+            f"{path.t[0]:g}..{path.t[-1]:g} s in {truth}"
+        )
+    recorded = motion.RecordedMotion(
+        t=path.t, lat0=float(path.lat[0]), lon0=float(path.lon[0]), h0=float(path.h[0]), v_n=path.v_n,
+        q_nb=path.q_nb,
+    )  # fmt: skip
+    ideal = trajectory.ideal_rates(recorded, path.interpolate(samples.t))
+    temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
+    return CalibrationData(
+        t=samples.t, gyro=samples.omega_ib_b, accel=samples.f_ib_b, ref_gyro=ideal.omega_ib_b,
+        ref_accel=ideal.f_ib_b, temp=temp, source=str(recording),
+    )  # fmt: skip

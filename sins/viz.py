@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from sins import earth
 from sins.errors import SinsInputError
+from sins.gap import GapReport
 from sins.imu import CHANNELS, DEG_PER_H, MG
 from sins.pipeline import ScenarioRun, StrategyRun
 from sins.series import NavSeries
@@ -289,3 +290,66 @@ def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_
     from urllib.parse import quote
 
     return f"http://localhost:{web_port}/?url={quote(grpc_url, safe='')}"
+
+
+def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> None:
+    """A gap diagnosis: per channel, the withheld residual before and after the accepted effects (°/h,
+    mg), their noise floor, and the report as text."""
+    t = report.t_withheld
+    for i, channel in enumerate(CHANNELS):
+        unit = DEG_PER_H if channel.startswith("gyro") else MG
+        floor = report.channels[channel]["noise_floor"] / unit
+        for label, residual, rgb in (
+            ("before", report.residual_before, (228, 26, 28)),
+            ("after", report.residual_after, (55, 126, 184)),
+        ):
+            entity = _join(prefix, "gap", imu_entity(channel), label)
+            rec.log(entity, rr.SeriesPoints(names=[label], colors=[rgb], marker_sizes=[1.0]), static=True)
+            rec.send_columns(
+                entity, indexes=_time(t), columns=rr.Scalars.columns(scalars=residual[:, i] / unit)
+            )
+        for label, value in (("floor_plus", floor), ("floor_minus", -floor)):
+            entity = _join(prefix, "gap", imu_entity(channel), label)
+            rec.log(entity, rr.SeriesLines(names=["noise floor"], colors=[(77, 175, 74)]), static=True)
+            rec.send_columns(
+                entity, indexes=_time(t[[0, -1]]), columns=rr.Scalars.columns(scalars=np.full(2, value))
+            )
+    lines = ["| channel | before/floor | after/floor |", "|---|---|---|"]
+    for channel, v in report.channels.items():
+        before, after = v["rms_before"] / v["noise_floor"], v["rms_after"] / v["noise_floor"]
+        lines.append(f"| {channel} | {before:.3f} | {after:.3f} |")
+    lines += ["", f"diagnosis: {', '.join(report.diagnosis) or 'nothing to add'}"]
+    lines += [f"unexplained: {', '.join(report.unexplained) or 'none'}", "", "where:"]
+    lines += [f"- {w['channel']}: {w['excess']:.3f}× — {'; '.join(w['concentrates'])}" for w in report.where]
+    rec.log(
+        _join(prefix, "gap", "report"),
+        rr.TextDocument("\n".join(lines), media_type="text/markdown"),
+        static=True,
+    )
+
+
+def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
+    """Write a gap diagnosis to a ``.rrd`` file (through a temporary name)."""
+    path = check_rrd_path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
+    whole = rrb.TimeRangeBoundary.infinite()
+    axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
+    views = [
+        rrb.TimeSeriesView(origin=f"gap/{imu_entity(ch)}", name=f"{ch} residual", axis_x=axis)
+        for ch in CHANNELS
+    ]
+    bp = rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Grid(*views), rrb.TextDocumentView(origin="gap/report", name="report"), column_shares=[3, 1]
+        )
+    )
+    try:
+        rec.save(tmp, default_blueprint=bp)
+        log_gap(rec, report)
+        rec.flush()
+        rec.disconnect()
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path

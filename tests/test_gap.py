@@ -1,0 +1,93 @@
+"""Sim-to-real gap diagnosis: withheld effects found, a clean unit left alone, bad recordings refused."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import refusal
+
+from sins import calibration, gap, imu, imu_spec, io
+from sins.cli import main
+
+RIG = calibration.RigProcedure(
+    position_dwell_s=10.0,
+    rate_table=calibration.RateTable(dwell_s=5.0),
+    temperature=calibration.TemperatureProfile((0.0, 600.0), (10.0, 40.0)),
+)
+
+
+def _recording(extra: str | None, seed: int = 1, scale: float = 3.0) -> calibration.CalibrationData:
+    model = imu_spec.draw_unit("tactical", seed).only(*imu.BASELINE)
+    if extra is not None:
+        model = model.with_effects(imu_spec.typical_effect(extra, np.random.default_rng(seed), scale))
+    return calibration.simulate_rig(RIG, model, seed=seed)
+
+
+def test_every_library_effect_beyond_the_baseline_is_a_candidate():
+    assert set(gap.CANDIDATES) == set(imu.EFFECT_NAMES) - set(imu.BASELINE) - {"gyro.bias", "accel.bias"}
+
+
+def test_a_baseline_unit_needs_nothing_added():
+    for seed in range(2):
+        report = gap.diagnose(_recording(None, seed))
+        assert report.diagnosis == [] and report.unexplained == [] and report.where == []
+        for v in report.channels.values():  # the floor from first differences is the noise's own level
+            assert v["rms_before"] == pytest.approx(v["noise_floor"], rel=0.03)
+        assert all(e.score < 0 for e in report.effects)
+
+
+@pytest.mark.parametrize(
+    "effect",
+    ["gyro.scale_nonlinearity", "gyro.scale_asymmetry", "accel.temperature_bias", "accel.size_effect"],
+)
+def test_a_withheld_effect_is_found_first_and_closes_the_gap(effect: str):
+    report = gap.diagnose(_recording(effect))
+    assert report.diagnosis[:1] == [effect]
+    assert report.effects[0].name == effect and report.effects[0].accepted
+    sensor = effect.split(".")[0]
+    assert any(w["channel"].startswith(sensor) for w in report.where)  # there was a gap to find
+    for ch, v in report.channels.items():
+        assert v["rms_after"] <= 1.15 * v["noise_floor"], ch  # the issue's target
+    assert report.unexplained == []
+
+
+def test_an_effect_outside_the_library_stays_unexplained():
+    """A 0.3 °/s sinusoid on gyro x (period 37 s) is no library effect: it must not be passed off as one."""
+    data = _recording(None)
+    gyro = data.gyro.copy()
+    gyro[:, 0] += np.radians(0.3) * np.sin(2 * np.pi * data.t / 37.0)
+    report = gap.diagnose(dataclasses.replace(data, gyro=gyro))
+    assert report.where[0]["channel"] == "gyro.x"
+    assert "gyro.x" in report.unexplained
+
+
+def test_cli_json_has_the_stable_keys(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    path = tmp_path / "rig.csv"
+    io.write_recording(path, _recording("gyro.scale_nonlinearity"))
+    out = tmp_path / "gap.json"
+    assert main(["gap", str(path), "--json", str(out), "--holdout", "0.3"]) == 0
+    assert "diagnosis: gyro.scale_nonlinearity" in capsys.readouterr().out
+    report = json.loads(out.read_text())
+    assert list(report["channels"]) == list(imu.CHANNELS)
+    assert set(report["channels"]["gyro.x"]) == {"rms_before", "rms_after", "noise_floor"}
+    assert {"channel", "excess", "concentrates"} <= set(report["where"][0])
+    assert {"name", "channels", "score", "accepted"} == set(report["effects"][0])
+    assert report["diagnosis"] == ["gyro.scale_nonlinearity"] and report["unexplained"] == []
+
+
+def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
+    data = _recording(None)
+    bad = data.gyro.copy()
+    bad[123, 1] = np.nan
+    refusal(lambda: gap.diagnose(dataclasses.replace(data, gyro=bad)), "NaN", "row 123")
+    refusal(lambda: gap.diagnose(data.rows(slice(0, 50))), "too short to split")
+    refusal(lambda: gap.diagnose(data, model=("gyro.wobble",)), "unknown effect")
+    imu_only = tmp_path / "imu.csv"
+    imu_only.write_text("t,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n")
+    from sins import pipeline
+
+    refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "--truth")
