@@ -273,8 +273,11 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         model = tuple(e.name for e in spec.model().effects)
     report = gap.diagnose(data, args.holdout, model)
     _, held_rows = report.rows
+    skipped = (
+        f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""
+    )
     print(
-        f"{args.recording}: {len(data)} rows, {held_rows} withheld (the last {args.holdout:g} of "
+        f"{args.recording}: {len(data)} rows{skipped}, {held_rows} withheld (the last {args.holdout:g} of "
         f"{'every phase' if data.phases else 'the recording'}); model: {', '.join(report.model)}"
     )
     head = ["channel", "unit", "before", "after", "noise floor", "before/floor", "after/floor"]

@@ -162,6 +162,7 @@ class GapReport:
     diagnosis: list[str]
     unexplained: list[str]
     rows: tuple[int, int] = (0, 0)  # fit, withheld
+    unreferenced: int = 0  # rows left out for want of a per-sample reference
     model: tuple[str, ...] = BASELINE
     residual_before: Array = field(default_factory=lambda: np.zeros((0, 6)))
     residual_after: Array = field(default_factory=lambda: np.zeros((0, 6)))
@@ -338,18 +339,20 @@ def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.boo
 
 def _check(data: CalibrationData, holdout: float) -> None:
     where = data.source or "recording"
-    for name in ("gyro", "accel", "ref_gyro", "ref_accel"):
+    for name in ("gyro", "accel"):
         a = getattr(data, name)
-        if np.isnan(a).any():
-            row = int(np.flatnonzero(np.isnan(a).any(axis=1))[0])
-            what = "reference" if name.startswith("ref") else "reading"
-            raise SinsInputError(
-                f"{where}: NaN in the {what} {name} at row {row}: the diagnosis needs every row"
-            )
+        if not np.isfinite(a).all():
+            row = int(np.flatnonzero(~np.isfinite(a).all(axis=1))[0])
+            raise SinsInputError(f"{where}: NaN or infinite {name} reading at row {row}")
+    if data.temp is not None and not np.isfinite(data.temp).all():
+        row = int(np.flatnonzero(~np.isfinite(data.temp))[0])
+        raise SinsInputError(f"{where}: NaN or infinite temperature at row {row}")
     if not 0.0 < holdout < 1.0:
         raise SinsInputError(f"{where}: --holdout must be in (0, 1), got {holdout}")
-    if len(data) < 200:
-        raise SinsInputError(f"{where}: too short to split ({len(data)} rows; at least 200 are needed)")
+    n = int((np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)).sum())
+    if n < 200:
+        with_ref = " with a per-sample reference" if n < len(data) else ""
+        raise SinsInputError(f"{where}: too short to split ({n} rows{with_ref}; at least 200 are needed)")
 
 
 def diagnose(
@@ -369,6 +372,8 @@ def diagnose(
     progress : called with each candidate's name as it is scored
     """
     _check(data, holdout)
+    all_rows = len(data)
+    data = data.referenced()  # rows without a per-sample reference (a hand-turned rotation) say nothing
     unknown = [n for n in model if n not in EFFECT_NAMES]
     if unknown:
         raise SinsInputError(f"model: unknown effect {unknown[0]!r} (see `sins effects`)")
@@ -455,6 +460,7 @@ def diagnose(
         diagnosis=accepted,
         unexplained=unexplained,
         rows=(n_fit, int(withheld.sum())),
+        unreferenced=all_rows - len(data),
         model=tuple(dict.fromkeys((*BASELINE, *model))),
         residual_before=before[withheld],
         residual_after=residual[withheld],

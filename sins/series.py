@@ -223,6 +223,11 @@ class CalibrationData:
             raise ValueError(f"{self.source or 'recording'}: too short to split ({n} rows)")
         return self._subset(fit_rows), self._subset(val_rows)
 
+    def referenced(self) -> CalibrationData:
+        """The rows with a per-sample reference (finite ``ref_gyro`` and ``ref_accel``), phases kept."""
+        ok = np.isfinite(self.ref_gyro).all(axis=1) & np.isfinite(self.ref_accel).all(axis=1)
+        return self if ok.all() else self._subset(np.flatnonzero(ok))
+
     def _subset(self, rows: NDArray[np.integer]) -> CalibrationData:
         """Rows (sorted) with the phases that survive, re-indexed."""
         position = np.full(len(self.t) + 1, -1)

@@ -12,6 +12,7 @@ from conftest import refusal
 
 from sins import calibration, gap, imu, imu_spec, io
 from sins.cli import main
+from sins.gap import SIGNIFICANT_RATIO as SIGNIFICANT
 
 RIG = calibration.RigProcedure(
     position_dwell_s=10.0,
@@ -83,7 +84,7 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
     data = _recording(None)
     bad = data.gyro.copy()
     bad[123, 1] = np.nan
-    refusal(lambda: gap.diagnose(dataclasses.replace(data, gyro=bad)), "NaN", "row 123")
+    refusal(lambda: gap.diagnose(dataclasses.replace(data, gyro=bad)), "NaN", "gyro", "row 123")
     refusal(lambda: gap.diagnose(data.rows(slice(0, 50))), "too short to split")
     refusal(lambda: gap.diagnose(data, model=("gyro.wobble",)), "unknown effect")
     imu_only = tmp_path / "imu.csv"
@@ -91,3 +92,26 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
     from sins import pipeline
 
     refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "--truth")
+
+
+def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
+    """Real data: only the six static holds have a per-sample reference (the turns are hand-made).
+
+    The accelerometers part from the seed model by 1.3-2.3× their noise floor, in offsets that
+    last a whole hold ("slow"): a hand-held orientation is off by a degree or so, which the
+    reference (±9.81 m/s² on one axis) cannot know. The gyros are at their floor.
+    """
+    from sins import datasets
+    from sins.errors import SinsInputError
+
+    try:
+        session = datasets.read_ferraris()
+    except SinsInputError as exc:  # the data root is absent: say where it was looked for
+        pytest.skip(f"Ferraris session unavailable: {exc}")
+    report = gap.diagnose(session)
+    assert report.unreferenced == int(np.isnan(session.ref_gyro).any(axis=1).sum()) > 0
+    gapped = [w["channel"] for w in report.where]
+    assert set(gapped) <= {"accel.x", "accel.y", "accel.z"} and "accel.x" in gapped
+    assert all(any(c.startswith("slow") for c in w["concentrates"]) for w in report.where)
+    for ch in ("gyro.x", "gyro.y", "gyro.z"):
+        assert report.channels[ch]["rms_before"] <= SIGNIFICANT * report.channels[ch]["noise_floor"]

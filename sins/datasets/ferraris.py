@@ -1,10 +1,4 @@
-"""Readers for the real IMU datasets kept beside the project (never copied into it).
-
-Each dataset lives in a folder under the data root (see :func:`data_root`) with
-a SOURCE.md giving its origin, licence, units and columns. The readers convert
-to the package's conventions (SI, radians) and return the package's types.
-
-imucal Ferraris session (``imucal_ferraris/``; MIT licence, MaD Lab, FAU Erlangen-Nürnberg,
+"""The imucal Ferraris session (``imucal_ferraris/``; MIT licence, MaD Lab, FAU Erlangen-Nürnberg,
 github.com/mad-lab-fau/imucal)
     A hand-performed Ferraris calibration of an unnamed MEMS IMU: six static
     holds with each axis up and down, then one turn about each axis.
@@ -23,13 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import earth, io
+from sins.datasets.root import ENV_VAR, data_root
 from sins.errors import SinsInputError
 from sins.series import CalibrationData, RigPhase
 
 Array = NDArray[np.float64]
-
-#: The environment variable that points at the data root.
-ENV_VAR = "SINS_DATA"
 
 FERRARIS_FOLDER = "imucal_ferraris"
 #: Sample rate of the example session, Hz. SOURCE.md cites imucal's ``examples/basic_ferraris.py``
@@ -47,36 +39,6 @@ FERRARIS_HEIGHT_M = 0.0
 #: The sections of a Ferraris session, as imucal names them.
 FERRARIS_SECTIONS = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot")
 _FERRARIS_COLUMNS = ("n_samples", "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z")
-
-
-def data_root(override: str | os.PathLike[str] | None = None) -> Path:
-    """The folder that holds the datasets.
-
-    In this order: ``override`` when given; else the environment variable
-    ``SINS_DATA`` when set and non-empty; else ``../shared/data`` relative to
-    the current working directory when that is a folder; else ``../shared/data``
-    relative to the repository root (the parent of the ``sins`` package
-    folder), whether or not it exists (the readers then say it is missing).
-
-    Parameters
-    ----------
-    override : an explicit data root, or None
-
-    Returns
-    -------
-    Path
-        absolute (``~`` expanded); not checked to exist when given by ``override``
-        or ``SINS_DATA``.
-    """
-    if override is not None:
-        return Path(override).expanduser().absolute()
-    env = os.environ.get(ENV_VAR, "")
-    if env:
-        return Path(env).expanduser().absolute()
-    here = Path.cwd() / ".." / "shared" / "data"
-    if here.is_dir():
-        return here.resolve()
-    return (Path(__file__).resolve().parent.parent / ".." / "shared" / "data").resolve()
 
 
 def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = "example") -> CalibrationData:

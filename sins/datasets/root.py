@@ -1,0 +1,39 @@
+"""Where the real datasets live: the data root (``../shared/data``, or ``SINS_DATA``)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+#: The environment variable that points at the data root.
+ENV_VAR = "SINS_DATA"
+
+
+def data_root(override: str | os.PathLike[str] | None = None) -> Path:
+    """The folder that holds the datasets.
+
+    In this order: ``override`` when given; else the environment variable
+    ``SINS_DATA`` when set and non-empty; else ``../shared/data`` relative to
+    the current working directory when that is a folder; else ``../shared/data``
+    relative to the repository root (the parent of the ``sins`` package
+    folder), whether or not it exists (the readers then say it is missing).
+
+    Parameters
+    ----------
+    override : an explicit data root, or None
+
+    Returns
+    -------
+    Path
+        absolute (``~`` expanded); not checked to exist when given by ``override``
+        or ``SINS_DATA``.
+    """
+    if override is not None:
+        return Path(override).expanduser().absolute()
+    env = os.environ.get(ENV_VAR, "")
+    if env:
+        return Path(env).expanduser().absolute()
+    here = Path.cwd() / ".." / "shared" / "data"
+    if here.is_dir():
+        return here.resolve()
+    return (Path(__file__).resolve().parents[2] / ".." / "shared" / "data").resolve()
