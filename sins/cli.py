@@ -266,7 +266,17 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
-    data = pipeline.gap_data(args.recording, args.truth)
+    if (args.recording is None) == (args.dataset is None):
+        raise SinsInputError("gap: give a RECORDING.csv or --dataset NAME (one of them)")
+    if args.dataset is not None:
+        from sins import datasets
+
+        if args.truth is not None:
+            raise SinsInputError("gap: --truth goes with a RECORDING.csv, not with --dataset")
+        data = datasets.load(args.dataset)
+        args.recording = args.dataset
+    else:
+        data = pipeline.gap_data(args.recording, args.truth)
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
         spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
@@ -425,7 +435,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_check)
 
     p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
-    p.add_argument("recording", type=Path, metavar="RECORDING.csv")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+    p.add_argument(
+        "--dataset", metavar="NAME",
+        help="a real dataset from the data root instead of a file: ferraris, psins_vehicle, psins_lasergyro, "
+        "broad_05, broad_18",
+    )  # fmt: skip
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
     p.add_argument("--model", metavar="MODEL.toml", help="the simulation's IMU model (default: the baseline)")
     p.add_argument(

@@ -17,12 +17,14 @@ Every library effect not in the model is a candidate, of one of three kinds:
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
 model's, minus ``k/2 · ln(n_fit)`` for its ``k`` parameters (BIC's penalty).
-Candidates are accepted greedily while the best score is positive.
+Candidates are accepted greedily while the best score is positive, effects that
+predict the error (regressors, output maps) before processes: a random bias
+tracks any slow misfit, a clipped rate or a bias step as well as a real
+instability.
 
 The noise floor of a channel is the white-noise level the model expects,
-measured without the model: the robust spread of first differences of the
-fit rows' residual (``1.4826 · MAD / √2``), which slowly varying unmodelled
-errors do not reach.
+measured without the model: the spread of first differences of the fit rows'
+residual, which slowly varying unmodelled errors do not reach.
 """
 
 from __future__ import annotations
@@ -136,7 +138,7 @@ assert set(CANDIDATES) == set(EFFECT_NAMES) - set(BASELINE) - {"gyro.bias", "acc
 
 @dataclass(frozen=True)
 class EffectScore:
-    """A candidate's score in the round it was last scored: its log-likelihood gain less its penalty."""
+    """A candidate's score in the round it was accepted or last scored: log-likelihood gain less penalty."""
 
     name: str
     channels: tuple[str, ...]
@@ -220,8 +222,14 @@ class _ChannelModel:
     def predict(self) -> Array:
         """The predicted error of every row, all parameters fitted on the fit rows."""
         a = np.hstack(self.columns)
-        scale = np.maximum(np.abs(a[self.fit]).max(axis=0), 1e-300)
-        coef, *_ = np.linalg.lstsq(a[self.fit] / scale, self.error[self.fit], rcond=None)
+        rows, rcond = self.fit, None
+        scale = np.maximum(np.abs(a[rows]).max(axis=0), 1e-300)
+        if self.output == "saturation":
+            # Clipped readings say nothing of the unclipped model; what the other rows hardly
+            # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
+            seen = self.reading[self.fit]
+            rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
+        coef, *_ = np.linalg.lstsq(a[rows] / scale, self.error[rows], rcond=rcond)
         pred = (a / scale) @ coef
         if self.process is not None:
             y = self.error - pred
@@ -300,9 +308,12 @@ def _inputs(data: CalibrationData) -> _Inputs:
 
 
 def noise_floor(residual: Array) -> float:
-    """White-noise level of a residual series from its first differences (robust to slow errors)."""
-    d = np.diff(residual)
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0))
+    """White-noise level of a residual series from its first differences: ``std(Δr) / √2``.
+
+    Differencing removes what varies slowly (unmodelled scale, temperature or bias effects) and
+    keeps white noise of any distribution, quantised readings' included, at twice its variance.
+    """
+    return float(np.std(np.diff(residual)) / np.sqrt(2.0))
 
 
 def _score(before: Array, after: Array, withheld: NDArray[np.bool_], k_extra: int, n_fit: int) -> float:
@@ -422,9 +433,13 @@ def diagnose(
             scores[name] = EffectScore(name, names, float(total), False)
         if not round_scores:
             break
-        best = max(round_scores, key=lambda n: round_scores[n][0])
-        if round_scores[best][0] <= 0.0:
+        positive = [n for n in round_scores if round_scores[n][0] > 0.0]
+        if not positive:
             break
+        # A random bias tracks any slow misfit, a bias step or a clipped rate as well as a real
+        # instability: it is accepted only when no effect that predicts the error helps.
+        pool = [n for n in positive if CANDIDATES[n].kind != "process"] or positive
+        best = max(pool, key=lambda n: round_scores[n][0])
         accepted.append(best)
         scores[best] = EffectScore(best, scores[best].channels, scores[best].score, True)
         for i, m, r in round_scores[best][1]:
@@ -452,7 +467,10 @@ def diagnose(
         for i in gapped
     ]
     unexplained = [ch for i, ch in enumerate(CHANNELS) if rms_after[i] > SIGNIFICANT_RATIO * floors[i]]
-    ordered = sorted(scores.values(), key=lambda e: -e.score)
+    # Accepted effects first, in the order they were accepted; then the rest, best score first.
+    ordered = [scores[n] for n in accepted] + sorted(
+        (e for e in scores.values() if not e.accepted), key=lambda e: -e.score
+    )
     return GapReport(
         channels=channels,
         where=where,
@@ -484,12 +502,15 @@ def _concentrates(residual: Array, floor: float, x: _Inputs, withheld: NDArray[n
     }
     for name in _FEATURES:
         v = features[name]
-        if v is None or float(np.ptp(v)) == 0.0:
+        # A constant input (a static unit's rate of change: 1e-19 from uneven time stamps) says nothing.
+        if v is None or float(np.ptp(v)) <= 1e-9 * max(1.0, float(np.abs(v).max())):
             continue
         v = v[withheld]
         edges = np.quantile(v, [0.25, 0.5, 0.75])
         bins = np.searchsorted(edges, v, side="right")
-        share = np.array([np.sum(excess[bins == b]) for b in range(4)]) / max(float(np.sum(excess)), 1e-300)
+        # A bin may sit below the floor: shares are of the bins above it.
+        per_bin = np.maximum([np.sum(excess[bins == b]) for b in range(4)], 0.0)
+        share = per_bin / max(float(np.sum(per_bin)), 1e-300)
         top = int(np.argmax(share))
         if share[top] > 0.5:
             label = ("lowest", "second", "third", "highest")[top]

@@ -12,7 +12,6 @@ from conftest import refusal
 
 from sins import calibration, gap, imu, imu_spec, io
 from sins.cli import main
-from sins.gap import SIGNIFICANT_RATIO as SIGNIFICANT
 
 RIG = calibration.RigProcedure(
     position_dwell_s=10.0,
@@ -97,9 +96,10 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
 def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
     """Real data: only the six static holds have a per-sample reference (the turns are hand-made).
 
-    The accelerometers part from the seed model by 1.3-2.3× their noise floor, in offsets that
-    last a whole hold ("slow"): a hand-held orientation is off by a degree or so, which the
-    reference (±9.81 m/s² on one axis) cannot know. The gyros are at their floor.
+    The accelerometers part from the seed model most (1.3-1.8× their noise floor), in offsets
+    that last a whole hold ("slow"): a hand-held orientation is off by a degree or so, which the
+    reference (±9.81 m/s² on one axis) cannot know. The gyros sit 9-11 % above theirs: a hand
+    on a box is not still, and the reference says 0.
     """
     from sins import datasets
     from sins.errors import SinsInputError
@@ -110,8 +110,47 @@ def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
         pytest.skip(f"Ferraris session unavailable: {exc}")
     report = gap.diagnose(session)
     assert report.unreferenced == int(np.isnan(session.ref_gyro).any(axis=1).sum()) > 0
-    gapped = [w["channel"] for w in report.where]
-    assert set(gapped) <= {"accel.x", "accel.y", "accel.z"} and "accel.x" in gapped
-    assert all(any(c.startswith("slow") for c in w["concentrates"]) for w in report.where)
+    assert report.where[0]["channel"] == "accel.x"
+    for w in report.where:
+        if w["channel"].startswith("accel"):
+            assert any(c.startswith("slow") for c in w["concentrates"])
     for ch in ("gyro.x", "gyro.y", "gyro.z"):
-        assert report.channels[ch]["rms_before"] <= SIGNIFICANT * report.channels[ch]["noise_floor"]
+        assert report.channels[ch]["rms_before"] <= 1.2 * report.channels[ch]["noise_floor"]
+
+
+def test_an_imu_recording_with_its_truth_gets_the_exact_ideal_imu_as_reference(tmp_path: Path):
+    """``--truth``: splines through the truth file give the reference inputs of an IMU recording."""
+    from sins import motion, pipeline, trajectory
+
+    drive = motion.SegmentMotion.from_segments(
+        motion.Start(np.radians(45.0), np.radians(7.0), 200.0),
+        [motion.Accelerate(20, 15.0, 2.0), motion.Turn(30, np.radians(3.0), 2.0), motion.Hold(30)],
+    )
+    truth, _ = trajectory.generate(drive, 100.0)
+    rates = trajectory.ideal_rates(drive, truth)
+    model = imu_spec.draw_unit("tactical", 2).only(*imu.BASELINE)
+    io.write_imu(tmp_path / "imu.csv", model.corrupt_rates(rates, seed=2))
+    io.write_truth(tmp_path / "truth.csv", truth)
+    data = pipeline.gap_data(tmp_path / "imu.csv", tmp_path / "truth.csv")
+    # Far below a tactical unit's noise per sample (60 °/h, 1 mg); measured 4e-8 rad/s and 8e-6 m/s².
+    np.testing.assert_allclose(data.ref_gyro, rates.omega_ib_b, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(data.ref_accel, rates.f_ib_b, rtol=0, atol=5e-5)
+    assert gap.diagnose(data).diagnosis == []
+    late = tmp_path / "late.csv"
+    io.write_truth(late, truth.at(slice(0, 4000)))
+    refusal(lambda: pipeline.gap_data(tmp_path / "imu.csv", late), "outside the truth")
+
+
+def test_cli_diagnoses_a_real_dataset_by_name(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    from sins import datasets
+
+    if not (datasets.data_root() / datasets.FERRARIS_FOLDER).is_dir():
+        pytest.skip(f"no {datasets.FERRARIS_FOLDER}/ under {datasets.data_root()} (set {datasets.ENV_VAR})")
+    out = tmp_path / "gap.json"
+    assert main(["gap", "--dataset", "ferraris", "--json", str(out)]) == 0
+    assert "without a per-sample reference left out" in capsys.readouterr().out
+    assert json.loads(out.read_text())["where"][0]["channel"] == "accel.x"
+    assert main(["gap", "--dataset", "nonesuch"]) == 2
+    assert "no dataset 'nonesuch'" in capsys.readouterr().err
+    assert main(["gap"]) == 2
+    assert "RECORDING.csv or --dataset" in capsys.readouterr().err

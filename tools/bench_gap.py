@@ -29,14 +29,15 @@ RIGS = {
     "24pos+table": calibration.RigProcedure(
         position_dwell_s=10.0,
         rate_table=calibration.RateTable(dwell_s=5.0),
-        temperature=calibration.TemperatureProfile((0.0, 600.0), (10.0, 40.0)),
+        # A chamber cycle, not a ramp: a temperature monotonic in time cannot be told from a drift.
+        temperature=calibration.TemperatureProfile((0.0, 300.0, 600.0), (10.0, 40.0, 20.0)),
     ),
     "6pos+fast table": calibration.RigProcedure(
         rate_hz=200.0,
         positions=6,
         position_dwell_s=30.0,
         rate_table=calibration.RateTable(rates_dps=(30.0, 150.0, 300.0), dwell_s=8.0, accel_dps2=300.0),
-        temperature=calibration.TemperatureProfile((0.0, 400.0), (40.0, 15.0)),
+        temperature=calibration.TemperatureProfile((0.0, 150.0, 400.0), (25.0, 40.0, 10.0)),
     ),
 }
 

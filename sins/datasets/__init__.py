@@ -3,17 +3,57 @@
 Each dataset lives in a folder under the data root (see :func:`data_root`) with
 a SOURCE.md giving its origin, licence, units and columns. Each reader, one
 module per dataset, converts to the package's conventions (SI, radians) and
-returns the package's types.
+returns the package's types; :func:`load` gives any of them by name as
+readings beside reference inputs, what ``sins gap --dataset NAME`` diagnoses.
 """
 
+from __future__ import annotations
+
+import os
+
+from sins.datasets.broad import BROAD_TRIALS, read_broad
 from sins.datasets.ferraris import FERRARIS_FOLDER, FERRARIS_RATE_HZ, FERRARIS_SECTIONS, read_ferraris
+from sins.datasets.psins_lasergyro import read_psins_lasergyro
+from sins.datasets.psins_vehicle import read_psins_vehicle
 from sins.datasets.root import ENV_VAR, data_root
+from sins.errors import SinsInputError
+from sins.series import CalibrationData
+
+#: Dataset names for :func:`load`, and what each is.
+NAMES = {
+    "ferraris": "imucal's hand-made Ferraris session of a MEMS IMU (static holds only have a reference)",
+    "psins_vehicle": "PSINS vehicle MEMS IMU against its FOG-INS, as 0.1 s means (the INS's own rate)",
+    "psins_lasergyro": "PSINS static ring-laser INS against Earth rate and gravity",
+    **{f"broad_{s[:2]}": f"BROAD trial {s}: a MEMS IMU against optical motion capture" for s in BROAD_TRIALS},
+}
+
+
+def load(name: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
+    """A dataset by name (see :data:`NAMES`) as readings beside reference inputs."""
+    if name == "ferraris":
+        return read_ferraris(root)
+    if name == "psins_vehicle":
+        # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
+        # vibration the MEMS sees, which would pass for a sensor gap.
+        return read_psins_vehicle(root, rate="fog")[0]
+    if name == "psins_lasergyro":
+        return read_psins_lasergyro(root)
+    if name.startswith("broad_") and name in NAMES:
+        return read_broad(name.removeprefix("broad_"), root)
+    raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(NAMES)})")
+
 
 __all__ = [
+    "BROAD_TRIALS",
     "ENV_VAR",
     "FERRARIS_FOLDER",
     "FERRARIS_RATE_HZ",
     "FERRARIS_SECTIONS",
+    "NAMES",
     "data_root",
+    "load",
+    "read_broad",
     "read_ferraris",
+    "read_psins_lasergyro",
+    "read_psins_vehicle",
 ]
