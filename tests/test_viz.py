@@ -235,3 +235,21 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
     assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
     with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
         assert page.status == 200 and b"<html" in page.read().lower()
+
+
+def test_a_gap_diagnosis_logs_its_withheld_residuals(tmp_path: Path) -> None:
+    from sins import calibration, gap, imu, imu_spec
+
+    rig = calibration.RigProcedure(position_dwell_s=6.0, rate_table=calibration.RateTable(dwell_s=3.0))
+    unit = imu_spec.draw_unit("tactical", 1).only(*imu.BASELINE)
+    report = gap.diagnose(calibration.simulate_rig(rig, unit, seed=1))
+    logged = _read(viz.save_gap(report, tmp_path / "gap.rrd"))
+    held = report.rows[1]
+    for ch in CHANNELS:
+        for label in ("before", "after"):
+            assert len(logged[f"/gap/{viz.imu_entity(ch)}/{label}"]["t"]) == held
+    unit_size = DEG_PER_H
+    np.testing.assert_allclose(
+        logged["/gap/gyro_x_deg_per_h/before"]["scalars"], report.residual_before[:, 0] / unit_size
+    )
+    assert "static" in logged["/gap/report"]
