@@ -17,10 +17,10 @@ Every library effect not in the model is a candidate, of one of three kinds:
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
 model's, minus ``k/2 · ln(n_fit)`` for its ``k`` parameters (BIC's penalty).
-Candidates are accepted greedily while the best score is positive, effects that
-predict the error (regressors, output maps) before processes: a random bias
-tracks any slow misfit, a clipped rate or a bias step as well as a real
-instability.
+Candidates are accepted greedily while the best score is positive. A random
+bias tracks a single jump or any one-off misfit as well as a real instability,
+so a process candidate must also drive its bias alike in both halves of the
+fit rows (see :func:`_homogeneous`).
 
 The noise floor of a channel is the white-noise level the model expects,
 measured without the model: the spread of first differences of the fit rows'
@@ -149,7 +149,7 @@ class EffectScore:
         return {
             "name": self.name,
             "channels": list(self.channels),
-            "score": self.score,
+            "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (_homogeneous)
             "accepted": self.accepted,
         }
 
@@ -234,6 +234,8 @@ class _ChannelModel:
         if self.process is not None:
             y = self.error - pred
             phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
+            if not _homogeneous(y, self.fit, self.x.t, phi, q, r):
+                return np.full_like(pred, np.nan)  # not this process: see _homogeneous
             pred = pred + y - _innovations(y, phi, _steady_gain(phi, q, r)[0])
         if self.output is not None:
             pred = _output_map(self.output, pred, self.reading - self.error, self.reading, self.fit)
@@ -249,24 +251,31 @@ def _steady_gain(phi: float, q: float, r: float) -> tuple[float, float]:
 
 
 def _innovations(y: Array, phi: float, gain: float) -> Array:
-    """One-step-ahead innovations of the steady-state filter: ``x̂' = φ(1−K) x̂ + φ K y``."""
-    pred = lfilter([0.0, phi * gain], [1.0, -phi * (1.0 - gain)], y)
-    return y - pred
+    """One-step-ahead innovations of the steady-state filter: ``x̂' = φ(1−K) x̂ + φ K y``.
+
+    The filter starts from the mean of the first 100 samples, not from 0: a start from 0 would
+    be a jump the process did not make.
+    """
+    # Transposed direct form: the state is the next prediction, so zi is the first one.
+    pred, _ = lfilter([0.0, phi * gain], [1.0, -phi * (1.0 - gain)], y, zi=[float(np.mean(y[:100]))])
+    return np.asarray(y - pred)
 
 
 def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> tuple[float, float, float]:
     """(φ, q, r) maximising the innovations' likelihood on the fit rows, over a grid of τ and q/r.
 
+    ``r``, the white noise's variance, is the noise floor's square; the grid chooses the bias's
+    correlation (``φ = exp(−step/τ)``, 1 for a random walk) and drive ``q``.
+
     The filter runs over every row in time order (so withheld blocks are predicted from what came
     before them, as a filter in the field would), but only the fit rows' innovations choose.
     """
-    r0 = float(np.var(y[fit]))
-    best = (-np.inf, 1.0, 0.0, r0)
+    r = max(noise_floor(y[fit]) ** 2, _TINY**2)  # the white part, from first differences
+    best = (-np.inf, 1.0, 0.0, r)
     phis = [1.0] if kind == "rate_random_walk" else list(np.exp(-step_s / _TAUS_S))
     for phi in phis:
         for ratio in np.geomspace(1e-9, 1e-1, 17):
-            q = ratio * r0
-            r = r0 if phi == 1.0 else max(r0 - q / (1 - phi * phi), 1e-3 * r0)
+            q = ratio * r
             gain, s = _steady_gain(phi, q, r)
             nu = _innovations(y, phi, gain)[fit]
             s = float(np.mean(nu * nu))  # the innovation variance, re-estimated
@@ -274,6 +283,33 @@ def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> 
             if ll > best[0]:
                 best = (ll, phi, q, r)
     return best[1], best[2], best[3]
+
+
+def _homogeneous(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float, r: float) -> bool:
+    """Whether one drive ``q`` serves all four quarters of the fit rows (a likelihood-ratio test).
+
+    A random bias tracks a single jump or any other one-off misfit as well as a real instability;
+    only a real one drives the bias alike all along. With each quarter's own ``q`` (``φ`` and ``r``
+    kept), twice the log-likelihood gain over the common ``q`` is χ² with 3 degrees of freedom for a
+    real process; beyond 16.3 (p = 0.001) it is not this process.
+    """
+    if q <= 0.0:
+        return False
+    edges = np.quantile(t[fit], [0.25, 0.5, 0.75])
+    quarter = np.searchsorted(edges, t, side="right")
+    common = _innovations(y, phi, _steady_gain(phi, q, r)[0])
+    ratios = np.geomspace(1e-9, 1e-1, 17)
+    trials = [_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in ratios]
+    gain = 0.0
+    for k in range(4):
+        rows = fit & (quarter == k)
+        n = int(rows.sum())
+
+        def ll(nu: Array, rows: NDArray[np.bool_] = rows, n: int = n) -> float:
+            return -0.5 * n * float(np.log(np.mean(nu[rows] ** 2)))
+
+        gain += max(ll(nu) for nu in trials) - ll(common)
+    return 2.0 * gain <= 16.3
 
 
 def _output_map(kind: str, pred: Array, reference: Array, reading: Array, fit: NDArray[np.bool_]) -> Array:
@@ -318,6 +354,8 @@ def noise_floor(residual: Array) -> float:
 
 def _score(before: Array, after: Array, withheld: NDArray[np.bool_], k_extra: int, n_fit: int) -> float:
     """Withheld log-likelihood gain (Gaussian, own variance) less ``k/2 ln n_fit``."""
+    if np.isnan(after).any():
+        return -np.inf
     s0 = float(np.mean(before[withheld] ** 2)) + _TINY**2
     s1 = float(np.mean(after[withheld] ** 2)) + _TINY**2
     n = int(withheld.sum())
@@ -436,10 +474,7 @@ def diagnose(
         positive = [n for n in round_scores if round_scores[n][0] > 0.0]
         if not positive:
             break
-        # A random bias tracks any slow misfit, a bias step or a clipped rate as well as a real
-        # instability: it is accepted only when no effect that predicts the error helps.
-        pool = [n for n in positive if CANDIDATES[n].kind != "process"] or positive
-        best = max(pool, key=lambda n: round_scores[n][0])
+        best = max(positive, key=lambda n: round_scores[n][0])
         accepted.append(best)
         scores[best] = EffectScore(best, scores[best].channels, scores[best].score, True)
         for i, m, r in round_scores[best][1]:
