@@ -313,8 +313,19 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         print(f"  {e.name:<26} {e.score:14.1f}  {mark}")
     print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
+    document = {"recording": str(args.recording), **report.to_dict()}
+    if args.truth is not None and not report.unreferenced:
+        nav = pipeline.gap_navigation(data, io.read_truth(args.truth), report)
+        print(
+            "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
+            f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with the "
+            f"model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
+            f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
+            f"{nav['sim_to_real_after_m']:.3f} m after"
+        )
+        document["navigation"] = nav
     if args.json:
-        io.write_json(args.json, {"recording": str(args.recording), **report.to_dict()})
+        io.write_json(args.json, document)
     if args.rerun:
         viz.save_gap(report, args.rerun)
         print(f"wrote {args.rerun}")

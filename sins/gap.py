@@ -169,6 +169,9 @@ class GapReport:
     residual_before: Array = field(default_factory=lambda: np.zeros((0, 6)))
     residual_after: Array = field(default_factory=lambda: np.zeros((0, 6)))
     t_withheld: Array = field(default_factory=lambda: np.zeros(0))
+    #: The models' predicted errors of every referenced row, (n, 6) SI: before and after the accepted effects.
+    predicted_before: Array = field(default_factory=lambda: np.zeros((0, 6)))
+    predicted_after: Array = field(default_factory=lambda: np.zeros((0, 6)))
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -517,6 +520,8 @@ def diagnose(
         model=tuple(dict.fromkeys((*BASELINE, *model))),
         residual_before=before[withheld],
         residual_after=residual[withheld],
+        predicted_before=errors - before,
+        predicted_after=errors - residual,
         t_withheld=data.t[withheld],
     )
 

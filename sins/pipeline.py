@@ -12,7 +12,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -325,3 +325,30 @@ def gap_data(
         t=samples.t, gyro=samples.omega_ib_b, accel=samples.f_ib_b, ref_gyro=ideal.omega_ib_b,
         ref_accel=ideal.f_ib_b, temp=temp, source=str(recording),
     )  # fmt: skip
+
+
+def gap_navigation(data: CalibrationData, truth: NavSeries, report: Any) -> dict[str, float]:
+    """Navigation drift of the real unit and of the simulated one (the model before and after the
+    accepted effects), integrated over the recording from the truth, vertical channel held to it.
+
+    The simulated unit's readings are the reference plus the model's predicted error (no noise: the
+    drift of what the model explains). Returns final horizontal errors against the truth and the
+    horizontal distance between the simulated and the real unit's solutions at the end, m.
+    """
+    from sins.gap import GapReport
+
+    assert isinstance(report, GapReport)
+    times = truth.interpolate(data.t)
+    start = strapdown.InitialState.from_series(times.at(0))
+
+    def solve(gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> NavSeries:
+        increments = ImuRates(t=data.t, omega_ib_b=gyro, f_ib_b=accel).to_increments()
+        return strapdown.integrate(increments, start, vertical="hold", h_ref=times.h)
+
+    real = solve(data.gyro, data.accel)
+    out = {"real_m": summarize(nav_errors(real, times)).final_horizontal_m}
+    for label, predicted in (("before", report.predicted_before), ("after", report.predicted_after)):
+        sim = solve(data.ref_gyro + predicted[:, :3], data.ref_accel + predicted[:, 3:])
+        out[f"simulated_{label}_m"] = summarize(nav_errors(sim, times)).final_horizontal_m
+        out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
+    return out

@@ -154,3 +154,38 @@ def test_cli_diagnoses_a_real_dataset_by_name(tmp_path: Path, capsys: pytest.Cap
     assert "no dataset 'nonesuch'" in capsys.readouterr().err
     assert main(["gap"]) == 2
     assert "RECORDING.csv or --dataset" in capsys.readouterr().err
+
+
+def test_with_a_trajectory_the_simulated_unit_navigates_beside_the_real_one(tmp_path: Path, capsys):
+    """A 20 ms gyro delay (withheld) over a drive with turns: found, and the simulated unit then
+    follows the real one more closely. What is left is the real unit's noise, which the simulated
+    unit (model predictions only) does not have."""
+    from sins import motion, trajectory
+
+    drive = motion.SegmentMotion.from_segments(
+        motion.Start(np.radians(45.0), np.radians(7.0), 200.0),
+        [motion.Hold(20), motion.Accelerate(20, 15.0, 2.0), motion.Turn(30, np.radians(6.0), 2.0),
+         motion.Hold(30), motion.Turn(20, np.radians(-8.0), 2.0), motion.Hold(60)],
+    )  # fmt: skip
+    truth, _ = trajectory.generate(drive, 100.0)
+    unit = imu_spec.draw_unit("tactical", 2).only(*imu.BASELINE)
+    unit = unit.with_effects(imu.TimeOffset("gyro", delay=np.full(3, 0.02)))
+    io.write_imu(tmp_path / "imu.csv", unit.corrupt_rates(trajectory.ideal_rates(drive, truth), seed=2))
+    io.write_truth(tmp_path / "truth.csv", truth)
+    out = tmp_path / "gap.json"
+    assert (
+        main(["gap", str(tmp_path / "imu.csv"), "--truth", str(tmp_path / "truth.csv"), "--json", str(out)])
+        == 0
+    )
+    assert "simulated against real at the end" in capsys.readouterr().out
+    report = json.loads(out.read_text())
+    assert report["diagnosis"][:1] == ["gyro.time_offset"]
+    nav = report["navigation"]
+    assert set(nav) == {
+        "real_m",
+        "simulated_before_m",
+        "simulated_after_m",
+        "sim_to_real_before_m",
+        "sim_to_real_after_m",
+    }
+    assert nav["sim_to_real_after_m"] < nav["sim_to_real_before_m"]
