@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -182,13 +182,18 @@ def log_scenario_run(
         rec.log(_join(prefix, "summary"), rr.TextDocument(text, media_type="text/markdown"), static=True)
 
 
+def _whole_run() -> rrb.TimeAxis:
+    """A plot's time axis showing the whole run, not the viewer's minute around the cursor."""
+    whole = rrb.TimeRangeBoundary.infinite()
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
+
+
 def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str = "") -> rrb.Blueprint:
     """The 3D paths beside the error panels; IMU errors and the summary in tabs below the errors.
 
     Every plot shows the whole run, not a window around the time cursor: drift is about the long run.
     """
-    whole = rrb.TimeRangeBoundary.infinite()
-    axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
+    axis = _whole_run()
     errors = [
         rrb.TimeSeriesView(origin=_join(prefix, "errors", panel), name=_TITLES[panel], axis_x=axis)
         for panel in ERROR_PANELS
@@ -234,20 +239,27 @@ def check_rrd_path(path: str | os.PathLike[str]) -> Path:
     return path
 
 
-def save(result: ScenarioRun, path: str | os.PathLike[str], *, summary: str = "") -> Path:
-    """Write the run to a ``.rrd`` file (through a temporary name, so a failed run leaves none)."""
+def _write(
+    path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None]
+) -> Path:
+    """Log into a ``.rrd`` file through a temporary name, so a failed run leaves none."""
     path = check_rrd_path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    rec, bp = _recording(result)
     try:
         rec.save(tmp, default_blueprint=bp)
-        log_scenario_run(rec, result, summary=summary)
+        log()
         rec.flush()
         rec.disconnect()
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def save(result: ScenarioRun, path: str | os.PathLike[str], *, summary: str = "") -> Path:
+    """Write the run to a ``.rrd`` file."""
+    rec, bp = _recording(result)
+    return _write(path, rec, bp, lambda: log_scenario_run(rec, result, summary=summary))
 
 
 NO_DISPLAY = (
@@ -330,11 +342,8 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
 
 def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
     """Write a gap diagnosis to a ``.rrd`` file (through a temporary name)."""
-    path = check_rrd_path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
-    whole = rrb.TimeRangeBoundary.infinite()
-    axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
+    axis = _whole_run()
     views = [
         rrb.TimeSeriesView(origin=f"gap/{imu_entity(ch)}", name=f"{ch} residual", axis_x=axis)
         for ch in CHANNELS
@@ -344,12 +353,4 @@ def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
             rrb.Grid(*views), rrb.TextDocumentView(origin="gap/report", name="report"), column_shares=[3, 1]
         )
     )
-    try:
-        rec.save(tmp, default_blueprint=bp)
-        log_gap(rec, report)
-        rec.flush()
-        rec.disconnect()
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    return _write(path, rec, bp, lambda: log_gap(rec, report))

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import earth, rotation
-from sins.datasets.root import ENV_VAR, data_root
+from sins.datasets.root import dataset_file
 from sins.errors import SinsInputError
 from sins.series import CalibrationData
 
@@ -142,18 +142,7 @@ def read_psins_lasergyro(root: str | os.PathLike[str] | None = None) -> Calibrat
         data line (with its line number), a record whose mean specific force
         is not gravity (not static, or not in the stated units).
     """
-    folder = data_root(root) / PSINS_LASERGYRO_FOLDER
-    if not folder.is_dir():
-        raise SinsInputError(
-            f"{folder}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
-            f"holds {PSINS_LASERGYRO_FOLDER}/ (the project's ../shared/data)"
-        )
-    path = folder / PSINS_LASERGYRO_FILE
-    if not path.is_file():
-        raise SinsInputError(
-            f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
-            f"{PSINS_LASERGYRO_FOLDER}/"
-        )
+    path = dataset_file(PSINS_LASERGYRO_FOLDER, PSINS_LASERGYRO_FILE, root)
     header, increments = _read_simu(path)
     (_pitch0, _roll0, yaw0_deg, *_), (lat_deg, _lon, h, t0, ts_ms, g_unit), scales = header
 

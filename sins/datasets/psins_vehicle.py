@@ -23,7 +23,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from sins import earth, rotation
-from sins.datasets.root import ENV_VAR, data_root
+from sins.datasets.root import dataset_file
 from sins.errors import SinsInputError
 from sins.series import CalibrationData, NavSeries
 
@@ -221,19 +221,7 @@ class _Mems:
 
 
 def _path(root: str | os.PathLike[str] | None) -> Path:
-    folder = data_root(root) / PSINS_VEHICLE_FOLDER
-    if not folder.is_dir():
-        raise SinsInputError(
-            f"{folder}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
-            f"holds {PSINS_VEHICLE_FOLDER}/ (the project's ../shared/data)"
-        )
-    path = folder / PSINS_VEHICLE_FILE
-    if not path.is_file():
-        raise SinsInputError(
-            f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
-            f"{PSINS_VEHICLE_FOLDER}/"
-        )
-    return path
+    return dataset_file(PSINS_VEHICLE_FOLDER, PSINS_VEHICLE_FILE, root)
 
 
 def _load(path: Path) -> tuple[_Mems, NavSeries]:

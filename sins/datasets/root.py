@@ -37,3 +37,22 @@ def data_root(override: str | os.PathLike[str] | None = None) -> Path:
     if here.is_dir():
         return here.resolve()
     return (Path(__file__).resolve().parents[2] / ".." / "shared" / "data").resolve()
+
+
+def dataset_file(folder: str, name: str, root: str | os.PathLike[str] | None = None) -> Path:
+    """``<data root>/<folder>/<name>``, or a one-line error saying how to point at the data."""
+    from sins.errors import SinsInputError
+
+    where = data_root(root) / folder
+    if not where.is_dir():
+        raise SinsInputError(
+            f"{where}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
+            f"holds {folder}/ (the project's ../shared/data)"
+        )
+    path = where / name
+    if not path.is_file():
+        raise SinsInputError(
+            f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
+            f"{folder}/"
+        )
+    return path
