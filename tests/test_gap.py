@@ -77,6 +77,10 @@ def test_cli_json_has_the_stable_keys(tmp_path: Path, capsys: pytest.CaptureFixt
     assert {"channel", "excess", "concentrates"} <= set(report["where"][0])
     assert {"name", "channels", "score", "accepted"} == set(report["effects"][0])
     assert report["diagnosis"] == ["gyro.scale_nonlinearity"] and report["unexplained"] == []
+    # A model that already has the tactical grade's bias instability: no longer a candidate.
+    assert main(["gap", str(path), "--model", "tactical", "--json", str(out)]) == 0
+    names = [e["name"] for e in json.loads(out.read_text())["effects"]]
+    assert "gyro.bias_instability" not in names and "gyro.scale_nonlinearity" in names
 
 
 def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
