@@ -281,7 +281,13 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.model:
         spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
         model = tuple(e.name for e in spec.model().effects)
-    report = gap.diagnose(data, args.holdout, model)
+
+    def progress(name: str) -> None:  # a live line on a terminal; nothing in a log
+        print(f"\rscoring {name:<26}", end="", file=sys.stderr, flush=True)
+
+    report = gap.diagnose(data, args.holdout, model, progress if sys.stderr.isatty() else None)
+    if sys.stderr.isatty():
+        print("\r" + " " * 34 + "\r", end="", file=sys.stderr, flush=True)
     _, held_rows = report.rows
     skipped = (
         f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""

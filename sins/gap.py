@@ -200,9 +200,10 @@ class _ChannelModel:
             base += [x.f[:, 0], x.f[:, 1], x.f[:, 2]]
         self.columns: list[Array] = [np.stack(base, axis=1)]
         self.process: str | None = None  # "bias_instability" | "rate_random_walk"
+        self.process_on_trial = True  # a candidate's process must pass _homogeneous; the model's need not
         self.output: str | None = None  # "quantization" | "saturation"
 
-    def with_candidate(self, cand: Candidate) -> _ChannelModel:
+    def with_candidate(self, cand: Candidate, on_trial: bool = True) -> _ChannelModel:
         m = _ChannelModel.__new__(_ChannelModel)
         m.__dict__.update(self.__dict__)
         m.columns = list(self.columns)
@@ -210,7 +211,7 @@ class _ChannelModel:
             assert cand.columns is not None
             m.columns.append(cand.columns(self.x, self.axis))
         elif cand.kind == "process":
-            m.process = cand.name.split(".")[1]
+            m.process, m.process_on_trial = cand.name.split(".")[1], on_trial
         else:
             m.output = cand.name.split(".")[1]
         return m
@@ -237,7 +238,7 @@ class _ChannelModel:
         if self.process is not None:
             y = self.error - pred
             phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
-            if not _homogeneous(y, self.fit, self.x.t, phi, q, r):
+            if self.process_on_trial and not _homogeneous(y, self.fit, self.x.t, phi, q, r):
                 return np.full_like(pred, np.nan)  # not this process: see _homogeneous
             pred = pred + y - _innovations(y, phi, _steady_gain(phi, q, r)[0])
         if self.output is not None:
@@ -446,7 +447,7 @@ def diagnose(
             cand = CANDIDATES[name]
             for i, ch in enumerate(CHANNELS):
                 if ch.startswith(cand.sensor):
-                    models[i] = models[i].with_candidate(cand)
+                    models[i] = models[i].with_candidate(cand, on_trial=False)
     residual = np.stack([m.error - m.predict() for m in models], axis=1)
     before = residual.copy()
     floors = np.array([max(noise_floor(residual[fit, i]), _TINY) for i in range(6)])
