@@ -20,7 +20,7 @@ from scipy.interpolate import CubicSpline
 from scipy.signal import savgol_filter
 
 from sins import earth, rotation
-from sins.datasets.root import ENV_VAR, data_root
+from sins.datasets.root import dataset_file
 from sins.errors import SinsInputError
 from sins.series import CalibrationData
 
@@ -145,18 +145,7 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
         or optical and inertial data that do not correlate.
     """
     stem = _stem(trial)
-    folder = data_root(root) / BROAD_FOLDER
-    if not folder.is_dir():
-        raise SinsInputError(
-            f"{folder}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
-            f"holds {BROAD_FOLDER}/ (the project's ../shared/data)"
-        )
-    path = folder / f"{stem}.mat"
-    if not path.is_file():
-        raise SinsInputError(
-            f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
-            f"{BROAD_FOLDER}/"
-        )
+    path = dataset_file(BROAD_FOLDER, f"{stem}.mat", root)
     gyr, acc, quat, pos = _load(str(path))
     dt = 1.0 / BROAD_RATE_HZ
     rate_half = round(_RATE_HALF_WINDOW_S * BROAD_RATE_HZ)

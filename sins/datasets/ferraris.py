@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import earth, io
-from sins.datasets.root import ENV_VAR, data_root
+from sins.datasets.root import dataset_file
 from sins.errors import SinsInputError
 from sins.series import CalibrationData, RigPhase
 
@@ -86,22 +86,10 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
         one line: a missing folder or file (saying how to point at the data),
         a malformed CSV or section list.
     """
-    folder = data_root(root) / FERRARIS_FOLDER
     if not session or Path(session).name != session or session in (".", ".."):
         raise SinsInputError(f"session {session!r}: expected a file-name prefix such as 'example'")
-    if not folder.is_dir():
-        raise SinsInputError(
-            f"{folder}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
-            f"holds {FERRARIS_FOLDER}/ (the project's ../shared/data)"
-        )
-    csv_path = folder / f"{session}_ferraris_session.csv"
-    json_path = folder / f"{session}_ferraris_session_list.json"
-    for path in (csv_path, json_path):
-        if not path.is_file():
-            raise SinsInputError(
-                f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
-                f"{FERRARIS_FOLDER}/"
-            )
+    csv_path = dataset_file(FERRARIS_FOLDER, f"{session}_ferraris_session.csv", root)
+    json_path = dataset_file(FERRARIS_FOLDER, f"{session}_ferraris_session_list.json", root)
 
     table = io.read_table(csv_path, required=_FERRARIS_COLUMNS, select=_FERRARIS_COLUMNS)
     d = table.data
