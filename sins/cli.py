@@ -273,10 +273,10 @@ def _cmd_gap(args: argparse.Namespace) -> int:
 
         if args.truth is not None:
             raise SinsInputError("gap: --truth goes with a RECORDING.csv, not with --dataset")
-        data = datasets.load(args.dataset)
+        data, truth = datasets.load(args.dataset), None
         args.recording = args.dataset
     else:
-        data = pipeline.gap_data(args.recording, args.truth)
+        data, truth = pipeline.gap_data(args.recording, args.truth)
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
         spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
@@ -320,8 +320,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     document = {"recording": str(args.recording), **report.to_dict()}
-    if args.truth is not None and not report.unreferenced:
-        nav = pipeline.gap_navigation(data, io.read_truth(args.truth), report)
+    if truth is not None and not report.unreferenced:
+        nav = pipeline.gap_navigation(data, truth, report)
         print(
             "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
             f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with the "

@@ -181,6 +181,11 @@ def _read_header(path: Path) -> tuple[int, tuple[str, ...]]:
     raise SinsInputError(f"{path}: empty file, expected a header row")
 
 
+def read_columns(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The column names of a CSV file's header, without reading its rows."""
+    return _read_header(Path(path))[1]
+
+
 def _read_fast(
     path: Path, header_line: int, columns: tuple[str, ...], wanted: tuple[str, ...] | None = None
 ) -> Array | None:

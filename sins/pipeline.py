@@ -12,7 +12,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,6 +31,9 @@ from sins.metrics import (
 )
 from sins.scenario import Scenario
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
+
+if TYPE_CHECKING:
+    from sins.gap import GapReport
 
 T = TypeVar("T")
 
@@ -286,23 +289,22 @@ def integrate_recording(
 
 def gap_data(
     recording: str | os.PathLike[str], truth: str | os.PathLike[str] | None = None
-) -> CalibrationData:
-    """Readings beside reference inputs for :func:`sins.gap.diagnose`.
+) -> tuple[CalibrationData, NavSeries | None]:
+    """Readings beside reference inputs for :func:`sins.gap.diagnose`, and the truth at their times.
 
-    Without ``truth``: a rig recording with ``ref_`` columns. With it: an IMU recording in rate form
-    whose reference inputs come from the truth trajectory through the exact ideal-IMU path (splines
-    through the truth, then the strapdown equations backwards).
+    Without ``truth``: a rig recording with ``ref_`` columns (the truth returned is None). With it:
+    an IMU recording in rate form whose reference inputs come from the truth trajectory through the
+    exact ideal-IMU path (splines through the truth, then the strapdown equations backwards).
     """
     from sins import motion
 
     if truth is None:
-        table = io.read_table(recording)
-        if not any(c.startswith("ref_") for c in table.columns):
+        if not any(c.startswith("ref_") for c in io.read_columns(recording)):
             raise SinsInputError(
                 f"{recording}: no ref_ columns (a rig recording has them); for an IMU recording "
                 "pass its trajectory with --truth TRUTH.csv"
             )
-        return io.read_recording(recording)
+        return io.read_recording(recording), None
     samples, table = io.read_imu(recording)
     if not isinstance(samples, ImuRates):
         raise SinsInputError(f"{recording}: the gap diagnosis needs the rate form (wx..wz, fx..fz columns)")
@@ -319,36 +321,36 @@ def gap_data(
         t=path.t, lat0=float(path.lat[0]), lon0=float(path.lon[0]), h0=float(path.h[0]), v_n=path.v_n,
         q_nb=path.q_nb,
     )  # fmt: skip
-    ideal = trajectory.ideal_rates(recorded, path.interpolate(samples.t))
+    at_samples = path.interpolate(samples.t)
+    ideal = trajectory.ideal_rates(recorded, at_samples)
     temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
-    return CalibrationData(
+    data = CalibrationData(
         t=samples.t, gyro=samples.omega_ib_b, accel=samples.f_ib_b, ref_gyro=ideal.omega_ib_b,
         ref_accel=ideal.f_ib_b, temp=temp, source=str(recording),
     )  # fmt: skip
+    return data, at_samples
 
 
-def gap_navigation(data: CalibrationData, truth: NavSeries, report: Any) -> dict[str, float]:
+def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -> dict[str, float]:
     """Navigation drift of the real unit and of the simulated one (the model before and after the
     accepted effects), integrated over the recording from the truth, vertical channel held to it.
 
     The simulated unit's readings are the reference plus the model's predicted error (no noise: the
     drift of what the model explains). Returns final horizontal errors against the truth and the
     horizontal distance between the simulated and the real unit's solutions at the end, m.
-    """
-    from sins.gap import GapReport
 
-    assert isinstance(report, GapReport)
-    times = truth.interpolate(data.t)
-    start = strapdown.InitialState.from_series(times.at(0))
+    ``truth`` is at the recording's times, as :func:`gap_data` returns it.
+    """
+    start = strapdown.InitialState.from_series(truth.at(0))
 
     def solve(gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> NavSeries:
         increments = ImuRates(t=data.t, omega_ib_b=gyro, f_ib_b=accel).to_increments()
-        return strapdown.integrate(increments, start, vertical="hold", h_ref=times.h)
+        return strapdown.integrate(increments, start, vertical="hold", h_ref=truth.h)
 
     real = solve(data.gyro, data.accel)
-    out = {"real_m": summarize(nav_errors(real, times)).final_horizontal_m}
+    out = {"real_m": summarize(nav_errors(real, truth)).final_horizontal_m}
     for label, predicted in (("before", report.predicted_before), ("after", report.predicted_after)):
         sim = solve(data.ref_gyro + predicted[:, :3], data.ref_accel + predicted[:, 3:])
-        out[f"simulated_{label}_m"] = summarize(nav_errors(sim, times)).final_horizontal_m
+        out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
         out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
     return out

@@ -135,7 +135,8 @@ def test_an_imu_recording_with_its_truth_gets_the_exact_ideal_imu_as_reference(t
     model = imu_spec.draw_unit("tactical", 2).only(*imu.BASELINE)
     io.write_imu(tmp_path / "imu.csv", model.corrupt_rates(rates, seed=2))
     io.write_truth(tmp_path / "truth.csv", truth)
-    data = pipeline.gap_data(tmp_path / "imu.csv", tmp_path / "truth.csv")
+    data, at_samples = pipeline.gap_data(tmp_path / "imu.csv", tmp_path / "truth.csv")
+    assert at_samples is not None and np.array_equal(at_samples.t, data.t)
     # Far below a tactical unit's noise per sample (60 °/h, 1 mg); measured 4e-8 rad/s and 8e-6 m/s².
     np.testing.assert_allclose(data.ref_gyro, rates.omega_ib_b, rtol=0, atol=1e-6)
     np.testing.assert_allclose(data.ref_accel, rates.f_ib_b, rtol=0, atol=5e-5)
