@@ -29,6 +29,7 @@ residual, which slowly varying unmodelled errors do not reach.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -49,6 +50,8 @@ SIGNIFICANT_RATIO = 1.03
 _TINY = 1e-10
 #: Random-walk and Gauss–Markov correlation times tried for the process candidates, s.
 _TAUS_S = np.geomspace(2.0, 5000.0, 12)
+#: Drives ``q / r`` tried for the process candidates.
+_DRIVE_RATIOS = np.geomspace(1e-9, 1e-1, 17)
 #: Input quartiles reported where the excess concentrates.
 _FEATURES = ("|ω|", "|f|", "temperature", "rate of change", "time")
 
@@ -204,8 +207,7 @@ class _ChannelModel:
         self.output: str | None = None  # "quantization" | "saturation"
 
     def with_candidate(self, cand: Candidate, on_trial: bool = True) -> _ChannelModel:
-        m = _ChannelModel.__new__(_ChannelModel)
-        m.__dict__.update(self.__dict__)
+        m = copy.copy(self)
         m.columns = list(self.columns)
         if cand.kind == "regressors":
             assert cand.columns is not None
@@ -278,15 +280,16 @@ def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> 
     best = (-np.inf, 1.0, 0.0, r)
     phis = [1.0] if kind == "rate_random_walk" else list(np.exp(-step_s / _TAUS_S))
     for phi in phis:
-        for ratio in np.geomspace(1e-9, 1e-1, 17):
-            q = ratio * r
-            gain, s = _steady_gain(phi, q, r)
-            nu = _innovations(y, phi, gain)[fit]
-            s = float(np.mean(nu * nu))  # the innovation variance, re-estimated
-            ll = -0.5 * len(nu) * np.log(s)
+        for ratio in _DRIVE_RATIOS:
+            ll = _log_likelihood(_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0])[fit])
             if ll > best[0]:
-                best = (ll, phi, q, r)
+                best = (ll, phi, ratio * r, r)
     return best[1], best[2], best[3]
+
+
+def _log_likelihood(innovations: Array) -> float:
+    """Gaussian log-likelihood of innovations with their own variance, up to a constant."""
+    return -0.5 * len(innovations) * float(np.log(np.mean(innovations * innovations)))
 
 
 def _homogeneous(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float, r: float) -> bool:
@@ -301,18 +304,12 @@ def _homogeneous(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: floa
         return False
     edges = np.quantile(t[fit], [0.25, 0.5, 0.75])
     quarter = np.searchsorted(edges, t, side="right")
-    common = _innovations(y, phi, _steady_gain(phi, q, r)[0])
-    ratios = np.geomspace(1e-9, 1e-1, 17)
-    trials = [_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in ratios]
+    trials = [_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in _DRIVE_RATIOS]
+    common = trials[int(np.argmin(np.abs(_DRIVE_RATIOS * r - q)))]  # q is on the grid
     gain = 0.0
     for k in range(4):
         rows = fit & (quarter == k)
-        n = int(rows.sum())
-
-        def ll(nu: Array, rows: NDArray[np.bool_] = rows, n: int = n) -> float:
-            return -0.5 * n * float(np.log(np.mean(nu[rows] ** 2)))
-
-        gain += max(ll(nu) for nu in trials) - ll(common)
+        gain += max(_log_likelihood(nu[rows]) for nu in trials) - _log_likelihood(common[rows])
     return 2.0 * gain <= 16.3
 
 

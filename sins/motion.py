@@ -22,7 +22,7 @@ Three kinds:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numba
 import numpy as np
@@ -30,6 +30,9 @@ from numpy.typing import NDArray
 
 from sins import rotation
 from sins.earth import E2, G0, radii
+
+if TYPE_CHECKING:
+    from sins.series import NavSeries
 
 Array = NDArray[np.float64]
 
@@ -635,6 +638,14 @@ class RecordedMotion:
     h0: float
     v_n: Array
     q_nb: Array
+
+    @classmethod
+    def from_series(cls, truth: NavSeries) -> RecordedMotion:
+        """The motion through a recorded truth trajectory (its first position is the start)."""
+        return cls(
+            t=truth.t, lat0=float(truth.lat[0]), lon0=float(truth.lon[0]), h0=float(truth.h[0]),
+            v_n=truth.v_n, q_nb=truth.q_nb,
+        )  # fmt: skip
 
     @property
     def t_start(self) -> float:

@@ -317,12 +317,8 @@ def gap_data(
             f"{recording}: rows from t={samples.t[~inside][0]:g} s lie outside the truth's "
             f"{path.t[0]:g}..{path.t[-1]:g} s in {truth}"
         )
-    recorded = motion.RecordedMotion(
-        t=path.t, lat0=float(path.lat[0]), lon0=float(path.lon[0]), h0=float(path.h[0]), v_n=path.v_n,
-        q_nb=path.q_nb,
-    )  # fmt: skip
     at_samples = path.interpolate(samples.t)
-    ideal = trajectory.ideal_rates(recorded, at_samples)
+    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(path), at_samples)
     temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
     data = CalibrationData(
         t=samples.t, gyro=samples.omega_ib_b, accel=samples.f_ib_b, ref_gyro=ideal.omega_ib_b,

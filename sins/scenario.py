@@ -476,10 +476,7 @@ def build_motion(scenario: Scenario) -> motion.Motion:
     truth = io.read_truth(spec.path)
     if len(truth.t) < 4:
         raise SinsInputError(f"{spec.path}: a truth trajectory needs at least 4 rows to define a motion")
-    return motion.RecordedMotion(
-        t=truth.t, lat0=float(truth.lat[0]), lon0=float(truth.lon[0]), h0=float(truth.h[0]), v_n=truth.v_n,
-        q_nb=truth.q_nb,
-    )  # fmt: skip
+    return motion.RecordedMotion.from_series(truth)
 
 
 # --------------------------------------------------------------------------- IMU and rig files
