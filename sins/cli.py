@@ -111,10 +111,10 @@ def _show(args: argparse.Namespace, result: Any, summary: str) -> None:
 
 
 def _display_unit(channel: str) -> tuple[float, str]:
-    """The SI size of one display unit of a channel, and its name: °/h for gyros, mg for accelerometers."""
-    from sins.imu import DEG_PER_H, MG
+    """:func:`sins.imu.display_unit`, imported when a table needs it (the CLI starts without numpy)."""
+    from sins.imu import display_unit
 
-    return (DEG_PER_H, "°/h") if channel.startswith("gyro") else (MG, "mg")
+    return display_unit(channel)
 
 
 def format_residuals(residuals: dict[str, dict[str, float]]) -> str:

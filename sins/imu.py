@@ -56,6 +56,13 @@ DEG = np.pi / 180.0
 DEG_PER_H = DEG / 3600.0
 PPM = 1e-6
 MG = 1e-3 * G0
+
+
+def display_unit(channel: str) -> tuple[float, str]:
+    """The SI size of one display unit of a channel, and its symbol: °/h for gyros, mg for accelerometers."""
+    return (DEG_PER_H, "°/h") if channel.startswith("gyro") else (MG, "mg")
+
+
 UG = 1e-6 * G0
 
 

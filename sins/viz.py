@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from sins import earth
 from sins.errors import SinsInputError
 from sins.gap import GapReport
-from sins.imu import CHANNELS, DEG_PER_H, MG
+from sins.imu import CHANNELS, display_unit
 from sins.pipeline import ScenarioRun, StrategyRun
 from sins.series import NavSeries
 
@@ -145,7 +145,7 @@ def log_run(
     if run.sensor_error is not None and sensor_t is not None:
         label = "raw" if name == "none" else name
         for i, channel in enumerate(CHANNELS):
-            unit = DEG_PER_H if channel.startswith("gyro") else MG
+            unit = display_unit(channel)[0]
             entity = _join(prefix, "imu", imu_entity(channel), label)
             rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
             rec.send_columns(
@@ -203,7 +203,7 @@ def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str =
         tabs += [
             rrb.TimeSeriesView(
                 origin=_join(prefix, "imu", imu_entity(ch)),
-                name=f"{ch} error, {'°/h' if ch.startswith('gyro') else 'mg'}",
+                name=f"{ch} error, {display_unit(ch)[1]}",
                 axis_x=axis,
             )
             for ch in CHANNELS
@@ -309,7 +309,7 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
     mg), their noise floor, and the report as text."""
     t = report.t_withheld
     for i, channel in enumerate(CHANNELS):
-        unit = DEG_PER_H if channel.startswith("gyro") else MG
+        unit = display_unit(channel)[0]
         floor = report.channels[channel]["noise_floor"] / unit
         for label, residual, rgb in (
             ("before", report.residual_before, (228, 26, 28)),
