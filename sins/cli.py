@@ -273,7 +273,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
 
         if args.truth is not None:
             raise SinsInputError("gap: --truth goes with a RECORDING.csv, not with --dataset")
-        data, truth = datasets.load(args.dataset), None
+        data, truth = datasets.load_with_truth(args.dataset)
         args.recording = args.dataset
     else:
         data, truth = pipeline.gap_data(args.recording, args.truth)
@@ -316,9 +316,13 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     print("\ncandidate effects (withheld log-likelihood gain less the BIC penalty; accepted if > 0):")
     for e in report.effects[: args.top]:
         mark = "accepted" if e.accepted else ""
+        if e.indistinguishable:
+            mark += f" (this data cannot tell it from {' or '.join(e.indistinguishable)})"
         print(f"  {e.name:<26} {e.score:14.1f}  {mark}")
     print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
+    for o in report.outside:
+        print(f"  {o.channel}: {o.describe().split(': ', 1)[1]}, which no library effect explains as well")
     document = {"recording": str(args.recording), **report.to_dict()}
     if truth is not None and not report.unreferenced:
         nav = pipeline.gap_navigation(data, truth, report)

@@ -9,37 +9,51 @@ Every library effect not in the model is a candidate, of one of three kinds:
   bias and scale, time offset, size effect): columns added to the channel's
   least-squares fit;
 - *processes* (bias instability, rate random walk): a first-order Gauss–Markov
-  or random-walk bias under the white noise, fitted on the fit rows' residual
-  and predicted one step ahead by the steady-state Kalman filter;
+  or random-walk bias under the white noise, fitted by the likelihood of the fit
+  rows' innovations, the regressors refitted beside it by generalised least
+  squares, and predicted one step ahead by the steady-state Kalman filter;
 - *output maps* (quantization, saturation): the prediction rounded to the
   readings' lattice or clipped at the readings' pile-up.
 
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
 model's, minus ``k/2 · ln(n_fit)`` for its ``k`` parameters (BIC's penalty).
-Candidates are accepted greedily while the best score is positive. A random
-bias tracks a single jump or any one-off misfit as well as a real instability,
-so a process candidate must also drive its bias alike in both halves of the
-fit rows (see :func:`_homogeneous`).
+Candidates are accepted greedily while the best score is positive. Three
+guards keep a library effect from taking credit for what it is not:
+
+- a random bias tracks a single jump or a hum as well as a real instability,
+  so a process candidate must drive its bias alike in all four quarters of the
+  fit rows and leave no burst in its innovations (:func:`_falsified`);
+- where a disturbance outside the library (a single bias step, an oscillation)
+  explains a channel as well as the best candidate does, that channel is
+  reported in ``outside`` and ``unexplained`` instead (:func:`_outside`);
+- candidates whose withheld gains lie within :data:`TIE_NATS` of the accepted
+  one's are reported as indistinguishable on this data; between the two random
+  biases, the fit rows' likelihood-ratio test decides (:func:`_nested_choice`).
 
 The noise floor of a channel is the white-noise level the model expects,
 measured without the model: the spread of first differences of the fit rows'
-residual, which slowly varying unmodelled errors do not reach.
+residual, which slowly varying unmodelled errors do not reach. Where the gap
+lies is told by input quartiles and by the residual's Allan deviation against
+that white noise (:func:`allan_deviation`).
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
+from scipy.stats import chi2, norm
 
 from sins.errors import SinsInputError
-from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES
+from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES, display_unit
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
@@ -52,6 +66,13 @@ _TINY = 1e-10
 _TAUS_S = np.geomspace(2.0, 5000.0, 12)
 #: Drives ``q / r`` tried for the process candidates.
 _DRIVE_RATIOS = np.geomspace(1e-9, 1e-1, 17)
+#: Candidates whose withheld log-likelihood gains (before the penalty) differ by less than this are
+#: indistinguishable on the data: a likelihood ratio below e³ ≈ 20, short of "strong" evidence.
+TIE_NATS = 3.0
+#: A single bias step may not fall in the first or last 5 % of the fit rows (there it is an outlier).
+_STEP_MARGIN = 0.05
+#: The random-bias candidates: a sensor's model has at most one.
+_PROCESSES = ("bias_instability", "rate_random_walk")
 #: Input quartiles reported where the excess concentrates.
 _FEATURES = ("|ω|", "|f|", "temperature", "rate of change", "time")
 
@@ -147,14 +168,39 @@ class EffectScore:
     channels: tuple[str, ...]
     score: float
     accepted: bool
+    gain: float = float("nan")  # the withheld log-likelihood gain before the penalty
+    #: Candidates this one could not be told from (gains within :data:`TIE_NATS`); set on accepted ones.
+    indistinguishable: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,
             "channels": list(self.channels),
-            "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (_homogeneous)
+            "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (_falsified)
             "accepted": self.accepted,
+            "indistinguishable_from": list(self.indistinguishable),
         }
+
+
+@dataclass(frozen=True)
+class Outside:
+    """A disturbance outside the library that explains a channel's gap as well as any library effect."""
+
+    channel: str
+    kind: str  # "bias step" | "periodic"
+    size: float  # the step's size or the oscillation's amplitude, SI units of the channel
+    score: float  # withheld log-likelihood gain less the penalty, as for the candidates
+    t_s: float | None = None  # when the step happens
+    period_s: float | None = None  # the oscillation's period
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
+
+    def describe(self) -> str:
+        size, unit = display_unit(self.channel)
+        if self.kind == "periodic":
+            return f"frequency: an oscillation of {self.size / size:.3g} {unit} every {self.period_s:.3g} s"
+        return f"time: a bias step of {self.size / size:+.3g} {unit} at {self.t_s:.1f} s"
 
 
 @dataclass(frozen=True)
@@ -166,6 +212,13 @@ class GapReport:
     effects: list[EffectScore]
     diagnosis: list[str]
     unexplained: list[str]
+    #: Channels whose gap a disturbance outside the library (a bias step, an oscillation) explains.
+    outside: list[Outside] = field(default_factory=list)
+    #: Per channel: ``tau_s`` and the Allan deviation of the residual ``before`` and ``after`` the
+    #: accepted effects, and of the white noise the model expects (``model``), SI units.
+    allan: dict[str, dict[str, list[float]]] = field(default_factory=dict)
+    #: Per channel and input: the share of the withheld excess in each quartile of that input.
+    quartiles: dict[str, dict[str, list[float]]] = field(default_factory=dict)
     rows: tuple[int, int] = (0, 0)  # fit, withheld
     unreferenced: int = 0  # rows left out for want of a per-sample reference
     model: tuple[str, ...] = BASELINE
@@ -183,6 +236,8 @@ class GapReport:
             "effects": [e.to_dict() for e in self.effects],
             "diagnosis": self.diagnosis,
             "unexplained": self.unexplained,
+            "outside": [o.to_dict() for o in self.outside],
+            "allan": self.allan,
         }
 
 
@@ -203,8 +258,9 @@ class _ChannelModel:
             base += [x.f[:, 0], x.f[:, 1], x.f[:, 2]]
         self.columns: list[Array] = [np.stack(base, axis=1)]
         self.process: str | None = None  # "bias_instability" | "rate_random_walk"
-        self.process_on_trial = True  # a candidate's process must pass _homogeneous; the model's need not
+        self.process_on_trial = True  # a candidate's process must pass _falsified; the model's need not
         self.output: str | None = None  # "quantization" | "saturation"
+        self.fit_loglik = np.nan  # the process's innovations' log-likelihood on the fit rows, once predicted
 
     def with_candidate(self, cand: Candidate, on_trial: bool = True) -> _ChannelModel:
         m = copy.copy(self)
@@ -216,6 +272,11 @@ class _ChannelModel:
             m.process, m.process_on_trial = cand.name.split(".")[1], on_trial
         else:
             m.output = cand.name.split(".")[1]
+        return m
+
+    def with_columns(self, columns: Array) -> _ChannelModel:
+        m = copy.copy(self)
+        m.columns = [*self.columns, columns]
         return m
 
     @property
@@ -240,9 +301,20 @@ class _ChannelModel:
         if self.process is not None:
             y = self.error - pred
             phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
-            if self.process_on_trial and not _homogeneous(y, self.fit, self.x.t, phi, q, r):
-                return np.full_like(pred, np.nan)  # not this process: see _homogeneous
-            pred = pred + y - _innovations(y, phi, _steady_gain(phi, q, r)[0])
+            # A random bias misleads least squares: a walk's level in each static position passes for
+            # scale factors. Generalised least squares instead: the innovations filter is linear, so
+            # the regressors that whiten best are those fitted to the filtered error and columns.
+            gain = _steady_gain(phi, q, r)[0]
+            whitened = np.column_stack([_innovations(c, phi, gain) for c in (a / scale).T])
+            coef, *_ = np.linalg.lstsq(whitened[rows], _innovations(self.error, phi, gain)[rows], rcond=rcond)
+            pred = (a / scale) @ coef
+            y = self.error - pred
+            phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
+            if self.process_on_trial and _falsified(y, self.fit, self.x.t, phi, q, r):
+                return np.full_like(pred, np.nan)  # not this process: see _falsified
+            innovations = _innovations(y, phi, _steady_gain(phi, q, r)[0])
+            self.fit_loglik = _log_likelihood(innovations[self.fit])  # for _nested_choice
+            pred = pred + y - innovations
         if self.output is not None:
             pred = _output_map(self.output, pred, self.reading - self.error, self.reading, self.fit)
         return pred
@@ -292,25 +364,61 @@ def _log_likelihood(innovations: Array) -> float:
     return -0.5 * len(innovations) * float(np.log(np.mean(innovations * innovations)))
 
 
-def _homogeneous(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float, r: float) -> bool:
-    """Whether one drive ``q`` serves all four quarters of the fit rows (a likelihood-ratio test).
+def _falsified(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float, r: float) -> bool:
+    """Whether a random bias fitted to the residual ``y`` is not the process it claims to be.
 
-    A random bias tracks a single jump or any other one-off misfit as well as a real instability;
-    only a real one drives the bias alike all along. With each quarter's own ``q`` (``φ`` and ``r``
-    kept), twice the log-likelihood gain over the common ``q`` is χ² with 3 degrees of freedom for a
-    real process; beyond 16.3 (p = 0.001) it is not this process.
+    A random bias tracks a single jump or any other one-off misfit nearly as well as a real
+    instability; only a real one drives the bias alike all along and leaves white innovations
+    behind. Two tests on the fit rows, each at p = 0.001:
+
+    - *homogeneity*: with each quarter's own drive ``q`` (``φ`` and ``r`` kept), twice the
+      log-likelihood gain over the common ``q`` is χ² with 3 degrees of freedom for a real process;
+    - *no burst*: summed over the filter's own settling time ``w``, the innovations of a real process
+      are ``N(0, w σ²)`` in every window. After a jump, the filter trails the new level for about
+      ``w`` rows, and their sum shows it. The largest standardised window sum is held against the
+      Bonferroni bound over every window.
     """
     if q <= 0.0:
-        return False
-    edges = np.quantile(t[fit], [0.25, 0.5, 0.75])
-    quarter = np.searchsorted(edges, t, side="right")
+        return True
+    gain_k, _ = _steady_gain(phi, q, r)
     trials = [_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in _DRIVE_RATIOS]
     common = trials[int(np.argmin(np.abs(_DRIVE_RATIOS * r - q)))]  # q is on the grid
+    nu = common[fit]
+    w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - gain_k))), 1, len(nu) // 4))
+    c = np.concatenate([[0.0], np.cumsum(nu)])
+    z = np.abs(c[w:] - c[:-w]) / (np.std(nu) * np.sqrt(w))
+    if float(z.max()) > float(norm.isf(0.0005 / len(z))):
+        return True
+    edges = np.quantile(t[fit], [0.25, 0.5, 0.75])
+    quarter = np.searchsorted(edges, t, side="right")
     gain = 0.0
     for k in range(4):
         rows = fit & (quarter == k)
         gain += max(_log_likelihood(nu[rows]) for nu in trials) - _log_likelihood(common[rows])
-    return 2.0 * gain <= 16.3
+    return 2.0 * gain > 16.3
+
+
+def _best_step(residual: Array, columns: Array, fit: NDArray[np.bool_], t: Array) -> tuple[float, float]:
+    """The single bias step that best fits the fit rows' residual, the model's regressors refitted beside it.
+
+    With ``M`` the projection off the regressors ``A``, a step ``s`` after fit row ``k`` explains
+    ``(sᵀ M e)² / sᵀ M s`` of the residual ``e = M y``'s sum of squares; ``sᵀ M e`` is a suffix sum
+    of ``e`` and ``sᵀ M s = (n − k) − (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs)``, with ``Aᵀs`` a suffix sum of ``A``'s
+    rows, so every ``k`` costs one pass. Returns the step's time (halfway between the rows either
+    side) and its size.
+    """
+    e, a, tf = residual[fit], columns[fit], t[fit]
+    n = len(e)
+    a = a / np.maximum(np.abs(a).max(axis=0), 1e-300)
+    suffix_e = np.cumsum(e[::-1])[::-1][1:]  # the step starts at fit row k = 1 … n − 1
+    suffix_a = np.cumsum(a[::-1], axis=0)[::-1][1:]
+    inverse = np.linalg.pinv(a.T @ a)
+    denominator = np.arange(n - 1, 0, -1) - np.einsum("ki,ij,kj->k", suffix_a, inverse, suffix_a)
+    explained = np.where(denominator > 1e-9 * n, suffix_e**2 / np.maximum(denominator, 1e-300), -1.0)
+    margin = max(1, int(_STEP_MARGIN * n))
+    explained[: margin - 1] = explained[n - 1 - margin :] = -1.0
+    j = int(np.argmax(explained))
+    return 0.5 * float(tf[j] + tf[j + 1]), float(suffix_e[j] / denominator[j])
 
 
 def _output_map(kind: str, pred: Array, reference: Array, reading: Array, fit: NDArray[np.bool_]) -> Array:
@@ -451,36 +559,56 @@ def diagnose(
 
     accepted: list[str] = []
     scores: dict[str, EffectScore] = {}
-    remaining = [c for c in CANDIDATES.values() if c.name not in model]
+    outside: list[Outside] = []
+    # A sensor whose model has a random bias already takes no other: it would replace, not add.
+    taken = {n.split(".")[0] for n in model if n.split(".")[-1] in _PROCESSES}
+    remaining = [
+        c
+        for c in CANDIDATES.values()
+        if c.name not in model and not (c.kind == "process" and c.sensor in taken)
+    ]
     while remaining:
-        round_scores: dict[str, tuple[float, list[tuple[int, _ChannelModel, Array]]]] = {}
+        round_scores: dict[str, _Trial] = {}
         for cand in remaining:
             if progress:
                 progress(cand.name)
             chans = [i for i, ch in enumerate(CHANNELS) if ch.startswith(cand.sensor)]
             if not _available(cand, x, readings[:, chans], fit):
                 continue
-            total, trial = 0.0, []
+            trial = _Trial()
             for i in chans:
+                if CHANNELS[i] in {o.channel for o in outside}:
+                    continue  # explained by a disturbance outside the library: nothing to add there
                 m = models[i].with_candidate(cand)
                 r = m.error - m.predict()
-                total += _score(residual[:, i], r, withheld, m.n_params - models[i].n_params, n_fit)
-                trial.append((i, m, r))
-            round_scores[cand.name] = (total, trial)
-        for name, (total, _) in round_scores.items():
-            names = tuple(ch for ch in CHANNELS if ch.startswith(CANDIDATES[name].sensor))
-            scores[name] = EffectScore(name, names, float(total), False)
-        if not round_scores:
-            break
-        positive = [n for n in round_scores if round_scores[n][0] > 0.0]
+                k = m.n_params - models[i].n_params
+                trial.add(i, m, r, _score(residual[:, i], r, withheld, k, n_fit), 0.5 * k * np.log(n_fit))
+            if trial.channels:
+                round_scores[cand.name] = trial
+        for name, trial in round_scores.items():
+            scores[name] = EffectScore(name, trial.names, trial.score, False, trial.gain)
+        positive = [n for n in round_scores if round_scores[n].score > 0.0]
         if not positive:
             break
-        best = max(positive, key=lambda n: round_scores[n][0])
+        best = max(positive, key=lambda n: round_scores[n].score)
+        best, told_apart, alike = _nested_choice(best, round_scores)
+        disturbances = _outside(round_scores[best], models, residual, x.t, fit, withheld, n_fit)
+        if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
+            outside += disturbances
+            continue
+        ties = alike + tuple(
+            n
+            for n, trial in round_scores.items()
+            if n not in (best, *told_apart, *alike) and abs(trial.gain - round_scores[best].gain) < TIE_NATS
+        )
         accepted.append(best)
-        scores[best] = EffectScore(best, scores[best].channels, scores[best].score, True)
-        for i, m, r in round_scores[best][1]:
+        scores[best] = dataclasses.replace(scores[best], accepted=True, indistinguishable=ties)
+        for i, m, r, *_ in round_scores[best].rows:
             models[i], residual[:, i] = m, r
-        remaining = [c for c in remaining if c.name != best]
+        # One random bias per sensor: the other is an alternative to it, not an addition.
+        sensor, kind = best.split(".")
+        exclusive = {f"{sensor}.{k}" for k in _PROCESSES} if kind in _PROCESSES else {best}
+        remaining = [c for c in remaining if c.name not in exclusive]
 
     rms_before = np.sqrt(np.mean(before[withheld] ** 2, axis=0))
     rms_after = np.sqrt(np.mean(residual[withheld] ** 2, axis=0))
@@ -492,17 +620,32 @@ def diagnose(
         }
         for i, ch in enumerate(CHANNELS)
     }
-    gapped = [i for i in range(6) if rms_before[i] > SIGNIFICANT_RATIO * floors[i]]
+    # What the library leaves may still be a step or a hum, too small to lift the RMS by 3 % but
+    # significant by its withheld likelihood: a gap all the same.
+    for i, ch in enumerate(CHANNELS):
+        if ch not in {o.channel for o in outside}:
+            alone = _Trial([(i, models[i], residual[:, i], 0.0, 0.0)])
+            outside += _outside(alone, models, residual, x.t, fit, withheld, n_fit)
+    outside.sort(key=lambda o: CHANNELS.index(o.channel))
+    disturbed = {CHANNELS.index(o.channel) for o in outside}
+    gapped = [i for i in range(6) if rms_before[i] > SIGNIFICANT_RATIO * floors[i] or i in disturbed]
     gapped.sort(key=lambda i: -rms_before[i] / floors[i])
+    quartiles = {ch: _quartile_shares(before[:, i], floors[i], x, withheld) for i, ch in enumerate(CHANNELS)}
+    allan = {ch: _allan(before[:, i], residual[:, i], floors[i], x.step_s) for i, ch in enumerate(CHANNELS)}
     where: list[dict[str, Any]] = [
         {
             "channel": CHANNELS[i],
             "excess": float(rms_before[i] / floors[i]),
-            "concentrates": _concentrates(before[:, i], floors[i], x, withheld),
+            "concentrates": _concentrates(quartiles[CHANNELS[i]], allan[CHANNELS[i]])
+            + [o.describe() for o in outside if o.channel == CHANNELS[i]],
         }
         for i in gapped
     ]
-    unexplained = [ch for i, ch in enumerate(CHANNELS) if rms_after[i] > SIGNIFICANT_RATIO * floors[i]]
+    unexplained = [
+        ch
+        for i, ch in enumerate(CHANNELS)
+        if rms_after[i] > SIGNIFICANT_RATIO * floors[i] or ch in {o.channel for o in outside}
+    ]
     # Accepted effects first, in the order they were accepted; then the rest, best score first.
     ordered = [scores[n] for n in accepted] + sorted(
         (e for e in scores.values() if not e.accepted), key=lambda e: -e.score
@@ -513,6 +656,7 @@ def diagnose(
         effects=ordered,
         diagnosis=accepted,
         unexplained=unexplained,
+        outside=outside,
         rows=(n_fit, int(withheld.sum())),
         unreferenced=all_rows - len(data),
         model=tuple(dict.fromkeys((*BASELINE, *model))),
@@ -521,16 +665,180 @@ def diagnose(
         predicted_before=errors - before,
         predicted_after=errors - residual,
         t_withheld=data.t[withheld],
+        allan=allan,
+        quartiles=quartiles,
     )
 
 
-def _concentrates(residual: Array, floor: float, x: _Inputs, withheld: NDArray[np.bool_]) -> list[str]:
-    """Where a channel's excess power sits: input quartiles holding most of it, and the time scales."""
+def _nested_choice(best: str, trials: dict[str, _Trial]) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
+    """Between a sensor's two random biases, the one the fit rows' likelihood-ratio test prefers.
+
+    A rate random walk is a bias instability with ``τ → ∞``. Their one-step predictions of the
+    withheld rows hardly differ (both lean on the last few hundred rows, far shorter than ``τ``);
+    the fit rows' likelihood can tell them apart, but only with frequencies well below
+    ``1 / (2π τ)``, which a session of a few ``τ`` hardly has. The instability is chosen where twice
+    its log-likelihood gain exceeds χ² (p = 0.001, one degree per channel: the demeaned residual
+    already favours a bias that reverts to zero by about a unit per channel); otherwise the walk,
+    the simpler, and the two are reported as indistinguishable.
+
+    Returns the choice, the candidates told apart from it and those that could not be.
+    """
+    sensor, kind = best.split(".")
+    if kind not in _PROCESSES:
+        return best, (), ()
+    bi, rw = trials.get(f"{sensor}.bias_instability"), trials.get(f"{sensor}.rate_random_walk")
+    if bi is None or rw is None or not (bi.score > 0.0 and rw.score > 0.0) or bi.names != rw.names:
+        return best, (), ()
+    gain = sum(row[1].fit_loglik for row in bi.rows) - sum(row[1].fit_loglik for row in rw.rows)
+    if 2.0 * gain > float(chi2.isf(0.001, len(bi.rows))):
+        return f"{sensor}.bias_instability", (f"{sensor}.rate_random_walk",), ()
+    return f"{sensor}.rate_random_walk", (), (f"{sensor}.bias_instability",)
+
+
+@dataclass
+class _Trial:
+    """A candidate tried on a sensor's channels: the trial model, residual and score of each."""
+
+    #: (channel, trial model, residual, score, BIC penalty) of each channel
+    rows: list[tuple[int, _ChannelModel, Array, float, float]] = field(default_factory=list)
+
+    def add(self, i: int, model: _ChannelModel, residual: Array, score: float, penalty: float) -> None:
+        self.rows.append((i, model, residual, score, penalty))
+
+    @property
+    def channels(self) -> list[int]:
+        return [i for i, *_ in self.rows]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(CHANNELS[i] for i in self.channels)
+
+    @property
+    def score(self) -> float:
+        return float(sum(row[3] for row in self.rows))
+
+    @property
+    def gain(self) -> float:
+        """The withheld log-likelihood gain: the score without the penalty."""
+        return self.score + float(sum(row[4] for row in self.rows))
+
+
+def _outside(
+    trial: _Trial,
+    models: list[_ChannelModel],
+    residual: Array,
+    t: Array,
+    fit: NDArray[np.bool_],
+    withheld: NDArray[np.bool_],
+    n_fit: int,
+) -> list[Outside]:
+    """The channels of ``trial`` where a disturbance outside the library does as well as its effect.
+
+    Two such disturbances are tried on each channel, fitted on the fit rows beside the model's
+    regressors: a single bias step (:func:`_best_step`; its size and time are two parameters) and
+    an oscillation (:func:`_best_oscillation`; frequency and two amplitudes, three). As well: a
+    positive score, and a withheld gain within :data:`TIE_NATS` of the effect's. A library effect
+    that explains a channel no better than a one-off step or a hum cannot claim it; the
+    disturbance is reported instead.
+    """
+    out = []
+    for i, _, _, score, penalty in trial.rows:
+        if score <= 0.0 and trial.score > 0.0:
+            continue  # the effect gains nothing here: no gain to take from it
+        columns = np.hstack(models[i].columns)
+        t_step, size = _best_step(residual[:, i], columns, fit, t)
+        period, amplitude = _best_oscillation(residual[:, i], columns, fit, t)
+        wave = np.column_stack([np.cos(2 * np.pi * t / period), np.sin(2 * np.pi * t / period)])
+        step_column = (t > t_step)[:, None].astype(float)
+        tries = [
+            (Outside(CHANNELS[i], "bias step", size, 0.0, t_s=t_step), step_column, 2),
+            (Outside(CHANNELS[i], "periodic", amplitude, 0.0, period_s=period), wave, 3),
+        ]
+        found = []
+        for disturbance, column, k in tries:
+            m = models[i].with_columns(column)
+            outside_score = _score(residual[:, i], m.error - m.predict(), withheld, k, n_fit)
+            outside_gain = outside_score + 0.5 * k * np.log(n_fit)
+            # Gains compared, as for ties: an effect no better than the disturbance is not what happened.
+            if outside_score > 0.0 and outside_gain > score + penalty - TIE_NATS:
+                found.append(dataclasses.replace(disturbance, score=float(outside_score)))
+        if found:
+            out.append(max(found, key=lambda o: o.score))
+    return out
+
+
+def _best_oscillation(
+    residual: Array, columns: Array, fit: NDArray[np.bool_], t: Array
+) -> tuple[float, float]:
+    """The period and amplitude of the strongest oscillation in the fit rows' residual.
+
+    The peak of the periodogram of the residual with the withheld rows zeroed (they may not
+    choose), padded eightfold, refined to the frequency whose sine and cosine, fitted beside the
+    regressors, leave the least; periods longer than a third of the recording are left to the drifts.
+    """
+    step = float(np.median(np.diff(t)))
+    x = np.where(fit, residual - residual[fit].mean(), 0.0)
+    n = 8 * len(x)
+    power = np.abs(np.fft.rfft(x, n)) ** 2
+    freq = np.fft.rfftfreq(n, step)
+    power[freq < 3.0 / (t[-1] - t[0])] = 0.0
+    peak = float(freq[int(np.argmax(power))])
+    scale = np.maximum(np.abs(columns[fit]).max(axis=0), 1e-300)
+    a, tf, y = columns[fit] / scale, t[fit], residual[fit]
+
+    def fitted(f_hz: float) -> tuple[float, Array]:
+        w = np.column_stack([a, np.cos(2 * np.pi * f_hz * tf), np.sin(2 * np.pi * f_hz * tf)])
+        coef, *_ = np.linalg.lstsq(w, y, rcond=None)
+        return float(np.sum((y - w @ coef) ** 2)), coef
+
+    half_bin = 0.5 / (n * step)
+    best = minimize_scalar(
+        lambda f: fitted(f)[0], bounds=(peak - half_bin, peak + half_bin), method="bounded"
+    )
+    f_hz = float(best.x)
+    return 1.0 / f_hz, float(np.hypot(*fitted(f_hz)[1][-2:]))
+
+
+def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
+    """Overlapping Allan deviation of a uniformly sampled rate series, for each cluster size (rows).
+
+    With ``θ`` the running sum of the rate, ``σ²(m) = ⟨(θₖ₊₂ₘ − 2θₖ₊ₘ + θₖ)²⟩ / (2 m²)`` over every
+    ``k``: white noise of standard deviation ``σ`` gives ``σ / √m``. The cluster time is ``m`` times
+    the sampling step; the deviation is in the rate's units.
+    """
+    theta = np.concatenate([[0.0], np.cumsum(rate)])
+    out = np.empty(len(clusters))
+    for j, m in enumerate(clusters):
+        d = theta[2 * m :] - 2.0 * theta[m:-m] + theta[: -2 * m]
+        out[j] = np.sqrt(np.mean(d * d) / (2.0 * m * m))
+    return out
+
+
+def _allan(before: Array, after: Array, floor: float, step_s: float) -> dict[str, list[float]]:
+    """The Allan deviations of a channel's residual, every row in time order, at octave clusters.
+
+    Octaves up to an eighth of the rows, so that every point averages at least eight clusters.
+    """
+    clusters = 2 ** np.arange(int(np.log2(max(len(before) // 8, 1))) + 1)
+    return {
+        "tau_s": list(clusters * step_s),
+        "before": list(allan_deviation(before, clusters)),
+        "after": list(allan_deviation(after, clusters)),
+        "model": list(floor / np.sqrt(clusters)),
+    }
+
+
+def _quartile_shares(
+    residual: Array, floor: float, x: _Inputs, withheld: NDArray[np.bool_]
+) -> dict[str, list[float]]:
+    """For each input, the share of a channel's withheld excess power in each of its quartiles.
+
+    Inputs that do not vary (a static unit's rate of change: 1e-19 from uneven time stamps) and a
+    channel with no excess give nothing.
+    """
     excess = residual[withheld] ** 2 - floor**2
-    total = float(np.sum(np.maximum(excess, 0.0)))
-    out: list[str] = []
-    if total <= 0.0:
-        return out
+    if float(np.sum(np.maximum(excess, 0.0))) <= 0.0:
+        return {}
     features = {
         "|ω|": np.linalg.norm(x.omega, axis=1),
         "|f|": np.linalg.norm(x.f, axis=1),
@@ -538,29 +846,31 @@ def _concentrates(residual: Array, floor: float, x: _Inputs, withheld: NDArray[n
         "rate of change": np.linalg.norm(x.omega_dot, axis=1),
         "time": x.t,
     }
+    out = {}
     for name in _FEATURES:
         v = features[name]
-        # A constant input (a static unit's rate of change: 1e-19 from uneven time stamps) says nothing.
         if v is None or float(np.ptp(v)) <= 1e-9 * max(1.0, float(np.abs(v).max())):
             continue
         v = v[withheld]
-        edges = np.quantile(v, [0.25, 0.5, 0.75])
-        bins = np.searchsorted(edges, v, side="right")
+        bins = np.searchsorted(np.quantile(v, [0.25, 0.5, 0.75]), v, side="right")
         # A bin may sit below the floor: shares are of the bins above it.
         per_bin = np.maximum([np.sum(excess[bins == b]) for b in range(4)], 0.0)
-        share = per_bin / max(float(np.sum(per_bin)), 1e-300)
+        out[name] = list(per_bin / max(float(np.sum(per_bin)), 1e-300))
+    return out
+
+
+def _concentrates(shares: dict[str, list[float]], allan: dict[str, list[float]]) -> list[str]:
+    """Where a channel's excess sits: an input quartile holding most of it, and the time scale at
+    which the residual's Allan deviation stands furthest above the white noise the model expects."""
+    out: list[str] = []
+    for name, share in shares.items():
         top = int(np.argmax(share))
         if share[top] > 0.5:
             label = ("lowest", "second", "third", "highest")[top]
             out.append(f"{name}: {label} quartile holds {100 * share[top]:.0f} % of the excess")
-    # Frequency: block means of the residual against white noise's 1/√m.
-    r = residual[withheld]
-    for m in (10, 100, 1000, 10000):
-        if len(r) < 4 * m:
-            break
-        blocks = r[: len(r) // m * m].reshape(-1, m).mean(axis=1)
-        ratio = float(np.std(blocks) / (floor / np.sqrt(m)))
-        if ratio > 2.0:
-            out.append(f"slow: averages over {m * x.step_s:g} s spread {ratio:.1f}× white noise's")
-            break
+    ratio = np.array(allan["before"]) / np.maximum(np.array(allan["model"]), 1e-300)
+    if len(ratio) and ratio.max() > 1.5:  # 2.25× the variance: beyond the scatter of eight clusters
+        k = int(np.argmax(ratio))
+        tau = f"τ = {allan['tau_s'][k]:.3g} s"
+        out.append(f"frequency: Allan deviation at {tau} is {ratio[k]:.1f}× the model's white noise")
     return out

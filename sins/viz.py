@@ -54,6 +54,7 @@ _TITLES = {
     "pitch_deg": "pitch error, °",
     "yaw_deg": "yaw error, °",
 }
+RED, BLUE, GREEN = (228, 26, 28), (55, 126, 184), (77, 175, 74)  # the gap's before, after, model
 _COLOURS = {
     "truth": (230, 230, 230),
     "none": (228, 26, 28),
@@ -312,8 +313,8 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
         unit = display_unit(channel)[0]
         floor = report.channels[channel]["noise_floor"] / unit
         for label, residual, rgb in (
-            ("before", report.residual_before, (228, 26, 28)),
-            ("after", report.residual_after, (55, 126, 184)),
+            ("before", report.residual_before, RED),
+            ("after", report.residual_after, BLUE),
         ):
             entity = _join(prefix, "gap", imu_entity(channel), label)
             rec.log(entity, rr.SeriesPoints(names=[label], colors=[rgb], marker_sizes=[1.0]), static=True)
@@ -322,10 +323,11 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
             )
         for label, value in (("floor_plus", floor), ("floor_minus", -floor)):
             entity = _join(prefix, "gap", imu_entity(channel), label)
-            rec.log(entity, rr.SeriesLines(names=["noise floor"], colors=[(77, 175, 74)]), static=True)
+            rec.log(entity, rr.SeriesLines(names=["noise floor"], colors=[GREEN]), static=True)
             rec.send_columns(
                 entity, indexes=_time(t[[0, -1]]), columns=rr.Scalars.columns(scalars=np.full(2, value))
             )
+    _log_gap_localisation(rec, report, prefix)
     lines = ["| channel | before/floor | after/floor |", "|---|---|---|"]
     for channel, v in report.channels.items():
         before, after = v["rms_before"] / v["noise_floor"], v["rms_after"] / v["noise_floor"]
@@ -340,6 +342,39 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
     )
 
 
+#: The Allan-deviation plots' x axis: octaves of the cluster time, ``τ = step · 2^k``.
+ALLAN_TIMELINE = "allan_octave"
+
+
+def _log_gap_localisation(rec: rr.RecordingStream, report: GapReport, prefix: str) -> None:
+    """Where each channel's gap lies: its residual's Allan deviation before and after the accepted
+    effects against the model's white noise (log10 of °/h or mg, by octave of the cluster time),
+    and the share of the withheld excess in each quartile of every input (bar charts)."""
+    for channel in CHANNELS:
+        unit = display_unit(channel)[0]
+        allan = report.allan.get(channel)
+        if allan:
+            octave = rr.TimeColumn(ALLAN_TIMELINE, sequence=np.arange(len(allan["tau_s"])))
+            for label, rgb in (
+                ("before", (228, 26, 28)),
+                ("after", (55, 126, 184)),
+                ("model", (77, 175, 74)),
+            ):
+                entity = _join(prefix, "gap", "allan", imu_entity(channel), label)
+                rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
+                values = np.log10(np.maximum(np.asarray(allan[label]) / unit, 1e-300))
+                rec.send_columns(entity, indexes=[octave], columns=rr.Scalars.columns(scalars=values))
+        for feature, shares in report.quartiles.get(channel, {}).items():
+            entity = _join(prefix, "gap", "quartiles", imu_entity(channel), _slug(feature))
+            rec.log(entity, rr.BarChart(np.asarray(shares, dtype=np.float64)), static=True)
+
+
+def _slug(name: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in name.replace("|ω|", "omega").replace("|f|", "f")).strip(
+        "_"
+    )
+
+
 def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
     """Write a gap diagnosis to a ``.rrd`` file (through a temporary name)."""
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
@@ -348,9 +383,27 @@ def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
         rrb.TimeSeriesView(origin=f"gap/{imu_entity(ch)}", name=f"{ch} residual", axis_x=axis)
         for ch in CHANNELS
     ]
+    allan = [
+        rrb.TimeSeriesView(
+            origin=f"gap/allan/{imu_entity(ch)}",
+            name=f"{ch} Allan deviation (log10; τ = {report.allan[ch]['tau_s'][0]:.3g} s · 2^k)",
+        )
+        for ch in CHANNELS
+        if ch in report.allan
+    ]
+    quartiles = [
+        rrb.BarChartView(origin=f"gap/quartiles/{imu_entity(ch)}/{_slug(feature)}", name=f"{ch}: {feature}")
+        for ch in CHANNELS
+        for feature in report.quartiles.get(ch, {})
+    ]
+    tabs = [rrb.Grid(*views, name="withheld residuals")]
+    tabs += [rrb.Grid(*allan, name="Allan deviation")] if allan else []
+    tabs += [rrb.Grid(*quartiles, name="excess by input quartile")] if quartiles else []
     bp = rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Grid(*views), rrb.TextDocumentView(origin="gap/report", name="report"), column_shares=[3, 1]
+            rrb.Tabs(*tabs),
+            rrb.TextDocumentView(origin="gap/report", name="report"),
+            column_shares=[3, 1],
         )
     )
     return _write(path, rec, bp, lambda: log_gap(rec, report))

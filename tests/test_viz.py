@@ -80,7 +80,10 @@ def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
             out[chunk.entity_path]["static"].append(np.array([1]))
             continue
         batch = chunk.to_record_batch()
-        t = batch.column("sim_time").to_numpy().astype("int64") / 1e9
+        if "sim_time" in batch.schema.names:
+            t = batch.column("sim_time").to_numpy().astype("int64") / 1e9
+        else:  # the gap's Allan deviations, by octave of the cluster time
+            t = batch.column(viz.ALLAN_TIMELINE).to_numpy().astype(float)
         out[chunk.entity_path]["t"].append(t)
         for name in batch.schema.names:
             if ":" in name:  # "Archetype:component"
@@ -237,12 +240,17 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
         assert page.status == 200 and b"<html" in page.read().lower()
 
 
-def test_a_gap_diagnosis_logs_its_withheld_residuals(tmp_path: Path) -> None:
+def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_path: Path) -> None:
+    import dataclasses
+
     from sins import calibration, gap, imu, imu_spec
 
     rig = calibration.RigProcedure(position_dwell_s=6.0, rate_table=calibration.RateTable(dwell_s=3.0))
     unit = imu_spec.draw_unit("tactical", 1).only(*imu.BASELINE)
-    report = gap.diagnose(calibration.simulate_rig(rig, unit, seed=1))
+    data = calibration.simulate_rig(rig, unit, seed=1)
+    gyro = data.gyro.copy()
+    gyro[:, 0] += np.radians(0.05) * np.sin(2 * np.pi * data.t / 20.0)  # a gap on gyro x to localise
+    report = gap.diagnose(dataclasses.replace(data, gyro=gyro))
     logged = _read(viz.save_gap(report, tmp_path / "gap.rrd"))
     held = report.rows[1]
     for ch in CHANNELS:
@@ -253,3 +261,16 @@ def test_a_gap_diagnosis_logs_its_withheld_residuals(tmp_path: Path) -> None:
         logged["/gap/gyro_x_deg_per_h/before"]["scalars"], report.residual_before[:, 0] / unit_size
     )
     assert "static" in logged["/gap/report"]
+    # Allan deviation by octave: the model's line is the floor's white noise, σ / √m, in log10 °/h.
+    allan = report.allan["gyro.x"]
+    model = logged["/gap/allan/gyro_x_deg_per_h/model"]
+    clusters = 2.0 ** model["t"]
+    floor = report.channels["gyro.x"]["noise_floor"] / unit_size
+    np.testing.assert_allclose(model["scalars"], np.log10(floor / np.sqrt(clusters)), rtol=1e-6)
+    before = logged["/gap/allan/gyro_x_deg_per_h/before"]["scalars"]
+    assert np.max(before - model["scalars"]) > np.log10(3.0)  # the sinusoid stands out
+    assert np.allclose(allan["tau_s"], clusters * np.median(np.diff(data.t)))
+    # The excess by input quartile, as bar charts: shares of the excess, summing to one.
+    assert set(report.quartiles["gyro.x"]) <= {"omega", "|ω|", "|f|", "rate of change", "time", "temperature"}
+    assert "static" in logged["/gap/quartiles/gyro_x_deg_per_h/time"]
+    assert sum(report.quartiles["gyro.x"]["time"]) == pytest.approx(1.0)

@@ -2,14 +2,15 @@
 
 Usage::
 
-    .venv/bin/python tools/bench_gap.py [--seeds 3] [--scales 1 3] [--effects NAME ...] [--timing]
+    .venv/bin/python tools/bench_gap.py [--seeds 3] [--scales 1 3] [--effects NAME ...] [--jobs 2] [--timing]
 
 For every library effect beyond the baseline, every seed, magnitude (``imu_spec.typical_effect``
 times ``scale``) and rig procedure: simulate a tactical unit's session with the baseline plus that
 effect, diagnose it with the baseline model (the effect withheld), and record what was ranked first
 and accepted, and the share of the withheld excess (rms² − floor²) removed. Controls: the baseline
 alone (``diagnosis`` should be empty) and two disturbances outside the library (a 0.3 °/s sinusoid
-and a 20 °/h bias step on gyro x, which should land in ``unexplained``). ``--timing`` diagnoses one
+and a 20 °/h bias step on gyro x, which should land in ``unexplained``). Prints one line per injected
+effect, then the confusion matrix (injected × first diagnosed). ``--timing`` diagnoses one
 30-minute, 100 Hz recording and prints the wall time.
 """
 
@@ -17,9 +18,12 @@ from __future__ import annotations
 
 import argparse
 import collections
+import concurrent.futures
 import dataclasses
+import os
 import statistics
 import time
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +43,16 @@ RIGS = {
         rate_table=calibration.RateTable(rates_dps=(30.0, 150.0, 300.0), dwell_s=8.0, accel_dps2=300.0),
         temperature=calibration.TemperatureProfile((0.0, 150.0, 400.0), (25.0, 40.0, 10.0)),
     ),
+    # An hour of static holds at 10 Hz: the session a random bias's correlation time needs.
+    "6pos long static": calibration.RigProcedure(
+        rate_hz=10.0,
+        positions=6,
+        position_dwell_s=600.0,
+        rate_table=None,
+        temperature=calibration.TemperatureProfile((0.0, 1200.0, 2400.0, 3600.0), (20.0, 40.0, 10.0, 30.0)),
+    ),
 }
+CONTROLS = ("control", "sinusoid (outside)", "bias step (outside)")
 
 
 def _excess_removed(report: gap.GapReport, sensor: str) -> float:
@@ -51,11 +64,94 @@ def _excess_removed(report: gap.GapReport, sensor: str) -> float:
     return 1.0 - after / before if before > 0 else float("nan")
 
 
+def run_case(name: str, rig: str, seed: int, scale: float) -> dict[str, Any]:
+    """Simulate one session with ``name`` injected (or a control), diagnose it with the baseline."""
+    model = imu_spec.draw_unit("tactical", seed).only(*imu.BASELINE)
+    if name in gap.CANDIDATES:
+        model = model.with_effects(imu_spec.typical_effect(name, np.random.default_rng([seed, 5]), scale))
+    data = calibration.simulate_rig(RIGS[rig], model, seed=seed)
+    if "outside" in name:
+        gyro = data.gyro.copy()
+        if name.startswith("sinusoid"):
+            gyro[:, 0] += np.radians(0.3) * np.sin(2 * np.pi * data.t / 37.0)
+        else:
+            gyro[:, 0] += 20.0 * imu.DEG_PER_H * (data.t > 0.5 * data.t[-1])
+        data = dataclasses.replace(data, gyro=gyro)
+    report = gap.diagnose(data)
+    sensor = name.split(".")[0]
+    ranked = report.effects[0].name if report.effects and report.effects[0].score > 0 else "-"
+    tied = list(report.effects[0].indistinguishable) if ranked != "-" else []
+    return {
+        "name": name,
+        "rig": rig,
+        "seed": seed,
+        "scale": scale,
+        "ranked": ranked,
+        "tied": tied,
+        # Whether the injected effect left a gap to find: a channel of its sensor above the floor.
+        "footprint": any(w["channel"].startswith(sensor) for w in report.where),
+        "first": report.diagnosis[0] if report.diagnosis else "-",
+        "diagnosis": report.diagnosis,
+        "unexplained": report.unexplained,
+        "removed": _excess_removed(report, sensor) if name in gap.CANDIDATES else float("nan"),
+        "after": max(
+            (v["rms_after"] / v["noise_floor"] for ch, v in report.channels.items() if ch.startswith(sensor)),
+            default=float("nan"),
+        ),
+    }
+
+
+def _passed(case: dict[str, Any], ties: bool = False) -> bool:
+    """Whether a case met its target; with ``ties``, an effect tied with the first counts as first."""
+    if case["name"] == "control":
+        return not case["diagnosis"]
+    if "outside" in case["name"]:
+        return "gyro.x" in case["unexplained"] and not case["diagnosis"]
+    return bool(case["ranked"] == case["name"] or (ties and case["name"] in case["tied"]))
+
+
+def _summary_line(name: str, cases: list[dict[str, Any]]) -> str:
+    passed = sum(_passed(c) for c in cases)
+    label = {"control": " (empty)", "sinusoid (outside)": " (unexpl.)", "bias step (outside)": " (unexpl.)"}
+    share = f"{passed}/{len(cases)}" + label.get(name, "")
+    tied = sum(_passed(c, ties=True) for c in cases) - passed
+    share += f" +{tied} tied" if tied else ""
+    unseen = sum(not c["footprint"] for c in cases) if name in gap.CANDIDATES else 0
+    share += f" ({unseen} no gap)" if unseen else ""
+    accepted = str(sum(name in c["diagnosis"] for c in cases)) if name in gap.CANDIDATES else ""
+    removed = [c["removed"] for c in cases if np.isfinite(c["removed"])]
+    rm = f"{100 * statistics.median(removed):.0f} %" if removed else "-"
+    after = [c["after"] for c in cases if name in gap.CANDIDATES and name in c["diagnosis"]]
+    af = f"{max(after):.3f}" if after else "-"
+    seen = collections.Counter(c["first"] for c in cases)
+    return f"{name:<26} {len(cases):>3} {share:>30} {accepted:>9} {rm:>15} {af:>12}  " + ", ".join(
+        f"{k} {v}" for k, v in seen.most_common(3)
+    )
+
+
+def _confusion(effects: list[str], results: dict[str, list[dict[str, Any]]]) -> None:
+    def short(n: str) -> str:
+        if n == "-":
+            return "-"
+        sensor, kind = n.split(".")
+        return sensor[0] + "." + "".join(w[:2] for w in kind.split("_"))
+
+    columns = sorted({c["first"] for n in effects for c in results[n]}, key=lambda n: (n == "-", n))
+    print("\nconfusion matrix: injected (rows) × first diagnosed (columns; - = nothing)")
+    print("injected".ljust(26) + "".join(f"{short(c):>9}" for c in columns))
+    for n in effects:
+        counts = collections.Counter(c["first"] for c in results[n])
+        print(f"{n:<26}" + "".join(f"{counts.get(c, 0) or '.':>9}" for c in columns))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--scales", type=float, nargs="+", default=[1.0, 3.0])
-    parser.add_argument("--effects", nargs="+", default=list(gap.CANDIDATES))
+    parser.add_argument("--effects", nargs="*", default=list(gap.CANDIDATES))
+    parser.add_argument("--controls", nargs="*", default=list(CONTROLS))
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--verbose", action="store_true", help="print every case as it finishes")
     parser.add_argument("--timing", action="store_true")
     args = parser.parse_args()
 
@@ -67,58 +163,49 @@ def main() -> None:
         elapsed = time.perf_counter() - started
         print(f"timing: {len(data)} rows ({data.t[-1] / 60:.1f} min at 100 Hz) diagnosed in {elapsed:.1f} s")
 
+    names = (["control"] if "control" in args.controls else []) + args.effects
+    names += [n for n in CONTROLS[1:] if n in args.controls]
+    jobs = [
+        (name, rig, seed, scale)
+        for name in names
+        for rig in RIGS
+        for seed in range(args.seeds)
+        for scale in (args.scales if name in gap.CANDIDATES else [1.0])
+    ]
+    results: dict[str, list[dict[str, Any]]] = {n: [] for n in names}
+    started = time.perf_counter()
+    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool:
+        for case in pool.map(run_case, *zip(*jobs, strict=True)):
+            results[case["name"]].append(case)
+            if args.verbose:
+                print(
+                    f"  {case['name']:<26} {case['rig']:<16} seed {case['seed']} ×{case['scale']:g}: "
+                    f"ranked {case['ranked']} (tied {case['tied']}), diagnosis {case['diagnosis']}, "
+                    f"unexplained {case['unexplained']}, after/floor {case['after']:.3f}, "
+                    f"gap {case['footprint']}, removed {case['removed']:.3f}",
+                    flush=True,
+                )
+    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
     print(
-        f"{'injected':<26} {'n':>3} {'ranked 1st':>10} {'accepted':>9} {'excess removed':>15} "
-        f"{'after/floor':>12}  diagnosed"
+        f"{'injected':<26} {'n':>3} {'passed':>30} {'accepted':>9} {'excess removed':>15} "
+        f"{'after/floor':>12}  diagnosed first"
     )
-    for name in ["control", *args.effects, "sinusoid (outside)", "bias step (outside)"]:
-        first = accepted = 0
-        removed, after = [], []
-        seen: collections.Counter[str] = collections.Counter()
-        cases = 0
-        for rig in RIGS.values():
-            for seed in range(args.seeds):
-                for scale in args.scales if name in gap.CANDIDATES else [1.0]:
-                    model = imu_spec.draw_unit("tactical", seed).only(*imu.BASELINE)
-                    if name in gap.CANDIDATES:
-                        rng = np.random.default_rng([seed, 5])
-                        model = model.with_effects(imu_spec.typical_effect(name, rng, scale))
-                    data = calibration.simulate_rig(rig, model, seed=seed)
-                    if "outside" in name:
-                        gyro = data.gyro.copy()
-                        if name.startswith("sinusoid"):
-                            gyro[:, 0] += np.radians(0.3) * np.sin(2 * np.pi * data.t / 37.0)
-                        else:
-                            gyro[:, 0] += 20.0 * imu.DEG_PER_H * (data.t > 0.5 * data.t[-1])
-                        data = dataclasses.replace(data, gyro=gyro)
-                    report = gap.diagnose(data)
-                    cases += 1
-                    top = report.effects[0].name if report.effects and report.effects[0].score > 0 else "-"
-                    seen[report.diagnosis[0] if report.diagnosis else "-"] += 1
-                    if name in gap.CANDIDATES:
-                        first += top == name
-                        accepted += name in report.diagnosis
-                        removed.append(_excess_removed(report, name.split(".")[0]))
-                        sensor_after = [
-                            v["rms_after"] / v["noise_floor"]
-                            for ch, v in report.channels.items()
-                            if ch.startswith(name.split(".")[0])
-                        ]
-                        after.append(max(sensor_after))
-                    elif name == "control":
-                        first += report.diagnosis == []
-                    else:
-                        first += "gyro.x" in report.unexplained
-        removed_ok = [r for r in removed if np.isfinite(r)]
-        rm = f"{100 * statistics.median(removed_ok):.0f} %" if removed_ok else "-"
-        af = f"{max(after):.3f}" if after else "-"
-        label = {"control": "(empty)", "sinusoid (outside)": "(unexpl.)", "bias step (outside)": "(unexpl.)"}
-        share = f"{first}/{cases}" + (f" {label[name]}" if name in label else "")
+    for name in names:
+        print(_summary_line(name, results[name]))
+    effects = [n for n in names if n in gap.CANDIDATES]
+    for label, keep in (("all cases", lambda c: True), ("cases with a gap", lambda c: c["footprint"])):
+        cases = [c for n in effects for c in results[n] if keep(c)]
+        if not cases:
+            continue
+        n = len(cases)
+        ranked, tied = sum(_passed(c) for c in cases), sum(_passed(c, ties=True) for c in cases)
         print(
-            f"{name:<26} {cases:>3} {share:>10} {accepted if name in gap.CANDIDATES else '':>9} {rm:>15} "
-            f"{af:>12}  " + ", ".join(f"{k} {v}" for k, v in seen.most_common(3)),
-            flush=True,
+            f"\n{label}: injected effect ranked first in {ranked}/{n} ({100 * ranked / n:.0f} %); first or "
+            f"indistinguishable from the first (withheld gains within {gap.TIE_NATS:g} nats) in "
+            f"{tied}/{n} ({100 * tied / n:.0f} %)"
         )
+    if effects:
+        _confusion(effects, results)
 
 
 if __name__ == "__main__":

@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
+
 from sins.datasets.broad import BROAD_TRIALS, read_broad
 from sins.datasets.ferraris import FERRARIS_FOLDER, FERRARIS_RATE_HZ, FERRARIS_SECTIONS, read_ferraris
 from sins.datasets.psins_lasergyro import read_psins_lasergyro
 from sins.datasets.psins_vehicle import read_psins_vehicle
 from sins.datasets.root import ENV_VAR, data_root
 from sins.errors import SinsInputError
-from sins.series import CalibrationData
+from sins.series import CalibrationData, NavSeries
 
 #: Dataset names for :func:`load`, and what each is.
 NAMES = {
@@ -30,12 +32,32 @@ NAMES = {
 
 def load(name: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
     """A dataset by name (see :data:`NAMES`) as readings beside reference inputs."""
-    if name == "ferraris":
-        return read_ferraris(root)
+    return load_with_truth(name, root)[0]
+
+
+def load_with_truth(
+    name: str, root: str | os.PathLike[str] | None = None
+) -> tuple[CalibrationData, NavSeries | None]:
+    """A dataset by name, and its reference trajectory at the readings' times where it has one.
+
+    Only ``psins_vehicle`` has one (the FOG-INS's solution); its first and last rows, which the
+    solution does not span, are left out.
+    """
     if name == "psins_vehicle":
         # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
         # vibration the MEMS sees, which would pass for a sensor gap.
-        return read_psins_vehicle(root, rate="fog")[0]
+        data, nav = read_psins_vehicle(root, rate="fog")
+        if nav is None:
+            return data, None
+        inside = np.flatnonzero((data.t >= nav.t[0]) & (data.t <= nav.t[-1]))
+        data = data.rows(inside) if len(inside) < len(data) else data
+        return data, nav.interpolate(data.t)
+    return _load(name, root), None
+
+
+def _load(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
+    if name == "ferraris":
+        return read_ferraris(root)
     if name == "psins_lasergyro":
         return read_psins_lasergyro(root)
     if name.startswith("broad_") and name in NAMES:
@@ -52,6 +74,7 @@ __all__ = [
     "NAMES",
     "data_root",
     "load",
+    "load_with_truth",
     "read_broad",
     "read_ferraris",
     "read_psins_lasergyro",
