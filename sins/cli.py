@@ -322,7 +322,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
-        print(f"  {o.channel}: {o.describe().split(': ', 1)[1]}, which no library effect explains as well")
+        print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
     document = {"recording": str(args.recording), **report.to_dict()}
     if truth is not None and not report.unreferenced:
         nav = pipeline.gap_navigation(data, truth, report)

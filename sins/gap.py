@@ -196,11 +196,16 @@ class Outside:
     def to_dict(self) -> dict[str, Any]:
         return {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
 
-    def describe(self) -> str:
+    def what(self) -> str:
+        """The disturbance in words, in the channel's display unit."""
         size, unit = display_unit(self.channel)
         if self.kind == "periodic":
-            return f"frequency: an oscillation of {self.size / size:.3g} {unit} every {self.period_s:.3g} s"
-        return f"time: a bias step of {self.size / size:+.3g} {unit} at {self.t_s:.1f} s"
+            return f"an oscillation of {self.size / size:.3g} {unit} every {self.period_s:.3g} s"
+        return f"a bias step of {self.size / size:+.3g} {unit} at {self.t_s:.1f} s"
+
+    def describe(self) -> str:
+        """As a ``where`` entry: the view it belongs to, then :meth:`what`."""
+        return f"{'frequency' if self.kind == 'periodic' else 'time'}: {self.what()}"
 
 
 @dataclass(frozen=True)

@@ -333,7 +333,9 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
         before, after = v["rms_before"] / v["noise_floor"], v["rms_after"] / v["noise_floor"]
         lines.append(f"| {channel} | {before:.3f} | {after:.3f} |")
     lines += ["", f"diagnosis: {', '.join(report.diagnosis) or 'nothing to add'}"]
-    lines += [f"unexplained: {', '.join(report.unexplained) or 'none'}", "", "where:"]
+    lines += [f"unexplained: {', '.join(report.unexplained) or 'none'}"]
+    lines += [f"- {o.channel}: {o.what()} (no library effect)" for o in report.outside]
+    lines += ["", "where:"]
     lines += [f"- {w['channel']}: {w['excess']:.3f}× — {'; '.join(w['concentrates'])}" for w in report.where]
     rec.log(
         _join(prefix, "gap", "report"),
@@ -355,11 +357,7 @@ def _log_gap_localisation(rec: rr.RecordingStream, report: GapReport, prefix: st
         allan = report.allan.get(channel)
         if allan:
             octave = rr.TimeColumn(ALLAN_TIMELINE, sequence=np.arange(len(allan["tau_s"])))
-            for label, rgb in (
-                ("before", (228, 26, 28)),
-                ("after", (55, 126, 184)),
-                ("model", (77, 175, 74)),
-            ):
+            for label, rgb in (("before", RED), ("after", BLUE), ("model", GREEN)):
                 entity = _join(prefix, "gap", "allan", imu_entity(channel), label)
                 rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
                 values = np.log10(np.maximum(np.asarray(allan[label]) / unit, 1e-300))
