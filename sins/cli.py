@@ -468,8 +468,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--holdout", type=_fraction, default=0.3, metavar="FRACTION",
         help="withhold the last FRACTION of every phase (default 0.3); every verdict is judged on it",
     )  # fmt: skip
-    p.add_argument("--json", type=Path, metavar="REPORT.json")
-    p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the residuals before and after")
+    p.add_argument(
+        "--json", type=Path, metavar="REPORT.json",
+        help="write the report: channels, where, effects, diagnosis, unexplained, outside, allan "
+        "(and navigation, with a trajectory)",
+    )  # fmt: skip
+    p.add_argument(
+        "--rerun", type=Path, metavar="OUT.rrd",
+        help="log the residuals before and after, their Allan deviations and the excess by input quartile",
+    )  # fmt: skip
     p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
     p.set_defaults(func=_cmd_gap)
 
