@@ -12,8 +12,9 @@ Every library effect not in the model is a candidate, of one of three kinds:
   or random-walk bias under the white noise, fitted by the likelihood of the fit
   rows' innovations, the regressors refitted beside it by generalised least
   squares, and predicted one step ahead by the steady-state Kalman filter;
-- *output maps* (quantization, saturation): the prediction rounded to the
-  readings' lattice or clipped at the readings' pile-up.
+- *output maps* (quantization, saturation): the prediction's expected reading
+  on the readings' lattice (rounding smoothed by the noise) or the prediction
+  clipped at the readings' pile-up.
 
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
@@ -71,6 +72,8 @@ _DRIVE_RATIOS = np.geomspace(1e-9, 1e-1, 17)
 TIE_NATS = 3.0
 #: A single bias step may not fall in the first or last 5 % of the fit rows (there it is an outlier).
 _STEP_MARGIN = 0.05
+#: The white noise before rounding, in quantization steps, tried for the quantization candidate.
+_NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
 #: The random-bias candidates: a sensor's model has at most one.
 _PROCESSES = ("bias_instability", "rate_random_walk")
 #: Input quartiles reported where the excess concentrates.
@@ -435,9 +438,31 @@ def _output_map(kind: str, pred: Array, reference: Array, reading: Array, fit: N
         if len(steps) == 0:
             return pred
         q = float(np.median(steps))
-        return np.round(y / q) * q - reference
+        # The reading is the rounded sum of the prediction and the white noise: its expectation is a
+        # staircase smoothed by the noise (plain rounding when the noise is far below the step, the
+        # prediction itself when far above). The noise's share of the step, the one parameter,
+        # is the one whose expectation fits the fit rows best.
+        best, out = np.inf, pred
+        for ratio in _NOISE_PER_STEP:
+            expected = _expected_rounding(y / q, ratio) * q - reference
+            sse = float(np.sum((reading[fit] - reference[fit] - expected[fit]) ** 2))
+            if sse < best:
+                best, out = sse, expected
+        return out
     top, bottom = float(reading[fit].max()), float(reading[fit].min())
     return np.clip(y, bottom, top) - reference
+
+
+def _expected_rounding(z: Array, s: float) -> Array:
+    """``E[round(z + w)]`` for ``w ~ N(0, s²)``: the sum over the nearest lattice points of each
+    point times its probability (points beyond ``±(4 + 6 s)`` hold less than 1e-9)."""
+    base = np.floor(z)
+    out = np.zeros_like(z)
+    reach = int(np.ceil(4 + 6 * s))
+    for j in range(-reach, reach + 1):
+        k = base + j
+        out += k * (norm.cdf((k + 0.5 - z) / s) - norm.cdf((k - 0.5 - z) / s))
+    return out
 
 
 # --------------------------------------------------------------------------- the diagnosis

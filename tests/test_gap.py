@@ -110,6 +110,22 @@ def test_effects_the_rig_cannot_tell_apart_are_reported_as_such():
     assert first.accepted and first.name in pair and set(first.indistinguishable) >= pair - {first.name}
 
 
+def test_the_expected_rounded_reading_matches_a_monte_carlo_mean():
+    """E[round(z + w)], w ~ N(0, s²), against the mean of 4,000 draws per point: the difference is
+    within 4.5 standard errors (the sd of one rounded draw is at most s + ½: the noise plus a rounding
+    error of at most half a step) at every one of 500 points. A wrong s (0.1 for 0.2) misses by 0.18,
+    four times that. It is plain rounding when s is far below the step, and z itself far above it."""
+    rng = np.random.default_rng(0)
+    z = rng.uniform(-5.0, 5.0, 500)
+    for s in (0.1, 0.3, 1.0):
+        draws = np.round(z[:, None] + s * rng.standard_normal((500, 4000))).mean(axis=1)
+        tolerance = 4.5 * (s + 0.5) / np.sqrt(4000)
+        np.testing.assert_array_less(np.abs(gap._expected_rounding(z, s) - draws), tolerance)
+    away = z[np.abs(z - np.round(z)) < 0.4]  # not on a rounding boundary
+    np.testing.assert_allclose(gap._expected_rounding(away, 0.02), np.round(away), atol=1e-6)
+    np.testing.assert_allclose(gap._expected_rounding(z, 3.0), z, atol=1e-6)
+
+
 def test_allan_deviation_matches_the_white_noise_and_random_walk_oracles():
     """σ/√m for white noise; K·√(τ/3) for a random walk of density K (IEEE Std 952). Tolerances are
     the estimators' scatter: about 1/√(n/m) relative for white noise; 25 % for the walk at a
