@@ -3,11 +3,22 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 
+from sins.datasets.root import data_root
 from sins.errors import SinsInputError
+
+
+def dataset_folder(name: str) -> Path:
+    """A dataset's folder under the data root, or a placeholder path when the root cannot be
+    resolved (the working directory is gone, say): the data tests then skip, naming it."""
+    try:
+        return data_root() / name
+    except OSError:
+        return Path("(no data root)")
 
 
 def refusal(call: Callable[[], Any], *fragments: str) -> str:

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
-from conftest import refusal
+from conftest import dataset_folder, refusal
 from scipy.ndimage import maximum_filter1d
 from scipy.spatial.transform import Rotation
 
@@ -26,13 +26,9 @@ from sins.datasets.broad import (
     BROAD_TRIALS,
     read_broad,
 )
-from sins.datasets.root import data_root
 from sins.series import CalibrationData
 
-try:
-    FOLDER = data_root() / BROAD_FOLDER
-except OSError:  # the working directory is gone, say
-    FOLDER = Path("(no data root)")
+FOLDER = dataset_folder(BROAD_FOLDER)
 
 # --------------------------------------------------------------------------- a synthetic trial
 

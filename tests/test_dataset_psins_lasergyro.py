@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import refusal
+from conftest import dataset_folder, refusal
 
 from sins import earth
 from sins.datasets.psins_lasergyro import (
@@ -22,13 +22,9 @@ from sins.datasets.psins_lasergyro import (
     PSINS_LASERGYRO_FOLDER,
     read_psins_lasergyro,
 )
-from sins.datasets.root import data_root
 from sins.series import CalibrationData
 
-try:
-    FOLDER = data_root() / PSINS_LASERGYRO_FOLDER
-except OSError:  # the working directory is gone, say
-    FOLDER = Path("(no data root)")
+FOLDER = dataset_folder(PSINS_LASERGYRO_FOLDER)
 PATH = FOLDER / PSINS_LASERGYRO_FILE
 
 N_ROWS = 184718

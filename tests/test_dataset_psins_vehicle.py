@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 import scipy.io
-from conftest import refusal
+from conftest import dataset_folder, refusal
 
 from sins import earth, rotation
 from sins.datasets.psins_vehicle import (
@@ -27,13 +27,10 @@ from sins.datasets.psins_vehicle import (
     psins_alignment,
     read_psins_vehicle,
 )
-from sins.datasets.root import ENV_VAR, data_root
+from sins.datasets.root import ENV_VAR
 from sins.series import CalibrationData, NavSeries
 
-try:
-    FOLDER = data_root() / PSINS_VEHICLE_FOLDER
-except OSError:  # the working directory is gone, say
-    FOLDER = Path("(no data root)")
+FOLDER = dataset_folder(PSINS_VEHICLE_FOLDER)
 PATH = FOLDER / PSINS_VEHICLE_FILE
 #: PSINS right-forward-up (and east-north-up) to forward-right-down (north-east-down), written out
 #: again here rather than imported, so that a slip in the reader's matrix shows.

@@ -12,16 +12,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import refusal
+from conftest import dataset_folder, refusal
 
 import sins
 from sins import datasets, earth, io
 from sins.series import CalibrationData
 
-try:
-    FOLDER = datasets.data_root() / datasets.FERRARIS_FOLDER
-except OSError:  # the working directory is gone, say
-    FOLDER = Path("(no data root)")
+FOLDER = dataset_folder(datasets.FERRARIS_FOLDER)
 FILES = ("example_ferraris_session.csv", "example_ferraris_session_list.json")
 if not all((FOLDER / name).is_file() for name in FILES):
     pytest.skip(
