@@ -22,9 +22,9 @@ import argparse
 import statistics
 import time
 
-import numpy as np
+from bench_strategies import drive  # tools/ is on the path when a tool is run as a script
 
-from sins import calibration, compensation, imu, imu_spec, motion, strapdown, trajectory
+from sins import calibration, compensation, imu, imu_spec, strapdown
 from sins.metrics import nav_errors, summarize
 
 SEED_LINEAR = tuple(name for name in imu.BASELINE if not name.endswith(".noise"))
@@ -37,14 +37,7 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=60.0)
     args = parser.parse_args()
 
-    segs = [
-        motion.Accelerate(20, 15.0, 2.0),
-        motion.Turn(30, np.radians(3.0), 3.0),
-        motion.Hold(60 * args.minutes),
-    ]
-    drive = motion.SegmentMotion.from_segments(motion.Start(np.radians(45.0), 0.1, 200.0), segs)
-    truth, ideal = trajectory.generate(drive, 100.0)
-    temp = np.full(len(ideal.t), 20.0)
+    truth, ideal, temp = drive(args.minutes)  # the drive bench_strategies.py measures
     start = strapdown.InitialState.from_series(truth)
     print(f"{args.units} tactical units, seed linear errors + white noise; drive {truth.t[-1] / 60:.1f} min")
     print(f"{'rig':>10} {'noise':>6} {'oracle m':>18} {'regression m':>18} {'ratio of means':>15}")

@@ -23,6 +23,7 @@ import numpy as np
 
 from sins import calibration, compensation, imu, imu_spec, motion, strapdown, trajectory
 from sins.metrics import nav_errors, summarize
+from sins.series import ImuIncrements, NavSeries
 
 STRATEGIES = ("none", "regression", "regression_robust", "mlp", "kohonen")
 
@@ -43,6 +44,20 @@ def unit(regime: str, seed: int) -> tuple[imu.ImuModel, imu.ImuModel]:
     return base, base
 
 
+def drive(minutes: float) -> tuple[NavSeries, ImuIncrements, np.ndarray]:
+    """The benchmarks' drive at 100 Hz and 20 °C: 20 s speeding up to 15 m/s, an 81° right turn over
+    30 s, then ``minutes`` straight on. Returns the truth, the ideal increments and every sample's
+    temperature."""
+    segs: list[motion.Segment] = [
+        motion.Accelerate(20, 15.0, 2.0),
+        motion.Turn(30, np.radians(3.0), 3.0),
+        motion.Hold(60 * minutes),
+    ]
+    path = motion.SegmentMotion.from_segments(motion.Start(np.radians(45.0), 0.1, 200.0), segs)
+    truth, ideal = trajectory.generate(path, 100.0)
+    return truth, ideal, np.full(len(ideal.t), 20.0)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--units", type=int, default=20)
@@ -56,14 +71,7 @@ def main() -> None:
 
     torch.set_num_threads(1)
     rig = calibration.RigProcedure(position_dwell_s=10.0, rate_table=calibration.RateTable(dwell_s=5.0))
-    segs = [
-        motion.Accelerate(20, 15.0, 2.0),
-        motion.Turn(30, np.radians(3.0), 3.0),
-        motion.Hold(60 * args.minutes),
-    ]
-    drive = motion.SegmentMotion.from_segments(motion.Start(np.radians(45.0), 0.1, 200.0), segs)
-    truth, ideal = trajectory.generate(drive, 100.0)
-    temp = np.full(len(ideal.t), 20.0)
+    truth, ideal, temp = drive(args.minutes)
     print(
         f"{args.units} units per regime; drive {truth.t[-1] / 60:.1f} min at 100 Hz, vertical channel damped"
     )
