@@ -171,7 +171,6 @@ class EffectScore:
     channels: tuple[str, ...]
     score: float
     accepted: bool
-    gain: float = float("nan")  # the withheld log-likelihood gain before the penalty
     #: Candidates this one could not be told from (gains within :data:`TIE_NATS`); set on accepted ones.
     indistinguishable: tuple[str, ...] = ()
 
@@ -308,21 +307,20 @@ class _ChannelModel:
         pred = (a / scale) @ coef
         if self.process is not None:
             y = self.error - pred
-            phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
+            process = _fit_process(self.process, y, self.fit, self.x.step_s)
             # A random bias misleads least squares: a walk's level in each static position passes for
             # scale factors. Generalised least squares instead: the innovations filter is linear, so
             # the regressors that whiten best are those fitted to the filtered error and columns.
-            gain = _steady_gain(phi, q, r)[0]
+            phi, gain = process.phi, _steady_gain(process.phi, process.q, process.r)[0]
             whitened = np.column_stack([_innovations(c, phi, gain) for c in (a / scale).T])
             coef, *_ = np.linalg.lstsq(whitened[rows], _innovations(self.error, phi, gain)[rows], rcond=rcond)
             pred = (a / scale) @ coef
             y = self.error - pred
-            phi, q, r = _fit_process(self.process, y, self.fit, self.x.step_s)
-            if self.process_on_trial and _falsified(y, self.fit, self.x.t, phi, q, r):
+            process = _fit_process(self.process, y, self.fit, self.x.step_s)
+            if self.process_on_trial and _falsified(process, self.fit, self.x.t):
                 return np.full_like(pred, np.nan)  # not this process: see _falsified
-            innovations = _innovations(y, phi, _steady_gain(phi, q, r)[0])
-            self.fit_loglik = _log_likelihood(innovations[self.fit])  # for _nested_choice
-            pred = pred + y - innovations
+            self.fit_loglik = process.fit_loglik  # for _nested_choice
+            pred = pred + y - process.innovations
         if self.output is not None:
             pred = _output_map(self.output, pred, self.reading - self.error, self.reading, self.fit)
         return pred
@@ -347,8 +345,29 @@ def _innovations(y: Array, phi: float, gain: float) -> Array:
     return np.asarray(y - pred)
 
 
-def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> tuple[float, float, float]:
-    """(φ, q, r) maximising the innovations' likelihood on the fit rows, over a grid of τ and q/r.
+@dataclass(frozen=True)
+class _ProcessFit:
+    """A random bias fitted to a residual: ``b' = φ b + w (q)`` under white noise of variance ``r``.
+
+    ``trials`` are the one-step innovations of every row for the chosen ``φ`` and each drive of
+    :data:`_DRIVE_RATIOS`; ``chosen`` indexes the one the fit rows prefer (what :func:`_falsified`
+    holds against the others).
+    """
+
+    phi: float
+    q: float
+    r: float
+    trials: tuple[Array, ...] = ()
+    chosen: int = 0
+    fit_loglik: float = -np.inf
+
+    @property
+    def innovations(self) -> Array:
+        return self.trials[self.chosen]
+
+
+def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> _ProcessFit:
+    """The (φ, q) maximising the innovations' likelihood on the fit rows, over a grid of τ and q/r.
 
     ``r``, the white noise's variance, is the noise floor's square; the grid chooses the bias's
     correlation (``φ = exp(−step/τ)``, 1 for a random walk) and drive ``q``.
@@ -357,14 +376,15 @@ def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> 
     before them, as a filter in the field would), but only the fit rows' innovations choose.
     """
     r = max(noise_floor(y[fit]) ** 2, _TINY**2)  # the white part, from first differences
-    best = (-np.inf, 1.0, 0.0, r)
+    best = _ProcessFit(1.0, 0.0, r)
     phis = [1.0] if kind == "rate_random_walk" else list(np.exp(-step_s / _TAUS_S))
     for phi in phis:
-        for ratio in _DRIVE_RATIOS:
-            ll = _log_likelihood(_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0])[fit])
-            if ll > best[0]:
-                best = (ll, phi, ratio * r, r)
-    return best[1], best[2], best[3]
+        trials = tuple(_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in _DRIVE_RATIOS)
+        for j, ratio in enumerate(_DRIVE_RATIOS):
+            ll = _log_likelihood(trials[j][fit])
+            if ll > best.fit_loglik:
+                best = _ProcessFit(phi, ratio * r, r, trials, j, ll)
+    return best
 
 
 def _log_likelihood(innovations: Array) -> float:
@@ -372,8 +392,8 @@ def _log_likelihood(innovations: Array) -> float:
     return -0.5 * len(innovations) * float(np.log(np.mean(innovations * innovations)))
 
 
-def _falsified(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float, r: float) -> bool:
-    """Whether a random bias fitted to the residual ``y`` is not the process it claims to be.
+def _falsified(process: _ProcessFit, fit: NDArray[np.bool_], t: Array) -> bool:
+    """Whether a random bias fitted to a residual is not the process it claims to be.
 
     A random bias tracks a single jump or any other one-off misfit nearly as well as a real
     instability; only a real one drives the bias alike all along and leaves white innovations
@@ -386,11 +406,10 @@ def _falsified(y: Array, fit: NDArray[np.bool_], t: Array, phi: float, q: float,
       ``w`` rows, and their sum shows it. The largest standardised window sum is held against the
       Bonferroni bound over every window.
     """
-    if q <= 0.0:
+    if process.q <= 0.0:
         return True
-    gain_k, _ = _steady_gain(phi, q, r)
-    trials = [_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in _DRIVE_RATIOS]
-    common = trials[int(np.argmin(np.abs(_DRIVE_RATIOS * r - q)))]  # q is on the grid
+    phi, trials, common = process.phi, process.trials, process.innovations
+    gain_k, _ = _steady_gain(phi, process.q, process.r)
     nu = common[fit]
     w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - gain_k))), 1, len(nu) // 4))
     c = np.concatenate([[0.0], np.cumsum(nu)])
@@ -616,7 +635,7 @@ def diagnose(
             if trial.channels:
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
-            scores[name] = EffectScore(name, trial.names, trial.score, False, trial.gain)
+            scores[name] = EffectScore(name, trial.names, trial.score, False)
         positive = [n for n in round_scores if round_scores[n].score > 0.0]
         if not positive:
             break
