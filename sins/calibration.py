@@ -3,7 +3,11 @@
 A rig session is a sequence of phases at a fixed place on Earth:
 
 * multi-position static: the IMU rests with each face down in turn, at 1, 2
-  or 4 headings (6, 12 or 24 orientations), for ``dwell_s`` each;
+  or 4 headings (6, 12 or 24 orientations), for ``dwell_s`` each; or tilted
+  as well, with each edge (18) and each corner (26) down, so that gravity also
+  lies between the axes (0.71 g and 0.58 g on each) and the effects that are
+  the same column at 0 and ±1 g (``|f|`` and ``f²``, a scale and a clip at
+  0.95 g, the cross products of ``f``) come apart;
 * rate table: a single-axis table with a vertical axis; the IMU is mounted
   with its x, y or z axis up or down and the table steps through rates of both
   signs, ramping between them at a finite angular acceleration;
@@ -18,6 +22,7 @@ on the reference inputs, with standard errors from the residuals.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -31,6 +36,8 @@ from sins.series import CalibrationData, ImuRates, RigPhase
 Array = NDArray[np.float64]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
+#: The static position counts :func:`static_orientations` knows.
+POSITION_COUNTS = (0, 6, 12, 18, 24, 26)
 
 #: A table's rate (rad/s) and angle (rad) against time since the phase began.
 RateProfile = Callable[[Array], tuple[Array, Array]]
@@ -66,7 +73,8 @@ class TemperatureProfile:
 class RigProcedure:
     """A calibration session.
 
-    ``positions`` is 0, 6, 12 or 24; ``orientation_error_deg`` is the 1σ error
+    ``positions`` is 0, 6, 12, 24 (faces down) or 18, 26 (faces, edges and corners down; see
+    :func:`static_orientations`); ``orientation_error_deg`` is the 1σ error
     of each static orientation (and of each mounting on the table) about every
     axis; ``rate_error_ppm`` is the 1σ scale error of the table's rate.
     """
@@ -83,8 +91,10 @@ class RigProcedure:
     rate_error_ppm: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.positions not in (0, 6, 12, 24):
-            raise ValueError(f"positions must be 0, 6, 12 or 24, got {self.positions}")
+        if self.positions not in POSITION_COUNTS:
+            raise ValueError(
+                f"positions must be one of {', '.join(map(str, POSITION_COUNTS))}, got {self.positions}"
+            )
         if not self.rate_hz > 0 or not self.position_dwell_s > 0:
             raise ValueError("rate_hz and position_dwell_s must be positive")
         if self.rate_table is not None:
@@ -105,6 +115,12 @@ def _face_down(axis: int, sign: float) -> Array:
     """``C_nb`` with body axis ``sign·e_axis`` pointing down and the rest level."""
     target = np.zeros(3)
     target[axis] = sign
+    return _down(target)
+
+
+def _down(target: Array) -> Array:
+    """``C_nb`` turning the body unit vector ``target`` onto the down axis by the shortest rotation."""
+    target = target / np.linalg.norm(target)
     # Rotate body vector `target` onto the down axis [0, 0, 1].
     down = np.array([0.0, 0.0, 1.0])
     v = np.cross(target, down)
@@ -116,7 +132,25 @@ def _face_down(axis: int, sign: float) -> Array:
 
 
 def static_orientations(count: int) -> list[tuple[str, Array]]:
-    """``(name, C_nb)`` of the 6, 12 or 24 static positions: each face down at 1, 2 or 4 headings."""
+    """``(name, C_nb)`` of the static positions.
+
+    6, 12 or 24: each face down at 1, 2 or 4 headings. 18: each face, then each of the 12 edges
+    down (the two body axes either side of it at 45°). 26: those and each of the 8 corners down
+    (all three axes at 35.3° from the vertical).
+    """
+    if count in (18, 26):
+        out = static_orientations(6)
+        signs = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))
+        for a, b in ((0, 1), (0, 2), (1, 2)):
+            for sa, sb in signs:
+                v = np.zeros(3)
+                v[a], v[b] = sa, sb
+                out.append((f"{_label(v)} edge down", _down(v)))
+        if count == 26:
+            for signs3 in itertools.product((1.0, -1.0), repeat=3):
+                corner = np.array(signs3)
+                out.append((f"{_label(corner)} corner down", _down(corner)))
+        return out
     headings = {6: (0.0,), 12: (0.0, 90.0), 24: (0.0, 90.0, 180.0, 270.0)}[count]
     out = []
     for axis, label in enumerate("xyz"):
@@ -130,6 +164,10 @@ def static_orientations(count: int) -> list[tuple[str, Array]]:
                     )
                 )
     return out
+
+
+def _label(v: Array) -> str:
+    return "".join(("+" if c > 0 else "-") + a for c, a in zip(v, "xyz", strict=True) if c != 0)
 
 
 def _small_rotation(rng: np.random.Generator, sigma_rad: float) -> Array:

@@ -549,8 +549,10 @@ def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
     rig.done()
     positions = top.sub("positions")
     count = positions.number("count", 0)
-    if count not in (0, 6, 12, 24):
-        raise positions.error(f"must be 0, 6, 12 or 24, got {count:g}", "count")
+    if count not in calibration.POSITION_COUNTS:
+        raise positions.error(
+            f"must be one of {', '.join(map(str, calibration.POSITION_COUNTS))}, got {count:g}", "count"
+        )
     kwargs["positions"] = int(count)
     kwargs["position_dwell_s"] = positions.number("dwell_s", 20.0, low=0.0, low_open=True)
     positions.done()

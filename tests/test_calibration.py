@@ -143,7 +143,7 @@ def test_underdetermined_recordings_are_refused():
 
 
 def test_static_orientations_are_proper_rotations():
-    for count in (6, 12, 24):
+    for count in (6, 12, 18, 24, 26):
         cs = [c for _, c in calibration.static_orientations(count)]
         assert len(cs) == count
         for c in cs:
@@ -219,3 +219,22 @@ def test_accelerometer_fit_agrees_with_imucal_on_its_own_session():
     np.testing.assert_allclose(pair_bias, snapshot["b_a"], rtol=1e-12)
     # The two bias estimators differ by the hand placement's imperfection: counts, not hundreds.
     assert 0.0 < np.abs(fit.A0 - pair_bias).max() < 20.0
+
+
+def test_tilted_positions_put_each_edge_and_corner_down():
+    # 18 = the 6 faces and the 12 edges, 26 = also the 8 corners: gravity along (±1, ±1, 0)/√2 and
+    # (±1, ±1, ±1)/√3 in the body, each exactly once.
+    proc = RigProcedure(rate_table=None, positions=26, position_dwell_s=1.0, lat_deg=30.0)
+    data = calibration.simulate_rig(proc, imu.ImuModel(), seed=0)
+    g = earth.normal_gravity(np.radians(30.0), 100.0)
+    up = np.array([data.ref_accel[p.start] for p in data.phases]) / g
+    np.testing.assert_allclose(np.linalg.norm(up, axis=1), 1.0, rtol=1e-14)
+    nonzero = np.sum(np.abs(up) > 1e-9, axis=1)
+    assert list(np.bincount(nonzero)) == [0, 6, 12, 8]
+    for k in (1, 2, 3):
+        np.testing.assert_allclose(np.abs(up[nonzero == k])[np.abs(up[nonzero == k]) > 1e-9], 1 / np.sqrt(k))
+    assert len({tuple(np.round(u, 9)) for u in up}) == 26
+    assert [p.name for p in data.phases][:7] == [
+        *(n for n, _ in calibration.static_orientations(6)),
+        "+x+y edge down",
+    ]

@@ -14,7 +14,7 @@ import pytest
 from conftest import refusal
 from scipy.spatial.transform import Rotation
 
-from sins import io, motion, scenario, trajectory
+from sins import calibration, io, motion, pipeline, scenario, trajectory
 
 SEED = 7_2024
 PRESET_DIR = Path(__file__).resolve().parents[1] / "scenarios"
@@ -501,3 +501,13 @@ def test_derivatives_match_finite_differences(doc: dict[str, Any], in_ramps: lis
     np.testing.assert_allclose(kin.omega_nb_b, w_fd, rtol=0, atol=1e-7)
     # The checks bite: accelerations and rates here are far from zero.
     assert np.abs(kin.a_n).max() > 0.5 and np.abs(kin.omega_nb_b).max() > 0.02
+
+
+@pytest.mark.parametrize("name", pipeline.presets("rig"))
+def test_rig_preset_loads_as_written(name: str) -> None:
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "rig" / f"{name}.toml"
+    raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    rig = scenario.load_rig(path)
+    assert rig.positions == raw["positions"]["count"] and rig.position_dwell_s == raw["positions"]["dwell_s"]
+    assert rig.rate_hz == raw["rig"]["rate_hz"]
+    assert len(calibration.static_orientations(rig.positions)) == rig.positions
