@@ -6,19 +6,25 @@ fitted by least squares, plus white noise) and any effects accepted so far.
 Every library effect not in the model is a candidate, of one of three kinds:
 
 - *regressors* (scale nonlinearity and asymmetry, g² sensitivity, temperature
-  bias and scale, time offset, size effect): columns added to the channel's
-  least-squares fit;
+  bias and scale, size effect): columns added to the channel's least-squares
+  fit;
+- *delay* (time offset): the reading is the reference at ``t − τ``, cubic
+  Hermite between rows; ``τ`` is found by a 1-D search beside the regressors;
 - *processes* (bias instability, rate random walk): a first-order Gauss–Markov
   or random-walk bias under the white noise, fitted by the likelihood of the fit
   rows' innovations, the regressors refitted beside it by generalised least
   squares, and predicted one step ahead by the steady-state Kalman filter;
-- *output maps* (quantization, saturation): the prediction's expected reading
-  on the readings' lattice (rounding smoothed by the noise) or the prediction
-  clipped at the readings' pile-up.
+- *output maps* (quantization, saturation): a quantizer on the readings'
+  lattice (each reading rounded, or increments rounded with the remainder
+  carried, after white noise whose level it fits; :mod:`sins.lattice`), or the
+  prediction clipped at the readings' pile-up.
 
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
 model's, minus ``k/2 · ln(n_fit)`` for its ``k`` parameters (BIC's penalty).
+On readings that lie on a lattice, each is scored instead by the probability
+of the reading at its recorded resolution: a quantizer's probability of its
+lattice index, a continuous model's of the same lattice bin.
 Candidates are accepted greedily while the best score is positive. Three
 guards keep a library effect from taking credit for what it is not:
 
@@ -34,7 +40,8 @@ guards keep a library effect from taking credit for what it is not:
 
 The noise floor of a channel is the white-noise level the model expects,
 measured without the model: the spread of first differences of the fit rows'
-residual, which slowly varying unmodelled errors do not reach. Where the gap
+residual, which slowly varying unmodelled errors do not reach (and which holds
+rounding's spread as well). Where the gap
 lies is told by input quartiles and by the residual's Allan deviation against
 that white noise (:func:`allan_deviation`).
 """
@@ -49,10 +56,12 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.interpolate import CubicHermiteSpline
 from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 from scipy.stats import chi2, norm
 
+from sins import lattice
 from sins.errors import SinsInputError
 from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES, display_unit
 from sins.series import CalibrationData
@@ -74,8 +83,12 @@ TIE_NATS = 3.0
 _STEP_MARGIN = 0.05
 #: The white noise before rounding, in quantization steps, tried for the quantization candidate.
 _NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
+#: The two quantizers (see :mod:`sins.lattice`).
+_QUANTIZERS = {"rounded": lattice.rounded, "carried": lattice.carried}
 #: The random-bias candidates: a sensor's model has at most one.
 _PROCESSES = ("bias_instability", "rate_random_walk")
+#: The output-map candidates: a sensor's model has at most one.
+_OUTPUTS = ("quantization", "saturation")
 #: Input quartiles reported where the excess concentrates.
 _FEATURES = ("|ω|", "|f|", "temperature", "rate of change", "time")
 
@@ -86,7 +99,7 @@ class Candidate:
 
     name: str
     sensor: str
-    kind: str  # "regressors" | "process" | "output"
+    kind: str  # "regressors" | "delay" | "process" | "output"
     columns: Callable[[_Inputs, int], Array] | None = None  # (n, k) extra regressors of axis i
 
 
@@ -98,7 +111,7 @@ class _Inputs:
     omega: Array
     f: Array
     omega_dot: Array
-    u_dot: dict[str, Array]
+    u_rate: dict[str, Array]  # the reference's rate of change, central differences
     temp: Array | None
     step_s: float
 
@@ -145,7 +158,7 @@ def _candidates(sensor: str) -> list[Candidate]:
             "regressors",
             lambda x, i: (_temp(x) * x.of(sensor)[:, i])[:, None],
         ),
-        Candidate(f"{sensor}.time_offset", sensor, "regressors", lambda x, i: x.u_dot[sensor][:, i : i + 1]),
+        Candidate(f"{sensor}.time_offset", sensor, "delay"),
         Candidate(f"{sensor}.bias_instability", sensor, "process"),
         Candidate(f"{sensor}.rate_random_walk", sensor, "process"),
         Candidate(f"{sensor}.quantization", sensor, "output"),
@@ -259,14 +272,19 @@ class _ChannelModel:
     ) -> None:
         self.x, self.sensor, self.axis = x, sensor, axis
         self.error, self.reading, self.fit = error, reading, fit
+        self.lattice = lattice.find(reading[fit])
         u = x.of(sensor)
         base = [np.ones(len(x.t)), u[:, 0], u[:, 1], u[:, 2]]
         if sensor == "gyro":
             base += [x.f[:, 0], x.f[:, 1], x.f[:, 2]]
         self.columns: list[Array] = [np.stack(base, axis=1)]
+        self.delayed = False  # whether the reading is the reference at t − τ
+        self.delay_s: float | None = None  # τ, once fitted
         self.process: str | None = None  # "bias_instability" | "rate_random_walk"
         self.process_on_trial = True  # a candidate's process must pass _falsified; the model's need not
         self.output: str | None = None  # "quantization" | "saturation"
+        self.quantizer: tuple[str, float] | None = None  # its kind and noise per step, once fitted
+        self.loglik_rows: Array | None = None  # a quantizer's ln P of every row's reading, once predicted
         self.fit_loglik = np.nan  # the process's innovations' log-likelihood on the fit rows, once predicted
 
     def with_candidate(self, cand: Candidate, on_trial: bool = True) -> _ChannelModel:
@@ -275,10 +293,12 @@ class _ChannelModel:
         if cand.kind == "regressors":
             assert cand.columns is not None
             m.columns.append(cand.columns(self.x, self.axis))
+        elif cand.kind == "delay":
+            m.delayed, m.delay_s = True, None
         elif cand.kind == "process":
             m.process, m.process_on_trial = cand.name.split(".")[1], on_trial
         else:
-            m.output = cand.name.split(".")[1]
+            m.output, m.quantizer, m.loglik_rows = cand.name.split(".")[1], None, None
         return m
 
     def with_columns(self, columns: Array) -> _ChannelModel:
@@ -291,7 +311,7 @@ class _ChannelModel:
         k = sum(c.shape[1] for c in self.columns)
         if self.process is not None:
             k += 2 if self.process == "bias_instability" else 1
-        return k + (self.output is not None)
+        return k + (self.output is not None) + self.delayed
 
     def predict(self) -> Array:
         """The predicted error of every row, all parameters fitted on the fit rows."""
@@ -303,27 +323,93 @@ class _ChannelModel:
             # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
-        coef, *_ = np.linalg.lstsq(a[rows] / scale, self.error[rows], rcond=rcond)
+        lag = np.zeros_like(self.error)  # what a delay adds to the error: the reference at t − τ less at t
+        if self.delayed:
+            if self.delay_s is None:
+                self.delay_s = _fit_delay(self.x, self.sensor, self.axis, self.error, a / scale, rows)
+            lag = _lag(self.x, self.sensor, self.axis, self.delay_s)
+        error = self.error - lag
+        coef, *_ = np.linalg.lstsq(a[rows] / scale, error[rows], rcond=rcond)
         pred = (a / scale) @ coef
         if self.process is not None:
-            y = self.error - pred
+            y = error - pred
             process = _fit_process(self.process, y, self.fit, self.x.step_s)
             # A random bias misleads least squares: a walk's level in each static position passes for
             # scale factors. Generalised least squares instead: the innovations filter is linear, so
             # the regressors that whiten best are those fitted to the filtered error and columns.
             phi, gain = process.phi, _steady_gain(process.phi, process.q, process.r)[0]
             whitened = np.column_stack([_innovations(c, phi, gain) for c in (a / scale).T])
-            coef, *_ = np.linalg.lstsq(whitened[rows], _innovations(self.error, phi, gain)[rows], rcond=rcond)
+            coef, *_ = np.linalg.lstsq(whitened[rows], _innovations(error, phi, gain)[rows], rcond=rcond)
             pred = (a / scale) @ coef
-            y = self.error - pred
+            y = error - pred
             process = _fit_process(self.process, y, self.fit, self.x.step_s)
             if self.process_on_trial and _falsified(process, self.fit, self.x.t):
                 return np.full_like(pred, np.nan)  # not this process: see _falsified
             self.fit_loglik = process.fit_loglik  # for _nested_choice
             pred = pred + y - process.innovations
-        if self.output is not None:
-            pred = _output_map(self.output, pred, self.reading - self.error, self.reading, self.fit)
+        pred = pred + lag
+        if self.output == "quantization":
+            pred = self._quantized(pred)
+        elif self.output == "saturation":
+            reference = self.reading - self.error
+            top, bottom = float(self.reading[self.fit].max()), float(self.reading[self.fit].min())
+            pred = np.clip(reference + pred, bottom, top) - reference
         return pred
+
+    def _quantized(self, pred: Array) -> Array:
+        """The expected reading of the quantizer the fit rows' likelihood prefers; sets ``loglik_rows``.
+
+        Rounded or carried, and the white noise before the rounding (per step, over
+        :data:`_NOISE_PER_STEP`): one parameter, chosen once; the models built on this one keep it.
+        """
+        assert self.lattice is not None
+        reference = self.reading - self.error
+        m = self.lattice.index(self.reading)
+        mu = self.lattice.units(reference + pred)
+        choices = [(k, s) for k in _QUANTIZERS for s in _NOISE_PER_STEP]
+        choices = [self.quantizer] if self.quantizer else choices
+        if abs(self.lattice.offset) > 1e-9 * self.lattice.step:
+            choices = [c for c in choices if c[0] == "rounded"]  # differences of a lattice have no offset
+        best = -np.inf
+        for kind, s in choices:
+            loglik, expected, _ = _QUANTIZERS[kind](m, mu, s)
+            if float(loglik[self.fit].sum()) > best:
+                best, self.quantizer, self.loglik_rows = float(loglik[self.fit].sum()), (kind, s), loglik
+                out = expected * self.lattice.step + self.lattice.offset - reference
+        return out
+
+
+def _lag(x: _Inputs, sensor: str, axis: int, delay_s: float) -> Array:
+    """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows, with
+    slopes from central differences, held at the ends."""
+    u = x.of(sensor)[:, axis]
+    spline = CubicHermiteSpline(x.t, u, x.u_rate[sensor][:, axis])
+    return np.asarray(spline(np.clip(x.t - delay_s, x.t[0], x.t[-1]))) - u
+
+
+def _fit_delay(
+    x: _Inputs, sensor: str, axis: int, error: Array, columns: Array, rows: NDArray[np.bool_]
+) -> float:
+    """The delay τ whose lag, with the regressors fitted beside it, leaves the least on the fit rows.
+
+    To first order the lag is ``−τ u̇``, a column whose coefficient is ``τ``; the search refines it
+    within two rows either side, where the rest matters: a step in the reference (a rig turning
+    faster than a row) is smoothed differently from its slope.
+    """
+    slope = -x.u_rate[sensor][rows, axis : axis + 1]
+    coef, *_ = np.linalg.lstsq(np.hstack([columns[rows], slope]), error[rows], rcond=None)
+    first = float(coef[-1])
+
+    def left(tau: float) -> float:
+        target = (error - _lag(x, sensor, axis, tau))[rows]
+        c, *_ = np.linalg.lstsq(columns[rows], target, rcond=None)
+        return float(np.sum((target - columns[rows] @ c) ** 2))
+
+    span = 2.0 * x.step_s
+    found = minimize_scalar(
+        left, bounds=(first - span, first + span), method="bounded", options={"xatol": 1e-3 * x.step_s}
+    )
+    return float(found.x) if found.fun < left(first) else first
 
 
 def _steady_gain(phi: float, q: float, r: float) -> tuple[float, float]:
@@ -448,42 +534,6 @@ def _best_step(residual: Array, columns: Array, fit: NDArray[np.bool_], t: Array
     return 0.5 * float(tf[j] + tf[j + 1]), float(suffix_e[j] / denominator[j])
 
 
-def _output_map(kind: str, pred: Array, reference: Array, reading: Array, fit: NDArray[np.bool_]) -> Array:
-    """The prediction of the error after the readings' lattice or clipping, learnt from the fit rows."""
-    y = reference + pred  # predicted reading
-    if kind == "quantization":
-        steps = np.diff(np.unique(reading[fit]))
-        steps = steps[steps > 1e-15 * np.abs(reading).max()]
-        if len(steps) == 0:
-            return pred
-        q = float(np.median(steps))
-        # The reading is the rounded sum of the prediction and the white noise: its expectation is a
-        # staircase smoothed by the noise (plain rounding when the noise is far below the step, the
-        # prediction itself when far above). The noise's share of the step, the one parameter,
-        # is the one whose expectation fits the fit rows best.
-        best, out = np.inf, pred
-        for ratio in _NOISE_PER_STEP:
-            expected = _expected_rounding(y / q, ratio) * q - reference
-            sse = float(np.sum((reading[fit] - reference[fit] - expected[fit]) ** 2))
-            if sse < best:
-                best, out = sse, expected
-        return out
-    top, bottom = float(reading[fit].max()), float(reading[fit].min())
-    return np.clip(y, bottom, top) - reference
-
-
-def _expected_rounding(z: Array, s: float) -> Array:
-    """``E[round(z + w)]`` for ``w ~ N(0, s²)``: the sum over the nearest lattice points of each
-    point times its probability (points beyond ``±(4 + 6 s)`` hold less than 1e-9)."""
-    base = np.floor(z)
-    out = np.zeros_like(z)
-    reach = int(np.ceil(4 + 6 * s))
-    for j in range(-reach, reach + 1):
-        k = base + j
-        out += k * (norm.cdf((k + 0.5 - z) / s) - norm.cdf((k - 0.5 - z) / s))
-    return out
-
-
 # --------------------------------------------------------------------------- the diagnosis
 
 
@@ -495,7 +545,7 @@ def _inputs(data: CalibrationData) -> _Inputs:
         omega=data.ref_gyro,
         f=data.ref_accel,
         omega_dot=grad(data.ref_gyro),
-        u_dot={"gyro": -grad(data.ref_gyro), "accel": -grad(data.ref_accel)},
+        u_rate={"gyro": grad(data.ref_gyro), "accel": grad(data.ref_accel)},
         temp=data.temp,
         step_s=float(np.median(np.diff(t))),
     )
@@ -520,6 +570,32 @@ def _score(before: Array, after: Array, withheld: NDArray[np.bool_], k_extra: in
     return 0.5 * n * np.log(s0 / s1) - 0.5 * k_extra * np.log(n_fit)
 
 
+def _trial_score(
+    current: _ChannelModel, trial: _ChannelModel, before: Array, after: Array,
+    withheld: NDArray[np.bool_], n_fit: int, extra: int = 0,
+) -> tuple[float, float]:  # fmt: skip
+    """A trial model's score against the current one (whose residual is ``before``) and its penalty.
+
+    Readings off a lattice: :func:`_score`. On a lattice, each withheld reading's probability at the
+    readings' resolution: a quantizer's own, a continuous model's of the reading's lattice bin (its
+    residual Gaussian with its own variance).
+    ``extra`` counts parameters the trial has beyond its columns (a step's time, a hum's frequency).
+    """
+    k = trial.n_params - current.n_params + extra
+    penalty = 0.5 * k * float(np.log(n_fit))
+    if trial.lattice is None or np.isnan(after).any():
+        return _score(before, after, withheld, k, n_fit), penalty
+
+    def loglik(model: _ChannelModel, residual: Array) -> float:
+        if model.loglik_rows is not None:
+            return float(model.loglik_rows[withheld].sum())
+        assert trial.lattice is not None
+        sigma = float(np.sqrt(np.mean(residual[withheld] ** 2))) + _TINY
+        return float(lattice.binned(residual[withheld], trial.lattice.step, sigma).sum())
+
+    return loglik(trial, after) - loglik(current, before) - penalty, penalty
+
+
 def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.bool_]) -> bool:
     """Whether the data can say anything about a candidate.
 
@@ -540,7 +616,7 @@ def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.boo
                 return True
         return False
     if cand.name.endswith("quantization"):
-        return any(len(np.unique(r[:, j])) < 0.5 * len(r) for j in range(r.shape[1]))
+        return any(lattice.find(r[:, j]) is not None for j in range(r.shape[1]))
     return True
 
 
@@ -609,13 +685,16 @@ def diagnose(
     accepted: list[str] = []
     scores: dict[str, EffectScore] = {}
     outside: list[Outside] = []
-    # A sensor whose model has a random bias already takes no other: it would replace, not add.
-    taken = {n.split(".")[0] for n in model if n.split(".")[-1] in _PROCESSES}
-    remaining = [
-        c
-        for c in CANDIDATES.values()
-        if c.name not in model and not (c.kind == "process" and c.sensor in taken)
-    ]
+    # A sensor whose model has a random bias (an output map) already takes no other: it would replace,
+    # not add.
+    taken = {
+        f"{n.split('.')[0]}.{k}"
+        for n in model
+        for g in (_PROCESSES, _OUTPUTS)
+        if n.split(".")[-1] in g
+        for k in g
+    }
+    remaining = [c for c in CANDIDATES.values() if c.name not in model and c.name not in taken]
     while remaining:
         round_scores: dict[str, _Trial] = {}
         for cand in remaining:
@@ -628,10 +707,11 @@ def diagnose(
             for i in chans:
                 if CHANNELS[i] in {o.channel for o in outside}:
                     continue  # explained by a disturbance outside the library: nothing to add there
+                if cand.name.endswith("quantization") and models[i].lattice is None:
+                    continue
                 m = models[i].with_candidate(cand)
                 r = m.error - m.predict()
-                k = m.n_params - models[i].n_params
-                trial.add(i, m, r, _score(residual[:, i], r, withheld, k, n_fit), 0.5 * k * np.log(n_fit))
+                trial.add(i, m, r, *_trial_score(models[i], m, residual[:, i], r, withheld, n_fit))
             if trial.channels:
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
@@ -640,7 +720,9 @@ def diagnose(
         if not positive:
             break
         best = max(positive, key=lambda n: round_scores[n].score)
-        best, told_apart, alike = _nested_choice(best, round_scores)
+        best, told_apart, alike = _process_or_regressors(
+            *_nested_choice(best, round_scores), round_scores, fit
+        )
         disturbances = _outside(round_scores[best], models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
@@ -654,9 +736,13 @@ def diagnose(
         scores[best] = dataclasses.replace(scores[best], accepted=True, indistinguishable=ties)
         for i, m, r, *_ in round_scores[best].rows:
             models[i], residual[:, i] = m, r
-        # One random bias per sensor: the other is an alternative to it, not an addition.
+        # One random bias per sensor: the other is an alternative to it, not an addition. Likewise one
+        # output map (a channel's model holds one: quantizing a clipped reading is not modelled).
         sensor, kind = best.split(".")
-        exclusive = {f"{sensor}.{k}" for k in _PROCESSES} if kind in _PROCESSES else {best}
+        exclusive = {best}
+        for group in (_PROCESSES, _OUTPUTS):
+            if kind in group:
+                exclusive = {f"{sensor}.{k}" for k in group}
         remaining = [c for c in remaining if c.name not in exclusive]
 
     rms_before = np.sqrt(np.mean(before[withheld] ** 2, axis=0))
@@ -744,6 +830,58 @@ def _nested_choice(best: str, trials: dict[str, _Trial]) -> tuple[str, tuple[str
     return f"{sensor}.rate_random_walk", (), (f"{sensor}.bias_instability",)
 
 
+def _process_or_regressors(
+    best: str, told_apart: tuple[str, ...], alike: tuple[str, ...], trials: dict[str, _Trial],
+    fit: NDArray[np.bool_],
+) -> tuple[str, tuple[str, ...], tuple[str, ...]]:  # fmt: skip
+    """Between a random bias and a regressor effect that both gain on the withheld rows, the one the
+    fit rows' likelihood less BIC's penalty prefers.
+
+    A random bias's filter follows any level that holds for a while: a static position's offset from
+    g² sensitivity or a slow temperature drift as much as a wandering bias. With the withheld rows at
+    the end of each phase, it has caught the level before they begin, and predicts them about as well
+    as regressors that explain the level from the inputs, with fewer parameters. On the fit rows it
+    pays for following: its innovations after every change of level, which the regressors predict.
+    The regressor is taken where it is ahead there by more than :data:`TIE_NATS`; within that, the
+    two are listed as indistinguishable.
+
+    Takes and returns what :func:`_nested_choice` does: the choice, the candidates told apart from
+    it and those that could not be.
+    """
+    if best.split(".")[1] not in _PROCESSES:
+        return best, told_apart, alike
+
+    def fit_score(name: str) -> float:
+        total = 0.0
+        for _, model, residual, _, penalty in trials[name].rows:
+            loglik = (
+                model.fit_loglik if CANDIDATES[name].kind == "process" else _log_likelihood(residual[fit])
+            )
+            total += loglik - penalty
+        return total
+
+    rivals = [
+        n
+        for n, trial in trials.items()
+        if CANDIDATES[n].kind in ("regressors", "delay")
+        and trial.score > 0.0
+        and trial.names == trials[best].names
+    ]
+    if not rivals:
+        return best, told_apart, alike
+    rival = max(rivals, key=fit_score)
+    margin = fit_score(rival) - fit_score(best)
+    if margin > TIE_NATS:
+        return (
+            rival,
+            tuple(n for n in trials if n.split(".")[1] in _PROCESSES and n.startswith(rival.split(".")[0])),
+            (),
+        )
+    if margin > -TIE_NATS:
+        return best, told_apart, (*alike, rival)
+    return best, told_apart, alike
+
+
 @dataclass
 class _Trial:
     """A candidate tried on a sensor's channels: the trial model, residual and score of each."""
@@ -806,8 +944,10 @@ def _outside(
         found = []
         for disturbance, column, k in tries:
             m = models[i].with_columns(column)
-            outside_score = _score(residual[:, i], m.error - m.predict(), withheld, k, n_fit)
-            outside_gain = outside_score + 0.5 * k * np.log(n_fit)
+            outside_score, penalty_k = _trial_score(
+                models[i], m, residual[:, i], m.error - m.predict(), withheld, n_fit, k - column.shape[1]
+            )
+            outside_gain = outside_score + penalty_k
             # Gains compared, as for ties: an effect no better than the disturbance is not what happened.
             if outside_score > 0.0 and outside_gain > score + penalty - TIE_NATS:
                 found.append(dataclasses.replace(disturbance, score=float(outside_score)))

@@ -110,20 +110,68 @@ def test_effects_the_rig_cannot_tell_apart_are_reported_as_such():
     assert first.accepted and first.name in pair and set(first.indistinguishable) >= pair - {first.name}
 
 
-def test_the_expected_rounded_reading_matches_a_monte_carlo_mean():
-    """E[round(z + w)], w ~ N(0, s²), against the mean of 4,000 draws per point: the difference is
-    within 4.5 standard errors (the sd of one rounded draw is at most s + ½: the noise plus a rounding
-    error of at most half a step) at every one of 500 points. A wrong s (0.1 for 0.2) misses by 0.18,
-    four times that. It is plain rounding when s is far below the step, and z itself far above it."""
-    rng = np.random.default_rng(0)
-    z = rng.uniform(-5.0, 5.0, 500)
-    for s in (0.1, 0.3, 1.0):
-        draws = np.round(z[:, None] + s * rng.standard_normal((500, 4000))).mean(axis=1)
-        tolerance = 4.5 * (s + 0.5) / np.sqrt(4000)
-        np.testing.assert_array_less(np.abs(gap._expected_rounding(z, s) - draws), tolerance)
-    away = z[np.abs(z - np.round(z)) < 0.4]  # not on a rounding boundary
-    np.testing.assert_allclose(gap._expected_rounding(away, 0.02), np.round(away), atol=1e-6)
-    np.testing.assert_allclose(gap._expected_rounding(z, 3.0), z, atol=1e-6)
+def test_on_a_rig_with_edges_down_asymmetry_is_told_from_nonlinearity():
+    """With gravity also at 0.71 g on two axes, ``|f|`` and ``f²`` part (0.71 against 0.5): the
+    asymmetry is ranked first and accepted, and nothing is reported as indistinguishable from it."""
+    rig = calibration.RigProcedure(positions=18, position_dwell_s=10.0, rate_table=None)
+    model = imu_spec.draw_unit("tactical", 1).only(*imu.BASELINE)
+    effect = imu_spec.typical_effect("accel.scale_asymmetry", np.random.default_rng(1), 3.0)
+    report = gap.diagnose(calibration.simulate_rig(rig, model.with_effects(effect), seed=1))
+    first = report.effects[0]
+    assert first.name == "accel.scale_asymmetry" and first.accepted and first.indistinguishable == ()
+
+
+def test_a_temperature_bias_is_not_taken_for_the_random_walk_that_follows_it():
+    """In a 10 → 40 → 20 °C chamber cycle, the gyro's temperature bias at its typical size is a slow
+    drift a random walk's filter follows: on the withheld tails of each phase the walk scores higher
+    (36.6 against 27.8 here). On the fit rows it pays for following, and the regressors, which
+    predict the drift from the temperature, are taken."""
+    rig = calibration.RigProcedure(
+        position_dwell_s=10.0,
+        rate_table=calibration.RateTable(dwell_s=5.0),
+        temperature=calibration.TemperatureProfile((0.0, 300.0, 600.0), (10.0, 40.0, 20.0)),
+    )
+    model = imu_spec.draw_unit("tactical", 0).only(*imu.BASELINE)
+    effect = imu_spec.typical_effect("gyro.temperature_bias", np.random.default_rng([0, 5]))
+    report = gap.diagnose(calibration.simulate_rig(rig, model.with_effects(effect), seed=0))
+    assert report.diagnosis == ["gyro.temperature_bias"]
+
+
+def test_a_time_offset_is_found_at_the_rigs_steps():
+    """A 3 ms accelerometer delay at 200 Hz, on a rig that steps between 18 positions: the lag is all
+    at the steps. The reference delayed through cubic Hermite pieces explains it; the first-order
+    column ``−τ u̇`` in its place does not (this test fails with it)."""
+    rig = calibration.RigProcedure(rate_hz=200.0, positions=18, position_dwell_s=5.0, rate_table=None)
+    model = imu_spec.draw_unit("tactical", 0).only(*imu.BASELINE)
+    effect = imu_spec.typical_effect("accel.time_offset", np.random.default_rng([0, 5]), 3.0)
+    report = gap.diagnose(calibration.simulate_rig(rig, model.with_effects(effect), seed=0))
+    assert report.diagnosis[:1] == ["accel.time_offset"]
+    for ch in ("accel.x", "accel.y", "accel.z"):
+        assert report.channels[ch]["rms_after"] <= 1.15 * report.channels[ch]["noise_floor"], ch
+
+
+def test_rounded_readings_are_diagnosed_as_quantization():
+    """The gyro's readings rounded to 0.15 °/s (three times the typical step), noise at about a
+    seventh of it: the readings' probability at their lattice's resolution puts the quantizer first,
+    and it leaves the withheld residual within 15 % of the floor."""
+    report = gap.diagnose(_recording("gyro.quantization"))
+    assert report.diagnosis[:1] == ["gyro.quantization"] and report.effects[0].name == "gyro.quantization"
+    for ch in ("gyro.x", "gyro.y", "gyro.z"):
+        assert report.channels[ch]["rms_after"] <= 1.15 * report.channels[ch]["noise_floor"], ch
+
+
+def test_carried_increments_are_diagnosed_as_quantization():
+    """The same unit's gyro output as increments rounded with the remainder carried (written here
+    with numpy, not the simulator): the readings' running sum is the rounded running sum of the
+    unrounded ones. The quantizer is found on all three channels."""
+    data = _recording(None)
+    step = np.radians(0.1)
+    dt = float(np.median(np.diff(data.t)))
+    running = np.round(np.cumsum(data.gyro * dt, axis=0) / (step * dt))
+    gyro = np.diff(np.vstack([np.zeros((1, 3)), running]), axis=0) * step
+    report = gap.diagnose(dataclasses.replace(data, gyro=gyro))
+    assert report.diagnosis[:1] == ["gyro.quantization"] and report.effects[0].name == "gyro.quantization"
+    assert report.effects[0].channels == ("gyro.x", "gyro.y", "gyro.z")
 
 
 def test_allan_deviation_matches_the_white_noise_and_random_walk_oracles():

@@ -1,0 +1,177 @@
+"""Readings on a lattice: finding the step, and the probability of each reading under a quantizer.
+
+A quantizer outputs ``offset + m·step`` for integers ``m``. Two kinds are modelled, both driven by
+a predicted (unrounded, noiseless) reading ``ŷ`` and white noise ``σ`` before the rounding, written
+in lattice units as ``μ = (ŷ − offset) / step`` and ``s = σ / step``:
+
+* *rounded*: each reading is rounded on its own, ``m_k = round(μ_k + w_k)``. The readings are
+  independent, ``P(m) = Φ((m + ½ − μ)/s) − Φ((m − ½ − μ)/s)``.
+* *carried*: increments are rounded with the remainder carried to the next (a ΔΘ/ΔV output; see
+  :func:`sins.imu.ImuModel.corrupt_rates`), so the readings' running sum is the rounded running sum
+  of ``μ + w``. Each reading then depends on where the running sum lay in its lattice cell, which
+  the readings so far say only in part: :func:`carried` filters that position on a grid of cells.
+
+Either gives ``P(m_k | m_<k)`` for every row, so a quantizer's likelihood of the readings can be held
+against a continuous model's probability of the same lattice bins (:func:`binned`), the readings'
+recorded resolution being the lattice step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+from scipy.special import ndtr
+
+Array = NDArray[np.float64]
+
+#: A probability no reading falls below: a reading the model calls impossible costs ln 1e-12 ≈ −28 nats.
+_FLOOR = 1e-12
+#: Cells of the running sum's position in its lattice cell, in :func:`carried`.
+CELLS = 16
+#: Points per period of the tabulated excess of the expected rounding over its argument.
+_TABLE = 512
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """Readings ``offset + m·step``: the step and offset in the readings' units."""
+
+    step: float
+    offset: float
+
+    def index(self, reading: Array) -> Array:
+        """The lattice index ``m`` of each reading, as floats."""
+        return np.round((reading - self.offset) / self.step)
+
+    def units(self, value: Array) -> Array:
+        """Values in lattice units, ``(value − offset) / step``."""
+        return (value - self.offset) / self.step
+
+
+def find(reading: Array, tolerance: float = 1e-6) -> Lattice | None:
+    """The coarsest lattice every reading lies on, or None.
+
+    The step is the smallest gap between distinct values; every reading must lie within
+    ``tolerance`` steps of a lattice point, and the readings must take fewer distinct values than
+    half their number (else the gaps are only the spread of a continuous reading).
+    """
+    values = np.unique(reading[np.isfinite(reading)])
+    if len(values) < 2 or len(values) >= 0.5 * len(reading):
+        return None
+    gaps = np.diff(values)
+    gaps = gaps[gaps > 1e-12 * max(float(np.abs(values).max()), 1e-300)]
+    if len(gaps) == 0:
+        return None
+    step = float(gaps.min())
+    offset = float(values[np.argmin(np.abs(values))])
+    offset -= step * np.round(offset / step)
+    m = (values - offset) / step
+    if float(np.abs(m - np.round(m)).max()) > tolerance:
+        return None
+    return Lattice(step, offset)
+
+
+def rounded(m: Array, mu: Array, s: float) -> tuple[Array, Array, Array]:
+    """Each reading rounded on its own: ``ln P(m_k)``, and the mean and variance of ``m_k``, of every row."""
+    p = ndtr((m + 0.5 - mu) / s) - ndtr((m - 0.5 - mu) / s)
+    first, second = _rounding_moments(mu, s)
+    return np.log(np.maximum(p, _FLOOR)), mu + first, second - first**2
+
+
+def expected_rounding(z: Array, s: float) -> Array:
+    """``E[round(z + w)]`` for ``w ~ N(0, s²)``."""
+    return z + _rounding_moments(z, s)[0]
+
+
+def _rounding_moments(z: Array, s: float) -> tuple[Array, Array]:
+    """``E[e]`` and ``E[e²]`` of ``e = round(z + w) − z``, ``w ~ N(0, s²)``: sums over the nearest
+    lattice points (points beyond ``±(4 + 6 s)`` hold less than 1e-9). Both are periodic in ``z``."""
+    base = np.floor(z)
+    first, second = np.zeros_like(z), np.zeros_like(z)
+    reach = int(np.ceil(4 + 6 * s))
+    for j in range(-reach, reach + 1):
+        e = base + j - z
+        p = ndtr((e + 0.5) / s) - ndtr((e - 0.5) / s)
+        first += e * p
+        second += e * e * p
+    return first, second
+
+
+def carried(m: Array, mu: Array, s: float, cells: int = CELLS) -> tuple[Array, Array, Array]:
+    """Increments rounded with the remainder carried: ``ln P(m_k | m_<k)``, and the mean and variance
+    of ``m_k`` given ``m_<k``, of every row.
+
+    The running sum ``S_k = S_{k−1} + μ_k + w_k`` is output as ``R_k = round(S_k)``, and the reading is
+    ``m_k = R_k − R_{k−1}``. The state is the position ``u = S − R`` in ``[−½, ½)``, held as masses at
+    the centres of ``cells`` equal cells (uniform at the start). ``s`` below half a cell is raised to
+    it: the grid cannot hold a position more sharply.
+    """
+    s = max(float(s), 0.5 / cells)
+    # The moments of round(z + w) − z are periodic in z: tabulated over one period, interpolated.
+    first, second = _rounding_moments(np.linspace(0.0, 1.0, _TABLE + 1), s)
+    m, mu = (np.ascontiguousarray(a, dtype=np.float64) for a in (m, mu))
+    return _carried(m, mu, s, cells, first, second)
+
+
+@numba.njit(cache=True, nogil=True)
+def _cdf(x: float) -> float:
+    return 0.5 * math.erfc(-x / math.sqrt(2.0))
+
+
+@numba.njit(cache=True, nogil=True)
+def _carried(
+    m: Array, mu: Array, s: float, cells: int, first: Array, second: Array
+) -> tuple[Array, Array, Array]:
+    # With the cells' centres at u_i = −½ + (i + ½)/M and edges at b_j = −½ + j/M, the reading m moves
+    # the mass at u_i into cell j when w lies between x_n and x_{n+1}, n = j − i + m·M, where
+    # x_n = (n − ½)/M − μ. One F_n = Φ(x_n / s) per n in m·M − M … m·M + M serves every (i, j): the
+    # new masses are a discrete convolution of the old with F's differences, and P(m) their sum.
+    n_rows, big, table = len(m), cells, len(first) - 1
+    p = np.full(big, 1.0 / big)
+    new = np.empty(big)
+    f = np.empty(2 * big + 1)
+    loglik = np.empty(n_rows)
+    expected = np.empty(n_rows)
+    variance = np.empty(n_rows)
+    for k in range(n_rows):
+        d, obs = mu[k], m[k]
+        # From position u_i the reading is round(z_i + w), z_i = u_i + μ: mix its moments over i.
+        mean = square = 0.0
+        for i in range(big):
+            z = (i + 0.5) / big - 0.5 + d
+            pos = (z - np.floor(z)) * table
+            a = min(int(pos), table - 1)
+            e1 = first[a] + (pos - a) * (first[a + 1] - first[a])
+            e2 = second[a] + (pos - a) * (second[a + 1] - second[a])
+            mean += p[i] * (z + e1)
+            square += p[i] * (z * z + 2.0 * z * e1 + e2)
+        expected[k] = mean
+        variance[k] = max(square - mean * mean, 0.0)
+        for t in range(2 * big + 1):
+            f[t] = _cdf(((obs * big - big + t - 0.5) / big - d) / s)
+        norm = 0.0
+        for j in range(big):
+            acc = 0.0
+            for i in range(big):
+                a = j - i + big
+                acc += p[i] * (f[a + 1] - f[a])
+            new[j] = acc
+            norm += acc
+        loglik[k] = math.log(max(norm, _FLOOR))
+        if norm > 1e-300:
+            for j in range(big):
+                p[j] = new[j] / norm
+        else:  # a reading the model called impossible: start afresh
+            p[:] = 1.0 / big
+    return loglik, expected, variance
+
+
+def binned(residual: Array, step: float, sigma: float) -> Array:
+    """``ln P`` of each reading's lattice bin under a continuous Gaussian model: the residual
+    (reading − prediction) ``N(0, σ²)``, coarsened to the bin ``± step/2`` about the reading."""
+    p = ndtr((residual + 0.5 * step) / sigma) - ndtr((residual - 0.5 * step) / sigma)
+    return np.log(np.maximum(p, _FLOOR))

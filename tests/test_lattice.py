@@ -1,0 +1,91 @@
+"""Quantizers' likelihoods (sins.lattice) against Monte Carlo and particle-filter oracles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from sins import lattice
+
+
+def test_the_lattice_is_found_with_its_step_and_offset_and_only_where_there_is_one():
+    rng = np.random.default_rng(0)
+    x = rng.normal(0.0, 3e-3, 5000)
+    step, offset = 7.3e-4, 2.1e-4
+    found = lattice.find(np.round((x - offset) / step) * step + offset)
+    assert found is not None
+    assert found.step == pytest.approx(step, rel=1e-9) and found.offset == pytest.approx(offset, abs=1e-12)
+    assert lattice.find(x) is None  # continuous readings
+    assert lattice.find(np.zeros(100)) is None  # one value says nothing of a step
+    assert lattice.find(np.round(x / step) * step + 1e-3 * step * rng.standard_normal(5000)) is None
+
+
+def test_rounded_readings_probability_mean_and_variance_match_monte_carlo():
+    """P(m), E[m] and Var[m] of round(μ + w), w ~ N(0, s²), against 20,000 draws at 200 points: the
+    mean within 5 standard errors (sd ≤ s + ½), the variance within 0.02 (its sampling sd is below
+    0.004 here), the probability of the drawn index within 5 binomial standard errors."""
+    rng = np.random.default_rng(1)
+    mu, s = rng.uniform(-3.0, 3.0, 200), 0.35
+    draws = np.round(mu[:, None] + s * rng.standard_normal((200, 20000)))
+    m = draws[:, 0]
+    loglik, mean, var = lattice.rounded(m, mu, s)
+    np.testing.assert_array_less(np.abs(mean - draws.mean(axis=1)), 5 * (s + 0.5) / np.sqrt(20000))
+    np.testing.assert_allclose(var, draws.var(axis=1), atol=0.02)
+    p_hat = (draws == m[:, None]).mean(axis=1)
+    p = np.exp(loglik)
+    np.testing.assert_array_less(np.abs(p - p_hat), 5 * np.sqrt(p * (1 - p) / 20000) + 1e-4)
+    # The expected reading: plain rounding far below a step of noise, the value itself far above.
+    away = mu[np.abs(mu - np.round(mu)) < 0.4]
+    np.testing.assert_allclose(lattice.expected_rounding(away, 0.02), np.round(away), atol=1e-6)
+    np.testing.assert_allclose(lattice.expected_rounding(mu, 3.0), mu, atol=1e-6)
+
+
+def _carried_readings(mu: np.ndarray, s: float, rng: np.random.Generator) -> np.ndarray:
+    running = np.round(np.cumsum(mu + s * rng.standard_normal(len(mu))) + rng.uniform(-0.5, 0.5))
+    return np.diff(np.concatenate([[0.0], running]))
+
+
+@pytest.mark.parametrize("s", [0.2, 0.6])
+def test_carried_readings_match_a_particle_filter(s: float):
+    """The grid filter against a bootstrap particle filter (100,000 particles) on 200 readings of
+    carried rounding: each reading's ln P within 0.06 nats, the sum within 1 nat (the grid's 16 cells
+    and the particles' sampling), and the predictive mean within 0.02 of a step."""
+    rng = np.random.default_rng(2)
+    mu = 0.03 + 0.3 * np.sin(np.arange(200) / 20.0)
+    m = _carried_readings(mu, s, rng)
+    loglik, mean, _ = lattice.carried(m, mu, s)
+    u = rng.uniform(-0.5, 0.5, 100_000)
+    oracle_ll, oracle_mean = [], []
+    for k in range(len(m)):
+        z = u + mu[k] + s * rng.standard_normal(len(u))
+        index = np.round(z)
+        oracle_mean.append(index.mean())
+        kept = index == m[k]
+        oracle_ll.append(np.log(kept.mean()))
+        u = rng.choice((z - index)[kept], len(u))
+    np.testing.assert_allclose(loglik, oracle_ll, atol=0.06)
+    assert loglik.sum() == pytest.approx(sum(oracle_ll), abs=1.0)
+    np.testing.assert_allclose(mean, oracle_mean, atol=0.02)
+
+
+def test_each_quantizer_is_told_from_the_other_by_its_likelihood():
+    """On 2,000 readings with noise at 0.2 steps, each kind's own model is more likely than the other
+    by far more than any parameter penalty; both beat the continuous model's probability of the bins."""
+    rng = np.random.default_rng(3)
+    mu, s = 0.37 + 0.2 * np.sin(np.arange(2000) / 50.0), 0.2
+    carried_m = _carried_readings(mu, s, rng)
+    rounded_m = np.round(mu + s * rng.standard_normal(len(mu)))
+    for m, own, other in (
+        (carried_m, lattice.carried, lattice.rounded),
+        (rounded_m, lattice.rounded, lattice.carried),
+    ):
+        assert own(m, mu, s)[0].sum() > other(m, mu, s)[0].sum() + 100.0
+        residual = m - mu
+        continuous = lattice.binned(residual, 1.0, float(np.sqrt(np.mean(residual**2)))).sum()
+        assert own(m, mu, s)[0].sum() > continuous + 100.0
+
+
+def test_a_continuous_models_bin_probability_tends_to_its_density_times_the_step():
+    r = np.linspace(-3.0, 3.0, 61)
+    np.testing.assert_allclose(lattice.binned(r, 1e-3, 1.0), np.log(norm.pdf(r) * 1e-3), atol=1e-6)
