@@ -150,6 +150,18 @@ def test_a_time_offset_is_found_at_the_rigs_steps():
         assert report.channels[ch]["rms_after"] <= 1.15 * report.channels[ch]["noise_floor"], ch
 
 
+def test_a_sensor_takes_one_random_bias_and_one_output_map():
+    """A model that already holds a gyro random walk and accelerometer saturation offers neither the
+    other random bias nor the other output map as a candidate, on readings whose lattice would make
+    quantization one: each would replace, not add."""
+    data = _recording("accel.quantization")
+    report = gap.diagnose(data, model=("gyro.rate_random_walk", "accel.saturation"))
+    names = {e.name for e in report.effects}
+    assert "gyro.bias_instability" not in names and "accel.quantization" not in names
+    assert "accel.bias_instability" in names  # the other sensor's random biases are still candidates
+    assert "accel.quantization" in {e.name for e in gap.diagnose(data).effects}
+
+
 def test_rounded_readings_are_diagnosed_as_quantization():
     """The gyro's readings rounded to 0.15 °/s (three times the typical step), noise at about a
     seventh of it: the readings' probability at their lattice's resolution puts the quantizer first,
