@@ -4,12 +4,14 @@ A quantizer outputs ``offset + m·step`` for integers ``m``. Two kinds are model
 a predicted (unrounded, noiseless) reading ``ŷ`` and white noise ``σ`` before the rounding, written
 in lattice units as ``μ = (ŷ − offset) / step`` and ``s = σ / step``:
 
-* *rounded*: each reading is rounded on its own, ``m_k = round(μ_k + w_k)``. The readings are
-  independent, ``P(m) = Φ((m + ½ − μ)/s) − Φ((m − ½ − μ)/s)``.
-* *carried*: increments are rounded with the remainder carried to the next (a ΔΘ/ΔV output; see
-  :func:`sins.imu.ImuModel.corrupt_rates`), so the readings' running sum is the rounded running sum
-  of ``μ + w``. Each reading then depends on where the running sum lay in its lattice cell, which
-  the readings so far say only in part: :func:`carried` filters that position on a grid of cells.
+* *rounded*: each reading is rounded on its own (as :meth:`sins.imu.ImuModel.corrupt_rates` does),
+  ``m_k = round(μ_k + w_k)``. The readings are independent,
+  ``P(m) = Φ((m + ½ − μ)/s) − Φ((m − ½ − μ)/s)``.
+* *carried*: increments are rounded with the remainder carried to the next (a ΔΘ/ΔV output, as
+  :meth:`sins.imu.ImuModel.corrupt_increments` makes), so the readings' running sum is the rounded
+  running sum of ``μ + w``. Each reading then depends on where the running sum lay in its lattice
+  cell, which the readings so far say only in part: :func:`carried` filters that position on a grid
+  of cells.
 
 Either gives ``P(m_k | m_<k)`` for every row, so a quantizer's likelihood of the readings can be held
 against a continuous model's probability of the same lattice bins (:func:`binned`), the readings'
