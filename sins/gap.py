@@ -660,10 +660,8 @@ def diagnose(
     unknown = [n for n in model if n not in EFFECT_NAMES]
     if unknown:
         raise SinsInputError(f"model: unknown effect {unknown[0]!r} (see `sins effects`)")
-    fit_part, _ = data.split(holdout)
-    fit = np.zeros(len(data), dtype=bool)
-    fit[np.searchsorted(data.t, fit_part.t)] = True
-    withheld = ~fit
+    withheld = data.held_back(holdout)
+    fit = ~withheld
     x = _inputs(data)
     n_fit = int(fit.sum())
     readings = np.hstack([data.gyro, data.accel])

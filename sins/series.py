@@ -199,14 +199,22 @@ class CalibrationData:
         )
 
     def split(self, validation: float, *, by_phase: bool = True) -> tuple[CalibrationData, CalibrationData]:
-        """Fit and validation portions, in contiguous time blocks.
+        """Fit and validation portions, in contiguous time blocks (see :meth:`held_back`).
+
+        Phases are kept, re-indexed, in both portions.
+        """
+        held = self.held_back(validation, by_phase=by_phase)
+        return self._subset(np.flatnonzero(~held)), self._subset(np.flatnonzero(held))
+
+    def held_back(self, validation: float, *, by_phase: bool = True) -> NDArray[np.bool_]:
+        """Which rows :meth:`split` holds back for validation.
 
         With ``by_phase`` and phases present, the last ``validation`` fraction
         (rounded half up, at least one row and at most all but one) of every
         phase of two or more rows is held back, so each orientation and rate is
         seen in both portions yet no validation sample sits between fit samples
         of the same phase; otherwise the last fraction of the whole recording
-        is. Phases are kept, re-indexed, in both portions.
+        is.
         """
         if not 0.0 < validation < 1.0:
             raise ValueError(f"validation fraction must be in (0, 1), got {validation}")
@@ -218,10 +226,9 @@ class CalibrationData:
             # At least one row each way for any block of two or more rows.
             held_rows = min(max(int(np.floor(validation * length + 0.5)), 1), length - 1) if length > 1 else 0
             held[stop - held_rows : stop] = True
-        fit_rows, val_rows = np.flatnonzero(~held), np.flatnonzero(held)
-        if len(fit_rows) == 0 or len(val_rows) == 0:
+        if held.all() or not held.any():
             raise ValueError(f"{self.source or 'recording'}: too short to split ({n} rows)")
-        return self._subset(fit_rows), self._subset(val_rows)
+        return held
 
     def referenced(self) -> CalibrationData:
         """The rows with a per-sample reference (finite ``ref_gyro`` and ``ref_accel``), phases kept."""

@@ -63,6 +63,8 @@ RIGS = {
     ),
 }
 CONTROLS = ("control", "sinusoid (outside)", "bias step (outside)")
+#: The fraction of every phase withheld, by the diagnosis and the oracle alike.
+HOLDOUT = 0.3
 #: The oracle's withheld gain below which an effect counts as unobservable on a rig (see above).
 OBSERVABLE_NATS = 10.0
 
@@ -81,9 +83,7 @@ def oracle_gain(name: str, rig: str, seed: int, scale: float) -> float:
     a = np.column_stack(columns)
     a = a / np.maximum(np.abs(a).max(axis=0), 1e-300)
     left = delta - a @ np.linalg.lstsq(a, delta, rcond=None)[0]
-    fit_part, _ = with_effect.split(0.3)
-    withheld = np.ones(len(with_effect), dtype=bool)
-    withheld[np.searchsorted(with_effect.t, fit_part.t)] = False
+    withheld = with_effect.held_back(HOLDOUT)
     noise = unit.get(f"{sensor}.noise").density * np.sqrt(RIGS[rig].rate_hz)  # per sample
     return float(0.5 * np.sum((left[withheld] / noise) ** 2))
 
@@ -110,7 +110,7 @@ def run_case(name: str, rig: str, seed: int, scale: float) -> dict[str, Any]:
         else:
             gyro[:, 0] += 20.0 * imu.DEG_PER_H * (data.t > 0.5 * data.t[-1])
         data = dataclasses.replace(data, gyro=gyro)
-    report = gap.diagnose(data)
+    report = gap.diagnose(data, holdout=HOLDOUT)
     sensor = name.split(".")[0]
     ranked = report.effects[0].name if report.effects and report.effects[0].score > 0 else "-"
     tied = list(report.effects[0].indistinguishable) if ranked != "-" else []
