@@ -114,9 +114,19 @@ class _Inputs:
     u_rate: dict[str, Array]  # the reference's rate of change, central differences
     temp: Array | None
     step_s: float
+    _splines: dict[tuple[str, int], CubicHermiteSpline] = field(default_factory=dict)
 
     def of(self, sensor: str) -> Array:
         return self.omega if sensor == "gyro" else self.f
+
+    def lag(self, sensor: str, axis: int, delay_s: float) -> Array:
+        """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows, with
+        slopes from central differences, held at the ends (the spline built once per axis)."""
+        u = self.of(sensor)[:, axis]
+        key = (sensor, axis)
+        if key not in self._splines:
+            self._splines[key] = CubicHermiteSpline(self.t, u, self.u_rate[sensor][:, axis])
+        return np.asarray(self._splines[key](np.clip(self.t - delay_s, self.t[0], self.t[-1]))) - u
 
 
 def _size_columns(x: _Inputs, i: int) -> Array:
@@ -327,7 +337,7 @@ class _ChannelModel:
         if self.delayed:
             if self.delay_s is None:
                 self.delay_s = _fit_delay(self.x, self.sensor, self.axis, self.error, a / scale, rows)
-            lag = _lag(self.x, self.sensor, self.axis, self.delay_s)
+            lag = self.x.lag(self.sensor, self.axis, self.delay_s)
         error = self.error - lag
         coef, *_ = np.linalg.lstsq(a[rows] / scale, error[rows], rcond=rcond)
         pred = (a / scale) @ coef
@@ -379,14 +389,6 @@ class _ChannelModel:
         return out
 
 
-def _lag(x: _Inputs, sensor: str, axis: int, delay_s: float) -> Array:
-    """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows, with
-    slopes from central differences, held at the ends."""
-    u = x.of(sensor)[:, axis]
-    spline = CubicHermiteSpline(x.t, u, x.u_rate[sensor][:, axis])
-    return np.asarray(spline(np.clip(x.t - delay_s, x.t[0], x.t[-1]))) - u
-
-
 def _fit_delay(
     x: _Inputs, sensor: str, axis: int, error: Array, columns: Array, rows: NDArray[np.bool_]
 ) -> float:
@@ -396,14 +398,15 @@ def _fit_delay(
     within two rows either side, where the rest matters: a step in the reference (a rig turning
     faster than a row) is smoothed differently from its slope.
     """
+    a = columns[rows]
     slope = -x.u_rate[sensor][rows, axis : axis + 1]
-    coef, *_ = np.linalg.lstsq(np.hstack([columns[rows], slope]), error[rows], rcond=None)
+    coef, *_ = np.linalg.lstsq(np.hstack([a, slope]), error[rows], rcond=None)
     first = float(coef[-1])
 
     def left(tau: float) -> float:
-        target = (error - _lag(x, sensor, axis, tau))[rows]
-        c, *_ = np.linalg.lstsq(columns[rows], target, rcond=None)
-        return float(np.sum((target - columns[rows] @ c) ** 2))
+        target = (error - x.lag(sensor, axis, tau))[rows]
+        c, *_ = np.linalg.lstsq(a, target, rcond=None)
+        return float(np.sum((target - a @ c) ** 2))
 
     span = 2.0 * x.step_s
     found = minimize_scalar(
