@@ -129,6 +129,15 @@ class _Inputs:
         return np.asarray(self._splines[key](np.clip(self.t - delay_s, self.t[0], self.t[-1]))) - u
 
 
+def baseline_columns(sensor: str, omega: Array, f: Array) -> Array:
+    """The baseline's regressors of one channel: bias and scale/misalignment, and the gyro's g-sensitivity."""
+    u = omega if sensor == "gyro" else f
+    base = [np.ones(len(u)), u[:, 0], u[:, 1], u[:, 2]]
+    if sensor == "gyro":
+        base += [f[:, 0], f[:, 1], f[:, 2]]
+    return np.stack(base, axis=1)
+
+
 def _size_columns(x: _Inputs, i: int) -> Array:
     w, wd = x.omega, x.omega_dot
     cols = []
@@ -283,11 +292,7 @@ class _ChannelModel:
         self.x, self.sensor, self.axis = x, sensor, axis
         self.error, self.reading, self.fit = error, reading, fit
         self.lattice = lattice.find(reading[fit])
-        u = x.of(sensor)
-        base = [np.ones(len(x.t)), u[:, 0], u[:, 1], u[:, 2]]
-        if sensor == "gyro":
-            base += [x.f[:, 0], x.f[:, 1], x.f[:, 2]]
-        self.columns: list[Array] = [np.stack(base, axis=1)]
+        self.columns: list[Array] = [baseline_columns(sensor, x.omega, x.f)]
         self.delayed = False  # whether the reading is the reference at t − τ
         self.delay_s: float | None = None  # τ, once fitted
         self.process: str | None = None  # "bias_instability" | "rate_random_walk"

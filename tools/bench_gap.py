@@ -69,22 +69,21 @@ HOLDOUT = 0.3
 OBSERVABLE_NATS = 10.0
 
 
-def oracle_gain(name: str, rig: str, seed: int, scale: float) -> float:
-    """Half the withheld sum of squares, in white-noise units, of what the effect adds beyond the baseline."""
-    unit = imu_spec.draw_unit("tactical", seed)
+def oracle_gain(unit: imu.ImuModel, effect: imu.Effect, rig: str, seed: int) -> float:
+    """Half the withheld sum of squares, in white-noise units, of what ``effect`` adds to ``unit``'s
+    readings beyond what the baseline's columns absorb."""
     quiet = unit.only(*(n for n in imu.BASELINE if not n.endswith(".noise")))
-    effect = imu_spec.typical_effect(name, np.random.default_rng([seed, 5]), scale)
     with_effect = calibration.simulate_rig(RIGS[rig], quiet.with_effects(effect), seed=seed)
     without = calibration.simulate_rig(RIGS[rig], quiet, seed=seed)
-    sensor = name.split(".")[0]
+    sensor = effect.sensor
     delta = getattr(with_effect, sensor) - getattr(without, sensor)
-    u = with_effect.ref_gyro if sensor == "gyro" else with_effect.ref_accel
-    columns = [np.ones(len(u)), *u.T] + (list(with_effect.ref_accel.T) if sensor == "gyro" else [])
-    a = np.column_stack(columns)
+    a = gap.baseline_columns(sensor, with_effect.ref_gyro, with_effect.ref_accel)
     a = a / np.maximum(np.abs(a).max(axis=0), 1e-300)
     left = delta - a @ np.linalg.lstsq(a, delta, rcond=None)[0]
     withheld = with_effect.held_back(HOLDOUT)
-    noise = unit.get(f"{sensor}.noise").density * np.sqrt(RIGS[rig].rate_hz)  # per sample
+    white = unit.get(f"{sensor}.noise")
+    assert isinstance(white, imu.Noise)
+    noise = white.density * np.sqrt(RIGS[rig].rate_hz)  # per sample
     return float(0.5 * np.sum((left[withheld] / noise) ** 2))
 
 
@@ -99,9 +98,12 @@ def _excess_removed(report: gap.GapReport, sensor: str) -> float:
 
 def run_case(name: str, rig: str, seed: int, scale: float) -> dict[str, Any]:
     """Simulate one session with ``name`` injected (or a control), diagnose it with the baseline."""
-    model = imu_spec.draw_unit("tactical", seed).only(*imu.BASELINE)
+    unit = imu_spec.draw_unit("tactical", seed)
+    model = unit.only(*imu.BASELINE)
+    effect = None
     if name in gap.CANDIDATES:
-        model = model.with_effects(imu_spec.typical_effect(name, np.random.default_rng([seed, 5]), scale))
+        effect = imu_spec.typical_effect(name, np.random.default_rng([seed, 5]), scale)
+        model = model.with_effects(effect)
     data = calibration.simulate_rig(RIGS[rig], model, seed=seed)
     if "outside" in name:
         gyro = data.gyro.copy()
@@ -121,7 +123,7 @@ def run_case(name: str, rig: str, seed: int, scale: float) -> dict[str, Any]:
         "scale": scale,
         "ranked": ranked,
         "tied": tied,
-        "oracle": oracle_gain(name, rig, seed, scale) if name in gap.CANDIDATES else float("nan"),
+        "oracle": oracle_gain(unit, effect, rig, seed) if effect is not None else float("nan"),
         "first": report.diagnosis[0] if report.diagnosis else "-",
         "diagnosis": report.diagnosis,
         "unexplained": report.unexplained,
