@@ -76,6 +76,8 @@ _TINY = 1e-10
 _TAUS_S = np.geomspace(2.0, 5000.0, 12)
 #: Drives ``q / r`` tried for the process candidates.
 _DRIVE_RATIOS = np.geomspace(1e-9, 1e-1, 17)
+#: Factors about the coarse grid's best drive, spanning its step either side.
+_FINE_DRIVE = np.geomspace(10**-0.5, 10**0.5, 9)
 #: Candidates whose withheld log-likelihood gains (before the penalty) differ by less than this are
 #: indistinguishable on the data: a likelihood ratio below e³ ≈ 20, short of "strong" evidence.
 TIE_NATS = 3.0
@@ -443,8 +445,8 @@ def _innovations(y: Array, phi: float, gain: float) -> Array:
 class _ProcessFit:
     """A random bias fitted to a residual: ``b' = φ b + w (q)`` under white noise of variance ``r``.
 
-    ``trials`` are the one-step innovations of every row for the chosen ``φ`` and each drive of
-    :data:`_DRIVE_RATIOS`; ``chosen`` indexes the one the fit rows prefer (what :func:`_falsified`
+    ``trials`` are the one-step innovations of every row for the chosen ``φ`` and each drive of the
+    fine grid (:data:`_FINE_DRIVE`); ``chosen`` indexes the one the fit rows prefer (what :func:`_falsified`
     holds against the others).
     """
 
@@ -464,21 +466,28 @@ def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> 
     """The (φ, q) maximising the innovations' likelihood on the fit rows, over a grid of τ and q/r.
 
     ``r``, the white noise's variance, is the noise floor's square; the grid chooses the bias's
-    correlation (``φ = exp(−step/τ)``, 1 for a random walk) and drive ``q``.
+    correlation (``φ = exp(−step/τ)``, 1 for a random walk) and drive ``q``, and the drive is then
+    refined by :data:`_FINE_DRIVE` about the best.
 
     The filter runs over every row in time order (so withheld blocks are predicted from what came
     before them, as a filter in the field would), but only the fit rows' innovations choose.
     """
     r = max(noise_floor(y[fit]) ** 2, _TINY**2)  # the white part, from first differences
-    best = _ProcessFit(1.0, 0.0, r)
+
+    def innovations(phi: float, ratio: float) -> Array:
+        return _innovations(y, phi, _steady_gain(phi, ratio * r, r)[0])
+
     phis = [1.0] if kind == "rate_random_walk" else list(np.exp(-step_s / _TAUS_S))
-    for phi in phis:
-        trials = tuple(_innovations(y, phi, _steady_gain(phi, ratio * r, r)[0]) for ratio in _DRIVE_RATIOS)
-        for j, ratio in enumerate(_DRIVE_RATIOS):
-            ll = _log_likelihood(trials[j][fit])
-            if ll > best.fit_loglik:
-                best = _ProcessFit(phi, ratio * r, r, trials, j, ll)
-    return best
+    _, phi, ratio = max(
+        (_log_likelihood(innovations(phi, ratio)[fit]), phi, ratio) for phi in phis for ratio in _DRIVE_RATIOS
+    )
+    # The drive's likelihood is sharp on long records: between two coarse steps it can drop by more
+    # than a per-quarter drive gains by chance, which would falsify real processes (_falsified).
+    ratios = ratio * _FINE_DRIVE
+    trials = tuple(innovations(phi, q) for q in ratios)
+    lls = [_log_likelihood(nu[fit]) for nu in trials]
+    j = int(np.argmax(lls))
+    return _ProcessFit(phi, float(ratios[j]) * r, r, trials, j, lls[j])
 
 
 def _log_likelihood(innovations: Array) -> float:
@@ -557,6 +566,22 @@ def _inputs(data: CalibrationData) -> _Inputs:
         temp=data.temp,
         step_s=float(np.median(np.diff(t))),
     )
+
+
+def regressors_of(name: str, data: CalibrationData) -> list[Array]:
+    """The columns the regressor candidate ``name`` adds to each of its sensor's three channels.
+
+    What the diagnosis fits beside the baseline's columns; exposed for oracles that ask what a
+    candidate could absorb (``tools/bench_gap.py``).
+    """
+    cand = CANDIDATES.get(name)
+    if cand is None or cand.columns is None:
+        raise ValueError(f"{name!r} is not a regressor candidate")
+    if "temperature" in name and data.temp is None:
+        where = data.source or "the recording"
+        raise ValueError(f"{name!r} needs a temperature column, and {where} has none")
+    x = _inputs(data)
+    return [cand.columns(x, i) for i in range(3)]
 
 
 def noise_floor(residual: Array) -> float:
