@@ -366,18 +366,20 @@ class _ChannelModel:
             pred = pred + y - process.innovations
         pred = pred + lag
         if self.output == "quantization":
-            pred = self._quantized(pred)
+            pred = self._quantized(pred, a / scale)
         elif self.output == "saturation":
             reference = self.reading - self.error
             top, bottom = float(self.reading[self.fit].max()), float(self.reading[self.fit].min())
             pred = np.clip(reference + pred, bottom, top) - reference
         return pred
 
-    def _quantized(self, pred: Array) -> Array:
+    def _quantized(self, pred: Array, columns: Array) -> Array:
         """The expected reading of the quantizer the fit rows' likelihood prefers; sets ``loglik_rows``.
 
         Rounded or carried, and the white noise before the rounding (per step, over
-        :data:`_NOISE_PER_STEP`): one parameter, chosen once; the models built on this one keep it.
+        :data:`_NOISE_PER_STEP`): chosen once; the models built on this one keep them. For the
+        rounded kind the regressors and the noise are then refitted by the readings' own likelihood
+        (:func:`lattice.fit_rounded`): least squares on rounded readings misplaces the mean.
         """
         assert self.lattice is not None
         reference = self.reading - self.error
@@ -387,12 +389,18 @@ class _ChannelModel:
         choices = [self.quantizer] if self.quantizer else choices
         if abs(self.lattice.offset) > 1e-9 * self.lattice.step:
             choices = [c for c in choices if c[0] == "rounded"]  # differences of a lattice have no offset
-        best = -np.inf
+        best, out = -np.inf, pred
         for kind, s in choices:
             loglik, expected, _ = _QUANTIZERS[kind](m, mu, s)
             if float(loglik[self.fit].sum()) > best:
                 best, self.quantizer, self.loglik_rows = float(loglik[self.fit].sum()), (kind, s), loglik
                 out = expected * self.lattice.step + self.lattice.offset - reference
+        assert self.quantizer is not None
+        if self.quantizer[0] == "rounded":
+            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], columns[self.fit], self.quantizer[1])
+            loglik, expected, _ = lattice.rounded(m, mu + columns @ delta, s)
+            self.quantizer, self.loglik_rows = ("rounded", s), loglik
+            out = expected * self.lattice.step + self.lattice.offset - reference
         return out
 
 
