@@ -33,6 +33,7 @@ Array = NDArray[np.float64]
 
 #: A probability no reading falls below: a reading the model calls impossible costs ln 1e-12 ≈ −28 nats.
 _FLOOR = 1e-12
+#: The standard normal density's normaliser.
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
 #: Cells of the running sum's position in its lattice cell, in :func:`carried`.
 CELLS = 16
@@ -94,7 +95,7 @@ def fit_rounded(m: Array, mu: Array, columns: Array, s: float) -> tuple[Array, f
     Least squares on rounded readings misplaces the mean wherever the noise is small against the
     step: a reading that leaves its usual lattice point one time in twenty lies near a rounding
     edge, not a twentieth of a step from the point. The log-likelihood is concave in ``(δ/s, 1/s)``,
-    so it has one maximum.
+    so a local search finds its maximum (unique where the columns and levels identify it).
     """
 
     def cost(theta: Array) -> tuple[float, Array]:

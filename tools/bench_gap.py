@@ -105,7 +105,9 @@ def oracle_gains(unit: imu.ImuModel, effect: imu.Effect, rig: str, seed: int) ->
     if isinstance(effect, imu.BiasInstability):
         rivals[f"{sensor}.rate_random_walk"] = float(np.sum(with_effect.t[-1] / (4.0 * effect.tau)))
     for name, cand in gap.CANDIDATES.items():
-        if cand.sensor == sensor and cand.kind == "regressors" and name != f"{sensor}.{effect.kind}":
+        if cand.sensor != sensor or cand.kind != "regressors" or name == f"{sensor}.{effect.kind}":
+            continue
+        if "temperature" not in name or with_effect.temp is not None:
             rivals[name] = gain(gap.regressors_of(name, with_effect))
     rival = min(rivals, key=lambda n: rivals[n])
     return observable, min(observable, rivals[rival]), rival
