@@ -93,10 +93,10 @@ def test_a_continuous_models_bin_probability_tends_to_its_density_times_the_step
 
 def test_rounded_readings_regression_recovers_the_mean_least_squares_misplaces():
     """Readings rounded at 0.15 step of noise, 1,000 at each of 12 levels of an input (a rig's
-    positions): the censored regression recovers the intercept and slope within 0.01 step and the
-    noise within 10 %, from a start at 0.05 or 0.3 step; least squares on the rounded readings is
-    off by more than 0.02 step. (With three levels the three parameters are not identified: the
-    likelihood has a ridge.)"""
+    positions): the censored regression recovers the intercept and slope within 0.01 step (its
+    errors on three seeds were below 0.002) and the noise within 10 % (3 % there), from a start at
+    0.05 or 0.3 step; least squares on the rounded readings is off by more than 0.02 step. (With
+    three levels the three parameters are not identified: the likelihood has a ridge.)"""
     rng = np.random.default_rng(1)
     u = np.repeat(rng.uniform(-3.0, 3.0, 12), 1000)
     beta, s = np.array([0.37, 2.3]), 0.15
