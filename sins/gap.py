@@ -641,8 +641,8 @@ def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.boo
     """Whether the data can say anything about a candidate.
 
     Temperature effects need a varying temperature; saturation needs readings piled up at an
-    extreme (ten or more equal to it) while the reference goes beyond it; quantization needs
-    readings on a lattice (fewer distinct values than half the rows).
+    extreme (ten or more equal to it) while the reference goes beyond it. (Quantization needs
+    readings on a lattice: each channel's model holds its own, and only those channels try it.)
     """
     if "temperature" in cand.name:
         return x.temp is not None and float(np.ptp(x.temp)) > 0.5
@@ -656,8 +656,6 @@ def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.boo
             if np.sum(r[:, j] == bottom) >= 10 and np.sum(ref[:, j] < bottom - margin) >= 10:
                 return True
         return False
-    if cand.name.endswith("quantization"):
-        return any(lattice.find(r[:, j]) is not None for j in range(r.shape[1]))
     return True
 
 
@@ -724,16 +722,8 @@ def diagnose(
     accepted: list[str] = []
     scores: dict[str, EffectScore] = {}
     outside: list[Outside] = []
-    # A sensor whose model has a random bias (an output map) already takes no other: it would replace,
-    # not add.
-    taken = {
-        f"{n.split('.')[0]}.{k}"
-        for n in model
-        for g in (_PROCESSES, _OUTPUTS)
-        if n.split(".")[-1] in g
-        for k in g
-    }
-    remaining = [c for c in CANDIDATES.values() if c.name not in model and c.name not in taken]
+    taken = set().union(*(_exclusive(n) for n in model))
+    remaining = [c for c in CANDIDATES.values() if c.name not in taken]
     while remaining:
         round_scores: dict[str, _Trial] = {}
         for cand in remaining:
@@ -775,14 +765,7 @@ def diagnose(
         scores[best] = dataclasses.replace(scores[best], accepted=True, indistinguishable=ties)
         for i, m, r, *_ in round_scores[best].rows:
             models[i], residual[:, i] = m, r
-        # One random bias per sensor: the other is an alternative to it, not an addition. Likewise one
-        # output map (a channel's model holds one: quantizing a clipped reading is not modelled).
-        sensor, kind = best.split(".")
-        exclusive = {best}
-        for group in (_PROCESSES, _OUTPUTS):
-            if kind in group:
-                exclusive = {f"{sensor}.{k}" for k in group}
-        remaining = [c for c in remaining if c.name not in exclusive]
+        remaining = [c for c in remaining if c.name not in _exclusive(best)]
 
     rms_before = np.sqrt(np.mean(before[withheld] ** 2, axis=0))
     rms_after = np.sqrt(np.mean(residual[withheld] ** 2, axis=0))
@@ -842,6 +825,17 @@ def diagnose(
         allan=allan,
         quartiles=quartiles,
     )
+
+
+def _exclusive(name: str) -> set[str]:
+    """The effects a model holding ``name`` takes no more: itself, and for a random bias or an output
+    map the sensor's others of that kind. One random bias per sensor: the other is an alternative to
+    it, not an addition. Likewise one output map (quantizing a clipped reading is not modelled)."""
+    sensor, kind = name.split(".")
+    for group in (_PROCESSES, _OUTPUTS):
+        if kind in group:
+            return {f"{sensor}.{k}" for k in group}
+    return {name}
 
 
 def _nested_choice(best: str, trials: dict[str, _Trial]) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
