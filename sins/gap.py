@@ -39,11 +39,14 @@ guards keep a library effect from taking credit for what it is not:
   biases, the fit rows' likelihood-ratio test decides (:func:`_nested_choice`).
 
 The noise floor of a channel is the white-noise level the model expects,
-measured without the model: the spread of first differences of the fit rows'
-residual, which slowly varying unmodelled errors do not reach (and which holds
-rounding's spread as well). Where the gap
-lies is told by input quartiles and by the residual's Allan deviation against
-that white noise (:func:`allan_deviation`).
+measured without the model: the spread of first differences of the residual,
+which slowly varying unmodelled errors do not reach (and which holds rounding's
+spread as well), within the fit rows and within the withheld rows, the larger
+of the two. Rounding's spread depends on where each hold's mean sits in its
+lattice cell: where readings leave their level a few times an hour, one portion
+may see more of it than the other, or none. Where the gap lies is told by
+input quartiles and by the residual's Allan deviation against that white noise
+(:func:`allan_deviation`).
 """
 
 from __future__ import annotations
@@ -592,13 +595,17 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
     return [cand.columns(x, i) for i in range(3)]
 
 
-def noise_floor(residual: Array) -> float:
+def noise_floor(residual: Array, rows: NDArray[np.bool_] | None = None) -> float:
     """White-noise level of a residual series from its first differences: ``std(Δr) / √2``.
 
     Differencing removes what varies slowly (unmodelled scale, temperature or bias effects) and
     keeps white noise of any distribution, quantised readings' included, at twice its variance.
+    With ``rows``, only differences between consecutive rows both in it count (0 where none do).
     """
-    return float(np.std(np.diff(residual)) / np.sqrt(2.0))
+    d = np.diff(residual)
+    if rows is not None:
+        d = d[rows[1:] & rows[:-1]]
+    return float(np.std(d) / np.sqrt(2.0)) if len(d) else 0.0
 
 
 def _score(before: Array, after: Array, withheld: NDArray[np.bool_], k_extra: int, n_fit: int) -> float:
@@ -717,7 +724,9 @@ def diagnose(
                     models[i] = models[i].with_candidate(cand, on_trial=False)
     residual = np.stack([m.error - m.predict() for m in models], axis=1)
     before = residual.copy()
-    floors = np.array([max(noise_floor(residual[fit, i]), _TINY) for i in range(6)])
+    # Both portions measure the same white noise; where it is rounding's, its level depends on
+    # where each hold's mean sits in its lattice cell, and a portion may see no reading change.
+    floors = np.array([max(noise_floor(r, fit), noise_floor(r, withheld), _TINY) for r in residual.T])
 
     accepted: list[str] = []
     scores: dict[str, EffectScore] = {}

@@ -27,16 +27,22 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize
-from scipy.special import ndtr
+from scipy.special import log_ndtr, ndtr
 
 Array = NDArray[np.float64]
 
 #: A probability no reading falls below: a reading the model calls impossible costs ln 1e-12 ≈ −28 nats.
 _FLOOR = 1e-12
-#: The standard normal density's normaliser.
-_SQRT_2PI = math.sqrt(2.0 * math.pi)
+#: The logarithm of the standard normal density's normaliser.
+_LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
+#: The prior standard deviation of :func:`fit_rounded`'s correction to the means, in lattice steps.
+_PRIOR_STEPS = 1.0
+#: The prior standard deviation of :func:`fit_rounded`'s log noise about its start (a factor of e).
+_PRIOR_LOG_S = 1.0
 #: Cells of the running sum's position in its lattice cell, in :func:`carried`.
 CELLS = 16
+#: The most lattice steps :func:`find` lets the smallest gap between readings span.
+_MAX_STEPS_PER_GAP = 1000
 #: Points per period of the tabulated excess of the expected rounding over its argument.
 _TABLE = 512
 
@@ -60,9 +66,11 @@ class Lattice:
 def find(reading: Array, tolerance: float = 1e-6) -> Lattice | None:
     """The coarsest lattice every reading lies on, or None.
 
-    The step is the smallest gap between distinct values; every reading must lie within
-    ``tolerance`` steps of a lattice point, and the readings must take fewer distinct values than
-    half their number (else the gaps are only the spread of a continuous reading).
+    The step is the smallest gap between distinct values over the least whole number (up to
+    :data:`_MAX_STEPS_PER_GAP`) that puts every reading within ``tolerance`` steps of a lattice point:
+    where rounding is far coarser than the noise, static readings may never leave their levels, and
+    no two levels need lie one step apart. The readings must take fewer distinct values than half
+    their number (else the gaps are only the spread of a continuous reading).
     """
     values = np.unique(reading[np.isfinite(reading)])
     if len(values) < 2 or len(values) >= 0.5 * len(reading):
@@ -71,13 +79,20 @@ def find(reading: Array, tolerance: float = 1e-6) -> Lattice | None:
     gaps = gaps[gaps > 1e-12 * max(float(np.abs(values).max()), 1e-300)]
     if len(gaps) == 0:
         return None
-    step = float(gaps.min())
-    offset = float(values[np.argmin(np.abs(values))])
-    offset -= step * np.round(offset / step)
+    nearest_zero = float(values[np.argmin(np.abs(values))])
+    probe = values[:: max(1, len(values) // 64)]  # most wrong steps fail on a few values: test those first
+    for k in range(1, _MAX_STEPS_PER_GAP + 1):
+        step = float(gaps.min()) / k
+        offset = nearest_zero - step * np.round(nearest_zero / step)
+        if _misfit(probe, step, offset) <= tolerance and _misfit(values, step, offset) <= tolerance:
+            return Lattice(step, offset)
+    return None
+
+
+def _misfit(values: Array, step: float, offset: float) -> float:
+    """The farthest any value lies from the lattice ``offset + m·step``, in steps."""
     m = (values - offset) / step
-    if float(np.abs(m - np.round(m)).max()) > tolerance:
-        return None
-    return Lattice(step, offset)
+    return float(np.abs(m - np.round(m)).max())
 
 
 def rounded(m: Array, mu: Array, s: float) -> tuple[Array, Array, Array]:
@@ -90,12 +105,20 @@ def rounded(m: Array, mu: Array, s: float) -> tuple[Array, Array, Array]:
 def fit_rounded(m: Array, mu: Array, columns: Array, s: float) -> tuple[Array, float]:
     """The correction ``δ`` to the means ``μ + A δ`` (``A`` the columns) and the noise ``s`` that make
     readings rounded on their own most likely: a Gaussian regression censored to each reading's
-    lattice cell, started from ``δ = 0`` and the given ``s`` (in steps, kept within 0.001–10).
+    lattice cell, started from ``δ = 0`` and the given ``s`` (in steps, kept within 0.001–10), and
+    held near them by weak priors.
 
     Least squares on rounded readings misplaces the mean wherever the noise is small against the
     step: a reading that leaves its usual lattice point one time in twenty lies near a rounding
     edge, not a twentieth of a step from the point. The log-likelihood is concave in ``(δ/s, 1/s)``,
-    so a local search finds its maximum (unique where the columns and levels identify it).
+    but flat where it is a set of inequalities: a static hold whose readings never leave their
+    level says only that its mean lies well inside the cell, and where each hold whose readings do
+    change has a mean of its own, the noise scales those means and is not identified at all.
+    Gaussian priors on ``δ`` (:data:`_PRIOR_STEPS` steps) and on ``ln s`` (about the start,
+    :data:`_PRIOR_LOG_S`) make the maximum unique there, the point of that set nearest the start,
+    and move an identified one by a fraction of its standard error. The
+    readings' probabilities are taken in logarithms throughout, so that readings far from the
+    start's means still pull the search (a floored probability has no gradient).
     """
 
     def cost(theta: Array) -> tuple[float, Array]:
@@ -103,17 +126,22 @@ def fit_rounded(m: Array, mu: Array, columns: Array, s: float) -> tuple[Array, f
         sd = float(np.exp(log_s))
         z1 = (m + 0.5 - mu - columns @ delta) / sd
         z0 = z1 - 1.0 / sd
-        upper = z0 > 0.0  # both edges above the mean: the complementary form keeps the digits
-        p = np.where(upper, ndtr(-z0) - ndtr(-z1), ndtr(z1) - ndtr(z0))
-        p = np.maximum(p, _FLOOR)
-        d1, d0 = np.exp(-0.5 * z1 * z1) / _SQRT_2PI, np.exp(-0.5 * z0 * z0) / _SQRT_2PI
-        d_mu = -(d1 - d0) / (sd * p)  # ∂ ln P / ∂ μ
-        d_log_s = -(z1 * d1 - z0 * d0) / p
-        grad = np.concatenate([columns.T @ d_mu, [d_log_s.sum()]])
-        return -float(np.log(p).sum()), -grad
+        # ln(Φ(z1) − Φ(z0)); where both edges lie above the mean, ln(Φ(−z0) − Φ(−z1)) keeps the digits.
+        upper = z0 > 0.0
+        near, far = np.where(upper, -z0, z1), np.where(upper, -z1, z0)
+        log_near = log_ndtr(near)
+        log_p = log_near + np.log(-np.expm1(log_ndtr(far) - log_near))
+        d1 = np.exp(-0.5 * z1 * z1 - _LOG_SQRT_2PI - log_p)  # φ(z1) / P
+        d0 = np.exp(-0.5 * z0 * z0 - _LOG_SQRT_2PI - log_p)
+        d_mu = -(d1 - d0) / sd  # ∂ ln P / ∂ μ
+        d_log_s = -(z1 * d1 - z0 * d0)
+        prior, prior_s = delta / _PRIOR_STEPS**2, (log_s - log_s0) / _PRIOR_LOG_S**2
+        grad = np.concatenate([columns.T @ d_mu - prior, [d_log_s.sum() - prior_s]])
+        return -float(log_p.sum() - 0.5 * delta @ prior - 0.5 * (log_s - log_s0) * prior_s), -grad
 
     k = columns.shape[1]
-    start = np.concatenate([np.zeros(k), [np.log(np.clip(s, 1e-3, 10.0))]])
+    log_s0 = float(np.log(np.clip(s, 1e-3, 10.0)))
+    start = np.concatenate([np.zeros(k), [log_s0]])
     bounds = [(None, None)] * k + [(np.log(1e-3), np.log(10.0))]
     found = minimize(cost, start, jac=True, method="L-BFGS-B", bounds=bounds)
     return found.x[:-1], float(np.exp(found.x[-1]))

@@ -201,6 +201,36 @@ def test_rounded_readings_are_diagnosed_as_quantization():
         assert report.channels[ch]["rms_after"] <= 1.15 * report.channels[ch]["noise_floor"], ch
 
 
+def test_static_holds_rounded_far_coarser_than_their_noise_are_diagnosed_as_quantization():
+    """An hour of 26 static holds at 10 Hz through a chamber cycle, the accelerometers rounded to
+    59 mg with 3 mg of noise per reading: a reading leaves its level a few times an hour, if at all.
+    The lattice is found though no two of a channel's levels lie one step apart, and the floor is the
+    rounding spread of whichever portion saw more of it (the withheld rows may see more readings
+    change than the fit rows, or none): the quantizer alone closes the gap. Before both, the
+    temperature effects were taken for it and accel.z was left at 23× its floor."""
+    chamber = calibration.TemperatureProfile((0.0, 1200.0, 2400.0, 3600.0), (20.0, 40.0, 10.0, 30.0))
+    rig = calibration.RigProcedure(
+        rate_hz=10.0, positions=26, position_dwell_s=3600.0 / 26, rate_table=None, temperature=chamber
+    )
+    model = imu_spec.draw_unit("tactical", 1).only(*imu.BASELINE)
+    data = calibration.simulate_rig(
+        rig, model.with_effects(imu.Quantization("accel", np.full(3, 0.0588))), seed=1
+    )
+    report = gap.diagnose(data)
+    assert report.diagnosis == ["accel.quantization"] and report.unexplained == []
+    for ch in ("accel.x", "accel.y", "accel.z"):
+        assert report.channels[ch]["rms_after"] <= 1.15 * report.channels[ch]["noise_floor"], ch
+
+
+def test_the_noise_floor_differences_only_consecutive_rows_of_a_portion():
+    """White noise of σ = 1 in two runs a jump of 100 apart: the jump is no noise."""
+    r = np.random.default_rng(0).standard_normal(20000) + 100.0 * (np.arange(20000) >= 10000)
+    rows = np.arange(20000) % 10000 < 7000  # two runs of 7,000 rows
+    assert gap.noise_floor(r, rows) == pytest.approx(1.0, rel=0.02)  # sd of the estimate: 0.7 %
+    assert gap.noise_floor(r[rows]) > 1.1  # differenced straight across, the jump counts (1.16)
+    assert gap.noise_floor(r, np.arange(20000) % 2 == 0) == 0.0  # no two consecutive rows
+
+
 def test_carried_increments_are_diagnosed_as_quantization():
     """The same unit's gyro output as increments rounded with the remainder carried (written here
     with numpy, not the simulator): the readings' running sum is the rounded running sum of the

@@ -21,6 +21,20 @@ def test_the_lattice_is_found_with_its_step_and_offset_and_only_where_there_is_o
     assert lattice.find(np.round(x / step) * step + 1e-3 * step * rng.standard_normal(5000)) is None
 
 
+def test_the_step_is_found_where_no_two_levels_lie_one_step_apart():
+    """Static holds rounded far coarser than their noise never leave their levels: the step is the
+    levels' common divisor, not their smallest gap. Seven levels drawn from a continuous law share
+    none: for each tried divisor, each level beyond the two that set it lies within 1e-6 steps of
+    the lattice by chance one time in 5e5, and five would have to."""
+    step, offset = 0.0588399, 0.011
+    levels = np.array([-167, -118, -96, 0, 22, 96, 145])
+    found = lattice.find(np.repeat(levels * step + offset, 300))
+    assert found is not None
+    assert found.step == pytest.approx(step, rel=1e-9) and found.offset == pytest.approx(offset, abs=1e-9)
+    drawn = np.random.default_rng(3).uniform(-10.0, 10.0, 7)
+    assert lattice.find(np.repeat(drawn, 300)) is None
+
+
 def test_rounded_readings_probability_mean_and_variance_match_monte_carlo():
     """P(m), E[m] and Var[m] of round(μ + w), w ~ N(0, s²), against 20,000 draws at 200 points: the
     mean within 5 standard errors (sd ≤ s + ½), the variance within 0.02 (its sampling sd is below
@@ -108,3 +122,23 @@ def test_rounded_readings_regression_recovers_the_mean_least_squares_misplaces()
         delta, s_fit = lattice.fit_rounded(m, columns @ least_squares, columns, start)
         np.testing.assert_allclose(least_squares + delta, beta, atol=0.01)
         assert s_fit == pytest.approx(s, rel=0.1)
+
+
+def test_the_rounded_regression_is_pulled_by_readings_its_start_calls_impossible():
+    """26 static holds of 500 readings at 0.04 step of noise (5 holds ever change reading), searched
+    from a noise of 0.01, 0.04 and 0.1 step: at 0.01 most of the changing readings lie beyond 10σ
+    of the least-squares means, where a floored probability gives the search no gradient (it stayed
+    there, 7,500 nats short). Each start reaches the same likelihood within 0.05 nats; the means
+    agree within 0.003 step and the noise within 5 % (the prior on ln s holds each near its start
+    by about 1 %)."""
+    rng = np.random.default_rng(4)
+    u = np.repeat(rng.uniform(-3.0, 3.0, 26), 500)
+    columns = np.column_stack([np.ones_like(u), u])
+    m = np.round(columns @ np.array([0.31, 7.3]) + 0.04 * rng.standard_normal(len(u)))
+    mu = columns @ np.linalg.lstsq(columns, m, rcond=None)[0]
+    fits = [lattice.fit_rounded(m, mu, columns, start) for start in (0.01, 0.04, 0.1)]
+    loglik = [lattice.rounded(m, mu + columns @ delta, s)[0].sum() for delta, s in fits]
+    assert max(loglik) - min(loglik) < 0.05
+    for delta, s in fits[:2]:
+        np.testing.assert_allclose(delta, fits[2][0], atol=0.003)
+        assert s == pytest.approx(fits[2][1], rel=0.05)
