@@ -483,7 +483,7 @@ def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> 
     The filter runs over every row in time order (so withheld blocks are predicted from what came
     before them, as a filter in the field would), but only the fit rows' innovations choose.
     """
-    r = max(noise_floor(y[fit]) ** 2, _TINY**2)  # the white part, from first differences
+    r = max(noise_floor(y, fit) ** 2, _TINY**2)  # the white part, from first differences within the fit rows
 
     def innovations(phi: float, ratio: float) -> Array:
         return _innovations(y, phi, _steady_gain(phi, ratio * r, r)[0])
