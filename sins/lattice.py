@@ -43,6 +43,8 @@ _PRIOR_LOG_S = 1.0
 CELLS = 16
 #: The most lattice steps :func:`find` lets the smallest gap between readings span.
 _MAX_STEPS_PER_GAP = 1000
+#: Readings taking fewer distinct values than this share of their number are held on levels.
+_LEVELS_SHARE = 0.01
 #: Points per period of the tabulated excess of the expected rounding over its argument.
 _TABLE = 512
 
@@ -66,11 +68,12 @@ class Lattice:
 def find(reading: Array, tolerance: float = 1e-6) -> Lattice | None:
     """The coarsest lattice every reading lies on, or None.
 
-    The step is the smallest gap between distinct values over the least whole number (up to
-    :data:`_MAX_STEPS_PER_GAP`) that puts every reading within ``tolerance`` steps of a lattice point:
-    where rounding is far coarser than the noise, static readings may never leave their levels, and
-    no two levels need lie one step apart. The readings must take fewer distinct values than half
-    their number (else the gaps are only the spread of a continuous reading).
+    The step is the smallest gap between distinct values, or, for readings held on a few levels
+    (fewer distinct values than :data:`_LEVELS_SHARE` of the readings), that gap over the least whole
+    number (up to :data:`_MAX_STEPS_PER_GAP`) that puts every reading within ``tolerance`` steps of a
+    lattice point: where rounding is far coarser than the noise, static readings may never leave
+    their levels, and no two levels need lie one step apart. The readings must take fewer distinct
+    values than half their number (else the gaps are only the spread of a continuous reading).
     """
     values = np.unique(reading[np.isfinite(reading)])
     if len(values) < 2 or len(values) >= 0.5 * len(reading):
@@ -81,7 +84,11 @@ def find(reading: Array, tolerance: float = 1e-6) -> Lattice | None:
         return None
     nearest_zero = float(values[np.argmin(np.abs(values))])
     probe = values[:: max(1, len(values) // 64)]  # most wrong steps fail on a few values: test those first
-    for k in range(1, _MAX_STEPS_PER_GAP + 1):
+    # Readings that move visit neighbouring lattice points: only readings held on a few levels can
+    # leave their smallest gap more than one step wide (else the divisor found would be the
+    # resolution a file was printed at, not a quantizer's).
+    held = len(values) < _LEVELS_SHARE * len(reading)
+    for k in range(1, (_MAX_STEPS_PER_GAP if held else 1) + 1):
         step = float(gaps.min()) / k
         offset = nearest_zero - step * np.round(nearest_zero / step)
         if _misfit(probe, step, offset) <= tolerance and _misfit(values, step, offset) <= tolerance:

@@ -23,9 +23,9 @@ def test_the_lattice_is_found_with_its_step_and_offset_and_only_where_there_is_o
 
 def test_the_step_is_found_where_no_two_levels_lie_one_step_apart():
     """Static holds rounded far coarser than their noise never leave their levels: the step is the
-    levels' common divisor, not their smallest gap. Seven levels drawn from a continuous law share
-    none: for each tried divisor, each level beyond the two that set it lies within 1e-6 steps of
-    the lattice by chance one time in 5e5, and five would have to."""
+    levels' common divisor, not their smallest gap (readings held on levels only). Seven levels
+    drawn from a continuous law share none: for each tried divisor, each level beyond the two that
+    set it lies within 1e-6 steps of the lattice by chance one time in 5e5, and five would have to."""
     step, offset = 0.0588399, 0.011
     levels = np.array([-167, -118, -96, 0, 22, 96, 145])
     found = lattice.find(np.repeat(levels * step + offset, 300))
@@ -33,6 +33,13 @@ def test_the_step_is_found_where_no_two_levels_lie_one_step_apart():
     assert found.step == pytest.approx(step, rel=1e-9) and found.offset == pytest.approx(offset, abs=1e-9)
     drawn = np.random.default_rng(3).uniform(-10.0, 10.0, 7)
     assert lattice.find(np.repeat(drawn, 300)) is None
+    # Moving readings (°/s) rounded to 0.0610865 and printed to four decimals, as BROAD's gyro z:
+    # every value lies on the 1e-4 lattice, 611 times finer than the smallest gap, a file's
+    # resolution and no quantizer's; the readings visit neighbouring levels, so none is sought
+    # below that gap (the search finds the file's lattice where it is let).
+    rng = np.random.default_rng(4)
+    moving = 100.0 * np.sin(np.linspace(0.0, 20.0, 40000)) + 0.05 * rng.standard_normal(40000)
+    assert lattice.find(np.round(np.round(moving / 0.0610865) * 0.0610865, 4)) is None
 
 
 def test_rounded_readings_probability_mean_and_variance_match_monte_carlo():
