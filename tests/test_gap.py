@@ -203,11 +203,13 @@ def test_rounded_readings_are_diagnosed_as_quantization():
 
 def test_static_holds_rounded_far_coarser_than_their_noise_are_diagnosed_as_quantization():
     """An hour of 26 static holds at 10 Hz through a chamber cycle, the accelerometers rounded to
-    59 mg with 3 mg of noise per reading: a reading leaves its level a few times an hour, if at all.
-    The lattice is found though no two of a channel's levels lie one step apart, and the floor is the
-    rounding spread of whichever portion saw more of it (the withheld rows may see more readings
-    change than the fit rows, or none): the quantizer alone closes the gap. Before both, the
-    temperature effects were taken for it and accel.z was left at 23× its floor."""
+    6 mg (0.0588 m/s²) with 0.3 mg of noise per reading: a reading leaves its level a few times an
+    hour, if at all. The lattice is found though no two of a channel's levels need lie one step
+    apart, the floor is the rounding spread of whichever portion saw more of it (the withheld rows
+    may see more readings change than the fit rows, or none), and the censored fit has a unique
+    maximum: the quantizer alone closes the gap. Before, a time offset moved that fit along its
+    flat ridge and was accepted, and accel.y stayed unexplained (1.033× the fit rows' floor); at the
+    benchmark's step of 0.0588399 m/s², accel.z found no lattice and stayed at 23× its floor."""
     chamber = calibration.TemperatureProfile((0.0, 1200.0, 2400.0, 3600.0), (20.0, 40.0, 10.0, 30.0))
     rig = calibration.RigProcedure(
         rate_hz=10.0, positions=26, position_dwell_s=3600.0 / 26, rate_table=None, temperature=chamber
