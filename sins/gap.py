@@ -90,6 +90,11 @@ _STEP_MARGIN = 0.05
 _NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
 #: The two quantizers (see :mod:`sins.lattice`).
 _QUANTIZERS = {"rounded": lattice.rounded, "carried": lattice.carried}
+#: Their readings' log-probabilities alone, for choosing one (the carried kind's filter gives all at once).
+_QUANTIZER_LOGLIK: dict[str, Callable[[Array, Array, float], Array]] = {
+    "rounded": lattice.rounded_loglik,
+    "carried": lambda m, mu, s: lattice.carried(m, mu, s)[0],
+}
 #: The random-bias candidates: a sensor's model has at most one.
 _PROCESSES = ("bias_instability", "rate_random_walk")
 #: The output-map candidates: a sensor's model has at most one.
@@ -388,23 +393,19 @@ class _ChannelModel:
         reference = self.reading - self.error
         m = self.lattice.index(self.reading)
         mu = self.lattice.units(reference + pred)
-        choices = [(k, s) for k in _QUANTIZERS for s in _NOISE_PER_STEP]
-        choices = [self.quantizer] if self.quantizer else choices
-        if abs(self.lattice.offset) > 1e-9 * self.lattice.step:
-            choices = [c for c in choices if c[0] == "rounded"]  # differences of a lattice have no offset
-        best, out = -np.inf, pred
-        for kind, s in choices:
-            loglik, expected, _ = _QUANTIZERS[kind](m, mu, s)
-            if float(loglik[self.fit].sum()) > best:
-                best, self.quantizer, self.loglik_rows = float(loglik[self.fit].sum()), (kind, s), loglik
-                out = expected * self.lattice.step + self.lattice.offset - reference
-        assert self.quantizer is not None
-        if self.quantizer[0] == "rounded":
-            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], columns[self.fit], self.quantizer[1])
-            loglik, expected, _ = lattice.rounded(m, mu + columns @ delta, s)
-            self.quantizer, self.loglik_rows = ("rounded", s), loglik
-            out = expected * self.lattice.step + self.lattice.offset - reference
-        return out
+        if self.quantizer is None:
+            choices = [(k, s) for k in _QUANTIZERS for s in _NOISE_PER_STEP]
+            if abs(self.lattice.offset) > 1e-9 * self.lattice.step:
+                choices = [c for c in choices if c[0] == "rounded"]  # differences of a lattice have no offset
+            self.quantizer = max(
+                choices, key=lambda c: float(_QUANTIZER_LOGLIK[c[0]](m, mu, c[1])[self.fit].sum())
+            )
+        kind, s = self.quantizer
+        if kind == "rounded":
+            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], columns[self.fit], s)
+            mu, self.quantizer = mu + columns @ delta, ("rounded", s)
+        self.loglik_rows, expected, _ = _QUANTIZERS[kind](m, mu, s)
+        return expected * self.lattice.step + self.lattice.offset - reference
 
 
 def _fit_delay(
