@@ -30,7 +30,7 @@ guards keep a library effect from taking credit for what it is not:
 
 - a random bias tracks a single jump or a hum as well as a real instability,
   so a process candidate must drive its bias alike in all four quarters of the
-  fit rows and leave no burst in its innovations (:func:`_falsified`);
+  fit rows and leave no burst in its innovations (:func:`sins.randombias.falsified`);
 - where a disturbance outside the library (a single bias step, an oscillation)
   explains a channel as well as the best candidate does, that channel is
   reported in ``outside`` and ``unexplained`` instead (:func:`_outside`);
@@ -61,10 +61,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import CubicHermiteSpline
 from scipy.optimize import minimize_scalar
-from scipy.signal import lfilter
-from scipy.stats import chi2, norm
+from scipy.stats import chi2
 
-from sins import lattice
+from sins import disturbance, lattice, randombias
 from sins.errors import SinsInputError
 from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES, display_unit
 from sins.series import CalibrationData
@@ -75,17 +74,9 @@ Array = NDArray[np.float64]
 SIGNIFICANT_RATIO = 1.03
 #: Below any real sensor's noise (2e-5 °/h, 1e-11 g): the floor of noiseless (simulated) readings, SI units.
 _TINY = 1e-10
-#: Random-walk and Gauss–Markov correlation times tried for the process candidates, s.
-_TAUS_S = np.geomspace(2.0, 5000.0, 12)
-#: Drives ``q / r`` tried for the process candidates.
-_DRIVE_RATIOS = np.geomspace(1e-9, 1e-1, 17)
-#: Factors about the coarse grid's best drive, spanning its step either side.
-_FINE_DRIVE = np.geomspace(10**-0.5, 10**0.5, 9)
 #: Candidates whose withheld log-likelihood gains (before the penalty) differ by less than this are
 #: indistinguishable on the data: a likelihood ratio below e³ ≈ 20, short of "strong" evidence.
 TIE_NATS = 3.0
-#: A single bias step may not fall in the first or last 5 % of the fit rows (there it is an outlier).
-_STEP_MARGIN = 0.05
 #: The white noise before rounding, in quantization steps, tried for the quantization candidate.
 _NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
 #: The two quantizers (see :mod:`sins.lattice`).
@@ -220,7 +211,7 @@ class EffectScore:
         return {
             "name": self.name,
             "channels": list(self.channels),
-            "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (_falsified)
+            "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (falsified)
             "accepted": self.accepted,
             "indistinguishable_from": list(self.indistinguishable),
         }
@@ -306,7 +297,7 @@ class _ChannelModel:
         self.delayed = False  # whether the reading is the reference at t − τ
         self.delay_s: float | None = None  # τ, once fitted
         self.process: str | None = None  # "bias_instability" | "rate_random_walk"
-        self.process_on_trial = True  # a candidate's process must pass _falsified; the model's need not
+        self.process_on_trial = True  # a candidate's process must pass falsified(); the model's need not
         self.output: str | None = None  # "quantization" | "saturation"
         self.quantizer: tuple[str, float] | None = None  # its kind and noise per step, once fitted
         self.loglik_rows: Array | None = None  # a quantizer's ln P of every row's reading, once predicted
@@ -358,18 +349,19 @@ class _ChannelModel:
         pred = (a / scale) @ coef
         if self.process is not None:
             y = error - pred
-            process = _fit_process(self.process, y, self.fit, self.x.step_s)
+            process = self._fit_process(y)
             # A random bias misleads least squares: a walk's level in each static position passes for
             # scale factors. Generalised least squares instead: the innovations filter is linear, so
             # the regressors that whiten best are those fitted to the filtered error and columns.
-            phi, gain = process.phi, _steady_gain(process.phi, process.q, process.r)[0]
-            whitened = np.column_stack([_innovations(c, phi, gain) for c in (a / scale).T])
-            coef, *_ = np.linalg.lstsq(whitened[rows], _innovations(error, phi, gain)[rows], rcond=rcond)
+            phi, gain = process.phi, process.gain
+            whitened = np.column_stack([randombias.innovations(c, phi, gain) for c in (a / scale).T])
+            target = randombias.innovations(error, phi, gain)
+            coef, *_ = np.linalg.lstsq(whitened[rows], target[rows], rcond=rcond)
             pred = (a / scale) @ coef
             y = error - pred
-            process = _fit_process(self.process, y, self.fit, self.x.step_s)
-            if self.process_on_trial and _falsified(process, self.fit, self.x.t):
-                return np.full_like(pred, np.nan)  # not this process: see _falsified
+            process = self._fit_process(y)
+            if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
+                return np.full_like(pred, np.nan)  # not this process: see randombias.falsified
             self.fit_loglik = process.fit_loglik  # for _nested_choice
             pred = pred + y - process.innovations
         pred = pred + lag
@@ -380,6 +372,14 @@ class _ChannelModel:
             top, bottom = float(self.reading[self.fit].max()), float(self.reading[self.fit].min())
             pred = np.clip(reference + pred, bottom, top) - reference
         return pred
+
+    def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
+        """The random bias under the residual ``y``, its white part from first differences within the
+        fit rows (as the floor's), not straddling the withheld blocks: a walk's increments over a
+        block would inflate it."""
+        r = max(noise_floor(y, self.fit) ** 2, _TINY**2)
+        walk = self.process == "rate_random_walk"
+        return randombias.fit(y, self.fit, self.x.step_s, r, walk)
 
     def _quantized(self, pred: Array, columns: Array) -> Array:
         """The expected reading of the quantizer the fit rows' likelihood prefers; sets ``loglik_rows``.
@@ -432,135 +432,6 @@ def _fit_delay(
         left, bounds=(first - span, first + span), method="bounded", options={"xatol": 1e-3 * x.step_s}
     )
     return float(found.x) if found.fun < left(first) else first
-
-
-def _steady_gain(phi: float, q: float, r: float) -> tuple[float, float]:
-    """Steady-state Kalman gain and innovation variance of ``b' = φ b + w (q)``, ``y = b + v (r)``."""
-    # Riccati: P = φ² P r / (P + r) + q  (P the predicted variance).
-    a, b, c = 1.0, r * (1.0 - phi * phi) - q, -q * r
-    p = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
-    return p / (p + r), p + r
-
-
-def _innovations(y: Array, phi: float, gain: float) -> Array:
-    """One-step-ahead innovations of the steady-state filter: ``x̂' = φ(1−K) x̂ + φ K y``.
-
-    The filter starts from the mean of the first 100 samples, not from 0: a start from 0 would
-    be a jump the process did not make.
-    """
-    # Transposed direct form: the state is the next prediction, so zi is the first one.
-    pred, _ = lfilter([0.0, phi * gain], [1.0, -phi * (1.0 - gain)], y, zi=[float(np.mean(y[:100]))])
-    return np.asarray(y - pred)
-
-
-@dataclass(frozen=True)
-class _ProcessFit:
-    """A random bias fitted to a residual: ``b' = φ b + w (q)`` under white noise of variance ``r``.
-
-    ``trials`` are the one-step innovations of every row for the chosen ``φ`` and each drive of the
-    fine grid (:data:`_FINE_DRIVE`); ``chosen`` indexes the one the fit rows prefer (what :func:`_falsified`
-    holds against the others).
-    """
-
-    phi: float
-    q: float
-    r: float
-    trials: tuple[Array, ...] = ()
-    chosen: int = 0
-    fit_loglik: float = -np.inf
-
-    @property
-    def innovations(self) -> Array:
-        return self.trials[self.chosen]
-
-
-def _fit_process(kind: str, y: Array, fit: NDArray[np.bool_], step_s: float) -> _ProcessFit:
-    """The (φ, q) maximising the innovations' likelihood on the fit rows, over a grid of τ and q/r.
-
-    ``r``, the white noise's variance, is the noise floor's square; the grid chooses the bias's
-    correlation (``φ = exp(−step/τ)``, 1 for a random walk) and drive ``q``, and the drive is then
-    refined by :data:`_FINE_DRIVE` about the best.
-
-    The filter runs over every row in time order (so withheld blocks are predicted from what came
-    before them, as a filter in the field would), but only the fit rows' innovations choose.
-    """
-    r = max(noise_floor(y, fit) ** 2, _TINY**2)  # the white part, from first differences within the fit rows
-
-    def innovations(phi: float, ratio: float) -> Array:
-        return _innovations(y, phi, _steady_gain(phi, ratio * r, r)[0])
-
-    phis = [1.0] if kind == "rate_random_walk" else list(np.exp(-step_s / _TAUS_S))
-    _, phi, ratio = max(
-        (_log_likelihood(innovations(phi, ratio)[fit]), phi, ratio) for phi in phis for ratio in _DRIVE_RATIOS
-    )
-    # The drive's likelihood is sharp on long records: between two coarse steps it can drop by more
-    # than a per-quarter drive gains by chance, which would falsify real processes (_falsified).
-    ratios = ratio * _FINE_DRIVE
-    trials = tuple(innovations(phi, q) for q in ratios)
-    lls = [_log_likelihood(nu[fit]) for nu in trials]
-    j = int(np.argmax(lls))
-    return _ProcessFit(phi, float(ratios[j]) * r, r, trials, j, lls[j])
-
-
-def _log_likelihood(innovations: Array) -> float:
-    """Gaussian log-likelihood of innovations with their own variance, up to a constant."""
-    return -0.5 * len(innovations) * float(np.log(np.mean(innovations * innovations)))
-
-
-def _falsified(process: _ProcessFit, fit: NDArray[np.bool_], t: Array) -> bool:
-    """Whether a random bias fitted to a residual is not the process it claims to be.
-
-    A random bias tracks a single jump or any other one-off misfit nearly as well as a real
-    instability; only a real one drives the bias alike all along and leaves white innovations
-    behind. Two tests on the fit rows, each at p = 0.001:
-
-    - *homogeneity*: with each quarter's own drive ``q`` (``φ`` and ``r`` kept), twice the
-      log-likelihood gain over the common ``q`` is χ² with 3 degrees of freedom for a real process;
-    - *no burst*: summed over the filter's own settling time ``w``, the innovations of a real process
-      are ``N(0, w σ²)`` in every window. After a jump, the filter trails the new level for about
-      ``w`` rows, and their sum shows it. The largest standardised window sum is held against the
-      Bonferroni bound over every window.
-    """
-    if process.q <= 0.0:
-        return True
-    phi, trials, common = process.phi, process.trials, process.innovations
-    gain_k, _ = _steady_gain(phi, process.q, process.r)
-    nu = common[fit]
-    w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - gain_k))), 1, len(nu) // 4))
-    c = np.concatenate([[0.0], np.cumsum(nu)])
-    z = np.abs(c[w:] - c[:-w]) / (np.std(nu) * np.sqrt(w))
-    if float(z.max()) > float(norm.isf(0.0005 / len(z))):
-        return True
-    edges = np.quantile(t[fit], [0.25, 0.5, 0.75])
-    quarter = np.searchsorted(edges, t, side="right")
-    gain = 0.0
-    for k in range(4):
-        rows = fit & (quarter == k)
-        gain += max(_log_likelihood(nu[rows]) for nu in trials) - _log_likelihood(common[rows])
-    return 2.0 * gain > 16.3
-
-
-def _best_step(residual: Array, columns: Array, fit: NDArray[np.bool_], t: Array) -> tuple[float, float]:
-    """The single bias step that best fits the fit rows' residual, the model's regressors refitted beside it.
-
-    With ``M`` the projection off the regressors ``A``, a step ``s`` after fit row ``k`` explains
-    ``(sᵀ M e)² / sᵀ M s`` of the residual ``e = M y``'s sum of squares; ``sᵀ M e`` is a suffix sum
-    of ``e`` and ``sᵀ M s = (n − k) − (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs)``, with ``Aᵀs`` a suffix sum of ``A``'s
-    rows, so every ``k`` costs one pass. Returns the step's time (halfway between the rows either
-    side) and its size.
-    """
-    e, a, tf = residual[fit], columns[fit], t[fit]
-    n = len(e)
-    a = a / np.maximum(np.abs(a).max(axis=0), 1e-300)
-    suffix_e = np.cumsum(e[::-1])[::-1][1:]  # the step starts at fit row k = 1 … n − 1
-    suffix_a = np.cumsum(a[::-1], axis=0)[::-1][1:]
-    inverse = np.linalg.pinv(a.T @ a)
-    denominator = np.arange(n - 1, 0, -1) - np.einsum("ki,ij,kj->k", suffix_a, inverse, suffix_a)
-    explained = np.where(denominator > 1e-9 * n, suffix_e**2 / np.maximum(denominator, 1e-300), -1.0)
-    margin = max(1, int(_STEP_MARGIN * n))
-    explained[: margin - 1] = explained[n - 1 - margin :] = -1.0
-    j = int(np.argmax(explained))
-    return 0.5 * float(tf[j] + tf[j + 1]), float(suffix_e[j] / denominator[j])
 
 
 # --------------------------------------------------------------------------- the diagnosis
@@ -898,7 +769,9 @@ def _process_or_regressors(
         total = 0.0
         for _, model, residual, _, penalty in trials[name].rows:
             loglik = (
-                model.fit_loglik if CANDIDATES[name].kind == "process" else _log_likelihood(residual[fit])
+                model.fit_loglik
+                if CANDIDATES[name].kind == "process"
+                else randombias.log_likelihood(residual[fit])
             )
             total += loglik - penalty
         return total
@@ -965,19 +838,19 @@ def _outside(
     """The channels of ``trial`` where a disturbance outside the library does as well as its effect.
 
     Two such disturbances are tried on each channel, fitted on the fit rows beside the model's
-    regressors: a single bias step (:func:`_best_step`; its size and time are two parameters) and
-    an oscillation (:func:`_best_oscillation`; frequency and two amplitudes, three). As well: a
-    positive score, and a withheld gain within :data:`TIE_NATS` of the effect's. A library effect
-    that explains a channel no better than a one-off step or a hum cannot claim it; the
-    disturbance is reported instead.
+    regressors: a single bias step (:func:`sins.disturbance.best_step`; its size and time are two
+    parameters) and an oscillation (:func:`sins.disturbance.best_oscillation`; frequency and two
+    amplitudes, three). As well: a positive score, and a withheld gain within :data:`TIE_NATS` of
+    the effect's. A library effect that explains a channel no better than a one-off step or a hum
+    cannot claim it; the disturbance is reported instead.
     """
     out = []
     for i, _, _, score, penalty in trial.rows:
         if score <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
         columns = np.hstack(models[i].columns)
-        t_step, size = _best_step(residual[:, i], columns, fit, t)
-        period, amplitude = _best_oscillation(residual[:, i], columns, fit, t)
+        t_step, size = disturbance.best_step(residual[:, i], columns, fit, t)
+        period, amplitude = disturbance.best_oscillation(residual[:, i], columns, fit, t)
         wave = np.column_stack([np.cos(2 * np.pi * t / period), np.sin(2 * np.pi * t / period)])
         step_column = (t > t_step)[:, None].astype(float)
         tries = [
@@ -985,7 +858,7 @@ def _outside(
             (Outside(CHANNELS[i], "periodic", amplitude, 0.0, period_s=period), wave, 3),
         ]
         found = []
-        for disturbance, column, k in tries:
+        for candidate, column, k in tries:
             m = models[i].with_columns(column)
             outside_score, penalty_k = _trial_score(
                 models[i], m, residual[:, i], m.error - m.predict(), withheld, n_fit, k - column.shape[1]
@@ -993,42 +866,10 @@ def _outside(
             outside_gain = outside_score + penalty_k
             # Gains compared, as for ties: an effect no better than the disturbance is not what happened.
             if outside_score > 0.0 and outside_gain > score + penalty - TIE_NATS:
-                found.append(dataclasses.replace(disturbance, score=float(outside_score)))
+                found.append(dataclasses.replace(candidate, score=float(outside_score)))
         if found:
             out.append(max(found, key=lambda o: o.score))
     return out
-
-
-def _best_oscillation(
-    residual: Array, columns: Array, fit: NDArray[np.bool_], t: Array
-) -> tuple[float, float]:
-    """The period and amplitude of the strongest oscillation in the fit rows' residual.
-
-    The peak of the periodogram of the residual with the withheld rows zeroed (they may not
-    choose), padded eightfold, refined to the frequency whose sine and cosine, fitted beside the
-    regressors, leave the least; periods longer than a third of the recording are left to the drifts.
-    """
-    step = float(np.median(np.diff(t)))
-    x = np.where(fit, residual - residual[fit].mean(), 0.0)
-    n = 8 * len(x)
-    power = np.abs(np.fft.rfft(x, n)) ** 2
-    freq = np.fft.rfftfreq(n, step)
-    power[freq < 3.0 / (t[-1] - t[0])] = 0.0
-    peak = float(freq[int(np.argmax(power))])
-    scale = np.maximum(np.abs(columns[fit]).max(axis=0), 1e-300)
-    a, tf, y = columns[fit] / scale, t[fit], residual[fit]
-
-    def fitted(f_hz: float) -> tuple[float, Array]:
-        w = np.column_stack([a, np.cos(2 * np.pi * f_hz * tf), np.sin(2 * np.pi * f_hz * tf)])
-        coef, *_ = np.linalg.lstsq(w, y, rcond=None)
-        return float(np.sum((y - w @ coef) ** 2)), coef
-
-    half_bin = 0.5 / (n * step)
-    best = minimize_scalar(
-        lambda f: fitted(f)[0], bounds=(peak - half_bin, peak + half_bin), method="bounded"
-    )
-    f_hz = float(best.x)
-    return 1.0 / f_hz, float(np.hypot(*fitted(f_hz)[1][-2:]))
 
 
 def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
