@@ -313,9 +313,12 @@ def _cmd_gap(args: argparse.Namespace) -> int:
             print(f"  {w['channel']}: {w['excess']:.3f}x the floor; " + ("; ".join(w["concentrates"]) or "-"))
     else:
         print("\nno channel is significantly above its noise floor: the model explains the data")
-    print("\ncandidate effects (withheld log-likelihood gain less the BIC penalty; accepted if > 0):")
+    print("\ncandidate effects (withheld log-likelihood gain less the BIC penalty; the best above 0 is")
+    print("accepted, then the rest are scored again beside it):")
     for e in report.effects[: args.top]:
         mark = "accepted" if e.accepted else ""
+        if e.not_accepted_because:
+            mark = f"not accepted: {e.not_accepted_because}"
         if e.indistinguishable:
             mark += f" (this data cannot tell it from {' or '.join(e.indistinguishable)})"
         print(f"  {e.name:<26} {e.score:14.1f}  {mark}")

@@ -206,6 +206,8 @@ class EffectScore:
     accepted: bool
     #: Candidates this one could not be told from (gains within :data:`TIE_NATS`); set on accepted ones.
     indistinguishable: tuple[str, ...] = ()
+    #: Why a candidate that scored above 0 was not accepted all the same ("" otherwise).
+    not_accepted_because: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -214,6 +216,7 @@ class EffectScore:
             "score": self.score if np.isfinite(self.score) else None,  # None: ruled out (falsified)
             "accepted": self.accepted,
             "indistinguishable_from": list(self.indistinguishable),
+            "not_accepted_because": self.not_accepted_because or None,
         }
 
 
@@ -602,6 +605,7 @@ def diagnose(
 
     accepted: list[str] = []
     scores: dict[str, EffectScore] = {}
+    why_not: dict[str, str] = {}  # why a candidate whose latest score is above 0 was passed over
     outside: list[Outside] = []
     taken = set().union(*(_exclusive(n) for n in model))
     remaining = [c for c in CANDIDATES.values() if c.name not in taken]
@@ -626,6 +630,7 @@ def diagnose(
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
             scores[name] = EffectScore(name, trial.names, trial.score, False)
+            why_not.pop(name, None)
         positive = [n for n in round_scores if round_scores[n].score > 0.0]
         if not positive:
             break
@@ -636,6 +641,9 @@ def diagnose(
         disturbances = _outside(round_scores[best], models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
+            for name in round_scores:
+                if set(scores[name].channels) <= {o.channel for o in outside}:
+                    why_not[name] = "a disturbance outside the library explains its channels as well"
             continue
         ties = alike + tuple(
             n
@@ -644,6 +652,13 @@ def diagnose(
         )
         accepted.append(best)
         scores[best] = dataclasses.replace(scores[best], accepted=True, indistinguishable=ties)
+        for name in told_apart:
+            why_not[name] = f"the fit rows' likelihood prefers {best}"
+        for name in ties:
+            why_not[name] = f"this data cannot tell it from {best}, which was taken"
+        for name in _exclusive(best) - {best}:
+            what = "random bias" if name.split(".")[1] in _PROCESSES else "output map"
+            why_not.setdefault(name, f"a sensor takes one {what}, and {best} was taken")
         for i, m, r, *_ in round_scores[best].rows:
             models[i], residual[:, i] = m, r
         remaining = [c for c in remaining if c.name not in _exclusive(best)]
@@ -685,9 +700,12 @@ def diagnose(
         if rms_after[i] > SIGNIFICANT_RATIO * floors[i] or ch in {o.channel for o in outside}
     ]
     # Accepted effects first, in the order they were accepted; then the rest, best score first.
-    ordered = [scores[n] for n in accepted] + sorted(
-        (e for e in scores.values() if not e.accepted), key=lambda e: -e.score
-    )
+    passed_over = [
+        dataclasses.replace(e, not_accepted_because=why_not.get(e.name, "") if e.score > 0.0 else "")
+        for e in scores.values()
+        if not e.accepted
+    ]
+    ordered = [scores[n] for n in accepted] + sorted(passed_over, key=lambda e: -e.score)
     return GapReport(
         channels=channels,
         where=where,
