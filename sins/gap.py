@@ -623,9 +623,10 @@ def diagnose(
                     continue  # explained by a disturbance outside the library: nothing to add there
                 if cand.name.endswith("quantization") and models[i].lattice is None:
                     continue
-                m = models[i].with_candidate(cand)
-                r = m.error - m.predict()
-                trial.add(i, m, r, *_trial_score(models[i], m, residual[:, i], r, withheld, n_fit))
+                m, r = _tried(models[i], cand)
+                score, penalty = _trial_score(models[i], m, residual[:, i], r, withheld, n_fit)
+                fit_loglik = m.fit_loglik if cand.kind == "process" else randombias.log_likelihood(r[fit])
+                trial.add(i, score, penalty, fit_loglik)
             if trial.channels:
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
@@ -635,9 +636,7 @@ def diagnose(
         if not positive:
             break
         best = max(positive, key=lambda n: round_scores[n].score)
-        best, told_apart, alike = _process_or_regressors(
-            *_nested_choice(best, round_scores), round_scores, fit
-        )
+        best, told_apart, alike = _process_or_regressors(*_nested_choice(best, round_scores), round_scores)
         disturbances = _outside(round_scores[best], models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
@@ -659,8 +658,8 @@ def diagnose(
         for name in _exclusive(best) - {best}:
             what = "random bias" if name.split(".")[1] in _PROCESSES else "output map"
             why_not.setdefault(name, f"a sensor takes one {what}, and {best} was taken")
-        for i, m, r, *_ in round_scores[best].rows:
-            models[i], residual[:, i] = m, r
+        for i in round_scores[best].channels:
+            models[i], residual[:, i] = _tried(models[i], CANDIDATES[best])
         remaining = [c for c in remaining if c.name not in _exclusive(best)]
 
     rms_before = np.sqrt(np.mean(before[withheld] ** 2, axis=0))
@@ -677,7 +676,7 @@ def diagnose(
     # significant by its withheld likelihood: a gap all the same.
     for i, ch in enumerate(CHANNELS):
         if ch not in {o.channel for o in outside}:
-            alone = _Trial([(i, models[i], residual[:, i], 0.0, 0.0)])
+            alone = _Trial([(i, 0.0, 0.0, np.nan)])
             outside += _outside(alone, models, residual, x.t, fit, withheld, n_fit)
     outside.sort(key=lambda o: CHANNELS.index(o.channel))
     disturbed = {CHANNELS.index(o.channel) for o in outside}
@@ -756,16 +755,15 @@ def _nested_choice(best: str, trials: dict[str, _Trial]) -> tuple[str, tuple[str
     bi, rw = trials.get(f"{sensor}.bias_instability"), trials.get(f"{sensor}.rate_random_walk")
     if bi is None or rw is None or not (bi.score > 0.0 and rw.score > 0.0) or bi.names != rw.names:
         return best, (), ()
-    gain = sum(row[1].fit_loglik for row in bi.rows) - sum(row[1].fit_loglik for row in rw.rows)
+    gain = sum(row[3] for row in bi.rows) - sum(row[3] for row in rw.rows)
     if 2.0 * gain > float(chi2.isf(0.001, len(bi.rows))):
         return f"{sensor}.bias_instability", (f"{sensor}.rate_random_walk",), ()
     return f"{sensor}.rate_random_walk", (), (f"{sensor}.bias_instability",)
 
 
 def _process_or_regressors(
-    best: str, told_apart: tuple[str, ...], alike: tuple[str, ...], trials: dict[str, _Trial],
-    fit: NDArray[np.bool_],
-) -> tuple[str, tuple[str, ...], tuple[str, ...]]:  # fmt: skip
+    best: str, told_apart: tuple[str, ...], alike: tuple[str, ...], trials: dict[str, _Trial]
+) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
     """Between a random bias and a regressor effect that both gain on the withheld rows, the one the
     fit rows' likelihood less BIC's penalty prefers.
 
@@ -784,15 +782,7 @@ def _process_or_regressors(
         return best, told_apart, alike
 
     def fit_score(name: str) -> float:
-        total = 0.0
-        for _, model, residual, _, penalty in trials[name].rows:
-            loglik = (
-                model.fit_loglik
-                if CANDIDATES[name].kind == "process"
-                else randombias.log_likelihood(residual[fit])
-            )
-            total += loglik - penalty
-        return total
+        return float(sum(fit_loglik - penalty for _, _, penalty, fit_loglik in trials[name].rows))
 
     rivals = [
         n
@@ -818,13 +808,18 @@ def _process_or_regressors(
 
 @dataclass
 class _Trial:
-    """A candidate tried on a sensor's channels: the trial model, residual and score of each."""
+    """A candidate tried on a sensor's channels: each channel's score, BIC penalty and fit-row
+    log-likelihood (the process's innovations' for a random bias, the residual's otherwise).
 
-    #: (channel, trial model, residual, score, BIC penalty) of each channel
-    rows: list[tuple[int, _ChannelModel, Array, float, float]] = field(default_factory=list)
+    The trial models and residuals are not kept: one per candidate and channel would hold
+    hundreds of MB on a long recording. :func:`_tried` rebuilds the accepted one's.
+    """
 
-    def add(self, i: int, model: _ChannelModel, residual: Array, score: float, penalty: float) -> None:
-        self.rows.append((i, model, residual, score, penalty))
+    #: (channel, score, BIC penalty, fit-row log-likelihood) of each channel
+    rows: list[tuple[int, float, float, float]] = field(default_factory=list)
+
+    def add(self, i: int, score: float, penalty: float, fit_loglik: float) -> None:
+        self.rows.append((i, score, penalty, fit_loglik))
 
     @property
     def channels(self) -> list[int]:
@@ -836,12 +831,18 @@ class _Trial:
 
     @property
     def score(self) -> float:
-        return float(sum(row[3] for row in self.rows))
+        return float(sum(row[1] for row in self.rows))
 
     @property
     def gain(self) -> float:
         """The withheld log-likelihood gain: the score without the penalty."""
-        return self.score + float(sum(row[4] for row in self.rows))
+        return self.score + float(sum(row[2] for row in self.rows))
+
+
+def _tried(model: _ChannelModel, cand: Candidate) -> tuple[_ChannelModel, Array]:
+    """A channel's model with a candidate added, fitted, and the residual it leaves on every row."""
+    m = model.with_candidate(cand)
+    return m, m.error - m.predict()
 
 
 def _outside(
@@ -863,7 +864,7 @@ def _outside(
     cannot claim it; the disturbance is reported instead.
     """
     out = []
-    for i, _, _, score, penalty in trial.rows:
+    for i, score, penalty, _ in trial.rows:
         if score <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
         columns = np.hstack(models[i].columns)
