@@ -376,6 +376,11 @@ class _ChannelModel:
             pred = np.clip(reference + pred, bottom, top) - reference
         return pred
 
+    def fit_rows_loglik(self, residual: Array) -> float:
+        """The fit rows' Gaussian log-likelihood (own variance): of the process's innovations where
+        the model has a random bias, of ``residual``, the model's, otherwise. Once predicted."""
+        return self.fit_loglik if self.process is not None else randombias.log_likelihood(residual[self.fit])
+
     def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
         """The random bias under the residual ``y``, its white part from first differences within the
         fit rows (as the floor's), not straddling the withheld blocks: a walk's increments over a
@@ -625,8 +630,7 @@ def diagnose(
                     continue
                 m, r = _tried(models[i], cand)
                 score, penalty = _trial_score(models[i], m, residual[:, i], r, withheld, n_fit)
-                fit_loglik = m.fit_loglik if cand.kind == "process" else randombias.log_likelihood(r[fit])
-                trial.add(i, score, penalty, fit_loglik)
+                trial.add(i, score, penalty, m.fit_rows_loglik(r))
             if trial.channels:
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
@@ -637,7 +641,8 @@ def diagnose(
             break
         best = max(positive, key=lambda n: round_scores[n].score)
         best, told_apart, alike = _process_or_regressors(*_nested_choice(best, round_scores), round_scores)
-        disturbances = _outside(round_scores[best], models, residual, x.t, fit, withheld, n_fit)
+        process = CANDIDATES[best].kind == "process"
+        disturbances = _outside(round_scores[best], process, models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
             for name in round_scores:
@@ -677,7 +682,7 @@ def diagnose(
     for i, ch in enumerate(CHANNELS):
         if ch not in {o.channel for o in outside}:
             alone = _Trial([(i, 0.0, 0.0, np.nan)])
-            outside += _outside(alone, models, residual, x.t, fit, withheld, n_fit)
+            outside += _outside(alone, False, models, residual, x.t, fit, withheld, n_fit)
     outside.sort(key=lambda o: CHANNELS.index(o.channel))
     disturbed = {CHANNELS.index(o.channel) for o in outside}
     gapped = [i for i in range(6) if rms_before[i] > SIGNIFICANT_RATIO * floors[i] or i in disturbed]
@@ -847,6 +852,7 @@ def _tried(model: _ChannelModel, cand: Candidate) -> tuple[_ChannelModel, Array]
 
 def _outside(
     trial: _Trial,
+    process: bool,
     models: list[_ChannelModel],
     residual: Array,
     t: Array,
@@ -859,12 +865,17 @@ def _outside(
     Two such disturbances are tried on each channel, fitted on the fit rows beside the model's
     regressors: a single bias step (:func:`sins.disturbance.best_step`; its size and time are two
     parameters) and an oscillation (:func:`sins.disturbance.best_oscillation`; frequency and two
-    amplitudes, three). As well: a positive score, and a withheld gain within :data:`TIE_NATS` of
-    the effect's. A library effect that explains a channel no better than a one-off step or a hum
-    cannot claim it; the disturbance is reported instead.
+    amplitudes, three). A library effect that explains a channel no better than a one-off step or a
+    hum cannot claim it; the disturbance is reported instead. As well: a positive score, and a
+    withheld gain within :data:`TIE_NATS` of the effect's; or, where the effect is a random bias
+    (``process``), a fit-row log-likelihood less penalty within :data:`TIE_NATS` of its own. The
+    random bias's filter predicts each withheld row from the readings before it, so it follows a
+    step that falls inside a withheld block, where the fit rows cannot place it; on the fit rows it
+    pays for trailing the step, as it does for trailing regressors' levels
+    (:func:`_process_or_regressors`).
     """
     out = []
-    for i, score, penalty, _ in trial.rows:
+    for i, score, penalty, fit_loglik in trial.rows:
         if score <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
         columns = np.hstack(models[i].columns)
@@ -879,12 +890,15 @@ def _outside(
         found = []
         for candidate, column, k in tries:
             m = models[i].with_columns(column)
+            after = m.error - m.predict()
             outside_score, penalty_k = _trial_score(
-                models[i], m, residual[:, i], m.error - m.predict(), withheld, n_fit, k - column.shape[1]
+                models[i], m, residual[:, i], after, withheld, n_fit, k - column.shape[1]
             )
-            outside_gain = outside_score + penalty_k
-            # Gains compared, as for ties: an effect no better than the disturbance is not what happened.
-            if outside_score > 0.0 and outside_gain > score + penalty - TIE_NATS:
+            if process:
+                as_well = m.fit_rows_loglik(after) - penalty_k > fit_loglik - penalty - TIE_NATS
+            else:  # gains compared, as for ties: no better than the disturbance is not what happened
+                as_well = outside_score + penalty_k > score + penalty - TIE_NATS
+            if outside_score > 0.0 and as_well:
                 found.append(dataclasses.replace(candidate, score=float(outside_score)))
         if found:
             out.append(max(found, key=lambda o: o.score))
