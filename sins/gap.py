@@ -55,7 +55,7 @@ import copy
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -645,8 +645,9 @@ def diagnose(
         disturbances = _outside(round_scores[best], process, models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
+            outside_channels = {o.channel for o in outside}
             for name in round_scores:
-                if set(scores[name].channels) <= {o.channel for o in outside}:
+                if set(scores[name].channels) <= outside_channels:
                     why_not[name] = "a disturbance outside the library explains its channels as well"
             continue
         ties = alike + tuple(
@@ -681,7 +682,7 @@ def diagnose(
     # significant by its withheld likelihood: a gap all the same.
     for i, ch in enumerate(CHANNELS):
         if ch not in {o.channel for o in outside}:
-            alone = _Trial([(i, 0.0, 0.0, np.nan)])
+            alone = _Trial([_ChannelTrial(i, 0.0, 0.0, np.nan)])
             outside += _outside(alone, False, models, residual, x.t, fit, withheld, n_fit)
     outside.sort(key=lambda o: CHANNELS.index(o.channel))
     disturbed = {CHANNELS.index(o.channel) for o in outside}
@@ -760,7 +761,7 @@ def _nested_choice(best: str, trials: dict[str, _Trial]) -> tuple[str, tuple[str
     bi, rw = trials.get(f"{sensor}.bias_instability"), trials.get(f"{sensor}.rate_random_walk")
     if bi is None or rw is None or not (bi.score > 0.0 and rw.score > 0.0) or bi.names != rw.names:
         return best, (), ()
-    gain = sum(row[3] for row in bi.rows) - sum(row[3] for row in rw.rows)
+    gain = sum(row.fit_loglik for row in bi.rows) - sum(row.fit_loglik for row in rw.rows)
     if 2.0 * gain > float(chi2.isf(0.001, len(bi.rows))):
         return f"{sensor}.bias_instability", (f"{sensor}.rate_random_walk",), ()
     return f"{sensor}.rate_random_walk", (), (f"{sensor}.bias_instability",)
@@ -787,7 +788,7 @@ def _process_or_regressors(
         return best, told_apart, alike
 
     def fit_score(name: str) -> float:
-        return float(sum(fit_loglik - penalty for _, _, penalty, fit_loglik in trials[name].rows))
+        return float(sum(row.fit_loglik - row.penalty for row in trials[name].rows))
 
     rivals = [
         n
@@ -811,24 +812,31 @@ def _process_or_regressors(
     return best, told_apart, alike
 
 
+class _ChannelTrial(NamedTuple):
+    """A candidate tried on one channel."""
+
+    channel: int
+    score: float
+    penalty: float  # BIC's, within the score
+    fit_loglik: float  # the fit rows' log-likelihood: the process's innovations' for a random bias
+
+
 @dataclass
 class _Trial:
-    """A candidate tried on a sensor's channels: each channel's score, BIC penalty and fit-row
-    log-likelihood (the process's innovations' for a random bias, the residual's otherwise).
+    """A candidate tried on a sensor's channels.
 
     The trial models and residuals are not kept: one per candidate and channel would hold
     hundreds of MB on a long recording. :func:`_tried` rebuilds the accepted one's.
     """
 
-    #: (channel, score, BIC penalty, fit-row log-likelihood) of each channel
-    rows: list[tuple[int, float, float, float]] = field(default_factory=list)
+    rows: list[_ChannelTrial] = field(default_factory=list)
 
     def add(self, i: int, score: float, penalty: float, fit_loglik: float) -> None:
-        self.rows.append((i, score, penalty, fit_loglik))
+        self.rows.append(_ChannelTrial(i, score, penalty, fit_loglik))
 
     @property
     def channels(self) -> list[int]:
-        return [i for i, *_ in self.rows]
+        return [row.channel for row in self.rows]
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -836,12 +844,12 @@ class _Trial:
 
     @property
     def score(self) -> float:
-        return float(sum(row[1] for row in self.rows))
+        return float(sum(row.score for row in self.rows))
 
     @property
     def gain(self) -> float:
         """The withheld log-likelihood gain: the score without the penalty."""
-        return self.score + float(sum(row[2] for row in self.rows))
+        return self.score + float(sum(row.penalty for row in self.rows))
 
 
 def _tried(model: _ChannelModel, cand: Candidate) -> tuple[_ChannelModel, Array]:
