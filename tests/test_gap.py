@@ -136,6 +136,18 @@ def test_a_random_walk_under_static_holds_is_found_with_the_regressors_refitted_
         assert v["rms_before"] > 2.0 * v["noise_floor"] and v["rms_after"] <= 1.15 * v["noise_floor"], ch
 
 
+def test_effects_a_rig_never_excites_are_not_diagnosed():
+    """Static holds never turn the unit: a gyro saturation at 50 °/s and a scale nonlinearity under
+    Earth rate alone (1e-12 rad/s at 15 °/h) leave the readings a baseline unit's, and nothing is
+    diagnosed, though both are in the simulated unit."""
+    rig = calibration.RigProcedure(positions=24, position_dwell_s=10.0, rate_table=None)
+    model = imu_spec.draw_unit("tactical", 0).only(*imu.BASELINE)
+    rng = np.random.default_rng([0, 5])
+    effects = [imu_spec.typical_effect(n, rng, 3.0) for n in ("gyro.saturation", "gyro.scale_nonlinearity")]
+    report = gap.diagnose(calibration.simulate_rig(rig, model.with_effects(*effects), seed=0))
+    assert report.diagnosis == [] and report.unexplained == []
+
+
 def test_effects_the_rig_cannot_tell_apart_are_reported_as_such():
     """On a rig whose accelerometers only see 0 and ±1 g, ``f²`` and ``|f|`` are the same column
     up to scale: asymmetry and nonlinearity explain the data equally, and the report says so."""

@@ -3,7 +3,8 @@
 Usage::
 
     .venv/bin/python tools/bench_gap.py [--seeds 3] [--control-seeds 20] [--scales 1 3] [--effects NAME ...]
-        [--controls NAME ...] [--jobs 2] [--timing] [--verbose]
+        [--controls NAME ...] [--rigs NAME ...] [--jobs 2] [--timing] [--verbose] [--save CASES.json]
+    .venv/bin/python tools/bench_gap.py --load CASES.json [MORE.json ...] [--effects ...] [--rigs ...]
 
 For every library effect beyond the baseline, every seed, magnitude (``imu_spec.typical_effect``
 times ``scale``) and rig procedure: simulate a tactical unit's session with the baseline plus that
@@ -15,7 +16,13 @@ seeds each: the target for the controls is a rate (≥ 95 % empty), and six case
 each control's line gives the one-sided 95 % Clopper–Pearson lower bound on its pass rate, and how far
 below zero its best candidate's score stayed. Prints one line per injected effect, then the confusion
 matrix (injected × first diagnosed). ``--timing`` diagnoses one 30-minute, 100 Hz recording and
-prints the wall time.
+prints the wall time. ``--save`` writes every case's result; ``--load`` summarises saved results
+without running anything, a later file's case replacing an earlier one's (a rig rerun after a
+change, merged with the rest).
+
+Every rig procedure turns the unit as well as holding it still: an effect a rig never excites (a gyro
+scale factor under Earth rate alone) leaves the readings a baseline unit's, so its case would test
+nothing beyond the controls (``tests/test_gap.py::test_effects_a_rig_never_excites_are_not_diagnosed``).
 
 Whether a case's effect could be found at all is judged by an oracle that knows it, independently of
 the diagnosis: the effect's own contribution to the readings (the session simulated without white
@@ -40,6 +47,7 @@ import argparse
 import collections
 import concurrent.futures
 import dataclasses
+import json
 import os
 import statistics
 import time
@@ -48,7 +56,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from sins import calibration, gap, imu, imu_spec
+from sins import calibration, gap, imu, imu_spec, io
 
 RIGS = {
     "24pos+table": calibration.RigProcedure(
@@ -66,13 +74,16 @@ RIGS = {
         temperature=calibration.TemperatureProfile((0.0, 150.0, 400.0), (25.0, 40.0, 10.0)),
     ),
     # An hour of static holds at 10 Hz (the session a random bias's correlation time needs), with
-    # faces, edges and corners down.
-    "26pos long static": calibration.RigProcedure(
+    # faces, edges and corners down, then four minutes on the table while the chamber warms: without
+    # them the rig never turns, and no rate-dependent effect could show in its readings.
+    "26pos hour + table": calibration.RigProcedure(
         rate_hz=10.0,
         positions=26,
         position_dwell_s=3600.0 / 26,
-        rate_table=None,
-        temperature=calibration.TemperatureProfile((0.0, 1200.0, 2400.0, 3600.0), (20.0, 40.0, 10.0, 30.0)),
+        rate_table=calibration.RateTable(rates_dps=(20.0, 100.0, 200.0), dwell_s=5.0),
+        temperature=calibration.TemperatureProfile(
+            (0.0, 1200.0, 2400.0, 3600.0, 3900.0), (20.0, 40.0, 10.0, 30.0, 40.0)
+        ),
     ),
 }
 CONTROLS = ("control", "sinusoid (outside)", "bias step (outside)")
@@ -235,50 +246,37 @@ def _confusion(effects: list[str], results: dict[str, list[dict[str, Any]]]) -> 
         print(f"{n:<26}" + "".join(f"{counts.get(c, 0) or '.':>9}" for c in columns))
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--control-seeds", type=int, help="seeds for the controls (default: --seeds)")
-    parser.add_argument("--scales", type=float, nargs="+", default=[1.0, 3.0])
-    parser.add_argument("--effects", nargs="*", default=list(gap.CANDIDATES))
-    parser.add_argument("--controls", nargs="*", default=list(CONTROLS))
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--verbose", action="store_true", help="print every case as it finishes")
-    parser.add_argument("--timing", action="store_true")
-    args = parser.parse_args()
+def _print_case(case: dict[str, Any]) -> None:
+    print(
+        f"  {case['name']:<26} {case['rig']:<16} seed {case['seed']} ×{case['scale']:g}: "
+        f"ranked {case['ranked']} (tied {case['tied']}), diagnosis {case['diagnosis']}, "
+        f"unexplained {case['unexplained']}, after/floor {case['after']:.3f}, "
+        f"oracle {case['oracle']:.3g} nats, {case['identifiable']:.3g} beside {case['rival']}, "
+        f"removed {case['removed']:.3f}, best {case['best'][0]} {case['best'][1]:.1f}",
+        flush=True,
+    )
 
-    if args.timing:
-        rig = calibration.RigProcedure(position_dwell_s=40.0, rate_table=calibration.RateTable(dwell_s=20.0))
-        data = calibration.simulate_rig(rig, imu_spec.draw_unit("tactical", 0).only(*imu.BASELINE), seed=0)
-        started = time.perf_counter()
-        gap.diagnose(data)
-        elapsed = time.perf_counter() - started
-        print(f"timing: {len(data)} rows ({data.t[-1] / 60:.1f} min at 100 Hz) diagnosed in {elapsed:.1f} s")
 
-    names = (["control"] if "control" in args.controls else []) + args.effects
-    names += [n for n in CONTROLS[1:] if n in args.controls]
-    jobs = [
-        (name, rig, seed, scale)
-        for name in names
-        for rig in RIGS
-        for seed in range(args.seeds if name in gap.CANDIDATES else (args.control_seeds or args.seeds))
-        for scale in (args.scales if name in gap.CANDIDATES else [1.0])
-    ]
-    results: dict[str, list[dict[str, Any]]] = {n: [] for n in names}
-    started = time.perf_counter()
-    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool:
-        for case in pool.map(run_case, *zip(*jobs, strict=True)):
-            results[case["name"]].append(case)
-            if args.verbose:
-                print(
-                    f"  {case['name']:<26} {case['rig']:<16} seed {case['seed']} ×{case['scale']:g}: "
-                    f"ranked {case['ranked']} (tied {case['tied']}), diagnosis {case['diagnosis']}, "
-                    f"unexplained {case['unexplained']}, after/floor {case['after']:.3f}, "
-                    f"oracle {case['oracle']:.3g} nats, {case['identifiable']:.3g} beside {case['rival']}, "
-                    f"removed {case['removed']:.3f}, best {case['best'][0]} {case['best'][1]:.1f}",
-                    flush=True,
-                )
-    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
+def _load(paths: list[str]) -> list[dict[str, Any]]:
+    """Cases saved by ``--save``; a later file's case replaces an earlier one's of the same name, rig,
+    seed and scale (a rig rerun after a change, merged with the rest)."""
+    cases: dict[tuple[Any, ...], dict[str, Any]] = {}
+    for path in paths:
+        try:
+            with open(path, encoding="utf-8") as fh:
+                doc = json.load(fh)
+        except (OSError, json.JSONDecodeError) as exc:
+            raise SystemExit(f"{path}: cannot read saved cases ({exc})") from None
+        if not isinstance(doc, dict) or doc.get("format") != "sins-bench-gap":
+            raise SystemExit(f'{path}: not saved by bench_gap.py --save (no "format": "sins-bench-gap")')
+        for case in doc["cases"]:
+            cases[case["name"], case["rig"], case["seed"], case["scale"]] = case
+    return list(cases.values())
+
+
+def _report(names: list[str], cases: list[dict[str, Any]]) -> None:
+    """The summary lines, the controls' rates, the shares ranked first and the confusion matrix."""
+    results: dict[str, list[dict[str, Any]]] = {n: [c for c in cases if c["name"] == n] for n in names}
     print(
         f"{'injected':<26} {'n':>3} {'passed':>44} {'accepted':>9} {'excess removed':>15} "
         f"{'after/floor':>12}  diagnosed first"
@@ -295,11 +293,11 @@ def main() -> None:
         ("observable cases", _observable),
         ("identifiable cases", _identifiable),
     ):
-        cases = [c for n in effects for c in results[n] if keep(c)]
-        if not cases:
+        chosen = [c for n in effects for c in results[n] if keep(c)]
+        if not chosen:
             continue
-        n = len(cases)
-        ranked, tied = sum(_passed(c) for c in cases), sum(_passed(c, ties=True) for c in cases)
+        n = len(chosen)
+        ranked, tied = sum(_passed(c) for c in chosen), sum(_passed(c, ties=True) for c in chosen)
         print(
             f"\n{label}: injected effect ranked first in {ranked}/{n} ({100 * ranked / n:.0f} %); first or "
             f"indistinguishable from the first (withheld gains within {gap.TIE_NATS:g} nats) in "
@@ -307,6 +305,60 @@ def main() -> None:
         )
     if effects:
         _confusion(effects, results)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--control-seeds", type=int, help="seeds for the controls (default: --seeds)")
+    parser.add_argument("--scales", type=float, nargs="+", default=[1.0, 3.0])
+    parser.add_argument("--effects", nargs="*", default=list(gap.CANDIDATES))
+    parser.add_argument("--controls", nargs="*", default=list(CONTROLS))
+    parser.add_argument("--rigs", nargs="*", default=list(RIGS), choices=list(RIGS))
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--verbose", action="store_true", help="print every case as it finishes")
+    parser.add_argument("--timing", action="store_true")
+    parser.add_argument("--save", metavar="CASES.json", help="write every case's result here")
+    parser.add_argument(
+        "--load", metavar="CASES.json", nargs="+",
+        help="summarise cases saved by --save instead of running any (later files replace earlier cases)",
+    )  # fmt: skip
+    args = parser.parse_args()
+
+    names = (["control"] if "control" in args.controls else []) + args.effects
+    names += [n for n in CONTROLS[1:] if n in args.controls]
+    if args.load:
+        cases = [c for c in _load(args.load) if c["name"] in names and c["rig"] in args.rigs]
+        print(f"{len(cases)} cases from {', '.join(args.load)}\n")
+        _report([n for n in names if any(c["name"] == n for c in cases)], cases)
+        return
+
+    if args.timing:
+        rig = calibration.RigProcedure(position_dwell_s=40.0, rate_table=calibration.RateTable(dwell_s=20.0))
+        data = calibration.simulate_rig(rig, imu_spec.draw_unit("tactical", 0).only(*imu.BASELINE), seed=0)
+        started = time.perf_counter()
+        gap.diagnose(data)
+        elapsed = time.perf_counter() - started
+        print(f"timing: {len(data)} rows ({data.t[-1] / 60:.1f} min at 100 Hz) diagnosed in {elapsed:.1f} s")
+
+    jobs = [
+        (name, rig, seed, scale)
+        for name in names
+        for rig in args.rigs
+        for seed in range(args.seeds if name in gap.CANDIDATES else (args.control_seeds or args.seeds))
+        for scale in (args.scales if name in gap.CANDIDATES else [1.0])
+    ]
+    cases = []
+    started = time.perf_counter()
+    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool:
+        for case in pool.map(run_case, *zip(*jobs, strict=True)):
+            cases.append(case)
+            if args.verbose:
+                _print_case(case)
+    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
+    if args.save:
+        io.write_json(args.save, {"format": "sins-bench-gap", "cases": cases})
+    _report(names, cases)
 
 
 if __name__ == "__main__":
