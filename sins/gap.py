@@ -612,6 +612,7 @@ def diagnose(
     scores: dict[str, EffectScore] = {}
     why_not: dict[str, str] = {}  # why a candidate whose latest score is above 0 was passed over
     outside: list[Outside] = []
+    outside_channels: set[str] = set()  # of ``outside``, kept beside it
     taken = set().union(*(_exclusive(n) for n in model))
     remaining = [c for c in CANDIDATES.values() if c.name not in taken]
     while remaining:
@@ -624,7 +625,7 @@ def diagnose(
                 continue
             trial = _Trial()
             for i in chans:
-                if CHANNELS[i] in {o.channel for o in outside}:
+                if CHANNELS[i] in outside_channels:
                     continue  # explained by a disturbance outside the library: nothing to add there
                 if cand.name.endswith("quantization") and models[i].lattice is None:
                     continue
@@ -645,7 +646,7 @@ def diagnose(
         disturbances = _outside(round_scores[best], process, models, residual, x.t, fit, withheld, n_fit)
         if disturbances:  # the best candidate's gain there is a step's or a hum's: score again without
             outside += disturbances
-            outside_channels = {o.channel for o in outside}
+            outside_channels |= {o.channel for o in disturbances}
             for name in round_scores:
                 if set(scores[name].channels) <= outside_channels:
                     why_not[name] = "a disturbance outside the library explains its channels as well"
@@ -680,8 +681,8 @@ def diagnose(
     }
     # What the library leaves may still be a step or a hum, too small to lift the RMS by 3 % but
     # significant by its withheld likelihood: a gap all the same.
-    for i, ch in enumerate(CHANNELS):
-        if ch not in {o.channel for o in outside}:
+    for i, ch in enumerate(CHANNELS):  # each adds to its own channel only: the set before them holds
+        if ch not in outside_channels:
             alone = _Trial([_ChannelTrial(i, 0.0, 0.0, np.nan)])
             outside += _outside(alone, False, models, residual, x.t, fit, withheld, n_fit)
     outside.sort(key=lambda o: CHANNELS.index(o.channel))
@@ -700,9 +701,7 @@ def diagnose(
         for i in gapped
     ]
     unexplained = [
-        ch
-        for i, ch in enumerate(CHANNELS)
-        if rms_after[i] > SIGNIFICANT_RATIO * floors[i] or ch in {o.channel for o in outside}
+        ch for i, ch in enumerate(CHANNELS) if rms_after[i] > SIGNIFICANT_RATIO * floors[i] or i in disturbed
     ]
     # Accepted effects first, in the order they were accepted; then the rest, best score first.
     passed_over = [
