@@ -313,8 +313,9 @@ def _cmd_gap(args: argparse.Namespace) -> int:
             print(f"  {w['channel']}: {w['excess']:.3f}x the floor; " + ("; ".join(w["concentrates"]) or "-"))
     else:
         print("\nno channel is significantly above its noise floor: the model explains the data")
-    print("\ncandidate effects (withheld log-likelihood gain less the BIC penalty; the best above 0 is")
-    print("accepted, then the rest are scored again beside it):")
+    threshold = f"{gap.SIGNIFICANT_NATS:.1f} nats"
+    print(f"\ncandidate effects (withheld log-likelihood gain less {threshold}, and a random bias's")
+    print("allowance; the best above 0 is accepted, then the rest are scored again beside it):")
     for e in report.effects[: args.top]:
         mark = "accepted" if e.accepted else ""
         if e.not_accepted_because:

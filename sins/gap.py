@@ -21,12 +21,19 @@ Every library effect not in the model is a candidate, of one of three kinds:
 
 Each candidate is fitted on the fit rows and scored on the withheld rows: the
 Gaussian log-likelihood gain of its withheld residual over the current
-model's, minus ``k/2 · ln(n_fit)`` for its ``k`` parameters (BIC's penalty).
-On readings that lie on a lattice, each is scored instead by the probability
-of the reading at its recorded resolution: a quantizer's probability of its
-lattice index, a continuous model's of the same lattice bin.
-Candidates are accepted greedily while the best score is positive. Three
-guards keep a library effect from taking credit for what it is not:
+model's. On readings that lie on a lattice, each is scored instead by the
+probability of the reading at its recorded resolution: a quantizer's
+probability of its lattice index, a continuous model's of the same lattice bin.
+Its parameters need no penalty beyond what their errors cost the withheld
+rows; its score is the gain less a significance threshold,
+:data:`SIGNIFICANT_NATS` (``ln(20 / 0.05)``: a likelihood ratio fitted on other
+rows passes it by chance with probability ``0.05 / 20`` at most, Markov's
+bound). A random bias, whose filter also follows the withheld rows, may
+correct the current coefficients' errors there; what that can gain by chance
+is added to its threshold (:func:`_refit_allowance`). Candidates are accepted
+greedily, the one of greatest gain among those whose score is positive, until
+none is. Three guards keep a library effect from taking credit for what it is
+not:
 
 - a random bias tracks a single jump or a hum as well as a real instability,
   so a process candidate must drive its bias alike in all four quarters of the
@@ -72,9 +79,12 @@ Array = NDArray[np.float64]
 
 #: A channel's withheld residual counts as above its floor beyond this ratio (3 % plus sampling error).
 SIGNIFICANT_RATIO = 1.03
+#: The withheld log-likelihood gain a candidate needs, in nats: ln(20 / 0.05), a chance of 0.05 / 20
+#: that one of some twenty candidates passes where the current model holds (see :func:`_trial_gain`).
+SIGNIFICANT_NATS = float(np.log(20 / 0.05))
 #: Below any real sensor's noise (2e-5 °/h, 1e-11 g): the floor of noiseless (simulated) readings, SI units.
 _TINY = 1e-10
-#: Candidates whose withheld log-likelihood gains (before the penalty) differ by less than this are
+#: Candidates whose withheld log-likelihood gains differ by less than this are
 #: indistinguishable on the data: a likelihood ratio below e³ ≈ 20, short of "strong" evidence.
 TIE_NATS = 3.0
 #: The white noise before rounding, in quantization steps, tried for the quantization candidate.
@@ -198,7 +208,9 @@ assert set(CANDIDATES) == set(EFFECT_NAMES) - set(BASELINE) - {"gyro.bias", "acc
 
 @dataclass(frozen=True)
 class EffectScore:
-    """A candidate's score in the round it was accepted or last scored: log-likelihood gain less penalty."""
+    """A candidate's score in the round it was accepted or last scored: its withheld log-likelihood
+    gain less what it needs to be significant (:data:`SIGNIFICANT_NATS`, and a random bias's
+    allowance)."""
 
     name: str
     channels: tuple[str, ...]
@@ -227,7 +239,7 @@ class Outside:
     channel: str
     kind: str  # "bias step" | "periodic"
     size: float  # the step's size or the oscillation's amplitude, SI units of the channel
-    score: float  # withheld log-likelihood gain less the penalty, as for the candidates
+    score: float  # withheld log-likelihood gain less SIGNIFICANT_NATS, as for the candidates
     t_s: float | None = None  # when the step happens
     period_s: float | None = None  # the oscillation's period
 
@@ -488,31 +500,37 @@ def noise_floor(residual: Array, rows: NDArray[np.bool_] | None = None) -> float
     return float(np.std(d) / np.sqrt(2.0)) if len(d) else 0.0
 
 
-def _score(before: Array, after: Array, withheld: NDArray[np.bool_], k_extra: int, n_fit: int) -> float:
-    """Withheld log-likelihood gain (Gaussian, own variance) less ``k/2 ln n_fit``."""
+def _gain(before: Array, after: Array, withheld: NDArray[np.bool_]) -> float:
+    """Withheld log-likelihood gain (Gaussian, own variance)."""
     if np.isnan(after).any():
         return -np.inf
     s0 = float(np.mean(before[withheld] ** 2)) + _TINY**2
     s1 = float(np.mean(after[withheld] ** 2)) + _TINY**2
-    n = int(withheld.sum())
-    return 0.5 * n * np.log(s0 / s1) - 0.5 * k_extra * np.log(n_fit)
+    return 0.5 * int(withheld.sum()) * float(np.log(s0 / s1))
 
 
-def _trial_score(
+def _trial_gain(
     current: _ChannelModel, trial: _ChannelModel, before: Array, after: Array,
     withheld: NDArray[np.bool_], n_fit: int, extra: int = 0,
 ) -> tuple[float, float]:  # fmt: skip
-    """A trial model's score against the current one (whose residual is ``before``) and its penalty.
+    """A trial model's withheld log-likelihood gain over the current one (whose residual is
+    ``before``), and BIC's penalty for its extra parameters, for comparisons on the fit rows.
 
-    Readings off a lattice: :func:`_score`. On a lattice, each withheld reading's probability at the
+    Readings off a lattice: :func:`_gain`. On a lattice, each withheld reading's probability at the
     readings' resolution: a quantizer's own, a continuous model's of the reading's lattice bin (its
     residual Gaussian with its own variance).
     ``extra`` counts parameters the trial has beyond its columns (a step's time, a hum's frequency).
+
+    The gain needs no penalty for the trial's parameters: they were fitted on other rows, and each
+    one's error costs the withheld likelihood what it is worth. Where the current model holds, the
+    withheld likelihood ratio of a model fitted on the fit rows has expectation 1 at most, so it
+    exceeds ``e^T`` with probability ``e^-T`` at most (Markov): :data:`SIGNIFICANT_NATS` is ``T``.
+    (Approximately: each model's variance here is its own withheld mean square.)
     """
     k = trial.n_params - current.n_params + extra
     penalty = 0.5 * k * float(np.log(n_fit))
     if trial.lattice is None or np.isnan(after).any():
-        return _score(before, after, withheld, k, n_fit), penalty
+        return _gain(before, after, withheld), penalty
 
     def loglik(model: _ChannelModel, residual: Array) -> float:
         if model.loglik_rows is not None:
@@ -521,7 +539,38 @@ def _trial_score(
         sigma = float(np.sqrt(np.mean(residual[withheld] ** 2))) + _TINY
         return float(lattice.binned(residual[withheld], trial.lattice.step, sigma).sum())
 
-    return loglik(trial, after) - loglik(current, before) - penalty, penalty
+    return loglik(trial, after) - loglik(current, before), penalty
+
+
+def _refit_allowance(models: list[_ChannelModel], withheld: NDArray[np.bool_]) -> float:
+    """What a random bias may gain on the withheld rows where the current models hold, beyond
+    :data:`SIGNIFICANT_NATS`: the part of their error that comes from coefficients fitted on the
+    fit rows alone, at probability ``1 − e^-T``.
+
+    A random bias's filter follows the withheld readings as they come, so it also corrects the
+    current regressors' coefficient errors there: on a drive whose withheld rows are its last
+    straight, a misfit that the fit rows' turns could not pin down. With white noise of variance
+    ``σ²`` and columns ``A``, the coefficients' error is ``N(0, σ² (A_fᵀA_f)⁻¹)`` and the withheld
+    log-likelihood it costs is ``½ Σ λ_j χ²₁``, ``λ`` the eigenvalues of ``(A_fᵀA_f)⁻¹ A_wᵀA_w``:
+    at most ``½ λ_max χ²`` with as many degrees as there are nonzero ``λ``. On a rig whose holds
+    are all split alike, ``λ ≈ n_withheld / n_fit`` for every column.
+
+    The random bias's gain over the fitted current model is its gain over the true one (beyond
+    ``T`` with probability ``e^-T`` at most, :func:`_trial_gain`) plus this loss (beyond the
+    allowance with probability ``e^-T``): beyond both with probability ``2 e^-T`` at most.
+    """
+    lam_max, degrees = 0.0, 0
+    for m in models:
+        a = np.hstack(m.columns)
+        a = a / np.maximum(np.abs(a[m.fit]).max(axis=0), 1e-300)
+        _, s, vt = np.linalg.svd(a[m.fit], full_matrices=False)
+        keep = s > s[0] * max(a[m.fit].shape) * np.finfo(float).eps  # lstsq's cut-off
+        lam = np.linalg.svd(a[withheld] @ vt[keep].T / s[keep], compute_uv=False) ** 2
+        lam_max = max(lam_max, float(lam.max(initial=0.0)))
+        degrees += int(np.sum(lam > 1e-9 * lam.max(initial=0.0)))
+    if degrees == 0:
+        return 0.0
+    return 0.5 * lam_max * float(chi2.isf(np.exp(-SIGNIFICANT_NATS), degrees))
 
 
 def _available(cand: Candidate, x: _Inputs, readings: Array, fit: NDArray[np.bool_]) -> bool:
@@ -630,8 +679,10 @@ def diagnose(
                 if cand.name.endswith("quantization") and models[i].lattice is None:
                     continue
                 m, r = _tried(models[i], cand)
-                score, penalty = _trial_score(models[i], m, residual[:, i], r, withheld, n_fit)
-                trial.add(i, score, penalty, m.fit_rows_loglik(r))
+                gain, penalty = _trial_gain(models[i], m, residual[:, i], r, withheld, n_fit)
+                trial.add(i, gain, penalty, m.fit_rows_loglik(r))
+            if cand.kind == "process" and trial.channels:
+                trial.allowance = _refit_allowance([models[i] for i in trial.channels], withheld)
             if trial.channels:
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
@@ -640,7 +691,9 @@ def diagnose(
         positive = [n for n in round_scores if round_scores[n].score > 0.0]
         if not positive:
             break
-        best = max(positive, key=lambda n: round_scores[n].score)
+        # Significance is each candidate's own test; of those that pass, the one that explains the
+        # withheld rows best: a random bias's allowance is no evidence against it.
+        best = max(positive, key=lambda n: round_scores[n].gain)
         best, told_apart, alike = _process_or_regressors(*_nested_choice(best, round_scores), round_scores)
         process = CANDIDATES[best].kind == "process"
         disturbances = _outside(round_scores[best], process, models, residual, x.t, fit, withheld, n_fit)
@@ -815,8 +868,8 @@ class _ChannelTrial(NamedTuple):
     """A candidate tried on one channel."""
 
     channel: int
-    score: float
-    penalty: float  # BIC's, within the score
+    gain: float  # the withheld log-likelihood gain
+    penalty: float  # BIC's, for comparisons on the fit rows
     fit_loglik: float  # the fit rows' log-likelihood: the process's innovations' for a random bias
 
 
@@ -829,9 +882,12 @@ class _Trial:
     """
 
     rows: list[_ChannelTrial] = field(default_factory=list)
+    #: Beyond :data:`SIGNIFICANT_NATS`, what the candidate may gain where the current model holds
+    #: (a random bias: :func:`_refit_allowance`).
+    allowance: float = 0.0
 
-    def add(self, i: int, score: float, penalty: float, fit_loglik: float) -> None:
-        self.rows.append(_ChannelTrial(i, score, penalty, fit_loglik))
+    def add(self, i: int, gain: float, penalty: float, fit_loglik: float) -> None:
+        self.rows.append(_ChannelTrial(i, gain, penalty, fit_loglik))
 
     @property
     def channels(self) -> list[int]:
@@ -842,13 +898,14 @@ class _Trial:
         return tuple(CHANNELS[i] for i in self.channels)
 
     @property
-    def score(self) -> float:
-        return float(sum(row.score for row in self.rows))
+    def gain(self) -> float:
+        """The withheld log-likelihood gain."""
+        return float(sum(row.gain for row in self.rows))
 
     @property
-    def gain(self) -> float:
-        """The withheld log-likelihood gain: the score without the penalty."""
-        return self.score + float(sum(row.penalty for row in self.rows))
+    def score(self) -> float:
+        """The gain beyond what it needs to be significant: accepted above 0."""
+        return self.gain - SIGNIFICANT_NATS - self.allowance
 
 
 def _tried(model: _ChannelModel, cand: Candidate) -> tuple[_ChannelModel, Array]:
@@ -873,17 +930,17 @@ def _outside(
     regressors: a single bias step (:func:`sins.disturbance.best_step`; its size and time are two
     parameters) and an oscillation (:func:`sins.disturbance.best_oscillation`; frequency and two
     amplitudes, three). A library effect that explains a channel no better than a one-off step or a
-    hum cannot claim it; the disturbance is reported instead. As well: a positive score, and a
-    withheld gain within :data:`TIE_NATS` of the effect's; or, where the effect is a random bias
-    (``process``), a fit-row log-likelihood less penalty within :data:`TIE_NATS` of its own. The
-    random bias's filter predicts each withheld row from the readings before it, so it follows a
-    step that falls inside a withheld block, where the fit rows cannot place it; on the fit rows it
-    pays for trailing the step, as it does for trailing regressors' levels
-    (:func:`_process_or_regressors`).
+    hum cannot claim it; the disturbance is reported instead. As well: a withheld gain above
+    :data:`SIGNIFICANT_NATS`, and within :data:`TIE_NATS` of the effect's; or, where the effect is
+    a random bias (``process``), a fit-row log-likelihood less BIC's penalty within
+    :data:`TIE_NATS` of its own. The random bias's filter predicts each withheld row from the
+    readings before it, so it follows a step that falls inside a withheld block, where the fit rows
+    cannot place it; on the fit rows it pays for trailing the step, as it does for trailing
+    regressors' levels (:func:`_process_or_regressors`).
     """
     out = []
-    for i, score, penalty, fit_loglik in trial.rows:
-        if score <= 0.0 and trial.score > 0.0:
+    for i, gain, penalty, fit_loglik in trial.rows:
+        if gain <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
         columns = np.hstack(models[i].columns)
         t_step, size = disturbance.best_step(residual[:, i], columns, fit, t)
@@ -898,15 +955,15 @@ def _outside(
         for candidate, column, k in tries:
             m = models[i].with_columns(column)
             after = m.error - m.predict()
-            outside_score, penalty_k = _trial_score(
+            outside_gain, penalty_k = _trial_gain(
                 models[i], m, residual[:, i], after, withheld, n_fit, k - column.shape[1]
             )
             if process:
                 as_well = m.fit_rows_loglik(after) - penalty_k > fit_loglik - penalty - TIE_NATS
             else:  # gains compared, as for ties: no better than the disturbance is not what happened
-                as_well = outside_score + penalty_k > score + penalty - TIE_NATS
-            if outside_score > 0.0 and as_well:
-                found.append(dataclasses.replace(candidate, score=float(outside_score)))
+                as_well = outside_gain > gain - TIE_NATS
+            if outside_gain > SIGNIFICANT_NATS and as_well:
+                found.append(dataclasses.replace(candidate, score=outside_gain - SIGNIFICANT_NATS))
         if found:
             out.append(max(found, key=lambda o: o.score))
     return out

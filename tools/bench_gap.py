@@ -29,8 +29,9 @@ the diagnosis: the effect's own contribution to the readings (the session simula
 noise, with and without it), less what the baseline's columns (bias, scale and misalignment,
 g-sensitivity) absorb by least squares over the whole session, in units of the white noise on the
 withheld rows. Its half sum of squares is the withheld log-likelihood gain an oracle model would make
-under white noise; below :data:`OBSERVABLE_NATS` no model could beat a few parameters' BIC penalty
-(``k/2 ln n`` ≈ 5–6 nats each at these lengths) with strong evidence, and the case is "unobservable".
+under white noise; below :data:`OBSERVABLE_NATS` no model could pass the diagnosis's significance
+threshold (``gap.SIGNIFICANT_NATS``, 6.0 nats) with strong evidence to spare (``gap.TIE_NATS``, 3),
+and the case is "unobservable".
 
 Whether it could be told from the library effect most like it is judged the same way: what is left of
 its contribution once the baseline's columns *and* a rival's (every other regressor effect of the
