@@ -562,10 +562,11 @@ def _refit_allowance(models: list[_ChannelModel], withheld: NDArray[np.bool_]) -
     lam_max, degrees = 0.0, 0
     for m in models:
         a = np.hstack(m.columns)
-        a = a / np.maximum(np.abs(a[m.fit]).max(axis=0), 1e-300)
-        _, s, vt = np.linalg.svd(a[m.fit], full_matrices=False)
-        keep = s > s[0] * max(a[m.fit].shape) * np.finfo(float).eps  # lstsq's cut-off
-        lam = np.linalg.svd(a[withheld] @ vt[keep].T / s[keep], compute_uv=False) ** 2
+        a_fit = a[m.fit]
+        scale = np.maximum(np.abs(a_fit).max(axis=0), 1e-300)
+        _, s, vt = np.linalg.svd(a_fit / scale, full_matrices=False)
+        keep = s > s[0] * max(a_fit.shape) * np.finfo(float).eps  # lstsq's cut-off
+        lam = np.linalg.svd((a[withheld] / scale) @ vt[keep].T / s[keep], compute_uv=False) ** 2
         lam_max = max(lam_max, float(lam.max(initial=0.0)))
         degrees += int(np.sum(lam > 1e-9 * lam.max(initial=0.0)))
     if degrees == 0:
@@ -681,9 +682,9 @@ def diagnose(
                 m, r = _tried(models[i], cand)
                 gain, penalty = _trial_gain(models[i], m, residual[:, i], r, withheld, n_fit)
                 trial.add(i, gain, penalty, m.fit_rows_loglik(r))
-            if cand.kind == "process" and trial.channels:
-                trial.allowance = _refit_allowance([models[i] for i in trial.channels], withheld)
             if trial.channels:
+                if cand.kind == "process":
+                    trial.allowance = _refit_allowance([models[i] for i in trial.channels], withheld)
                 round_scores[cand.name] = trial
         for name, trial in round_scores.items():
             scores[name] = EffectScore(name, trial.names, trial.score, False)
