@@ -300,9 +300,9 @@ def _report(names: list[str], cases: list[dict[str, Any]]) -> None:
         n = len(chosen)
         ranked, tied = sum(_passed(c) for c in chosen), sum(_passed(c, ties=True) for c in chosen)
         print(
-            f"\n{label}: injected effect ranked first in {ranked}/{n} ({100 * ranked / n:.0f} %); first or "
+            f"\n{label}: injected effect ranked first in {ranked}/{n} ({100 * ranked / n:.1f} %); first or "
             f"indistinguishable from the first (withheld gains within {gap.TIE_NATS:g} nats) in "
-            f"{tied}/{n} ({100 * tied / n:.0f} %)"
+            f"{tied}/{n} ({100 * tied / n:.1f} %)"
         )
     if effects:
         _confusion(effects, results)
