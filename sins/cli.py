@@ -214,14 +214,18 @@ def _cmd_effects(args: argparse.Namespace) -> int:
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from sins import compensation, io
+    from sins.residual import ResidualStrategy
 
     data = io.read_recording(args.recording)
     if args.strategy == "oracle":
         raise SinsInputError(
             "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
         )
+    if args.no_guard and args.strategy not in ("mlp", "kohonen"):
+        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
     try:
-        strategy = compensation.make(args.strategy)
+        params = {"guard": False} if args.no_guard else {}
+        strategy = compensation.make(args.strategy, **params)
         part = data
         if args.validation:
             part, _ = data.split(args.validation)
@@ -231,8 +235,18 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     compensation.save(strategy, args.out)
     held = f" (the last {args.validation:g} of each phase held back)" if args.validation else ""
     print(f"fitted {args.strategy} on {len(part)} of {len(data)} rows of {args.recording}{held}")
+    if isinstance(strategy, ResidualStrategy):
+        print(
+            f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks: "
+            + "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
+        )
+        print(strategy.guard_report())
     print(f"wrote {args.out}")
     return 0
+
+
+def _settings(config: dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in config.items())
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -432,11 +446,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("recording", type=Path, metavar="RECORDING.csv")
     p.add_argument(
         "--strategy", required=True,
-        help="none, regression, regression_robust, regression_extended, mlp, mlp_seed or kohonen",
+        help="none, regression, regression_robust, regression_extended, mlp, kohonen "
+        "(or the seed paper's mlp_pure, mlp_seed, kohonen_pure)",
     )  # fmt: skip
     p.add_argument(
         "--validation", type=_fraction, metavar="FRACTION",
         help="hold back the last FRACTION of every phase (of the whole recording if it has no phases)",
+    )  # fmt: skip
+    p.add_argument(
+        "--no-guard", action="store_true",
+        help="mlp, kohonen: use the learned correction on every channel, even where it does not beat "
+        "regression on held-back blocks",
     )  # fmt: skip
     p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
     p.set_defaults(func=_cmd_fit)

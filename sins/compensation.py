@@ -34,7 +34,7 @@ from sins.series import CalibrationData, ImuIncrements, ImuRates
 Array = NDArray[np.float64]
 
 #: Version of the model file format; bump it when the saved state changes meaning.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 FORMAT_NAME = "sins.compensation"
 
 
@@ -253,14 +253,14 @@ class ExtendedRegression(Strategy):
 
 def strategy_class(name: str) -> type[Strategy]:
     """The class registered under ``name``; the learned ones import torch or minisom only when asked for."""
-    if name == "mlp":
-        from sins.mlp import MLP
+    if name in ("mlp", "mlp_pure"):
+        from sins.mlp import MLP, ResidualMLP
 
-        return MLP
-    if name == "kohonen":
-        from sins.kohonen import Kohonen
+        return ResidualMLP if name == "mlp" else MLP
+    if name in ("kohonen", "kohonen_pure"):
+        from sins.kohonen import Kohonen, LocalLinearMap
 
-        return Kohonen
+        return LocalLinearMap if name == "kohonen" else Kohonen
     classes: dict[str, type[Strategy]] = {
         "none": NoCompensation, "oracle": Oracle, "regression": Regression,
         "regression_extended": ExtendedRegression,
@@ -278,9 +278,14 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "regression_robust": ("regression", {"robust": True}),
     "regression_extended": ("regression_extended", {}),
     "mlp": ("mlp", {}),
-    "mlp_seed": ("mlp", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
+    "mlp_pure": ("mlp_pure", {}),
+    "mlp_seed": ("mlp_pure", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
     "kohonen": ("kohonen", {}),
+    "kohonen_pure": ("kohonen_pure", {}),
 }
+
+#: Names a model file may carry (the registered classes that can be fitted).
+SAVED_STRATEGIES = ("none", "regression", "regression_extended", "mlp", "mlp_pure", "kohonen", "kohonen_pure")
 
 
 def make(name: str, **params: Any) -> Strategy:
@@ -317,12 +322,12 @@ def load(path: str | os.PathLike[str]) -> Strategy:
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
-    if name not in ("none", "regression", "regression_extended", "mlp", "kohonen"):
-        raise SinsInputError(f"{path}: unknown strategy {name!r}")
+    if name not in SAVED_STRATEGIES:
+        raise SinsInputError(f"{path}: unknown strategy {name!r} (known: {', '.join(SAVED_STRATEGIES)})")
     try:
         strategy = strategy_class(name)(**doc.get("params", {}))
         strategy.set_state(doc.get("state", {}))
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, KeyError) as exc:
         raise SinsInputError(f"{path}: malformed {name} model ({exc})") from None
     return strategy
 
