@@ -149,8 +149,9 @@ class LocalLinearMap(ResidualStrategy):
         sizes: tuple[int, ...] = (5, 8, 12),
         sigmas: tuple[float, ...] = (0.7, 1.2),
         smoothing: float = 1e-2,
+        slope_ridge: float = 1e-2,
         som_iterations: int = 30,
-        folds: int = 4,
+        folds: int = 3,
         guard: bool = True,
         guard_z: float = 2.0,
         seed: int = 0,
@@ -159,12 +160,14 @@ class LocalLinearMap(ResidualStrategy):
         self.sizes = tuple(int(n) for n in sizes)
         self.sigmas = tuple(float(s) for s in sigmas)
         self.smoothing = smoothing
+        self.slope_ridge = slope_ridge
         self.som_iterations = som_iterations
 
     def params(self) -> dict[str, Any]:
         return {
             **super().params(), "sizes": list(self.sizes), "sigmas": list(self.sigmas),
-            "smoothing": self.smoothing, "som_iterations": self.som_iterations,
+            "smoothing": self.smoothing, "slope_ridge": self.slope_ridge,
+            "som_iterations": self.som_iterations,
         }  # fmt: skip
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
@@ -174,14 +177,19 @@ class LocalLinearMap(ResidualStrategy):
     def _groups(n_inputs: int) -> list[tuple[list[int], list[int]]]:
         """Each map's ``(winner columns, plane columns)``: gyro inputs ``[ω, f(, T)]``, accel ``[f(, T)]``.
 
-        A rate map and a force map, and a chain over temperature whose planes also slope in
-        the rate and force (a scale factor that drifts with temperature). Temperature is not in
-        the rate and force maps: a rig visits each rate at one temperature, so a slope in it
-        there is set by chance.
+        For the gyros, a chain over the rate about each axis (a scale factor's curve is a function
+        of its own axis's rate; a map over the three rates at once would have to extrapolate from the
+        few axes a table turns about to every direction a vehicle turns in); for both sensors a sheet
+        over the specific force (g² sensitivity, a scale factor's curve in force), and a chain over
+        temperature whose planes also slope in rate and force (a scale factor that drifts with it).
+        Temperature is not in the rate and force maps: a rig visits each rate at one temperature, so
+        a slope in it there is set by chance.
         """
         temp = [n_inputs - 1] if n_inputs in (4, 7) else []
-        spaces = [[0, 1, 2], [3, 4, 5]] if n_inputs >= 6 else [[0, 1, 2]]
-        groups = [(cols, cols) for cols in spaces]
+        gyro = n_inputs >= 6
+        groups = [([i], [i]) for i in range(3)] if gyro else []
+        force = [3, 4, 5] if gyro else [0, 1, 2]
+        groups.append((force, force))
         return [*groups, (temp, [*temp, *range(n_inputs - 1)])] if temp else groups
 
     def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
@@ -192,8 +200,14 @@ class LocalLinearMap(ResidualStrategy):
         rng = np.random.default_rng(seed)
         some = points.x if len(points.x) <= 2000 else points.x[rng.choice(len(points.x), 2000, replace=False)]
         placed = []
+        temp_last = points.x.shape[1] in (4, 7)
         for win_cols, plane_cols in self._groups(points.x.shape[1]):
-            grid = lattice(size, min(len(win_cols), LATTICE_DIMS))
+            # A rate chain has as many nodes as a sheet: its one input gets the resolution a sheet spreads
+            # over two. Temperature, slow and smooth, gets a chain of ``size``.
+            if len(win_cols) > 1:
+                grid = lattice(size, 2)
+            else:
+                grid = lattice(size if win_cols == [points.x.shape[1] - 1] and temp_last else size * size, 1)
             codebook = batch_map(some[:, win_cols], grid, self.som_iterations)
             winners = _nearest(points.x[:, win_cols], codebook)
             placed.append(_Placed(win_cols, plane_cols, grid, codebook, winners))
@@ -219,7 +233,14 @@ class LocalLinearMap(ResidualStrategy):
         weight = points.n / points.n.sum()
         normal = (design.T @ design.multiply(weight[:, None])).toarray()
         nodes = sum(len(pl.grid) for pl in placed)
-        normal += (self.smoothing / nodes) * (smooth.T @ smooth).toarray() + 1e-8 * np.eye(design.shape[1])
+        normal += (self.smoothing / nodes) * (smooth.T @ smooth).toarray()
+        # Where the data cannot set a slope (across a table's axis, say), the plane is flat; the offsets
+        # get only a trace of ridge, to keep the system well posed.
+        ridge = np.concatenate(
+            [np.r_[1e-8, np.full(len(pl.plane_cols), self.slope_ridge)].repeat(1).tolist() * len(pl.grid)
+             for pl in placed]
+        )  # fmt: skip
+        normal += np.diag(ridge)
         rhs = design.T @ (weight[:, None] * points.y / sigma)
         theta = np.linalg.solve(normal, rhs)
         maps, at = [], 0
@@ -318,9 +339,9 @@ def batch_map(x: Array, grid: Array, iterations: int) -> Array:
 
 
 def neighbourhood_weights(grid: Array, sigma: float) -> Array:
-    """``h[w, j]``: node ``j``'s share of a prediction won by node ``w`` (rows sum to 1; cut at 3σ)."""
+    """``h[w, j]``: node ``j``'s share of a prediction won by node ``w`` (rows sum to 1; cut at 2σ)."""
     lattice = ((grid[:, None, :] - grid[None, :, :]) ** 2).sum(axis=2)
-    h = np.where(lattice <= 9.0 * sigma * sigma, np.exp(-lattice / (2.0 * sigma * sigma)), 0.0)
+    h = np.where(lattice <= 4.0 * sigma * sigma, np.exp(-lattice / (2.0 * sigma * sigma)), 0.0)
     out: Array = h / h.sum(axis=1, keepdims=True)
     return out
 
@@ -328,11 +349,6 @@ def neighbourhood_weights(grid: Array, sigma: float) -> Array:
 def _nearest(x: Array, codebook: Array) -> NDArray[np.intp]:
     d2 = (x * x).sum(axis=1)[:, None] - 2.0 * x @ codebook.T + (codebook * codebook).sum(axis=1)[None, :]
     return np.argmin(d2, axis=1)
-
-
-#: The rate and force maps are the classic square sheet (a cube fitted held-back blocks no better on the
-#: 26-position rig at 1.5-3x the fitting time); temperature, one input, is a chain.
-LATTICE_DIMS = 2
 
 
 def lattice(size: int, dims: int) -> Array:

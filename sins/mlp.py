@@ -273,7 +273,7 @@ class ResidualMLP(ResidualStrategy):
         self,
         hidden_sizes: tuple[tuple[int, ...], ...] = ((16, 16), (32, 32)),
         decays: tuple[float, ...] = (1e-6, 1e-4),
-        folds: int = 4,
+        folds: int = 3,
         guard: bool = True,
         guard_z: float = 2.0,
         seed: int = 0,

@@ -16,8 +16,8 @@ against the rig's reference. Consequences, each a reason for the design:
   ``ω`` by the largest rate the rig turned at (one scale for the three axes,
   at least 1 °/s), ``f`` by ``G0``, ``T`` by half the temperature span
   (temperature is an input only where the data span 2 °C or more). Outside
-  the box the rig covered the inputs are clamped to its edge: a learner holds
-  its last value rather than extrapolate.
+  the box the rig covered a learner goes on along its edge slope for a
+  quarter of the box, and holds beyond (``_residual``).
 * **Sufficient statistics.** Rows whose inputs fall in one cell of a fine
   grid (1/64 of the scaled range: 4.7 °/s on a 300 °/s rig, 0.15 m/s²)
   within one time block are averaged into one point weighted by its count.
@@ -151,7 +151,7 @@ class ResidualStrategy(Strategy):
     seed : fold assignment and the learner's own randomness
     """
 
-    def __init__(self, folds: int = 4, guard: bool = True, guard_z: float = 2.0, seed: int = 0) -> None:
+    def __init__(self, folds: int = 3, guard: bool = True, guard_z: float = 2.0, seed: int = 0) -> None:
         if folds < 2:
             raise ValueError(f"folds must be 2 or more, got {folds}")
         self.folds = folds
@@ -296,21 +296,40 @@ class ResidualStrategy(Strategy):
             lo, hi = float(np.min(data.temp)), float(np.max(data.temp))
             centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
         self.scaling_ = {"rate": rate, "accel": earth.G0, "temp_centre": centre, "temp_half": half}
-        box = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp, clamp=False) for s in SENSORS}
+        box = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
         self.box_ = {s: [box[s].min(axis=0).tolist(), box[s].max(axis=0).tolist()] for s in SENSORS}
 
-    def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None, *, clamp: bool = True) -> Array:
+    def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
         s = self.scaling_
         t = None
         if self.uses_temp_:
             if temp is None:
                 raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
             t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
-        x = input_columns(sensor, w / s["rate"], f / s["accel"], t)
-        if clamp:
-            lo, hi = self.box_[sensor]
-            x = np.clip(x, lo, hi)
-        return x
+        return input_columns(sensor, w / s["rate"], f / s["accel"], t)
+
+    def _residual(self, sensor: str, x: Array) -> Array:
+        """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
+        goes on along its edge slope (a one-sided difference over the last 5 % of the range) for up
+        to a quarter of the range, and holds from there: a scale factor's curve that the rig followed
+        to 250 °/s is better continued to 300 than cut flat, and guessed no further."""
+        lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
+        width = np.maximum(hi - lo, 1e-12)
+        reach = np.clip(x, lo - 0.25 * width, hi + 0.25 * width)
+        inside = np.clip(reach, lo, hi)
+        learner = self._learner(sensor)
+        pred: Array = self._predict(learner, inside)
+        beyond = np.flatnonzero((reach != inside).any(axis=1))
+        for d in range(x.shape[1]):
+            rows = beyond[reach[beyond, d] != inside[beyond, d]]
+            if rows.size == 0:
+                continue
+            step = 0.05 * width[d] * np.sign(reach[rows, d] - inside[rows, d])
+            back = inside[rows].copy()
+            back[:, d] -= step
+            slope = (pred[rows] - self._predict(learner, back)) / step[:, None]
+            pred[rows] += slope * (reach[rows, d] - inside[rows, d])[:, None]
+        return pred
 
     # ------------------------------------------------------------------ use
 
@@ -326,11 +345,7 @@ class ResidualStrategy(Strategy):
             out = []
             for si, sensor in enumerate(SENSORS):
                 mask = self.used_[3 * si : 3 * si + 3]
-                pred = (
-                    self._predict(self._learner(sensor), self._scale(sensor, w, f, temp))
-                    if mask.any()
-                    else 0.0
-                )
+                pred = self._residual(sensor, self._scale(sensor, w, f, temp)) if mask.any() else 0.0
                 out.append(hat[si] - pred * mask)
             w, f = out
         return w, f
