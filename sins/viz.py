@@ -63,8 +63,10 @@ _COLOURS = {
     "regression_robust": (31, 120, 180),
     "regression_extended": (0, 90, 160),
     "mlp": (255, 127, 0),
+    "mlp_pure": (230, 150, 60),
     "mlp_seed": (200, 100, 0),
     "kohonen": (152, 78, 163),
+    "kohonen_pure": (190, 140, 200),
 }
 _OTHER_COLOURS = ((166, 86, 40), (247, 129, 191), (153, 153, 153), (255, 255, 51))
 

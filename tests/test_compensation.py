@@ -249,7 +249,7 @@ def test_kohonen_improves_on_none_fivefold_beyond_the_noise_floor(nonlinear_runs
     assert (np.mean([r["none"] / r["kohonen"] for r in nonlinear_runs], axis=0)[:3] >= 3.0).all()
 
 
-@pytest.mark.parametrize("name", ["mlp", "kohonen", "mlp_seed"])
+@pytest.mark.parametrize("name", ["mlp_seed"])  # the others: tests/test_learned.py
 def test_learned_strategies_save_load_and_correct_alike(tmp_path: Path, name: str):
     data = calibration.simulate_rig(FAST, _unit("consumer", 6), seed=6)
     small = data.rows(slice(0, len(data), 20))  # 2,600 rows: enough to learn something, fast
@@ -261,8 +261,8 @@ def test_learned_strategies_save_load_and_correct_alike(tmp_path: Path, name: st
     again = compensation.load(path)
     w1, f1 = strategy.correct(data.gyro, data.accel)
     w2, f2 = again.correct(data.gyro, data.accel)
-    np.testing.assert_allclose(w2, w1, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(f2, f1, rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(w2, w1)
+    np.testing.assert_array_equal(f2, f1)
     before = _after(compensation.residual_rms(compensation.make("none"), data))
     after = _after(compensation.residual_rms(strategy, data))
     assert (after < before).mean() >= 0.5  # it learned something on most channels
