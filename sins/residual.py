@@ -140,6 +140,38 @@ def _block_gains(points: Points, pred: Array) -> tuple[Array, Array]:
     return out, base
 
 
+class _Trial:
+    """A candidate setting's held-back record: its weighted loss, and per held-back block and channel
+    the gain over regression and regression's own sum of squares."""
+
+    def __init__(self, config: dict[str, Any]) -> None:
+        self.config = config
+        self.score = 0.0
+        self.gains: list[Array] = []
+        self.base: list[Array] = []
+
+    def add(self, held: Points, pred: Array, sigma: Array) -> None:
+        self.score += float((held.n[:, None] * ((held.y - pred) / sigma) ** 2).sum())
+        gain, base = _block_gains(held, pred)
+        self.gains.append(gain)
+        self.base.append(base)
+
+    def verdicts(self, z: float) -> list[dict[str, Any]]:
+        """Per channel: the gain and its standard error as fractions of regression's sum of squares,
+        and whether the gain is above ``z`` of them (blocks taken as independent draws)."""
+        gains, base = np.vstack(self.gains), np.vstack(self.base)
+        out = []
+        for c in range(gains.shape[1]):
+            total, base_sse, b = float(gains[:, c].sum()), float(base[:, c].sum()), len(gains)
+            se = float(np.sqrt(b * gains[:, c].var(ddof=1))) if b > 1 else np.inf
+            out.append({
+                "gain_fraction": total / base_sse if base_sse > 0 else 0.0,
+                "gain_se_fraction": se / base_sse if base_sse > 0 else 0.0,
+                "earns_its_place": bool(total > z * se),
+            })  # fmt: skip
+        return out
+
+
 class ResidualStrategy(Strategy):
     """Regression first, then a learner of what it leaves (see the module docstring).
 
@@ -201,21 +233,41 @@ class ResidualStrategy(Strategy):
         self._base = base
         self._set_scaling(data)
         scaled = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
-        block = segment(np.hstack([scaled["gyro"][:, :6]]), data.t)
-        rng = np.random.default_rng([self.seed, 17])
+        block = segment(scaled["gyro"][:, :6], data.t)
         n_blocks = int(block[-1]) + 1
-        fold_of_block = rng.permutation(n_blocks) % self.folds
-        fold = fold_of_block[block]
+        fold = (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[block]
         self.blocks_, self.cv_folds_ = n_blocks, self.folds
         targets = self._targets(base, data)
         sigma = np.sqrt(np.mean(targets**2, axis=0))
-        sigma = np.where(sigma > 0, sigma, 1.0)
-        self.sigma_ = sigma
-        # Cross-validation: per sensor and candidate variant, held-back scores and per-block gains.
-        scores: dict[str, dict[str, float]] = {s: {} for s in SENSORS}
-        gains: dict[str, dict[str, list[Array]]] = {s: {} for s in SENSORS}
-        base_sums: dict[str, dict[str, list[Array]]] = {s: {} for s in SENSORS}
-        configs: dict[str, dict[str, dict[str, Any]]] = {s: {} for s in SENSORS}
+        self.sigma_ = np.where(sigma > 0, sigma, 1.0)
+        trials = self._cross_validate(data, scaled, block, fold)
+        self.learners_: dict[str, Any] = {}
+        self.configs_: dict[str, dict[str, Any]] = {}
+        self.cv_scores_ = {s: {k: t.score for k, t in trials[s].items()} for s in SENSORS}
+        self.guard_: dict[str, dict[str, Any]] = {}
+        used = np.zeros(6, dtype=bool)
+        for si, sensor in enumerate(SENSORS):
+            cols = slice(3 * si, 3 * si + 3)
+            if not trials[sensor]:
+                raise ValueError(f"{data.source or 'recording'}: no fold could be fitted (too few blocks)")
+            best = min(trials[sensor].values(), key=lambda t: t.score)
+            self.configs_[sensor] = best.config
+            for c, verdict in enumerate(best.verdicts(self.guard_z)):
+                self.guard_[CHANNELS[3 * si + c]] = verdict
+                used[3 * si + c] = verdict["earns_its_place"] or not self.guard
+            learner = self._train(best.config, aggregate(scaled[sensor], targets[:, cols], block),
+                                  self.sigma_[cols], self.seed)  # fmt: skip
+            self.learners_[sensor] = self._final(best.config, learner)
+        self.used_ = used
+        self.fit_seconds_ = time.perf_counter() - started
+        return self
+
+    def _cross_validate(
+        self, data: CalibrationData, scaled: dict[str, Array], block: NDArray[np.intp], fold: NDArray[np.intp]
+    ) -> dict[str, dict[str, _Trial]]:
+        """Per sensor and candidate setting, its held-back record over the folds: for each fold the
+        regression is refitted on the others and every candidate trained on their residuals."""
+        trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
         for k in range(self.folds):
             train, held = fold != k, fold == k
             try:
@@ -228,49 +280,11 @@ class ResidualStrategy(Strategy):
                 pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train])
                 pts_held = aggregate(scaled[sensor][held], fold_targets[held, cols], block[held])
                 for config in self._candidates(sensor, scaled[sensor].shape[1]):
-                    learner = self._train(config, pts_train, sigma[cols], self.seed + k)
+                    learner = self._train(config, pts_train, self.sigma_[cols], self.seed + k)
                     for variant, fitted in self._variants(config, learner):
-                        key = _key(variant)
-                        configs[sensor][key] = variant
-                        pred = self._predict(fitted, pts_held.x)
-                        loss = float((pts_held.n[:, None] * ((pts_held.y - pred) / sigma[cols]) ** 2).sum())
-                        scores[sensor][key] = scores[sensor].get(key, 0.0) + loss
-                        gain, base_sum = _block_gains(pts_held, pred)
-                        gains[sensor].setdefault(key, []).append(gain)
-                        base_sums[sensor].setdefault(key, []).append(base_sum)
-        self.learners_: dict[str, Any] = {}
-        self.configs_: dict[str, dict[str, Any]] = {}
-        self.cv_scores_: dict[str, dict[str, float]] = scores
-        used = np.zeros(6, dtype=bool)
-        self.guard_ = {}
-        for si, sensor in enumerate(SENSORS):
-            cols = slice(3 * si, 3 * si + 3)
-            if not scores[sensor]:
-                raise ValueError(f"{data.source or 'recording'}: no fold could be fitted (too few blocks)")
-            key = min(scores[sensor], key=scores[sensor].__getitem__)
-            config = configs[sensor][key]
-            self.configs_[sensor] = config
-            block_gains = np.vstack(gains[sensor][key])
-            block_base = np.vstack(base_sums[sensor][key])
-            for c in range(3):
-                total = float(block_gains[:, c].sum())
-                b = len(block_gains)
-                # Blocks as independent draws: the total's standard error from their spread.
-                se = float(np.sqrt(b * block_gains[:, c].var(ddof=1))) if b > 1 else np.inf
-                base_sse = float(block_base[:, c].sum())
-                earns = total > self.guard_z * se
-                used[3 * si + c] = earns or not self.guard
-                self.guard_[CHANNELS[3 * si + c]] = {
-                    "gain_fraction": total / base_sse if base_sse > 0 else 0.0,
-                    "gain_se_fraction": se / base_sse if base_sse > 0 else 0.0,
-                    "earns_its_place": bool(earns),
-                }
-            pts_all = aggregate(scaled[sensor], targets[:, cols], block)
-            learner = self._train(config, pts_all, sigma[cols], self.seed)
-            self.learners_[sensor] = self._final(config, learner)
-        self.used_ = used
-        self.fit_seconds_ = time.perf_counter() - started
-        return self
+                        trial = trials[sensor].setdefault(_key(variant), _Trial(variant))
+                        trial.add(pts_held, self._predict(fitted, pts_held.x), self.sigma_[cols])
+        return trials
 
     def _final(self, config: dict[str, Any], learner: Any) -> Any:
         """The learner to keep from a final training run under ``config`` (its variant's, say)."""

@@ -25,7 +25,7 @@ from sins import calibration, compensation, imu, imu_spec, motion, strapdown, tr
 from sins.metrics import nav_errors, summarize
 from sins.series import ImuIncrements, NavSeries
 
-STRATEGIES = ("none", "regression", "regression_robust", "mlp", "kohonen")
+STRATEGIES = ("none", "regression", "regression_robust", "mlp", "kohonen", "mlp_pure", "kohonen_pure")
 
 
 def unit(regime: str, seed: int) -> tuple[imu.ImuModel, imu.ImuModel]:
