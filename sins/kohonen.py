@@ -149,7 +149,7 @@ class LocalLinearMap(ResidualStrategy):
         sizes: tuple[int, ...] = (5, 8, 12),
         sigmas: tuple[float, ...] = (0.7, 1.2),
         smoothing: float = 1e-2,
-        slope_ridge: float = 1e-2,
+        slope_ridge: float = 1e-5,
         som_iterations: int = 30,
         folds: int = 3,
         guard: bool = True,
@@ -223,7 +223,7 @@ class LocalLinearMap(ResidualStrategy):
 
         designs, penalties, blends = [], [], []
         for pl in placed:
-            blend = neighbourhood_weights(pl.grid, width)
+            blend = neighbourhood_weights(pl.grid, width, pl.codebook)
             centres = _centres(pl.codebook, pl.win_cols, pl.plane_cols)
             designs.append(_local_design(points.x[:, pl.plane_cols], centres, blend, pl.winners))
             penalties.append(_smoothness(centres, pl.grid))
@@ -338,10 +338,21 @@ def batch_map(x: Array, grid: Array, iterations: int) -> Array:
     return np.asarray(codebook)
 
 
-def neighbourhood_weights(grid: Array, sigma: float) -> Array:
-    """``h[w, j]``: node ``j``'s share of a prediction won by node ``w`` (rows sum to 1; cut at 2σ)."""
+def neighbourhood_weights(grid: Array, sigma: float, codebook: Array | None = None) -> Array:
+    """``h[w, j]``: node ``j``'s share of a prediction won by node ``w`` (rows sum to 1; cut at 2σ).
+
+    Gaussian in lattice distance; with the prototypes given, also in their input distance, on the
+    scale of twice the mean distance from a prototype to its nearest: where a rig's inputs come in
+    clusters (six faces down) the lattice folds between them, and a lattice neighbour in another
+    cluster is no neighbour of the input.
+    """
     lattice = ((grid[:, None, :] - grid[None, :, :]) ** 2).sum(axis=2)
     h = np.where(lattice <= 4.0 * sigma * sigma, np.exp(-lattice / (2.0 * sigma * sigma)), 0.0)
+    if codebook is not None and len(codebook) > 1:
+        apart = ((codebook[:, None, :] - codebook[None, :, :]) ** 2).sum(axis=2)
+        nearest = np.sqrt(np.where(np.eye(len(codebook), dtype=bool), np.inf, apart).min(axis=1))
+        scale = max(2.0 * float(nearest.mean()), 1e-6)
+        h = h * np.exp(-apart / (2.0 * scale * scale))
     out: Array = h / h.sum(axis=1, keepdims=True)
     return out
 

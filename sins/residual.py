@@ -64,6 +64,9 @@ _SEGMENT_CELL = 1.0 / 8.0
 _MIN_BLOCK_S, _MAX_BLOCK_S = 1.0, 20.0
 _MIN_RATE_SCALE = np.radians(1.0)
 _MIN_TEMP_SPAN = 2.0
+#: The one-sided difference that gives a learner's edge slope, as a fraction of the box: small enough to
+#: stay within the edge node of a map whose data sit on the box's face (static holds at ±1 g).
+EDGE_STEP = 1e-3
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
 
@@ -324,7 +327,7 @@ class ResidualStrategy(Strategy):
 
     def _residual(self, sensor: str, x: Array) -> Array:
         """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
-        goes on along its edge slope (a one-sided difference over the last 5 % of the range) for up
+        goes on along its edge slope (a one-sided difference over the last 0.1 % of the range) for up
         to a quarter of the range, and holds from there: a scale factor's curve that the rig followed
         to 250 °/s is better continued to 300 than cut flat, and guessed no further."""
         lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
@@ -338,7 +341,7 @@ class ResidualStrategy(Strategy):
             rows = beyond[reach[beyond, d] != inside[beyond, d]]
             if rows.size == 0:
                 continue
-            step = 0.05 * width[d] * np.sign(reach[rows, d] - inside[rows, d])
+            step = EDGE_STEP * width[d] * np.sign(reach[rows, d] - inside[rows, d])
             back = inside[rows].copy()
             back[:, d] -= step
             slope = (pred[rows] - self._predict(learner, back)) / step[:, None]

@@ -209,7 +209,8 @@ def nonlinear_runs() -> list[dict[str, np.ndarray]]:
             imu.G2Sensitivity("gyro", rng.normal(0.0, 2e-6, (3, 3, 3))),
         )
         fit, val = calibration.simulate_rig(NONLINEAR_RIG, model, seed=seed).split(0.3)
-        strategies = {name: compensation.make(name) for name in ("none", "regression", "mlp", "kohonen")}
+        names = ("none", "regression", "mlp", "kohonen", "kohonen_pure")
+        strategies = {name: compensation.make(name) for name in names}
         strategies["oracle"] = compensation.Oracle(model)
         runs.append(
             {name: _after(compensation.residual_rms(s.fit(fit), val)) for name, s in strategies.items()}
@@ -239,14 +240,29 @@ def test_mlp_leaves_at_most_half_the_residual_of_linear_regression(nonlinear_run
     assert (systematic <= 0.5).all()
 
 
-def test_kohonen_improves_on_none_fivefold_beyond_the_noise_floor(nonlinear_runs):
-    # In total RMS the accelerometers cannot improve 5x: their errors are only 1.3-3x their noise.
-    # The systematic part (beyond the oracle's floor) improves 7-12x on the gyros, more on the
-    # accelerometers.
-    ratios = [_systematic(r, "none") / np.maximum(_systematic(r, "kohonen"), 1e-15) for r in nonlinear_runs]
+def test_the_papers_map_improves_on_none_fivefold_beyond_the_noise_floor(nonlinear_runs):
+    # kohonen_pure: node means over the readings. In total RMS the accelerometers cannot improve 5x:
+    # their errors are only 1.3-3x their noise. The systematic part (beyond the oracle's floor) improves
+    # 7-12x on the gyros, more on the accelerometers.
+    ratios = [
+        _systematic(r, "none") / np.maximum(_systematic(r, "kohonen_pure"), 1e-15) for r in nonlinear_runs
+    ]
     ratio = np.mean(ratios, axis=0)
     assert (ratio >= 5.0).all()
-    assert (np.mean([r["none"] / r["kohonen"] for r in nonlinear_runs], axis=0)[:3] >= 3.0).all()
+    assert (np.mean([r["none"] / r["kohonen_pure"] for r in nonlinear_runs], axis=0)[:3] >= 3.0).all()
+
+
+def test_the_local_linear_map_is_never_worse_than_regression_and_halves_it_on_the_gyros(nonlinear_runs):
+    for run in nonlinear_runs:
+        # The guard's promise on the rig it was fitted on (held-back rows): no channel worse than
+        # regression beyond its own estimation noise.
+        assert (run["kohonen"] <= 1.01 * run["regression"]).all()
+    systematic = np.mean(
+        [_systematic(r, "kohonen") / _systematic(r, "regression") for r in nonlinear_runs], axis=0
+    )
+    # Measured: 0.05-0.3 on the gyros. The accelerometers' systematic error is 0.2-1 of regression's: on this
+    # faces-down rig the force is only ever ±1 g along an axis, six points a map folds between.
+    assert (systematic[:3] <= 0.5).all()
 
 
 @pytest.mark.parametrize("name", ["mlp_seed"])  # the others: tests/test_learned.py

@@ -25,10 +25,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import numpy_rigs  # noqa: E402
+import numpy_rigs
 
-from sins import compensation  # noqa: E402
-from sins.series import CalibrationData  # noqa: E402
+from sins import compensation
+from sins.series import CalibrationData
 
 STRATEGIES = ("regression", "regression_robust", "regression_extended", "mlp", "kohonen", "mlp_pure",
               "kohonen_pure")  # fmt: skip
