@@ -21,10 +21,6 @@ from sins import calibration, compensation, imu
 from sins.series import CalibrationData
 
 STRATEGIES = ("regression", "mlp", "kohonen")
-#: Where the issue's bound is not met today (judged procedure, strategy, effect): the Kohonen map's force
-#: sheet takes up part of a temperature drift that the fitting rig's warming ties to its orientations,
-#: and puts it back on another rig's orientations (measured 1.22x the noise on sins's rig).
-KNOWN_MISSES = {("sins_rig", "kohonen", "accel_tc1")}
 
 
 def _sins_rig() -> nr.Session:
@@ -92,19 +88,11 @@ def test_a_nonlinear_effect_is_learned_on_one_rig_and_holds_on_others(sessions, 
     effect = np.hstack(probe.errors(fit.ref_gyro, fit.ref_accel, fit.temp))[:, channel]
     noise = (base.gyro_noise if channel < 3 else base.accel_noise) * np.sqrt(fit.rate_hz)
     unit = dataclasses.replace(base, **{field: shape * 3.0 * noise / np.sqrt(np.mean(effect**2))})
-    misses = []
     for judge, by_strategy in _judged(unit, sessions).items():
         regression = by_strategy["regression"][channel]
         assert regression > 1.5, (judge, regression)  # the effect matters on this procedure
         for name in ("mlp", "kohonen"):
             learned = by_strategy[name][channel]
-            if (judge, name, field) in KNOWN_MISSES:
-                holds = learned <= 1.15 and learned - 1.0 <= 0.5 * (regression - 1.0)
-                assert not holds, f"{(judge, name, field)} now meets the bound: take it off KNOWN_MISSES"
-                misses.append((judge, name, round(float(learned), 3)))
-                continue
             assert learned <= 1.15, (judge, name, learned)
             assert learned - 1.0 <= 0.5 * (regression - 1.0), (judge, name, learned, regression)
             assert (by_strategy[name] <= 1.05).sum() >= 5, (judge, name, by_strategy[name])
-    if misses:
-        pytest.xfail(f"known miss of the issue's 1.15x: {misses}")  # everything else above held

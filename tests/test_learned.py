@@ -154,7 +154,7 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     io.write_recording(rec, data.rows(slice(0, len(data), 4)))
     assert main(["fit", str(rec), "--strategy", "kohonen", "--out", str(tmp_path / "k.json")]) == 0
     out = capsys.readouterr().out
-    assert "chosen on 4 folds of" in out and "gyro size" in out and "accel size" in out
+    assert "chosen on 3 folds of" in out and "gyro size" in out and "accel size" in out
     assert sum(line.split()[0] in compensation.CHANNELS for line in out.splitlines()) == 6
     doc = json.loads((tmp_path / "k.json").read_text())
     assert doc["version"] == compensation.FORMAT_VERSION == 2

@@ -231,6 +231,44 @@ def summarise(cases: list[dict[str, Any]]) -> None:
             )
 
 
+def markdown(cases: list[dict[str, Any]], strategies: tuple[str, ...] = STRATEGIES[1:]) -> None:
+    """The README's two tables: per regime and strategy, the affected channel's residual × noise (mean over
+    units) on the worst judged procedure, with the procedure's initial; and the mean 1-h drift over
+    regression's."""
+    regimes = [r for r in REGIMES if any(c["regime"] == r for c in cases)]
+    head = "| regime | units | " + " | ".join(strategies) + " |"
+    rule = "|---|---|" + "---|" * len(strategies)
+    print("Residual × noise on the affected channel (seed: worst channel), worst judged procedure "
+          "(s same, r sins rig, f faces, t tumble):\n")  # fmt: skip
+    print(head + "\n" + rule)
+    for regime in regimes:
+        rows = [c for c in cases if c["regime"] == regime]
+        cells = []
+        for s in strategies:
+            means = {}
+            for j in JUDGES:
+                vals = [c["residual"][j][s][c["channel"]] if c["channel"] >= 0 else max(c["residual"][j][s])
+                        for c in rows]  # fmt: skip
+                means[j] = float(np.mean(vals))
+            worst = max(means, key=means.__getitem__)
+            cells.append(f"{means[worst]:.2f} {worst[0]}")
+        print(f"| {regime} | {len(rows)} | " + " | ".join(cells) + " |")
+    print("\n1-hour drive, mean final horizontal error over regression's (regression's in km):\n")
+    print(head + "\n" + rule)
+    for regime in regimes:
+        rows = [c for c in cases if c["regime"] == regime and c["drift"]]
+        if not rows:
+            continue
+        ref = float(np.mean([c["drift"]["regression"] for c in rows]))
+        cells = [
+            f"{np.mean([c['drift'][s] for c in rows]) / ref:.2f}"
+            if s != "regression"
+            else f"1 ({ref / 1e3:.1f})"
+            for s in strategies
+        ]
+        print(f"| {regime} | {len(rows)} | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--units", type=int, default=20)
@@ -241,10 +279,14 @@ def main() -> None:
     parser.add_argument("--drive-minutes", type=float, default=60.0)
     parser.add_argument("--save", type=Path)
     parser.add_argument("--load", type=Path, nargs="+")
+    parser.add_argument("--markdown", action="store_true", help="with --load: the README's tables")
     args = parser.parse_args()
     if args.load:
         cases = [c for path in args.load for c in json.loads(path.read_text())["cases"]]
-        summarise(cases)
+        if args.markdown:
+            markdown(cases, tuple(s for s in STRATEGIES[1:] if s in cases[0]["residual"]["same"]))
+        else:
+            summarise(cases)
         return
     # Unit by unit across the regimes, so that a run stopped early has every regime at a like count.
     tasks = [(r, s, tuple(args.strategies), args.drive_minutes)
