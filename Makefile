@@ -1,10 +1,10 @@
-# Two entry points: `make run` (default scenario) and `make test`.
+# Two entry points: `make run` (default scenario) and `make test` (lint, then the tests; CI runs it).
 # Both create .venv and install the project into it on first use.
 PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint clean clean-cache
+.PHONY: run test lint docs clean clean-cache
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -15,16 +15,19 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/sins run
 
-test: $(STAMP)
+test: lint
 	$(VENV)/bin/python -m pytest -q
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check sins tests tools
-	$(VENV)/bin/ruff format --check sins tests tools
+	$(VENV)/bin/ruff check sins tests tools examples
+	$(VENV)/bin/ruff format --check sins tests tools examples
 	$(VENV)/bin/mypy
 
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build site *.egg-info
 
 # numba caches a kernel against its own file only; run this after editing a module a kernel inlines.
 clean-cache:

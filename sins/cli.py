@@ -159,7 +159,8 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from sins import io, pipeline, scenario, trajectory
+    from sins import io, pipeline, scenario
+    from sins.nav import trajectory
 
     path = pipeline.resolve_scenario(args.scenario)
     sc = scenario.load(path)
@@ -185,7 +186,8 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from sins import calibration, io, pipeline, scenario
+    from sins import io, pipeline, scenario
+    from sins.imu import calibration
 
     rig = scenario.load_rig(pipeline.resolve_scenario(args.rig, "rig"))
     spec = scenario.load_imu(pipeline.resolve_scenario(args.imu, "imu"))
@@ -203,7 +205,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def _cmd_effects(args: argparse.Namespace) -> int:
-    from sins import imu, imu_spec
+    from sins import imu
+    from sins.imu import spec as imu_spec
 
     for name, spec in imu_spec.PARAMETERS.items():
         params = ", ".join(f"{p.key} [{p.unit}]" for p in spec.params)
@@ -214,7 +217,7 @@ def _cmd_effects(args: argparse.Namespace) -> int:
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from sins import compensation, io
-    from sins.residual import ResidualStrategy
+    from sins.compensation.residual import ResidualStrategy
 
     data = io.read_recording(args.recording)
     if args.strategy == "oracle":
@@ -283,7 +286,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("gap: give a RECORDING.csv or --dataset NAME (one of them)")
     if args.dataset is not None:
-        from sins import datasets
+        from sins.io import datasets
 
         if args.truth is not None:
             raise SinsInputError("gap: --truth goes with a RECORDING.csv, not with --dataset")
@@ -399,6 +402,7 @@ def _fraction(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``sins`` command's argument parser, one subcommand per action."""
     parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
     parser.add_argument("--version", action="version", version=f"sins {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -513,6 +517,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args))

@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io, scenario, strapdown, trajectory
+from sins import io, scenario
 from sins.errors import SinsInputError
-from sins.metrics import (
+from sins.nav import strapdown, trajectory
+from sins.nav.metrics import (
     DriftAccumulator,
     DriftSummary,
     NavErrors,
@@ -186,7 +187,8 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
     navigation run's true deterministic model; it is every table's reference.
     Whole-array processing: memory grows with the duration.
     """
-    from sins import calibration, compensation
+    from sins import compensation
+    from sins.imu import calibration
 
     assert sc.imu_model is not None
     spec = scenario.load_imu(sc.imu_model)
@@ -296,7 +298,7 @@ def gap_data(
     an IMU recording in rate form whose reference inputs come from the truth trajectory through the
     exact ideal-IMU path (splines through the truth, then the strapdown equations backwards).
     """
-    from sins import motion
+    from sins.nav import motion
 
     if truth is None:
         if not any(c.startswith("ref_") for c in io.read_columns(recording)):

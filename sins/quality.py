@@ -32,12 +32,16 @@ BASELINE_FORMAT = "sins.quality-baseline"
 
 @dataclass(frozen=True)
 class Case:
+    """One suite case: its name and scenario file (resolved against the suite file's folder)."""
+
     name: str
     scenario: Path
 
 
 @dataclass(frozen=True)
 class Suite:
+    """A suite file read: its path, its cases and the relative tolerance per metric family."""
+
     source: Path
     cases: tuple[Case, ...]
     tolerances: dict[str, float]
@@ -56,6 +60,7 @@ class Change:
 
     @property
     def relative(self) -> float | None:
+        """Relative growth ``value / baseline - 1``; None if either is missing or the baseline is 0."""
         if self.baseline is None or self.value is None or self.baseline == 0:
             return None
         return self.value / self.baseline - 1.0
@@ -63,10 +68,10 @@ class Change:
 
 def load_suite(path: str | os.PathLike[str]) -> Suite:
     """Read a suite file (see the module docstring); one-line errors name the file and key."""
-    from sins.scenario import _Keys, _read_toml
+    from sins.scenario import TomlKeys, read_toml
 
     path = Path(path)
-    top = _Keys(str(path), "", _read_toml(path, "suite"))
+    top = TomlKeys(str(path), "", read_toml(path, "suite"))
     cases = []
     for table in top.tables("case"):
         name = table.string("name")
@@ -141,6 +146,7 @@ def compare(
 
 
 def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str, float]]]:
+    """A baseline file's ``cases``: ``{case: {strategy: {metric: value}}}``."""
     from sins import io
 
     path = Path(path)
@@ -152,6 +158,7 @@ def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str,
 
 
 def write_baseline(path: str | os.PathLike[str], measured: dict[str, Any], suite: Suite) -> None:
+    """Write ``measured`` as the new baseline, tagged with the sins version and the suite's name."""
     from sins import __version__, io
 
     io.write_json(path, {"format": BASELINE_FORMAT, "sins": __version__, "suite": str(suite.source.name),

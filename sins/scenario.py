@@ -38,11 +38,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sins import earth, io, motion
+from sins import io
 from sins.errors import SinsInputError
+from sins.nav import earth, motion
 
 if TYPE_CHECKING:  # the IMU and rig readers import these when called: `sins run` needs neither
-    from sins import calibration, imu
+    from sins import imu
+    from sins.imu import calibration
 
 _MISSING: Any = object()
 
@@ -105,7 +107,7 @@ class CompensationSpec:
     strategies: tuple[str, ...]
 
 
-class _Keys:
+class TomlKeys:
     """Typed access to one TOML table that remembers which keys were used."""
 
     def __init__(self, source: str, where: str, table: Any) -> None:
@@ -117,10 +119,12 @@ class _Keys:
         self.used: set[str] = set()
 
     def error(self, message: str, key: str | None = None) -> SinsInputError:
+        """The one-line error to raise for ``key`` (or the table), naming the file and key."""
         place = f"{self.where}.{key}" if key and self.where else (key or self.where)
         return SinsInputError(f"{self.source}: {place}: {message}" if place else f"{self.source}: {message}")
 
     def has(self, key: str) -> bool:
+        """Whether the table has ``key`` (without marking it used)."""
         return key in self.table
 
     def _default(self, key: str, default: Any) -> Any:
@@ -130,6 +134,7 @@ class _Keys:
         return default
 
     def get(self, key: str) -> Any:
+        """The raw value of ``key``, marked as used."""
         self.used.add(key)
         return self.table[key]
 
@@ -143,6 +148,7 @@ class _Keys:
         low_open: bool = False,
         high_open: bool = False,
     ) -> float:
+        """A finite number within ``low`` and ``high`` (open where ``*_open``); ``default`` if absent."""
         if key not in self.table:
             return float(self._default(key, default))
         value = self.get(key)
@@ -161,6 +167,7 @@ class _Keys:
         return value
 
     def string(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> str:
+        """A string, one of ``choices`` when given; ``default`` if absent."""
         if key not in self.table:
             return str(self._default(key, default))
         value = self.get(key)
@@ -198,6 +205,7 @@ class _Keys:
         return list(value)
 
     def boolean(self, key: str, default: bool) -> bool:
+        """A boolean; ``default`` if absent."""
         if key not in self.table:
             return default
         value = self.get(key)
@@ -205,17 +213,19 @@ class _Keys:
             raise self.error(f"expected true or false, got {_kind(value)} {value!r}", key)
         return value
 
-    def tables(self, key: str) -> list[_Keys]:
+    def tables(self, key: str) -> list[TomlKeys]:
+        """The array of tables ``[[key]]``, each as a :class:`TomlKeys`; empty if absent."""
         if key not in self.table:
             return []
         value = self.get(key)
         if not isinstance(value, list):
             raise self.error(f"expected an array of tables ([[{key}]]), got {_kind(value)}", key)
-        return [_Keys(self.source, f"{key}[{i + 1}]", item) for i, item in enumerate(value)]
+        return [TomlKeys(self.source, f"{key}[{i + 1}]", item) for i, item in enumerate(value)]
 
-    def sub(self, key: str) -> _Keys:
+    def sub(self, key: str) -> TomlKeys:
+        """The sub-table ``key`` as a :class:`TomlKeys` (empty if absent)."""
         value = self.get(key) if key in self.table else {}
-        return _Keys(self.source, key, value)
+        return TomlKeys(self.source, key, value)
 
     def done(self, allowed: tuple[str, ...] = ()) -> None:
         """Refuse keys that were never read (unknown or not valid in this context)."""
@@ -239,10 +249,11 @@ def load(path: str | os.PathLike[str]) -> Scenario:
         one line naming the file and the key (or TOML line) at fault.
     """
     path = Path(path)
-    return from_dict(_read_toml(path, "scenario"), source=path)
+    return from_dict(read_toml(path, "scenario"), source=path)
 
 
-def _read_toml(path: Path, what: str) -> dict[str, Any]:
+def read_toml(path: Path, what: str) -> dict[str, Any]:
+    """A TOML file parsed; one-line errors name the file and ``what`` kind of file it is."""
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
@@ -261,7 +272,7 @@ def _read_toml(path: Path, what: str) -> dict[str, Any]:
 def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     """Validate a parsed scenario table (what :func:`load` does after parsing)."""
     name_of_source = str(source) if source else "<scenario>"
-    top = _Keys(name_of_source, "", data)
+    top = TomlKeys(name_of_source, "", data)
     name = top.string("name", default=source.stem if source else "scenario")
     description = top.string("description", default="")
     imu = top.sub("imu")
@@ -334,7 +345,7 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     )
 
 
-def _preset_or_path(keys: _Keys, key: str, kind: str, base: Path) -> Path:
+def _preset_or_path(keys: TomlKeys, key: str, kind: str, base: Path) -> Path:
     """A file named by ``key``: a path relative to the scenario, or a preset name of ``kind``."""
     value = keys.string(key)
     path = base / value
@@ -346,14 +357,14 @@ def _preset_or_path(keys: _Keys, key: str, kind: str, base: Path) -> Path:
     raise keys.error(f"no such file or {kind} preset: {value!r}", key)
 
 
-def _position(init: _Keys) -> tuple[float, float, float]:
+def _position(init: TomlKeys) -> tuple[float, float, float]:
     lat = init.number("lat_deg", low=-89.9, high=89.9)
     lon = init.number("lon_deg", 0.0, low=-180.0, high=360.0)
     alt = init.number("alt_m", 0.0, low=-1000.0, high=100000.0)
     return math.radians(lat), math.radians(lon), alt
 
 
-def _segments(top: _Keys) -> SegmentsSpec:
+def _segments(top: TomlKeys) -> SegmentsSpec:
     init = top.sub("initial")
     lat, lon, alt = _position(init)
     start = motion.Start(
@@ -433,14 +444,14 @@ def _segments(top: _Keys) -> SegmentsSpec:
     return SegmentsSpec(start=start, segments=tuple(segments), oscillations=tuple(oscillations))
 
 
-def _exactly_one(seg: _Keys, keys: tuple[str, str]) -> str:
+def _exactly_one(seg: TomlKeys, keys: tuple[str, str]) -> str:
     given = [k for k in keys if seg.has(k)]
     if len(given) != 1:
         raise seg.error(f"give exactly one of {' or '.join(keys)}")
     return given[0]
 
 
-def _waypoints(top: _Keys) -> WaypointsSpec:
+def _waypoints(top: TomlKeys) -> WaypointsSpec:
     init = top.sub("initial")
     lat, lon, alt = _position(init)
     init.done()
@@ -494,7 +505,8 @@ class ImuSpec:
 
     def model(self, run_seed: int | None = None) -> imu.ImuModel:
         """The unit's error model for one power-on (``run_seed`` draws its turn-on bias)."""
-        from sins import imu, imu_spec
+        from sins import imu
+        from sins.imu import spec as imu_spec
 
         base = imu_spec.draw_unit(self.grade, self.unit_seed, run_seed) if self.grade else imu.ImuModel()
         return base.with_effects(*self.effects).without(*self.withhold)
@@ -510,10 +522,11 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
     name = "gyro.scale_nonlinearity"
     k2_ppm_per_dps = [50, 50, 50]
     """
-    from sins import imu, imu_spec
+    from sins import imu
+    from sins.imu import spec as imu_spec
 
     path = Path(path)
-    top = _Keys(str(path), "", _read_toml(path, "IMU"))
+    top = TomlKeys(str(path), "", read_toml(path, "IMU"))
     grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
     unit_seed = int(top.number("unit_seed", 0, low=0))
     withhold = tuple(top.strings("withhold", [], imu.EFFECT_NAMES))
@@ -533,10 +546,10 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
 
 def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
     """Read a rig file (``[rig]``, ``[positions]``, ``[rate_table]``, ``[temperature]``; see scenarios/)."""
-    from sins import calibration
+    from sins.imu import calibration
 
     path = Path(path)
-    top = _Keys(str(path), "", _read_toml(path, "rig"))
+    top = TomlKeys(str(path), "", read_toml(path, "rig"))
     rig = top.sub("rig")
     kwargs: dict[str, Any] = dict(
         lat_deg=rig.number("lat_deg", 45.0, low=-89.9, high=89.9),

@@ -34,10 +34,10 @@ import rerun as rr
 import rerun.blueprint as rrb
 from numpy.typing import NDArray
 
-from sins import earth
 from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
+from sins.nav import earth
 from sins.pipeline import ScenarioRun, StrategyRun
 from sins.series import NavSeries
 

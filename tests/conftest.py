@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from sins.datasets.root import data_root
 from sins.errors import SinsInputError
+from sins.io.datasets.root import data_root
 
 
 def dataset_folder(name: str) -> Path:

@@ -187,7 +187,7 @@ def test_scenarios_lists_every_preset(capsys: pytest.CaptureFixture[str]) -> Non
 def test_round_trip_increment_form(round_trips: dict[str, dict[str, float]]) -> None:
     r = round_trips["increment"]
     assert r["truth_rows"] == 6001 and r["duration_s"] == 60.0
-    # The ideal increments are exact to ~1e-10 (Simpson, see sins.trajectory) and the files carry 17
+    # The ideal increments are exact to ~1e-10 (Simpson, see sins.nav.trajectory) and the files carry 17
     # digits, so what is left is the strapdown algorithm's own error at 100 Hz: measured 1e-4 m
     # horizontally after 60 s of manoeuvres. 1 cm is 100 times that, and far below the metres a
     # wrong sign or a missing Earth/transport-rate term would give over a minute.

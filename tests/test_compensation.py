@@ -10,9 +10,13 @@ import numpy as np
 import pytest
 from conftest import refusal
 
-from sins import calibration, compensation, imu, imu_spec, io, trajectory
+from sins import compensation, imu, io
 from sins.cli import main
-from sins.motion import Hold, SegmentMotion, Start, Turn
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
+from sins.nav import trajectory
+from sins.nav.motion import Hold, SegmentMotion, Start, Turn
+from sins.series import ImuRates
 
 FAST = calibration.RigProcedure(position_dwell_s=8.0, rate_table=calibration.RateTable(dwell_s=4.0))
 
@@ -137,7 +141,7 @@ def test_fit_and_evaluate_on_a_recording(tmp_path: Path, capsys: pytest.CaptureF
     )
     assert main(["evaluate", str(model_path), str(rec), "--last", "0.3", "--json", str(out)]) == 0
     channels = json.loads(out.read_text())["channels"]
-    assert list(channels) == list(compensation.CHANNELS)
+    assert list(channels) == list(imu.CHANNELS)
     for name, v in channels.items():
         assert v["rms_after"] < v["rms_before"], name  # consumer-grade errors dwarf the noise
     noise = _unit("consumer", 4)
@@ -172,7 +176,7 @@ def test_evaluate_refuses_a_recording_without_references(tmp_path: Path, capsys:
     model_path = tmp_path / "m.json"
     compensation.save(compensation.make("regression").fit(data), model_path)
     plain = tmp_path / "plain.csv"
-    io.write_imu(plain, io.ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel))
+    io.write_imu(plain, ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel))
     assert main(["evaluate", str(model_path), str(plain)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "ref_gyro_x" in err
@@ -365,8 +369,8 @@ def test_regression_drifts_like_the_oracle_over_an_hour_on_the_seed_model_alone(
     part in 10⁶ (0.2 °/h of bias) would show. With white noise added the rig's finite length
     limits it instead: see the next test and tools/bench_rig_length.py.
     """
-    from sins import strapdown
-    from sins.metrics import nav_errors, summarize
+    from sins.nav import strapdown
+    from sins.nav.metrics import nav_errors, summarize
 
     seg = [Turn(30, np.radians(3.0), 3.0), Hold(3570)]
     drive = SegmentMotion.from_segments(Start(np.radians(45.0), 0.1, 200.0), seg)
@@ -431,7 +435,7 @@ def test_run_json_has_every_strategy_with_residuals(tmp_path: Path, capsys: pyte
     strategies = json.loads(out.read_text())["strategies"]
     assert list(strategies) == ["none", "oracle", "regression"]
     for name in ("oracle", "regression"):
-        assert list(strategies[name]["residual_rms"]) == list(compensation.CHANNELS)
+        assert list(strategies[name]["residual_rms"]) == list(imu.CHANNELS)
         assert strategies[name]["final_horizontal_m"] > 0
     assert "residual_rms" not in strategies["none"]  # "none" is the raw stream, not fitted on the rig
 

@@ -17,7 +17,8 @@ import numpy as np
 import numpy_rigs as nr
 import pytest
 
-from sins import calibration, compensation, imu
+from sins import compensation, imu
+from sins.imu import calibration
 from sins.series import CalibrationData
 
 STRATEGIES = ("regression", "mlp", "kohonen")

@@ -19,7 +19,7 @@ from conftest import dataset_folder, refusal
 from scipy.ndimage import maximum_filter1d
 from scipy.spatial.transform import Rotation
 
-from sins.datasets.broad import (
+from sins.io.datasets.broad import (
     BROAD_FOLDER,
     BROAD_GRAVITY,
     BROAD_RATE_HZ,

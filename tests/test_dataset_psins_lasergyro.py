@@ -1,5 +1,5 @@
 """The PSINS static ring-laser-gyro record (../shared/data/psins_lasergyro_static), read by
-:func:`sins.datasets.psins_lasergyro.read_psins_lasergyro`.
+:func:`sins.io.datasets.psins_lasergyro.read_psins_lasergyro`.
 
 The figures checked against the real record are those of the folder's SOURCE.md (an independent numpy
 script) measured again through the reader; those tests skip when the data are absent. The refusals and
@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from conftest import dataset_folder, refusal
 
-from sins import earth
-from sins.datasets.psins_lasergyro import (
+from sins.io.datasets.psins_lasergyro import (
     PSINS_LASERGYRO_FILE,
     PSINS_LASERGYRO_FOLDER,
     read_psins_lasergyro,
 )
+from sins.nav import earth
 from sins.series import CalibrationData
 
 FOLDER = dataset_folder(PSINS_LASERGYRO_FOLDER)

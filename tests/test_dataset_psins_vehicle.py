@@ -1,5 +1,5 @@
 """The PSINS FOG/MEMS vehicle recording (../shared/data/psins_fog_mems_vehicle), read by
-:func:`sins.datasets.psins_vehicle.read_psins_vehicle`.
+:func:`sins.io.datasets.psins_vehicle.read_psins_vehicle`.
 
 The file never stands still (the vehicle drives at 11.5–15.8 m/s throughout), so the checks that
 need a still unit (|f| = g, |ω| = Earth rate) are done on the quietest stretch for gravity and are
@@ -19,15 +19,15 @@ import pytest
 import scipy.io
 from conftest import dataset_folder, refusal
 
-from sins import earth, rotation
-from sins.datasets.psins_vehicle import (
+from sins.io.datasets.psins_vehicle import (
     PSINS_VEHICLE_FILE,
     PSINS_VEHICLE_FOLDER,
     PsinsAlignment,
     psins_alignment,
     read_psins_vehicle,
 )
-from sins.datasets.root import ENV_VAR
+from sins.io.datasets.root import ENV_VAR
+from sins.nav import earth, rotation
 from sins.series import CalibrationData, NavSeries
 
 FOLDER = dataset_folder(PSINS_VEHICLE_FOLDER)

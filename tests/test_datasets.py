@@ -1,7 +1,7 @@
 """Real datasets beside the project: the imucal Ferraris session (../shared/data/imucal_ferraris).
 
 The figures checked here are those of the folder's SOURCE.md (an independent numpy script), measured
-again through :func:`sins.datasets.read_ferraris`.
+again through :func:`sins.io.datasets.read_ferraris`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,9 @@ import pytest
 from conftest import dataset_folder, refusal
 
 import sins
-from sins import datasets, earth, io
+from sins import io
+from sins.io import datasets
+from sins.nav import earth
 from sins.series import CalibrationData
 
 FOLDER = dataset_folder(datasets.FERRARIS_FOLDER)

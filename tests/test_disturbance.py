@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sins import disturbance
+from sins.gap import disturbance
 
 N, STEP_S = 20_000, 0.1
 T = np.arange(N) * STEP_S

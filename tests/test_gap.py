@@ -12,8 +12,11 @@ import pytest
 from conftest import refusal
 from scipy.spatial.transform import Rotation
 
-from sins import calibration, gap, imu, imu_spec, io
+from sins import gap, imu, io
 from sins.cli import main
+from sins.gap import diagnosis
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
 
 RIG = calibration.RigProcedure(
     position_dwell_s=10.0,
@@ -342,8 +345,8 @@ def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
     16.2-16.7 LSB/(°/s)), and their white noise is 0.7-0.8 of a count, so a static hold reads
     five to seven values. Rounding leaves the RMS as it was; the readings' probability tells.
     """
-    from sins import datasets
     from sins.errors import SinsInputError
+    from sins.io import datasets
 
     try:
         session = datasets.read_ferraris()
@@ -421,7 +424,8 @@ def test_a_recording_by_another_tool_on_another_procedure_is_diagnosed(
 def _drive_recording(tmp_path: Path, seed: int = 2) -> tuple[calibration.CalibrationData, Any, Any]:
     """A baseline unit's IMU recording over 80 s of driving (speeding up, a turn, a straight) with
     its truth, written and read back as ``sins gap --truth`` does; and the truth and its ideal IMU."""
-    from sins import motion, pipeline, trajectory
+    from sins import pipeline
+    from sins.nav import motion, trajectory
 
     drive = motion.SegmentMotion.from_segments(
         motion.Start(np.radians(45.0), np.radians(7.0), 200.0),
@@ -469,10 +473,10 @@ def test_a_random_bias_may_gain_what_the_current_coefficients_misfit_on_the_with
     data, _, _ = _drive_recording(tmp_path)
     withheld = data.held_back(0.3)
     fit = ~withheld
-    x = gap._inputs(data)
+    x = diagnosis._inputs(data)
     errors = data.gyro - data.ref_gyro
-    models = [gap._ChannelModel(x, "gyro", i, errors[:, i], data.gyro[:, i], fit) for i in range(3)]
-    allowance = gap._refit_allowance(models, withheld)
+    models = [diagnosis._ChannelModel(x, "gyro", i, errors[:, i], data.gyro[:, i], fit) for i in range(3)]
+    allowance = diagnosis._refit_allowance(models, withheld)
 
     rng = np.random.default_rng(0)
     draws, losses = 20_000, np.zeros(20_000)
@@ -489,7 +493,7 @@ def test_a_random_bias_may_gain_what_the_current_coefficients_misfit_on_the_with
 
 
 def test_cli_diagnoses_a_real_dataset_by_name(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
-    from sins import datasets
+    from sins.io import datasets
 
     if not (datasets.data_root() / datasets.FERRARIS_FOLDER).is_dir():
         pytest.skip(f"no {datasets.FERRARIS_FOLDER}/ under {datasets.data_root()} (set {datasets.ENV_VAR})")
@@ -507,7 +511,7 @@ def test_with_a_trajectory_the_simulated_unit_navigates_beside_the_real_one(tmp_
     """A 20 ms gyro delay (withheld) over a drive with turns: found, and the simulated unit then
     follows the real one more closely. What is left is the real unit's noise, which the simulated
     unit (model predictions only) does not have."""
-    from sins import motion, trajectory
+    from sins.nav import motion, trajectory
 
     drive = motion.SegmentMotion.from_segments(
         motion.Start(np.radians(45.0), np.radians(7.0), 200.0),

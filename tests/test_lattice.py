@@ -1,4 +1,4 @@
-"""Quantizers' likelihoods (sins.lattice) against Monte Carlo and particle-filter oracles."""
+"""Quantizers' likelihoods (sins.gap.lattice) against Monte Carlo and particle-filter oracles."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from sins import lattice
+from sins.gap import lattice
 
 
 def test_the_lattice_is_found_with_its_step_and_offset_and_only_where_there_is_one():

@@ -9,10 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sins import calibration, compensation, imu, imu_spec, io
+from sins import compensation, imu, io
 from sins.cli import main
-from sins.kohonen import LocalLinearMap
-from sins.residual import Points, aggregate, segment
+from sins.compensation.kohonen import LocalLinearMap
+from sins.compensation.residual import Points, aggregate, segment
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
 
 FAST = calibration.RigProcedure(
     positions=18,
@@ -93,7 +95,7 @@ def test_on_a_seed_model_unit_the_learned_strategies_are_regression(seed_model_f
         assert (after <= 1.01 * regression).all(), (name, after / regression)
         # What was chosen and why is recorded, channel by channel.
         assert set(learned.configs_) == {"gyro", "accel"}
-        assert set(learned.guard_) == set(compensation.CHANNELS)
+        assert set(learned.guard_) == set(imu.CHANNELS)
         for ch, verdict in learned.guard_.items():
             earns = verdict["gain_fraction"] > learned.guard_z * verdict["gain_se_fraction"]
             assert verdict["earns_its_place"] == earns, ch
@@ -155,7 +157,7 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     assert main(["fit", str(rec), "--strategy", "kohonen", "--out", str(tmp_path / "k.json")]) == 0
     out = capsys.readouterr().out
     assert "chosen on 3 folds of" in out and "gyro size" in out and "accel size" in out
-    assert sum(line.split()[0] in compensation.CHANNELS for line in out.splitlines()) == 6
+    assert sum(line.split()[0] in imu.CHANNELS for line in out.splitlines()) == 6
     doc = json.loads((tmp_path / "k.json").read_text())
     assert doc["version"] == compensation.FORMAT_VERSION == 2
     assert {"configs_", "cv_scores_", "guard_", "used_", "base_"} <= set(doc["state"])

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sins import earth, rotation
-from sins.metrics import DriftAccumulator, NavErrors, euler_errors, nav_errors, summarize
+from sins.nav import earth, rotation
+from sins.nav.metrics import DriftAccumulator, NavErrors, euler_errors, nav_errors, summarize
 from sins.series import NavSeries
 
 

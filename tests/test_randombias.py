@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
 
-from sins import randombias
+from sins.gap import randombias
 
 
 def _reference_filter(y: np.ndarray, phi: float, q: float, r: float, x0: float, p0: float):

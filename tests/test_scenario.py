@@ -14,7 +14,9 @@ import pytest
 from conftest import refusal
 from scipy.spatial.transform import Rotation
 
-from sins import calibration, io, motion, pipeline, scenario, trajectory
+from sins import io, pipeline, scenario
+from sins.imu import calibration
+from sins.nav import motion, trajectory
 
 SEED = 7_2024
 PRESET_DIR = Path(__file__).resolve().parents[1] / "scenarios"

@@ -12,9 +12,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sins import earth, strapdown, trajectory
-from sins.metrics import nav_errors, summarize
-from sins.motion import Accelerate, Climb, Hold, Rotate, SegmentMotion, Start, Turn
+from sins.nav import earth, strapdown, trajectory
+from sins.nav.metrics import nav_errors, summarize
+from sins.nav.motion import Accelerate, Climb, Hold, Rotate, SegmentMotion, Start, Turn
 
 D = np.radians
 MG = 1e-3 * earth.G0

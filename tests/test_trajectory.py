@@ -16,9 +16,10 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from sins import earth, io, rotation, strapdown, trajectory
-from sins.metrics import nav_errors
-from sins.motion import (
+from sins import io
+from sins.nav import earth, rotation, strapdown, trajectory
+from sins.nav.metrics import nav_errors
+from sins.nav.motion import (
     Accelerate,
     Climb,
     Hold,

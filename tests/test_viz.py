@@ -11,9 +11,10 @@ from conftest import refusal
 
 rr = pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
 
-from sins import earth, pipeline, scenario, viz  # noqa: E402
+from sins import pipeline, scenario, viz  # noqa: E402
 from sins.cli import main  # noqa: E402
 from sins.imu import CHANNELS, DEG_PER_H, MG  # noqa: E402
+from sins.nav import earth  # noqa: E402
 
 IMU = """\
 [[effect]]
@@ -243,7 +244,9 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
 def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_path: Path) -> None:
     import dataclasses
 
-    from sins import calibration, gap, imu, imu_spec
+    from sins import gap, imu
+    from sins.imu import calibration
+    from sins.imu import spec as imu_spec
 
     rig = calibration.RigProcedure(position_dwell_s=6.0, rate_table=calibration.RateTable(dwell_s=3.0))
     unit = imu_spec.draw_unit("tactical", 1).only(*imu.BASELINE)

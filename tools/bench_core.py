@@ -60,7 +60,8 @@ def _median(label: str, args: list[str], repeat: int) -> None:
 
 
 def _kernel_throughput(repeat: int) -> None:
-    from sins import pipeline, scenario, strapdown
+    from sins import pipeline, scenario
+    from sins.nav import strapdown
 
     sc = scenario.load(pipeline.resolve_scenario(pipeline.DEFAULT_SCENARIO))
     truth, imu = pipeline.simulate(sc)

@@ -45,8 +45,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy_rigs as ind
 
-from sins import calibration, compensation, imu, pipeline, scenario, strapdown
-from sins.metrics import nav_errors, summarize
+from sins import compensation, imu, pipeline, scenario
+from sins.imu import calibration
+from sins.nav import strapdown
+from sins.nav.metrics import nav_errors, summarize
 from sins.series import CalibrationData, ImuIncrements
 
 REGIMES = (

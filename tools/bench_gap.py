@@ -57,7 +57,9 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from sins import calibration, gap, imu, imu_spec, io
+from sins import gap, imu, io
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
 
 RIGS = {
     "24pos+table": calibration.RigProcedure(

@@ -16,7 +16,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from sins import calibration, imu, imu_spec, pipeline, scenario, trajectory
+from sins import imu, pipeline, scenario
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
+from sins.nav import trajectory
 
 
 def _time(label: str, call: Callable[[], object], repeat: int) -> None:

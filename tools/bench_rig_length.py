@@ -24,8 +24,11 @@ import time
 
 from bench_strategies import drive  # tools/ is on the path when a tool is run as a script
 
-from sins import calibration, compensation, imu, imu_spec, strapdown
-from sins.metrics import nav_errors, summarize
+from sins import compensation, imu
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
+from sins.nav import strapdown
+from sins.nav.metrics import nav_errors, summarize
 
 SEED_LINEAR = tuple(name for name in imu.BASELINE if not name.endswith(".noise"))
 

@@ -1,0 +1,44 @@
+"""Compensation strategies: fitted on calibration data, they remove the IMU's errors before integration.
+
+:mod:`~sins.compensation.base` holds the interface, :mod:`~sins.compensation.registry` makes strategies by
+name and keeps their model files; the strategies are :mod:`~sins.compensation.regression` (least squares),
+:mod:`~sins.compensation.mlp` and :mod:`~sins.compensation.kohonen` (learned, on
+:mod:`~sins.compensation.residual`'s physics-first base).
+"""
+
+from sins.compensation.base import (
+    NoCompensation,
+    Oracle,
+    Strategy,
+    residual_rms,
+)
+from sins.compensation.registry import (
+    CLASSES,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    SAVED_STRATEGIES,
+    VARIANTS,
+    load,
+    make,
+    save,
+    strategy_class,
+)
+from sins.compensation.regression import ExtendedRegression, Regression
+
+__all__ = [
+    "CLASSES",
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "SAVED_STRATEGIES",
+    "VARIANTS",
+    "ExtendedRegression",
+    "NoCompensation",
+    "Oracle",
+    "Regression",
+    "Strategy",
+    "load",
+    "make",
+    "residual_rms",
+    "save",
+    "strategy_class",
+]

@@ -1,0 +1,153 @@
+"""The compensation interface: what every strategy does, and how one is judged on recorded data.
+
+Every strategy follows one interface (scikit-learn style):
+
+* ``fit(data)`` on a :class:`~sins.series.CalibrationData` returns the
+  strategy; what it learned sits in attributes ending in ``_``;
+* ``correct(gyro, accel, temp=None)`` maps readings (rate form, SI) to
+  estimates of the true inputs; ``correct_rates`` and ``correct_increments``
+  apply it to whole IMU streams (increments through their mean rate over each
+  interval, which is exact for the linear strategies);
+* ``predict_error(gyro, accel, temp)`` is ``readings - correct(readings)``, the
+  error each channel is believed to carry.
+
+The strategies themselves live in the modules beside this one; :mod:`sins.compensation.registry` makes
+them by name and keeps their model files.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.errors import SinsInputError
+from sins.imu import CHANNELS, ImuModel
+from sins.series import CalibrationData, ImuIncrements, ImuRates
+
+Array = NDArray[np.float64]
+
+
+class Strategy(ABC):
+    """A compensation strategy (see the module docstring)."""
+
+    name: ClassVar[str] = ""
+
+    @abstractmethod
+    def fit(self, data: CalibrationData) -> Strategy:
+        """Learn from calibration data; returns ``self``."""
+
+    @abstractmethod
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Estimated true angular rate and specific force (n, 3) from readings (n, 3)."""
+
+    def predict_error(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """The error believed to be in each reading: ``readings - correct(readings)``."""
+        w, f = self.correct(gyro, accel, temp)
+        return gyro - w, accel - f
+
+    def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
+        """Correct rate-form samples ``omega_ib_b`` and ``f_ib_b`` (``temp`` at ``rates.t``)."""
+        w, f = self.correct(rates.omega_ib_b, rates.f_ib_b, temp)
+        return ImuRates(t=rates.t, omega_ib_b=w, f_ib_b=f)
+
+    def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
+        """Correct increments through their mean rate over each interval (``temp`` at ``imu.t``)."""
+        dt = np.diff(imu.t)[:, None]
+        mid_temp = None if temp is None else 0.5 * (np.asarray(temp)[:-1] + np.asarray(temp)[1:])
+        w, f = self.correct(imu.dtheta_b / dt, imu.dv_b / dt, mid_temp)
+        return ImuIncrements(t=imu.t, dtheta_b=w * dt, dv_b=f * dt)
+
+    def get_state(self) -> dict[str, Any]:
+        """What :func:`save` writes: the fitted attributes, as plain lists and numbers."""
+        return {k: _plain(v) for k, v in vars(self).items() if k.endswith("_")}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore what :meth:`get_state` gave (lists become float arrays)."""
+        for k, v in state.items():
+            setattr(self, k, np.asarray(v, dtype=float) if isinstance(v, list) else v)
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters (saved beside the state)."""
+        return {}
+
+
+def _plain(value: Any) -> Any:
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+class NoCompensation(Strategy):
+    """Readings taken as they are."""
+
+    name = "none"
+
+    def fit(self, data: CalibrationData) -> NoCompensation:
+        """Nothing to learn; returns self."""
+        return self
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """The readings unchanged."""
+        return gyro, accel
+
+
+class Oracle(Strategy):
+    """Knows the simulated unit's true deterministic error model and inverts it.
+
+    The limit any strategy can reach: what is left is the unit's noise and
+    stochastic biases. The inversion solves ``reading = x + e(x)`` by
+    fixed-point iteration ``x ← reading - e(x)``, which converges because the
+    errors are small against the inputs (each pass gains the error's relative
+    size, below 1e-2 for every grade).
+    """
+
+    name = "oracle"
+
+    def __init__(self, model: ImuModel | None = None, iterations: int = 6) -> None:
+        self.model = model
+        self.iterations = iterations
+
+    def fit(self, data: CalibrationData) -> Oracle:
+        """Nothing to learn, but the model must be given; returns self."""
+        if self.model is None:
+            raise ValueError("the oracle needs the simulated unit's model: Oracle(model)")
+        return self
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Invert the unit's deterministic errors by fixed-point iteration (angular acceleration 0)."""
+        from sins.imu import Inputs
+
+        if self.model is None:
+            raise ValueError("the oracle needs the simulated unit's model: Oracle(model)")
+        w, f = gyro.copy(), accel.copy()
+        zero = np.zeros_like(w)
+        for _ in range(self.iterations):
+            inputs = Inputs(omega=w, f=f, omega_dot=zero, temp=temp)
+            w = gyro - self.model.deterministic_error("gyro", inputs)
+            f = accel - self.model.deterministic_error("accel", inputs)
+        return w, f
+
+    def get_state(self) -> dict[str, Any]:
+        """Always raises ``ValueError``: an oracle holds a simulated unit, not a model to save."""
+        raise ValueError("the oracle knows a simulated unit; it cannot be saved as a model file")
+
+
+# --------------------------------------------------------------------------- judging on recorded data
+
+
+def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[str, float]]:
+    """Per channel, the RMS of reading − reference before and after correction (SI units).
+
+    Rows without a finite reference are left out.
+    """
+    ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+    if not ok.any():
+        raise SinsInputError(f"{data.source or 'recording'}: no rows with a reference to judge against")
+    temp = None if data.temp is None else data.temp[ok]
+    w, f = strategy.correct(data.gyro[ok], data.accel[ok], temp)
+    before = np.hstack([data.gyro[ok] - data.ref_gyro[ok], data.accel[ok] - data.ref_accel[ok]])
+    after = np.hstack([w - data.ref_gyro[ok], f - data.ref_accel[ok]])
+    rms = lambda x: np.sqrt(np.mean(x * x, axis=0))  # noqa: E731
+    b, a = rms(before), rms(after)
+    return {ch: {"rms_before": float(b[i]), "rms_after": float(a[i])} for i, ch in enumerate(CHANNELS)}

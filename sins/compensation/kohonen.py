@@ -1,0 +1,428 @@
+"""Self-organising-map strategies: ``kohonen`` learns what regression leaves with a local linear map;
+``kohonen_pure`` is the seed paper's map from readings to errors (minisom).
+
+``kohonen`` (:class:`LocalLinearMap`) is the one to pick: the seed model's
+least-squares fit first, then the self-organising local linear map of Ritter,
+Martinetz and Schulten over the reference inputs (:mod:`sins.compensation.residual`). Each
+node ``j`` has a prototype ``c_j`` and a local linear model ``a_j + B_j (x − c_j)``
+of the residual; a prediction blends the models of the winner's lattice
+neighbourhood, ``Σ_j h_j (a_j + B_j (x − c_j)) / Σ_j h_j`` with
+``h_j = exp(−|g_j − g_win|² / 2σ²)`` on the lattice, so it interpolates where a
+node that stores one mean is a staircase. The prototypes are placed by
+Kohonen's batch map (vectorised here: minisom's batch mode loops over the
+samples in Python). With the prototypes and σ fixed the prediction is linear in
+the ``a_j`` and ``B_j``, so they are solved for jointly by weighted least
+squares, with a penalty that makes lattice neighbours' models agree (the map's
+cooperation: nodes no data reached inherit their neighbours' planes) and a
+small ridge. Map size and σ are chosen on held-back blocks.
+
+``kohonen_pure`` (:class:`Kohonen`) keeps the seed paper's question askable.
+The seed paper's idea for g-dependent errors: normalise the inputs, let a
+Kohonen map place its codebook vectors over the input space, store for each
+node the mean error of the calibration samples it wins, and predict by
+interpolation among the nodes nearest to a new input (inverse-distance
+weights over the ``neighbours`` nearest codebook vectors).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.compensation.base import Strategy
+from sins.compensation.residual import Points, ResidualStrategy
+from sins.series import CalibrationData
+
+Array = NDArray[np.float64]
+
+
+class Kohonen(Strategy):
+    """The seed paper's self-organising map from readings to errors, ``kohonen_pure`` (module docstring).
+
+    Parameters
+    ----------
+    rows, cols : map size
+    sigma : initial neighbourhood radius (nodes)
+    learning_rate : initial learning rate
+    iterations : training iterations (random samples)
+    neighbours : codebook vectors interpolated for a prediction
+    seed : minisom's random seed
+    """
+
+    name = "kohonen_pure"
+
+    def __init__(
+        self,
+        rows: int = 20,
+        cols: int = 20,
+        sigma: float = 2.0,
+        learning_rate: float = 0.5,
+        iterations: int = 60000,
+        neighbours: int = 4,
+        seed: int = 0,
+    ) -> None:
+        self.rows, self.cols = rows, cols
+        self.sigma = sigma
+        self.learning_rate = learning_rate
+        self.iterations = iterations
+        self.neighbours = neighbours
+        self.seed = seed
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters: map size, training settings, ``neighbours`` and ``seed``."""
+        return {
+            "rows": self.rows, "cols": self.cols, "sigma": self.sigma, "learning_rate": self.learning_rate,
+            "iterations": self.iterations, "neighbours": self.neighbours, "seed": self.seed,
+        }  # fmt: skip
+
+    def fit(self, data: CalibrationData) -> Kohonen:
+        """Train the map on standardised readings and store each node's mean error; returns self."""
+        from minisom import MiniSom
+
+        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        x = np.hstack([data.gyro, data.accel])[ok]
+        y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
+        if len(x) < self.rows * self.cols:
+            raise ValueError(f"{data.source or 'recording'}: fewer samples than map nodes")
+        self.x_mean_ = x.mean(axis=0)
+        self.x_scale_ = np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
+        xs = (x - self.x_mean_) / self.x_scale_
+        som = MiniSom(self.rows, self.cols, xs.shape[1], sigma=self.sigma, learning_rate=self.learning_rate,
+                      random_seed=self.seed)  # fmt: skip
+        som.pca_weights_init(xs)
+        som.train_random(xs, self.iterations)
+        codebook = som.get_weights().reshape(-1, xs.shape[1])
+        winners = self._nearest(xs, codebook, 1)[:, 0]
+        sums = np.zeros((len(codebook), 6))
+        np.add.at(sums, winners, y)
+        counts = np.bincount(winners, minlength=len(codebook))
+        values = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], np.nan)
+        # Nodes that won nothing take the mean of the nodes nearest to them that did.
+        empty = np.flatnonzero(counts == 0)
+        if empty.size:
+            filled = np.flatnonzero(counts > 0)
+            near = self._nearest(codebook[empty], codebook[filled], min(3, filled.size))
+            values[empty] = values[filled][near].mean(axis=1)
+        self.codebook_, self.node_error_, self.node_count_ = codebook, values, counts.astype(float)
+        return self
+
+    @staticmethod
+    def _nearest(x: Array, codebook: Array, k: int) -> NDArray[np.intp]:
+        d2 = (x * x).sum(axis=1)[:, None] - 2.0 * x @ codebook.T + (codebook * codebook).sum(axis=1)[None, :]
+        return np.argsort(d2, axis=1)[:, :k] if k > 1 else np.argmin(d2, axis=1)[:, None]
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Subtract the ``neighbours`` nearest nodes' errors, inverse-distance weighted (``temp`` unused)."""
+        xs = (np.hstack([gyro, accel]) - self.x_mean_) / self.x_scale_
+        k = min(self.neighbours, len(self.codebook_))
+        err = np.empty((len(xs), 6))
+        for start in range(0, len(xs), 65536):  # bounded memory for the distance matrix
+            part = xs[start : start + 65536]
+            idx = self._nearest(part, self.codebook_, k)
+            d = np.sqrt(((part[:, None, :] - self.codebook_[idx]) ** 2).sum(axis=2))
+            w = 1.0 / np.maximum(d, 1e-9)
+            weighted = (w[:, :, None] * self.node_error_[idx]).sum(axis=1)
+            err[start : start + len(part)] = weighted / w.sum(axis=1)[:, None]
+        return gyro - err[:, :3], accel - err[:, 3:]
+
+
+# --------------------------------------------------------------------------- physics first
+
+
+class LocalLinearMap(ResidualStrategy):
+    """``kohonen``: regression, then self-organising local linear maps of its residual (module docstring).
+
+    The gyros' residual is the sum of a map over ``(ω, T)`` and a map over ``(f, T)``,
+    the accelerometers' one map over ``(f, T)``: the library's errors are functions of
+    the rate or of the specific force (and temperature), and a map of all seven
+    inputs at once must place its nodes in a space a rig covers only along a few
+    lines, where a plane's slope across them is set by chance. The maps' planes are
+    solved for together. Candidates: square maps of ``sizes`` nodes a side ×
+    lattice neighbourhoods ``sigmas``.
+    """
+
+    name = "kohonen"
+
+    def __init__(
+        self,
+        sizes: tuple[int, ...] = (5, 8, 12),
+        sigmas: tuple[float, ...] = (0.7, 1.2),
+        smoothing: float = 1e-2,
+        slope_ridge: float = 1e-5,
+        som_iterations: int = 30,
+        folds: int = 3,
+        guard: bool = True,
+        guard_z: float = 2.0,
+        seed: int = 0,
+    ) -> None:
+        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed)
+        self.sizes = tuple(int(n) for n in sizes)
+        self.sigmas = tuple(float(s) for s in sigmas)
+        self.smoothing = smoothing
+        self.slope_ridge = slope_ridge
+        self.som_iterations = som_iterations
+
+    def params(self) -> dict[str, Any]:
+        """The base's parameters plus map sizes, neighbourhoods, penalties and SOM iterations."""
+        return {
+            **super().params(), "sizes": list(self.sizes), "sigmas": list(self.sigmas),
+            "smoothing": self.smoothing, "slope_ridge": self.slope_ridge,
+            "som_iterations": self.som_iterations,
+        }  # fmt: skip
+
+    def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
+        return [{"size": n} for n in self.sizes]
+
+    @staticmethod
+    def _groups(n_inputs: int) -> list[tuple[list[int], list[int]]]:
+        """Each map's ``(winner columns, plane columns)``: gyro inputs ``[ω, f(, T)]``, accel ``[f(, T)]``.
+
+        For the gyros, a chain over the rate about each axis (a scale factor's curve is a function
+        of its own axis's rate; a map over the three rates at once would have to extrapolate from the
+        few axes a table turns about to every direction a vehicle turns in); for both sensors a sheet
+        over the specific force (g² sensitivity, a scale factor's curve in force), and a chain over
+        temperature whose planes also slope in rate and force (a scale factor that drifts with it).
+        Temperature is not in the rate and force maps: a rig visits each rate at one temperature, so
+        a slope in it there is set by chance.
+        """
+        temp = [n_inputs - 1] if n_inputs in (4, 7) else []
+        gyro = n_inputs >= 6
+        groups = [([i], [i]) for i in range(3)] if gyro else []
+        force = [3, 4, 5] if gyro else [0, 1, 2]
+        groups.append((force, force))
+        return [*groups, (temp, [*temp, *range(n_inputs - 1)])] if temp else groups
+
+    def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
+        """The maps placed once; their planes fitted for each neighbourhood (``config``'s or all of
+        ``sigmas``): ``{sigma: learner}``."""
+        size = int(config["size"])
+        # Placing prototypes needs the input set's shape, not every point: at most 2,000 of them.
+        rng = np.random.default_rng(seed)
+        some = points.x if len(points.x) <= 2000 else points.x[rng.choice(len(points.x), 2000, replace=False)]
+        placed = []
+        temp_last = points.x.shape[1] in (4, 7)
+        for win_cols, plane_cols in self._groups(points.x.shape[1]):
+            # A rate chain has as many nodes as a sheet: its one input gets the resolution a sheet spreads
+            # over two. Temperature, slow and smooth, gets a chain of ``size``.
+            if len(win_cols) > 1:
+                grid = lattice(size, 2)
+            else:
+                grid = lattice(size if win_cols == [points.x.shape[1] - 1] and temp_last else size * size, 1)
+            codebook = batch_map(some[:, win_cols], grid, self.som_iterations)
+            winners = _nearest(points.x[:, win_cols], codebook)
+            placed.append(_Placed(win_cols, plane_cols, grid, codebook, winners))
+        widths = [float(config["sigma"])] if "sigma" in config else list(self.sigmas)
+        return {w: self._planes(points, sigma, placed, w) for w in widths}
+
+    def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
+        return [({"size": config["size"], "sigma": w}, fitted) for w, fitted in learner.items()]
+
+    def _planes(self, points: Points, sigma: Array, placed: list[_Placed], width: float) -> _MapLearner:
+        """Every node's plane for lattice neighbourhood ``width``, by penalised weighted least squares."""
+        from scipy import sparse
+
+        designs, penalties, blends = [], [], []
+        for pl in placed:
+            blend = neighbourhood_weights(pl.grid, width, pl.codebook)
+            centres = _centres(pl.codebook, pl.win_cols, pl.plane_cols)
+            designs.append(_local_design(points.x[:, pl.plane_cols], centres, blend, pl.winners))
+            penalties.append(_smoothness(centres, pl.grid))
+            blends.append(blend)
+        design = sparse.hstack(designs).tocsr()
+        smooth = sparse.block_diag(penalties).tocsr()
+        weight = points.n / points.n.sum()
+        normal = (design.T @ design.multiply(weight[:, None])).toarray()
+        nodes = sum(len(pl.grid) for pl in placed)
+        normal += (self.smoothing / nodes) * (smooth.T @ smooth).toarray()
+        # Where the data cannot set a slope (across a table's axis, say), the plane is flat; the offsets
+        # get only a trace of ridge, to keep the system well posed.
+        ridge = np.concatenate(
+            [np.r_[1e-8, np.full(len(pl.plane_cols), self.slope_ridge)].repeat(1).tolist() * len(pl.grid)
+             for pl in placed]
+        )  # fmt: skip
+        normal += np.diag(ridge)
+        rhs = design.T @ (weight[:, None] * points.y / sigma)
+        theta = np.linalg.solve(normal, rhs)
+        maps, at = [], 0
+        for pl, blend in zip(placed, blends, strict=True):
+            k, d = len(pl.grid), len(pl.plane_cols)
+            planes = theta[at : at + k * (d + 1)].reshape(k, d + 1, 3)
+            maps.append(_Map(pl.win_cols, pl.plane_cols, pl.codebook, blend, planes))
+            at += k * (d + 1)
+        return _MapLearner(maps, sigma)
+
+    def _predict(self, learner: Any, x: Array) -> Array:
+        return learner.predict(x)
+
+    def _learner_state(self, learner: Any) -> Any:
+        return {
+            "sigma": learner.sigma.tolist(),
+            "maps": [
+                {"winner_columns": m.win_cols, "plane_columns": m.plane_cols,
+                 "codebook": m.codebook.tolist(), "blend": m.blend.tolist(), "planes": m.planes.tolist()}
+                for m in learner.maps
+            ],
+        }  # fmt: skip
+
+    def _learner_from_state(self, state: Any) -> Any:
+        maps = [
+            _Map([int(c) for c in m["winner_columns"]], [int(c) for c in m["plane_columns"]],
+                 *(np.asarray(m[k], dtype=float) for k in ("codebook", "blend", "planes")))
+            for m in state["maps"]
+        ]  # fmt: skip
+        return _MapLearner(maps, np.asarray(state["sigma"], dtype=float))
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """A map placed over its winner columns: its lattice ``grid``, prototypes, each point's winner."""
+
+    win_cols: list[int]
+    plane_cols: list[int]
+    grid: Array
+    codebook: Array
+    winners: NDArray[np.intp]
+
+
+def _centres(codebook: Array, win_cols: list[int], plane_cols: list[int]) -> Array:
+    """Each node's plane centre over the plane columns: its prototype, and 0 (the scaled range's
+    middle) in the columns it does not win by."""
+    centres = np.zeros((len(codebook), len(plane_cols)))
+    for i, c in enumerate(plane_cols):
+        if c in win_cols:
+            centres[:, i] = codebook[:, win_cols.index(c)]
+    return centres
+
+
+def _smoothness(centres: Array, grid: Array) -> Any:
+    """Rows ``a_i + B_i (c_j − c_i) − a_j`` for every pair of lattice neighbours, both ways (sparse):
+    neighbours' planes agree where they meet."""
+    from scipy import sparse
+
+    k, d = centres.shape
+    d2 = ((grid[:, None, :] - grid[None, :, :]) ** 2).sum(axis=2)
+    edges = np.argwhere(np.triu(d2 == 1.0)) if len(grid) > 1 else np.zeros((1, 2), dtype=np.intp)
+    pairs = np.vstack([edges, edges[:, ::-1]])
+    a, b = pairs[:, 0], pairs[:, 1]
+    m = len(pairs)
+    rows = np.repeat(np.arange(m), d + 2)
+    cols = np.column_stack([a * (d + 1), a[:, None] * (d + 1) + 1 + np.arange(d), b * (d + 1)])
+    vals = np.column_stack([np.ones(m), centres[b] - centres[a], -np.ones(m)])
+    return sparse.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(m, k * (d + 1)))
+
+
+def batch_map(x: Array, grid: Array, iterations: int) -> Array:
+    """Kohonen's batch map: prototypes (k, d) for the lattice ``grid`` (k, q) over points ``x`` (m, d).
+
+    Started on the points' first ``q`` principal components, spanning ±2 standard deviations; each
+    pass moves every prototype to the neighbourhood-weighted mean of the points
+    its lattice neighbours win, the neighbourhood shrinking geometrically from
+    half the map to half a node.
+    """
+    mean = x.mean(axis=0)
+    centred = x - mean
+    _, s, vt = np.linalg.svd(centred, full_matrices=False)
+    q = min(grid.shape[1], len(s))
+    spread = s[:q] / np.sqrt(max(len(x), 1))
+    span = np.ptp(grid, axis=0)
+    unit = (grid - grid.mean(axis=0)) / np.where(span > 0, span / 2.0, 1.0)  # in [-1, 1]
+    codebook = mean + sum(unit[:, [c]] * 2.0 * spread[c] * vt[c] for c in range(q))
+    lattice = ((grid[:, None, :] - grid[None, :, :]) ** 2).sum(axis=2)
+    start, end = max(float(span.max()) / 2.0, 0.5), 0.5
+    for it in range(iterations):
+        width = start * (end / start) ** (it / max(iterations - 1, 1))
+        h = np.exp(-lattice[:, _nearest(x, codebook)] / (2.0 * width * width))  # (k, m)
+        total = h.sum(axis=1)
+        moved = total > 1e-12
+        codebook[moved] = (h[moved] @ x) / total[moved, None]
+    return np.asarray(codebook)
+
+
+def neighbourhood_weights(grid: Array, sigma: float, codebook: Array | None = None) -> Array:
+    """``h[w, j]``: node ``j``'s share of a prediction won by node ``w`` (rows sum to 1; cut at 2σ).
+
+    Gaussian in lattice distance; with the prototypes given, also in their input distance, on the
+    scale of twice the mean distance from a prototype to its nearest: where a rig's inputs come in
+    clusters (six faces down) the lattice folds between them, and a lattice neighbour in another
+    cluster is no neighbour of the input.
+    """
+    lattice = ((grid[:, None, :] - grid[None, :, :]) ** 2).sum(axis=2)
+    h = np.where(lattice <= 4.0 * sigma * sigma, np.exp(-lattice / (2.0 * sigma * sigma)), 0.0)
+    if codebook is not None and len(codebook) > 1:
+        apart = ((codebook[:, None, :] - codebook[None, :, :]) ** 2).sum(axis=2)
+        nearest = np.sqrt(np.where(np.eye(len(codebook), dtype=bool), np.inf, apart).min(axis=1))
+        scale = max(2.0 * float(nearest.mean()), 1e-6)
+        h = h * np.exp(-apart / (2.0 * scale * scale))
+    out: Array = h / h.sum(axis=1, keepdims=True)
+    return out
+
+
+def _nearest(x: Array, codebook: Array) -> NDArray[np.intp]:
+    d2 = (x * x).sum(axis=1)[:, None] - 2.0 * x @ codebook.T + (codebook * codebook).sum(axis=1)[None, :]
+    return np.argmin(d2, axis=1)
+
+
+def lattice(size: int, dims: int) -> Array:
+    """Node coordinates (size**dims, dims) of a square lattice of ``dims`` dimensions."""
+    return np.array(list(itertools.product(range(size), repeat=dims)), dtype=float)
+
+
+def _local_design(x: Array, centres: Array, blend: Array, winners: NDArray[np.intp]) -> Any:
+    """Sparse (m, k·(d+1)) matrix: row ``i`` holds ``h_j [1, x_i − c_j]`` in node ``j``'s columns."""
+    from scipy import sparse
+
+    m, d = x.shape
+    k = len(centres)
+    rows, cols, vals = [], [], []
+    for w in np.unique(winners):
+        members = np.flatnonzero(winners == w)
+        nodes = np.flatnonzero(blend[w] > 0)
+        h = blend[w, nodes]  # (q,)
+        local = x[members][:, None, :] - centres[nodes][None, :, :]  # (r, q, d)
+        block = np.concatenate([np.ones((len(members), len(nodes), 1)), local], axis=2) * h[None, :, None]
+        col = nodes[:, None] * (d + 1) + np.arange(d + 1)[None, :]  # (q, d+1)
+        rows.append(np.repeat(members, len(nodes) * (d + 1)))
+        cols.append(np.tile(col.ravel(), len(members)))
+        vals.append(block.ravel())
+    return sparse.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, k * (d + 1))
+    )
+
+
+class _Map:
+    """One fitted map: the columns it picks its winner by and those its planes span, prototypes (k, w),
+    blending weights (k, k) and planes (k, d+1, 3) in units of the learner's ``sigma``."""
+
+    def __init__(
+        self, win_cols: list[int], plane_cols: list[int], codebook: Array, blend: Array, planes: Array
+    ) -> None:
+        self.win_cols, self.plane_cols = win_cols, plane_cols
+        self.codebook, self.blend, self.planes = codebook, blend, planes
+        centres = _centres(codebook, win_cols, plane_cols)
+        # Won by node w: Σ_j h_wj (a_j + B_j (x − c_j)) = Σ_j h_wj (a_j − B_j c_j) + (Σ_j h_wj B_j) x.
+        offsets = planes[:, 0, :] - np.einsum("kdc,kd->kc", planes[:, 1:, :], centres)
+        self._offset = blend @ offsets  # (k, 3)
+        self._slope = np.einsum("wk,kdc->wdc", blend, planes[:, 1:, :])  # (k, d, 3)
+
+    def predict(self, x: Array) -> Array:
+        win = _nearest(x[:, self.win_cols], self.codebook)
+        out: Array = self._offset[win] + np.einsum("nd,ndc->nc", x[:, self.plane_cols], self._slope[win])
+        return out
+
+
+class _MapLearner:
+    """Fitted maps whose predictions add up, in units of ``sigma`` (3,)."""
+
+    def __init__(self, maps: list[_Map], sigma: Array) -> None:
+        self.maps, self.sigma = maps, sigma
+
+    def predict(self, x: Array) -> Array:
+        out = np.zeros((len(x), 3))
+        for start in range(0, len(x), 65536):  # bounded memory for the distance matrices
+            part = x[start : start + 65536]
+            out[start : start + len(part)] = sum(m.predict(part) for m in self.maps)
+        return out * self.sigma

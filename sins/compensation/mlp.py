@@ -1,0 +1,412 @@
+"""Feed-forward network strategies (torch): ``mlp`` learns what regression leaves; ``mlp_pure`` is the
+seed paper's network from readings to errors.
+
+``mlp`` (:class:`ResidualMLP`) is the one to pick: the seed model's least-squares
+fit first, then a small tanh network of the residual over the reference inputs,
+its size, weight decay and training length chosen by cross-validation over
+held-back blocks, and a per-channel guard that keeps regression's correction
+where the network does not earn its place (:mod:`sins.compensation.residual`).
+
+``mlp_pure`` and ``mlp_seed`` (:class:`MLP`) keep the seed paper's question
+askable. Inputs are the six readings (and the temperature when the calibration
+data has it); outputs are the six errors, reading − reference. Training uses the
+readings as inputs because in operation only readings exist; the correction
+is ``reading − predicted error``.
+
+Two training modes:
+
+* ``"seed"``: the seed paper's network. Every neuron is a sigmoid
+  ``1/(1+exp(−a(x−c)))`` (gain ``a``, learnable centre ``c``), trained by
+  back-propagation pattern by pattern with learning rate ``alpha`` until the
+  summed squared error ``ε = ½ΣΣ(a−t)²`` per pattern falls below
+  ``residual`` (or ``max_epochs`` pass); targets are scaled into the sigmoid's
+  range [0.1, 0.9].
+* ``"modern"``: the same topology with a linear output layer, inputs and
+  outputs standardised, Adam on mini-batches, and early stopping on the last
+  ``validation`` fraction of every calibration phase.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.compensation.base import Strategy
+from sins.compensation.residual import Points, ResidualStrategy
+from sins.series import CalibrationData
+
+Array = NDArray[np.float64]
+
+
+def _features(gyro: Array, accel: Array, temp: Array | None) -> Array:
+    parts = [gyro, accel] + ([] if temp is None else [np.asarray(temp, dtype=float)[:, None]])
+    return np.hstack(parts)
+
+
+class MLP(Strategy):
+    """The seed paper's network from readings to errors, ``mlp_pure`` and ``mlp_seed`` (module docstring).
+
+    Parameters
+    ----------
+    hidden : hidden layer sizes
+    mode : "modern" or "seed"
+    alpha : learning rate (per pattern in "seed" mode, Adam's in "modern")
+    gain : the sigmoid's slope ``a`` ("seed" mode)
+    residual : stop when the mean per-pattern ``ε`` falls below this ("seed" mode, scaled units)
+    max_epochs, batch_size, patience, validation : "modern" mode's training loop
+    seed : initial weights and shuffling
+    """
+
+    name = "mlp_pure"
+
+    def __init__(
+        self,
+        hidden: tuple[int, ...] = (32, 32),
+        mode: str = "modern",
+        alpha: float = 3e-3,
+        gain: float = 1.0,
+        residual: float = 1e-5,
+        max_epochs: int = 200,
+        batch_size: int = 512,
+        patience: int = 10,
+        validation: float = 0.2,
+        seed: int = 0,
+    ) -> None:
+        if mode not in ("modern", "seed"):
+            raise ValueError(f"mlp mode must be 'modern' or 'seed', got {mode!r}")
+        self.hidden = tuple(int(h) for h in hidden)
+        self.mode = mode
+        self.alpha = alpha
+        self.gain = gain
+        self.residual = residual
+        self.max_epochs = max_epochs
+        self.batch_size = batch_size
+        self.patience = patience
+        self.validation = validation
+        self.seed = seed
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters: topology, ``mode`` and the training settings."""
+        return {
+            "hidden": list(self.hidden), "mode": self.mode, "alpha": self.alpha, "gain": self.gain,
+            "residual": self.residual, "max_epochs": self.max_epochs, "batch_size": self.batch_size,
+            "patience": self.patience, "validation": self.validation, "seed": self.seed,
+        }  # fmt: skip
+
+    # ------------------------------------------------------------------ network
+
+    def _network(self, n_in: int) -> Any:
+        import torch
+        from torch import nn
+
+        class Sigmoid(nn.Module):
+            """``1/(1+exp(−a(x−c)))`` with a learnable centre per neuron."""
+
+            def __init__(self, width: int, gain: float) -> None:
+                super().__init__()
+                self.gain = gain
+                self.centre = nn.Parameter(torch.zeros(width, dtype=torch.float64))
+
+            def forward(self, x: torch.Tensor) -> torch.Tensor:
+                return torch.sigmoid(self.gain * (x - self.centre))
+
+        layers: list[nn.Module] = []
+        width = n_in
+        for h in self.hidden:
+            layers += [nn.Linear(width, h, bias=False, dtype=torch.float64), Sigmoid(h, self.gain)]
+            width = h
+        layers.append(nn.Linear(width, 6, bias=self.mode == "modern", dtype=torch.float64))
+        if self.mode == "seed":
+            layers.append(Sigmoid(6, self.gain))
+        return nn.Sequential(*layers)
+
+    # ------------------------------------------------------------------ fit
+
+    def fit(self, data: CalibrationData) -> MLP:
+        """Train the network from readings (and temperature) to errors in ``mode``; returns self."""
+        import torch
+
+        torch.manual_seed(self.seed)
+        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        if ok.sum() < 10:
+            raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
+        self.uses_temp_ = data.temp is not None
+        x = _features(data.gyro, data.accel, data.temp)[ok]
+        y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
+        self.x_mean_, self.x_scale_ = x.mean(axis=0), np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
+        if self.mode == "seed":
+            # Min-max into [0.1, 0.9], the sigmoid's useful range.
+            lo, hi = y.min(axis=0), y.max(axis=0)
+            self.y_mean_ = lo - 0.125 * (hi - lo)
+            self.y_scale_ = np.where(hi > lo, 1.25 * (hi - lo), 1.0)
+        else:
+            self.y_mean_, self.y_scale_ = y.mean(axis=0), np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
+        xs = torch.from_numpy((x - self.x_mean_) / self.x_scale_)
+        ys = torch.from_numpy((y - self.y_mean_) / self.y_scale_)
+        net = self._network(xs.shape[1])
+        if self.mode == "seed":
+            self.epochs_, self.final_error_ = self._train_seed(net, xs, ys)
+        else:
+            rows = np.flatnonzero(ok)
+            held = np.zeros(len(data), dtype=bool)
+            if data.phases:
+                _, val_part = data.split(self.validation)
+                held[np.searchsorted(data.t, val_part.t)] = True
+            else:
+                held[int(len(data) * (1 - self.validation)) :] = True
+            val_mask = torch.from_numpy(held[rows])
+            self.epochs_, self.final_error_ = self._train_modern(net, xs, ys, val_mask)
+        self.weights_ = [p.detach().numpy().copy() for p in net.parameters()]
+        self._net = net
+        return self
+
+    def _train_seed(self, net: Any, xs: Any, ys: Any) -> tuple[int, float]:
+        import torch
+
+        optimiser = torch.optim.SGD(net.parameters(), lr=self.alpha)
+        gen = torch.Generator().manual_seed(self.seed)
+        epsilon = float("inf")
+        epochs = 0
+        while epochs < self.max_epochs:
+            epochs += 1
+            total = 0.0
+            for i in torch.randperm(len(xs), generator=gen).tolist():
+                optimiser.zero_grad()
+                e = 0.5 * ((net(xs[i : i + 1]) - ys[i : i + 1]) ** 2).sum()
+                e.backward()
+                optimiser.step()
+                total += float(e.detach())
+            epsilon = total / len(xs)
+            if epsilon < self.residual:
+                break
+        return epochs, epsilon
+
+    def _train_modern(self, net: Any, xs: Any, ys: Any, val_mask: Any) -> tuple[int, float]:
+        import torch
+
+        train_x, train_y = xs[~val_mask], ys[~val_mask]
+        val_x, val_y = xs[val_mask], ys[val_mask]
+        if len(val_x) == 0:
+            val_x, val_y = train_x, train_y
+        optimiser = torch.optim.Adam(net.parameters(), lr=self.alpha)
+        gen = torch.Generator().manual_seed(self.seed)
+        best, best_state, stale, epochs = float("inf"), None, 0, 0
+        while epochs < self.max_epochs:
+            epochs += 1
+            order = torch.randperm(len(train_x), generator=gen)
+            for start in range(0, len(order), self.batch_size):
+                batch = order[start : start + self.batch_size]
+                optimiser.zero_grad()
+                loss = ((net(train_x[batch]) - train_y[batch]) ** 2).mean()
+                loss.backward()
+                optimiser.step()
+            with torch.no_grad():
+                val = float(((net(val_x) - val_y) ** 2).mean())
+            if val < best * (1.0 - 1e-4):
+                best, stale = val, 0
+                best_state = {k: v.clone() for k, v in net.state_dict().items()}
+            else:
+                stale += 1
+                if stale >= self.patience:
+                    break
+        if best_state is not None:
+            net.load_state_dict(best_state)
+        return epochs, best
+
+    # ------------------------------------------------------------------ use
+
+    def _restore(self) -> Any:
+        import torch
+
+        net = getattr(self, "_net", None)
+        if net is None:
+            net = self._network(len(self.x_mean_))
+            with torch.no_grad():
+                for p, w in zip(net.parameters(), self.weights_, strict=True):
+                    p.copy_(torch.from_numpy(np.asarray(w, dtype=float)).reshape(p.shape))
+            self._net = net
+        return net
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Subtract the network's predicted error (needs ``temp`` if trained with temperature)."""
+        import torch
+
+        if self.uses_temp_ and temp is None:
+            raise ValueError("this mlp was trained with temperature: give the temperature series")
+        x = _features(gyro, accel, temp if self.uses_temp_ else None)
+        with torch.no_grad():
+            out = self._restore()(torch.from_numpy((x - self.x_mean_) / self.x_scale_)).numpy()
+        err = out * self.y_scale_ + self.y_mean_
+        return gyro - err[:, :3], accel - err[:, 3:]
+
+    def get_state(self) -> dict[str, Any]:
+        """The fitted state, the network's weights as nested lists."""
+        state = {k: v for k, v in super().get_state().items() if k != "weights_"}
+        state["weights_"] = [np.asarray(w).tolist() for w in self.weights_]
+        return state
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore the state and weights; the network is rebuilt on first use."""
+        weights = state.get("weights_", [])
+        super().set_state({k: v for k, v in state.items() if k != "weights_"})
+        self.weights_ = [np.asarray(w, dtype=float) for w in weights]
+        self.uses_temp_ = bool(state.get("uses_temp_", False))
+        self._net = None
+
+
+# --------------------------------------------------------------------------- physics first
+
+
+#: Training lengths (L-BFGS iterations) whose held-back scores are compared.
+CHECKPOINTS = (25, 50, 100, 200, 400)
+
+
+class ResidualMLP(ResidualStrategy):
+    """``mlp``: regression, then a tanh network of its residual (see the module docstring).
+
+    Candidates: hidden layers ``hidden_sizes`` × weight decay ``decays``, each trained
+    by full-batch L-BFGS on the averaged points and scored after every length of
+    :data:`CHECKPOINTS`; the best on the held-back blocks is retrained on all data.
+    The output layer starts at zero, so an untrained network is regression.
+    """
+
+    name = "mlp"
+
+    def __init__(
+        self,
+        hidden_sizes: tuple[tuple[int, ...], ...] = ((16, 16), (32, 32)),
+        decays: tuple[float, ...] = (1e-6, 1e-4),
+        folds: int = 3,
+        guard: bool = True,
+        guard_z: float = 2.0,
+        seed: int = 0,
+    ) -> None:
+        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed)
+        self.hidden_sizes = tuple(tuple(int(h) for h in hs) for hs in hidden_sizes)
+        self.decays = tuple(float(d) for d in decays)
+
+    def params(self) -> dict[str, Any]:
+        """The base's parameters plus the candidate hidden layers and weight decays."""
+        return {
+            **super().params(),
+            "hidden_sizes": [list(h) for h in self.hidden_sizes],
+            "decays": list(self.decays),
+        }
+
+    def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
+        return [{"hidden": list(h), "decay": d} for h in self.hidden_sizes for d in self.decays]
+
+    def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
+        with _one_thread():
+            return self._train_on_one_thread(config, points, sigma, seed)
+
+    def _train_on_one_thread(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
+        import torch
+
+        torch.manual_seed(seed)
+        net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
+        x = torch.from_numpy(points.x)
+        y = torch.from_numpy(points.y / sigma)
+        w = torch.from_numpy(points.n / points.n.sum())[:, None]
+        weights = [p for name, p in net.named_parameters() if name.endswith("weight")]
+        decay = config["decay"]
+        optimiser = torch.optim.LBFGS(
+            net.parameters(), lr=1.0, max_iter=CHECKPOINTS[0], history_size=20,
+            tolerance_grad=1e-12, tolerance_change=1e-15, line_search_fn="strong_wolfe",
+        )  # fmt: skip
+
+        def closure() -> Any:
+            optimiser.zero_grad()
+            loss = (w * (net(x) - y) ** 2).sum() + decay * sum((p * p).sum() for p in weights)
+            loss.backward()
+            return loss
+
+        lengths = [config["iterations"]] if "iterations" in config else list(CHECKPOINTS)
+        snapshots: dict[int, list[Array]] = {}
+        done = 0
+        for length in lengths:
+            optimiser.param_groups[0]["max_iter"] = length - done
+            optimiser.param_groups[0]["max_eval"] = int(1.25 * (length - done))
+            optimiser.step(closure)
+            done = length
+            snapshots[length] = [p.detach().numpy().copy() for p in net.parameters()]
+        return {"hidden": list(config["hidden"]), "sigma": sigma.tolist(), "snapshots": snapshots}
+
+    def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
+        base = {k: v for k, v in config.items() if k != "iterations"}
+        return [
+            ({**base, "iterations": length}, _NetLearner(learner["hidden"], learner["sigma"], weights))
+            for length, weights in learner["snapshots"].items()
+        ]
+
+    def _predict(self, learner: Any, x: Array) -> Array:
+        return learner.predict(x)
+
+    def _learner_state(self, learner: Any) -> Any:
+        return {
+            "hidden": list(learner.hidden),
+            "sigma": list(learner.sigma),
+            "weights": [np.asarray(w).tolist() for w in learner.weights],
+        }
+
+    def _learner_from_state(self, state: Any) -> Any:
+        return _NetLearner(
+            state["hidden"], state["sigma"], [np.asarray(w, dtype=float) for w in state["weights"]]
+        )
+
+
+@contextmanager
+def _one_thread() -> Iterator[None]:
+    """Torch on one thread for the while: the residual networks are small (a thread is as fast), and a
+    sum split over threads rounds differently, which L-BFGS's line search turns into another solution:
+    the same fit gave 486 m and 614 m of drift on the quality suite on one and two threads."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _tanh_network(n_in: int, hidden: tuple[int, ...]) -> Any:
+    import torch
+    from torch import nn
+
+    layers: list[nn.Module] = []
+    width = n_in
+    for h in hidden:
+        layers += [nn.Linear(width, h, dtype=torch.float64), nn.Tanh()]
+        width = h
+    out = nn.Linear(width, 3, dtype=torch.float64)
+    nn.init.zeros_(out.weight)
+    nn.init.zeros_(out.bias)
+    return nn.Sequential(*layers, out)
+
+
+class _NetLearner:
+    """A trained residual network: its layers' weights and the output scale (σ per channel)."""
+
+    def __init__(self, hidden: list[int], sigma: list[float], weights: list[Array]) -> None:
+        self.hidden = [int(h) for h in hidden]
+        self.sigma = np.asarray(sigma, dtype=float)
+        self.weights = weights
+        self._net: Any = None
+
+    def predict(self, x: Array) -> Array:
+        import torch
+
+        if self._net is None:
+            net = _tanh_network(x.shape[1], tuple(self.hidden))
+            with torch.no_grad():
+                for p, w in zip(net.parameters(), self.weights, strict=True):
+                    p.copy_(torch.from_numpy(np.asarray(w, dtype=float)).reshape(p.shape))
+            self._net = net
+        with torch.no_grad(), _one_thread():
+            out: Array = self._net(torch.from_numpy(np.ascontiguousarray(x))).numpy()
+        return out * self.sigma

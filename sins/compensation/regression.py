@@ -1,0 +1,134 @@
+"""Least-squares compensation: the seed paper's linear error model, and an extended one with temperature."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from sins.compensation.base import Array, Strategy
+from sins.imu import calibration
+from sins.series import CalibrationData
+
+
+class Regression(Strategy):
+    """Least squares on the seed paper's 33 coefficients: ``Δω = B0 + Bω + Kn``, ``Δn = A0 + An``.
+
+    ``robust=True`` re-weights residuals with Huber's function (threshold
+    ``huber_k`` robust standard deviations, iterated) so that outliers in the
+    calibration data do not pull the fit. Corrections invert the linear model
+    exactly.
+    """
+
+    name = "regression"
+
+    def __init__(self, robust: bool = False, huber_k: float = 1.345, g_sensitivity: bool = True) -> None:
+        self.robust = robust
+        self.huber_k = huber_k
+        self.g_sensitivity = g_sensitivity
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters: ``robust``, ``huber_k``, ``g_sensitivity``."""
+        return {"robust": self.robust, "huber_k": self.huber_k, "g_sensitivity": self.g_sensitivity}
+
+    def fit(self, data: CalibrationData) -> Regression:
+        """Fit the seed model by least squares (Huber-weighted if ``robust``); returns self."""
+        weights = _huber_weights(data, self.huber_k, self.g_sensitivity) if self.robust else None
+        fit = calibration.fit_seed_model(data, g_sensitivity=self.g_sensitivity, weights=weights)
+        self.B0_, self.B_, self.K_, self.A0_, self.A_ = fit.B0, fit.B, fit.K, fit.A0, fit.A
+        return self
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Invert the fitted seed model exactly (``temp`` unused)."""
+        return calibration.invert_seed_model(self.B0_, self.B_, self.K_, self.A0_, self.A_, gyro, accel)
+
+
+def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes: int = 5) -> Array:
+    """Row weights of iteratively re-weighted least squares with Huber's function.
+
+    Residuals (reading − reference − fitted error) are standardised per channel
+    by their median absolute deviation; a row's weight is ``min(1, k/|z|)`` of
+    its worst channel, so one corrupted reading discounts the whole sample.
+    """
+    weights = np.ones(len(data))
+    ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+    w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
+    for _ in range(passes):
+        fit = calibration.fit_seed_model(data, g_sensitivity=g_sensitivity, weights=weights)
+        err_g = fit.B0 + w_ref @ fit.B.T + n_ref @ fit.K.T
+        err_a = fit.A0 + n_ref @ fit.A.T
+        resid = np.hstack([data.gyro[ok] - w_ref - err_g, data.accel[ok] - n_ref - err_a])
+        mad = np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) / 0.6745
+        z = np.abs(resid) / np.where(mad > 0, mad, 1.0)
+        weights = np.ones(len(data))
+        weights[ok] = np.minimum(1.0, k / np.maximum(z, 1e-12)).min(axis=1)
+    return weights
+
+
+class ExtendedRegression(Strategy):
+    """Least squares with extra regressors a user switches on: squares of the inputs, temperature.
+
+    Each channel's error is linear in ``[1, ω, n]`` plus, with ``squares``,
+    ``[ω², n²]`` (element-wise: scale nonlinearity, and the diagonal of g²
+    sensitivity) and, with ``temperature`` and temperature in the data,
+    ``[T − T0, (T − T0)², (T − T0)·u]`` (temperature bias and scale). Fitted on
+    the reference inputs like the seed model; corrections invert it by
+    fixed-point iteration ``x ← reading − e(x)``.
+    """
+
+    name = "regression_extended"
+
+    def __init__(
+        self, squares: bool = True, temperature: bool = True, t0: float = 20.0, iterations: int = 6
+    ) -> None:
+        self.squares = squares
+        self.temperature = temperature
+        self.t0 = t0
+        self.iterations = iterations
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters: the extra regressors, ``t0`` (°C) and ``iterations``."""
+        return {
+            "squares": self.squares,
+            "temperature": self.temperature,
+            "t0": self.t0,
+            "iterations": self.iterations,
+        }
+
+    def _design(self, w: Array, f: Array, temp: Array | None) -> list[Array]:
+        """Per channel, its regressors (n, p): the shared columns and its own temperature-scale term."""
+        cols = [np.ones((len(w), 1)), w, f]
+        if self.squares:
+            cols += [w * w, f * f]
+        shared = np.hstack(cols)
+        if not self.uses_temp_:
+            return [shared] * 6
+        if temp is None:
+            raise ValueError("this regression was fitted with temperature: give the temperature series")
+        d = (np.asarray(temp, dtype=float) - self.t0)[:, None]
+        u = np.hstack([w, f])
+        return [np.hstack([shared, d, d * d, d * u[:, [i]]]) for i in range(6)]
+
+    def fit(self, data: CalibrationData) -> ExtendedRegression:
+        """Fit each channel's coefficients by least squares on the reference inputs; returns self."""
+        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        self.uses_temp_ = bool(self.temperature and data.temp is not None)
+        temp = None if data.temp is None else data.temp[ok]
+        designs = self._design(data.ref_gyro[ok], data.ref_accel[ok], temp)
+        errors = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
+        coef = []
+        for i, x in enumerate(designs):
+            scale = np.sqrt(np.mean(x * x, axis=0))
+            scale = np.where(scale > 0, scale, 1.0)
+            c, *_ = np.linalg.lstsq(x / scale, errors[:, i], rcond=None)
+            coef.append(c / scale)
+        self.coef_ = np.array(coef)
+        return self
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Invert the fitted model by fixed-point iteration (needs ``temp`` if fitted with it)."""
+        w, f = gyro.copy(), accel.copy()
+        for _ in range(self.iterations):
+            err = np.column_stack([x @ c for x, c in zip(self._design(w, f, temp), self.coef_, strict=True)])
+            w, f = gyro - err[:, :3], accel - err[:, 3:]
+        return w, f

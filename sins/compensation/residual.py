@@ -1,0 +1,417 @@
+"""Physics first, then learning: the machinery shared by the learned strategies ``mlp`` and ``kohonen``.
+
+A learned strategy here starts from the seed model's least-squares fit
+(:class:`~sins.compensation.Regression`) and learns only what that fit leaves:
+the residual ``x̂ − x_ref`` of the regression-corrected readings ``x̂``
+against the rig's reference. Consequences, each a reason for the design:
+
+* **Inputs are the reference, not the readings.** The residual is learned as a
+  function of the rig's reference inputs (noise-free), so a learner cannot
+  predict the readings' own noise from the readings (the pure networks do,
+  and what they learn that way does not carry to another rig). In operation
+  the inputs are the regression-corrected readings, whose noise is 1e-4 of
+  the inputs' range.
+* **Inputs the error depends on**, scaled by their physical range: the gyros'
+  residual is a function of ``(ω, f, T)``, the accelerometers' of ``(f, T)``;
+  ``ω`` by the largest rate the rig turned at (one scale for the three axes,
+  at least 1 °/s), ``f`` by ``G0``, ``T`` by half the temperature span
+  (temperature is an input only where the data span 2 °C or more). Outside
+  the box the rig covered a learner goes on along its edge slope for a
+  quarter of the box, and holds beyond (``_residual``).
+* **Sufficient statistics.** Rows whose inputs fall in one cell of a fine
+  grid (1/64 of the scaled range: 4.7 °/s on a 300 °/s rig, 0.15 m/s²)
+  within one time block are averaged into one point weighted by its count.
+  For least squares on the reference inputs this changes the loss by a
+  constant where inputs repeat exactly (a static hold is one point) and by
+  half the residual's curvature times the cell's variance otherwise (for
+  ``k2 ω²``, ``k2 δ²/12``: 1e-4 of the error at 300 °/s); it makes a
+  100,000-row session a few thousand points.
+* **Capacity chosen by data.** The session is cut into blocks of like input
+  (a new block where the coarse reference input changes, at least 1 s and at
+  most 20 s long), dealt at random (``seed``) into ``folds`` folds. For each
+  fold the regression is refitted on the others, every candidate learner
+  trained on their residuals and scored on the fold's: the held-back blocks
+  are orientations, rates and temperatures the learner did not see.
+* **An honest guard.** Per channel, the chosen learner's held-back gain over
+  regression (sum of squared residuals) is compared with its sampling error
+  over the held-back blocks; a channel whose gain is not above ``guard_z``
+  standard errors predicts regression's correction (unless ``guard=False``).
+
+Subclasses supply the learner: its candidate settings, training and prediction.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import abstractmethod
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.compensation.base import Strategy
+from sins.compensation.regression import Regression
+from sins.imu import CHANNELS
+from sins.nav import earth
+from sins.series import CalibrationData
+
+Array = NDArray[np.float64]
+
+SENSORS = ("gyro", "accel")
+#: Grid of the sufficient statistics and of the block segmentation, in scaled input units.
+_CELL = 1.0 / 64.0
+_SEGMENT_CELL = 1.0 / 8.0
+_MIN_BLOCK_S, _MAX_BLOCK_S = 1.0, 20.0
+_MIN_RATE_SCALE = np.radians(1.0)
+_MIN_TEMP_SPAN = 2.0
+#: The one-sided difference that gives a learner's edge slope, as a fraction of the box: small enough to
+#: stay within the edge node of a map whose data sit on the box's face (static holds at ±1 g).
+EDGE_STEP = 1e-3
+#: Fixed-point passes of a correction after the first (see ``correct``).
+_PASSES = 2
+
+
+@dataclass(frozen=True)
+class Points:
+    """Averaged training points of one sensor: inputs ``x`` (m, d), mean residual ``y`` (m, 3),
+    row counts ``n`` (m,) and the time block each came from ``block`` (m,)."""
+
+    x: Array
+    y: Array
+    n: Array
+    block: NDArray[np.intp]
+    #: Σ y² of the rows behind each point (m, 3): the regression's own sum of squares.
+    sq: Array
+
+
+def input_columns(sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
+    """The raw inputs a sensor's residual depends on: gyro ``[ω, f, T]``, accel ``[f, T]``."""
+    parts = [w, f] if sensor == "gyro" else [f]
+    if temp is not None:
+        parts.append(np.asarray(temp, dtype=float)[:, None])
+    return np.hstack(parts)
+
+
+def segment(scaled: Array, t: Array) -> NDArray[np.intp]:
+    """Block index of every row: a new block where the coarse cell of ``scaled`` (n, d) changes, merged
+    to at least 1 s and split to at most 20 s."""
+    n = len(t)
+    dt = float(np.median(np.diff(t))) if n > 1 else 1.0
+    min_rows, max_rows = max(1, round(_MIN_BLOCK_S / dt)), max(1, round(_MAX_BLOCK_S / dt))
+    coarse = np.floor(scaled / _SEGMENT_CELL)
+    changes = np.flatnonzero((coarse[1:] != coarse[:-1]).any(axis=1)) + 1
+    starts = [0]
+    for c in changes.tolist():
+        while c - starts[-1] > max_rows:
+            starts.append(starts[-1] + max_rows)
+        if c - starts[-1] >= min_rows:
+            starts.append(c)
+    while n - starts[-1] > max_rows:
+        starts.append(starts[-1] + max_rows)
+    block = np.zeros(n, dtype=np.intp)
+    block[np.array(starts[1:], dtype=np.intp)] = 1
+    return np.cumsum(block)
+
+
+def aggregate(x: Array, y: Array, block: NDArray[np.intp]) -> Points:
+    """Average rows sharing a fine input cell and a block (see the module docstring)."""
+    keys = np.column_stack([np.floor(x / _CELL).astype(np.int64), block])
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    m = len(counts)
+    sums_x = np.zeros((m, x.shape[1]))
+    sums_y = np.zeros((m, y.shape[1]))
+    sq = np.zeros((m, y.shape[1]))
+    np.add.at(sums_x, inverse, x)
+    np.add.at(sums_y, inverse, y)
+    np.add.at(sq, inverse, y * y)
+    first = np.full(m, len(block), dtype=np.intp)
+    np.minimum.at(first, inverse, np.arange(len(block)))
+    n = counts.astype(float)
+    return Points(sums_x / n[:, None], sums_y / n[:, None], n, block[first], sq)
+
+
+def _block_gains(points: Points, pred: Array) -> tuple[Array, Array]:
+    """Per block and channel, the drop in the sum of squared residuals that ``pred`` brings,
+    Σ n (ȳ² − (ȳ − p)²) (exact for the rows behind each averaged point), and regression's own sum."""
+    gain = points.n[:, None] * (points.y**2 - (points.y - pred) ** 2)
+    blocks, index = np.unique(points.block, return_inverse=True)
+    out = np.zeros((len(blocks), pred.shape[1]))
+    base = np.zeros((len(blocks), pred.shape[1]))
+    np.add.at(out, index.ravel(), gain)
+    np.add.at(base, index.ravel(), points.sq)
+    return out, base
+
+
+class _Trial:
+    """A candidate setting's held-back record: its weighted loss, and per held-back block and channel
+    the gain over regression and regression's own sum of squares."""
+
+    def __init__(self, config: dict[str, Any]) -> None:
+        self.config = config
+        self.score = 0.0
+        self.gains: list[Array] = []
+        self.base: list[Array] = []
+
+    def add(self, held: Points, pred: Array, sigma: Array) -> None:
+        self.score += float((held.n[:, None] * ((held.y - pred) / sigma) ** 2).sum())
+        gain, base = _block_gains(held, pred)
+        self.gains.append(gain)
+        self.base.append(base)
+
+    def verdicts(self, z: float) -> list[dict[str, Any]]:
+        """Per channel: the gain and its standard error as fractions of regression's sum of squares,
+        and whether the gain is above ``z`` of them (blocks taken as independent draws)."""
+        gains, base = np.vstack(self.gains), np.vstack(self.base)
+        out = []
+        for c in range(gains.shape[1]):
+            total, base_sse, b = float(gains[:, c].sum()), float(base[:, c].sum()), len(gains)
+            se = float(np.sqrt(b * gains[:, c].var(ddof=1))) if b > 1 else np.inf
+            out.append({
+                "gain_fraction": total / base_sse if base_sse > 0 else 0.0,
+                "gain_se_fraction": se / base_sse if base_sse > 0 else 0.0,
+                "earns_its_place": bool(total > z * se),
+            })  # fmt: skip
+        return out
+
+
+class ResidualStrategy(Strategy):
+    """Regression first, then a learner of what it leaves (see the module docstring).
+
+    Parameters
+    ----------
+    folds : cross-validation folds over the session's blocks
+    guard : fall back to regression on channels where the learner does not earn its place
+    guard_z : standard errors the held-back gain must exceed
+    seed : fold assignment and the learner's own randomness
+    """
+
+    def __init__(self, folds: int = 3, guard: bool = True, guard_z: float = 2.0, seed: int = 0) -> None:
+        if folds < 2:
+            raise ValueError(f"folds must be 2 or more, got {folds}")
+        self.folds = folds
+        self.guard = guard
+        self.guard_z = guard_z
+        self.seed = seed
+
+    def params(self) -> dict[str, Any]:
+        """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``."""
+        return {"folds": self.folds, "guard": self.guard, "guard_z": self.guard_z, "seed": self.seed}
+
+    # ------------------------------------------------------------------ what a learner supplies
+
+    @abstractmethod
+    def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
+        """Learner settings to try, cheapest first."""
+
+    @abstractmethod
+    def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
+        """A learner fitted to ``points`` (residuals in units of ``sigma`` per channel, weights ``n``)."""
+
+    @abstractmethod
+    def _predict(self, learner: Any, x: Array) -> Array:
+        """Residual predictions (m, 3) at scaled inputs ``x`` (m, d), in the data's units."""
+
+    def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
+        """Settings derived from one training run (training lengths, say) with their learners."""
+        return [(config, learner)]
+
+    @abstractmethod
+    def _learner_state(self, learner: Any) -> Any:
+        """The fitted learner as plain lists and numbers."""
+
+    @abstractmethod
+    def _learner_from_state(self, state: Any) -> Any:
+        """The learner :meth:`_learner_state` describes."""
+
+    # ------------------------------------------------------------------ fit
+
+    def fit(self, data: CalibrationData) -> ResidualStrategy:
+        """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self."""
+        started = time.perf_counter()
+        self.__dict__.pop("_restored", None)
+        data = data.referenced()
+        if len(data) < 10:
+            raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
+        base = Regression().fit(data)
+        self.base_ = base.get_state()
+        self._base = base
+        self._set_scaling(data)
+        scaled = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
+        block = segment(scaled["gyro"][:, :6], data.t)
+        n_blocks = int(block[-1]) + 1
+        fold = (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[block]
+        self.blocks_, self.cv_folds_ = n_blocks, self.folds
+        targets = self._targets(base, data)
+        sigma = np.sqrt(np.mean(targets**2, axis=0))
+        self.sigma_ = np.where(sigma > 0, sigma, 1.0)
+        trials = self._cross_validate(data, scaled, block, fold)
+        self.learners_: dict[str, Any] = {}
+        self.configs_: dict[str, dict[str, Any]] = {}
+        self.cv_scores_ = {s: {k: t.score for k, t in trials[s].items()} for s in SENSORS}
+        self.guard_: dict[str, dict[str, Any]] = {}
+        used = np.zeros(6, dtype=bool)
+        for si, sensor in enumerate(SENSORS):
+            cols = slice(3 * si, 3 * si + 3)
+            if not trials[sensor]:
+                raise ValueError(f"{data.source or 'recording'}: no fold could be fitted (too few blocks)")
+            best = min(trials[sensor].values(), key=lambda t: t.score)
+            self.configs_[sensor] = best.config
+            for c, verdict in enumerate(best.verdicts(self.guard_z)):
+                self.guard_[CHANNELS[3 * si + c]] = verdict
+                used[3 * si + c] = verdict["earns_its_place"] or not self.guard
+            learner = self._train(best.config, aggregate(scaled[sensor], targets[:, cols], block),
+                                  self.sigma_[cols], self.seed)  # fmt: skip
+            self.learners_[sensor] = self._final(best.config, learner)
+        self.used_ = used
+        self.fit_seconds_ = time.perf_counter() - started
+        return self
+
+    def _cross_validate(
+        self, data: CalibrationData, scaled: dict[str, Array], block: NDArray[np.intp], fold: NDArray[np.intp]
+    ) -> dict[str, dict[str, _Trial]]:
+        """Per sensor and candidate setting, its held-back record over the folds: for each fold the
+        regression is refitted on the others and every candidate trained on their residuals."""
+        trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
+        for k in range(self.folds):
+            train, held = fold != k, fold == k
+            try:
+                fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
+            except ValueError:
+                continue  # this fold's training part cannot determine the seed model
+            fold_targets = self._targets(fold_base, data)
+            for si, sensor in enumerate(SENSORS):
+                cols = slice(3 * si, 3 * si + 3)
+                pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train])
+                pts_held = aggregate(scaled[sensor][held], fold_targets[held, cols], block[held])
+                for config in self._candidates(sensor, scaled[sensor].shape[1]):
+                    learner = self._train(config, pts_train, self.sigma_[cols], self.seed + k)
+                    for variant, fitted in self._variants(config, learner):
+                        trial = trials[sensor].setdefault(_key(variant), _Trial(variant))
+                        trial.add(pts_held, self._predict(fitted, pts_held.x), self.sigma_[cols])
+        return trials
+
+    def _final(self, config: dict[str, Any], learner: Any) -> Any:
+        """The learner to keep from a final training run under ``config`` (its variant's, say)."""
+        for variant, fitted in self._variants(config, learner):
+            if _key(variant) == _key(config):
+                return fitted
+        return learner
+
+    @staticmethod
+    def _targets(base: Regression, data: CalibrationData) -> Array:
+        w, f = base.correct(data.gyro, data.accel)
+        return np.hstack([w - data.ref_gyro, f - data.ref_accel])
+
+    # ------------------------------------------------------------------ inputs
+
+    def _set_scaling(self, data: CalibrationData) -> None:
+        rate = max(float(np.abs(data.ref_gyro).max()), _MIN_RATE_SCALE)
+        self.uses_temp_ = bool(
+            data.temp is not None and np.ptp(np.asarray(data.temp, dtype=float)) >= _MIN_TEMP_SPAN
+        )
+        centre, half = 0.0, 1.0
+        if self.uses_temp_ and data.temp is not None:
+            lo, hi = float(np.min(data.temp)), float(np.max(data.temp))
+            centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        self.scaling_ = {"rate": rate, "accel": earth.G0, "temp_centre": centre, "temp_half": half}
+        box = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
+        self.box_ = {s: [box[s].min(axis=0).tolist(), box[s].max(axis=0).tolist()] for s in SENSORS}
+
+    def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
+        s = self.scaling_
+        t = None
+        if self.uses_temp_:
+            if temp is None:
+                raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
+            t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
+        return input_columns(sensor, w / s["rate"], f / s["accel"], t)
+
+    def _residual(self, sensor: str, x: Array) -> Array:
+        """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
+        goes on along its edge slope (a one-sided difference over the last 0.1 % of the range) for up
+        to a quarter of the range, and holds from there: a scale factor's curve that the rig followed
+        to 250 °/s is better continued to 300 than cut flat, and guessed no further."""
+        lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
+        width = np.maximum(hi - lo, 1e-12)
+        reach = np.clip(x, lo - 0.25 * width, hi + 0.25 * width)
+        inside = np.clip(reach, lo, hi)
+        learner = self._learner(sensor)
+        pred: Array = self._predict(learner, inside)
+        beyond = np.flatnonzero((reach != inside).any(axis=1))
+        for d in range(x.shape[1]):
+            rows = beyond[reach[beyond, d] != inside[beyond, d]]
+            if rows.size == 0:
+                continue
+            step = EDGE_STEP * width[d] * np.sign(reach[rows, d] - inside[rows, d])
+            back = inside[rows].copy()
+            back[:, d] -= step
+            slope = (pred[rows] - self._predict(learner, back)) / step[:, None]
+            pred[rows] += slope * (reach[rows, d] - inside[rows, d])[:, None]
+        return pred
+
+    # ------------------------------------------------------------------ use
+
+    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
+        """Regression's correction ``x̂``, less the learned residual at the inputs, solved for by
+        fixed-point iteration ``x ← x̂ − r(x)``: where regression is far off (a scale nonlinearity it
+        folded into a scale factor) ``x̂`` itself is off by the residual, and ``r(x̂)`` by its slope times
+        that; each pass multiplies what is left by the slope (2e-2 for 3 °/s at 300 °/s)."""
+        w_hat, f_hat = self._base_strategy().correct(gyro, accel)
+        hat = (w_hat, f_hat)
+        w, f = w_hat, f_hat
+        for _ in range(1 + _PASSES):
+            out = []
+            for si, sensor in enumerate(SENSORS):
+                mask = self.used_[3 * si : 3 * si + 3]
+                pred = self._residual(sensor, self._scale(sensor, w, f, temp)) if mask.any() else 0.0
+                out.append(hat[si] - pred * mask)
+            w, f = out
+        return w, f
+
+    def _base_strategy(self) -> Regression:
+        base: Regression | None = getattr(self, "_base", None)
+        if base is None:
+            base = Regression()
+            base.set_state(self.base_)
+            self._base = base
+        return base
+
+    def _learner(self, sensor: str) -> Any:
+        cache = self.__dict__.setdefault("_restored", {})
+        if sensor not in cache:
+            learner = self.learners_[sensor]
+            cache[sensor] = self._learner_from_state(learner) if isinstance(learner, dict) else learner
+        return cache[sensor]
+
+    def guard_report(self) -> str:
+        """One line per channel: the learner's held-back gain over regression and whether it is used."""
+        lines = []
+        for ch, g in self.guard_.items():
+            verdict = "learned" if g["earns_its_place"] else "regression"
+            forced = " (guard off)" if not self.guard and not g["earns_its_place"] else ""
+            gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
+            lines.append(f"{ch:<8} held-back gain {gain:+7.2f} % ± {se:.2f} %  -> {verdict}{forced}")
+        return "\n".join(lines)
+
+    def get_state(self) -> dict[str, Any]:
+        """The fitted state, each sensor's learner as plain lists and numbers."""
+        state = {k: v for k, v in super().get_state().items() if k != "learners_"}
+        state["learners_"] = {s: self._learner_state(self._learner(s)) for s in self.learners_}
+        return state
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore the state; the learners are rebuilt from it on first use."""
+        plain = {k: v for k, v in state.items() if k not in ("learners_", "used_")}
+        for k, v in plain.items():
+            setattr(self, k, v)
+        self.sigma_ = np.asarray(state["sigma_"], dtype=float)
+        self.used_ = np.asarray(state["used_"], dtype=bool)
+        self.learners_ = dict(state["learners_"])
+        self.__dict__.pop("_restored", None)
+        self.__dict__.pop("_base", None)
+
+
+def _key(config: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v}" for k, v in sorted(config.items()))

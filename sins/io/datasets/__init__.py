@@ -1,0 +1,82 @@
+"""Readers for the real IMU datasets kept beside the project (never copied into it).
+
+Each dataset lives in a folder under the data root (see :func:`data_root`) with
+a SOURCE.md giving its origin, licence, units and columns. Each reader, one
+module per dataset, converts to the package's conventions (SI, radians) and
+returns the package's types; :func:`load` gives any of them by name as
+readings beside reference inputs, what ``sins gap --dataset NAME`` diagnoses.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from sins.errors import SinsInputError
+from sins.io.datasets.broad import BROAD_TRIALS, read_broad
+from sins.io.datasets.ferraris import FERRARIS_FOLDER, FERRARIS_RATE_HZ, FERRARIS_SECTIONS, read_ferraris
+from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
+from sins.io.datasets.psins_vehicle import read_psins_vehicle
+from sins.io.datasets.root import ENV_VAR, data_root
+from sins.series import CalibrationData, NavSeries
+
+#: Dataset names for :func:`load`, and what each is.
+NAMES = {
+    "ferraris": "imucal's hand-made Ferraris session of a MEMS IMU (static holds only have a reference)",
+    "psins_vehicle": "PSINS vehicle MEMS IMU against its FOG-INS, as 0.1 s means (the INS's own rate)",
+    "psins_lasergyro": "PSINS static ring-laser INS against Earth rate and gravity",
+    **{f"broad_{s[:2]}": f"BROAD trial {s}: a MEMS IMU against optical motion capture" for s in BROAD_TRIALS},
+}
+
+
+def load(name: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
+    """A dataset by name (see :data:`NAMES`) as readings beside reference inputs."""
+    return load_with_truth(name, root)[0]
+
+
+def load_with_truth(
+    name: str, root: str | os.PathLike[str] | None = None
+) -> tuple[CalibrationData, NavSeries | None]:
+    """A dataset by name, and its reference trajectory at the readings' times where it has one.
+
+    Only ``psins_vehicle`` has one (the FOG-INS's solution); its first and last rows, which the
+    solution does not span, are left out.
+    """
+    if name == "psins_vehicle":
+        # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
+        # vibration the MEMS sees, which would pass for a sensor gap.
+        data, nav = read_psins_vehicle(root, rate="fog")
+        if nav is None:
+            return data, None
+        inside = np.flatnonzero((data.t >= nav.t[0]) & (data.t <= nav.t[-1]))
+        data = data.rows(inside) if len(inside) < len(data) else data
+        return data, nav.interpolate(data.t)
+    return _load(name, root), None
+
+
+def _load(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
+    if name == "ferraris":
+        return read_ferraris(root)
+    if name == "psins_lasergyro":
+        return read_psins_lasergyro(root)
+    if name.startswith("broad_") and name in NAMES:
+        return read_broad(name.removeprefix("broad_"), root)
+    raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(NAMES)})")
+
+
+__all__ = [
+    "BROAD_TRIALS",
+    "ENV_VAR",
+    "FERRARIS_FOLDER",
+    "FERRARIS_RATE_HZ",
+    "FERRARIS_SECTIONS",
+    "NAMES",
+    "data_root",
+    "load",
+    "load_with_truth",
+    "read_broad",
+    "read_ferraris",
+    "read_psins_lasergyro",
+    "read_psins_vehicle",
+]

@@ -1,0 +1,257 @@
+"""Navigation errors against a truth, and their summary.
+
+Errors are estimate − truth. Position errors are in metres along the truth's
+local north, east and down: ``δN = δlat (R_M + h)``, ``δE = δlon (R_N + h) cos lat``,
+``δD = -δh``; linearised, which is within 0.01 % for errors below 100 km.
+Attitude errors are the differences of ZYX Euler angles, wrapped to ±180°.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.nav import earth, rotation
+from sins.series import NavSeries
+
+Array = NDArray[np.float64]
+
+#: One international nautical mile, m.
+NAUTICAL_MILE_M = 1852.0
+
+
+@dataclass(frozen=True)
+class NavErrors:
+    """Error series at ``n`` common times.
+
+    Attributes
+    ----------
+    t : (n,) s
+    pos_ned_m : (n, 3) north, east, down position error, m
+    vel_ned_mps : (n, 3) velocity error, m/s
+    att_rpy_rad : (n, 3) roll, pitch, yaw error, rad
+    """
+
+    t: Array
+    pos_ned_m: Array
+    vel_ned_mps: Array
+    att_rpy_rad: Array
+
+    @property
+    def horizontal_m(self) -> Array:
+        """Horizontal position error (n,), m: the norm of the north and east errors."""
+        return np.hypot(self.pos_ned_m[:, 0], self.pos_ned_m[:, 1])
+
+    def at(self, index: NDArray[np.integer] | slice) -> NavErrors:
+        """The errors at ``index``."""
+        return NavErrors(
+            t=self.t[index],
+            pos_ned_m=self.pos_ned_m[index],
+            vel_ned_mps=self.vel_ned_mps[index],
+            att_rpy_rad=self.att_rpy_rad[index],
+        )
+
+
+def nav_errors(estimate: NavSeries, truth: NavSeries) -> NavErrors:
+    """Errors of ``estimate`` against ``truth``.
+
+    When the time bases differ, the truth is interpolated to the estimate's
+    times that fall within the truth's span (see :meth:`NavSeries.interpolate`).
+    """
+    if len(estimate.t) != len(truth.t) or not np.array_equal(estimate.t, truth.t):
+        inside = (estimate.t >= truth.t[0] - 1e-9) & (estimate.t <= truth.t[-1] + 1e-9)
+        if not inside.any():
+            raise ValueError("the estimate and the truth share no time span")
+        estimate = estimate.at(np.flatnonzero(inside))
+        truth = truth.interpolate(estimate.t)
+    r_m, r_n = earth.radii(truth.lat)
+    pos = np.column_stack(
+        [
+            (estimate.lat - truth.lat) * (r_m + truth.h),
+            rotation.wrap_angle(estimate.lon - truth.lon) * (r_n + truth.h) * np.cos(truth.lat),
+            -(estimate.h - truth.h),
+        ]
+    )
+    att = euler_errors(estimate.q_nb, truth.q_nb)
+    return NavErrors(t=estimate.t, pos_ned_m=pos, vel_ned_mps=estimate.v_n - truth.v_n, att_rpy_rad=att)
+
+
+@numba.njit(cache=True, nogil=True)
+def _euler_errors(q_est: Array, q_true: Array) -> Array:
+    n = q_est.shape[0]
+    out = np.empty((n, 3))
+    angles = np.empty((2, 3))
+    for k in range(n):
+        for j in range(2):
+            q = q_est[k] if j == 0 else q_true[k]
+            x, y, z, w = q[0], q[1], q[2], q[3]
+            c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
+            c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
+            angles[j, 1] = np.arctan2(-c20, np.hypot(c00, c10))
+            if np.hypot(c21, c22) < 1e-12:  # gimbal lock: roll 0, yaw takes the rest
+                angles[j, 0] = 0.0
+                angles[j, 2] = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
+            else:
+                angles[j, 0] = np.arctan2(c21, c22)
+                angles[j, 2] = np.arctan2(c10, c00)
+        for i in range(3):
+            d = angles[0, i] - angles[1, i]
+            out[k, i] = d - 2.0 * np.pi * np.round(d / (2.0 * np.pi))
+    return out
+
+
+def euler_errors(q_est: Array, q_true: Array) -> Array:
+    """Roll, pitch, yaw of ``q_est`` minus those of ``q_true``, wrapped to ±π, shape (n, 3).
+
+    The compiled equivalent of ``wrap_angle(euler_from_quat(q_est) - euler_from_quat(q_true))``
+    (:mod:`sins.nav.rotation`), which ``tests/test_metrics.py`` holds it to.
+    """
+    return _euler_errors(np.ascontiguousarray(q_est, dtype=float), np.ascontiguousarray(q_true, dtype=float))
+
+
+@dataclass(frozen=True)
+class DriftSummary:
+    """The headline figures of a run (errors are estimate − truth).
+
+    ``drift_rate_m_per_h`` is the final horizontal error divided by the elapsed
+    time; ``*_rms_*`` are over all compared samples.
+    """
+
+    duration_s: float
+    final_north_m: float
+    final_east_m: float
+    final_down_m: float
+    final_horizontal_m: float
+    max_horizontal_m: float
+    rms_horizontal_m: float
+    final_vn_mps: float
+    final_ve_mps: float
+    final_vd_mps: float
+    final_roll_deg: float
+    final_pitch_deg: float
+    final_yaw_deg: float
+    max_roll_deg: float
+    max_pitch_deg: float
+    max_yaw_deg: float
+    drift_rate_m_per_h: float
+    drift_rate_nmi_per_h: float
+
+    def to_dict(self) -> dict[str, float]:
+        """The figures keyed by field name."""
+        return asdict(self)
+
+
+class DriftAccumulator:
+    """Summary statistics of an error series fed chunk by chunk, and a thinned copy of it.
+
+    The statistics use every sample; the copy keeps the samples whose running
+    index is a multiple of ``keep_every`` plus the last one, so long runs can
+    be summarised and plotted without holding them whole. ``keep_every=0``
+    keeps no copy.
+    """
+
+    def __init__(self, keep_every: int = 1) -> None:
+        if keep_every < 0:
+            raise ValueError(f"keep_every must be >= 0, got {keep_every}")
+        self.keep_every = keep_every
+        self._count = 0
+        self._t0: float | None = None
+        self._last: NavErrors | None = None
+        self._max_hor = 0.0
+        self._sum_hor2 = 0.0
+        self._max_att = np.zeros(3)
+        self._kept: list[NavErrors] = []
+
+    def add(self, errors: NavErrors) -> None:
+        """Take the next chunk (times continue the previous chunk's)."""
+        n = len(errors.t)
+        if n == 0:
+            return
+        hor = errors.horizontal_m
+        if self._t0 is None:
+            self._t0 = float(errors.t[0])
+        self._max_hor = max(self._max_hor, float(hor.max()))
+        self._sum_hor2 += float(np.dot(hor, hor))
+        self._max_att = np.maximum(self._max_att, np.abs(errors.att_rpy_rad).max(axis=0))
+        if self.keep_every:
+            keep = kept_indices(self._count, n, self.keep_every)
+            if keep.size:
+                self._kept.append(errors.at(keep))
+        self._count += n
+        self._last = errors.at(np.array([n - 1]))
+
+    def summary(self) -> DriftSummary:
+        """Final, maximum and RMS errors and the drift rate of everything added."""
+        if self._last is None or self._t0 is None:
+            raise ValueError("no errors were added")
+        last = self._last
+        duration = float(last.t[0]) - self._t0
+        final_hor = float(last.horizontal_m[0])
+        rate = final_hor / (duration / 3600.0) if duration > 0 else 0.0
+        att_deg = np.degrees(last.att_rpy_rad[0])
+        max_att_deg = np.degrees(self._max_att)
+        return DriftSummary(
+            duration_s=duration,
+            final_north_m=float(last.pos_ned_m[0, 0]),
+            final_east_m=float(last.pos_ned_m[0, 1]),
+            final_down_m=float(last.pos_ned_m[0, 2]),
+            final_horizontal_m=final_hor,
+            max_horizontal_m=self._max_hor,
+            rms_horizontal_m=float(np.sqrt(self._sum_hor2 / self._count)),
+            final_vn_mps=float(last.vel_ned_mps[0, 0]),
+            final_ve_mps=float(last.vel_ned_mps[0, 1]),
+            final_vd_mps=float(last.vel_ned_mps[0, 2]),
+            final_roll_deg=float(att_deg[0]),
+            final_pitch_deg=float(att_deg[1]),
+            final_yaw_deg=float(att_deg[2]),
+            max_roll_deg=float(max_att_deg[0]),
+            max_pitch_deg=float(max_att_deg[1]),
+            max_yaw_deg=float(max_att_deg[2]),
+            drift_rate_m_per_h=rate,
+            drift_rate_nmi_per_h=rate / NAUTICAL_MILE_M,
+        )
+
+    def kept(self) -> NavErrors:
+        """The thinned series, ending with the last sample added."""
+        if not self.keep_every:
+            raise ValueError("this accumulator keeps no series (keep_every=0)")
+        parts = list(self._kept)
+        if self._last is not None and (self._count - 1) % self.keep_every != 0:
+            parts.append(self._last)
+        if not parts:
+            raise ValueError("no errors were added")
+        return NavErrors(
+            t=np.concatenate([p.t for p in parts]),
+            pos_ned_m=np.concatenate([p.pos_ned_m for p in parts]),
+            vel_ned_mps=np.concatenate([p.vel_ned_mps for p in parts]),
+            att_rpy_rad=np.concatenate([p.att_rpy_rad for p in parts]),
+        )
+
+
+def kept_indices(offset: int, n: int, every: int) -> NDArray[np.intp]:
+    """Indices ``i`` in ``range(n)`` whose running index ``offset + i`` is a multiple of ``every``."""
+    return np.arange((-offset) % every, n, every)
+
+
+def thinned_indices(n: int, every: int) -> NDArray[np.intp]:
+    """Every ``every``-th index of ``range(n)`` from 0, plus the last: a thinned series ends where it ends."""
+    keep = kept_indices(0, n, every)
+    return keep if n == 0 or keep[-1] == n - 1 else np.append(keep, n - 1)
+
+
+def block_means(values: Array, every: int) -> Array:
+    """Means of consecutive blocks of ``every`` rows of ``values`` (n, k); the last block may be shorter."""
+    n = len(values)
+    starts = np.arange(0, n, every)
+    sums = np.add.reduceat(values, starts, axis=0) if n else values[:0]
+    return sums / np.diff(np.append(starts, n))[:, None]
+
+
+def summarize(errors: NavErrors) -> DriftSummary:
+    """Final, maximum and RMS errors and the drift rate of a whole error series."""
+    acc = DriftAccumulator(keep_every=0)
+    acc.add(errors)
+    return acc.summary()

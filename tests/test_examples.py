@@ -1,0 +1,65 @@
+"""The examples in ``examples/`` run as a user runs them, and say what their docstrings promise."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from sins.nav.earth import G0
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _run(*args: str) -> str:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    done = subprocess.run(args, capture_output=True, text=True, env=env, cwd=EXAMPLES.parent, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def test_the_library_example_drifts_as_half_b_t_squared():
+    out = _run(sys.executable, str(EXAMPLES / "library_drift.py"))
+    error_m = float(out.split("final horizontal error")[1].split("m")[0])
+    # ½ b t² over the 40 s drive; the last 20 s turn the biased axis through 90°, which can only shorten
+    # the displacement (by at most ~(1 - 2/π)·¼ of it in the turn's half), so 0.8-1.0 of ½ b t².
+    bound = 0.5 * 1e-3 * G0 * 40.0**2
+    assert 0.8 * bound <= error_m <= 1.0 * bound, (error_m, bound)
+
+
+def test_the_compensation_study_learns_the_nonlinearity_regression_cannot():
+    out = _run(sys.executable, str(EXAMPLES / "compensation_study.py"))
+    rows = {line.split()[0]: np.array(line.split()[1:], dtype=float) for line in out.splitlines()[1:]}
+    assert set(rows) == {"none", "regression", "kohonen"}
+    # gyro.y carries a k2·ω² error the linear model cannot hold; elsewhere the map keeps regression's.
+    assert rows["kohonen"][1] < 0.1 * rows["regression"][1], rows
+    others = [0, 2, 3, 4, 5]
+    assert (rows["kohonen"][others] <= 1.02 * rows["regression"][others]).all(), rows
+
+
+def test_the_diagnosis_example_names_the_withheld_effect():
+    out = _run(sys.executable, str(EXAMPLES / "diagnosis.py"))
+    assert out.strip().splitlines()[-1] == "first effect: gyro.temperature_bias", out
+
+
+def test_the_example_scenario_runs_with_every_strategy():
+    out = _run(sys.executable, "-m", "sins.cli", "run", str(EXAMPLES / "short_drive.toml"))
+    for name in ("none", "oracle", "regression", "kohonen"):
+        assert any(line.split()[:1] == [name] for line in out.splitlines()), out
+
+
+def test_the_readmes_python_blocks_run(tmp_path):
+    """The README's library examples, exactly as printed there, run in a fresh directory."""
+    readme = (EXAMPLES.parent / "README.md").read_text()
+    blocks = [b.split("```", 1)[0] for b in readme.split("```python\n")[1:]]
+    assert len(blocks) >= 2
+    for i, block in enumerate(blocks):
+        script = tmp_path / f"readme_{i}.py"
+        script.write_text(block)
+        env = {**os.environ, "OMP_NUM_THREADS": "1"}
+        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env,
+                              cwd=tmp_path, timeout=300)  # fmt: skip
+        assert done.returncode == 0, (i, done.stderr[-2000:])

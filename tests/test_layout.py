@@ -1,0 +1,138 @@
+"""The package's layers: imports point down, and the heavy libraries stay where they belong.
+
+The table is the one in docs/development.md. A new module must be placed in it (the test fails on a module
+it does not know), so the architecture is decided when a file is added, not discovered later.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "sins"
+
+#: Rank of each module or package (longest prefix wins); a module may import only lower ranks, or its
+#: own package's modules.
+RANKS = {
+    "sins": 0,
+    "sins.errors": 0,
+    "sins.nav.rotation": 0,
+    "sins.nav.earth": 0,
+    "sins.series": 1,
+    "sins.nav": 2,
+    "sins.imu": 3,
+    "sins.io": 4,
+    "sins.compensation": 5,
+    "sins.gap": 5,
+    "sins.scenario": 6,
+    "sins.pipeline": 7,
+    "sins.quality": 8,
+    "sins.viz": 9,
+    "sins.cli": 10,
+}
+
+#: Third-party libraries confined to the modules that need them.
+CONFINED = {
+    "rerun": {"sins.viz"},
+    "torch": {"sins.compensation.mlp"},
+    "minisom": {"sins.compensation.kohonen"},
+    "dask": set(),  # campaigns, when they come
+}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if "scenarios" in path.relative_to(PACKAGE).parts:
+            continue
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        out[".".join(parts)] = path
+    return out
+
+
+def _key(module: str) -> str:
+    """The longest prefix of ``module`` in :data:`RANKS` ("" if none)."""
+    parts = module.split(".")
+    for n in range(len(parts), 0, -1):
+        if ".".join(parts[:n]) in RANKS and (n > 1 or len(parts) == 1):
+            return ".".join(parts[:n])
+    return ""
+
+
+def _imports(module: str, path: Path) -> list[tuple[int, str]]:
+    """Every imported module name, at any depth (imports inside functions count)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            # ``from sins.gap import lattice`` imports the submodule; ``from sins.gap import diagnose``
+            # the package.
+            for a in node.names:
+                sub = f"{node.module}.{a.name}"
+                found.append((node.lineno, sub if sub in MODULES else node.module))
+    return found
+
+
+MODULES = _modules()
+
+
+def test_every_module_has_a_layer():
+    assert {m: _key(m) for m in MODULES if not _key(m)} == {}
+
+
+def _package(module: str) -> str:
+    return ".".join(module.split(".")[:2])
+
+
+def _violations(module: str, path: Path) -> list[str]:
+    rank = RANKS[_key(module)]
+    wrong = []
+    for line, target in _imports(module, path):
+        if not target.startswith("sins") or target == module:
+            continue
+        t_rank = RANKS[_key(target)]
+        # Side by side (compensation and gap) is not below: neither may import the other.
+        beside = t_rank == rank and rank > 0 and _package(target) != _package(module)
+        if t_rank > rank or beside:
+            wrong.append(f"line {line}: {target} (layer {t_rank}) from layer {rank}")
+    return wrong
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_imports_point_down_the_layers(module: str):
+    assert _violations(module, MODULES[module]) == []
+
+
+@pytest.mark.parametrize("library", sorted(CONFINED))
+def test_heavy_libraries_are_confined(library: str):
+    users = {m for m in MODULES for _, t in _imports(m, MODULES[m]) if t.split(".")[0] == library}
+    assert users <= CONFINED[library], sorted(users - CONFINED[library])
+
+
+def test_the_layer_rule_catches_upward_and_sideways_imports(tmp_path):
+    """The check can fail: rotations that import the integrator (lazily, inside a function) and a
+    compensation module that imports the gap diagnosis are caught; the integrator importing rotations
+    is not."""
+    fake = tmp_path / "fake.py"
+    fake.write_text("def f():\n    from sins.nav import strapdown\n")
+    assert _violations("sins.nav.rotation", fake) == ["line 2: sins.nav.strapdown (layer 2) from layer 0"]
+    fake.write_text("from sins.gap import diagnose\n")
+    assert _violations("sins.compensation.mlp", fake) == ["line 1: sins.gap (layer 5) from layer 5"]
+    fake.write_text("from sins.nav import rotation\n")
+    assert _violations("sins.nav.strapdown", fake) == []
+
+
+def test_every_package_is_installed():
+    """A package missing from pyproject's list would work in the editable install and vanish from a wheel."""
+    import tomllib
+
+    listed = set(
+        tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
+    )
+    on_disk = {".".join(p.parent.relative_to(PACKAGE.parent).parts) for p in PACKAGE.rglob("__init__.py")}
+    assert on_disk <= listed, sorted(on_disk - listed)
