@@ -118,6 +118,21 @@ def test_the_guard_can_be_lifted_and_a_fit_is_reproducible(seed_model_fits):
     assert json.dumps(state, sort_keys=True) == json.dumps(state_again, sort_keys=True)
 
 
+@pytest.mark.parametrize("name", ["mlp", "kohonen"])
+def test_training_on_two_threads_gives_the_model_one_thread_gives(seed_model_fits, name: str):
+    """The cross-validation trains its candidates on ``n_jobs`` threads; each training is sequential and
+    seeded on its own (torch's global generator under a lock), so the model cannot depend on it."""
+    fit = seed_model_fits["fit"]
+    small = fit.rows(slice(0, len(fit), 4))
+    options = {"hidden_sizes": ((8, 8), (16, 16))} if name == "mlp" else {"sizes": (5, 8)}
+    states = []
+    for n_jobs in (1, 2):
+        state = compensation.make(name, guard=False, n_jobs=n_jobs, **options).fit(small).get_state()
+        state.pop("fit_seconds_")
+        states.append(json.dumps(state, sort_keys=True))
+    assert states[0] == states[1]
+
+
 def test_a_learner_is_not_fitted_on_the_readings_noise():
     """The pure networks take readings as inputs and learn part of the noise around static holds (their
     residual on the fitting rows dips below the noise); the physics-first ones learn over the reference,

@@ -28,8 +28,9 @@ Two training modes:
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from typing import Any
 
 import numpy as np
@@ -284,8 +285,9 @@ class ResidualMLP(ResidualStrategy):
         guard: bool = True,
         guard_z: float = 2.0,
         seed: int = 0,
+        n_jobs: int = 2,
     ) -> None:
-        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed)
+        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs)
         self.hidden_sizes = tuple(tuple(int(h) for h in hs) for hs in hidden_sizes)
         self.decays = tuple(float(d) for d in decays)
 
@@ -304,11 +306,15 @@ class ResidualMLP(ResidualStrategy):
         with _one_thread():
             return self._train_on_one_thread(config, points, sigma, seed)
 
+    def _training_context(self) -> AbstractContextManager[Any]:
+        return _one_thread()
+
     def _train_on_one_thread(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
         import torch
 
-        torch.manual_seed(seed)
-        net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
+        with _INIT_LOCK:  # torch's generator is global: seed and draw the weights as one step
+            torch.manual_seed(seed)
+            net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
         x = torch.from_numpy(points.x)
         y = torch.from_numpy(points.y / sigma)
         w = torch.from_numpy(points.n / points.n.sum())[:, None]
@@ -359,19 +365,34 @@ class ResidualMLP(ResidualStrategy):
         )
 
 
+_INIT_LOCK = threading.Lock()
+_THREADS_LOCK = threading.Lock()
+_one_thread_depth = 0
+_threads_before = 0
+
+
 @contextmanager
 def _one_thread() -> Iterator[None]:
     """Torch on one thread for the while: the residual networks are small (a thread is as fast), and a
     sum split over threads rounds differently, which L-BFGS's line search turns into another solution:
-    the same fit gave 486 m and 614 m of drift on the quality suite on one and two threads."""
+    the same fit gave 486 m and 614 m of drift on the quality suite on one and two threads. Nested and
+    concurrent holders share one setting, restored when the last lets go (the cross-validation trains
+    on several Python threads at once, each on one torch thread)."""
     import torch
 
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
+    global _one_thread_depth, _threads_before
+    with _THREADS_LOCK:
+        if _one_thread_depth == 0:
+            _threads_before = torch.get_num_threads()
+        torch.set_num_threads(1)  # again in each holder's thread: OpenMP keeps the count per thread
+        _one_thread_depth += 1
     try:
         yield
     finally:
-        torch.set_num_threads(threads)
+        with _THREADS_LOCK:
+            _one_thread_depth -= 1
+            if _one_thread_depth == 0:
+                torch.set_num_threads(_threads_before)
 
 
 def _tanh_network(n_in: int, hidden: tuple[int, ...]) -> Any:

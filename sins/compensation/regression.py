@@ -128,7 +128,33 @@ class ExtendedRegression(Strategy):
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Invert the fitted model by fixed-point iteration (needs ``temp`` if fitted with it)."""
         w, f = gyro.copy(), accel.copy()
+        d = None
+        if self.uses_temp_:
+            if temp is None:
+                raise ValueError("this regression was fitted with temperature: give the temperature series")
+            d = (np.asarray(temp, dtype=float) - self.t0)[:, None]
         for _ in range(self.iterations):
-            err = np.column_stack([x @ c for x, c in zip(self._design(w, f, temp), self.coef_, strict=True)])
+            err = self._errors(w, f, d)
             w, f = gyro - err[:, :3], accel - err[:, 3:]
         return w, f
+
+    def _errors(self, w: Array, f: Array, d: Array | None) -> Array:
+        """The fitted errors (n, 6) at inputs ``w``, ``f`` and temperature offset ``d`` (n, 1).
+
+        The same sums as ``x @ c`` over :meth:`_design`'s columns, but the columns all channels share go
+        through one matrix product instead of six: an hour's correction is 360,000 rows × 6 passes.
+        """
+        n = len(w)
+        k = 13 if self.squares else 7
+        shared = np.empty((n, k))
+        shared[:, 0] = 1.0
+        shared[:, 1:4] = w
+        shared[:, 4:7] = f
+        if self.squares:
+            np.multiply(w, w, out=shared[:, 7:10])
+            np.multiply(f, f, out=shared[:, 10:13])
+        err = shared @ np.ascontiguousarray(self.coef_[:, :k].T)
+        if d is not None:
+            u = np.hstack([w, f])
+            err += d * self.coef_[:, k] + d * d * self.coef_[:, k + 1] + d * u * self.coef_[:, k + 2]
+        return err

@@ -44,6 +44,8 @@ from __future__ import annotations
 
 import time
 from abc import abstractmethod
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -185,15 +187,22 @@ class ResidualStrategy(Strategy):
     guard : fall back to regression on channels where the learner does not earn its place
     guard_z : standard errors the held-back gain must exceed
     seed : fold assignment and the learner's own randomness
+    n_jobs : threads that train the cross-validation's candidates side by side; the results do not depend
+        on it (each training is sequential and seeded on its own), so it is not saved with the model
     """
 
-    def __init__(self, folds: int = 3, guard: bool = True, guard_z: float = 2.0, seed: int = 0) -> None:
+    def __init__(
+        self, folds: int = 3, guard: bool = True, guard_z: float = 2.0, seed: int = 0, n_jobs: int = 2
+    ) -> None:
         if folds < 2:
             raise ValueError(f"folds must be 2 or more, got {folds}")
+        if n_jobs < 1:
+            raise ValueError(f"n_jobs must be 1 or more, got {n_jobs}")
         self.folds = folds
         self.guard = guard
         self.guard_z = guard_z
         self.seed = seed
+        self.n_jobs = n_jobs
 
     def params(self) -> dict[str, Any]:
         """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``."""
@@ -216,6 +225,10 @@ class ResidualStrategy(Strategy):
     def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
         """Settings derived from one training run (training lengths, say) with their learners."""
         return [(config, learner)]
+
+    def _training_context(self) -> AbstractContextManager[Any]:
+        """Held around the cross-validation's trainings (torch's thread count, say)."""
+        return nullcontext()
 
     @abstractmethod
     def _learner_state(self, learner: Any) -> Any:
@@ -273,7 +286,7 @@ class ResidualStrategy(Strategy):
     ) -> dict[str, dict[str, _Trial]]:
         """Per sensor and candidate setting, its held-back record over the folds: for each fold the
         regression is refitted on the others and every candidate trained on their residuals."""
-        trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
+        jobs: list[tuple[str, dict[str, Any], Points, Points, slice, int]] = []
         for k in range(self.folds):
             train, held = fold != k, fold == k
             try:
@@ -286,10 +299,24 @@ class ResidualStrategy(Strategy):
                 pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train])
                 pts_held = aggregate(scaled[sensor][held], fold_targets[held, cols], block[held])
                 for config in self._candidates(sensor, scaled[sensor].shape[1]):
-                    learner = self._train(config, pts_train, self.sigma_[cols], self.seed + k)
-                    for variant, fitted in self._variants(config, learner):
-                        trial = trials[sensor].setdefault(_key(variant), _Trial(variant))
-                        trial.add(pts_held, self._predict(fitted, pts_held.x), self.sigma_[cols])
+                    jobs.append((sensor, config, pts_train, pts_held, cols, self.seed + k))
+
+        def run(job: tuple[str, dict[str, Any], Points, Points, slice, int]) -> Any:
+            _, config, pts_train, _, cols, seed = job
+            return self._train(config, pts_train, self.sigma_[cols], seed)
+
+        with self._training_context():
+            if self.n_jobs > 1:
+                with ThreadPoolExecutor(self.n_jobs) as pool:
+                    learners = list(pool.map(run, jobs))
+            else:
+                learners = [run(job) for job in jobs]
+        # Scored in the jobs' order, whatever order they finished in: the trials' sums come out the same.
+        trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
+        for (sensor, config, _, pts_held, cols, _), learner in zip(jobs, learners, strict=True):
+            for variant, fitted in self._variants(config, learner):
+                trial = trials[sensor].setdefault(_key(variant), _Trial(variant))
+                trial.add(pts_held, self._predict(fitted, pts_held.x), self.sigma_[cols])
         return trials
 
     def _final(self, config: dict[str, Any], learner: Any) -> Any:
