@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -85,7 +86,10 @@ def _check_viewer_args(args: argparse.Namespace) -> None:
     from sins import viz
 
     if args.spawn and not viz.has_display():
-        raise SinsInputError(viz.NO_DISPLAY)
+        raise SinsInputError(
+            f"--spawn: {viz.NO_DISPLAY}; use --rerun OUT.rrd to save a recording, "
+            "or --serve for the web viewer"
+        )
     if args.rerun:
         viz.check_rrd_path(args.rerun)
 
@@ -102,7 +106,10 @@ def _show(args: argparse.Namespace, result: Any, summary: str) -> None:
     if args.spawn:
         viz.spawn(result, summary=summary)
     if args.serve:
-        address = viz.serve(result, summary=summary, web_port=args.web_port)
+        try:
+            address = viz.serve(result, summary=summary, web_port=args.web_port)
+        except SinsInputError as exc:
+            raise SinsInputError(f"--serve: {exc}") from None
         print(f"serving the Rerun web viewer at {address}  (Ctrl-C stops)", flush=True)
         import time
 
@@ -232,7 +239,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         part = data
         if args.validation:
             part, _ = data.split(args.validation)
-        strategy.fit(part)
+        with _progress_bar(f"fitting {args.strategy}", "training") as bar:
+            if isinstance(strategy, ResidualStrategy) and bar is not None:
+                strategy.progress = lambda done, total: _advance(bar, done, total)
+            strategy.fit(part)
     except ValueError as exc:
         raise SinsInputError(f"{args.recording}: {exc}") from None
     compensation.save(strategy, args.out)
@@ -246,6 +256,24 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         print(strategy.guard_report())
     print(f"wrote {args.out}")
     return 0
+
+
+@contextmanager
+def _progress_bar(description: str, unit: str) -> Iterator[Any]:
+    """A tqdm bar on a terminal (stderr), None otherwise: logs and CI get the plain result lines only."""
+    if not sys.stderr.isatty():
+        yield None
+        return
+    from tqdm import tqdm
+
+    with tqdm(desc=description, unit=f" {unit}", leave=False, file=sys.stderr) as bar:
+        yield bar
+
+
+def _advance(bar: Any, done: int, total: int | None = None) -> None:
+    if total is not None:
+        bar.total = total
+    bar.update(done - bar.n)
 
 
 def _settings(config: dict[str, Any]) -> str:
@@ -285,6 +313,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         viz.check_rrd_path(args.rerun)
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("gap: give a RECORDING.csv or --dataset NAME (one of them)")
+    if not 0.0 < args.holdout < 1.0:
+        raise SinsInputError(f"--holdout must be in (0, 1), got {args.holdout}")
     if args.dataset is not None:
         from sins.io import datasets
 
@@ -299,12 +329,14 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
         model = tuple(e.name for e in spec.model().effects)
 
-    def progress(name: str) -> None:  # a live line on a terminal; nothing in a log
-        print(f"\rscoring {name:<26}", end="", file=sys.stderr, flush=True)
+    with _progress_bar("diagnosing", "candidate") as bar:
 
-    report = gap.diagnose(data, args.holdout, model, progress if sys.stderr.isatty() else None)
-    if sys.stderr.isatty():
-        print("\r" + " " * 34 + "\r", end="", file=sys.stderr, flush=True)
+        def progress(name: str) -> None:
+            assert bar is not None  # passed only when there is a bar
+            bar.set_postfix_str(name)
+            _advance(bar, bar.n + 1)
+
+        report = gap.diagnose(data, args.holdout, model, progress if bar is not None else None)
     _, held_rows = report.rows
     skipped = (
         f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""

@@ -230,9 +230,16 @@ class CalibrationData:
             raise ValueError(f"{self.source or 'recording'}: too short to split ({n} rows)")
         return held
 
-    def referenced(self) -> CalibrationData:
-        """The rows with a per-sample reference (finite ``ref_gyro`` and ``ref_accel``), phases kept."""
+    @property
+    def has_reference(self) -> NDArray[np.bool_]:
+        """Per row, whether it has a per-sample reference (finite ``ref_gyro`` and ``ref_accel``); a
+        hand-turned rotation's rows have none and say nothing of the errors."""
         ok = np.isfinite(self.ref_gyro).all(axis=1) & np.isfinite(self.ref_accel).all(axis=1)
+        return np.asarray(ok, dtype=bool)
+
+    def referenced(self) -> CalibrationData:
+        """The rows with a per-sample reference (:attr:`has_reference`), phases kept."""
+        ok = self.has_reference
         return self if ok.all() else self._subset(np.flatnonzero(ok))
 
     def _subset(self, rows: NDArray[np.integer]) -> CalibrationData:

@@ -265,10 +265,7 @@ def save(result: ScenarioRun, path: str | os.PathLike[str], *, summary: str = ""
     return _write(path, rec, bp, lambda: log_scenario_run(rec, result, summary=summary))
 
 
-NO_DISPLAY = (
-    "--spawn: no display to open the native viewer on (DISPLAY and WAYLAND_DISPLAY are unset); "
-    "use --rerun OUT.rrd to save a recording, or --serve for the web viewer"
-)
+NO_DISPLAY = "no display to open the native viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
 
 
 def has_display() -> bool:
@@ -299,7 +296,7 @@ def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_
         grpc_url = rec.serve_grpc(grpc_port=grpc_port, default_blueprint=bp)
         rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=grpc_url)
     except Exception as exc:  # rerun raises its own error types for a port in use
-        raise SinsInputError(f"--serve: cannot serve on ports {web_port}/{grpc_port}: {exc}") from None
+        raise SinsInputError(f"cannot serve the web viewer on ports {web_port}/{grpc_port}: {exc}") from None
     log_scenario_run(rec, result, summary=summary)
     rec.flush()
     from urllib.parse import quote

@@ -182,3 +182,50 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--no-guard" in err and not (tmp_path / "r.json").exists()
+
+
+def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Path):
+    """On a terminal, ``sins fit`` draws its cross-validation's progress on stderr; piped to a file
+    (a log, CI) stderr stays empty and stdout is the same result lines."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import subprocess
+    import sys
+    import termios
+    import threading
+
+    rec = tmp_path / "rec.csv"
+    data = calibration.simulate_rig(FAST, _unit(7), seed=7)
+    io.write_recording(rec, data.rows(slice(0, len(data), 8)))
+    command = [sys.executable, "-m", "sins.cli", "fit", str(rec), "--strategy", "kohonen", "--out"]
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    leader, follower = pty.openpty()
+    # A terminal of 80 columns (a fresh pty has none, and tqdm draws nothing in no width).
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
+    drawn = bytearray()
+
+    def read() -> None:  # drain the terminal while the fit runs (a full pty would block it)
+        while True:
+            try:
+                chunk = os.read(leader, 65536)
+            except OSError:
+                return
+            if not chunk:
+                return
+            drawn.extend(chunk)
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    on_tty = subprocess.run([*command, str(tmp_path / "a.json")], stdout=subprocess.PIPE, stderr=follower,
+                            env=env, timeout=300, check=True)  # fmt: skip
+    os.close(follower)
+    reader.join(timeout=10)
+    os.close(leader)
+    piped = subprocess.run([*command, str(tmp_path / "b.json")], capture_output=True, env=env, timeout=300,
+                           check=True)  # fmt: skip
+    assert b"fitting kohonen" in drawn and b"training" in drawn, bytes(drawn[-500:])
+    assert piped.stderr == b""
+    lines = lambda out: [ln for ln in out.decode().splitlines() if not ln.startswith("wrote")]  # noqa: E731
+    assert lines(on_tty.stdout) == lines(piped.stdout)

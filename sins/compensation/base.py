@@ -141,7 +141,7 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
 
     Rows without a finite reference are left out.
     """
-    ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+    ok = data.has_reference
     if not ok.any():
         raise SinsInputError(f"{data.source or 'recording'}: no rows with a reference to judge against")
     temp = None if data.temp is None else data.temp[ok]

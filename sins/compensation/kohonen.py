@@ -83,7 +83,7 @@ class Kohonen(Strategy):
         """Train the map on standardised readings and store each node's mean error; returns self."""
         from minisom import MiniSom
 
-        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        ok = data.has_reference
         x = np.hstack([data.gyro, data.accel])[ok]
         y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
         if len(x) < self.rows * self.cols:

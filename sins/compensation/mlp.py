@@ -132,7 +132,7 @@ class MLP(Strategy):
         import torch
 
         torch.manual_seed(self.seed)
-        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        ok = data.has_reference
         if ok.sum() < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
         self.uses_temp_ = data.temp is not None

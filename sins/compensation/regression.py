@@ -51,7 +51,7 @@ def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes:
     its worst channel, so one corrupted reading discounts the whole sample.
     """
     weights = np.ones(len(data))
-    ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+    ok = data.has_reference
     w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
     for _ in range(passes):
         fit = calibration.fit_seed_model(data, g_sensitivity=g_sensitivity, weights=weights)
@@ -111,7 +111,7 @@ class ExtendedRegression(Strategy):
 
     def fit(self, data: CalibrationData) -> ExtendedRegression:
         """Fit each channel's coefficients by least squares on the reference inputs; returns self."""
-        ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+        ok = data.has_reference
         self.uses_temp_ = bool(self.temperature and data.temp is not None)
         temp = None if data.temp is None else data.temp[ok]
         designs = self._design(data.ref_gyro[ok], data.ref_accel[ok], temp)

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import time
 from abc import abstractmethod
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
@@ -203,6 +204,9 @@ class ResidualStrategy(Strategy):
         self.guard_z = guard_z
         self.seed = seed
         self.n_jobs = n_jobs
+        #: Called as ``progress(done, total)`` as the cross-validation's trainings finish (a progress
+        #: bar, say); not a parameter, and not saved.
+        self.progress: Callable[[int, int], None] | None = None
 
     def params(self) -> dict[str, Any]:
         """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``."""
@@ -305,12 +309,12 @@ class ResidualStrategy(Strategy):
             _, config, pts_train, _, cols, seed = job
             return self._train(config, pts_train, self.sigma_[cols], seed)
 
-        with self._training_context():
-            if self.n_jobs > 1:
-                with ThreadPoolExecutor(self.n_jobs) as pool:
-                    learners = list(pool.map(run, jobs))
-            else:
-                learners = [run(job) for job in jobs]
+        learners: list[Any] = []
+        with self._training_context(), ThreadPoolExecutor(self.n_jobs) as pool:
+            for learner in pool.map(run, jobs) if self.n_jobs > 1 else map(run, jobs):
+                learners.append(learner)
+                if self.progress is not None:
+                    self.progress(len(learners), len(jobs))
         # Scored in the jobs' order, whatever order they finished in: the trials' sums come out the same.
         trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
         for (sensor, config, _, pts_held, cols, _), learner in zip(jobs, learners, strict=True):

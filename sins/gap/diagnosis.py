@@ -73,6 +73,7 @@ from scipy.stats import chi2
 from sins.errors import SinsInputError
 from sins.gap import disturbance, lattice, randombias
 from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES, display_unit
+from sins.nav.earth import G0
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
@@ -160,7 +161,7 @@ def _size_columns(x: _Inputs, i: int) -> Array:
 
 
 def _g2_columns(x: _Inputs, i: int) -> Array:
-    f = x.f / 9.80665  # in g: keeps the columns near the others' size
+    f = x.f / G0  # in g: keeps the columns near the others' size
     return np.stack([f[:, j] * f[:, k] for j in range(3) for k in range(j, 3)], axis=1)
 
 
@@ -610,8 +611,8 @@ def _check(data: CalibrationData, holdout: float) -> None:
         row = int(np.flatnonzero(~np.isfinite(data.temp))[0])
         raise SinsInputError(f"{where}: NaN or infinite temperature at row {row}")
     if not 0.0 < holdout < 1.0:
-        raise SinsInputError(f"{where}: --holdout must be in (0, 1), got {holdout}")
-    n = int((np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)).sum())
+        raise SinsInputError(f"{where}: the withheld fraction must be in (0, 1), got {holdout}")
+    n = int(data.has_reference.sum())
     if n < 200:
         with_ref = " with a per-sample reference" if n < len(data) else ""
         raise SinsInputError(f"{where}: too short to split ({n} rows{with_ref}; at least 200 are needed)")

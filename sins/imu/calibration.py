@@ -395,7 +395,7 @@ def fit_seed_model(
     for sensor in sensors:
         if sensor not in ("gyro", "accel"):
             raise ValueError(f"sensors must be gyro and/or accel, got {sensor!r}")
-    ok = np.isfinite(data.ref_gyro).all(axis=1) & np.isfinite(data.ref_accel).all(axis=1)
+    ok = data.has_reference
     w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
     ones = np.ones((len(w_ref), 1))
     root = (

@@ -196,16 +196,6 @@ def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
     return spec.cls(name.split(".")[0], **kwargs)
 
 
-def effect_to_params(effect: imu.Effect) -> dict[str, Any]:
-    """The file parameters (familiar units) of an effect; the inverse of :func:`effect_from_params`."""
-    spec = PARAMETERS[effect.name]
-    out: dict[str, Any] = {}
-    for p in spec.params:
-        value = getattr(effect, p.field)
-        out[p.key] = float(value) / p.factor if p.shape == () else (np.asarray(value) / p.factor).tolist()
-    return out
-
-
 # --------------------------------------------------------------------------- grades
 
 
