@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from sins import __version__
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 
 _COLUMNS = (
     ("final N m", "final_north_m", "{:.3f}"),
@@ -399,6 +399,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from sins import quality
 
     suite = quality.load_suite(args.suite)
+    if not args.update_baseline and not Path(args.baseline).exists():
+        raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     if not args.update_baseline:
         baseline = quality.read_baseline(args.baseline)  # refuse early, before the runs
     measured = quality.measure(suite)
@@ -548,11 +550,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The flag that gives what a :class:`MissingInputError` says is missing.
+_FLAG_FOR = {"truth": "--truth TRUTH.csv"}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args))
+    except MissingInputError as exc:
+        flag = _FLAG_FOR.get(exc.needs)
+        print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)
+        return 2
     except SinsInputError as exc:
         print(f"sins: error: {exc}", file=sys.stderr)
         return 2

@@ -7,3 +7,12 @@ class SinsInputError(ValueError):
     The message is one line that names what is wrong and where (file, line,
     column or key). The CLI prints it without a traceback.
     """
+
+
+class MissingInputError(SinsInputError):
+    """Bad input that another input would mend. ``needs`` names that input in the library's terms
+    (``"truth"``); the CLI says which flag gives it, so library messages never name flags."""
+
+    def __init__(self, message: str, needs: str) -> None:
+        super().__init__(message)
+        self.needs = needs

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import io, scenario
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
     DriftAccumulator,
@@ -302,9 +302,10 @@ def gap_data(
 
     if truth is None:
         if not any(c.startswith("ref_") for c in io.read_columns(recording)):
-            raise SinsInputError(
-                f"{recording}: no ref_ columns (a rig recording has them); for an IMU recording "
-                "pass its trajectory with --truth TRUTH.csv"
+            raise MissingInputError(
+                f"{recording}: no ref_ columns (a rig recording has them); an IMU recording needs its "
+                "trajectory (a truth file)",
+                needs="truth",
             )
         return io.read_recording(recording), None
     samples, table = io.read_imu(recording)

@@ -150,7 +150,7 @@ def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str,
     from sins import io
 
     path = Path(path)
-    doc = io.read_json_document(path, "quality baseline", BASELINE_FORMAT, "create it with --update-baseline")
+    doc = io.read_json_document(path, "quality baseline", BASELINE_FORMAT)
     if not isinstance(doc.get("cases"), dict):
         raise SinsInputError(f'{path}: a quality baseline needs a "cases" table')
     cases: dict[str, dict[str, dict[str, float]]] = doc["cases"]

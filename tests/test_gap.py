@@ -328,7 +328,16 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
     imu_only.write_text("t,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n")
     from sins import pipeline
 
-    refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "--truth")
+    refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "trajectory")
+
+
+def test_the_cli_names_the_flag_the_library_leaves_out(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    """The library says what is missing (a trajectory); the command line says how to give it."""
+    imu_only = tmp_path / "imu.csv"
+    imu_only.write_text("t,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n")
+    assert main(["gap", str(imu_only)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "trajectory" in err and "--truth TRUTH.csv" in err, err
 
 
 def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
