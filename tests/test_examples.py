@@ -14,10 +14,10 @@ from sins.nav.earth import G0
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-def _run(*args: str) -> str:
+def _run(*args: str, cwd: Path = EXAMPLES.parent) -> str:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
-    done = subprocess.run(args, capture_output=True, text=True, env=env, cwd=EXAMPLES.parent, timeout=300)
-    assert done.returncode == 0, done.stderr[-2000:]
+    done = subprocess.run(args, capture_output=True, text=True, env=env, cwd=cwd, timeout=300)
+    assert done.returncode == 0, (args, done.stderr[-2000:])
     return done.stdout
 
 
@@ -59,7 +59,4 @@ def test_the_readmes_python_blocks_run(tmp_path):
     for i, block in enumerate(blocks):
         script = tmp_path / f"readme_{i}.py"
         script.write_text(block)
-        env = {**os.environ, "OMP_NUM_THREADS": "1"}
-        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env,
-                              cwd=tmp_path, timeout=300)  # fmt: skip
-        assert done.returncode == 0, (i, done.stderr[-2000:])
+        _run(sys.executable, str(script), cwd=tmp_path)

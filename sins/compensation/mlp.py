@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -305,9 +305,6 @@ class ResidualMLP(ResidualStrategy):
     def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
         with _one_thread():
             return self._train_on_one_thread(config, points, sigma, seed)
-
-    def _training_context(self) -> AbstractContextManager[Any]:
-        return _one_thread()
 
     def _train_on_one_thread(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
         import torch

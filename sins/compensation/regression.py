@@ -95,17 +95,28 @@ class ExtendedRegression(Strategy):
             "iterations": self.iterations,
         }
 
-    def _design(self, w: Array, f: Array, temp: Array | None) -> list[Array]:
-        """Per channel, its regressors (n, p): the shared columns and its own temperature-scale term."""
+    def _shared(self, w: Array, f: Array) -> Array:
+        """The columns every channel's regressors share (n, k): ``[1, ω, f]`` and, with ``squares``,
+        ``[ω², f²]``."""
         cols = [np.ones((len(w), 1)), w, f]
         if self.squares:
             cols += [w * w, f * f]
-        shared = np.hstack(cols)
+        return np.hstack(cols)
+
+    def _temp_offset(self, temp: Array | None) -> Array | None:
+        """``T − T0`` (n, 1) where the fit used temperature, else None."""
         if not self.uses_temp_:
-            return [shared] * 6
+            return None
         if temp is None:
             raise ValueError("this regression was fitted with temperature: give the temperature series")
-        d = (np.asarray(temp, dtype=float) - self.t0)[:, None]
+        return (np.asarray(temp, dtype=float) - self.t0)[:, None]
+
+    def _design(self, w: Array, f: Array, temp: Array | None) -> list[Array]:
+        """Per channel, its regressors (n, p): the shared columns and its own temperature-scale term."""
+        shared = self._shared(w, f)
+        d = self._temp_offset(temp)
+        if d is None:
+            return [shared] * 6
         u = np.hstack([w, f])
         return [np.hstack([shared, d, d * d, d * u[:, [i]]]) for i in range(6)]
 
@@ -128,11 +139,7 @@ class ExtendedRegression(Strategy):
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Invert the fitted model by fixed-point iteration (needs ``temp`` if fitted with it)."""
         w, f = gyro.copy(), accel.copy()
-        d = None
-        if self.uses_temp_:
-            if temp is None:
-                raise ValueError("this regression was fitted with temperature: give the temperature series")
-            d = (np.asarray(temp, dtype=float) - self.t0)[:, None]
+        d = self._temp_offset(temp)
         for _ in range(self.iterations):
             err = self._errors(w, f, d)
             w, f = gyro - err[:, :3], accel - err[:, 3:]
@@ -144,15 +151,8 @@ class ExtendedRegression(Strategy):
         The same sums as ``x @ c`` over :meth:`_design`'s columns, but the columns all channels share go
         through one matrix product instead of six: an hour's correction is 360,000 rows × 6 passes.
         """
-        n = len(w)
-        k = 13 if self.squares else 7
-        shared = np.empty((n, k))
-        shared[:, 0] = 1.0
-        shared[:, 1:4] = w
-        shared[:, 4:7] = f
-        if self.squares:
-            np.multiply(w, w, out=shared[:, 7:10])
-            np.multiply(f, f, out=shared[:, 10:13])
+        shared = self._shared(w, f)
+        k = shared.shape[1]
         err = shared @ np.ascontiguousarray(self.coef_[:, :k].T)
         if d is not None:
             u = np.hstack([w, f])

@@ -46,7 +46,6 @@ import time
 from abc import abstractmethod
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -230,10 +229,6 @@ class ResidualStrategy(Strategy):
         """Settings derived from one training run (training lengths, say) with their learners."""
         return [(config, learner)]
 
-    def _training_context(self) -> AbstractContextManager[Any]:
-        """Held around the cross-validation's trainings (torch's thread count, say)."""
-        return nullcontext()
-
     @abstractmethod
     def _learner_state(self, learner: Any) -> Any:
         """The fitted learner as plain lists and numbers."""
@@ -310,8 +305,8 @@ class ResidualStrategy(Strategy):
             return self._train(config, pts_train, self.sigma_[cols], seed)
 
         learners: list[Any] = []
-        with self._training_context(), ThreadPoolExecutor(self.n_jobs) as pool:
-            for learner in pool.map(run, jobs) if self.n_jobs > 1 else map(run, jobs):
+        with ThreadPoolExecutor(self.n_jobs) as pool:
+            for learner in pool.map(run, jobs):
                 learners.append(learner)
                 if self.progress is not None:
                     self.progress(len(learners), len(jobs))
