@@ -15,9 +15,11 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/sins run
 
-# Both cores: test files are dealt to two workers whole (a file's module fixtures are built once).
+# Both cores: test files are dealt to two workers whole (a file's module fixtures are built once). One
+# BLAS/OpenMP thread per worker: a pool per worker beside torch's oversubscribed the two cores and made
+# the gap diagnosis four times slower (2.0 s -> 8.1 s a case).
 test: lint
-	$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check sins tests tools examples

@@ -11,6 +11,10 @@ Names
     Earth, resolved in n), ``omega_ib_b`` (angular rate of b relative to i,
     resolved in b), ``f_ib_b`` (specific force), ``C_nb`` (direction cosine
     matrix that rotates b-vectors into n: ``x_n = C_nb @ x_b``), ``q_nb``.
+    The true or reference quantity carries its frames (``omega_ib_b``,
+    ``f_ib_b``, ``omega_dot_b``; a corrected reading is an estimate of it and
+    is named so too); a sensor's readings of it are ``gyro`` and ``accel``
+    (and their references ``ref_gyro``, ``ref_accel``), the CSV columns' names.
 Quaternions
     Scalar-last ``[x, y, z, w]`` (the order of scipy and Rerun), Hamilton
     product, ``q_nb`` represents the same rotation as ``C_nb``.

@@ -7,6 +7,7 @@ never a traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -15,6 +16,7 @@ from typing import Any
 
 from sins import __version__
 from sins.errors import MissingInputError, SinsInputError
+from sins.nav.vertical import VERTICAL_MODES
 
 _COLUMNS = (
     ("final N m", "final_north_m", "{:.3f}"),
@@ -55,8 +57,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
     _check_viewer_args(args)
     path = pipeline.resolve_scenario(args.scenario)
     sc = scenario.load(path)
-    result = pipeline.run_scenario(sc)
+    _check_scenario_size(sc, path, "running")
+    try:
+        result = pipeline.run_scenario(sc)
+    except ValueError as exc:  # a rig session that cannot be fitted, say
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{path}: {exc}") from None
+    scenario.check_latitude(sc, result.truth)
     summaries: dict[str, dict[str, Any]] = {name: run.summary.to_dict() for name, run in result.runs.items()}
+    for name, summary in summaries.items():
+        _check_finite(summary, f"{path}: strategy {name}")
     n = result.samples
     imu_note = f", IMU {sc.imu_model.stem} (seed {sc.imu_seed})" if sc.imu_model else ", ideal IMU"
     report = [
@@ -77,6 +88,50 @@ def _cmd_run(args: argparse.Namespace) -> int:
         io.write_json(args.json, {"scenario": _scenario_json(sc, path, n), "strategies": summaries})
     _show(args, result, "\n".join(report))
     return 0
+
+
+#: Memory per sample of what the commands hold whole, bytes (each about 1.2-1.4 times what was measured
+#: at 1e6 samples): ``sins simulate``'s truth and increments (430 measured), ``sins run``'s sample times
+#: (8; the run itself streams in chunks), a rig session's readings and references (510 measured).
+_SIMULATE_BYTES, _RUN_BYTES, _RIG_BYTES = 600, 8, 600
+
+
+def _check_scenario_size(sc: Any, path: Path, what: str, outputs: dict[Path, int] | None = None) -> None:
+    """Refuse up front a scenario whose arrays would not fit in memory, or whose CSVs (``{path:
+    columns}``) would not fit on their disks; the message gives the size it would need."""
+    from sins import scenario
+    from sins.io import limits
+
+    n = scenario.sample_count(sc)
+    per_sample = _SIMULATE_BYTES if outputs else _RUN_BYTES
+    span = f"{n:.4g} samples ({n / sc.rate_hz:.4g} s at {sc.rate_hz:g} Hz)"
+    if outputs:
+        limits.check_disk({p: limits.csv_bytes(n + 1, columns) for p, columns in outputs.items()}, path)
+    limits.check_memory(n * per_sample, f"{what} {span}", path)
+    if sc.compensation is not None:
+        _check_rig_size(scenario.load_rig(sc.compensation.rig), sc.compensation.rig)
+
+
+def _check_rig_size(rig: Any, path: Path, outputs: dict[Path, int] | None = None) -> None:
+    """:func:`_check_scenario_size` for a rig session."""
+    from sins import scenario
+    from sins.io import limits
+
+    rows = scenario.rig_rows(rig)
+    if outputs:
+        limits.check_disk({p: limits.csv_bytes(rows, columns) for p, columns in outputs.items()}, path)
+    limits.check_memory(rows * _RIG_BYTES, f"a rig session of {rows:.4g} rows at {rig.rate_hz:g} Hz", path)
+
+
+def _check_finite(values: dict[str, Any], where: str) -> None:
+    """Refuse a result with a non-finite number rather than print it: the inputs took the computation
+    beyond what floating point holds (readings near the physical limits, held for long)."""
+    for key, value in values.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            raise SinsInputError(
+                f"{where}: {key} came out {value}; the inputs drive the computation beyond finite numbers "
+                "(check the values they hold)"
+            )
 
 
 def _check_viewer_args(args: argparse.Namespace) -> None:
@@ -156,6 +211,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
 
     run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s)
     summary = run.summary.to_dict()
+    _check_finite(summary, f"{args.imu}: against {args.truth}")
     print(
         f"{args.imu}: {len(run.solution.t) - 1} intervals against {args.truth}; errors are estimate - truth"
     )
@@ -171,7 +227,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     path = pipeline.resolve_scenario(args.scenario)
     sc = scenario.load(path)
+    columns = len(io.RATE_COLUMNS if args.form == "rate" else io.INCREMENT_COLUMNS)
+    _check_scenario_size(sc, path, "simulating", {args.imu: columns, args.truth: len(io.TRUTH_COLUMNS)})
     truth, imu = pipeline.simulate(sc)
+    scenario.check_latitude(sc, truth)
     note = f"sins {__version__}: ideal IMU of scenario {sc.name} ({path})"
     samples = trajectory.ideal_rates(scenario.build_motion(sc), truth) if args.form == "rate" else imu
     io.write_imu(args.imu, samples, comment=note)
@@ -183,21 +242,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_scenarios(args: argparse.Namespace) -> int:
     from sins import pipeline, scenario
 
-    for name, path in pipeline.presets().items():
+    for name, path in scenario.presets().items():
         sc = scenario.load(path)
         marker = " (default)" if name == pipeline.DEFAULT_SCENARIO else ""
         print(f"{name:<16} {sc.description}{marker}")
-    print(f"rig procedures (sins calibrate RIG): {', '.join(pipeline.presets('rig'))}")
-    print(f"IMU models (--imu): {', '.join(pipeline.presets('imu'))}")
+    print(f"rig procedures (sins calibrate RIG): {', '.join(scenario.presets('rig'))}")
+    print(f"IMU models (--imu): {', '.join(scenario.presets('imu'))}")
     return 0
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from sins import io, pipeline, scenario
+    from sins import io, scenario
     from sins.imu import calibration
 
-    rig = scenario.load_rig(pipeline.resolve_scenario(args.rig, "rig"))
-    spec = scenario.load_imu(pipeline.resolve_scenario(args.imu, "imu"))
+    rig_path = scenario.resolve_preset(args.rig, "rig")
+    rig = scenario.load_rig(rig_path)
+    spec = scenario.load_imu(scenario.resolve_preset(args.imu, "imu"))
+    _check_rig_size(rig, rig_path, {args.out: len(io.RECORDING_COLUMNS) + 2})
     data = calibration.simulate_rig(rig, spec.model(run_seed=args.seed), seed=args.seed)
     note = (
         f"sins {__version__}: simulated rig {args.rig} with IMU {args.imu}, seed {args.seed}\n"
@@ -227,6 +288,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from sins.compensation.residual import ResidualStrategy
 
     data = io.read_recording(args.recording)
+    io.check_recording_range(args.recording, data)
     if args.strategy == "oracle":
         raise SinsInputError(
             "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
@@ -285,12 +347,15 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     strategy = compensation.load(args.model)
     data = io.read_recording(args.recording)
+    io.check_recording_range(args.recording, data)
     if args.last:
         try:
             _, data = data.split(args.last)
         except ValueError as exc:
             raise SinsInputError(f"{args.recording}: {exc}") from None
     channels = compensation.residual_rms(strategy, data)
+    for name, v in channels.items():
+        _check_finite(v, f"{args.model} on {args.recording}: {name}")
     scope = f"the last {args.last:g} of each phase" if args.last else "the whole recording"
     print(f"{args.model} ({strategy.name}) on {args.recording}, {scope}: RMS of reading - reference")
     print(f"{'channel':<8} {'before':>12} {'after':>12}  unit")
@@ -324,9 +389,11 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         args.recording = args.dataset
     else:
         data, truth = pipeline.gap_data(args.recording, args.truth)
+        if args.truth is None:
+            io.check_recording_range(args.recording, data)
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
-        spec = scenario.load_imu(pipeline.resolve_scenario(args.model, "imu"))
+        spec = scenario.load_imu(scenario.resolve_preset(args.model, "imu"))
         model = tuple(e.name for e in spec.model().effects)
 
     with _progress_bar("diagnosing", "candidate") as bar:
@@ -341,10 +408,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     skipped = (
         f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""
     )
-    print(
-        f"{args.recording}: {len(data)} rows{skipped}, {held_rows} withheld (the last {args.holdout:g} of "
-        f"{'every phase' if data.phases else 'the recording'}); model: {', '.join(report.model)}"
-    )
+    print(f"{args.recording}: {len(data)} rows{skipped}, {held_rows} withheld: {report.withholding}")
+    print(f"model: {', '.join(report.model)}")
     head = ["channel", "unit", "before", "after", "noise floor", "before/floor", "after/floor"]
     rows = []
     for ch, v in report.channels.items():
@@ -372,6 +437,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         if e.indistinguishable:
             mark += f" (this data cannot tell it from {' or '.join(e.indistinguishable)})"
         print(f"  {e.name:<26} {e.score:14.1f}  {mark}")
+    for name, why in report.unfitted.items():
+        print(f"  {name:<26} {'not fitted':>14}  {why}")
     print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
@@ -428,6 +495,13 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive(text: str) -> float:
+    value = float(text)
+    if not 0.0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
+
+
 def _fraction(text: str) -> float:
     value = float(text)
     if not 0.0 < value < 1.0:
@@ -459,11 +533,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.add_argument(
         "--vertical",
-        choices=("free", "hold", "damp"),
+        choices=VERTICAL_MODES,
         default="free",
         help="vertical channel: free inertial, held to, or damped towards the truth height",
     )
-    p.add_argument("--vertical-tau-s", type=float, default=10.0, help="time constant of 'damp', s")
+    p.add_argument(
+        "--vertical-tau-s", type=_positive, default=10.0, help="time constant of 'damp', s (default 10)"
+    )
     p.set_defaults(func=_cmd_integrate)
 
     p = sub.add_parser("simulate", help="write a scenario's ideal IMU and truth as CSV")

@@ -6,11 +6,11 @@ the CLI prints and writes.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
@@ -21,22 +21,32 @@ from sins import io, scenario
 from sins.errors import MissingInputError, SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
+    BlockMeans,
     DriftAccumulator,
     DriftSummary,
     NavErrors,
-    block_means,
     kept_indices,
     nav_errors,
     summarize,
-    thinned_indices,
 )
-from sins.scenario import Scenario
+from sins.nav.vertical import VerticalMode
+from sins.scenario import PresetKind, Scenario, resolve_preset
+
+# Re-exported: the presets lived here before they moved down to sins.scenario.
+from sins.scenario import preset_dir as preset_dir
+from sins.scenario import presets as presets
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 if TYPE_CHECKING:
+    from sins.compensation import Strategy
     from sins.gap import GapReport
+    from sins.imu import ImuModel
+    from sins.nav.motion import Motion
 
 T = TypeVar("T")
+
+#: The most samples a run's thinned series keep (an hour at 10 Hz): a longer run keeps them sparser.
+MAX_KEPT = 36_000
 
 #: The scenario ``sins run`` uses without an argument.
 DEFAULT_SCENARIO = "car_drive"
@@ -67,7 +77,8 @@ class ScenarioRun:
 
     Summaries use every sample; ``truth`` and each run's ``solution`` and
     ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
-    sample, plus the last) so that hour-long runs stay small in memory, and the
+    sample, plus the last), and to at most :data:`MAX_KEPT` samples for longer
+    runs, so that memory stays bounded whatever the duration, and the
     runs' ``sensor_error`` are means over blocks of as many intervals, centred
     at ``sensor_t``: a mean keeps the systematic error a plot can show and
     averages down the noise it cannot.
@@ -80,30 +91,12 @@ class ScenarioRun:
     sensor_t: NDArray[np.float64] | None = None
 
 
-def preset_dir() -> Path:
-    """The folder of the scenario presets shipped with the package."""
-    return Path(str(resources.files("sins") / "scenarios"))
+def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: PresetKind = "") -> Path:
+    """A file path from a path, a preset name of ``kind``, or ``None`` (the default scenario).
 
-
-def presets(kind: str = "") -> dict[str, Path]:
-    """Shipped presets by name: scenarios (``kind=""``), ``"rig"`` procedures or ``"imu"`` models."""
-    return {p.stem: p for p in sorted((preset_dir() / kind).glob("*.toml"))}
-
-
-def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: str = "") -> Path:
-    """A file path from a path, a preset name of ``kind``, or ``None`` (the default scenario)."""
-    if name_or_path is None:
-        name_or_path = DEFAULT_SCENARIO
-    path = Path(name_or_path)
-    if path.suffix == ".toml" or path.exists():
-        return path
-    known = presets(kind)
-    if str(name_or_path) in known:
-        return known[str(name_or_path)]
-    what = {"": "scenario", "rig": "rig", "imu": "IMU"}[kind]
-    raise SinsInputError(
-        f"{name_or_path}: no such {what} file or preset (presets: {', '.join(known) or 'none'})"
-    )
+    :func:`sins.scenario.resolve_preset` with :data:`DEFAULT_SCENARIO` for ``None``.
+    """
+    return resolve_preset(DEFAULT_SCENARIO if name_or_path is None else name_or_path, kind)
 
 
 def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
@@ -117,7 +110,7 @@ def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
 
 
 def navigate(
-    imu: ImuIncrements, truth: NavSeries, vertical: str = "free", vertical_tau_s: float = 10.0
+    imu: ImuIncrements, truth: NavSeries, vertical: VerticalMode = "free", vertical_tau_s: float = 10.0
 ) -> StrategyRun:
     """Integrate ``imu`` from the truth's state at ``imu.t[0]`` and compare with the truth.
 
@@ -149,7 +142,7 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
         motion = scenario.build_motion(sc)
         first = trajectory.start_state(motion)
         chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
-        keep_every = max(1, round(sc.rate_hz / keep_hz))
+        keep_every = _keep_every(sc, motion, keep_hz)
         state = strapdown.start(strapdown.InitialState.from_series(first))
         acc = DriftAccumulator(keep_every)
         acc.add(nav_errors(first, first))
@@ -185,48 +178,176 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
     (seeds ``[compensation] seed`` and ``[imu] seed``): strategies fitted on the
     rig meet the navigation run's own turn-on bias. ``oracle`` knows the
     navigation run's true deterministic model; it is every table's reference.
-    Whole-array processing: memory grows with the duration.
+
+    Streamed: the ideal IMU is generated, corrupted (:class:`sins.imu.stream.IncrementStream`,
+    the unit's state carried between chunks), corrected by each strategy and integrated chunk by
+    chunk, and only the errors' statistics and thinned series are kept, so memory stays bounded
+    whatever the duration. The readings equal the whole array's corruption to the last bit, and so
+    do the integrated solutions (:func:`sins.nav.strapdown.advance` continues exactly).
     """
-    from sins import compensation
-    from sins.imu import calibration
+    from sins.imu.stream import IncrementStream
 
     assert sc.imu_model is not None
     spec = scenario.load_imu(sc.imu_model)
     nav_model = spec.model(run_seed=sc.imu_seed)
-    truth, ideal = simulate(sc)
-    temp = np.interp(ideal.t, *sc.temperature)  # cabin temperature, °C (default a constant 20)
-    corrupted = nav_model.corrupt_increments(ideal, temp=temp, seed=sc.imu_seed)
-    strategies: dict[str, compensation.Strategy] = {"none": compensation.make("none")}
+    strategies, residuals = _fitted_strategies(sc, spec, nav_model)
+    try:
+        motion = scenario.build_motion(sc)
+        keep_every = _keep_every(sc, motion, keep_hz)
+        first = trajectory.start_state(motion)
+        chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
+        stream = IncrementStream(nav_model, sc.imu_seed, 1.0 / sc.rate_hz)
+        runs = {name: _StreamedRun(first, keep_every) for name in strategies}
+        truth_kept, pending = [first], _Pending()
+        step = _ChunkStep(sc, strategies, runs, pending, truth_kept, keep_every, float(first.h[0]))
+        for truth_c, ideal_c in chunks:
+            pending.add(truth_c, ideal_c)
+            step(stream.push(ideal_c, _cabin(sc, ideal_c.t)))
+        step(stream.finish())
+        samples = step.samples
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
+    last_truth = pending.last_truth
+    if samples % keep_every and last_truth is not None:
+        truth_kept.append(last_truth)
+    out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in runs.items()}
+    sensor_t = runs["none"].mid_t.means()[:, 0]
+    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t)
+
+
+def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
+    """Every how many samples the thinned series keep one: about ``keep_hz``, and no more than
+    :data:`MAX_KEPT` over the run (a 6-hour run keeps a sample every 0.6 s, not 2 million)."""
+    samples = (motion.t_end - motion.t_start) * sc.rate_hz
+    return max(1, round(sc.rate_hz / keep_hz), math.ceil(samples / MAX_KEPT))
+
+
+def _cabin(sc: Scenario, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cabin temperature at ``t``, °C (default a constant 20)."""
+    return np.asarray(np.interp(t, *sc.temperature), dtype=float)
+
+
+def _fitted_strategies(
+    sc: Scenario, spec: scenario.ImuSpec, nav_model: ImuModel
+) -> tuple[dict[str, Strategy], dict[str, dict[str, float]]]:
+    """Every strategy of the scenario fitted on its rig session, and each one's held-back residuals."""
+    from sins import compensation
+    from sins.imu import calibration
+
+    strategies: dict[str, Strategy] = {"none": compensation.make("none")}
     residuals: dict[str, dict[str, float]] = {}
     comp = sc.compensation
-    if comp is not None:
-        rig = scenario.load_rig(comp.rig)
-        rig_model = spec.model(run_seed=comp.seed)
-        data = calibration.simulate_rig(rig, rig_model, seed=comp.seed)
-        fit, held = data.split(comp.validation)
-        for name in comp.strategies:
-            if name == "oracle":
-                # On the rig it knows the rig session's unit; in navigation, the navigation run's.
-                judged: compensation.Strategy = compensation.Oracle(rig_model)
-                strategies[name] = compensation.Oracle(nav_model)
+    if comp is None:
+        return strategies, residuals
+    rig = scenario.load_rig(comp.rig)
+    rig_model = spec.model(run_seed=comp.seed)
+    data = calibration.simulate_rig(rig, rig_model, seed=comp.seed)
+    fit, held = data.split(comp.validation)
+    for name in comp.strategies:
+        if name == "oracle":
+            # On the rig it knows the rig session's unit; in navigation, the navigation run's.
+            judged: Strategy = compensation.Oracle(rig_model)
+            strategies[name] = compensation.Oracle(nav_model)
+        else:
+            judged = strategies[name] = compensation.make(name).fit(fit)
+        channels = compensation.residual_rms(judged, held)
+        residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
+    return strategies, residuals
+
+
+class _Pending:
+    """Truth states and ideal increments generated but not yet integrated: the corruption writes an
+    interval only once the intervals after it have come."""
+
+    def __init__(self) -> None:
+        self._truth: list[NavSeries] = []
+        self._ideal: list[ImuIncrements] = []
+        self.last_truth: NavSeries | None = None
+
+    def add(self, truth: NavSeries, ideal: ImuIncrements) -> None:
+        """A generated chunk: the truth at ``ideal.t[1:]`` and the ideal increments."""
+        self._truth.append(truth)
+        self._ideal.append(ideal)
+
+    def take(self, n: int) -> tuple[NavSeries, NDArray[np.float64]]:
+        """The next ``n`` intervals' truth states (at their ends) and ideal increments (n, 6)."""
+        truth, ideal = [], []
+        while n:
+            t0, i0 = self._truth[0], self._ideal[0]
+            m = min(n, len(t0.t))
+            truth.append(t0.at(np.arange(m)))
+            ideal.append(np.hstack([i0.dtheta_b[:m], i0.dv_b[:m]]))
+            if m == len(t0.t):
+                self._truth.pop(0)
+                self._ideal.pop(0)
             else:
-                judged = strategies[name] = compensation.make(name).fit(fit)
-            channels = compensation.residual_rms(judged, held)
-            residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
-    keep_every = max(1, round(sc.rate_hz / keep_hz))
-    keep = thinned_indices(len(truth.t), keep_every)
-    dt = np.diff(ideal.t)[:, None]
-    runs = {}
-    for name, strategy in strategies.items():
-        corrected = strategy.correct_increments(corrupted, temp)
-        run = navigate(corrected, truth, sc.vertical, sc.vertical_tau_s)
-        error = np.hstack([corrected.dtheta_b - ideal.dtheta_b, corrected.dv_b - ideal.dv_b]) / dt
-        runs[name] = StrategyRun(
-            run.solution.at(keep), run.errors.at(keep), run.summary, residuals.get(name),
-            block_means(error, keep_every),
-        )  # fmt: skip
-    sensor_t = block_means(0.5 * (ideal.t[:-1] + ideal.t[1:])[:, None], keep_every)[:, 0]
-    return ScenarioRun(scenario=sc, samples=len(ideal), truth=truth.at(keep), runs=runs, sensor_t=sensor_t)
+                self._truth[0] = t0.at(np.arange(m, len(t0.t)))
+                self._ideal[0] = ImuIncrements(t=i0.t[m:], dtheta_b=i0.dtheta_b[m:], dv_b=i0.dv_b[m:])
+            n -= m
+        joined = _join(truth)
+        self.last_truth = joined.at(-1)
+        return joined, np.vstack(ideal)
+
+
+class _StreamedRun:
+    """One strategy's integration state and what it keeps of its errors."""
+
+    def __init__(self, first: NavSeries, keep_every: int) -> None:
+        self.state = strapdown.start(strapdown.InitialState.from_series(first))
+        self.errors = DriftAccumulator(keep_every)
+        self.errors.add(nav_errors(first, first))
+        self.kept = [first]
+        self.last: NavSeries = first
+        self.sensor = BlockMeans(keep_every)
+        self.mid_t = BlockMeans(keep_every)
+
+    def result(self, residual: dict[str, float] | None, samples: int, keep_every: int) -> StrategyRun:
+        """The run's thinned solution and errors, its summary over every sample."""
+        kept = self.kept + ([self.last] if samples % keep_every else [])
+        return StrategyRun(
+            _join(kept), self.errors.kept(), self.errors.summary(), residual, self.sensor.means()
+        )
+
+
+@dataclass
+class _ChunkStep:
+    """Correct and integrate each chunk of corrupted readings with every strategy, in turn."""
+
+    sc: Scenario
+    strategies: dict[str, Strategy]
+    runs: dict[str, _StreamedRun]
+    pending: _Pending
+    truth_kept: list[NavSeries]
+    keep_every: int
+    h_prev: float  # the truth's height at the last integrated sample (the vertical aiding's start)
+    samples: int = 0
+
+    def __call__(self, corrupted: ImuIncrements) -> None:
+        n = len(corrupted)
+        if n == 0:
+            return
+        sc = self.sc
+        truth, ideal = self.pending.take(n)
+        temp = _cabin(sc, corrupted.t)
+        dt = np.diff(corrupted.t)[:, None]
+        keep = kept_indices(self.samples + 1, n, self.keep_every)
+        h_ref = np.concatenate([[self.h_prev], truth.h]) if sc.vertical != "free" else None
+        for name, strategy in self.strategies.items():
+            run = self.runs[name]
+            corrected = strategy.correct_increments(corrupted, temp)
+            solution, run.state = strapdown.advance(
+                run.state, corrected, vertical=sc.vertical, h_ref=h_ref, vertical_tau_s=sc.vertical_tau_s
+            )
+            run.errors.add(nav_errors(solution, truth))
+            run.kept.append(solution.at(keep))
+            run.last = solution.at(-1)
+            run.sensor.add((np.hstack([corrected.dtheta_b, corrected.dv_b]) - ideal) / dt)
+            run.mid_t.add(0.5 * (corrected.t[:-1] + corrected.t[1:])[:, None])
+        self.truth_kept.append(truth.at(keep))
+        self.samples += n
+        self.h_prev = float(truth.h[-1])
 
 
 def _prefetched(items: Iterator[T]) -> Iterator[T]:
@@ -256,7 +377,7 @@ def _join(parts: list[NavSeries]) -> NavSeries:
 def integrate_recording(
     imu_path: str | os.PathLike[str],
     truth_path: str | os.PathLike[str],
-    vertical: str = "free",
+    vertical: VerticalMode = "free",
     vertical_tau_s: float = 10.0,
 ) -> StrategyRun:
     """Integrate a recorded IMU file from its truth's first state; errors against the truth.

@@ -17,6 +17,7 @@ more than its relative tolerance plus a small absolute floor. Suite file::
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +29,9 @@ from sins.errors import SinsInputError
 FLOORS = {"horizontal": 0.5, "residual": 1e-9}
 DEFAULT_TOLERANCES = {"horizontal": 0.10, "residual": 0.05}
 BASELINE_FORMAT = "sins.quality-baseline"
+#: The largest relative tolerance a suite may give (a metric may grow 100-fold): beyond it no change
+#: is judged, and the gate tests nothing.
+MAX_TOLERANCE = 100.0
 
 
 @dataclass(frozen=True)
@@ -85,7 +89,7 @@ def load_suite(path: str | os.PathLike[str]) -> Suite:
     if len({c.name for c in cases}) != len(cases):
         raise top.error("case names must be unique", "case")
     tol = top.sub("tolerance")
-    tolerances = {k: tol.number(k, v, low=0.0) for k, v in DEFAULT_TOLERANCES.items()}
+    tolerances = {k: tol.number(k, v, low=0.0, high=MAX_TOLERANCE) for k, v in DEFAULT_TOLERANCES.items()}
     tol.done()
     top.done()
     return Suite(source=path, cases=tuple(cases), tolerances=tolerances)
@@ -146,14 +150,35 @@ def compare(
 
 
 def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str, float]]]:
-    """A baseline file's ``cases``: ``{case: {strategy: {metric: value}}}``."""
+    """A baseline file's ``cases``: ``{case: {strategy: {metric: value}}}``, every value a finite number.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and the place (``cases.CASE.STRATEGY.METRIC``) of a malformed entry.
+    """
     from sins import io
 
     path = Path(path)
     doc = io.read_json_document(path, "quality baseline", BASELINE_FORMAT)
     if not isinstance(doc.get("cases"), dict):
         raise SinsInputError(f'{path}: a quality baseline needs a "cases" table')
-    cases: dict[str, dict[str, dict[str, float]]] = doc["cases"]
+    cases: dict[str, dict[str, dict[str, float]]] = {}
+    for case, strategies in doc["cases"].items():
+        if not isinstance(strategies, dict):
+            raise SinsInputError(f"{path}: cases.{case}: expected a table of strategies, got {strategies!r}")
+        cases[case] = {}
+        for strategy, metrics in strategies.items():
+            if not isinstance(metrics, dict):
+                raise SinsInputError(
+                    f"{path}: cases.{case}.{strategy}: expected a table of metrics, got {metrics!r}"
+                )
+            for metric, value in metrics.items():
+                if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                    raise SinsInputError(
+                        f"{path}: cases.{case}.{strategy}.{metric}: expected a finite number, got {value!r}"
+                    )
+            cases[case][strategy] = {metric: float(value) for metric, value in metrics.items()}
     return cases
 
 

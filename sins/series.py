@@ -7,6 +7,7 @@ package docstring, :class:`ImuIncrements` and :class:`ImuRates`.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,6 +16,15 @@ from numpy.typing import NDArray
 from sins.nav import rotation
 
 Array = NDArray[np.float64]
+
+#: A row's reference is steady where its rate moved less than this from the previous row's, rad/s.
+STEADY_RATE = 1e-5
+#: ... and its specific force less than this, m/s².
+STEADY_FORCE = 1e-4
+#: Runs of one kind shorter than this join the stretch before them, s.
+STRETCH_SHORTEST_S = 0.5
+#: Stretches longer than this are cut into equal parts no longer, s.
+STRETCH_LONGEST_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -206,20 +216,27 @@ class CalibrationData:
         held = self.held_back(validation, by_phase=by_phase)
         return self._subset(np.flatnonzero(~held)), self._subset(np.flatnonzero(held))
 
-    def held_back(self, validation: float, *, by_phase: bool = True) -> NDArray[np.bool_]:
+    def held_back(
+        self, validation: float, *, by_phase: bool = True, like_input: bool = False
+    ) -> NDArray[np.bool_]:
         """Which rows :meth:`split` holds back for validation.
 
         With ``by_phase`` and phases present, the last ``validation`` fraction
         (rounded half up, at least one row and at most all but one) of every
         phase of two or more rows is held back, so each orientation and rate is
         seen in both portions yet no validation sample sits between fit samples
-        of the same phase; otherwise the last fraction of the whole recording
-        is.
+        of the same phase. Without phases, with ``like_input``, the same of
+        every one of :meth:`stretches`; otherwise the last fraction of the
+        whole recording.
         """
         if not 0.0 < validation < 1.0:
             raise ValueError(f"validation fraction must be in (0, 1), got {validation}")
         n = len(self.t)
-        blocks = [(p.start, p.stop) for p in self.phases] if by_phase and self.phases else [(0, n)]
+        blocks = [(0, n)]
+        if by_phase and self.phases:
+            blocks = [(p.start, p.stop) for p in self.phases]
+        elif like_input:
+            blocks = self.stretches()
         held = np.zeros(n, dtype=bool)
         for start, stop in blocks:
             length = stop - start
@@ -229,6 +246,65 @@ class CalibrationData:
         if held.all() or not held.any():
             raise ValueError(f"{self.source or 'recording'}: too short to split ({n} rows)")
         return held
+
+    def stretches(self, longest_s: float = STRETCH_LONGEST_S) -> list[tuple[int, int]]:
+        """Rows ``(start, stop)`` of stretches of like input, in time order, covering the recording: the
+        phases a recording without them would have had.
+
+        A row is *steady* where its reference rate and force moved from the previous row's by less
+        than :data:`STEADY_RATE` and :data:`STEADY_FORCE` (static holds, constant table rates) and
+        *moving* otherwise (transitions, tumbling, a drive); rows without a reference are a third
+        kind. A stretch is a run of one kind; a run shorter than :data:`STRETCH_SHORTEST_S` (a
+        reference that flickers about the threshold) joins the stretch before it, and one longer
+        than ``longest_s`` is cut into equal parts no longer, so that continuous motion is withheld
+        in interleaved blocks rather than at its end.
+        """
+        n = len(self.t)
+        if n < 2:
+            return [(0, n)]
+        ref = np.hstack([self.ref_gyro, self.ref_accel])
+        step = np.abs(np.diff(ref, axis=0))
+        rate_step = np.linalg.norm(step[:, :3], axis=1)
+        force_step = np.linalg.norm(step[:, 3:], axis=1)
+        # Relative slack as well: a fast table's rate printed to ten digits moves in its last one.
+        rate_tol = STEADY_RATE + 1e-6 * np.linalg.norm(self.ref_gyro[1:], axis=1)
+        force_tol = STEADY_FORCE + 1e-6 * np.linalg.norm(self.ref_accel[1:], axis=1)
+        kind = np.where((rate_step <= rate_tol) & (force_step <= force_tol), 0, 1)
+        kind = np.concatenate([kind[:1], kind])
+        kind[~self.has_reference] = 2
+        dt = float(np.median(np.diff(self.t)))
+        shortest = max(2, round(STRETCH_SHORTEST_S / dt))
+        # A steady run too short to be a stretch is a pause in motion: it takes the moving kind. A short
+        # moving run joins the stretch before it: a jump between steady levels (a rate stepped without
+        # a ramp) ends that stretch, a flicker of a still reference (back to its level) does not.
+        edges = np.concatenate([[0], np.flatnonzero(np.diff(kind)) + 1, [n]])
+        for start, stop in itertools.pairwise(edges):
+            if stop - start < shortest and kind[start] == 0:
+                kind[start:stop] = kind[start - 1]
+        edges = np.concatenate([[0], np.flatnonzero(np.diff(kind)) + 1, [n]])
+        runs: list[tuple[int, int]] = []
+        level_row = 0  # the last row of the latest stretch's own run, before any short run joined it
+        for start, stop in zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True):
+            if runs and stop - start < shortest:
+                runs[-1] = (runs[-1][0], stop)
+                continue
+            if runs and kind[start] == kind[level_row] == 0:
+                moved = np.abs(ref[start] - ref[level_row])
+                if (
+                    np.linalg.norm(moved[:3]) <= rate_tol[start - 1]
+                    and np.linalg.norm(moved[3:]) <= force_tol[start - 1]
+                ):
+                    runs[-1], level_row = (runs[-1][0], stop), stop - 1
+                    continue
+            runs.append((start, stop))
+            level_row = stop - 1
+        out = []
+        longest = max(2, round(longest_s / dt))
+        for start, stop in runs:
+            parts = -(-(stop - start) // longest)
+            cuts = np.linspace(start, stop, parts + 1).round().astype(int)
+            out += [(int(a), int(b)) for a, b in itertools.pairwise(cuts)]
+        return out
 
     @property
     def has_reference(self) -> NDArray[np.bool_]:

@@ -34,12 +34,68 @@ def test_the_step_is_found_where_no_two_levels_lie_one_step_apart():
     drawn = np.random.default_rng(3).uniform(-10.0, 10.0, 7)
     assert lattice.find(np.repeat(drawn, 300)) is None
     # Moving readings (°/s) rounded to 0.0610865 and printed to four decimals, as BROAD's gyro z:
-    # every value lies on the 1e-4 lattice, 611 times finer than the smallest gap, a file's
-    # resolution and no quantizer's; the readings visit neighbouring levels, so none is sought
-    # below that gap (the search finds the file's lattice where it is let).
+    # every value lies on the 1e-4 lattice, 611 times finer than the smallest gap. Taken as printed
+    # exactly, no lattice holds them (the readings visit neighbouring levels, so none is sought below
+    # that gap); told how the file was printed, the quantizer's is found under the print's rounding.
     rng = np.random.default_rng(4)
     moving = 100.0 * np.sin(np.linspace(0.0, 20.0, 40000)) + 0.05 * rng.standard_normal(40000)
-    assert lattice.find(np.round(np.round(moving / 0.0610865) * 0.0610865, 4)) is None
+    printed = np.round(np.round(moving / 0.0610865) * 0.0610865, 4)
+    assert lattice.find(printed) is None
+    habit = lattice.print_habit(printed, np.round(moving, 4))
+    assert habit.decimals == 4
+    found = lattice.find(printed, printed=habit)
+    assert found is not None and found.step == pytest.approx(0.0610865, rel=1e-6)
+
+
+def _print(values: np.ndarray, fmt: str) -> np.ndarray:
+    """Values as a file printed with ``fmt`` reads them back."""
+    return np.array([float(fmt % v) for v in values])
+
+
+def test_a_lattice_under_ten_significant_digits_is_found_from_earth_rate_to_250_deg_per_s():
+    """Issue 19's case: a gyro quantised to 0.06 °/s under 0.01 °/s of noise, every reading an integer
+    count, printed with 10 significant digits. At 250 °/s the print moves a reading 5e-10 rad/s, 5e-7
+    of a step, and the smallest gap holds that error (5e-10 of the step), which reaches 2e-6 steps by
+    4,000 steps: the step is refined over the indices, and each reading allowed its print's slack."""
+    rng = np.random.default_rng(5)
+    step = np.radians(0.06)
+    rates = np.radians([0.0042, 10.0, -10.0, 50.0, -50.0, 120.0, -120.0, 250.0, -250.0])
+    truth = np.repeat(rates, 5000) + np.radians(0.01) * rng.standard_normal(45000)
+    reading = _print(np.round(truth / step) * step, "%.10g")
+    habit = lattice.print_habit(reading, _print(truth, "%.10g"))
+    assert habit == lattice.Printed(digits=10)
+    assert lattice.find(reading) is None  # trusted to the last bit, the print's rounding breaks it
+    found = lattice.find(reading, printed=habit)
+    assert found is not None
+    assert found.step == pytest.approx(step, rel=1e-9) and abs(found.offset) < 1e-9 * step
+    assert (found.index(reading) == np.round(truth / step)).mean() > 0.999
+
+
+def test_print_rounding_alone_is_no_lattice():
+    """A file's own resolution is not a quantizer: continuous readings printed to four decimals, or to
+    five significant digits, held still (few levels) or moving."""
+    rng = np.random.default_rng(6)
+    still = 2e-4 + 3e-5 * rng.standard_normal(20000)  # rad/s: a static gyro, noise below 1e-4
+    moving = 0.3 * np.sin(np.linspace(0.0, 30.0, 20000)) + 1e-3 * rng.standard_normal(20000)
+    for values in (still, moving):
+        for fmt in ("%.4f", "%.5g"):
+            reading = _print(values, fmt)
+            habit = lattice.print_habit(reading)
+            assert habit.decimals == 4 or habit.digits == 5, (fmt, habit)
+            assert lattice.find(reading, printed=habit) is None, fmt
+
+
+def test_the_print_habit_is_the_files_not_a_round_columns():
+    """Readings on a round lattice (0.001) need few digits; the file's other columns show it printed
+    every float exactly, so the lattice is the sensor's."""
+    rng = np.random.default_rng(7)
+    truth = rng.normal(0.0, 0.05, 5000)
+    reading = _print(truth, "%.3f")  # a device that counts in thousandths and writes the counts as decimals
+    assert lattice.print_habit(reading).decimals is not None  # alone, it looks printed to 3 decimals
+    habit = lattice.print_habit(reading, truth)
+    assert habit == lattice.Printed()
+    found = lattice.find(reading, printed=habit)
+    assert found is not None and found.step == pytest.approx(0.001, rel=1e-9)
 
 
 def test_rounded_readings_probability_mean_and_variance_match_monte_carlo():

@@ -332,3 +332,50 @@ def test_split_whole_recording_and_too_short(tmp_path: Path) -> None:
     singles = tuple(RigPhase(name, i, i + 1, "static") for i, name in enumerate("abcd"))
     with pytest.raises(ValueError, match="too short"):
         _read_back(tmp_path, CalibrationData(np.arange(4.0), z, z, z, z, phases=singles)).split(0.2)
+
+
+def _phase_less(pieces: list[tuple[float, np.ndarray, np.ndarray]], rate_hz: float) -> CalibrationData:
+    """A recording without phases from ``(seconds, ref_gyro (3,) or (n, 3), ref_accel ...)`` pieces."""
+    gyro, accel = [], []
+    for seconds, w, f in pieces:
+        n = round(seconds * rate_hz)
+        gyro.append(np.broadcast_to(w, (n, 3)))
+        accel.append(np.broadcast_to(f, (n, 3)))
+    g, a = np.vstack(gyro), np.vstack(accel)
+    return CalibrationData(np.arange(len(g)) / rate_hz, g, a, g, a)
+
+
+def test_a_recording_without_phases_is_withheld_in_stretches_of_like_input() -> None:
+    """Holds, constant table rates and turns between them are each a stretch; the end of each is withheld,
+    so a table rate met once, late in the recording (issue 19's clipped gyro), is fitted as well as
+    judged. Transitions are their own stretches, ramps too short to be one join the stretch before."""
+    rate_hz, up = 100.0, np.array([0.0, 0.0, -9.80665])
+    ramp = np.linspace(0.0, 1.0, 200)[:, None]
+    turn = ramp * np.array([0.0, 9.80665, 0.0]) + up * (1.0 - 0.1 * ramp)  # the force turning, 2 s
+    pieces = [(30.0, np.zeros(3), up), (2.0, np.array([0.3, 0.0, 0.0]), turn)]
+    pieces += [(10.0, np.array([0.0, 0.0, r]), up) for r in (0.5, 1.0, 2.0, 4.4)]
+    data = _phase_less(pieces, rate_hz)
+    stretches = data.stretches()
+    # Each stretch ends with the row where the reference leaves it (the first of the next piece).
+    seconds = [(b - a) / rate_hz for a, b in stretches]
+    assert seconds == pytest.approx([30.0, 2.0, 10.0, 10.0, 10.0, 10.0], abs=0.011), seconds
+    held = data.held_back(0.3, like_input=True)
+    top = np.abs(data.ref_gyro[:, 2] - 4.4) < 1e-12
+    assert held[top].mean() == pytest.approx(0.3, abs=0.002) and (~held[top]).any()
+    assert held[-1] and not held[0]
+    # Without like_input, the whole tail: the top rate is withheld entirely, as before.
+    assert data.held_back(0.3)[top].all()
+
+
+def test_continuous_motion_is_withheld_in_interleaved_blocks_and_flicker_is_merged() -> None:
+    rng = np.random.default_rng(SEED + 9)
+    rate_hz, n = 50.0, 50 * 300
+    w = np.column_stack([np.sin(np.arange(n) / 300.0), np.zeros(n), np.zeros(n)])
+    moving = CalibrationData(np.arange(n) / rate_hz, w, w, w, w)
+    lengths = [b - a for a, b in moving.stretches()]
+    assert len(lengths) == 5 and max(lengths) <= 60 * rate_hz and sum(lengths) == n
+    # A static reference whose rows flicker past the steady threshold now and then (one row in 500)
+    # stays one stretch: a flicker is too short to be a stretch of its own, and returns to the level.
+    f = np.tile([0.0, 0.0, -9.8], (n, 1)) + (rng.random((n, 1)) < 0.002) * 1e-3
+    still = CalibrationData(np.arange(n) / rate_hz, f, f, np.zeros((n, 3)), f)
+    assert [b - a for a, b in still.stretches(longest_s=1e9)] == [n]

@@ -51,10 +51,12 @@ import dataclasses
 import json
 import os
 import statistics
+import sys
 import time
 from typing import Any
 
 import numpy as np
+import tqdm
 from scipy import stats
 
 from sins import gap, imu, io
@@ -249,14 +251,13 @@ def _confusion(effects: list[str], results: dict[str, list[dict[str, Any]]]) -> 
         print(f"{n:<26}" + "".join(f"{counts.get(c, 0) or '.':>9}" for c in columns))
 
 
-def _print_case(case: dict[str, Any]) -> None:
-    print(
+def _case_line(case: dict[str, Any]) -> str:
+    return (
         f"  {case['name']:<26} {case['rig']:<16} seed {case['seed']} ×{case['scale']:g}: "
         f"ranked {case['ranked']} (tied {case['tied']}), diagnosis {case['diagnosis']}, "
         f"unexplained {case['unexplained']}, after/floor {case['after']:.3f}, "
         f"oracle {case['oracle']:.3g} nats, {case['identifiable']:.3g} beside {case['rival']}, "
-        f"removed {case['removed']:.3f}, best {case['best'][0]} {case['best'][1]:.1f}",
-        flush=True,
+        f"removed {case['removed']:.3f}, best {case['best'][0]} {case['best'][1]:.1f}"
     )
 
 
@@ -353,11 +354,14 @@ def main() -> None:
     ]
     cases = []
     started = time.perf_counter()
-    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool:
+    # A bar on a terminal only (logs get the summary); --verbose prints each case above it.
+    bar = tqdm.tqdm(total=len(jobs), unit=" case", file=sys.stderr, disable=not sys.stderr.isatty())
+    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool, bar:
         for case in pool.map(run_case, *zip(*jobs, strict=True)):
             cases.append(case)
+            bar.update()
             if args.verbose:
-                _print_case(case)
+                bar.write(_case_line(case))
     print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
     if args.save:
         io.write_json(args.save, {"format": "sins-bench-gap", "cases": cases})

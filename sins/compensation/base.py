@@ -45,20 +45,20 @@ class Strategy(ABC):
 
     def predict_error(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """The error believed to be in each reading: ``readings - correct(readings)``."""
-        w, f = self.correct(gyro, accel, temp)
-        return gyro - w, accel - f
+        omega_ib_b, f_ib_b = self.correct(gyro, accel, temp)
+        return gyro - omega_ib_b, accel - f_ib_b
 
     def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
         """Correct rate-form samples ``omega_ib_b`` and ``f_ib_b`` (``temp`` at ``rates.t``)."""
-        w, f = self.correct(rates.omega_ib_b, rates.f_ib_b, temp)
-        return ImuRates(t=rates.t, omega_ib_b=w, f_ib_b=f)
+        omega_ib_b, f_ib_b = self.correct(rates.omega_ib_b, rates.f_ib_b, temp)
+        return ImuRates(t=rates.t, omega_ib_b=omega_ib_b, f_ib_b=f_ib_b)
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """Correct increments through their mean rate over each interval (``temp`` at ``imu.t``)."""
         dt = np.diff(imu.t)[:, None]
         mid_temp = None if temp is None else 0.5 * (np.asarray(temp)[:-1] + np.asarray(temp)[1:])
-        w, f = self.correct(imu.dtheta_b / dt, imu.dv_b / dt, mid_temp)
-        return ImuIncrements(t=imu.t, dtheta_b=w * dt, dv_b=f * dt)
+        omega_ib_b, f_ib_b = self.correct(imu.dtheta_b / dt, imu.dv_b / dt, mid_temp)
+        return ImuIncrements(t=imu.t, dtheta_b=omega_ib_b * dt, dv_b=f_ib_b * dt)
 
     def get_state(self) -> dict[str, Any]:
         """What :func:`save` writes: the fitted attributes, as plain lists and numbers."""
@@ -120,13 +120,13 @@ class Oracle(Strategy):
 
         if self.model is None:
             raise ValueError("the oracle needs the simulated unit's model: Oracle(model)")
-        w, f = gyro.copy(), accel.copy()
-        zero = np.zeros_like(w)
+        omega_ib_b, f_ib_b = gyro.copy(), accel.copy()
+        zero = np.zeros_like(omega_ib_b)
         for _ in range(self.iterations):
-            inputs = Inputs(omega=w, f=f, omega_dot=zero, temp=temp)
-            w = gyro - self.model.deterministic_error("gyro", inputs)
-            f = accel - self.model.deterministic_error("accel", inputs)
-        return w, f
+            inputs = Inputs(omega_ib_b=omega_ib_b, f_ib_b=f_ib_b, omega_dot_b=zero, temp=temp)
+            omega_ib_b = gyro - self.model.deterministic_error("gyro", inputs)
+            f_ib_b = accel - self.model.deterministic_error("accel", inputs)
+        return omega_ib_b, f_ib_b
 
     def get_state(self) -> dict[str, Any]:
         """Always raises ``ValueError``: an oracle holds a simulated unit, not a model to save."""
@@ -145,9 +145,9 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
     if not ok.any():
         raise SinsInputError(f"{data.source or 'recording'}: no rows with a reference to judge against")
     temp = None if data.temp is None else data.temp[ok]
-    w, f = strategy.correct(data.gyro[ok], data.accel[ok], temp)
+    omega_ib_b, f_ib_b = strategy.correct(data.gyro[ok], data.accel[ok], temp)
     before = np.hstack([data.gyro[ok] - data.ref_gyro[ok], data.accel[ok] - data.ref_accel[ok]])
-    after = np.hstack([w - data.ref_gyro[ok], f - data.ref_accel[ok]])
+    after = np.hstack([omega_ib_b - data.ref_gyro[ok], f_ib_b - data.ref_accel[ok]])
     rms = lambda x: np.sqrt(np.mean(x * x, axis=0))  # noqa: E731
     b, a = rms(before), rms(after)
     return {ch: {"rms_before": float(b[i]), "rms_after": float(a[i])} for i, ch in enumerate(CHANNELS)}

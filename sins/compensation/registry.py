@@ -13,6 +13,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from sins import __version__, io
 from sins.compensation.base import Strategy
 from sins.errors import SinsInputError
@@ -86,7 +88,13 @@ def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
 
 
 def load(path: str | os.PathLike[str]) -> Strategy:
-    """Read a strategy written by :func:`save`; refuse other formats and versions in one line."""
+    """Read a strategy written by :func:`save`; refuse other formats and versions in one line.
+
+    The parameters and state are checked (objects; every number finite and at most
+    :data:`MAX_MODEL_VALUE` in magnitude; state keys the fitted attributes ending in ``_``), and the
+    model corrects a few probe readings, so a damaged file is refused here, naming the file, rather
+    than failing or printing NaN later.
+    """
     path = Path(path)
     doc = io.read_json_document(path, "model file", FORMAT_NAME)
     if doc.get("version") != FORMAT_VERSION:
@@ -97,9 +105,53 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     name = doc.get("strategy")
     if name not in SAVED_STRATEGIES:
         raise SinsInputError(f"{path}: unknown strategy {name!r} (known: {', '.join(SAVED_STRATEGIES)})")
+    params, state = doc.get("params", {}), doc.get("state", {})
+    for key, value in (("params", params), ("state", state)):
+        if not isinstance(value, dict):
+            raise SinsInputError(f'{path}: malformed {name} model ("{key}" is not an object)')
+        _check_values(path, name, value, key)
+    odd = [k for k in state if not k.endswith("_")]
+    if odd:
+        raise SinsInputError(f"{path}: malformed {name} model (state.{odd[0]} is not a fitted attribute)")
     try:
-        strategy = strategy_class(name)(**doc.get("params", {}))
-        strategy.set_state(doc.get("state", {}))
-    except (TypeError, ValueError, KeyError) as exc:
-        raise SinsInputError(f"{path}: malformed {name} model ({exc})") from None
+        strategy = strategy_class(name)(**params)
+        strategy.set_state(state)
+        # A probe: a state of the wrong shape or kind fails here, not in the middle of a run.
+        gyro, accel = _PROBE
+        gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))
+        corrected = np.hstack([np.asarray(gyro_c, dtype=float), np.asarray(accel_c, dtype=float)])
+    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as exc:
+        raise SinsInputError(f"{path}: malformed {name} model ({type(exc).__name__}: {exc})") from None
+    if corrected.shape != (len(gyro), 6) or not np.isfinite(corrected).all():
+        raise SinsInputError(
+            f"{path}: malformed {name} model (its correction of a probe reading is not finite, or of shape "
+            f"{corrected.shape})"
+        )
     return strategy
+
+
+#: Readings a model file is tried on when loaded: at rest, turning at 1 rad/s and at 100 °/s under
+#: 2 g, in rad/s and m/s² (a fitted model corrects each to finite values).
+_PROBE = (
+    np.array([[0.0, 0.0, 0.0], [1.0, -0.5, 0.2], [-1.745, 1.745, 1.745]]),
+    np.array([[0.0, 0.0, -9.8], [1.0, 2.0, -9.0], [19.6, -19.6, 5.0]]),
+)
+
+#: The largest magnitude a number in a model file may have: fitted coefficients, weights, prototypes
+#: and scales are all far smaller; larger ones overflow when a reading is corrected.
+MAX_MODEL_VALUE = 1e12
+
+
+def _check_values(path: Path, name: str, value: Any, where: str) -> None:
+    """Refuse a non-finite or overflowing number anywhere in a model file's ``params`` or ``state``."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _check_values(path, name, v, f"{where}.{k}")
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            _check_values(path, name, v, f"{where}[{i}]")
+    elif isinstance(value, int | float) and not isinstance(value, bool) and not abs(value) <= MAX_MODEL_VALUE:
+        raise SinsInputError(
+            f"{path}: malformed {name} model ({where} is {value!r}; numbers must be finite and at most "
+            f"{MAX_MODEL_VALUE:g} in magnitude)"
+        )

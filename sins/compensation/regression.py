@@ -95,12 +95,12 @@ class ExtendedRegression(Strategy):
             "iterations": self.iterations,
         }
 
-    def _shared(self, w: Array, f: Array) -> Array:
+    def _shared(self, omega_ib_b: Array, f_ib_b: Array) -> Array:
         """The columns every channel's regressors share (n, k): ``[1, ω, f]`` and, with ``squares``,
         ``[ω², f²]``."""
-        cols = [np.ones((len(w), 1)), w, f]
+        cols = [np.ones((len(omega_ib_b), 1)), omega_ib_b, f_ib_b]
         if self.squares:
-            cols += [w * w, f * f]
+            cols += [omega_ib_b * omega_ib_b, f_ib_b * f_ib_b]
         return np.hstack(cols)
 
     def _temp_offset(self, temp: Array | None) -> Array | None:
@@ -111,13 +111,13 @@ class ExtendedRegression(Strategy):
             raise ValueError("this regression was fitted with temperature: give the temperature series")
         return (np.asarray(temp, dtype=float) - self.t0)[:, None]
 
-    def _design(self, w: Array, f: Array, temp: Array | None) -> list[Array]:
+    def _design(self, omega_ib_b: Array, f_ib_b: Array, temp: Array | None) -> list[Array]:
         """Per channel, its regressors (n, p): the shared columns and its own temperature-scale term."""
-        shared = self._shared(w, f)
+        shared = self._shared(omega_ib_b, f_ib_b)
         d = self._temp_offset(temp)
         if d is None:
             return [shared] * 6
-        u = np.hstack([w, f])
+        u = np.hstack([omega_ib_b, f_ib_b])
         return [np.hstack([shared, d, d * d, d * u[:, [i]]]) for i in range(6)]
 
     def fit(self, data: CalibrationData) -> ExtendedRegression:
@@ -138,23 +138,23 @@ class ExtendedRegression(Strategy):
 
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Invert the fitted model by fixed-point iteration (needs ``temp`` if fitted with it)."""
-        w, f = gyro.copy(), accel.copy()
+        omega_ib_b, f_ib_b = gyro.copy(), accel.copy()
         d = self._temp_offset(temp)
         for _ in range(self.iterations):
-            err = self._errors(w, f, d)
-            w, f = gyro - err[:, :3], accel - err[:, 3:]
-        return w, f
+            err = self._errors(omega_ib_b, f_ib_b, d)
+            omega_ib_b, f_ib_b = gyro - err[:, :3], accel - err[:, 3:]
+        return omega_ib_b, f_ib_b
 
-    def _errors(self, w: Array, f: Array, d: Array | None) -> Array:
-        """The fitted errors (n, 6) at inputs ``w``, ``f`` and temperature offset ``d`` (n, 1).
+    def _errors(self, omega_ib_b: Array, f_ib_b: Array, d: Array | None) -> Array:
+        """The fitted errors (n, 6) at inputs ``omega_ib_b``, ``f_ib_b`` and temperature offset ``d`` (n, 1).
 
         The same sums as ``x @ c`` over :meth:`_design`'s columns, but the columns all channels share go
         through one matrix product instead of six: an hour's correction is 360,000 rows × 6 passes.
         """
-        shared = self._shared(w, f)
+        shared = self._shared(omega_ib_b, f_ib_b)
         k = shared.shape[1]
         err = shared @ np.ascontiguousarray(self.coef_[:, :k].T)
         if d is not None:
-            u = np.hstack([w, f])
+            u = np.hstack([omega_ib_b, f_ib_b])
             err += d * self.coef_[:, k] + d * d * self.coef_[:, k + 1] + d * u * self.coef_[:, k + 2]
         return err

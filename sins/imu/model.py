@@ -75,20 +75,20 @@ class Inputs:
 
     Attributes
     ----------
-    omega : (n, 3) angular rate ``omega_ib_b``, rad/s
-    f : (n, 3) specific force ``f_ib_b``, m/s²
-    omega_dot : (n, 3) angular acceleration, rad/s² (for the size effect)
+    omega_ib_b : (n, 3) angular rate, rad/s
+    f_ib_b : (n, 3) specific force, m/s²
+    omega_dot_b : (n, 3) angular acceleration ``d(omega_ib_b)/dt``, rad/s² (for the size effect)
     temp : (n,) temperature, °C, or None
     """
 
-    omega: Array
-    f: Array
-    omega_dot: Array
+    omega_ib_b: Array
+    f_ib_b: Array
+    omega_dot_b: Array
     temp: Array | None = None
 
     def of(self, sensor: str) -> Array:
-        """The input ``sensor`` measures: ``omega`` for "gyro", ``f`` for "accel"."""
-        return self.omega if sensor == "gyro" else self.f
+        """The input ``sensor`` measures: ``omega_ib_b`` for "gyro", ``f_ib_b`` for "accel"."""
+        return self.omega_ib_b if sensor == "gyro" else self.f_ib_b
 
 
 # --------------------------------------------------------------------------- effects
@@ -178,7 +178,7 @@ class GSensitivity(Effect):
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """``K f`` from the specific force ``f_ib_b``."""
-        return inputs.f @ self.matrix.T
+        return inputs.f_ib_b @ self.matrix.T
 
 
 @dataclass(frozen=True)
@@ -215,7 +215,7 @@ class G2Sensitivity(Effect):
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """``Σ_jk G2[i, j, k] f_j f_k`` from the specific force ``f_ib_b``."""
-        f = inputs.f
+        f = inputs.f_ib_b
         return np.einsum("ijk,nj,nk->ni", self.tensor, f, f)
 
 
@@ -262,12 +262,27 @@ class SizeEffect(Effect):
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """Accelerometer ``i``'s own axis of ``ω̇ × r_i + ω × (ω × r_i)``."""
-        w, wd = inputs.omega, inputs.omega_dot
+        w, wd = inputs.omega_ib_b, inputs.omega_dot_b
         out = np.empty_like(w)
         for i in range(3):
-            r = self.lever_arms[i]
-            out[:, i] = (np.cross(wd, r) + np.cross(w, np.cross(w, r)))[:, i]
+            out[:, i] = lever_arm_acceleration(w, wd, self.lever_arms[i])[:, i]
         return out
+
+
+def lever_arm_acceleration(omega: Array, omega_dot: Array, r: Array) -> Array:
+    """The specific force at lever arm ``r`` (3,) m from the reference point, less the reference
+    point's: ``ω̇ × r + ω × (ω × r)`` (n, 3), m/s², body axes.
+
+    The size effect's error (:class:`SizeEffect`), and per unit lever arm its regressors in the gap
+    diagnosis (:mod:`sins.gap.candidates`).
+
+    Parameters
+    ----------
+    omega : (n, 3) angular rate ``omega_ib_b``, rad/s
+    omega_dot : (n, 3) angular acceleration, rad/s²
+    r : (3,) lever arm, m
+    """
+    return np.cross(omega_dot, r) + np.cross(omega, np.cross(omega, r))
 
 
 @dataclass(frozen=True)
@@ -305,7 +320,7 @@ class BiasInstability(Effect):
         xi = rng.standard_normal((len(t) - 1, 3))
         phi = np.exp(-dt[:, None] / self.tau)
         drive = self.sigma * np.sqrt(1.0 - phi * phi) * xi
-        _ar1(phi, drive, out, _uniform(t))
+        _ar1(phi, drive, out, uniform_steps(t))
         return out
 
 
@@ -370,7 +385,9 @@ def _ar1(phi: Array, drive: Array, out: Array, uniform: bool) -> None:
         out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
 
 
-def _uniform(t: Array) -> bool:
+def uniform_steps(t: Array) -> bool:
+    """Whether ``t`` is sampled regularly: its steps equal to 1 ppm or to the rounding of the time
+    stamps (which grows with ``|t|``)."""
     """Steps equal to 1 ppm or to the rounding of the time stamps (which grows with |t|)."""
     dt = np.diff(t)
     if len(dt) == 0:
@@ -378,7 +395,9 @@ def _uniform(t: Array) -> bool:
     return bool(np.ptp(dt) <= 1e-6 * np.median(dt) + 16.0 * np.finfo(float).eps * np.abs(t).max())
 
 
-def _stream(seed: int | None, name: str) -> np.random.Generator:
+def random_stream(seed: int | None, name: str) -> np.random.Generator:
+    """The generator of one effect's random draws in a run: its own stream of the run's seed, so that
+    adding or removing another effect leaves its draws alone."""
     return np.random.default_rng([0 if seed is None else seed, zlib.crc32(name.encode())])
 
 
@@ -440,21 +459,23 @@ class ImuModel:
         omega_dot = (
             np.gradient(rates.omega_ib_b, t, axis=0) if len(t) > 1 else np.zeros_like(rates.omega_ib_b)
         )
-        inputs = Inputs(omega=rates.omega_ib_b, f=rates.f_ib_b, omega_dot=omega_dot, temp=temp)
+        inputs = Inputs(omega_ib_b=rates.omega_ib_b, f_ib_b=rates.f_ib_b, omega_dot_b=omega_dot, temp=temp)
         dt = np.diff(t)
         out = []
         for sensor in SENSORS:
-            delay = self._delay(sensor)
+            delay = self.delay_of(sensor)
             y = np.empty_like(inputs.of(sensor))
             for d in np.unique(delay):
                 shifted = _shift_samples(inputs, t, d) if d else inputs
                 y_d = shifted.of(sensor) + self.deterministic_error(sensor, shifted)
                 y[:, delay == d] = y_d[:, delay == d]
             y = y + self._stochastic(sensor, t, seed)
-            noise = self._get(sensor, Noise)
+            noise = self.effect_of(sensor, Noise)
             if noise is not None and len(t) > 1:
                 step = np.median(dt)
-                y = y + noise.density / np.sqrt(step) * _stream(seed, noise.name).standard_normal(y.shape)
+                y = y + noise.density / np.sqrt(step) * random_stream(seed, noise.name).standard_normal(
+                    y.shape
+                )
             y = self._clip_and_round(sensor, y, scale=1.0)
             out.append(y)
         return ImuRates(t=t, omega_ib_b=out[0], f_ib_b=out[1])
@@ -462,119 +483,75 @@ class ImuModel:
     # ----------------------------------------------------------------- increment form
 
     def corrupt_increments(
-        self, imu: ImuIncrements, temp: Array | None = None, seed: int | None = None
+        self,
+        imu: ImuIncrements,
+        temp: Array | None = None,
+        seed: int | None = None,
+        dt_nominal: float | None = None,
     ) -> ImuIncrements:
         """Readings of the modelled IMU as increments: integrals of the corrupted rate.
+
+        One :class:`sins.imu.stream.IncrementStream` fed the whole array; feed one chunk by chunk
+        for long runs (the readings are the same to the last bit).
 
         Parameters
         ----------
         imu : ideal increments over ``n`` intervals (``imu.t`` has ``n + 1`` times)
         temp : (n+1,) temperature at ``imu.t``, °C (needed by temperature effects)
         seed : the run's seed for stochastic effects
+        dt_nominal : the sampling step, s (default: the median step)
         """
+        from sins.imu.stream import IncrementStream  # the stream builds on this module
+
         t = imu.t
-        dt = np.diff(t)
-        n = len(dt)
-        if n == 0:
+        if len(t) < 2:
             return imu
         temp = _check_temp(temp, t)
-        means = (imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None])
-        mid = 0.5 * (t[:-1] + t[1:])
-        node_s = (-0.5 / np.sqrt(3.0), 0.5 / np.sqrt(3.0))  # two-point Gauss nodes, in units of dt
-        nodes = [mid + s * dt for s in node_s]
-        cache: dict[tuple[int, float], Inputs] = {}
-
-        def node_inputs(j: int, d: float) -> Inputs:
-            """True inputs at Gauss node ``j`` of every interval, delayed by ``d``."""
-            if (j, d) not in cache:
-                when = nodes[j]
-                if d == 0.0:  # each node lies in its own interval
-                    omega, omega_dot = _reconstruct_own(means[0], dt, node_s[j])
-                    f, _ = _reconstruct_own(means[1], dt, node_s[j])
-                else:
-                    omega, omega_dot = _reconstruct(means[0], t, when - d)
-                    f, _ = _reconstruct(means[1], t, when - d)
-                # The channel measured at when - d: its temperature was that of then.
-                temp_n = None if temp is None else np.interp(when - d, t, temp)
-                cache[j, d] = Inputs(omega=omega, f=f, omega_dot=omega_dot, temp=temp_n)
-            return cache[j, d]
-
-        out = []
-        for sensor, ideal in (("gyro", imu.dtheta_b), ("accel", imu.dv_b)):
-            bias = self._stochastic(sensor, t, seed)
-            noise = self._get(sensor, Noise)
-            # White noise as each interval's mean rate: density / sqrt(dt) per interval.
-            noise_rate = (
-                noise.density / np.sqrt(dt)[:, None] * _stream(seed, noise.name).standard_normal((n, 3))
-                if noise is not None
-                else np.zeros((n, 3))
-            )
-            sat = self._get(sensor, Saturation)
-            deterministic = any(e.stage == "deterministic" for e in self._of(sensor))
-            delay = self._delay(sensor)
-            total = np.empty_like(ideal)
-            for d in np.unique(delay):
-                cols = delay == d
-                shifted = _shift_increments(ideal, t, d) if d else ideal
-                if sat is None:
-                    part = np.zeros_like(ideal)
-                    if deterministic:
-                        for j in range(len(nodes)):
-                            part += (
-                                0.5 * dt[:, None] * self.deterministic_error(sensor, node_inputs(j, float(d)))
-                            )
-                    # The ideal part stays exact; only the errors come from the reconstruction.
-                    total[:, cols] = (shifted + part)[:, cols]
-                    continue
-                # Saturation clips the whole reading (input, errors, biases, noise) at the nodes.
-                part = np.zeros_like(ideal)
-                for j, when in enumerate(nodes):
-                    inputs = node_inputs(j, float(d))
-                    b = np.column_stack([np.interp(when, t, bias[:, i]) for i in range(3)])
-                    rate = inputs.of(sensor) + self.deterministic_error(sensor, inputs) + b + noise_rate
-                    part += 0.5 * dt[:, None] * np.clip(rate, -sat.limit, sat.limit)
-                total[:, cols] = part[:, cols]
-            if sat is None:
-                total = total + (0.5 * (bias[:-1] + bias[1:]) + noise_rate) * dt[:, None]
-            q = self._get(sensor, Quantization)
-            if q is not None and (q.step > 0).any():
-                total = _quantize_carry(total, q.step * np.median(dt))
-            out.append(total)
-        return ImuIncrements(t=t, dtheta_b=out[0], dv_b=out[1])
+        step = float(np.median(np.diff(t))) if dt_nominal is None else dt_nominal
+        stream = IncrementStream(self, seed, step)
+        head, tail = stream.push(imu, temp), stream.finish()
+        return ImuIncrements(
+            t=np.concatenate([head.t, tail.t[1:]]) if len(head.t) else tail.t,
+            dtheta_b=np.vstack([head.dtheta_b, tail.dtheta_b]),
+            dv_b=np.vstack([head.dv_b, tail.dv_b]),
+        )
 
     # ----------------------------------------------------------------- pieces
 
-    def _of(self, sensor: str) -> list[Effect]:
+    def effects_of(self, sensor: str) -> list[Effect]:
+        """The effects on ``sensor`` (gyro or accel), in model order."""
         return [e for e in self.effects if e.sensor == sensor]
 
-    def _get(self, sensor: str, kind: type[Any]) -> Any:
-        return next((e for e in self._of(sensor) if isinstance(e, kind)), None)
+    def effect_of(self, sensor: str, kind: type[Any]) -> Any:
+        """The effect of type ``kind`` on ``sensor``, or None."""
+        return next((e for e in self.effects_of(sensor) if isinstance(e, kind)), None)
 
-    def _delay(self, sensor: str) -> Array:
-        off = self._get(sensor, TimeOffset)
+    def delay_of(self, sensor: str) -> Array:
+        """The sensor's delay per axis, s (zeros without a time offset)."""
+        off = self.effect_of(sensor, TimeOffset)
         return np.zeros(3) if off is None else off.delay
 
     def deterministic_error(self, sensor: str, inputs: Inputs) -> Array:
         """The sum of the sensor's deterministic errors (n, 3) at these true inputs (no delay, no noise)."""
         u = inputs.of(sensor)
         err = np.zeros_like(u)
-        for e in self._of(sensor):
+        for e in self.effects_of(sensor):
             if e.stage == "deterministic":
                 err = err + e.error(inputs, u)
         return err
 
     def _stochastic(self, sensor: str, t: Array, seed: int | None) -> Array:
         total = np.zeros((len(t), 3))
-        for e in self._of(sensor):
+        for e in self.effects_of(sensor):
             if isinstance(e, BiasInstability | RateRandomWalk):
-                total += e.process(t, _stream(seed, e.name))
+                total += e.process(t, random_stream(seed, e.name))
         return total
 
     def _clip_and_round(self, sensor: str, y: Array, scale: float) -> Array:
-        sat = self._get(sensor, Saturation)
+        sat = self.effect_of(sensor, Saturation)
         if sat is not None:
             y = np.clip(y, -sat.limit, sat.limit)
-        q = self._get(sensor, Quantization)
+        q = self.effect_of(sensor, Quantization)
         if q is not None and (q.step > 0).any():
             step = np.where(q.step > 0, q.step * scale, 1.0)
             y = np.where(q.step > 0, np.round(y / step) * step, y)
@@ -598,82 +575,70 @@ def _check_names(names: tuple[str, ...]) -> None:
             raise ValueError(f"unknown effect {n!r} (see `sins effects`)")
 
 
-def _reconstruct(mean: Array, t: Array, when: Array) -> tuple[Array, Array]:
-    """Rate and its derivative at times ``when`` from interval means (n, 3) over ``t``.
+#: A one-sided slope replaces the central one at a row where the central stencil's second difference
+#: stands out from both one-sided stencils' by more than 1 / this: a kink (a rig's rate switched to a
+#: ramp, a turn started), not curvature.
+KINK_RATIO = 0.1
 
-    In interval ``k`` the rate is the quadratic whose means over intervals
-    ``k-1, k, k+1`` are the given ones (one-sided at the ends), evaluated at
-    ``s = (when - mid_k) / dt_k``.
+
+def hermite_slopes(t: Array, y: Array, central: Array) -> tuple[Array, Array]:
+    """The slopes a cubic Hermite curve through samples ``y`` (n, k) leaves and enters each row with:
+    the central ones, except at a kink.
+
+    A rig's commanded rate is piecewise linear, and the force turns as a rotation starts: where the
+    slope changes at a row, the central slope there is the mean of the two sides, and the curve bends
+    across the intervals on both (a lag of τ then errs by τ times half the change of slope). Where
+    the central stencil's second difference stands out from both one-sided stencils' (each below
+    :data:`KINK_RATIO` of it), each side takes its own one-sided slope, exact on a straight side.
+    Elsewhere, smooth curvature and inflections included, both are the central slope.
     """
-    n = len(mean)
-    k = np.clip(np.searchsorted(t, when, side="right") - 1, 0, n - 1)
-    dt = (t[1:] - t[:-1])[k][:, None]
-    s = ((when - 0.5 * (t[1:] + t[:-1])[k]) / dt[:, 0])[:, None]
-    prev = mean[np.maximum(k - 1, 0)]
-    nxt = mean[np.minimum(k + 1, n - 1)]
-    cur = mean[k]
-    slope = np.where((k == 0)[:, None] | (k == n - 1)[:, None], (nxt - prev), 0.5 * (nxt - prev))
-    curve = np.where((k == 0)[:, None] | (k == n - 1)[:, None], 0.0, 0.5 * (nxt - 2.0 * cur + prev))
-    value = cur + slope * s + curve * (s * s - 1.0 / 12.0)
-    return value, (slope + 2.0 * curve * s) / dt
+    right, left = central.copy(), central.copy()
+    n = len(t)
+    if n > 4:
+        h = np.diff(t)[:, None]
+        secant = np.diff(y, axis=0) / h
+        bend = np.abs(np.diff(secant, axis=0))  # the stencil centred on rows 1 .. n-2
+        # Rows 2 .. n-3 have a centred stencil and both one-sided ones.
+        centre, back, ahead = bend[1:-1], bend[:-2], bend[2:]
+        kink = (ahead < KINK_RATIO * centre) & (back < KINK_RATIO * centre)
+        rows = slice(2, n - 2)
+        forward = secant[2:-1] + (secant[2:-1] - secant[3:]) * h[2:-1] / (h[2:-1] + h[3:])
+        backward = secant[1:-2] + (secant[1:-2] - secant[:-3]) * h[1:-2] / (h[1:-2] + h[:-3])
+        right[rows] = np.where(kink, forward, central[rows])
+        left[rows] = np.where(kink, backward, central[rows])
+    return right, left
 
 
-def _reconstruct_own(mean: Array, dt: Array, s: float) -> tuple[Array, Array]:
-    """:func:`_reconstruct` at local coordinate ``s`` of every interval (by slices, no search)."""
-    n = len(mean)
-    prev = np.vstack([mean[:1], mean[:-1]])
-    nxt = np.vstack([mean[1:], mean[-1:]])
-    slope = 0.5 * (nxt - prev)
-    curve = 0.5 * (nxt - 2.0 * mean + prev)
-    if n > 1:  # one-sided at the two ends, as in _reconstruct
-        slope[0], slope[-1] = nxt[0] - prev[0], nxt[-1] - prev[-1]
-        curve[0] = curve[-1] = 0.0
-    value = mean + slope * s + curve * (s * s - 1.0 / 12.0)
-    return value, (slope + 2.0 * curve * s) / dt[:, None]
+def cubic_hermite(t: Array, y: Array, dy: Array, when: Array, dy_in: Array | None = None) -> Array:
+    """Samples ``y`` (n, k) at times ``t``, with slopes ``dy``, interpolated at ``when`` (within
+    ``t``'s span) by cubic Hermite pieces; ``dy_in``, if given, are the slopes each interval
+    enters its end row with (``dy`` those it leaves its start row with; see :func:`hermite_slopes`).
+
+    Written out in the Hermite basis. The gap diagnosis delays its reference with a scipy ``PPoly``
+    (:meth:`sins.gap.candidates.ReferenceInputs.lag`), the same curve in power form: the two agree to
+    the last few bits only, so each keeps its own.
+    """
+    dy_in = dy if dy_in is None else dy_in
+    k = np.clip(np.searchsorted(t, when, side="right") - 1, 0, len(t) - 2)
+    h = (t[k + 1] - t[k])[:, None]
+    s = ((when - t[k]) / h[:, 0])[:, None]
+    return (
+        (1 + 2 * s) * (1 - s) ** 2 * y[k] + s * (1 - s) ** 2 * h * dy[k]
+        + s * s * (3 - 2 * s) * y[k + 1] + s * s * (s - 1) * h * dy_in[k + 1]
+    )  # fmt: skip
 
 
 def _shift_samples(inputs: Inputs, t: Array, delay: float) -> Inputs:
     """Inputs delayed by ``delay`` s (cubic Hermite between samples, held at the ends)."""
 
     def at(y: Array) -> Array:
-        dy = np.gradient(y, t, axis=0)
-        q = np.clip(t - delay, t[0], t[-1])
-        k = np.clip(np.searchsorted(t, q, side="right") - 1, 0, len(t) - 2)
-        h = (t[k + 1] - t[k])[:, None]
-        s = ((q - t[k]) / h[:, 0])[:, None]
-        return (
-            (1 + 2 * s) * (1 - s) ** 2 * y[k] + s * (1 - s) ** 2 * h * dy[k]
-            + s * s * (3 - 2 * s) * y[k + 1] + s * s * (s - 1) * h * dy[k + 1]
-        )  # fmt: skip
+        out, into = hermite_slopes(t, y, np.gradient(y, t, axis=0))
+        return cubic_hermite(t, y, out, np.clip(t - delay, t[0], t[-1]), into)
 
     temp = None if inputs.temp is None else np.interp(t - delay, t, inputs.temp)
-    return Inputs(omega=at(inputs.omega), f=at(inputs.f), omega_dot=at(inputs.omega_dot), temp=temp)
-
-
-def _shift_increments(inc: Array, t: Array, delay: float) -> Array:
-    """Increments of the input delayed by ``delay``: differences of the cumulative integral at ``t - delay``.
-
-    The cumulative integral is interpolated with cubic Hermite pieces whose
-    slopes are the reconstructed rates at the sample times.
-    """
-    cum = np.vstack([np.zeros((1, 3)), np.cumsum(inc, axis=0)])
-    mean = inc / np.diff(t)[:, None]
-    rate_at = _reconstruct(mean, t, t)[0]
-    q = np.clip(t - delay, t[0], t[-1])
-    k = np.clip(np.searchsorted(t, q, side="right") - 1, 0, len(t) - 2)
-    h = (t[k + 1] - t[k])[:, None]
-    s = ((q - t[k]) / h[:, 0])[:, None]
-    shifted = (
-        (1 + 2 * s) * (1 - s) ** 2 * cum[k] + s * (1 - s) ** 2 * h * rate_at[k]
-        + s * s * (3 - 2 * s) * cum[k + 1] + s * s * (s - 1) * h * rate_at[k + 1]
-    )  # fmt: skip
-    return np.diff(shifted, axis=0)
-
-
-def _quantize_carry(inc: Array, step: Array) -> Array:
-    """Quantise increments carrying the remainder: the output differences the rounded running sum."""
-    active = step > 0
-    safe = np.where(active, step, 1.0)
-    rounded = np.round(np.cumsum(inc, axis=0) / safe) * safe
-    out = np.diff(np.vstack([np.zeros((1, 3)), rounded]), axis=0)
-    return np.where(active, out, inc)
+    return Inputs(
+        omega_ib_b=at(inputs.omega_ib_b),
+        f_ib_b=at(inputs.f_ib_b),
+        omega_dot_b=at(inputs.omega_dot_b),
+        temp=temp,
+    )

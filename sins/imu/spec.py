@@ -25,13 +25,21 @@ DEG_PER_H = imu.DEG_PER_H
 
 @dataclass(frozen=True)
 class Param:
-    """One file parameter: its key, the effect field it sets, ``SI = value × factor``."""
+    """One file parameter: its key, the effect field it sets, ``SI = value × factor``, and the range
+    ``[low, high]`` (``(low, high]`` if ``low_open``) every element must lie in, in the file's unit.
+
+    The ranges are generous, far beyond any real unit, and keep every error the model adds finite
+    for any motion a scenario may describe (they are listed in ``docs/guide/scenarios.md``).
+    """
 
     key: str
     field: str
     factor: float
     shape: tuple[int, ...]
     unit: str
+    low: float = -1e6
+    high: float = 1e6
+    low_open: bool = False
 
 
 @dataclass(frozen=True)
@@ -43,13 +51,18 @@ class EffectSpec:
     params: tuple[Param, ...]
 
 
-def _v(key: str, field: str, factor: float, unit: str) -> Param:
-    return Param(key, field, factor, (3,), unit)
+def _v(key: str, field: str, factor: float, unit: str, low: float = -1e6, high: float = 1e6,
+       low_open: bool = False) -> Param:  # fmt: skip
+    return Param(key, field, factor, (3,), unit, low, high, low_open)
+
+
+#: A temperature parameter's range, °C: an IMU's operating range with margin (as scenario and rig files).
+_T_LOW, _T_HIGH = -100.0, 200.0
 
 
 _SPECS: dict[str, EffectSpec] = {
     "gyro.bias": EffectSpec(imu.Bias, "constant drift", (_v("bias_dph", "value", DEG_PER_H, "°/h"),)),
-    "accel.bias": EffectSpec(imu.Bias, "constant offset", (_v("bias_mg", "value", imu.MG, "mg"),)),
+    "accel.bias": EffectSpec(imu.Bias, "constant offset", (_v("bias_mg", "value", imu.MG, "mg", -1e5, 1e5),)),
     "gyro.scale_misalignment": EffectSpec(
         imu.ScaleMisalignment,
         "scale-factor errors (diagonal) and axis misalignment: M·ω",
@@ -66,30 +79,32 @@ _SPECS: dict[str, EffectSpec] = {
         (Param("matrix_dph_per_g", "matrix", DEG_PER_H / G0, (3, 3), "°/h/g"),),
     ),
     "gyro.noise": EffectSpec(
-        imu.Noise, "white noise (angle random walk)", (_v("arw_deg_per_rt_h", "density", DEG / 60.0, "°/√h"),)
+        imu.Noise,
+        "white noise (angle random walk)",
+        (_v("arw_deg_per_rt_h", "density", DEG / 60.0, "°/√h", 0.0, 1e4),),
     ),
     "accel.noise": EffectSpec(
         imu.Noise,
         "white noise (velocity random walk)",
-        (_v("vrw_ug_per_rt_hz", "density", imu.UG, "µg/√Hz"),),
+        (_v("vrw_ug_per_rt_hz", "density", imu.UG, "µg/√Hz", 0.0, 1e7),),
     ),
     "gyro.bias_instability": EffectSpec(
         imu.BiasInstability,
         "Gauss–Markov bias: σ, correlation time τ",
-        (_v("sigma_dph", "sigma", DEG_PER_H, "°/h"), _v("tau_s", "tau", 1.0, "s")),
+        (_v("sigma_dph", "sigma", DEG_PER_H, "°/h", 0.0), _v("tau_s", "tau", 1.0, "s", 1e-6, 1e9)),
     ),
     "accel.bias_instability": EffectSpec(
         imu.BiasInstability,
         "Gauss–Markov bias: σ, correlation time τ",
-        (_v("sigma_ug", "sigma", imu.UG, "µg"), _v("tau_s", "tau", 1.0, "s")),
+        (_v("sigma_ug", "sigma", imu.UG, "µg", 0.0, 1e8), _v("tau_s", "tau", 1.0, "s", 1e-6, 1e9)),
     ),
     "gyro.rate_random_walk": EffectSpec(
         imu.RateRandomWalk,
         "random-walk bias",
-        (_v("rrw_dph_per_rt_h", "density", DEG_PER_H / 60.0, "°/h/√h"),),
+        (_v("rrw_dph_per_rt_h", "density", DEG_PER_H / 60.0, "°/h/√h", 0.0),),
     ),
     "accel.rate_random_walk": EffectSpec(
-        imu.RateRandomWalk, "random-walk bias", (_v("rrw_ug_per_rt_s", "density", imu.UG, "µg/√s"),)
+        imu.RateRandomWalk, "random-walk bias", (_v("rrw_ug_per_rt_s", "density", imu.UG, "µg/√s", 0.0, 1e8),)
     ),
     "gyro.scale_nonlinearity": EffectSpec(
         imu.ScaleNonlinearity,
@@ -116,52 +131,58 @@ _SPECS: dict[str, EffectSpec] = {
         imu.TemperatureBias,
         "c1·(T−T0) + c2·(T−T0)²",
         (
-            _v("c1_dph_per_degc", "c1", DEG_PER_H, "°/h/°C"),
-            _v("c2_dph_per_degc2", "c2", DEG_PER_H, "°/h/°C²"),
-            Param("t0_degc", "t0", 1.0, (), "°C"),
+            _v("c1_dph_per_degc", "c1", DEG_PER_H, "°/h/°C", -1e4, 1e4),
+            _v("c2_dph_per_degc2", "c2", DEG_PER_H, "°/h/°C²", -1e3, 1e3),
+            Param("t0_degc", "t0", 1.0, (), "°C", _T_LOW, _T_HIGH),
         ),
     ),
     "accel.temperature_bias": EffectSpec(
         imu.TemperatureBias,
         "c1·(T−T0) + c2·(T−T0)²",
         (
-            _v("c1_mg_per_degc", "c1", imu.MG, "mg/°C"),
-            _v("c2_mg_per_degc2", "c2", imu.MG, "mg/°C²"),
-            Param("t0_degc", "t0", 1.0, (), "°C"),
+            _v("c1_mg_per_degc", "c1", imu.MG, "mg/°C", -1e3, 1e3),
+            _v("c2_mg_per_degc2", "c2", imu.MG, "mg/°C²", -1e2, 1e2),
+            Param("t0_degc", "t0", 1.0, (), "°C", _T_LOW, _T_HIGH),
         ),
     ),
     "gyro.temperature_scale": EffectSpec(
         imu.TemperatureScale,
         "s1·(T−T0)·ω",
-        (_v("s1_ppm_per_degc", "s1", imu.PPM, "ppm/°C"), Param("t0_degc", "t0", 1.0, (), "°C")),
+        (
+            _v("s1_ppm_per_degc", "s1", imu.PPM, "ppm/°C", -1e5, 1e5),
+            Param("t0_degc", "t0", 1.0, (), "°C", _T_LOW, _T_HIGH),
+        ),
     ),
     "accel.temperature_scale": EffectSpec(
         imu.TemperatureScale,
         "s1·(T−T0)·f",
-        (_v("s1_ppm_per_degc", "s1", imu.PPM, "ppm/°C"), Param("t0_degc", "t0", 1.0, (), "°C")),
+        (
+            _v("s1_ppm_per_degc", "s1", imu.PPM, "ppm/°C", -1e5, 1e5),
+            Param("t0_degc", "t0", 1.0, (), "°C", _T_LOW, _T_HIGH),
+        ),
     ),
     "gyro.time_offset": EffectSpec(
-        imu.TimeOffset, "reports the input τ late", (_v("delay_ms", "delay", 1e-3, "ms"),)
+        imu.TimeOffset, "reports the input τ late", (_v("delay_ms", "delay", 1e-3, "ms", -1e3, 1e3),)
     ),
     "accel.time_offset": EffectSpec(
-        imu.TimeOffset, "reports the input τ late", (_v("delay_ms", "delay", 1e-3, "ms"),)
+        imu.TimeOffset, "reports the input τ late", (_v("delay_ms", "delay", 1e-3, "ms", -1e3, 1e3),)
     ),
     "gyro.quantization": EffectSpec(
-        imu.Quantization, "output resolution", (_v("step_dps", "step", DEG, "°/s"),)
+        imu.Quantization, "output resolution", (_v("step_dps", "step", DEG, "°/s", 0.0, 1e3),)
     ),
     "accel.quantization": EffectSpec(
-        imu.Quantization, "output resolution", (_v("step_mg", "step", imu.MG, "mg"),)
+        imu.Quantization, "output resolution", (_v("step_mg", "step", imu.MG, "mg", 0.0, 1e5),)
     ),
     "gyro.saturation": EffectSpec(
-        imu.Saturation, "output clipped at ± limit", (_v("limit_dps", "limit", DEG, "°/s"),)
+        imu.Saturation, "output clipped at ± limit", (_v("limit_dps", "limit", DEG, "°/s", 1e-3, 1e6),)
     ),
     "accel.saturation": EffectSpec(
-        imu.Saturation, "output clipped at ± limit", (_v("limit_g", "limit", G0, "g"),)
+        imu.Saturation, "output clipped at ± limit", (_v("limit_g", "limit", G0, "g", 1e-6, 1e5),)
     ),
     "accel.size_effect": EffectSpec(
         imu.SizeEffect,
         "lever arm r_i of each accelerometer: ω̇×r + ω×(ω×r)",
-        (Param("lever_arms_mm", "lever_arms", 1e-3, (3, 3), "mm (row i: accelerometer i)"),),
+        (Param("lever_arms_mm", "lever_arms", 1e-3, (3, 3), "mm (row i: accelerometer i)", -1e4, 1e4),),
     ),
 }
 
@@ -173,7 +194,8 @@ assert set(PARAMETERS) == set(imu.EFFECT_NAMES)
 def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
     """Build an effect from file parameters (familiar units); missing parameters are zero.
 
-    Raises ``ValueError`` naming the effect and parameter for an unknown key or a wrong shape.
+    Raises ``ValueError`` naming the effect and parameter for an unknown key, a wrong shape, a
+    non-finite value or one outside the parameter's range (:class:`Param`).
     """
     if name not in PARAMETERS:
         raise ValueError(f"unknown effect {name!r} (see `sins effects`)")
@@ -192,6 +214,13 @@ def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
             raise ValueError(f"{name}.{key}: expected shape {p.shape}, got {a.shape}")
         if not np.isfinite(a).all():
             raise ValueError(f"{name}.{key}: values must be finite")
+        outside = (a < p.low) | (a > p.high) | ((a == p.low) & p.low_open)
+        if outside.any():
+            value = float(a.flat[int(np.argmax(outside))])
+            low = "(" if p.low_open else "["
+            raise ValueError(
+                f"{name}.{key}: values must be in {low}{p.low:g}, {p.high:g}] {p.unit}, got {value:g}"
+            )
         kwargs[p.field] = float(a) * p.factor if p.shape == () else a * p.factor
     return spec.cls(name.split(".")[0], **kwargs)
 

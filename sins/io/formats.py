@@ -294,15 +294,82 @@ def read_imu(path: str | os.PathLike[str]) -> tuple[ImuRates | ImuIncrements, Ta
     return increments_from_table(table, start), table
 
 
+# --------------------------------------------------------------------------- physical ranges
+
+#: The largest time stamp, s: Unix time (1.7e9 s now) fits, and stamps keep 2 µs resolution.
+MAX_TIME_S = 1e10
+#: The fastest angular rate an IMU file may hold, rad/s (573,000 °/s; the fastest gyros read 4000 °/s,
+#: a spinning shell 100,000 °/s). Beyond it the integrator's attitude update loses meaning.
+MAX_RATE_RADPS = 1e4
+#: The largest specific force, m/s² (102,000 g; a gun launch reaches 50,000 g).
+MAX_FORCE_MPS2 = 1e6
+#: Truth files: the largest speed (m/s), the height range (m), the largest angle (degrees; yaw and
+#: longitude may be unwrapped over many turns).
+MAX_TRUTH_SPEED_MPS = 1e5
+TRUTH_ALT_M = (-1e5, 1e8)
+MAX_ANGLE_DEG = 1e6
+#: Temperatures a file may give, °C: above absolute zero, below any IMU's destruction.
+TEMP_DEGC = (-273.15, 1000.0)
+
+
+def check_range(
+    table: Table, column: str, values: Array, low: float, high: float, what: str, unit: str
+) -> None:
+    """Refuse the first value of ``values`` (one per row of ``table``, NaN passes) outside
+    ``[low, high]``, naming the file, line and ``column``; ``what`` says what the value is."""
+    outside = (values < low) | (values > high)
+    if outside.any():
+        r = int(np.argmax(outside))
+        line = line_of_row(table.path, table.first_data_line - 1, r)
+        raise SinsInputError(
+            f"{table.path}:{line}: column {column!r}: {what} {format_number(values[r])} {unit} is outside "
+            f"[{low:g}, {high:g}] {unit}, beyond any vehicle or sensor this simulator models"
+        )
+
+
+def _check_time(table: Table) -> None:
+    check_range(table, "t", table.column("t"), -MAX_TIME_S, MAX_TIME_S, "time", "s")
+
+
+def _check_readings(table: Table, names: tuple[str, ...], dt: Array | None = None) -> None:
+    """Gyro columns within :data:`MAX_RATE_RADPS`, accelerometer ones within :data:`MAX_FORCE_MPS2`
+    (increments divided by their interval ``dt``); a ``temp`` column within :data:`TEMP_DEGC`."""
+    for name in names:
+        rate = name.startswith(("gyro", "dtheta", "ref_gyro"))
+        limit = MAX_RATE_RADPS if rate else MAX_FORCE_MPS2
+        values = table.column(name) if dt is None else table.column(name) / dt
+        what = ("rate" if rate else "specific force") + (" (increment / interval)" if dt is not None else "")
+        check_range(table, name, values, -limit, limit, what, "rad/s" if rate else "m/s²")
+    if table.has("temp"):
+        check_range(table, "temp", table.column("temp"), *TEMP_DEGC, "temperature", "°C")
+
+
 def rates_from_table(table: Table) -> ImuRates:
-    """Rate-form samples (s, rad/s, m/s², body frame) from a table's :data:`RATE_COLUMNS`."""
+    """Rate-form samples (s, rad/s, m/s², body frame) from a table's :data:`RATE_COLUMNS`.
+
+    Raises
+    ------
+    SinsInputError
+        a time beyond :data:`MAX_TIME_S`, a rate beyond :data:`MAX_RATE_RADPS`, a specific force
+        beyond :data:`MAX_FORCE_MPS2` (naming the line and column).
+    """
+    _check_time(table)
+    _check_readings(table, RATE_COLUMNS[1:])
     idx = [table.columns.index(c) for c in RATE_COLUMNS]
     d = table.data[:, idx]
     return ImuRates(t=d[:, 0].copy(), omega_ib_b=d[:, 1:4].copy(), f_ib_b=d[:, 4:7].copy())
 
 
 def increments_from_table(table: Table, t_start: float) -> ImuIncrements:
-    """Increment-form samples whose first interval starts at ``t_start``."""
+    """Increment-form samples whose first interval starts at ``t_start``.
+
+    Raises
+    ------
+    SinsInputError
+        the first row does not end after ``t_start``; a time beyond :data:`MAX_TIME_S`; an increment
+        whose mean rate or specific force over its interval is beyond :data:`MAX_RATE_RADPS` or
+        :data:`MAX_FORCE_MPS2` (naming the line and column).
+    """
     idx = [table.columns.index(c) for c in INCREMENT_COLUMNS]
     d = table.data[:, idx]
     if not t_start < d[0, 0]:
@@ -311,6 +378,8 @@ def increments_from_table(table: Table, t_start: float) -> ImuIncrements:
             f"{table.path}:{line}: column 't': first increment ends at {format_number(d[0, 0])} s, "
             f"not after the start time {format_number(t_start)} s"
         )
+    _check_time(table)
+    _check_readings(table, INCREMENT_COLUMNS[1:], np.diff(np.concatenate([[t_start], d[:, 0]])))
     return ImuIncrements(
         t=np.concatenate([[t_start], d[:, 0]]), dtheta_b=d[:, 1:4].copy(), dv_b=d[:, 4:7].copy()
     )
@@ -343,8 +412,24 @@ def write_imu(
 
 
 def read_truth(path: str | os.PathLike[str]) -> NavSeries:
-    """Read a truth trajectory CSV into a :class:`NavSeries` (SI units, radians)."""
+    """Read a truth trajectory CSV into a :class:`NavSeries` (SI units, radians).
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`read_table`, and for a latitude outside [-90, 90]°, a time beyond
+        :data:`MAX_TIME_S`, a height outside :data:`TRUTH_ALT_M`, a velocity component beyond
+        :data:`MAX_TRUTH_SPEED_MPS` or an angle beyond :data:`MAX_ANGLE_DEG` (naming line and column).
+    """
     table = read_table(path, required=TRUTH_COLUMNS)
+    _check_time(table)
+    check_range(table, "alt", table.column("alt"), *TRUTH_ALT_M, "height", "m")
+    for name in ("vn", "ve", "vd"):
+        check_range(
+            table, name, table.column(name), -MAX_TRUTH_SPEED_MPS, MAX_TRUTH_SPEED_MPS, "velocity", "m/s"
+        )
+    for name in ("lon", "roll", "pitch", "yaw"):
+        check_range(table, name, table.column(name), -MAX_ANGLE_DEG, MAX_ANGLE_DEG, "angle", "°")
     d = table.data[:, [table.columns.index(c) for c in TRUTH_COLUMNS]]
     lat = np.radians(d[:, 1])
     if (np.abs(lat) > np.pi / 2).any():
@@ -571,6 +656,24 @@ def read_recording(path: str | os.PathLike[str]) -> CalibrationData:
         phases=phases,
         source=str(path),
     )
+
+
+def check_recording_range(path: str | os.PathLike[str], data: CalibrationData) -> None:
+    """Refuse a recording read by :func:`read_recording` whose readings or references lie beyond the
+    physical ranges of IMU files (:data:`MAX_RATE_RADPS`, :data:`MAX_FORCE_MPS2`, :data:`TEMP_DEGC`,
+    :data:`MAX_TIME_S`), naming the line and column.
+
+    :func:`read_recording` itself reads any finite value back (the format round-trips every float);
+    the commands that compute with a recording (``sins fit``, ``evaluate``, ``gap``) call this.
+    """
+    path = Path(path)
+    header_line, _ = _read_header(path)
+    columns = ("t", *RECORDING_COLUMNS[1:], *(("temp",) if data.temp is not None else ()))
+    values = np.column_stack([data.t, data.gyro, data.accel, data.ref_gyro, data.ref_accel,
+                              *((data.temp,) if data.temp is not None else ())])  # fmt: skip
+    table = Table(path=path, columns=columns, data=values, first_data_line=header_line + 1)
+    _check_time(table)
+    _check_readings(table, RECORDING_COLUMNS[1:])
 
 
 def _check_recording(data: CalibrationData) -> None:

@@ -250,6 +250,46 @@ def block_means(values: Array, every: int) -> Array:
     return sums / np.diff(np.append(starts, n))[:, None]
 
 
+class BlockMeans:
+    """:func:`block_means` of rows fed chunk by chunk: means of consecutive blocks of ``every`` rows
+    counted from the first row fed, the last block possibly shorter (a block may span chunks)."""
+
+    def __init__(self, every: int) -> None:
+        if every < 1:
+            raise ValueError(f"every must be >= 1, got {every}")
+        self.every = every
+        self._means: list[Array] = []
+        self._partial: Array | None = None  # the open block's sum
+        self._count = 0  # rows in the open block
+
+    def add(self, values: Array) -> None:
+        """Take the next rows (n, k)."""
+        start = 0
+        if self._count and len(values):  # fill the open block first
+            take = min(self.every - self._count, len(values))
+            assert self._partial is not None
+            self._partial = self._partial + values[:take].sum(axis=0)
+            self._count += take
+            start = take
+            if self._count == self.every:
+                self._means.append((self._partial / self.every)[None])
+                self._partial, self._count = None, 0
+        rest = values[start:]
+        whole = len(rest) - len(rest) % self.every
+        if whole:
+            self._means.append(block_means(rest[:whole], self.every))
+        if whole < len(rest):
+            self._partial, self._count = rest[whole:].sum(axis=0), len(rest) - whole
+
+    def means(self) -> Array:
+        """The block means so far, the open block's included, (m, k)."""
+        parts = list(self._means)
+        if self._count:
+            assert self._partial is not None
+            parts.append((self._partial / self._count)[None])
+        return np.concatenate(parts) if parts else np.zeros((0, 0))
+
+
 def summarize(errors: NavErrors) -> DriftSummary:
     """Final, maximum and RMS errors and the drift rate of a whole error series."""
     acc = DriftAccumulator(keep_every=0)

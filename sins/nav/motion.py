@@ -22,7 +22,7 @@ Three kinds:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Final, Literal, Protocol, get_args
 
 import numba
 import numpy as np
@@ -273,6 +273,19 @@ class Rotate:
 Segment = Hold | Accelerate | Turn | Climb | Rotate
 
 
+#: The shortest ramp a segment may have, s. The ramp's acceleration grows as ``delta/ramp`` and the
+#: evaluation divides by ``ramp²`` (which underflows to zero for ramps below 1e-154 s); below a
+#: millisecond no vehicle changes speed, rate or attitude.
+MIN_RAMP_S = 1e-3
+
+
+#: The channel an oscillation moves: an attitude angle or the height.
+OscillationChannel = Literal["roll", "pitch", "yaw", "heave"]
+
+#: The channels in the order the messages list them.
+OSCILLATION_CHANNELS: Final[tuple[OscillationChannel, ...]] = get_args(OscillationChannel)
+
+
 @dataclass(frozen=True)
 class Oscillation:
     """A sinusoid ``amplitude * sin(2π t / period + phase)`` on ``channel`` for the whole run.
@@ -280,13 +293,10 @@ class Oscillation:
     ``channel`` is "roll", "pitch", "yaw" (amplitude in rad) or "heave" (m, upwards).
     """
 
-    channel: str
+    channel: OscillationChannel
     amplitude: float
     period: float
     phase: float = 0.0
-
-
-_OSCILLATION_CHANNELS = ("roll", "pitch", "yaw", "heave")
 
 
 def _build_channel(
@@ -341,8 +351,8 @@ class SegmentMotion:
         """Compile segments (played back to back from ``t_start``) and oscillations into channels.
 
         Raises ``ValueError`` naming the segment (1-based) for an impossible
-        segment: non-positive duration, a ramp longer than half the segment, a
-        speed that would turn negative.
+        segment: non-positive duration, a ramp shorter than :data:`MIN_RAMP_S` or longer
+        than half the segment, a speed that would turn negative.
         """
         if not segments:
             raise ValueError("a segment motion needs at least one segment")
@@ -360,10 +370,10 @@ class SegmentMotion:
             dur[i] = seg.duration
             if isinstance(seg, Hold):
                 continue
-            if not 0 < seg.ramp <= seg.duration / 2:
+            if not MIN_RAMP_S <= seg.ramp <= seg.duration / 2:
                 raise ValueError(
-                    f"{where}: ramp must be in (0, {seg.duration / 2:g}] s (half the duration), "
-                    f"got {seg.ramp:g}"
+                    f"{where}: ramp must be in [{MIN_RAMP_S:g}, {seg.duration / 2:g}] s (at least "
+                    f"{MIN_RAMP_S:g} s, at most half the duration), got {seg.ramp:g}"
                 )
             ramp[i] = seg.ramp
             plateau = seg.duration - seg.ramp
@@ -384,14 +394,14 @@ class SegmentMotion:
                 amp["pitch"][i] = seg.d_pitch / plateau
                 amp["yaw"][i] = seg.d_yaw / plateau
         for o in oscillations:
-            if o.channel not in _OSCILLATION_CHANNELS:
-                raise ValueError(f"oscillation channel must be one of {', '.join(_OSCILLATION_CHANNELS)}")
+            if o.channel not in OSCILLATION_CHANNELS:
+                raise ValueError(f"oscillation channel must be one of {', '.join(OSCILLATION_CHANNELS)}")
             if not o.period > 0:
                 raise ValueError(f"oscillation on {o.channel}: period must be positive, got {o.period:g} s")
         edges = t_start + np.concatenate([[0.0], np.cumsum(dur)])
         zero = np.zeros(m)
 
-        def sines(name: str) -> list[Oscillation]:
+        def sines(name: OscillationChannel) -> list[Oscillation]:
             return [o for o in oscillations if o.channel == name]
 
         return cls(

@@ -31,11 +31,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.nav import earth
+from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 from sins.series import ImuIncrements, NavSeries
 
 Array = NDArray[np.float64]
 
-VERTICAL_MODES = {"free": 0, "hold": 1, "damp": 2}
+# The kernels' code for each vertical mode (they branch on 1 and 2).
+_MODE_CODE: dict[VerticalMode, int] = {"free": 0, "hold": 1, "damp": 2}
 _TWELFTH = 1.0 / 12.0
 
 _earth = numba.njit(cache=True, inline="always")(earth.radii_and_gravity_from_sin2)
@@ -298,11 +300,11 @@ def _batch_kernel(
 
 
 def _vertical_args(
-    vertical: str, h_ref: Array | None, n: int, h0: float, tau_s: float
+    vertical: VerticalMode, h_ref: Array | None, n: int, h0: float, tau_s: float
 ) -> tuple[int, Array, float, float]:
     if vertical not in VERTICAL_MODES:
         raise ValueError(f"vertical must be one of {', '.join(VERTICAL_MODES)}, got {vertical!r}")
-    mode = VERTICAL_MODES[vertical]
+    mode = _MODE_CODE[vertical]
     if h_ref is None:
         h_ref = np.full(n + 1, h0)
     h_ref = np.ascontiguousarray(h_ref, dtype=float)
@@ -336,7 +338,7 @@ def advance(
     state: Array,
     imu: ImuIncrements,
     *,
-    vertical: str = "free",
+    vertical: VerticalMode = "free",
     h_ref: Array | None = None,
     vertical_tau_s: float = 10.0,
     every: int = 1,
@@ -379,7 +381,7 @@ def integrate(
     imu: ImuIncrements,
     initial: InitialState,
     *,
-    vertical: str = "free",
+    vertical: VerticalMode = "free",
     h_ref: Array | None = None,
     vertical_tau_s: float = 10.0,
     every: int = 1,
@@ -419,7 +421,7 @@ def integrate_batch(
     dv_b: Array,
     initial: InitialState,
     *,
-    vertical: str = "free",
+    vertical: VerticalMode = "free",
     h_ref: Array | None = None,
     vertical_tau_s: float = 10.0,
 ) -> list[NavSeries]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from pathlib import Path
 
 import numpy as np
 import scipy.io
@@ -20,7 +21,9 @@ from scipy.interpolate import CubicSpline
 from scipy.signal import savgol_filter
 
 from sins.errors import SinsInputError
-from sins.io.datasets.root import dataset_file
+from sins.io.datasets.matfile import check_mat_v5
+from sins.io.datasets.root import check_magnitude, dataset_file
+from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
 from sins.nav import earth, rotation
 from sins.series import CalibrationData
 
@@ -222,6 +225,11 @@ def _stem(trial: str) -> str:
 def _load(path: str) -> tuple[Array, Array, Array, Array]:
     """``imu_gyr, imu_acc, opt_quat, opt_pos`` of a BROAD MAT file, shapes checked, rate checked."""
     try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    check_mat_v5(path, raw, "not a readable MATLAB MAT file")  # scipy crashes on some damage
+    try:
         mat = scipy.io.loadmat(path, squeeze_me=True)
     except NotImplementedError:  # scipy's answer to a v7.3 (HDF5) file
         raise SinsInputError(
@@ -242,6 +250,12 @@ def _load(path: str) -> tuple[Array, Array, Array, Array]:
                 f"{path}: variable {name!r}: expected N × {width} numbers, found shape {a.shape} of {a.dtype}"
             )
         out.append(a.astype(float))
+    # NaN marks a row without a reading or a marker (the longest finite stretch is kept); ±inf or an
+    # absurd value is damage. The optical position is within a room: ±1 km is far beyond it.
+    for name, a, limit, unit in zip(("imu_gyr", "imu_acc", "opt_quat", "opt_pos"), out,
+                                    (MAX_RATE_RADPS, MAX_FORCE_MPS2, 2.0, 1000.0), ("rad/s", "m/s²", "", "m"),
+                                    strict=True):  # fmt: skip
+        check_magnitude(path, f"variable {name!r}", a, limit, unit, nan_ok=True)
     if len({len(a) for a in out}) != 1:
         raise SinsInputError(
             f"{path}: imu_gyr, imu_acc, opt_quat and opt_pos have {', '.join(str(len(a)) for a in out)} rows"

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from sins import io
 from sins.errors import SinsInputError
 from sins.io.datasets.root import dataset_file
+from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
 from sins.nav import earth
 from sins.series import CalibrationData, RigPhase
 
@@ -104,6 +105,9 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
             f"{io.format_number(samples[r])} is not an integer sample index greater than the previous one"
         )
     sections = _ferraris_sections(json_path, n)
+    for i, name in enumerate(_FERRARIS_COLUMNS[1:]):
+        limit = np.degrees(MAX_RATE_RADPS) if name.startswith("gyr") else MAX_FORCE_MPS2
+        io.check_range(table, name, d[:, i + 1], -limit, limit, "reading", "°/s" if i < 3 else "m/s²")
 
     g = float(earth.normal_gravity(math.radians(FERRARIS_LAT_DEG), FERRARIS_HEIGHT_M))
     ref_gyro = np.full((n, 3), np.nan)

@@ -49,7 +49,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
-from sins.io.datasets.root import dataset_file
+from sins.io.datasets.root import check_magnitude, dataset_file
+from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
 from sins.nav import earth, rotation
 from sins.series import CalibrationData
 
@@ -149,6 +150,10 @@ def read_psins_lasergyro(root: str | os.PathLike[str] | None = None) -> Calibrat
     ts = ts_ms / 1000.0
     to_si = np.r_[np.asarray(scales[:3]) * _ARCSEC_RAD, np.asarray(scales[3:]) * 1e-6 * g_unit] / ts
     rates = increments * to_si
+    check_magnitude(path, "gyro rate (increment × scale / interval)", rates[:, :3], MAX_RATE_RADPS, "rad/s")
+    check_magnitude(
+        path, "specific force (increment × scale / interval)", rates[:, 3:], MAX_FORCE_MPS2, "m/s²"
+    )
     gyro = rates[:, :3] @ PSINS_TO_FRD.T
     accel = rates[:, 3:] @ PSINS_TO_FRD.T
     n = len(rates)

@@ -23,7 +23,9 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from sins.errors import SinsInputError
-from sins.io.datasets.root import dataset_file
+from sins.io.datasets.matfile import check_mat_v5
+from sins.io.datasets.root import check_magnitude, dataset_file
+from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS, MAX_TIME_S, MAX_TRUTH_SPEED_MPS, TRUTH_ALT_M
 from sins.nav import earth, rotation
 from sins.series import CalibrationData, NavSeries
 
@@ -227,12 +229,13 @@ def _path(root: str | os.PathLike[str] | None) -> Path:
 def _load(path: Path) -> tuple[_Mems, NavSeries]:
     """The two tables, checked, in the package's axes and units (the FOG-INS on its own clock)."""
     try:
-        with path.open("rb") as stream:
-            head = stream.read(128)
+        raw = path.read_bytes()
+        head = raw[:128]
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
     if not head.startswith(b"MATLAB 5.0 MAT-file"):
         raise SinsInputError(f"{path}: not a MATLAB 5 MAT file (no 'MATLAB 5.0 MAT-file' header)")
+    check_mat_v5(path, raw)  # scipy's reader crashes on some damage instead of raising
     try:
         content: dict[str, Any] = scipy.io.loadmat(path, squeeze_me=True)
     except Exception as exc:  # a damaged file raises MatReadError, OSError, ValueError, IndexError, …
@@ -267,6 +270,15 @@ def _load(path: Path) -> tuple[_Mems, NavSeries]:
         v_n=avp[:, 3:6] @ _PSINS_TO_SINS.T,
         q_nb=rotation.quat_from_dcm(c_ned),
     )
+    check_magnitude(path, "'mimu' rates (column / interval)", mems.omega, MAX_RATE_RADPS, "rad/s")
+    check_magnitude(path, "'mimu' specific force (column / interval)", mems.f, MAX_FORCE_MPS2, "m/s²")
+    check_magnitude(path, "'mimu' time", t_end, MAX_TIME_S, "s")
+    check_magnitude(path, "'fogavp' time", nav.t, MAX_TIME_S, "s")
+    check_magnitude(path, "'fogavp' attitude", avp[:, 0:3], 1e3, "rad")
+    check_magnitude(path, "'fogavp' velocity", avp[:, 3:6], MAX_TRUTH_SPEED_MPS, "m/s")
+    check_magnitude(path, "'fogavp' latitude", nav.lat, math.pi / 2, "rad")
+    check_magnitude(path, "'fogavp' longitude", nav.lon, 1e3, "rad")
+    check_magnitude(path, "'fogavp' height", nav.h, max(abs(a) for a in TRUTH_ALT_M), "m")
     overlap = min(mems.t_end[-1], nav.t[-1]) - max(mems.t_end[0], nav.t[0])
     if overlap < _MIN_INTERVALS * float(np.median(np.diff(nav.t))):
         raise SinsInputError(

@@ -56,3 +56,27 @@ def dataset_file(folder: str, name: str, root: str | os.PathLike[str] | None = N
             f"{folder}/"
         )
     return path
+
+
+def check_magnitude(
+    path: str | os.PathLike[str], variable: str, values: object, limit: float, unit: str, nan_ok: bool = False
+) -> None:
+    """Refuse the first element of ``values`` (rows × columns) beyond ``±limit`` (or not finite, unless
+    ``nan_ok``, where NaN marks a missing value), naming the file, the variable, row and column (from 1).
+
+    The readers convert a dataset's units, and a damaged file can hold anything: this keeps the values
+    they return within the physical ranges of sins's own files (see :mod:`sins.io.formats`).
+    """
+    import numpy as np
+
+    from sins.errors import SinsInputError
+
+    a = np.asarray(values, dtype=float)
+    a = a.reshape(len(a), -1) if a.ndim else a.reshape(1, 1)
+    bad = np.abs(a) > limit if nan_ok else ~(np.abs(a) <= limit)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise SinsInputError(
+            f"{path}: {variable}: row {r + 1}, column {c + 1}: {a[r, c]:g} {unit} is beyond "
+            f"±{limit:g} {unit}, outside any physical range (a damaged file?)"
+        )

@@ -1,0 +1,289 @@
+"""One channel's model of its reading error, and how each kind of candidate is fitted in it.
+
+The model of a channel's reading error ``e = reading − reference`` is the baseline (the seed
+model's bias, scale/misalignment and g-sensitivity rows, fitted by least squares, plus white noise)
+and any effects accepted so far (:class:`ChannelModel`). A candidate (:mod:`sins.gap.candidates`)
+enters it by its kind:
+
+- *regressors* (scale nonlinearity and asymmetry, g² sensitivity, temperature bias and scale,
+  size effect): columns added to the channel's least-squares fit;
+- *delay* (time offset): the reading is the reference at ``t − τ``, cubic Hermite between rows;
+  ``τ`` is found by a 1-D search beside the regressors (:func:`_fit_delay`);
+- *processes* (bias instability, rate random walk): a first-order Gauss–Markov or random-walk bias
+  under the white noise, fitted by the likelihood of the fit rows' innovations, the regressors
+  refitted beside it by generalised least squares, and predicted one step ahead by the
+  steady-state Kalman filter (:mod:`sins.gap.randombias`);
+- *output maps* (quantization, saturation): a quantizer on the readings' lattice (each reading
+  rounded, or increments rounded with the remainder carried, after white noise whose level it
+  fits; :mod:`sins.gap.lattice`), or the prediction clipped at the readings' pile-up.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import minimize_scalar
+
+from sins.gap import lattice, randombias
+from sins.gap.candidates import Candidate, ReferenceInputs, baseline_columns
+from sins.gap.floor import TINY, noise_floor
+from sins.gap.lattice import Printed
+
+Array = NDArray[np.float64]
+
+#: The white noise before rounding, in quantization steps, tried for the quantization candidate.
+_NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
+#: The two quantizers (see :mod:`sins.gap.lattice`).
+_QUANTIZERS = {"rounded": lattice.rounded, "carried": lattice.carried}
+#: Their readings' log-probabilities alone, for choosing one (the carried kind's filter gives all at once).
+_QUANTIZER_LOGLIK: dict[str, Callable[[Array, Array, float], Array]] = {
+    "rounded": lattice.rounded_loglik,
+    "carried": lambda m, mu, s: lattice.carried(m, mu, s)[0],
+}
+
+
+#: Numbers that read back exactly: the default print of a recording (a lattice needs no slack).
+_FULL_PRECISION = Printed()
+
+
+@dataclass(frozen=True, eq=False)
+class ChannelModel:
+    """One channel's model: regressor columns, and an optional delay, random bias and output map.
+
+    Built by :meth:`baseline`, extended by :meth:`with_candidate` and :meth:`with_columns`, and
+    fitted by :meth:`fitted`, which returns a new model holding its prediction and what the fit
+    settled (the delay, the quantizer); no model changes once built. A model built on a fitted one
+    keeps its delay and quantizer: they are settled once, when the effect is first tried.
+
+    Attributes
+    ----------
+    x : the reference inputs of every row
+    sensor, axis : the channel ("gyro", 0 is ``gyro.x``)
+    error : (n,) reading − reference of every row, SI units
+    reading : (n,) the readings
+    fit : (n,) the fit rows
+    lattice : the fit rows' readings' lattice, None where they lie on none
+    columns : the regressors, (n, k) blocks: the baseline's, then each accepted effect's
+    delayed : whether the reading is the reference at ``t − τ``
+    delay_s : ``τ``, once fitted
+    process : "bias_instability" | "rate_random_walk" | None
+    process_on_trial : whether the process must pass :func:`sins.gap.randombias.falsified` (a
+        candidate's must; one the simulation's model holds from the start need not)
+    output : "quantization" | "saturation" | None
+    quantizer : the quantizer's kind and white noise per step, once fitted
+    predicted : (n,) the predicted error of every row, once fitted
+    loglik_rows : (n,) a quantizer's ln P of every row's reading, once fitted
+    fit_loglik : the process's innovations' log-likelihood on the fit rows, once fitted
+    """
+
+    x: ReferenceInputs
+    sensor: str
+    axis: int
+    error: Array
+    reading: Array
+    fit: NDArray[np.bool_]
+    lattice: lattice.Lattice | None
+    columns: tuple[Array, ...]
+    delayed: bool = False
+    delay_s: float | None = None
+    process: str | None = None
+    process_on_trial: bool = True
+    output: str | None = None
+    quantizer: tuple[str, float] | None = None
+    predicted: Array | None = None
+    loglik_rows: Array | None = None
+    fit_loglik: float = np.nan
+
+    @classmethod
+    def baseline(
+        cls,
+        x: ReferenceInputs,
+        sensor: str,
+        axis: int,
+        error: Array,
+        reading: Array,
+        fit: NDArray[np.bool_],
+        printed: Printed = _FULL_PRECISION,
+    ) -> ChannelModel:
+        """The baseline's model of one channel (unfitted): its columns, and its readings' lattice
+        (sought under the file's print, ``printed``)."""
+        columns = (baseline_columns(sensor, x.omega_ib_b, x.f_ib_b),)
+        return cls(x, sensor, axis, error, reading, fit, lattice.find(reading[fit], printed=printed), columns)
+
+    def with_candidate(self, cand: Candidate, on_trial: bool = True) -> ChannelModel:
+        """This model with ``cand`` added (unfitted); ``on_trial``: see :attr:`process_on_trial`."""
+        if cand.kind == "regressors":
+            assert cand.columns is not None
+            return self.with_columns(cand.columns(self.x, self.axis))
+        if cand.kind == "delay":
+            return dataclasses.replace(self, delayed=True, delay_s=None)
+        if cand.kind == "process":
+            return dataclasses.replace(self, process=cand.name.split(".")[1], process_on_trial=on_trial)
+        return dataclasses.replace(self, output=cand.name.split(".")[1], quantizer=None, loglik_rows=None)
+
+    def with_columns(self, columns: Array) -> ChannelModel:
+        """This model with the regressors ``columns`` (n, k) added (unfitted)."""
+        return dataclasses.replace(self, columns=(*self.columns, columns))
+
+    def tried(self, cand: Candidate) -> ChannelModel:
+        """This model with ``cand`` added, fitted."""
+        return self.with_candidate(cand).fitted()
+
+    @property
+    def n_params(self) -> int:
+        """The number of fitted parameters: columns, the process's (two or one), the output map's, τ."""
+        k = sum(c.shape[1] for c in self.columns)
+        if self.process is not None:
+            k += 2 if self.process == "bias_instability" else 1
+        return k + (self.output is not None) + self.delayed
+
+    @property
+    def residual(self) -> Array:
+        """The error the fitted model leaves on every row: ``error − predicted`` (NaN if falsified)."""
+        assert self.predicted is not None, "fit the model first"
+        return self.error - self.predicted
+
+    def fit_rows_loglik(self) -> float:
+        """The fit rows' Gaussian log-likelihood (own variance): of the process's innovations where
+        the model has a random bias, of its residual otherwise. Once fitted."""
+        return (
+            self.fit_loglik
+            if self.process is not None
+            else randombias.log_likelihood(self.residual[self.fit])
+        )
+
+    def fitted(self) -> ChannelModel:
+        """This model with every parameter fitted on the fit rows and the predicted error of every row.
+
+        A process that :func:`sins.gap.randombias.falsified` rules out predicts NaN everywhere.
+        """
+        a = np.hstack(self.columns)
+        rows, rcond = self.fit, None
+        scale = np.maximum(np.abs(a[rows]).max(axis=0), 1e-300)
+        columns = a / scale
+        if self.output == "saturation":
+            # Clipped readings say nothing of the unclipped model; what the other rows hardly
+            # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
+            seen = self.reading[self.fit]
+            rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
+        delay_s = self.delay_s
+        lag = np.zeros_like(self.error)  # what a delay adds to the error: the reference at t − τ less at t
+        if self.delayed:
+            if delay_s is None:
+                delay_s = _fit_delay(self.x, self.sensor, self.axis, self.error, columns, rows)
+            lag = self.x.lag(self.sensor, self.axis, delay_s)
+        error = self.error - lag
+        coef, *_ = np.linalg.lstsq(columns[rows], error[rows], rcond=rcond)
+        pred = columns @ coef
+        fit_loglik = self.fit_loglik
+        if self.process is not None:
+            process = self._with_random_bias(error, pred, columns, rows, rcond)
+            if process is None:  # not this process: see randombias.falsified
+                return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(pred, np.nan))
+            pred, fit_loglik = process
+        pred = pred + lag
+        quantizer, loglik_rows = self.quantizer, self.loglik_rows
+        if self.output == "quantization":
+            pred, quantizer, loglik_rows = self._quantized(pred, columns)
+        elif self.output == "saturation":
+            reference = self.reading - self.error
+            top, bottom = float(self.reading[self.fit].max()), float(self.reading[self.fit].min())
+            pred = np.clip(reference + pred, bottom, top) - reference
+        return dataclasses.replace(
+            self,
+            delay_s=delay_s,
+            quantizer=quantizer,
+            predicted=pred,
+            loglik_rows=loglik_rows,
+            fit_loglik=fit_loglik,
+        )
+
+    def _with_random_bias(
+        self, error: Array, pred: Array, columns: Array, rows: NDArray[np.bool_], rcond: float | None
+    ) -> tuple[Array, float] | None:
+        """Given the least-squares prediction ``pred`` of ``error``, the regressors refitted beside the
+        random bias and the bias's one-step prediction added: the predicted error of every row and the
+        process's fit-row log-likelihood (None: falsified).
+
+        A random bias misleads least squares: a walk's level in each static position passes for
+        scale factors. Generalised least squares instead: the innovations filter is linear, so the
+        regressors that whiten best are those fitted to the filtered error and columns.
+        """
+        process = self._fit_process(error - pred)
+        phi, gain = process.phi, process.gain
+        whitened = np.column_stack([randombias.innovations(c, phi, gain) for c in columns.T])
+        target = randombias.innovations(error, phi, gain)
+        coef, *_ = np.linalg.lstsq(whitened[rows], target[rows], rcond=rcond)
+        pred = columns @ coef
+        y = error - pred
+        process = self._fit_process(y)
+        if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
+            return None
+        return pred + y - process.innovations, process.fit_loglik
+
+    def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
+        """The random bias under the residual ``y``, its white part from first differences within the
+        fit rows (as the floor's), not straddling the withheld blocks: a walk's increments over a
+        block would inflate it."""
+        r = max(noise_floor(y, self.fit) ** 2, TINY**2)
+        walk = self.process == "rate_random_walk"
+        return randombias.fit(y, self.fit, self.x.step_s, r, walk)
+
+    def _quantized(self, pred: Array, columns: Array) -> tuple[Array, tuple[str, float], Array]:
+        """The expected reading of the quantizer the fit rows' likelihood prefers, as an error; the
+        quantizer (kind and noise per step) and its ln P of every row's reading.
+
+        Rounded or carried, and the white noise before the rounding (per step, over
+        :data:`_NOISE_PER_STEP`): chosen once; the models built on this one keep them. For the
+        rounded kind the regressors and the noise are then refitted by the readings' own likelihood
+        (:func:`lattice.fit_rounded`): least squares on rounded readings misplaces the mean.
+        """
+        grid = self.lattice
+        assert grid is not None
+        reference = self.reading - self.error
+        m = grid.index(self.reading)
+        mu = grid.units(reference + pred)
+        quantizer = self.quantizer
+        if quantizer is None:
+            choices = [(k, s) for k in _QUANTIZERS for s in _NOISE_PER_STEP]
+            if abs(grid.offset) > 1e-9 * grid.step:
+                choices = [c for c in choices if c[0] == "rounded"]  # differences of a lattice have no offset
+            quantizer = max(
+                choices, key=lambda c: float(_QUANTIZER_LOGLIK[c[0]](m, mu, c[1])[self.fit].sum())
+            )
+        kind, s = quantizer
+        if kind == "rounded":
+            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], columns[self.fit], s)
+            mu, quantizer = mu + columns @ delta, ("rounded", s)
+        loglik_rows, expected, _ = _QUANTIZERS[kind](m, mu, s)
+        return expected * grid.step + grid.offset - reference, quantizer, loglik_rows
+
+
+def _fit_delay(
+    x: ReferenceInputs, sensor: str, axis: int, error: Array, columns: Array, rows: NDArray[np.bool_]
+) -> float:
+    """The delay τ whose lag, with the regressors fitted beside it, leaves the least on the fit rows.
+
+    To first order the lag is ``−τ u̇``, a column whose coefficient is ``τ``; the search refines it
+    within two rows either side, where the rest matters: a step in the reference (a rig turning
+    faster than a row) is smoothed differently from its slope.
+    """
+    a = columns[rows]
+    slope = -x.u_rate[sensor][rows, axis : axis + 1]
+    coef, *_ = np.linalg.lstsq(np.hstack([a, slope]), error[rows], rcond=None)
+    first = float(coef[-1])
+
+    def left(tau: float) -> float:
+        target = (error - x.lag(sensor, axis, tau))[rows]
+        c, *_ = np.linalg.lstsq(a, target, rcond=None)
+        return float(np.sum((target - a @ c) ** 2))
+
+    span = 2.0 * x.step_s
+    found = minimize_scalar(
+        left, bounds=(first - span, first + span), method="bounded", options={"xatol": 1e-3 * x.step_s}
+    )
+    return float(found.x) if found.fun < left(first) else first

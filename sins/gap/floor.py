@@ -1,0 +1,124 @@
+"""The noise floor a channel's residual is measured against, and where the excess over it lies.
+
+The noise floor of a channel is the white-noise level the model expects, measured without the model:
+the spread of first differences of the residual (:func:`noise_floor`), which slowly varying unmodelled
+errors do not reach (and which holds rounding's spread as well), within the fit rows and within the
+withheld rows, the larger of the two; and of the residual before the accepted effects and after them,
+the smaller (an effect that moves the reading by jumps, a clip reached or a delay across a step, lifts
+the differences before it). Rounding's spread depends on where each hold's mean sits in its
+lattice cell: where readings leave their level a few times an hour, one portion may see more of it than
+the other, or none. A channel whose withheld RMS exceeds its floor by :data:`SIGNIFICANT_RATIO` has a
+gap. Where the gap lies is told by input quartiles (:func:`quartile_shares`) and by the residual's Allan
+deviation against that white noise (:func:`allan_deviation`, :func:`allan_curves`), summed up in words by
+:func:`concentrates`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.gap.candidates import ReferenceInputs
+
+Array = NDArray[np.float64]
+
+#: A channel's withheld residual counts as above its floor beyond this ratio (3 % plus sampling error).
+SIGNIFICANT_RATIO = 1.03
+#: Below any real sensor's noise (2e-5 °/h, 1e-11 g): the floor of noiseless (simulated) readings, SI units.
+TINY = 1e-10
+#: Input quartiles reported where the excess concentrates.
+_FEATURES = ("|ω|", "|f|", "temperature", "rate of change", "time")
+
+
+def noise_floor(residual: Array, rows: NDArray[np.bool_] | None = None) -> float:
+    """White-noise level of a residual series from its first differences: ``std(Δr) / √2``.
+
+    Differencing removes what varies slowly (unmodelled scale, temperature or bias effects) and
+    keeps white noise of any distribution, quantised readings' included, at twice its variance.
+    With ``rows``, only differences between consecutive rows both in it count (0 where none do).
+    """
+    d = np.diff(residual)
+    if rows is not None:
+        d = d[rows[1:] & rows[:-1]]
+    return float(np.std(d) / np.sqrt(2.0)) if len(d) else 0.0
+
+
+def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
+    """Overlapping Allan deviation of a uniformly sampled rate series, for each cluster size (rows).
+
+    With ``θ`` the running sum of the rate, ``σ²(m) = ⟨(θₖ₊₂ₘ − 2θₖ₊ₘ + θₖ)²⟩ / (2 m²)`` over every
+    ``k``: white noise of standard deviation ``σ`` gives ``σ / √m``. The cluster time is ``m`` times
+    the sampling step; the deviation is in the rate's units.
+    """
+    theta = np.concatenate([[0.0], np.cumsum(rate)])
+    out = np.empty(len(clusters))
+    for j, m in enumerate(clusters):
+        d = theta[2 * m :] - 2.0 * theta[m:-m] + theta[: -2 * m]
+        out[j] = np.sqrt(np.mean(d * d) / (2.0 * m * m))
+    return out
+
+
+def allan_curves(before: Array, after: Array, floor: float, step_s: float) -> dict[str, list[float]]:
+    """The Allan deviations of a channel's residual, every row in time order, at octave clusters.
+
+    Octaves up to an eighth of the rows, so that every point averages at least eight clusters.
+    Returns ``tau_s``, the residual's deviation ``before`` and ``after`` the accepted effects, and the
+    white noise's (``model``), the floor over ``√m``.
+    """
+    clusters = 2 ** np.arange(int(np.log2(max(len(before) // 8, 1))) + 1)
+    return {
+        "tau_s": list(clusters * step_s),
+        "before": list(allan_deviation(before, clusters)),
+        "after": list(allan_deviation(after, clusters)),
+        "model": list(floor / np.sqrt(clusters)),
+    }
+
+
+def quartile_shares(
+    residual: Array, floor: float, x: ReferenceInputs, withheld: NDArray[np.bool_]
+) -> dict[str, list[float]]:
+    """For each input, the share of a channel's withheld excess power in each of its quartiles.
+
+    Inputs that do not vary (a static unit's rate of change: 1e-19 from uneven time stamps) and a
+    channel with no excess give nothing.
+    """
+    excess = residual[withheld] ** 2 - floor**2
+    if float(np.sum(np.maximum(excess, 0.0))) <= 0.0:
+        return {}
+    features = {
+        "|ω|": np.linalg.norm(x.omega_ib_b, axis=1),
+        "|f|": np.linalg.norm(x.f_ib_b, axis=1),
+        "temperature": x.temp,
+        "rate of change": np.linalg.norm(x.omega_dot_b, axis=1),
+        "time": x.t,
+    }
+    out = {}
+    for name in _FEATURES:
+        v = features[name]
+        if v is None or float(np.ptp(v)) <= 1e-9 * max(1.0, float(np.abs(v).max())):
+            continue
+        v = v[withheld]
+        bins = np.searchsorted(np.quantile(v, [0.25, 0.5, 0.75]), v, side="right")
+        # A bin may sit below the floor: shares are of the bins above it.
+        per_bin = np.maximum([np.sum(excess[bins == b]) for b in range(4)], 0.0)
+        out[name] = list(per_bin / max(float(np.sum(per_bin)), 1e-300))
+    return out
+
+
+def concentrates(shares: dict[str, list[float]], allan: dict[str, list[float]]) -> list[str]:
+    """Where a channel's excess sits: an input quartile holding most of it, and the time scale at
+    which the residual's Allan deviation stands furthest above the white noise the model expects."""
+    out: list[str] = []
+    for name, share in shares.items():
+        top = int(np.argmax(share))
+        if share[top] > 0.5:
+            label = ("lowest", "second", "third", "highest")[top]
+            out.append(f"{name}: {label} quartile holds {100 * share[top]:.0f} % of the excess")
+    ratio = np.array(allan["before"]) / np.maximum(np.array(allan["model"]), 1e-300)
+    if len(ratio) and ratio.max() > 1.5:  # 2.25× the variance: beyond the scatter of eight clusters
+        k = int(np.argmax(ratio))
+        tau = f"τ = {allan['tau_s'][k]:.3g} s"
+        out.append(f"frequency: Allan deviation at {tau} is {ratio[k]:.1f}× the model's white noise")
+    return out

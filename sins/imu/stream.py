@@ -1,0 +1,351 @@
+"""Corrupting ideal increments chunk by chunk, so that memory stays bounded whatever the duration.
+
+:class:`IncrementStream` is the increment form of :class:`sins.imu.ImuModel`:
+:meth:`~sins.imu.ImuModel.corrupt_increments` is one stream fed the whole array at once. Fed the same
+increments in chunks, it gives the same readings to the last bit, because everything that crosses a
+chunk boundary is carried rather than recomputed:
+
+* each random process (white noise, bias instability, rate random walk) draws from its own generator,
+  which a chunk continues where the last left it, and its state (the bias at the last sample) goes on;
+* the deterministic errors at an interval's Gauss nodes need the rate reconstructed from the
+  neighbouring intervals' means, and a delayed channel the input ``delay`` earlier: the stream keeps
+  :meth:`IncrementStream.margin` intervals on each side of those it writes, and writes an interval only
+  once its later neighbours have come;
+* a delayed channel interpolates the running integral of its input, carried as the sum of every
+  interval before the window, added in the same order as one long cumulative sum;
+* quantization with the remainder carried keeps the running sum and its last rounded value.
+
+The two paths differ only in the bias instability's recursion on irregular sampling, which takes each
+chunk's own steps (a stream of regular chunks and the whole array agree).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.imu.model import (
+    SENSORS,
+    BiasInstability,
+    ImuModel,
+    Inputs,
+    Noise,
+    Quantization,
+    RateRandomWalk,
+    Saturation,
+    cubic_hermite,
+    random_stream,
+    uniform_steps,
+)
+from sins.series import ImuIncrements
+
+Array = NDArray[np.float64]
+
+#: Two-point Gauss nodes of each interval, in units of its step from its middle.
+_NODES = (-0.5 / math.sqrt(3.0), 0.5 / math.sqrt(3.0))
+
+
+@dataclass
+class _Process:
+    """A random bias's generator and its value at the last written sample."""
+
+    effect: BiasInstability | RateRandomWalk
+    rng: np.random.Generator
+    value: Array | None = None  # None before the first sample
+
+
+@dataclass
+class _Sensor:
+    """What one sensor carries from chunk to chunk."""
+
+    processes: list[_Process]
+    noise: Noise | None
+    noise_rng: np.random.Generator | None
+    cum: Array = field(default_factory=lambda: np.zeros(3))  # ideal running integral at the window start
+    quant_sum: Array = field(default_factory=lambda: np.zeros(3))  # running sum before rounding
+    quant_out: Array = field(default_factory=lambda: np.zeros(3))  # its last rounded value
+
+
+class _NodeInputs:
+    """The true inputs at each buffered interval's Gauss nodes, delayed by ``d``, computed once per
+    write for both sensors: the rate reconstructed from the neighbouring intervals' means, and the
+    temperature of the moment the channel measured."""
+
+    def __init__(self, t: Array, inc: dict[str, Array], temp: Array | None) -> None:
+        self.t, self.temp = t, temp
+        self.dt = np.diff(t)
+        self.means = {sensor: inc[sensor] / self.dt[:, None] for sensor in SENSORS}
+        self.nodes = [0.5 * (t[:-1] + t[1:]) + s * self.dt for s in _NODES]
+        self._cache: dict[tuple[int, float], Inputs] = {}
+
+    def __call__(self, j: int, d: float) -> Inputs:
+        """The inputs at Gauss node ``j`` of every buffered interval, delayed by ``d`` s."""
+        if (j, d) not in self._cache:
+            t, when, means = self.t, self.nodes[j], self.means
+            if d == 0.0:  # each node lies in its own interval
+                omega, omega_dot = _reconstruct_own(means["gyro"], self.dt, _NODES[j])
+                f, _ = _reconstruct_own(means["accel"], self.dt, _NODES[j])
+            else:
+                omega, omega_dot = _reconstruct(means["gyro"], t, when - d)
+                f, _ = _reconstruct(means["accel"], t, when - d)
+            temp = None if self.temp is None else np.interp(when - d, t, self.temp)
+            self._cache[j, d] = Inputs(omega_ib_b=omega, f_ib_b=f, omega_dot_b=omega_dot, temp=temp)
+        return self._cache[j, d]
+
+
+class IncrementStream:
+    """Readings of ``model`` as increments, from ideal increments pushed chunk by chunk.
+
+    Parameters
+    ----------
+    model : the IMU's error model
+    seed : the run's seed for stochastic effects
+    dt_nominal : the sampling step, s: the quantization step of an increment is the rate step times it,
+        and the bias instability's recursion uses it on regular samples (one value for every chunk)
+
+    Chunks must follow each other (each chunk's ``imu.t[0]`` is the last chunk's final time). Each
+    :meth:`push` returns the intervals now complete, :meth:`finish` the rest; together they are
+    :meth:`sins.imu.ImuModel.corrupt_increments` of the whole, to the last bit.
+    """
+
+    def __init__(self, model: ImuModel, seed: int | None, dt_nominal: float) -> None:
+        if not (math.isfinite(dt_nominal) and dt_nominal > 0.0):
+            raise ValueError(f"dt_nominal must be a positive number of seconds, got {dt_nominal}")
+        self.model = model
+        self.seed = seed
+        self.dt_nominal = dt_nominal
+        self._sensors = {s: self._sensor(s) for s in SENSORS}
+        self._t: Array | None = None  # buffered sample times (window start .. latest)
+        self._inc: dict[str, Array] = {}  # buffered ideal increments per sensor
+        self._temp: Array | None = None
+        self._written = 0  # intervals of the buffer already written
+        self._finished = False
+
+    def _sensor(self, sensor: str) -> _Sensor:
+        processes = [
+            _Process(e, random_stream(self.seed, e.name))
+            for e in self.model.effects_of(sensor)
+            if isinstance(e, BiasInstability | RateRandomWalk)
+        ]
+        noise = self.model.effect_of(sensor, Noise)
+        rng = None if noise is None else random_stream(self.seed, noise.name)
+        return _Sensor(processes, noise, rng)
+
+    def margin(self) -> int:
+        """Intervals of context kept on each side of those written: the reconstruction's neighbours,
+        and the largest delay's reach."""
+        delay = max(float(np.abs(self.model.delay_of(s)).max()) for s in SENSORS)
+        return math.ceil(delay / self.dt_nominal) + 3
+
+    def push(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
+        """Take the next chunk (``temp`` at ``imu.t``, °C, if the model needs it); return the readings
+        of the intervals now complete (possibly none)."""
+        if self._finished:
+            raise ValueError("the stream is finished")
+        if len(imu.t) < 2:
+            return self._empty()
+        if self._t is None:
+            self._t = np.asarray(imu.t, dtype=float)
+            self._inc = {"gyro": imu.dtheta_b, "accel": imu.dv_b}
+            self._temp = None if temp is None else np.asarray(temp, dtype=float)
+        else:
+            if imu.t[0] != self._t[-1]:
+                raise ValueError(f"chunks must follow each other: {imu.t[0]} after {self._t[-1]}")
+            if (temp is None) != (self._temp is None):
+                raise ValueError("give the temperature with every chunk or with none")
+            self._t = np.concatenate([self._t, imu.t[1:]])
+            self._inc = {"gyro": np.vstack([self._inc["gyro"], imu.dtheta_b]),
+                         "accel": np.vstack([self._inc["accel"], imu.dv_b])}  # fmt: skip
+            if temp is not None and self._temp is not None:
+                self._temp = np.concatenate([self._temp, np.asarray(temp, dtype=float)[1:]])
+        return self._write(len(self._t) - 1 - self.margin())
+
+    def finish(self) -> ImuIncrements:
+        """The readings of every interval not yet written."""
+        if self._t is None:
+            self._finished = True
+            return self._empty()
+        out = self._write(len(self._t) - 1)
+        self._finished = True
+        return out
+
+    def _empty(self) -> ImuIncrements:
+        t = np.zeros(0) if self._t is None else self._t[self._written : self._written + 1]
+        return ImuIncrements(t=t, dtheta_b=np.zeros((0, 3)), dv_b=np.zeros((0, 3)))
+
+    def _write(self, end: int) -> ImuIncrements:
+        """Readings of the buffer's intervals ``written .. end``, then the buffer trimmed to the context
+        the next ones need."""
+        assert self._t is not None
+        lo, hi = self._written, max(end, self._written)
+        if hi == lo:
+            return self._empty()
+        nodes = _NodeInputs(self._t, self._inc, self._temp)
+        out = [self._sensor_readings(s, lo, hi, nodes) for s in SENSORS]
+        t_out = self._t[lo : hi + 1]
+        self._written = hi
+        self._trim()
+        return ImuIncrements(t=t_out, dtheta_b=out[0], dv_b=out[1])
+
+    def _trim(self) -> None:
+        """Drop the intervals no later one needs, adding them to each sensor's running integral in
+        order (so it is the same sum as one long cumulative sum's)."""
+        assert self._t is not None
+        drop = max(0, self._written - self.margin())
+        if drop == 0:
+            return
+        for sensor, inc in self._inc.items():
+            state = self._sensors[sensor]
+            state.cum = np.cumsum(np.vstack([state.cum, inc[:drop]]), axis=0)[-1]
+            self._inc[sensor] = inc[drop:]
+        self._t = self._t[drop:]
+        if self._temp is not None:
+            self._temp = self._temp[drop:]
+        self._written -= drop
+
+    # ------------------------------------------------------------------------------------------
+
+    def _sensor_readings(self, sensor: str, lo: int, hi: int, node_inputs: _NodeInputs) -> Array:
+        """One sensor's readings of the buffer's intervals ``lo .. hi``, the buffer as context."""
+        assert self._t is not None
+        model, state = self.model, self._sensors[sensor]
+        t, ideal = self._t, self._inc[sensor]
+        dt = node_inputs.dt
+        rows = slice(lo, hi)
+        n_out = hi - lo
+        bias = self._bias(state, t[lo : hi + 1])  # at the written intervals' ends
+        noise_rate = np.zeros((n_out, 3))
+        if state.noise is not None and state.noise_rng is not None:
+            # White noise as each interval's mean rate: density / sqrt(dt) per interval.
+            z = state.noise_rng.standard_normal((n_out, 3))
+            noise_rate = state.noise.density / np.sqrt(dt[rows])[:, None] * z
+        nodes = node_inputs.nodes
+        sat = model.effect_of(sensor, Saturation)
+        deterministic = any(e.stage == "deterministic" for e in model.effects_of(sensor))
+        delay = model.delay_of(sensor)
+        total = np.empty((n_out, 3))
+        step = dt[rows][:, None]
+        for d in np.unique(delay):
+            cols = delay == d
+            shifted = self._shifted(ideal, t, float(d), state.cum)[rows] if d else ideal[rows]
+            part = np.zeros((n_out, 3))
+            if sat is None:
+                if deterministic:
+                    for j in range(len(nodes)):
+                        err = model.deterministic_error(sensor, node_inputs(j, float(d)))[rows]
+                        part += 0.5 * step * err
+                # The ideal part stays exact; only the errors come from the reconstruction.
+                total[:, cols] = (shifted + part)[:, cols]
+                continue
+            # Saturation clips the whole reading (input, errors, biases, noise) at the nodes.
+            for j, when in enumerate(nodes):
+                inputs = node_inputs(j, float(d))
+                at = when[rows]
+                b = np.column_stack([np.interp(at, t[lo : hi + 1], bias[:, i]) for i in range(3)])
+                u = inputs.of(sensor)[rows]
+                rate = u + model.deterministic_error(sensor, inputs)[rows] + b + noise_rate
+                part += 0.5 * step * np.clip(rate, -sat.limit, sat.limit)
+            total[:, cols] = part[:, cols]
+        if sat is None:
+            total = total + (0.5 * (bias[:-1] + bias[1:]) + noise_rate) * step
+        q = model.effect_of(sensor, Quantization)
+        if q is not None and (q.step > 0).any():
+            total = self._quantized(state, total, q.step * self.dt_nominal)
+        return total
+
+    def _bias(self, state: _Sensor, t: Array) -> Array:
+        """The random biases' sum at ``t`` (the written intervals' ends), each process continued."""
+        total = np.zeros((len(t), 3))
+        dt = np.diff(t)
+        for p in state.processes:
+            values = np.empty((len(t), 3))
+            e = p.effect
+            if isinstance(e, BiasInstability):
+                values[0] = e.sigma * p.rng.standard_normal(3) if p.value is None else p.value
+                xi = p.rng.standard_normal((len(dt), 3))
+                phi = np.exp(-dt[:, None] / e.tau)
+                drive = e.sigma * np.sqrt(1.0 - phi * phi) * xi
+                _gauss_markov(
+                    phi, drive, values, np.exp(-self.dt_nominal / e.tau) if uniform_steps(t) else None
+                )
+            else:
+                start = np.zeros(3) if p.value is None else p.value
+                steps = e.density * np.sqrt(dt)[:, None] * p.rng.standard_normal((len(dt), 3))
+                values = np.cumsum(np.vstack([start, steps]), axis=0)
+            p.value = values[-1].copy()
+            total += values
+        return total
+
+    @staticmethod
+    def _shifted(inc: Array, t: Array, delay: float, cum0: Array) -> Array:
+        """Increments of the input delayed by ``delay``: differences of the running integral at
+        ``t - delay``, cubic Hermite between samples with the reconstructed rates as slopes; the
+        integral starts from ``cum0``, the sum of every interval before the buffer."""
+        cum = np.cumsum(np.vstack([cum0, inc]), axis=0)
+        rate_at = _reconstruct(inc / np.diff(t)[:, None], t, t)[0]
+        shifted = cubic_hermite(t, cum, rate_at, np.clip(t - delay, t[0], t[-1]))
+        return np.diff(shifted, axis=0)
+
+    @staticmethod
+    def _quantized(state: _Sensor, inc: Array, step: Array) -> Array:
+        """Increments quantised with the remainder carried: the differences of the rounded running sum,
+        continued from the last chunk's."""
+        active = step > 0
+        safe = np.where(active, step, 1.0)
+        running = np.cumsum(np.vstack([state.quant_sum, inc]), axis=0)[1:]
+        rounded = np.round(running / safe) * safe
+        out = np.diff(np.vstack([state.quant_out, rounded]), axis=0)
+        state.quant_sum, state.quant_out = running[-1].copy(), rounded[-1].copy()
+        return np.where(active, out, inc)
+
+
+def _gauss_markov(phi: Array, drive: Array, out: Array, a: Array | None) -> None:
+    """``out[k] = φ out[k-1] + drive[k-1]`` in place from ``out[0]``: with one coefficient per channel
+    ``a`` (regular samples) a linear filter does it in C; else step by step with each interval's ``phi``."""
+    from scipy.signal import lfilter
+
+    if len(phi) == 0:
+        return
+    if a is not None:
+        for i in range(3):
+            out[1:, i], _ = lfilter([1.0], [1.0, -a[i]], drive[:, i], zi=[a[i] * out[0, i]])
+        return
+    for k in range(1, len(out)):
+        out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
+
+
+def _reconstruct(mean: Array, t: Array, when: Array) -> tuple[Array, Array]:
+    """Rate and its derivative at times ``when`` from interval means (n, 3) over ``t``.
+
+    In interval ``k`` the rate is the quadratic whose means over intervals
+    ``k-1, k, k+1`` are the given ones (one-sided at the ends), evaluated at
+    ``s = (when - mid_k) / dt_k``.
+    """
+    n = len(mean)
+    k = np.clip(np.searchsorted(t, when, side="right") - 1, 0, n - 1)
+    dt = (t[1:] - t[:-1])[k][:, None]
+    s = ((when - 0.5 * (t[1:] + t[:-1])[k]) / dt[:, 0])[:, None]
+    prev = mean[np.maximum(k - 1, 0)]
+    nxt = mean[np.minimum(k + 1, n - 1)]
+    cur = mean[k]
+    slope = np.where((k == 0)[:, None] | (k == n - 1)[:, None], (nxt - prev), 0.5 * (nxt - prev))
+    curve = np.where((k == 0)[:, None] | (k == n - 1)[:, None], 0.0, 0.5 * (nxt - 2.0 * cur + prev))
+    value = cur + slope * s + curve * (s * s - 1.0 / 12.0)
+    return value, (slope + 2.0 * curve * s) / dt
+
+
+def _reconstruct_own(mean: Array, dt: Array, s: float) -> tuple[Array, Array]:
+    """:func:`_reconstruct` at local coordinate ``s`` of every interval (by slices, no search)."""
+    n = len(mean)
+    prev = np.vstack([mean[:1], mean[:-1]])
+    nxt = np.vstack([mean[1:], mean[-1:]])
+    slope = 0.5 * (nxt - prev)
+    curve = 0.5 * (nxt - 2.0 * mean + prev)
+    if n > 1:  # one-sided at the two ends, as in _reconstruct
+        slope[0], slope[-1] = nxt[0] - prev[0], nxt[-1] - prev[-1]
+        curve[0] = curve[-1] = 0.0
+    value = mean + slope * s + curve * (s * s - 1.0 / 12.0)
+    return value, (slope + 2.0 * curve * s) / dt[:, None]

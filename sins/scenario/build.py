@@ -1,0 +1,86 @@
+"""A validated scenario turned into the continuous motion it describes (with the geodesy that places it),
+its sample count, and the check that its path stays off the poles."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sins import io
+from sins.errors import SinsInputError
+from sins.nav import earth, motion
+from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
+from sins.scenario.validate import MAX_DURATION_S
+from sins.series import NavSeries
+
+
+def build_motion(scenario: Scenario) -> motion.Motion:
+    """The continuous motion a scenario describes.
+
+    Segments compile to a :class:`~sins.nav.motion.SegmentMotion`; waypoints to a
+    :class:`~sins.nav.motion.WaypointMotion` starting at the first waypoint; a truth file (read here,
+    not when the scenario is loaded) to a :class:`~sins.nav.motion.RecordedMotion`.
+
+    Raises
+    ------
+    SinsInputError
+        the truth file is missing, cannot be read, has fewer than 4 rows or spans more than
+        :data:`~sins.scenario.validate.MAX_DURATION_S`.
+    """
+    spec = scenario.trajectory
+    if isinstance(spec, SegmentsSpec):
+        return motion.SegmentMotion.from_segments(spec.start, spec.segments, spec.oscillations)
+    if isinstance(spec, WaypointsSpec):
+        p = np.array(spec.points_ned)
+        # The path starts at the first waypoint; place it relative to [initial].
+        r_m, r_n = earth.radii(spec.lat)
+        lat0 = spec.lat + p[0, 0] / (r_m + spec.h)
+        lon0 = spec.lon + p[0, 1] / ((r_n + spec.h) * math.cos(spec.lat))
+        return motion.WaypointMotion.from_waypoints(lat0, lon0, spec.h - p[0, 2], p, np.array(spec.speeds))
+    if not spec.path.is_file():
+        raise SinsInputError(f"{scenario.source or scenario.name}: truth.file: no such file: {spec.path}")
+    truth = io.read_truth(spec.path)
+    if len(truth.t) < 4:
+        raise SinsInputError(f"{spec.path}: a truth trajectory needs at least 4 rows to define a motion")
+    span = float(truth.t[-1] - truth.t[0])
+    if not span <= MAX_DURATION_S:
+        raise SinsInputError(
+            f"{spec.path}: the truth spans {span:g} s (column 't'), more than a scenario's "
+            f"{MAX_DURATION_S:g} s"
+        )
+    return motion.RecordedMotion.from_series(truth)
+
+
+def sample_count(scenario: Scenario, motion_: motion.Motion | None = None) -> float:
+    """How many IMU samples the scenario's run has (a float: it may be far beyond any array's size).
+
+    ``motion_`` is the scenario's motion when already built (a truth file is read to build it).
+    """
+    m = build_motion(scenario) if motion_ is None else motion_
+    return float(math.floor((m.t_end - m.t_start) * scenario.rate_hz + 1e-9))
+
+
+#: The largest latitude a trajectory may reach, degrees: the bound of ``[initial] lat_deg``.
+MAX_LAT_DEG = 89.9
+
+
+def check_latitude(scenario: Scenario, truth: NavSeries) -> None:
+    """Refuse a trajectory that passes beyond ±:data:`MAX_LAT_DEG` (over a pole).
+
+    The latitude/longitude mechanisation divides by ``cos(lat)``; across a pole the latitude simply
+    runs on past 90° (a truth file no reader takes back).
+
+    Raises
+    ------
+    SinsInputError
+        naming the scenario, the latitude reached and when.
+    """
+    beyond = np.abs(truth.lat) > math.radians(MAX_LAT_DEG)
+    if beyond.any():
+        k = int(np.argmax(beyond))
+        raise SinsInputError(
+            f"{scenario.source or scenario.name}: the trajectory reaches latitude "
+            f"{math.degrees(float(truth.lat[k])):.4g}° at t = {float(truth.t[k]):g} s; the "
+            f"latitude/longitude mechanisation cannot pass a pole (keep within ±{MAX_LAT_DEG:g}°)"
+        )

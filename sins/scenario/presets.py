@@ -1,0 +1,70 @@
+"""The presets shipped with sins: scenarios, rig procedures and IMU models, found by name.
+
+A name is looked up in one place for both the command line (``sins run car_drive``,
+``sins calibrate 24pos_ratetable --imu tactical``) and the files that name a preset
+(``[imu] model = "tactical"``, ``[compensation] rig = "24pos_ratetable"``).
+"""
+
+from __future__ import annotations
+
+import os
+from importlib import resources
+from pathlib import Path
+from typing import Literal
+
+from sins.errors import SinsInputError
+
+#: A kind of preset: scenarios (``""``, the folder's top level), rig procedures or IMU models.
+PresetKind = Literal["", "rig", "imu"]
+
+# What a kind is called in the messages.
+_WHAT: dict[PresetKind, str] = {"": "scenario", "rig": "rig", "imu": "IMU"}
+
+
+def preset_dir() -> Path:
+    """The folder of the presets shipped with the package (``sins/scenarios``)."""
+    return Path(str(resources.files("sins") / "scenarios"))
+
+
+def presets(kind: PresetKind = "") -> dict[str, Path]:
+    """Shipped presets by name: scenarios (``kind=""``), ``"rig"`` procedures or ``"imu"`` models."""
+    return {p.stem: p for p in sorted((preset_dir() / kind).glob("*.toml"))}
+
+
+def find_preset(
+    name_or_path: str | os.PathLike[str], kind: PresetKind, base: Path | None = None
+) -> Path | None:
+    """A file named by a path or by a preset name of ``kind``; None if it is neither.
+
+    Parameters
+    ----------
+    name_or_path : a path (relative to ``base``) or a preset name
+    kind : which presets a name refers to
+    base : the folder a relative path starts from (the naming file's); None: the working directory
+
+    Returns
+    -------
+    ``base / name_or_path`` if it ends in ``.toml`` or exists (a path is never a name, so a missing
+    ``.toml`` file is reported as such when read); otherwise the preset of that name; otherwise None.
+    """
+    path = Path(name_or_path) if base is None else base / name_or_path
+    if path.suffix == ".toml" or path.exists():
+        return path
+    return presets(kind).get(str(name_or_path))
+
+
+def resolve_preset(name_or_path: str | os.PathLike[str], kind: PresetKind = "") -> Path:
+    """A file path from a path or a preset name of ``kind``, as the command line takes them.
+
+    Raises
+    ------
+    SinsInputError
+        it is neither an existing file nor a preset; the message lists the presets of ``kind``.
+    """
+    path = find_preset(name_or_path, kind)
+    if path is None:
+        known = presets(kind)
+        raise SinsInputError(
+            f"{name_or_path}: no such {_WHAT[kind]} file or preset (presets: {', '.join(known) or 'none'})"
+        )
+    return path

@@ -1,0 +1,341 @@
+"""Scenario files read and checked: TOML tables → a :class:`~sins.scenario.schema.Scenario` in SI units.
+
+Every unknown key, wrong type or impossible value is refused with one line naming the file and the key
+(through :class:`~sins.scenario.toml.TomlKeys`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sins.nav import motion
+from sins.nav.vertical import VERTICAL_MODES
+from sins.scenario.presets import PresetKind, find_preset
+from sins.scenario.schema import CompensationSpec, Scenario, SegmentsSpec, TruthFileSpec, WaypointsSpec
+from sins.scenario.toml import MAX_SEED, Bound, TomlKeys, read_toml
+
+#: The values of ``[[segment]] type``.
+SEGMENT_TYPES = ("hold", "accelerate", "turn", "climb", "attitude")
+#: A segment's ramp when ``ramp_s`` is not given (a quarter of a shorter segment), s.
+DEFAULT_RAMP_S = 1.0
+#: The shortest ramp, s: :data:`sins.nav.motion.MIN_RAMP_S`. The ramp's acceleration ``delta/ramp``
+#: (and its jerk, ``delta/ramp²``) grows without bound as the ramp shrinks.
+MIN_RAMP_S = motion.MIN_RAMP_S
+#: The longest scenario, s (31.7 years): time stamps keep a resolution of 0.12 µs (the spacing of
+#: doubles near 1e9), 1/100 of the shortest sample interval (100 kHz).
+MAX_DURATION_S = 1e9
+#: The fastest vehicle, m/s (Mach 29): beyond it the motion is no longer near the ellipsoid.
+MAX_SPEED_MPS = 1e4
+#: The slowest waypoint speed, m/s: the longest leg (2.8e6 m) then lasts under 9 years.
+MIN_WAYPOINT_SPEED_MPS = 0.01
+#: An oscillation's period spans at least this many IMU samples: Simpson's rule then integrates it to
+#: a relative error of (2π/10)⁴/2880 = 5e-5 per interval; a shorter period aliases.
+MIN_PERIOD_SAMPLES = 10
+#: The damp loop's time constant spans at least this many IMU samples: the integrator's explicit
+#: update of the loop is unstable below one sample; two keep a margin.
+MIN_TAU_SAMPLES = 2
+
+#: Static bounds of every numeric scenario field, by its place (``segment.duration_s`` stands for
+#: every segment's). The bounds that depend on another field are checked beside them (see the guide).
+SCENARIO_BOUNDS: dict[str, Bound] = {
+    "imu.rate_hz": Bound(1.0, 100000.0, "Hz"),
+    "imu.times_s": Bound(-MAX_DURATION_S, MAX_DURATION_S, "s"),
+    "imu.temps_degc": Bound(-100.0, 200.0, "°C", "an IMU's operating range, with margin"),
+    "compensation.validation": Bound(0.0, 1.0, "", "a fraction", low_open=True, high_open=True),
+    "navigation.vertical_tau_s": Bound(0.0, MAX_DURATION_S, "s", low_open=True),
+    "initial.lat_deg": Bound(-89.9, 89.9, "°", "the latitude/longitude mechanisation is singular at a pole"),
+    "initial.lon_deg": Bound(-180.0, 360.0, "°"),
+    "initial.alt_m": Bound(-1000.0, 100000.0, "m"),
+    "initial.speed_mps": Bound(0.0, MAX_SPEED_MPS, "m/s"),
+    "initial.roll_deg": Bound(-180.0, 180.0, "°"),
+    "initial.pitch_deg": Bound(-90.0, 90.0, "°", low_open=True, high_open=True),
+    "initial.yaw_deg": Bound(-360.0, 360.0, "°"),
+    "segment.duration_s": Bound(0.0, MAX_DURATION_S, "s", low_open=True),
+    "segment.ramp_s": Bound(
+        MIN_RAMP_S, MAX_DURATION_S / 2, "s", "below it the acceleration delta/ramp is unbounded"
+    ),
+    "segment.to_speed_mps": Bound(0.0, MAX_SPEED_MPS, "m/s"),
+    "segment.delta_speed_mps": Bound(-MAX_SPEED_MPS, MAX_SPEED_MPS, "m/s"),
+    "segment.rate_dps": Bound(-360.0, 360.0, "°/s"),
+    "segment.angle_deg": Bound(-89.0, 89.0, "°", "a climb's flight-path angle"),
+    "segment.roll_deg": Bound(-360.0, 360.0, "°"),
+    "segment.pitch_deg": Bound(-360.0, 360.0, "°"),
+    "segment.yaw_deg": Bound(-360.0, 360.0, "°"),
+    "oscillation.amplitude_deg": Bound(0.0, 89.0, "°"),
+    "oscillation.amplitude_m": Bound(0.0, 1000.0, "m"),
+    "oscillation.period_s": Bound(0.0, MAX_DURATION_S, "s", low_open=True),
+    "oscillation.phase_deg": Bound(-360.0, 360.0, "°"),
+    "waypoint.north_m": Bound(-1e6, 1e6, "m", "the radii of the first waypoint are used throughout"),
+    "waypoint.east_m": Bound(-1e6, 1e6, "m"),
+    "waypoint.up_m": Bound(-1e5, 1e5, "m"),
+    "waypoint.speed_mps": Bound(0.0, MAX_SPEED_MPS, "m/s", low_open=True),
+}
+_B = SCENARIO_BOUNDS
+
+
+def load(path: str | os.PathLike[str]) -> Scenario:
+    """Read and validate a scenario file.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and the key (or TOML line) at fault.
+    """
+    path = Path(path)
+    return from_dict(read_toml(path, "scenario"), source=path)
+
+
+def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
+    """Validate a parsed scenario table (what :func:`load` does after parsing).
+
+    Parameters
+    ----------
+    data : the parsed TOML document
+    source : the file it came from: names it in the errors, and relative paths start from its folder
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and the key at fault.
+    """
+    name_of_source = str(source) if source else "<scenario>"
+    top = TomlKeys(name_of_source, "", data)
+    name = top.string("name", default=source.stem if source else "scenario")
+    description = top.string("description", default="")
+    imu = top.sub("imu")
+    rate_hz = imu.bounded("rate_hz", _B["imu.rate_hz"], 100.0)
+    base = source.parent if source else Path(".")
+    imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
+    imu_seed = imu.integer("seed", 0, high=MAX_SEED)
+    temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))
+    if imu.has("temps_degc"):
+        times = imu.bounded_numbers("times_s", _B["imu.times_s"], [0.0])
+        temps = imu.bounded_numbers("temps_degc", _B["imu.temps_degc"])
+        if len(times) != len(temps) or any(b <= a for a, b in itertools.pairwise(times)):
+            raise imu.error("times_s must increase and match temps_degc in length", "times_s")
+        temperature = (tuple(times), tuple(temps))
+    imu.done()
+    compensation = None
+    if top.has("compensation"):
+        comp = top.sub("compensation")
+        if imu_model is None:
+            raise comp.error("needs an IMU model to compensate: give [imu] model")
+        from sins.compensation import VARIANTS
+
+        names = comp.strings("strategies", ["none", "regression", "mlp", "kohonen"], tuple(VARIANTS))
+        compensation = CompensationSpec(
+            rig=_preset_or_path(comp, "rig", "rig", base),
+            validation=comp.bounded("validation", _B["compensation.validation"], 0.3),
+            seed=comp.integer("seed", 0, high=MAX_SEED),
+            strategies=tuple(dict.fromkeys(["oracle", *names])),  # the oracle is every table's reference
+        )
+        comp.done()
+    nav = top.sub("navigation")
+    vertical = nav.choice("vertical", VERTICAL_MODES, "free")
+    tau = nav.bounded("vertical_tau_s", _B["navigation.vertical_tau_s"], 10.0)
+    if tau < MIN_TAU_SAMPLES / rate_hz:
+        raise nav.error(
+            f"must be at least {MIN_TAU_SAMPLES} IMU samples ({MIN_TAU_SAMPLES / rate_hz:g} s at "
+            f"{rate_hz:g} Hz): a shorter damp loop is unstable, got {tau:g}",
+            "vertical_tau_s",
+        )
+    nav.done()
+
+    kinds = [k for k in ("segment", "waypoint", "truth") if top.has(k)]
+    if len(kinds) != 1:
+        found = ", ".join(kinds) or "none"
+        raise top.error(
+            "give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table "
+            f"(found {found})"
+        )
+    trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
+    if kinds[0] == "segment":
+        trajectory = _segments(top, rate_hz)
+    elif kinds[0] == "waypoint":
+        trajectory = _waypoints(top)
+    else:
+        truth = top.sub("truth")
+        file = truth.string("file")
+        truth.done()
+        base = source.parent if source else Path(".")
+        trajectory = TruthFileSpec(path=(base / file))
+        if top.has("initial"):
+            raise top.error(
+                "not used with a [truth] trajectory (the truth's first row is the start)", "initial"
+            )
+    top.done()
+    return Scenario(
+        name=name,
+        description=description,
+        source=source,
+        rate_hz=rate_hz,
+        trajectory=trajectory,
+        vertical=vertical,
+        vertical_tau_s=tau,
+        imu_model=imu_model,
+        imu_seed=imu_seed,
+        compensation=compensation,
+        temperature=temperature,
+    )
+
+
+def _preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Path:
+    """A file named by ``key``: a path relative to the scenario, or a preset name of ``kind``."""
+    value = keys.string(key)
+    path = find_preset(value, kind, base)
+    if path is None:
+        raise keys.error(f"no such file or {kind} preset: {value!r}", key)
+    return path
+
+
+def _position(init: TomlKeys) -> tuple[float, float, float]:
+    lat = init.bounded("lat_deg", _B["initial.lat_deg"])
+    lon = init.bounded("lon_deg", _B["initial.lon_deg"], 0.0)
+    alt = init.bounded("alt_m", _B["initial.alt_m"], 0.0)
+    return math.radians(lat), math.radians(lon), alt
+
+
+def _segments(top: TomlKeys, rate_hz: float) -> SegmentsSpec:
+    init = top.sub("initial")
+    lat, lon, alt = _position(init)
+    start = motion.Start(
+        lat=lat,
+        lon=lon,
+        h=alt,
+        speed=init.bounded("speed_mps", _B["initial.speed_mps"], 0.0),
+        roll=math.radians(init.bounded("roll_deg", _B["initial.roll_deg"], 0.0)),
+        pitch=math.radians(init.bounded("pitch_deg", _B["initial.pitch_deg"], 0.0)),
+        yaw=math.radians(init.bounded("yaw_deg", _B["initial.yaw_deg"], 0.0)),
+    )
+    init.done()
+    speed = start.speed
+    segments: list[motion.Segment] = []
+    total = 0.0
+    for seg in top.tables("segment"):
+        kind = seg.string("type", choices=SEGMENT_TYPES)
+        duration = seg.bounded("duration_s", _B["segment.duration_s"])
+        if duration < 2 * MIN_RAMP_S:
+            raise seg.error(
+                f"must be at least {2 * MIN_RAMP_S:g} s (a ramp in and out of at least {MIN_RAMP_S:g} s "
+                f"each), got {duration:g}",
+                "duration_s",
+            )
+        total += duration
+        if total > MAX_DURATION_S:
+            raise seg.error(
+                f"the segments so far last {total:g} s, more than a scenario's {MAX_DURATION_S:g} s",
+                "duration_s",
+            )
+        ramp = 0.0
+        if kind != "hold":
+            default = max(MIN_RAMP_S, min(DEFAULT_RAMP_S, duration / 4))
+            ramp = seg.bounded("ramp_s", _B["segment.ramp_s"], default)
+            if ramp > duration / 2:
+                raise seg.error(
+                    f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s"
+                )
+        plateau = duration - ramp
+        if kind == "hold":
+            segments.append(motion.Hold(duration))
+        elif kind == "accelerate":
+            delta = _exactly_one(seg, ("to_speed_mps", "delta_speed_mps"))
+            if delta == "to_speed_mps":
+                change = seg.bounded("to_speed_mps", _B["segment.to_speed_mps"]) - speed
+            else:
+                change = seg.bounded("delta_speed_mps", _B["segment.delta_speed_mps"])
+            if speed + change < -1e-9:
+                raise seg.error(f"the speed would become negative ({speed + change:g} m/s)", delta)
+            if speed + change > MAX_SPEED_MPS:
+                raise seg.error(
+                    f"the speed would become {speed + change:g} m/s, above {MAX_SPEED_MPS:g} m/s", delta
+                )
+            speed += change
+            segments.append(motion.Accelerate(duration, change, ramp))
+        elif kind == "turn":
+            which = _exactly_one(seg, ("rate_dps", "angle_deg"))
+            if which == "rate_dps":
+                rate = math.radians(seg.bounded("rate_dps", _B["segment.rate_dps"]))
+            else:
+                rate = math.radians(seg.number("angle_deg")) / plateau
+                if abs(rate) > math.radians(360.0):
+                    raise seg.error(f"turns faster than 360 °/s over {plateau:g} s", "angle_deg")
+            segments.append(motion.Turn(duration, rate, ramp, seg.boolean("coordinated", False)))
+        elif kind == "climb":
+            angle = seg.bounded("angle_deg", _B["segment.angle_deg"])
+            segments.append(motion.Climb(duration, math.radians(angle), ramp))
+        else:
+            d = [
+                math.radians(seg.bounded(k, _B[f"segment.{k}"], 0.0))
+                for k in ("roll_deg", "pitch_deg", "yaw_deg")
+            ]
+            segments.append(motion.Rotate(duration, d[0], d[1], d[2], ramp))
+        seg.done()
+    if not segments:
+        raise top.error("needs at least one [[segment]]", "segment")
+    oscillations = []
+    for osc in top.tables("oscillation"):
+        channel = osc.choice("channel", motion.OSCILLATION_CHANNELS)
+        if channel == "heave":
+            amplitude = osc.bounded("amplitude_m", _B["oscillation.amplitude_m"])
+        else:
+            amplitude = math.radians(osc.bounded("amplitude_deg", _B["oscillation.amplitude_deg"]))
+        period = osc.bounded("period_s", _B["oscillation.period_s"])
+        if period < MIN_PERIOD_SAMPLES / rate_hz:
+            raise osc.error(
+                f"must be at least {MIN_PERIOD_SAMPLES} IMU samples ({MIN_PERIOD_SAMPLES / rate_hz:g} s at "
+                f"{rate_hz:g} Hz), or the increments cannot resolve it; got {period:g}",
+                "period_s",
+            )
+        oscillations.append(
+            motion.Oscillation(
+                channel=channel,
+                amplitude=amplitude,
+                period=period,
+                phase=math.radians(osc.bounded("phase_deg", _B["oscillation.phase_deg"], 0.0)),
+            )
+        )
+        osc.done()
+    return SegmentsSpec(start=start, segments=tuple(segments), oscillations=tuple(oscillations))
+
+
+def _exactly_one(seg: TomlKeys, keys: tuple[str, str]) -> str:
+    given = [k for k in keys if seg.has(k)]
+    if len(given) != 1:
+        raise seg.error(f"give exactly one of {' or '.join(keys)}")
+    return given[0]
+
+
+def _waypoints(top: TomlKeys) -> WaypointsSpec:
+    init = top.sub("initial")
+    lat, lon, alt = _position(init)
+    init.done()
+    if top.has("oscillation"):
+        raise top.error("oscillations are only for [[segment]] trajectories", "oscillation")
+    points, speeds = [], []
+    for wp in top.tables("waypoint"):
+        north = wp.bounded("north_m", _B["waypoint.north_m"], 0.0)
+        east = wp.bounded("east_m", _B["waypoint.east_m"], 0.0)
+        points.append((north, east, -wp.bounded("up_m", _B["waypoint.up_m"], 0.0)))
+        speed = wp.bounded("speed_mps", _B["waypoint.speed_mps"])
+        if speed < MIN_WAYPOINT_SPEED_MPS:
+            raise wp.error(
+                f"must be at least {MIN_WAYPOINT_SPEED_MPS:g} m/s (a slower leg of the path could last "
+                f"decades), got {speed:g}",
+                "speed_mps",
+            )
+        speeds.append(speed)
+        wp.done()
+    if len(points) < 2:
+        raise top.error("needs at least two [[waypoint]] tables", "waypoint")
+    p = np.array(points)
+    gaps = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    if (gaps < 1e-3).any():
+        i = int(np.argmax(gaps < 1e-3)) + 2
+        raise top.error(f"waypoint {i} is at the same place as waypoint {i - 1}", "waypoint")
+    return WaypointsSpec(lat=lat, lon=lon, h=alt, points_ned=tuple(points), speeds=tuple(speeds))

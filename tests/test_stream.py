@@ -1,0 +1,188 @@
+"""Streamed corrupted runs (issue 20): the IMU model carried from chunk to chunk gives the whole array's
+readings to the last bit, and ``sins run`` with an IMU model integrates them chunk by chunk, keeping only
+what is bounded whatever the duration.
+
+The references are independent of the streamed path: the whole array corrupted in one call, and the
+whole-array run assembled here from the library's pieces (simulate, corrupt, correct, integrate,
+compare), as ``sins run`` did before it streamed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sins import compensation, pipeline, scenario
+from sins.imu import Quantization, TimeOffset, spec
+from sins.imu.stream import IncrementStream
+from sins.nav import motion, trajectory
+from sins.nav.metrics import BlockMeans, block_means
+from sins.series import ImuIncrements
+
+SEED = 20261125
+D = np.radians
+
+#: Every effect of the library on both sensors (typical sizes, twice) beside a tactical unit's baseline;
+#: the time offsets and the accelerometers' quantization are added by hand (delays of either sign).
+EVERY_EFFECT = (
+    "gyro.scale_nonlinearity", "gyro.scale_asymmetry", "gyro.g2_sensitivity", "gyro.temperature_bias",
+    "gyro.temperature_scale", "gyro.bias_instability", "gyro.rate_random_walk",
+    "gyro.quantization", "accel.scale_nonlinearity", "accel.scale_asymmetry", "accel.temperature_bias",
+    "accel.temperature_scale", "accel.size_effect", "accel.bias_instability",
+    "accel.rate_random_walk", "accel.saturation",
+)  # fmt: skip
+
+
+def _drive(rate_hz: float = 100.0) -> tuple[ImuIncrements, np.ndarray]:
+    """50 s of turning and accelerating (ideal increments) and a warming cabin."""
+    car = motion.SegmentMotion.from_segments(
+        motion.Start(lat=D(45.0), lon=D(7.6), h=250.0, yaw=D(30.0)),
+        [
+            motion.Hold(5),
+            motion.Accelerate(10, delta_speed=15.0, ramp=2.0),
+            motion.Turn(20, rate=D(30.0), ramp=1.0),
+            motion.Climb(15, angle=D(5.0), ramp=2.0),
+        ],
+    )
+    _, imu = trajectory.generate(car, rate_hz=rate_hz)
+    return imu, np.linspace(10.0, 35.0, len(imu.t))
+
+
+def _model(saturation_dps: float | None = None, delays_s: tuple[float, float] = (0.013, -0.007)):
+    rng = np.random.default_rng(SEED)
+    effects = [spec.typical_effect(name, rng, 2.0) for name in EVERY_EFFECT]
+    effects += [TimeOffset("gyro", np.array([delays_s[0], 0.0, -0.002])),
+                TimeOffset("accel", np.array([0.0, delays_s[1], 0.004]))]  # fmt: skip
+    effects += [Quantization("accel", np.full(3, 2e-3))]
+    model = spec.draw_unit("tactical", 3).with_effects(*effects)
+    if saturation_dps is not None:
+        from sins.imu import Saturation
+
+        model = model.with_effects(Saturation("gyro", np.full(3, D(saturation_dps))))
+    return model
+
+
+def _streamed(model, imu: ImuIncrements, temp: np.ndarray, sizes: list[int], seed: int = 7) -> ImuIncrements:
+    stream = IncrementStream(model, seed, 0.01)
+    parts, k = [], 0
+    for size in sizes:
+        end = min(len(imu), k + size)
+        if end == k:
+            break
+        chunk = ImuIncrements(imu.t[k : end + 1], imu.dtheta_b[k:end], imu.dv_b[k:end])
+        parts.append(stream.push(chunk, temp[k : end + 1]))
+        k = end
+    assert k == len(imu)
+    parts.append(stream.finish())
+    t = np.concatenate([parts[0].t] + [p.t[1:] for p in parts[1:] if len(p.t)])
+    return ImuIncrements(t, np.vstack([p.dtheta_b for p in parts]), np.vstack([p.dv_b for p in parts]))
+
+
+@pytest.mark.parametrize("saturation_dps", [None, 20.0])
+def test_a_stream_in_chunks_of_any_size_reads_as_the_whole_array_to_the_last_bit(saturation_dps):
+    """Chunks of 1 to 700 intervals, across delays of either sign (lead and lag), clipping, carried
+    quantization, both random biases and the temperature: every reading equal, not merely close."""
+    imu, temp = _drive()
+    model = _model(saturation_dps)
+    whole = model.corrupt_increments(imu, temp=temp, seed=7, dt_nominal=0.01)
+    # The effects matter: the readings differ from the ideal ones by more than rounding.
+    assert np.abs(whole.dtheta_b - imu.dtheta_b).max() > 1e-6
+    rng = np.random.default_rng(SEED + 1)
+    for sizes in ([1] * 40 + [len(imu)], list(rng.integers(1, 700, 200)), [len(imu) // 2, len(imu)]):
+        out = _streamed(model, imu, temp, [int(s) for s in sizes])
+        np.testing.assert_array_equal(out.t, imu.t)
+        np.testing.assert_array_equal(out.dtheta_b, whole.dtheta_b)
+        np.testing.assert_array_equal(out.dv_b, whole.dv_b)
+
+
+def test_a_stream_refuses_chunks_that_do_not_follow_each_other():
+    imu, temp = _drive()
+    stream = IncrementStream(_model(), 1, 0.01)
+    stream.push(ImuIncrements(imu.t[:11], imu.dtheta_b[:10], imu.dv_b[:10]), temp[:11])
+    with pytest.raises(ValueError, match="follow each other"):
+        stream.push(ImuIncrements(imu.t[12:21], imu.dtheta_b[12:20], imu.dv_b[12:20]), temp[12:21])
+    with pytest.raises(ValueError, match="dt_nominal"):
+        IncrementStream(_model(), 1, 0.0)
+
+
+def test_block_means_fed_in_chunks_are_the_whole_arrays():
+    rng = np.random.default_rng(SEED + 2)
+    values = rng.normal(size=(1003, 4))
+    acc = BlockMeans(10)
+    k = 0
+    for size in rng.integers(0, 37, 200):
+        acc.add(values[k : k + size])
+        k += size
+    acc.add(values[k:])
+    np.testing.assert_allclose(acc.means(), block_means(values, 10), rtol=1e-13, atol=1e-15)
+
+
+def _whole_array_run(
+    sc: scenario.Scenario, strategies: dict[str, compensation.Strategy]
+) -> dict[str, object]:
+    """The run as ``sins run`` made it before it streamed: every array whole."""
+    assert sc.imu_model is not None
+    nav_model = scenario.load_imu(sc.imu_model).model(run_seed=sc.imu_seed)
+    truth, ideal = pipeline.simulate(sc)
+    temp = np.interp(ideal.t, *sc.temperature)
+    corrupted = nav_model.corrupt_increments(ideal, temp=temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
+    out = {}
+    for name, strategy in strategies.items():
+        corrected = strategy.correct_increments(corrupted, temp)
+        out[name] = pipeline.navigate(corrected, truth, sc.vertical, sc.vertical_tau_s).summary
+    return out
+
+
+def test_sins_run_with_an_imu_model_streams_to_the_whole_arrays_final_errors(tmp_path):
+    """The shipped drive's first 141 s at 100 Hz (over one chunk) with a tactical unit, regression
+    fitted on a rig session and the oracle: the streamed run's final and largest errors are the whole-array
+    run's exactly, its RMS to the rounding of a sum taken in chunks."""
+    doc = scenario.read_toml(pipeline.resolve_scenario("car_drive_compensated"), "scenario")
+    doc["segment"] = doc["segment"][:6]
+    doc["compensation"]["strategies"] = ["none", "regression", "oracle"]
+    sc = scenario.from_dict(doc, pipeline.resolve_scenario("car_drive_compensated"))
+    run = pipeline.run_scenario(sc)
+    assert run.samples > trajectory.CHUNK
+    nav_model = scenario.load_imu(sc.imu_model).model(run_seed=sc.imu_seed)  # type: ignore[arg-type]
+    strategies = {"none": compensation.make("none"), "oracle": compensation.Oracle(nav_model)}
+    strategies["regression"] = _refit_regression(sc)
+    reference = _whole_array_run(sc, strategies)
+    for name, summary in reference.items():
+        got = run.runs[name].summary
+        for field in dataclasses.fields(summary):
+            a, b = getattr(got, field.name), getattr(summary, field.name)
+            if field.name.startswith(("final_", "max_", "duration", "drift")):
+                assert a == b, (name, field.name, a, b)
+            else:
+                assert a == pytest.approx(b, rel=1e-12), (name, field.name)
+
+
+def _refit_regression(sc: scenario.Scenario) -> compensation.Strategy:
+    from sins.imu import calibration
+
+    assert sc.compensation is not None and sc.imu_model is not None
+    rig_model = scenario.load_imu(sc.imu_model).model(run_seed=sc.compensation.seed)
+    data = calibration.simulate_rig(
+        scenario.load_rig(sc.compensation.rig), rig_model, seed=sc.compensation.seed
+    )
+    fit, _ = data.split(sc.compensation.validation)
+    return compensation.make("regression").fit(fit)
+
+
+def test_a_long_runs_thinned_series_stay_bounded():
+    """Six hours at 100 Hz keep no more than MAX_KEPT samples a series: memory does not grow with the
+    duration (the summaries still use every sample)."""
+    sc = scenario.from_dict(
+        {
+            "name": "six_hours",
+            "imu": {"rate_hz": 100},
+            "initial": {"lat_deg": 45.0, "lon_deg": 7.6, "alt_m": 250.0},
+            "segment": [{"type": "hold", "duration_s": 6 * 3600.0}],
+        }
+    )
+    run = pipeline.run_scenario(sc)
+    assert run.samples == 6 * 3600 * 100
+    assert len(run.truth.t) <= pipeline.MAX_KEPT + 2
+    assert len(run.runs["none"].errors.t) <= pipeline.MAX_KEPT + 2
