@@ -10,7 +10,7 @@ import math
 import os
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
@@ -213,7 +213,7 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
     if samples % keep_every and last_truth is not None:
         truth_kept.append(last_truth)
     out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in runs.items()}
-    sensor_t = runs["none"].mid_t.means()[:, 0]
+    sensor_t = step.mid_t.means()[:, 0]
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t)
 
 
@@ -301,7 +301,6 @@ class _StreamedRun:
         self.kept = [first]
         self.last: NavSeries = first
         self.sensor = BlockMeans(keep_every)
-        self.mid_t = BlockMeans(keep_every)
 
     def result(self, residual: dict[str, float] | None, samples: int, keep_every: int) -> StrategyRun:
         """The run's thinned solution and errors, its summary over every sample."""
@@ -323,6 +322,10 @@ class _ChunkStep:
     keep_every: int
     h_prev: float  # the truth's height at the last integrated sample (the vertical aiding's start)
     samples: int = 0
+    mid_t: BlockMeans = field(init=False)  # the block means' times: the intervals' mid-times
+
+    def __post_init__(self) -> None:
+        self.mid_t = BlockMeans(self.keep_every)
 
     def __call__(self, corrupted: ImuIncrements) -> None:
         n = len(corrupted)
@@ -344,7 +347,7 @@ class _ChunkStep:
             run.kept.append(solution.at(keep))
             run.last = solution.at(-1)
             run.sensor.add((np.hstack([corrected.dtheta_b, corrected.dv_b]) - ideal) / dt)
-            run.mid_t.add(0.5 * (corrected.t[:-1] + corrected.t[1:])[:, None])
+        self.mid_t.add(0.5 * (corrupted.t[:-1] + corrupted.t[1:])[:, None])
         self.truth_kept.append(truth.at(keep))
         self.samples += n
         self.h_prev = float(truth.h[-1])
