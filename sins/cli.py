@@ -370,12 +370,45 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _cmd_gap(args: argparse.Namespace) -> int:
-    from sins import gap, imu, io, pipeline, scenario
+    from sins import gap, io, pipeline
 
     if args.rerun:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
+    data, truth, model = _gap_inputs(args)
+    with _progress_bar("diagnosing", "candidate") as bar:
+
+        def progress(name: str) -> None:
+            assert bar is not None  # passed only when there is a bar
+            bar.set_postfix_str(name)
+            _advance(bar, bar.n + 1)
+
+        report = gap.diagnose(data, args.holdout, model, progress if bar is not None else None)
+    _print_gap_report(args, data, report)
+    document = {"recording": str(args.recording), **report.to_dict()}
+    if truth is not None and not report.unreferenced:
+        nav = pipeline.gap_navigation(data, truth, report)
+        print(
+            "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
+            f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with the "
+            f"model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
+            f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
+            f"{nav['sim_to_real_after_m']:.3f} m after"
+        )
+        document["navigation"] = nav
+    if args.json:
+        io.write_json(args.json, document)
+    if args.rerun:
+        viz.save_gap(report, args.rerun)
+        print(f"wrote {args.rerun}")
+    return 0
+
+
+def _gap_inputs(args: argparse.Namespace) -> tuple[Any, Any, tuple[str, ...]]:
+    """``sins gap``'s recording (a file, or a dataset by name), its truth if any, and the model's effects."""
+    from sins import imu, io, pipeline, scenario
+
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("gap: give a RECORDING.csv or --dataset NAME (one of them)")
     if not 0.0 < args.holdout < 1.0:
@@ -395,15 +428,14 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.model:
         spec = scenario.load_imu(scenario.resolve_preset(args.model, "imu"))
         model = tuple(e.name for e in spec.model().effects)
+    return data, truth, model
 
-    with _progress_bar("diagnosing", "candidate") as bar:
 
-        def progress(name: str) -> None:
-            assert bar is not None  # passed only when there is a bar
-            bar.set_postfix_str(name)
-            _advance(bar, bar.n + 1)
+def _print_gap_report(args: argparse.Namespace, data: Any, report: Any) -> None:
+    """The report as ``sins gap`` prints it: the rows, the residuals against the floor, where the gap
+    is, the candidates, the diagnosis and what is left unexplained."""
+    from sins import gap
 
-        report = gap.diagnose(data, args.holdout, model, progress if bar is not None else None)
     _, held_rows = report.rows
     skipped = (
         f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""
@@ -443,23 +475,6 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
-    document = {"recording": str(args.recording), **report.to_dict()}
-    if truth is not None and not report.unreferenced:
-        nav = pipeline.gap_navigation(data, truth, report)
-        print(
-            "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
-            f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with the "
-            f"model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
-            f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
-            f"{nav['sim_to_real_after_m']:.3f} m after"
-        )
-        document["navigation"] = nav
-    if args.json:
-        io.write_json(args.json, document)
-    if args.rerun:
-        viz.save_gap(report, args.rerun)
-        print(f"wrote {args.rerun}")
-    return 0
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
