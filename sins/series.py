@@ -254,10 +254,12 @@ class CalibrationData:
         A row is *steady* where its reference rate and force moved from the previous row's by less
         than :data:`STEADY_RATE` and :data:`STEADY_FORCE` (static holds, constant table rates) and
         *moving* otherwise (transitions, tumbling, a drive); rows without a reference are a third
-        kind. A stretch is a run of one kind; a run shorter than :data:`STRETCH_SHORTEST_S` (a
-        reference that flickers about the threshold) joins the stretch before it, and one longer
-        than ``longest_s`` is cut into equal parts no longer, so that continuous motion is withheld
-        in interleaved blocks rather than at its end.
+        kind. A stretch is a run of one kind, shorter runs than :data:`STRETCH_SHORTEST_S` aside: a
+        short steady run inside motion is part of the motion; a short moving run joins the stretch
+        before it, and ends it if the reference then holds another level (a rate stepped without a
+        ramp), not if it returns to the same one (a reference flickering about the threshold). A
+        stretch longer than ``longest_s`` is cut into equal parts no longer, so that continuous
+        motion is withheld in interleaved blocks rather than at its end.
         """
         n = len(self.t)
         if n < 2:
