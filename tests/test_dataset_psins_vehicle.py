@@ -225,7 +225,7 @@ def _write(root: Path, **variables: Any) -> Path:
     return path
 
 
-def _synthetic() -> dict[str, np.ndarray]:
+def synthetic_recording() -> dict[str, np.ndarray]:
     """20 s of a level unit facing north, swaying about all three axes: MEMS at 100 Hz, FOG-INS at 10 Hz.
 
     Small angles, so the body rates are the Euler-angle rates (PSINS order: x pitch, y roll, z yaw).
@@ -268,7 +268,7 @@ def test_gap_navigates_the_simulated_unit_beside_the_real_one(
 
 def test_synthetic_file_reads(tmp_path: Path) -> None:
     # The refusals below damage this file one way at a time; whole, it reads.
-    _write(tmp_path, **_synthetic())
+    _write(tmp_path, **synthetic_recording())
     data, nav = read_psins_vehicle(tmp_path)
     assert nav is not None and len(nav) == 200
     assert np.allclose(data.accel, [0.0, 0.0, -9.8])
@@ -287,7 +287,7 @@ def test_missing_folder_or_file(tmp_path: Path) -> None:
 
 
 def test_corrupt_files(tmp_path: Path) -> None:
-    path = _write(tmp_path, **_synthetic())
+    path = _write(tmp_path, **synthetic_recording())
     whole = path.read_bytes()
     path.write_bytes(b"not a mat file at all" * 20)
     refusal(lambda: read_psins_vehicle(tmp_path), str(path), "not a MATLAB 5 MAT file")
@@ -298,7 +298,7 @@ def test_corrupt_files(tmp_path: Path) -> None:
 
 
 def test_bad_variables(tmp_path: Path) -> None:
-    good = _synthetic()
+    good = synthetic_recording()
     _write(tmp_path, mimu=good["mimu"])
     refusal(lambda: read_psins_vehicle(tmp_path), "no variable 'fogavp'")
     _write(tmp_path, mimu=good["mimu"][:, :6], fogavp=good["fogavp"])

@@ -46,6 +46,7 @@ import pytest
 import scipy.io
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
+from test_dataset_psins_vehicle import synthetic_recording
 
 from sins.cli import main
 from sins.errors import SinsInputError
@@ -651,22 +652,6 @@ def _laser_text() -> str:
     return _LASER_HEADER + rows
 
 
-def _vehicle_mat() -> dict[str, np.ndarray]:
-    """20 s of a level unit swaying about three axes (as tests/test_dataset_psins_vehicle.py)."""
-    amplitude = np.array([0.05, 0.2, 0.02])
-    frequency = 2.0 * np.pi * np.array([0.3, 0.2, 0.13])
-    t = np.arange(2001) * 0.01
-    mimu = np.zeros((2001, 7))
-    mimu[1:, 0:3] = np.diff(amplitude * np.sin(frequency * t[:, None]), axis=0)
-    mimu[:, 5] = 9.8 * 0.01
-    mimu[:, 6] = t
-    t_fog = np.arange(1, 201) * 0.1
-    avp = np.zeros((200, 10))
-    avp[:, 0:3] = amplitude * np.sin(frequency * t_fog[:, None])
-    avp[:, 6], avp[:, 7], avp[:, 8], avp[:, 9] = 0.6, 1.9, 100.0, t_fog
-    return {"mimu": mimu, "fogavp": avp}
-
-
 def _broad_mat(n: int = 600) -> dict[str, Any]:
     """A short BROAD-like trial: a turning unit with optical orientation and position, some NaN rows."""
     from scipy.spatial.transform import Rotation
@@ -731,7 +716,7 @@ def target_datasets(b: Base, data: st.DataObject) -> None:
         else:
             folder = root / (PSINS_VEHICLE_FOLDER if name == "psins_vehicle" else BROAD_FOLDER)
             folder.mkdir()
-            content = _vehicle_mat() if name == "psins_vehicle" else _broad_mat()
+            content = synthetic_recording() if name == "psins_vehicle" else _broad_mat()
             path = folder / (PSINS_VEHICLE_FILE if name == "psins_vehicle" else f"{BROAD_TRIALS[0]}.mat")
             if data.draw(st.booleans(), label="values"):
                 key = data.draw(
