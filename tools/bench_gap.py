@@ -53,6 +53,7 @@ import os
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -311,6 +312,27 @@ def _report(names: list[str], cases: list[dict[str, Any]]) -> None:
         _confusion(effects, results)
 
 
+def run_cases(
+    run: Callable[..., dict[str, Any]],
+    jobs: list[tuple[Any, ...]],
+    processes: int,
+    line: Callable[[dict[str, Any]], str] | None = None,
+) -> list[dict[str, Any]]:
+    """``run(*job)`` for every job on ``processes`` processes, in order, with a bar on a terminal only
+    (logs get the summary) and, given ``line``, each case printed above it; then the total time."""
+    cases = []
+    started = time.perf_counter()
+    bar = tqdm.tqdm(total=len(jobs), unit=" case", file=sys.stderr, disable=not sys.stderr.isatty())
+    with concurrent.futures.ProcessPoolExecutor(processes) as pool, bar:
+        for case in pool.map(run, *zip(*jobs, strict=True)):
+            cases.append(case)
+            bar.update()
+            if line is not None:
+                bar.write(line(case))
+    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {processes} processes\n")
+    return cases
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
@@ -352,17 +374,7 @@ def main() -> None:
         for seed in range(args.seeds if name in gap.CANDIDATES else (args.control_seeds or args.seeds))
         for scale in (args.scales if name in gap.CANDIDATES else [1.0])
     ]
-    cases = []
-    started = time.perf_counter()
-    # A bar on a terminal only (logs get the summary); --verbose prints each case above it.
-    bar = tqdm.tqdm(total=len(jobs), unit=" case", file=sys.stderr, disable=not sys.stderr.isatty())
-    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool, bar:
-        for case in pool.map(run_case, *zip(*jobs, strict=True)):
-            cases.append(case)
-            bar.update()
-            if args.verbose:
-                bar.write(_case_line(case))
-    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
+    cases = run_cases(run_case, jobs, args.jobs, _case_line if args.verbose else None)
     if args.save:
         io.write_json(args.save, {"format": "sins-bench-gap", "cases": cases})
     _report(names, cases)

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import concurrent.futures
 import json
 import os
 import statistics
@@ -56,11 +55,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tqdm
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy_gap as ng
+from bench_gap import run_cases  # the same runner as sins's own rig bench (tools/ is on the path)
 
 from sins import gap, io, pipeline
 
@@ -282,17 +281,7 @@ def main() -> None:
     jobs = [(name, seed) for name in names for seed in range(args.seeds)]
     if not jobs:
         return
-    cases = []
-    started = time.perf_counter()
-    # A bar on a terminal only (logs get the summary); --verbose prints each case above it.
-    bar = tqdm.tqdm(total=len(jobs), unit=" case", file=sys.stderr, disable=not sys.stderr.isatty())
-    with concurrent.futures.ProcessPoolExecutor(args.jobs) as pool, bar:
-        for case in pool.map(run_case, *zip(*jobs, strict=True)):
-            cases.append(case)
-            bar.update()
-            if args.verbose:
-                bar.write(_case_line(case))
-    print(f"\n{len(jobs)} cases in {time.perf_counter() - started:.0f} s on {args.jobs} processes\n")
+    cases = run_cases(run_case, jobs, args.jobs, _case_line if args.verbose else None)
     if args.save:
         io.write_json(args.save, {"format": FORMAT, "cases": cases})
     _report(names, cases)
