@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -17,6 +17,9 @@ from typing import Any
 from sins import __version__
 from sins.errors import MissingInputError, SinsInputError
 from sins.nav.vertical import VERTICAL_MODES
+
+#: The object ``add_subparsers`` returns, to which each subcommand adds its parser.
+_Subparsers = argparse._SubParsersAction
 
 _COLUMNS = (
     ("final N m", "final_north_m", "{:.3f}"),
@@ -233,8 +236,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     scenario.check_latitude(sc, truth)
     note = f"sins {__version__}: ideal IMU of scenario {sc.name} ({path})"
     samples = trajectory.ideal_rates(scenario.build_motion(sc), truth) if args.form == "rate" else imu
-    io.write_imu(args.imu, samples, comment=note)
-    io.write_truth(args.truth, truth, comment=note)
+    with _progress_bar(f"writing {args.imu}", "row") as bar:
+        io.write_imu(args.imu, samples, comment=note, progress=_row_progress(bar))
+    with _progress_bar(f"writing {args.truth}", "row") as bar:
+        io.write_truth(args.truth, truth, comment=note, progress=_row_progress(bar))
     print(f"wrote {args.imu} ({args.form} form, {len(samples)} rows) and {args.truth} ({len(truth)} rows)")
     return 0
 
@@ -264,7 +269,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         f"sins {__version__}: simulated rig {args.rig} with IMU {args.imu}, seed {args.seed}\n"
         f"effects: {', '.join(spec.model(run_seed=args.seed).names) or 'none'}"
     )
-    io.write_recording(args.out, data, comment=note)
+    with _progress_bar(f"writing {args.out}", "row") as bar:
+        io.write_recording(args.out, data, comment=note, progress=_row_progress(bar))
     print(
         f"wrote {args.out}: {len(data)} rows, {data.t[-1] - data.t[0]:.1f} s at {rig.rate_hz:g} Hz, "
         f"{len(data.phases)} phases"
@@ -336,6 +342,13 @@ def _advance(bar: Any, done: int, total: int | None = None) -> None:
     if total is not None:
         bar.total = total
     bar.update(done - bar.n)
+
+
+def _row_progress(bar: Any) -> Callable[[int, int], None] | None:
+    """A ``progress(done, total)`` callback advancing ``bar``, or None without a bar."""
+    if bar is None:
+        return None
+    return lambda done, total: _advance(bar, done, total)
 
 
 def _settings(config: dict[str, Any]) -> str:
@@ -529,7 +542,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
     parser.add_argument("--version", action="version", version=f"sins {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in _SUBCOMMANDS:
+        add(sub)
+    return parser
 
+
+def _add_run(sub: _Subparsers) -> None:
     p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
@@ -542,6 +560,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
     p.set_defaults(func=_cmd_run)
 
+
+def _add_integrate(sub: _Subparsers) -> None:
     p = sub.add_parser("integrate", help="integrate a recorded IMU CSV against its truth CSV")
     p.add_argument("imu", type=Path, metavar="IMU.csv")
     p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
@@ -557,6 +577,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_cmd_integrate)
 
+
+def _add_simulate(sub: _Subparsers) -> None:
     p = sub.add_parser("simulate", help="write a scenario's ideal IMU and truth as CSV")
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
     p.add_argument("--imu", type=Path, required=True, metavar="IMU.csv")
@@ -564,6 +586,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--form", choices=("increment", "rate"), default="increment")
     p.set_defaults(func=_cmd_simulate)
 
+
+def _add_calibrate(sub: _Subparsers) -> None:
     p = sub.add_parser("calibrate", help="simulate a calibration rig session and write the recording")
     p.add_argument("rig", metavar="RIG.toml", help="rig file or preset (e.g. 24pos_ratetable)")
     p.add_argument("--imu", required=True, metavar="IMU.toml", help="IMU file or preset (e.g. tactical)")
@@ -571,6 +595,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seeds the rig's errors and the IMU's run (default 0)")
     p.set_defaults(func=_cmd_calibrate)
 
+
+def _add_fit(sub: _Subparsers) -> None:
     p = sub.add_parser("fit", help="fit a compensation strategy on a rig recording")
     p.add_argument("recording", type=Path, metavar="RECORDING.csv")
     p.add_argument(
@@ -590,6 +616,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
     p.set_defaults(func=_cmd_fit)
 
+
+def _add_evaluate(sub: _Subparsers) -> None:
     p = sub.add_parser("evaluate", help="RMS reading error per channel before and after a fitted model")
     p.add_argument("model", type=Path, metavar="MODEL.json")
     p.add_argument("recording", type=Path, metavar="RECORDING.csv")
@@ -600,6 +628,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.set_defaults(func=_cmd_evaluate)
 
+
+def _add_check(sub: _Subparsers) -> None:
     p = sub.add_parser("check", help="the compensation-quality gate: a suite against its baseline")
     p.add_argument("suite", type=Path, metavar="SUITE.toml")
     p.add_argument("--baseline", type=Path, required=True, metavar="BASELINE.json")
@@ -608,6 +638,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_cmd_check)
 
+
+def _add_gap(sub: _Subparsers) -> None:
     p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
     p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
     p.add_argument(
@@ -633,13 +665,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
     p.set_defaults(func=_cmd_gap)
 
+
+def _add_effects(sub: _Subparsers) -> None:
     p = sub.add_parser("effects", help="list the IMU error effects, their parameters and units")
     p.set_defaults(func=_cmd_effects)
 
+
+def _add_scenarios(sub: _Subparsers) -> None:
     p = sub.add_parser("scenarios", help="list the preset scenarios shipped with sins")
     p.set_defaults(func=_cmd_scenarios)
-    return parser
 
+
+#: Every subcommand, in the order ``sins --help`` lists them.
+_SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
+    _add_run,
+    _add_integrate,
+    _add_simulate,
+    _add_calibrate,
+    _add_fit,
+    _add_evaluate,
+    _add_check,
+    _add_gap,
+    _add_effects,
+    _add_scenarios,
+)
 
 #: The flag that gives what a :class:`MissingInputError` says is missing.
 _FLAG_FOR = {"truth": "--truth TRUTH.csv"}

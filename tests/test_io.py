@@ -132,6 +132,24 @@ def test_comment_is_written_as_hash_lines_before_the_header(tmp_path: Path) -> N
     assert np.array_equal(table.data, [[0.0, 1.0], [1.0, 2.0]])
 
 
+def test_a_table_written_in_blocks_is_numpys_one_call_text_and_reports_its_rows(tmp_path: Path) -> None:
+    """The blocks (what a progress bar needs) change nothing: the text is ``numpy.savetxt`` of the whole
+    array in one call, and progress is reported after every block, ending at the row count."""
+    rng = np.random.default_rng(SEED)
+    n = 2 * io.formats.WRITE_BLOCK_ROWS + 17
+    data = rng.normal(0.0, 1e3, (n, 3))
+    path = tmp_path / "blocks.csv"
+    calls: list[tuple[int, int]] = []
+    io.write_table(
+        path, ["t", "a", "b"], data, comment="c", progress=lambda done, total: calls.append((done, total))
+    )
+    whole = tmp_path / "whole.csv"
+    np.savetxt(whole, data, delimiter=",", fmt="%.17g", header="# c\nt,a,b", comments="")
+    assert path.read_bytes() == whole.read_bytes()
+    block = io.formats.WRITE_BLOCK_ROWS
+    assert calls == [(block, n), (2 * block, n), (n, n)]
+
+
 # --------------------------------------------------------------------------- refusals
 
 

@@ -136,3 +136,39 @@ def test_every_package_is_installed():
     )
     on_disk = {".".join(p.parent.relative_to(PACKAGE.parent).parts) for p in PACKAGE.rglob("__init__.py")}
     assert on_disk <= listed, sorted(on_disk - listed)
+
+
+#: A function's body (docstring aside) fits on a screen; these are the reasoned exceptions.
+SCREEN_LINES = 65
+LONG_ON_PURPOSE = {
+    # The integrator's numba loop: its steps share scalar state numba keeps in registers (see its comment).
+    "sins.nav.strapdown._kernel",
+}
+
+
+def _long_functions(module: str, path: Path) -> list[str]:
+    """Functions of ``module`` whose body, docstring aside, is longer than :data:`SCREEN_LINES`."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        body = node.body
+        if isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) and len(body) > 1:
+            body = body[1:]
+        lines = (body[-1].end_lineno or body[-1].lineno) - body[0].lineno + 1
+        name = f"{module}.{node.name}"
+        if lines > SCREEN_LINES and name not in LONG_ON_PURPOSE:
+            found.append(f"{name}: {lines} lines")
+    return found
+
+
+def test_functions_fit_on_a_screen():
+    assert [f for m, p in MODULES.items() for f in _long_functions(m, p)] == []
+
+
+def test_the_screen_rule_catches_a_long_function(tmp_path):
+    fake = tmp_path / "fake.py"
+    fake.write_text('def f():\n    """Doc."""\n' + "    x = 1\n" * (SCREEN_LINES + 1))
+    assert _long_functions("sins.fake", fake) == [f"sins.fake.f: {SCREEN_LINES + 1} lines"]
+    fake.write_text('def f():\n    """Doc."""\n' + "    x = 1\n" * SCREEN_LINES)
+    assert _long_functions("sins.fake", fake) == []

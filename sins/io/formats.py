@@ -31,7 +31,7 @@ import os
 import re
 import tempfile
 import urllib.parse
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple, TextIO
@@ -390,11 +390,13 @@ def write_imu(
     imu: ImuRates | ImuIncrements,
     extra: dict[str, Array] | None = None,
     comment: str = "",
+    progress: Callable[[int, int], None] | None = None,
 ) -> None:
     """Write an IMU recording (its form follows the type), atomically.
 
     For increments the rows are the intervals' end times ``imu.t[1:]``.
-    ``extra`` adds columns (``temp``, ``ref_gyro_x`` …), one value per row.
+    ``extra`` adds columns (``temp``, ``ref_gyro_x`` …), one value per row; ``progress`` is called as
+    ``progress(rows_written, rows)``.
     """
     if isinstance(imu, ImuRates):
         cols = list(RATE_COLUMNS)
@@ -405,7 +407,7 @@ def write_imu(
     for name, values in (extra or {}).items():
         cols.append(name)
         data.append(np.asarray(values, dtype=float))
-    write_table(path, cols, np.column_stack(data), comment)
+    write_table(path, cols, np.column_stack(data), comment, progress)
 
 
 # --------------------------------------------------------------------------- truth files
@@ -444,24 +446,47 @@ def read_truth(path: str | os.PathLike[str]) -> NavSeries:
     )
 
 
-def write_truth(path: str | os.PathLike[str], truth: NavSeries, comment: str = "") -> None:
-    """Write a truth trajectory CSV (degrees for angles), atomically."""
+def write_truth(
+    path: str | os.PathLike[str],
+    truth: NavSeries,
+    comment: str = "",
+    progress: Callable[[int, int], None] | None = None,
+) -> None:
+    """Write a truth trajectory CSV (degrees for angles), atomically; ``progress`` as :func:`write_table`."""
     roll, pitch, yaw = truth.euler()
     data = np.column_stack(
         [truth.t, np.degrees(truth.lat), np.degrees(truth.lon), truth.h, truth.v_n,
          np.degrees(roll), np.degrees(pitch), np.degrees(yaw)]
     )  # fmt: skip
-    write_table(path, list(TRUTH_COLUMNS), data, comment)
+    write_table(path, list(TRUTH_COLUMNS), data, comment, progress)
 
 
 # --------------------------------------------------------------------------- writing
 
 
-def write_table(path: str | os.PathLike[str], columns: list[str], data: Array, comment: str = "") -> None:
-    """Write a CSV with a header, 17 significant digits, to a temporary name then rename."""
+#: Rows formatted per call when writing a table: progress every ~0.5 s, memory for the text bounded.
+WRITE_BLOCK_ROWS = 100_000
+
+
+def write_table(
+    path: str | os.PathLike[str],
+    columns: list[str],
+    data: Array,
+    comment: str = "",
+    progress: Callable[[int, int], None] | None = None,
+) -> None:
+    """Write a CSV with a header, 17 significant digits, to a temporary name then rename.
+
+    ``progress(rows_written, rows)`` is called after each block of :data:`WRITE_BLOCK_ROWS` rows.
+    """
     header = "".join(f"# {line}\n" for line in comment.splitlines()) + ",".join(columns)
+    n = len(data)
     with _atomic(path) as fh:
-        np.savetxt(fh, data, delimiter=",", fmt="%.17g", header=header, comments="")
+        fh.write(header + "\n")
+        for start in range(0, n, WRITE_BLOCK_ROWS):
+            np.savetxt(fh, data[start : start + WRITE_BLOCK_ROWS], delimiter=",", fmt="%.17g")
+            if progress is not None:
+                progress(min(start + WRITE_BLOCK_ROWS, n), n)
 
 
 def write_json(path: str | os.PathLike[str], obj: Any) -> None:
@@ -552,7 +577,12 @@ class _Directive(NamedTuple):
     angle_rad: tuple[float, float, float] | None
 
 
-def write_recording(path: str | os.PathLike[str], data: CalibrationData, comment: str = "") -> None:
+def write_recording(
+    path: str | os.PathLike[str],
+    data: CalibrationData,
+    comment: str = "",
+    progress: Callable[[int, int], None] | None = None,
+) -> None:
     """Write a rig recording (the format above), 17 significant digits, atomically.
 
     Parameters
@@ -562,6 +592,7 @@ def write_recording(path: str | os.PathLike[str], data: CalibrationData, comment
         (n, 3) m/s², ``temp`` (n,) °C or None. A ``phase`` column is written when ``data.phases`` is
         non-empty (-1 on rows outside every phase), with one ``# phase N:`` line per phase.
     comment : free text, written as ``#`` lines before the phase lines
+    progress : called as ``progress(rows_written, rows)`` as blocks of rows are written
 
     Raises
     ------
@@ -595,7 +626,7 @@ def write_recording(path: str | os.PathLike[str], data: CalibrationData, comment
             lines.append(_phase_directive(i, phase))
         columns.append("phase")
         values.append(index)
-    write_table(path, columns, np.column_stack(values), "\n".join(lines))
+    write_table(path, columns, np.column_stack(values), "\n".join(lines), progress)
 
 
 def read_recording(path: str | os.PathLike[str]) -> CalibrationData:

@@ -109,6 +109,9 @@ def _turn(s: float, c: float, d: float) -> tuple[float, float]:
 # "contract" fuses multiply-adds and "arcp" turns divisions into reciprocal
 # multiplications: both change only the last bit and keep IEEE semantics for
 # special values; no approximate transcendental functions are allowed.
+# One long loop on purpose, the exception to the house's screen-length rule: the steps (attitude,
+# velocity, position, vertical channel) share the running state as scalars, which numba keeps in
+# registers; split into functions they would pass it through tuples or arrays on every sample.
 @numba.njit(cache=True, nogil=True, fastmath={"contract", "arcp"})
 def _kernel(
     t: Array,

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from sins.nav import motion
-from sins.nav.vertical import VERTICAL_MODES
+from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 from sins.scenario.presets import PresetKind, find_preset
 from sins.scenario.schema import CompensationSpec, Scenario, SegmentsSpec, TruthFileSpec, WaypointsSpec
 from sins.scenario.toml import MAX_SEED, Bound, TomlKeys, read_toml
@@ -108,67 +108,13 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     top = TomlKeys(name_of_source, "", data)
     name = top.string("name", default=source.stem if source else "scenario")
     description = top.string("description", default="")
-    imu = top.sub("imu")
-    rate_hz = imu.bounded("rate_hz", _B["imu.rate_hz"], 100.0)
     base = source.parent if source else Path(".")
-    imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
-    imu_seed = imu.integer("seed", 0, high=MAX_SEED)
-    temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))
-    if imu.has("temps_degc"):
-        times = imu.bounded_numbers("times_s", _B["imu.times_s"], [0.0])
-        temps = imu.bounded_numbers("temps_degc", _B["imu.temps_degc"])
-        if len(times) != len(temps) or any(b <= a for a, b in itertools.pairwise(times)):
-            raise imu.error("times_s must increase and match temps_degc in length", "times_s")
-        temperature = (tuple(times), tuple(temps))
-    imu.done()
-    compensation = None
-    if top.has("compensation"):
-        comp = top.sub("compensation")
-        if imu_model is None:
-            raise comp.error("needs an IMU model to compensate: give [imu] model")
-        from sins.compensation import VARIANTS
-
-        names = comp.strings("strategies", ["none", "regression", "mlp", "kohonen"], tuple(VARIANTS))
-        compensation = CompensationSpec(
-            rig=_preset_or_path(comp, "rig", "rig", base),
-            validation=comp.bounded("validation", _B["compensation.validation"], 0.3),
-            seed=comp.integer("seed", 0, high=MAX_SEED),
-            strategies=tuple(dict.fromkeys(["oracle", *names])),  # the oracle is every table's reference
-        )
-        comp.done()
-    nav = top.sub("navigation")
-    vertical = nav.choice("vertical", VERTICAL_MODES, "free")
-    tau = nav.bounded("vertical_tau_s", _B["navigation.vertical_tau_s"], 10.0)
-    if tau < MIN_TAU_SAMPLES / rate_hz:
-        raise nav.error(
-            f"must be at least {MIN_TAU_SAMPLES} IMU samples ({MIN_TAU_SAMPLES / rate_hz:g} s at "
-            f"{rate_hz:g} Hz): a shorter damp loop is unstable, got {tau:g}",
-            "vertical_tau_s",
-        )
-    nav.done()
-
-    kinds = [k for k in ("segment", "waypoint", "truth") if top.has(k)]
-    if len(kinds) != 1:
-        found = ", ".join(kinds) or "none"
-        raise top.error(
-            "give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table "
-            f"(found {found})"
-        )
-    trajectory: SegmentsSpec | WaypointsSpec | TruthFileSpec
-    if kinds[0] == "segment":
-        trajectory = _segments(top, rate_hz)
-    elif kinds[0] == "waypoint":
-        trajectory = _waypoints(top)
-    else:
-        truth = top.sub("truth")
-        file = truth.string("file")
-        truth.done()
-        base = source.parent if source else Path(".")
-        trajectory = TruthFileSpec(path=(base / file))
-        if top.has("initial"):
-            raise top.error(
-                "not used with a [truth] trajectory (the truth's first row is the start)", "initial"
-            )
+    rate_hz, imu_model, imu_seed, temperature = _imu(top.sub("imu"), base)
+    compensation = (
+        _compensation(top.sub("compensation"), imu_model, base) if top.has("compensation") else None
+    )
+    vertical, tau = _navigation(top.sub("navigation"), rate_hz)
+    trajectory = _trajectory(top, rate_hz, base)
     top.done()
     return Scenario(
         name=name,
@@ -183,6 +129,76 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
         compensation=compensation,
         temperature=temperature,
     )
+
+
+def _imu(
+    imu: TomlKeys, base: Path
+) -> tuple[float, Path | None, int, tuple[tuple[float, ...], tuple[float, ...]]]:
+    """The ``[imu]`` table: rate (Hz), model file, seed and temperature profile (times s, °C)."""
+    rate_hz = imu.bounded("rate_hz", _B["imu.rate_hz"], 100.0)
+    imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
+    imu_seed = imu.integer("seed", 0, high=MAX_SEED)
+    temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))
+    if imu.has("temps_degc"):
+        times = imu.bounded_numbers("times_s", _B["imu.times_s"], [0.0])
+        temps = imu.bounded_numbers("temps_degc", _B["imu.temps_degc"])
+        if len(times) != len(temps) or any(b <= a for a, b in itertools.pairwise(times)):
+            raise imu.error("times_s must increase and match temps_degc in length", "times_s")
+        temperature = (tuple(times), tuple(temps))
+    imu.done()
+    return rate_hz, imu_model, imu_seed, temperature
+
+
+def _compensation(comp: TomlKeys, imu_model: Path | None, base: Path) -> CompensationSpec:
+    """The ``[compensation]`` table: the rig, the held-back fraction, the seed and the strategies."""
+    if imu_model is None:
+        raise comp.error("needs an IMU model to compensate: give [imu] model")
+    from sins.compensation import VARIANTS
+
+    names = comp.strings("strategies", ["none", "regression", "mlp", "kohonen"], tuple(VARIANTS))
+    compensation = CompensationSpec(
+        rig=_preset_or_path(comp, "rig", "rig", base),
+        validation=comp.bounded("validation", _B["compensation.validation"], 0.3),
+        seed=comp.integer("seed", 0, high=MAX_SEED),
+        strategies=tuple(dict.fromkeys(["oracle", *names])),  # the oracle is every table's reference
+    )
+    comp.done()
+    return compensation
+
+
+def _navigation(nav: TomlKeys, rate_hz: float) -> tuple[VerticalMode, float]:
+    """The ``[navigation]`` table: the vertical channel's mode and damping time (s)."""
+    vertical = nav.choice("vertical", VERTICAL_MODES, "free")
+    tau = nav.bounded("vertical_tau_s", _B["navigation.vertical_tau_s"], 10.0)
+    if tau < MIN_TAU_SAMPLES / rate_hz:
+        raise nav.error(
+            f"must be at least {MIN_TAU_SAMPLES} IMU samples ({MIN_TAU_SAMPLES / rate_hz:g} s at "
+            f"{rate_hz:g} Hz): a shorter damp loop is unstable, got {tau:g}",
+            "vertical_tau_s",
+        )
+    nav.done()
+    return vertical, tau
+
+
+def _trajectory(top: TomlKeys, rate_hz: float, base: Path) -> SegmentsSpec | WaypointsSpec | TruthFileSpec:
+    """Exactly one of ``[[segment]]``, ``[[waypoint]]`` or ``[truth]``."""
+    kinds = [k for k in ("segment", "waypoint", "truth") if top.has(k)]
+    if len(kinds) != 1:
+        found = ", ".join(kinds) or "none"
+        raise top.error(
+            "give exactly one trajectory: [[segment]] tables, [[waypoint]] tables or a [truth] table "
+            f"(found {found})"
+        )
+    if kinds[0] == "segment":
+        return _segments(top, rate_hz)
+    if kinds[0] == "waypoint":
+        return _waypoints(top)
+    truth = top.sub("truth")
+    file = truth.string("file")
+    truth.done()
+    if top.has("initial"):
+        raise top.error("not used with a [truth] trajectory (the truth's first row is the start)", "initial")
+    return TruthFileSpec(path=(base / file))
 
 
 def _preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Path:
@@ -202,7 +218,27 @@ def _position(init: TomlKeys) -> tuple[float, float, float]:
 
 
 def _segments(top: TomlKeys, rate_hz: float) -> SegmentsSpec:
-    init = top.sub("initial")
+    start = _start(top.sub("initial"))
+    speed = start.speed
+    segments: list[motion.Segment] = []
+    total = 0.0
+    for seg in top.tables("segment"):
+        segment, speed = _segment(seg, speed)
+        total += segment.duration
+        if total > MAX_DURATION_S:
+            raise seg.error(
+                f"the segments so far last {total:g} s, more than a scenario's {MAX_DURATION_S:g} s",
+                "duration_s",
+            )
+        segments.append(segment)
+    if not segments:
+        raise top.error("needs at least one [[segment]]", "segment")
+    oscillations = tuple(_oscillation(osc, rate_hz) for osc in top.tables("oscillation"))
+    return SegmentsSpec(start=start, segments=tuple(segments), oscillations=oscillations)
+
+
+def _start(init: TomlKeys) -> motion.Start:
+    """The ``[initial]`` table: position, speed and attitude at t = 0."""
     lat, lon, alt = _position(init)
     start = motion.Start(
         lat=lat,
@@ -214,94 +250,95 @@ def _segments(top: TomlKeys, rate_hz: float) -> SegmentsSpec:
         yaw=math.radians(init.bounded("yaw_deg", _B["initial.yaw_deg"], 0.0)),
     )
     init.done()
-    speed = start.speed
-    segments: list[motion.Segment] = []
-    total = 0.0
-    for seg in top.tables("segment"):
-        kind = seg.string("type", choices=SEGMENT_TYPES)
-        duration = seg.bounded("duration_s", _B["segment.duration_s"])
-        if duration < 2 * MIN_RAMP_S:
-            raise seg.error(
-                f"must be at least {2 * MIN_RAMP_S:g} s (a ramp in and out of at least {MIN_RAMP_S:g} s "
-                f"each), got {duration:g}",
-                "duration_s",
-            )
-        total += duration
-        if total > MAX_DURATION_S:
-            raise seg.error(
-                f"the segments so far last {total:g} s, more than a scenario's {MAX_DURATION_S:g} s",
-                "duration_s",
-            )
-        ramp = 0.0
-        if kind != "hold":
-            default = max(MIN_RAMP_S, min(DEFAULT_RAMP_S, duration / 4))
-            ramp = seg.bounded("ramp_s", _B["segment.ramp_s"], default)
-            if ramp > duration / 2:
-                raise seg.error(
-                    f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s"
-                )
-        plateau = duration - ramp
-        if kind == "hold":
-            segments.append(motion.Hold(duration))
-        elif kind == "accelerate":
-            delta = _exactly_one(seg, ("to_speed_mps", "delta_speed_mps"))
-            if delta == "to_speed_mps":
-                change = seg.bounded("to_speed_mps", _B["segment.to_speed_mps"]) - speed
-            else:
-                change = seg.bounded("delta_speed_mps", _B["segment.delta_speed_mps"])
-            if speed + change < -1e-9:
-                raise seg.error(f"the speed would become negative ({speed + change:g} m/s)", delta)
-            if speed + change > MAX_SPEED_MPS:
-                raise seg.error(
-                    f"the speed would become {speed + change:g} m/s, above {MAX_SPEED_MPS:g} m/s", delta
-                )
-            speed += change
-            segments.append(motion.Accelerate(duration, change, ramp))
-        elif kind == "turn":
-            which = _exactly_one(seg, ("rate_dps", "angle_deg"))
-            if which == "rate_dps":
-                rate = math.radians(seg.bounded("rate_dps", _B["segment.rate_dps"]))
-            else:
-                rate = math.radians(seg.number("angle_deg")) / plateau
-                if abs(rate) > math.radians(360.0):
-                    raise seg.error(f"turns faster than 360 °/s over {plateau:g} s", "angle_deg")
-            segments.append(motion.Turn(duration, rate, ramp, seg.boolean("coordinated", False)))
-        elif kind == "climb":
-            angle = seg.bounded("angle_deg", _B["segment.angle_deg"])
-            segments.append(motion.Climb(duration, math.radians(angle), ramp))
-        else:
-            d = [
-                math.radians(seg.bounded(k, _B[f"segment.{k}"], 0.0))
-                for k in ("roll_deg", "pitch_deg", "yaw_deg")
-            ]
-            segments.append(motion.Rotate(duration, d[0], d[1], d[2], ramp))
-        seg.done()
-    if not segments:
-        raise top.error("needs at least one [[segment]]", "segment")
-    oscillations = []
-    for osc in top.tables("oscillation"):
-        channel = osc.choice("channel", motion.OSCILLATION_CHANNELS)
-        if channel == "heave":
-            amplitude = osc.bounded("amplitude_m", _B["oscillation.amplitude_m"])
-        else:
-            amplitude = math.radians(osc.bounded("amplitude_deg", _B["oscillation.amplitude_deg"]))
-        period = osc.bounded("period_s", _B["oscillation.period_s"])
-        if period < MIN_PERIOD_SAMPLES / rate_hz:
-            raise osc.error(
-                f"must be at least {MIN_PERIOD_SAMPLES} IMU samples ({MIN_PERIOD_SAMPLES / rate_hz:g} s at "
-                f"{rate_hz:g} Hz), or the increments cannot resolve it; got {period:g}",
-                "period_s",
-            )
-        oscillations.append(
-            motion.Oscillation(
-                channel=channel,
-                amplitude=amplitude,
-                period=period,
-                phase=math.radians(osc.bounded("phase_deg", _B["oscillation.phase_deg"], 0.0)),
-            )
+    return start
+
+
+def _segment(seg: TomlKeys, speed: float) -> tuple[motion.Segment, float]:
+    """One ``[[segment]]`` table entered at ``speed`` (m/s): the segment and the speed it leaves at."""
+    kind = seg.string("type", choices=SEGMENT_TYPES)
+    duration = seg.bounded("duration_s", _B["segment.duration_s"])
+    if duration < 2 * MIN_RAMP_S:
+        raise seg.error(
+            f"must be at least {2 * MIN_RAMP_S:g} s (a ramp in and out of at least {MIN_RAMP_S:g} s "
+            f"each), got {duration:g}",
+            "duration_s",
         )
-        osc.done()
-    return SegmentsSpec(start=start, segments=tuple(segments), oscillations=tuple(oscillations))
+    ramp = 0.0
+    if kind != "hold":
+        default = max(MIN_RAMP_S, min(DEFAULT_RAMP_S, duration / 4))
+        ramp = seg.bounded("ramp_s", _B["segment.ramp_s"], default)
+        if ramp > duration / 2:
+            raise seg.error(f"must be at most half the duration ({duration / 2:g} s), got {ramp:g}", "ramp_s")
+    segment: motion.Segment
+    if kind == "hold":
+        segment = motion.Hold(duration)
+    elif kind == "accelerate":
+        change = _speed_change(seg, speed)
+        speed += change
+        segment = motion.Accelerate(duration, change, ramp)
+    elif kind == "turn":
+        segment = motion.Turn(
+            duration, _turn_rate(seg, duration - ramp), ramp, seg.boolean("coordinated", False)
+        )
+    elif kind == "climb":
+        angle = seg.bounded("angle_deg", _B["segment.angle_deg"])
+        segment = motion.Climb(duration, math.radians(angle), ramp)
+    else:
+        d = [
+            math.radians(seg.bounded(k, _B[f"segment.{k}"], 0.0))
+            for k in ("roll_deg", "pitch_deg", "yaw_deg")
+        ]
+        segment = motion.Rotate(duration, d[0], d[1], d[2], ramp)
+    seg.done()
+    return segment, speed
+
+
+def _speed_change(seg: TomlKeys, speed: float) -> float:
+    """An ``accelerate`` segment's change of speed (m/s), from ``to_speed_mps`` or ``delta_speed_mps``."""
+    delta = _exactly_one(seg, ("to_speed_mps", "delta_speed_mps"))
+    if delta == "to_speed_mps":
+        change = seg.bounded("to_speed_mps", _B["segment.to_speed_mps"]) - speed
+    else:
+        change = seg.bounded("delta_speed_mps", _B["segment.delta_speed_mps"])
+    if speed + change < -1e-9:
+        raise seg.error(f"the speed would become negative ({speed + change:g} m/s)", delta)
+    if speed + change > MAX_SPEED_MPS:
+        raise seg.error(f"the speed would become {speed + change:g} m/s, above {MAX_SPEED_MPS:g} m/s", delta)
+    return change
+
+
+def _turn_rate(seg: TomlKeys, plateau_s: float) -> float:
+    """A ``turn`` segment's rate (rad/s), from ``rate_dps`` or ``angle_deg`` spread over the plateau."""
+    if _exactly_one(seg, ("rate_dps", "angle_deg")) == "rate_dps":
+        return math.radians(seg.bounded("rate_dps", _B["segment.rate_dps"]))
+    rate = math.radians(seg.number("angle_deg")) / plateau_s
+    if abs(rate) > math.radians(360.0):
+        raise seg.error(f"turns faster than 360 °/s over {plateau_s:g} s", "angle_deg")
+    return rate
+
+
+def _oscillation(osc: TomlKeys, rate_hz: float) -> motion.Oscillation:
+    """One ``[[oscillation]]`` table: a sinusoid on a channel, resolvable at ``rate_hz``."""
+    channel = osc.choice("channel", motion.OSCILLATION_CHANNELS)
+    if channel == "heave":
+        amplitude = osc.bounded("amplitude_m", _B["oscillation.amplitude_m"])
+    else:
+        amplitude = math.radians(osc.bounded("amplitude_deg", _B["oscillation.amplitude_deg"]))
+    period = osc.bounded("period_s", _B["oscillation.period_s"])
+    if period < MIN_PERIOD_SAMPLES / rate_hz:
+        raise osc.error(
+            f"must be at least {MIN_PERIOD_SAMPLES} IMU samples ({MIN_PERIOD_SAMPLES / rate_hz:g} s at "
+            f"{rate_hz:g} Hz), or the increments cannot resolve it; got {period:g}",
+            "period_s",
+        )
+    oscillation = motion.Oscillation(
+        channel=channel,
+        amplitude=amplitude,
+        period=period,
+        phase=math.radians(osc.bounded("phase_deg", _B["oscillation.phase_deg"], 0.0)),
+    )
+    osc.done()
+    return oscillation
 
 
 def _exactly_one(seg: TomlKeys, keys: tuple[str, str]) -> str:
