@@ -253,6 +253,7 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
         print(f"{name:<16} {sc.description}{marker}")
     print(f"rig procedures (sins calibrate RIG): {', '.join(scenario.presets('rig'))}")
     print(f"IMU models (--imu): {', '.join(scenario.presets('imu'))}")
+    print(f"campaigns (sins campaign NAME): {', '.join(scenario.presets('campaign'))}")
     return 0
 
 
@@ -490,6 +491,32 @@ def _print_gap_report(args: argparse.Namespace, data: Any, report: Any) -> None:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
 
 
+def _cmd_campaign(args: argparse.Namespace) -> int:
+    from sins import campaign
+    from sins.campaign import engine, results
+
+    if args.workers is not None and args.scheduler:
+        raise SinsInputError("--workers: the scheduler's cluster has its own workers; give one of the two")
+    from sins import scenario
+
+    spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
+    out = args.out or Path(f"{spec.name}-campaign")
+    strategies = dict.fromkeys(["none", *spec.compensation.strategies])
+    print(
+        f"campaign {spec.name}: {spec.count} units x {len(spec.scenarios)} scenarios x "
+        f"{len(strategies)} strategies -> {out}"
+    )
+    with _progress_bar(f"campaign {spec.name}", "unit") as bar:
+        progress = _row_progress(bar) or engine.log_progress()
+        done = engine.run(spec, out, args.workers, args.scheduler, args.resume, progress)
+    resumed = f" ({done.units_resumed} already done)" if done.units_resumed else ""
+    print(f"ran {done.units_run} units in {done.wall_s:.1f} s{resumed}")
+    for line in results.table_lines(done.summary):
+        print(line)
+    print(f"wrote {out / 'results.parquet'} and {out / 'summary.json'}")
+    return 0
+
+
 def _cmd_check(args: argparse.Namespace) -> int:
     from sins import quality
 
@@ -629,6 +656,23 @@ def _add_evaluate(sub: _Subparsers) -> None:
     p.set_defaults(func=_cmd_evaluate)
 
 
+def _add_campaign(sub: _Subparsers) -> None:
+    p = sub.add_parser(
+        "campaign", help="Monte-Carlo campaign: units x scenarios x strategies, on a dask cluster"
+    )
+    p.add_argument("campaign", metavar="CAMPAIGN.toml", help="campaign file or preset (e.g. tactical_drives)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="processes of the local cluster (default: the machine's cores)",
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing dask cluster (tcp://HOST:PORT)")
+    p.add_argument("--out", type=Path, metavar="DIR", help="results folder (default: NAME-campaign)")
+    p.add_argument("--resume", action="store_true", help="continue the campaign from what --out holds")
+    p.set_defaults(func=_cmd_campaign)
+
+
 def _add_check(sub: _Subparsers) -> None:
     p = sub.add_parser("check", help="the compensation-quality gate: a suite against its baseline")
     p.add_argument("suite", type=Path, metavar="SUITE.toml")
@@ -685,6 +729,7 @@ _SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_fit,
     _add_evaluate,
     _add_check,
+    _add_campaign,
     _add_gap,
     _add_effects,
     _add_scenarios,

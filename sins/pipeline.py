@@ -129,15 +129,17 @@ def navigate(
     return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
 
 
-def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
+def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None) -> ScenarioRun:
     """Simulate a scenario and integrate its IMU stream.
 
     Without an IMU model the one run is ``"none"``: the ideal IMU, streamed
     chunk by chunk, so memory stays bounded whatever the duration. With one
-    (``[imu] model``), see :func:`_run_with_imu`.
+    (``[imu] model``), see :func:`_run_with_imu`. ``unit`` (from :func:`fit_unit`) replaces the
+    scenario's IMU file and compensation: a campaign fits a unit once and drives it through
+    every scenario; the navigation run's power-on is still ``sc.imu_seed``.
     """
-    if sc.imu_model is not None:
-        return _run_with_imu(sc, keep_hz)
+    if sc.imu_model is not None or unit is not None:
+        return _run_with_imu(sc, keep_hz, unit)
     try:
         motion = scenario.build_motion(sc)
         first = trajectory.start_state(motion)
@@ -171,7 +173,7 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run})
 
 
-def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
+def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) -> ScenarioRun:
     """The scenario with a corrupted IMU, once per compensation strategy on the same stream.
 
     The rig session and the navigation run are two power-ons of the same unit
@@ -187,10 +189,11 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
     """
     from sins.imu.stream import IncrementStream
 
-    assert sc.imu_model is not None
-    spec = scenario.load_imu(sc.imu_model)
-    nav_model = spec.model(run_seed=sc.imu_seed)
-    strategies, residuals = _fitted_strategies(sc, spec, nav_model)
+    if unit is None:
+        assert sc.imu_model is not None
+        unit = fit_unit(scenario.load_imu(sc.imu_model), sc.compensation)
+    nav_model = unit.spec.model(run_seed=sc.imu_seed)
+    strategies, residuals = unit.for_run(nav_model), unit.residuals
     try:
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
@@ -229,18 +232,43 @@ def _cabin(sc: Scenario, t: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(np.interp(t, *sc.temperature), dtype=float)
 
 
-def _fitted_strategies(
-    sc: Scenario, spec: scenario.ImuSpec, nav_model: ImuModel
-) -> tuple[dict[str, Strategy], dict[str, dict[str, float]]]:
-    """Every strategy of the scenario fitted on its rig session, and each one's held-back residuals."""
+@dataclass(frozen=True)
+class FittedUnit:
+    """One unit's strategies, fitted on its rig session, ready to drive any number of scenarios.
+
+    ``strategies`` holds every strategy but the oracle, whose model is each navigation run's own
+    (:meth:`for_run`); ``residuals`` the RMS of each one's corrected readings on the held-back rig
+    rows, per channel, SI units (the oracle's knowing the rig session's unit).
+    """
+
+    spec: scenario.ImuSpec
+    compensation: scenario.CompensationSpec | None
+    strategies: dict[str, Strategy]
+    residuals: dict[str, dict[str, float]]
+
+    def for_run(self, nav_model: ImuModel) -> dict[str, Strategy]:
+        """The strategies in the scenario's order, the oracle knowing ``nav_model``."""
+        from sins import compensation
+
+        names = ["none", *(self.compensation.strategies if self.compensation else ())]
+        out: dict[str, Strategy] = {}
+        for name in names:
+            out[name] = compensation.Oracle(nav_model) if name == "oracle" else self.strategies[name]
+        return out
+
+
+def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> FittedUnit:
+    """Simulate the unit's rig session (power-on ``comp.seed``) and fit every strategy of ``comp``.
+
+    Without ``comp``, only ``"none"``.
+    """
     from sins import compensation
     from sins.imu import calibration
 
     strategies: dict[str, Strategy] = {"none": compensation.make("none")}
     residuals: dict[str, dict[str, float]] = {}
-    comp = sc.compensation
     if comp is None:
-        return strategies, residuals
+        return FittedUnit(spec, comp, strategies, residuals)
     rig = scenario.load_rig(comp.rig)
     rig_model = spec.model(run_seed=comp.seed)
     data = calibration.simulate_rig(rig, rig_model, seed=comp.seed)
@@ -249,12 +277,11 @@ def _fitted_strategies(
         if name == "oracle":
             # On the rig it knows the rig session's unit; in navigation, the navigation run's.
             judged: Strategy = compensation.Oracle(rig_model)
-            strategies[name] = compensation.Oracle(nav_model)
         else:
             judged = strategies[name] = compensation.make(name).fit(fit)
         channels = compensation.residual_rms(judged, held)
         residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
-    return strategies, residuals
+    return FittedUnit(spec, comp, strategies, residuals)
 
 
 class _Pending:

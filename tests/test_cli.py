@@ -168,13 +168,14 @@ def test_scenarios_lists_every_preset(capsys: pytest.CaptureFixture[str]) -> Non
     assert main(["scenarios"]) == 0
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if line.strip()]
-    names = [line.split()[0] for line in lines[:-2]]  # the last two lines list rig and IMU presets
+    names = [line.split()[0] for line in lines[:-3]]  # the last three list rig, IMU and campaign presets
     root = Path(__file__).resolve().parents[1] / "scenarios"
     shipped = sorted(p.stem for p in root.glob("*.toml"))
     assert sorted(names) == shipped == sorted(pipeline.presets())
     assert sum("(default)" in line for line in out.splitlines()) == 1
-    assert lines[-2].startswith("rig procedures") and lines[-1].startswith("IMU models")
-    for kind, line in (("rig", lines[-2]), ("imu", lines[-1])):
+    assert lines[-3].startswith("rig procedures") and lines[-2].startswith("IMU models")
+    assert lines[-1].startswith("campaigns")
+    for kind, line in (("rig", lines[-3]), ("imu", lines[-2]), ("campaign", lines[-1])):
         listed = sorted(x.strip() for x in line.split(":", 1)[1].split(","))
         assert (
             listed == sorted(p.stem for p in (root / kind).glob("*.toml")) == sorted(pipeline.presets(kind))

@@ -28,9 +28,10 @@ RANKS = {
     "sins.gap": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
-    "sins.quality": 8,
-    "sins.viz": 9,
-    "sins.cli": 10,
+    "sins.campaign": 8,
+    "sins.quality": 9,
+    "sins.viz": 10,
+    "sins.cli": 11,
 }
 
 #: Third-party libraries confined to the modules that need them.
@@ -38,7 +39,8 @@ CONFINED = {
     "rerun": {"sins.viz"},
     "torch": {"sins.compensation.mlp"},
     "minisom": {"sins.compensation.kohonen"},
-    "dask": set(),  # campaigns, when they come
+    "dask": {"sins.campaign.engine"},
+    "distributed": {"sins.campaign.engine"},
 }
 
 

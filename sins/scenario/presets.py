@@ -14,11 +14,11 @@ from typing import Literal
 
 from sins.errors import SinsInputError
 
-#: A kind of preset: scenarios (``""``, the folder's top level), rig procedures or IMU models.
-PresetKind = Literal["", "rig", "imu"]
+#: A kind of preset: scenarios (``""``, the folder's top level), rig procedures, IMU models or campaigns.
+PresetKind = Literal["", "rig", "imu", "campaign"]
 
 # What a kind is called in the messages.
-_WHAT: dict[PresetKind, str] = {"": "scenario", "rig": "rig", "imu": "IMU"}
+_WHAT: dict[PresetKind, str] = {"": "scenario", "rig": "rig", "imu": "IMU", "campaign": "campaign"}
 
 
 def preset_dir() -> Path:

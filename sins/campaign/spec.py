@@ -1,0 +1,173 @@
+"""Campaign files (TOML): which units, which rig and strategies, which scenarios.
+
+A campaign draws ``count`` units of one IMU file (a grade's units differ by ``unit_seed``), fits
+every strategy on each unit's rig session and drives each unit through every scenario::
+
+    name = "tactical_drives"
+    [units]
+    imu = "tactical"          # IMU file or preset; each unit replaces its unit_seed
+    count = 40
+    first_seed = 1            # unit k (0, 1, ...) has unit_seed first_seed + k
+    [compensation]
+    rig = "24pos_ratetable"   # rig file or preset
+    validation = 0.3          # the last fraction of each rig phase held back to judge the fit
+    strategies = ["none", "regression", "mlp"]
+    [[scenario]]
+    file = "car_drive"        # scenario file or preset: its motion, rate, vertical channel, cabin
+    [keep]
+    series_hz = 0.2           # each row's thinned horizontal error series (0: none)
+
+Each unit has two power-ons, as a real one would: the rig session (:func:`rig_seed`) and the
+navigation runs (:func:`nav_seed`). A row's seeds are written beside it, so ``sins run`` on a
+scenario with ``[imu] model`` (that IMU file with the row's ``unit_seed``), ``[imu] seed`` =
+``nav_seed`` and ``[compensation] seed`` = ``rig_seed`` reproduces it to the last digit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from sins import scenario
+from sins.errors import SinsInputError
+from sins.scenario import CompensationSpec, ImuSpec, Scenario
+from sins.scenario.toml import Bound, TomlKeys, read_toml
+
+#: The most units a campaign may draw (a million unit-runs is a cluster's week, not a typo's).
+MAX_UNITS = 1_000_000
+#: The most scenarios one campaign drives each unit through.
+MAX_SCENARIOS = 100
+_SERIES_HZ = Bound(0.0, 10.0, "Hz", "the thinned error series kept per row")
+_VALIDATION = Bound(0.0, 0.9, "", "a fraction of each rig phase", low_open=True)
+#: Every strategy a campaign runs unless it says otherwise.
+DEFAULT_STRATEGIES = ("none", "regression")
+
+
+def rig_seed(unit_seed: int) -> int:
+    """The power-on seed of a unit's rig session: ``2 · unit_seed``."""
+    return 2 * unit_seed
+
+
+def nav_seed(unit_seed: int) -> int:
+    """The power-on seed of a unit's navigation runs: ``2 · unit_seed + 1`` (never the rig's)."""
+    return 2 * unit_seed + 1
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """A campaign file, validated; paths resolved."""
+
+    name: str
+    source: Path
+    imu: ImuSpec
+    count: int
+    first_seed: int
+    compensation: CompensationSpec
+    scenarios: tuple[Scenario, ...]
+    series_hz: float
+
+    def unit_seed(self, unit: int) -> int:
+        """The ``unit_seed`` of unit ``unit`` (0-based)."""
+        return self.first_seed + unit
+
+    def unit_imu(self, unit: int) -> ImuSpec:
+        """Unit ``unit``'s IMU: the campaign's file with the unit's ``unit_seed``."""
+        return dataclasses.replace(self.imu, unit_seed=self.unit_seed(unit))
+
+    def unit_compensation(self, unit: int) -> CompensationSpec:
+        """The compensation table with the unit's rig power-on seed."""
+        return dataclasses.replace(self.compensation, seed=rig_seed(self.unit_seed(unit)))
+
+    def unit_scenario(self, index: int, unit: int) -> Scenario:
+        """Scenario ``index`` as unit ``unit`` drives it (its navigation power-on seed)."""
+        return dataclasses.replace(self.scenarios[index], imu_seed=nav_seed(self.unit_seed(unit)))
+
+
+def load(path: str | os.PathLike[str]) -> CampaignSpec:
+    """Read and validate a campaign file; every referenced file is read now, before any work.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and the key: an unknown key, zero units, an unknown strategy, a
+        scenario or IMU or rig file that does not exist or does not validate.
+    """
+    from sins.compensation import VARIANTS
+
+    path = Path(path)
+    top = TomlKeys(str(path), "", read_toml(path, "campaign"))
+    base = path.parent
+    name = top.string("name", default=path.stem)
+    units = top.sub("units")
+    imu = scenario.load_imu(_file(units, "imu", "imu", base))
+    count = units.integer("count", 0, low=1, high=MAX_UNITS)
+    if not units.has("count"):
+        raise units.error("is required: how many units to draw", "count")
+    first_seed = units.integer("first_seed", 0, high=2**62 - MAX_UNITS)
+    units.done()
+    comp = top.sub("compensation")
+    strategies = comp.strings("strategies", list(DEFAULT_STRATEGIES), tuple(VARIANTS))
+    compensation = CompensationSpec(
+        rig=_file(comp, "rig", "rig", base),
+        validation=comp.bounded("validation", _VALIDATION, 0.3),
+        seed=0,  # each unit's own (rig_seed)
+        strategies=tuple(dict.fromkeys(["oracle", *strategies])),
+    )
+    comp.done()
+    scenarios = tuple(_scenario(table, base) for table in top.tables("scenario"))
+    if not scenarios:
+        raise top.error("needs at least one [[scenario]] table", "scenario")
+    if len(scenarios) > MAX_SCENARIOS:
+        raise top.error(f"has {len(scenarios)} scenarios, more than {MAX_SCENARIOS}", "scenario")
+    names = [s.name for s in scenarios]
+    if len(set(names)) != len(names):
+        raise top.error(
+            f"two scenarios share a name ({', '.join(names)}): rows would be ambiguous", "scenario"
+        )
+    keep = top.sub("keep") if top.has("keep") else None
+    series_hz = keep.bounded("series_hz", _SERIES_HZ, 0.2) if keep else 0.2
+    if keep:
+        keep.done()
+    top.done()
+    scenario.load_rig(compensation.rig)  # refuse a bad rig file now, not in every task
+    return CampaignSpec(name, path, imu, count, first_seed, compensation, scenarios, series_hz)
+
+
+def _file(keys: TomlKeys, key: str, kind: scenario.PresetKind, base: Path) -> Path:
+    value = keys.string(key)
+    found = scenario.find_preset(value, kind, base)
+    if found is None:
+        raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
+    return found
+
+
+def _scenario(table: TomlKeys, base: Path) -> Scenario:
+    """One ``[[scenario]]``: the file's motion, rate, vertical channel and cabin temperature."""
+    path = _file(table, "file", "", base)
+    table.done()
+    try:
+        sc = scenario.load(path)
+    except SinsInputError as exc:
+        raise table.error(f"{exc}", "file") from None
+    # The campaign's unit and compensation replace the file's own: the pipeline is handed each fitted
+    # unit directly (pipeline.run_scenario's ``unit``).
+    return dataclasses.replace(sc, imu_model=None, compensation=None)
+
+
+def describe(spec: CampaignSpec) -> dict[str, Any]:
+    """What the campaign runs, for the results' metadata."""
+    return {
+        "name": spec.name,
+        "source": str(spec.source),
+        "imu": str(spec.imu.source),
+        "units": spec.count,
+        "first_seed": spec.first_seed,
+        "rig": str(spec.compensation.rig),
+        "validation": spec.compensation.validation,
+        "strategies": list(spec.compensation.strategies),
+        "scenarios": [s.name for s in spec.scenarios],
+        "series_hz": spec.series_hz,
+    }

@@ -1,0 +1,256 @@
+"""Campaigns: rows equal to ``sins run`` for the same unit, identical on any cluster, nothing lost to a
+killed worker or an interruption, one-line refusals before any work."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from conftest import refusal
+
+from sins import campaign, scenario
+from sins.campaign import engine, results
+from sins.cli import main
+
+BIN = Path(sys.executable).parent
+
+
+def _campaign(
+    tmp_path: Path, count: int = 3, strategies: str = '["none", "regression"]', extra: str = ""
+) -> Path:
+    path = tmp_path / "c.toml"
+    path.write_text(
+        f"""name = "t"
+[units]
+imu = "tactical"
+count = {count}
+first_seed = 5
+[compensation]
+rig = "24pos_ratetable"
+strategies = {strategies}
+[[scenario]]
+file = "car_drive_5min"
+[keep]
+series_hz = 0.1
+{extra}"""
+    )
+    return path
+
+
+def _table(out: Path) -> dict[str, list[object]]:
+    return pq.read_table(out / "results.parquet").to_pydict()
+
+
+# --------------------------------------------------------------------------- the single-unit path
+
+
+def test_a_campaign_row_is_sins_run_of_that_unit_to_the_last_digit(tmp_path: Path) -> None:
+    """Unit 1 of the campaign (unit_seed 6), written out as the IMU and scenario files a user would write
+    with the row's seeds, run by ``sins run``: every figure equal, bit for bit."""
+    spec = campaign.load(_campaign(tmp_path))
+    rows = campaign.run_unit(spec, 1)
+    assert {r["unit_seed"] for r in rows} == {6}
+    (tmp_path / "unit.toml").write_text('grade = "tactical"\nunit_seed = 6\n')
+    drive = scenario.resolve_preset("car_drive_5min").read_text()
+    drive = drive.replace(
+        "[imu]\nrate_hz = 100\n", f'[imu]\nrate_hz = 100\nmodel = "unit.toml"\nseed = {rows[0]["nav_seed"]}\n'
+    )
+    drive += (
+        f'\n[compensation]\nrig = "24pos_ratetable"\nseed = {rows[0]["rig_seed"]}\n'
+        'strategies = ["none", "regression"]\n'
+    )
+    (tmp_path / "drive.toml").write_text(drive)
+    assert main(["run", str(tmp_path / "drive.toml"), "--json", str(tmp_path / "run.json")]) == 0
+    ran = json.loads((tmp_path / "run.json").read_text())["strategies"]
+    assert [r["strategy"] for r in rows] == list(ran) == ["none", "oracle", "regression"]
+    for row in rows:
+        single = ran[row["strategy"]]
+        for key in (
+            "final_horizontal_m",
+            "max_horizontal_m",
+            "rms_horizontal_m",
+            "final_down_m",
+            "final_yaw_deg",
+        ):
+            assert row[key] == single[key], (row["strategy"], key)
+        residual = single.get("residual_rms") or {}
+        for ch, value in residual.items():
+            assert row[f"residual_{ch.replace('.', '_')}"] == value
+    # The two power-ons differ (a rig fit cannot know the drive's turn-on bias), and units differ.
+    assert rows[0]["rig_seed"] != rows[0]["nav_seed"]
+    assert campaign.run_unit(spec, 0)[0]["final_horizontal_m"] != rows[0]["final_horizontal_m"]
+
+
+# --------------------------------------------------------------------------- clusters
+
+
+def test_one_and_two_local_workers_give_identical_results_and_resume_adds_only_what_is_missing(
+    tmp_path: Path,
+) -> None:
+    spec = campaign.load(_campaign(tmp_path))
+    one = engine.run(spec, tmp_path / "one", workers=1)
+    two = engine.run(spec, tmp_path / "two", workers=2)
+    assert one.units_run == two.units_run == 3
+    assert _table(tmp_path / "one") == _table(tmp_path / "two")
+    assert one.summary == two.summary
+    # A resumed campaign whose parts were partly lost recomputes only those units, identically.
+    parts = sorted((tmp_path / "two" / "parts").glob("units-*.parquet"))
+    parts[-1].unlink()
+    again = engine.run(spec, tmp_path / "two", workers=1, resume=True)
+    assert again.units_resumed == 2 and again.units_run == 1
+    assert _table(tmp_path / "one") == _table(tmp_path / "two")
+    # Without --resume a folder holding results is refused, and another campaign's folder always.
+    refusal(lambda: engine.run(spec, tmp_path / "two", workers=1), "--resume")
+    other = campaign.load(_campaign(tmp_path, count=4))
+    refusal(lambda: engine.run(other, tmp_path / "two", workers=1, resume=True), "another campaign", "units")
+
+
+def test_an_interrupted_campaign_leaves_complete_rows_only(tmp_path: Path) -> None:
+    """Interrupted after its first task (Ctrl-C as the results stream back): the parts hold whole units
+    and no temporary file; --resume finishes it with the rows an uninterrupted run writes."""
+    spec = campaign.load(_campaign(tmp_path, count=4))
+
+    def interrupt(done: int, total: int) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        engine.run(spec, tmp_path / "cut", workers=1, progress=interrupt)
+    parts = tmp_path / "cut" / "parts"
+    assert [p.name for p in parts.iterdir() if not p.name.startswith("units-")] == []
+    held = results.done_units(parts)
+    assert 1 <= len(held) < 4
+    for part in parts.glob("units-*.parquet"):
+        table = pq.read_table(part).to_pydict()
+        assert len(table["unit"]) == 3 * len(set(table["unit"]))  # three strategies per unit, every one
+    engine.run(spec, tmp_path / "cut", workers=1, resume=True)
+    engine.run(spec, tmp_path / "whole", workers=1)
+    assert _table(tmp_path / "cut") == _table(tmp_path / "whole")
+
+
+def _start(args: list[str], log: Path) -> subprocess.Popen[bytes]:
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    return subprocess.Popen(
+        args, stdout=log.open("wb"), stderr=subprocess.STDOUT, env=env, start_new_session=True
+    )
+
+
+def _wait_for(condition, timeout_s: float, what: str) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        time.sleep(0.2)
+
+
+def test_a_cluster_started_by_hand_gives_the_same_rows_and_a_killed_worker_loses_nothing(
+    tmp_path: Path,
+) -> None:
+    """``dask scheduler`` and ``dask worker`` started as separate processes, as a user would; one worker
+    is killed (SIGKILL) once the first results are in, another joins: the campaign completes, and its
+    rows equal a local cluster's."""
+    spec = campaign.load(_campaign(tmp_path, count=6))
+    engine.run(spec, tmp_path / "local", workers=2)
+    address_file = tmp_path / "scheduler.json"
+    scheduler = _start(
+        [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+         "--scheduler-file", str(address_file)],
+        tmp_path / "scheduler.log",
+    )  # fmt: skip
+    workers: list[subprocess.Popen[bytes]] = []
+    try:
+        _wait_for(address_file.exists, 60, "the scheduler")
+        address = json.loads(address_file.read_text())["address"]
+
+        def worker(name: str) -> subprocess.Popen[bytes]:
+            return _start(
+                [str(BIN / "dask"), "worker", address, "--nthreads", "1", "--no-dashboard", "--name", name],
+                tmp_path / f"{name}.log",
+            )
+
+        workers.append(worker("a"))
+        killed = []
+
+        def kill_one(done: int, total: int) -> None:
+            if not killed:
+                os.killpg(workers[0].pid, signal.SIGKILL)
+                killed.append(done)
+                workers.append(worker("b"))
+
+        run = engine.run(spec, tmp_path / "remote", scheduler=address, progress=kill_one)
+        assert killed and run.units_run == 6
+        assert _table(tmp_path / "remote") == _table(tmp_path / "local")
+    finally:
+        for p in [*workers, scheduler]:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+                p.wait(30)
+
+
+# --------------------------------------------------------------------------- results
+
+
+def test_summary_statistics_and_intervals_follow_the_rows(tmp_path: Path) -> None:
+    """The summary's median, percentiles and mean are numpy's over the units' rows, and each bootstrap
+    interval contains its statistic."""
+    spec = campaign.load(_campaign(tmp_path, count=5))
+    run = engine.run(spec, tmp_path / "out", workers=1)
+    table = _table(tmp_path / "out")
+    assert len(table["unit"]) == 5 * 3
+    assert table["unit"] == sorted(table["unit"])
+    for group in run.summary["groups"].values():
+        rows = [
+            i for i, (s, g) in enumerate(zip(table["scenario"], table["strategy"], strict=True))
+            if (s, g) == (group["scenario"], group["strategy"])
+        ]  # fmt: skip
+        values = np.array(table["final_horizontal_m"])[rows]
+        stats = group["final_horizontal_m"]
+        assert stats["median"] == pytest.approx(np.median(values), rel=1e-12)
+        assert stats["p95"] == pytest.approx(np.percentile(values, 95), rel=1e-12)
+        assert stats["mean"] == pytest.approx(values.mean(), rel=1e-12)
+        for name in ("mean", "median", "p90", "p95"):
+            low, high = stats[f"{name}_ci95"]
+            assert low <= stats[name] <= high
+    assert json.loads((tmp_path / "out" / "summary.json").read_text()) == run.summary
+    series = table["series_horizontal_m"][0]
+    assert len(series) == len(table["series_t_s"][0]) >= 30  # 5 min at 0.1 Hz, and the start and end
+
+
+# --------------------------------------------------------------------------- refusals
+
+
+@pytest.mark.parametrize(
+    ("change", "fragments"),
+    [
+        (("count = 3", "count = 0"), ("units.count", "must be")),
+        (("first_seed = 5", "first_seed = 5\ncolour = 1"), ("colour",)),
+        (('strategies = ["none", "regression"]', 'strategies = ["none", "magic"]'), ("magic",)),
+        (('file = "car_drive_5min"', 'file = "no_such_drive"'), ("no_such_drive",)),
+        (('imu = "tactical"', 'imu = "no_such_unit"'), ("no_such_unit",)),
+    ],
+)
+def test_a_bad_campaign_file_is_refused_in_one_line_before_any_work(
+    tmp_path: Path, change: tuple[str, str], fragments: tuple[str, ...]
+) -> None:
+    path = _campaign(tmp_path)
+    path.write_text(path.read_text().replace(*change))
+    message = refusal(lambda: campaign.load(path), *fragments)
+    assert str(path) in message
+
+
+def test_the_cli_runs_a_campaign_and_refuses_workers_with_a_scheduler(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _campaign(tmp_path, count=2)
+    assert main(["campaign", str(path), "--workers", "1", "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "ran 2 units" in out and "car_drive_5min" in out and "regression" in out
+    assert main(["campaign", str(path), "--workers", "1", "--scheduler", "tcp://x:1"]) == 2
+    assert "--workers" in capsys.readouterr().err
