@@ -500,6 +500,10 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from sins import scenario
 
     spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)  # before the work, not after
     out = args.out or Path(f"{spec.name}-campaign")
     strategies = dict.fromkeys(["none", *spec.compensation.strategies])
     print(
@@ -513,7 +517,15 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     print(f"ran {done.units_run} units in {done.wall_s:.1f} s{resumed}")
     for line in results.table_lines(done.summary):
         print(line)
-    print(f"wrote {out / 'results.parquet'} and {out / 'summary.json'}")
+    written = f"{out / 'results.parquet'} and {out / 'summary.json'}"
+    if args.rerun:
+        import pyarrow.parquet as pq
+
+        from sins import viz
+
+        viz.save_campaign(pq.read_table(out / "results.parquet").to_pydict(), args.rerun)
+        written = f"{out / 'results.parquet'}, {out / 'summary.json'} and {args.rerun}"
+    print(f"wrote {written}")
     return 0
 
 
@@ -670,6 +682,10 @@ def _add_campaign(sub: _Subparsers) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing dask cluster (tcp://HOST:PORT)")
     p.add_argument("--out", type=Path, metavar="DIR", help="results folder (default: NAME-campaign)")
     p.add_argument("--resume", action="store_true", help="continue the campaign from what --out holds")
+    p.add_argument(
+        "--rerun", type=Path, metavar="OUT.rrd",
+        help="log the spread: percentile bands of horizontal error over time, each unit's final error",
+    )  # fmt: skip
     p.set_defaults(func=_cmd_campaign)
 
 

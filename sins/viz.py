@@ -28,6 +28,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rerun as rr
@@ -404,3 +405,62 @@ def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
         )
     )
     return _write(path, rec, bp, lambda: log_gap(rec, report))
+
+
+#: The percentiles of a campaign's horizontal error drawn over time, per strategy (a band and its median).
+CAMPAIGN_PERCENTILES = (5, 25, 50, 75, 95)
+
+
+def save_campaign(rows: dict[str, list[Any]], path: str | os.PathLike[str]) -> Path:
+    """A campaign's spread in a ``.rrd`` file: per scenario, the percentiles of the horizontal error over
+    time for each strategy (:data:`CAMPAIGN_PERCENTILES`), and each unit's final error as a point on a
+    ``unit`` timeline.
+
+    ``rows`` is the results table as columns (``pyarrow.Table.to_pydict()`` of ``results.parquet``); the
+    series need the campaign's ``series_hz`` > 0.
+    """
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id="campaign")
+    scenarios = list(dict.fromkeys(rows["scenario"]))
+    strategies = list(dict.fromkeys(rows["strategy"]))
+    views = []
+    for sc in scenarios:
+        views.append(
+            rrb.TimeSeriesView(origin=f"campaign/{sc}/horizontal_m", name=f"{sc}: horizontal error (m)")
+        )
+        views.append(
+            rrb.TimeSeriesView(origin=f"campaign/{sc}/final_m", name=f"{sc}: final error per unit (m)")
+        )
+    bp = rrb.Blueprint(rrb.Grid(*views), collapse_panels=True)
+
+    def log() -> None:
+        for sc in scenarios:
+            for st in strategies:
+                idx = [i for i, (s, g) in enumerate(zip(rows["scenario"], rows["strategy"], strict=True))
+                       if (s, g) == (sc, st)]  # fmt: skip
+                _log_campaign_group(rec, sc, st, rows, idx)
+
+    return _write(path, rec, bp, log)
+
+
+def _log_campaign_group(
+    rec: rr.RecordingStream, scenario: str, strategy: str, rows: dict[str, list[Any]], idx: list[int]
+) -> None:
+    rgb = colour(strategy)
+    units = np.array([rows["unit"][i] for i in idx], dtype=np.int64)
+    final = np.array([rows["final_horizontal_m"][i] for i in idx], dtype=np.float64)
+    entity = f"campaign/{scenario}/final_m/{strategy}"
+    rec.log(entity, rr.SeriesPoints(names=[strategy], colors=[rgb], marker_sizes=[3.0]), static=True)
+    rec.send_columns(
+        entity, indexes=[rr.TimeColumn("unit", sequence=units)], columns=rr.Scalars.columns(scalars=final)
+    )
+    if "series_horizontal_m" not in rows or not idx:
+        return
+    series = [np.asarray(rows["series_horizontal_m"][i], dtype=np.float64) for i in idx]
+    n = min(len(s) for s in series)  # every unit of a scenario keeps the same times
+    t = np.asarray(rows["series_t_s"][idx[0]][:n], dtype=np.float64)
+    bands = np.percentile(np.vstack([s[:n] for s in series]), CAMPAIGN_PERCENTILES, axis=0)
+    for q, band in zip(CAMPAIGN_PERCENTILES, bands, strict=True):
+        entity = f"campaign/{scenario}/horizontal_m/{strategy}/p{q}"
+        width = 2.0 if q == 50 else 0.75
+        rec.log(entity, rr.SeriesLines(names=[f"{strategy} p{q}"], colors=[rgb], widths=[width]), static=True)
+        rec.send_columns(entity, indexes=_time(t), columns=rr.Scalars.columns(scalars=band))

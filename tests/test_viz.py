@@ -83,6 +83,8 @@ def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
         batch = chunk.to_record_batch()
         if "sim_time" in batch.schema.names:
             t = batch.column("sim_time").to_numpy().astype("int64") / 1e9
+        elif "unit" in batch.schema.names:  # a campaign's final errors, by unit
+            t = batch.column("unit").to_numpy().astype(float)
         else:  # the gap's Allan deviations, by octave of the cluster time
             t = batch.column(viz.ALLAN_TIMELINE).to_numpy().astype(float)
         out[chunk.entity_path]["t"].append(t)
@@ -277,3 +279,32 @@ def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_pat
     assert set(report.quartiles["gyro.x"]) <= {"omega", "|ω|", "|f|", "rate of change", "time", "temperature"}
     assert "static" in logged["/gap/quartiles/gyro_x_deg_per_h/time"]
     assert sum(report.quartiles["gyro.x"]["time"]) == pytest.approx(1.0)
+
+
+def test_a_campaign_logs_its_percentile_bands_and_each_units_final_error(tmp_path: Path) -> None:
+    """Rows made up here (units' error series that grow at known rates): the logged bands are numpy's
+    percentiles across units at each time, and the points each unit's final error."""
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 300.0, 10.0)
+    rows: dict[str, list[object]] = {k: [] for k in ("unit", "scenario", "strategy", "final_horizontal_m",
+                                                     "series_t_s", "series_horizontal_m")}  # fmt: skip
+    growth = {"none": rng.uniform(1.0, 3.0, 9), "regression": rng.uniform(0.1, 0.3, 9)}
+    for unit in range(9):
+        for strategy, rates in growth.items():
+            series = rates[unit] * t
+            rows["unit"].append(unit)
+            rows["scenario"].append("drive")
+            rows["strategy"].append(strategy)
+            rows["final_horizontal_m"].append(float(series[-1]))
+            rows["series_t_s"].append(t.tolist())
+            rows["series_horizontal_m"].append(series.tolist())
+    logged = _read(viz.save_campaign(rows, tmp_path / "c.rrd"))
+    for strategy, rates in growth.items():
+        all_series = rates[:, None] * t[None, :]
+        for q in viz.CAMPAIGN_PERCENTILES:
+            band = logged[f"/campaign/drive/horizontal_m/{strategy}/p{q}"]
+            assert np.allclose(band["t"], t)
+            assert np.allclose(band["scalars"], np.percentile(all_series, q, axis=0), rtol=1e-12)
+        points = logged[f"/campaign/drive/final_m/{strategy}"]
+        assert np.array_equal(points["t"], np.arange(9))
+        assert np.allclose(points["scalars"], rates * t[-1], rtol=1e-12)
