@@ -530,9 +530,15 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from sins import quality
+    from sins import quality, scenario
+    from sins.campaign.spec import is_campaign
 
-    suite = quality.load_suite(args.suite)
+    path = Path(args.suite)
+    if not path.exists() and scenario.find_preset(args.suite, "campaign") is not None:
+        path = scenario.resolve_preset(args.suite, "campaign")
+    if is_campaign(path):
+        return _check_campaign(args, path)
+    suite = quality.load_suite(path)
     if not args.update_baseline and not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     if not args.update_baseline:
@@ -559,6 +565,41 @@ def _cmd_check(args: argparse.Namespace) -> int:
             print(f"  {c.case}/{c.strategy} {c.metric}: {c.verdict}{rel}")
         return 1
     print(f"\nall {len(changes)} metrics hold (tolerances: {tol})")
+    return 0
+
+
+def _check_campaign(args: argparse.Namespace, path: Path) -> int:
+    """``sins check`` on a campaign: its distributions against a baseline summary (sins.campaign.gate)."""
+    import tempfile
+
+    from sins import campaign, io
+    from sins.campaign import engine, gate, results
+
+    spec = campaign.load(path)
+    if not args.update_baseline and not Path(args.baseline).exists():
+        raise SinsInputError(f"{args.baseline}: no such campaign baseline; create it with --update-baseline")
+    baseline = None if args.update_baseline else results.read_summary(args.baseline)  # refuse early
+    with tempfile.TemporaryDirectory() as tmp, _progress_bar(f"campaign {spec.name}", "unit") as bar:
+        done = engine.run(spec, Path(tmp) / "out", progress=_row_progress(bar))
+    if baseline is None:
+        io.write_json(args.baseline, gate.baseline_of(done.summary))
+        print(f"wrote {args.baseline}: {len(done.summary['groups'])} groups of {spec.count} units")
+        return 0
+    checks = gate.compare(baseline, done.summary)
+    rows = [
+        [c.group, c.figure, c.test or "-", f"{c.median_ratio:.4g}", f"{c.p_value:.3g}", c.verdict]
+        for c in checks
+    ]
+    print(_fixed_width(["scenario/strategy", "figure", "test", "median now/base", "p", "verdict"], rows))
+    bad = [c for c in checks if c.verdict != "holds"]
+    each = gate.FALSE_ALARM / max(1, len(checks))
+    level = f"false-alarm rate {gate.FALSE_ALARM:g} over the {len(checks)} tests, each at {each:.2g}"
+    if bad:
+        print(f"\n{len(bad)} of {len(checks)} figures regressed or went missing ({level})")
+        for c in bad:
+            print(f"  {c.group} {c.figure}: {c.verdict} (p = {c.p_value:.3g}, median x{c.median_ratio:.4g})")
+        return 1
+    print(f"\nall {len(checks)} figures hold ({level})")
     return 0
 
 
@@ -690,8 +731,13 @@ def _add_campaign(sub: _Subparsers) -> None:
 
 
 def _add_check(sub: _Subparsers) -> None:
-    p = sub.add_parser("check", help="the compensation-quality gate: a suite against its baseline")
-    p.add_argument("suite", type=Path, metavar="SUITE.toml")
+    p = sub.add_parser(
+        "check", help="the compensation-quality gate: a suite or a campaign against its baseline"
+    )
+    p.add_argument(
+        "suite", metavar="SUITE.toml",
+        help="a quality suite, or a campaign file or preset (its distributions gated: sins.campaign.gate)",
+    )  # fmt: skip
     p.add_argument("--baseline", type=Path, required=True, metavar="BASELINE.json")
     p.add_argument(
         "--update-baseline", action="store_true", help="write the measured metrics as the baseline"

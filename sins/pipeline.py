@@ -6,9 +6,10 @@ the CLI prints and writes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,37 +188,86 @@ def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) 
     whatever the duration. The readings equal the whole array's corruption to the last bit, and so
     do the integrated solutions (:func:`sins.nav.strapdown.advance` continues exactly).
     """
-    from sins.imu.stream import IncrementStream
-
     if unit is None:
         assert sc.imu_model is not None
         unit = fit_unit(scenario.load_imu(sc.imu_model), sc.compensation)
-    nav_model = unit.spec.model(run_seed=sc.imu_seed)
-    strategies, residuals = unit.for_run(nav_model), unit.residuals
+    return run_units(sc, [unit], [sc.imu_seed], keep_hz)[0]
+
+
+def run_units(
+    sc: Scenario, units: Sequence[FittedUnit], nav_seeds: Sequence[int], keep_hz: float = 10.0
+) -> list[ScenarioRun]:
+    """Drive several fitted units through one scenario, sharing its trajectory.
+
+    The truth and ideal IMU are generated once, chunk by chunk, and each unit corrupts (power-on
+    ``nav_seeds[i]``), corrects and integrates every chunk in turn, exactly as it would alone:
+    each result equals :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the
+    last bit. Memory is bounded by the chunk and the thinned series, whatever the duration.
+    """
+    if len(units) != len(nav_seeds):
+        raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
     try:
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
         first = trajectory.start_state(motion)
         chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
-        stream = IncrementStream(nav_model, sc.imu_seed, 1.0 / sc.rate_hz)
-        runs = {name: _StreamedRun(first, keep_every) for name in strategies}
-        truth_kept, pending = [first], _Pending()
-        step = _ChunkStep(sc, strategies, runs, pending, truth_kept, keep_every, float(first.h[0]))
+        driven = [
+            _DrivenUnit(sc, unit, seed, first, keep_every)
+            for unit, seed in zip(units, nav_seeds, strict=True)
+        ]
         for truth_c, ideal_c in chunks:
-            pending.add(truth_c, ideal_c)
-            step(stream.push(ideal_c, _cabin(sc, ideal_c.t)))
-        step(stream.finish())
-        samples = step.samples
+            cabin = _cabin(sc, ideal_c.t)
+            for d in driven:
+                d.push(truth_c, ideal_c, cabin)
+        for d in driven:
+            d.finish()
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
         raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
-    last_truth = pending.last_truth
-    if samples % keep_every and last_truth is not None:
-        truth_kept.append(last_truth)
-    out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in runs.items()}
-    sensor_t = step.mid_t.means()[:, 0]
-    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t)
+    return [d.result(seed) for d, seed in zip(driven, nav_seeds, strict=True)]
+
+
+class _DrivenUnit:
+    """One unit's navigation power-on through a scenario: its stream, its strategies' runs."""
+
+    def __init__(
+        self, sc: Scenario, unit: FittedUnit, nav_seed: int, first: NavSeries, keep_every: int
+    ) -> None:
+        from sins.imu.stream import IncrementStream
+
+        self.sc, self.unit, self.keep_every = sc, unit, keep_every
+        nav_model = unit.spec.model(run_seed=nav_seed)
+        self.strategies = unit.for_run(nav_model)
+        self.stream = IncrementStream(nav_model, nav_seed, 1.0 / sc.rate_hz)
+        self.runs = {name: _StreamedRun(first, keep_every) for name in self.strategies}
+        self.truth_kept, self.pending = [first], _Pending()
+        self.step = _ChunkStep(
+            sc, self.strategies, self.runs, self.pending, self.truth_kept, keep_every, float(first.h[0])
+        )
+
+    def push(self, truth: NavSeries, ideal: ImuIncrements, cabin: NDArray[np.float64]) -> None:
+        """A generated chunk: corrupt it, and correct and integrate what the stream writes."""
+        self.pending.add(truth, ideal)
+        self.step(self.stream.push(ideal, cabin))
+
+    def finish(self) -> None:
+        """The stream's last intervals."""
+        self.step(self.stream.finish())
+
+    def result(self, nav_seed: int) -> ScenarioRun:
+        """The unit's runs, as :func:`run_scenario` gives them."""
+        samples, keep_every = self.step.samples, self.keep_every
+        last_truth = self.pending.last_truth
+        if samples % keep_every and last_truth is not None:
+            self.truth_kept.append(last_truth)
+        residuals = self.unit.residuals
+        out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in self.runs.items()}
+        sensor_t = self.step.mid_t.means()[:, 0]
+        sc = dataclasses.replace(self.sc, imu_seed=nav_seed)
+        return ScenarioRun(
+            scenario=sc, samples=samples, truth=_join(self.truth_kept), runs=out, sensor_t=sensor_t
+        )
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
@@ -238,13 +288,15 @@ class FittedUnit:
 
     ``strategies`` holds every strategy but the oracle, whose model is each navigation run's own
     (:meth:`for_run`); ``residuals`` the RMS of each one's corrected readings on the held-back rig
-    rows, per channel, SI units (the oracle's knowing the rig session's unit).
+    rows, per channel, SI units (the oracle's knowing the rig session's unit), and ``biases`` their
+    mean (the bias each strategy leaves).
     """
 
     spec: scenario.ImuSpec
     compensation: scenario.CompensationSpec | None
     strategies: dict[str, Strategy]
     residuals: dict[str, dict[str, float]]
+    biases: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def for_run(self, nav_model: ImuModel) -> dict[str, Strategy]:
         """The strategies in the scenario's order, the oracle knowing ``nav_model``."""
@@ -267,8 +319,9 @@ def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> 
 
     strategies: dict[str, Strategy] = {"none": compensation.make("none")}
     residuals: dict[str, dict[str, float]] = {}
+    biases: dict[str, dict[str, float]] = {}
     if comp is None:
-        return FittedUnit(spec, comp, strategies, residuals)
+        return FittedUnit(spec, comp, strategies, residuals, biases)
     rig = scenario.load_rig(comp.rig)
     rig_model = spec.model(run_seed=comp.seed)
     data = calibration.simulate_rig(rig, rig_model, seed=comp.seed)
@@ -281,7 +334,8 @@ def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> 
             judged = strategies[name] = compensation.make(name).fit(fit)
         channels = compensation.residual_rms(judged, held)
         residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
-    return FittedUnit(spec, comp, strategies, residuals)
+        biases[name] = {ch: v["mean_after"] for ch, v in channels.items()}
+    return FittedUnit(spec, comp, strategies, residuals, biases)
 
 
 class _Pending:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -471,3 +472,14 @@ def test_to_increments_needs_two_samples() -> None:
     inc = two.to_increments()
     assert np.array_equal(inc.dtheta_b, np.full((1, 3), 0.5))
     assert np.array_equal(inc.dv_b, np.full((1, 3), 1.0))
+
+
+def test_written_files_get_the_permissions_open_would_give_not_a_temporary_files(tmp_path: Path) -> None:
+    """Written through a temporary file (owner-only by default), the result has 0o666 less the umask,
+    as a plain ``open`` gives: a baseline or a recording is readable by the group as any other file."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    path = tmp_path / "t.csv"
+    io.write_table(path, ["t"], np.zeros((2, 1)))
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]

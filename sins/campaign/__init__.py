@@ -6,6 +6,6 @@
 """
 
 from sins.campaign.spec import CampaignSpec, load, nav_seed, rig_seed
-from sins.campaign.unit import run_unit
+from sins.campaign.unit import run_unit, run_units
 
-__all__ = ["CampaignSpec", "load", "nav_seed", "rig_seed", "run_unit"]
+__all__ = ["CampaignSpec", "load", "nav_seed", "rig_seed", "run_unit", "run_units"]

@@ -20,7 +20,7 @@ from typing import Any
 
 from sins.campaign import results
 from sins.campaign.spec import CampaignSpec
-from sins.campaign.unit import run_unit
+from sins.campaign.unit import run_units
 from sins.errors import SinsInputError
 
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
@@ -108,10 +108,7 @@ def run(
 
 def _run_units(spec: CampaignSpec, units: list[int]) -> tuple[list[int], list[dict[str, Any]]]:
     """A task: the rows of ``units``, on a worker."""
-    rows: list[dict[str, Any]] = []
-    for unit in units:
-        rows.extend(run_unit(spec, unit))
-    return units, rows
+    return units, run_units(spec, units)
 
 
 def _connect(address: str) -> Any:

@@ -13,9 +13,7 @@ complete rows only, and ``--resume`` skips the units the parts already hold.
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -26,7 +24,7 @@ import pyarrow.parquet as pq
 
 from sins import io
 from sins.campaign.spec import CampaignSpec, describe
-from sins.campaign.unit import RESIDUAL_FIELDS
+from sins.campaign.unit import BIAS_FIELDS, RESIDUAL_FIELDS
 from sins.errors import SinsInputError
 
 FORMAT = "sins-campaign"
@@ -38,7 +36,7 @@ BOOTSTRAP_SEED = 20081101
 #: The statistics of each figure: the percentile each one is (the mean is "mean").
 STATISTICS = {"mean": None, "median": 50.0, "p90": 90.0, "p95": 95.0}
 #: The figures summarised per scenario × strategy.
-SUMMARISED = ("final_horizontal_m", "max_horizontal_m", *RESIDUAL_FIELDS)
+SUMMARISED = ("final_horizontal_m", "max_horizontal_m", *RESIDUAL_FIELDS, *BIAS_FIELDS)
 
 
 def prepare(out: Path, spec: CampaignSpec, resume: bool) -> set[int]:
@@ -81,14 +79,8 @@ def done_units(parts: Path) -> set[int]:
 def write_part(parts: Path, units: list[int], rows: list[dict[str, Any]]) -> Path:
     """The rows of ``units`` as one Parquet part, renamed into place once whole."""
     path = parts / f"units-{min(units):07d}-{max(units):07d}.parquet"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parts)
-    os.close(fd)
-    try:
+    with io.atomic_path(path) as tmp:
         pq.write_table(pa.Table.from_pylist(rows), tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return path
 
 
@@ -104,21 +96,15 @@ def join(out: Path, spec: CampaignSpec) -> pa.Table:
         s_idx = np.array([scen[s] for s in table.column("scenario").to_pylist()])
         g_idx = np.array([strat[s] for s in table.column("strategy").to_pylist()])
         table = table.take(np.lexsort((g_idx, s_idx, units)))
-    path = out / "results.parquet"
-    fd, tmp = tempfile.mkstemp(prefix=".results.parquet.", suffix=".tmp", dir=out)
-    os.close(fd)
-    try:
+    with io.atomic_path(out / "results.parquet") as tmp:
         pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return table
 
 
 def summarise(table: pa.Table, spec: CampaignSpec) -> dict[str, Any]:
     """Per scenario × strategy and figure: mean, median, 90th and 95th percentiles over the units,
-    each with a percentile-bootstrap 95 % interval (resampling units; fixed seed)."""
+    each with a percentile-bootstrap 95 % interval (resampling units; fixed seed), and every unit's
+    figures (``values``, keyed by figure, with the units' ``unit_seed``)."""
     groups: dict[str, Any] = {}
     if table.num_rows:
         scenario = np.array(table.column("scenario").to_pylist())
@@ -133,6 +119,12 @@ def summarise(table: pa.Table, spec: CampaignSpec) -> dict[str, Any]:
                         "strategy": st,
                         "units": int(rows.sum()),
                         **{f: _statistics(v) for f, v in figures.items()},
+                        # Each unit's figures, so that a later campaign can be tested against these
+                        # units (sins.campaign.gate), paired where the seeds match.
+                        "values": {
+                            "unit_seed": table.column("unit_seed").to_numpy()[rows].tolist(),
+                            **{f: v.tolist() for f, v in figures.items()},
+                        },
                     }
     return {"format": SUMMARY_FORMAT, **describe(spec), "groups": groups}
 

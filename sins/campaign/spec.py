@@ -81,10 +81,6 @@ class CampaignSpec:
         """The compensation table with the unit's rig power-on seed."""
         return dataclasses.replace(self.compensation, seed=rig_seed(self.unit_seed(unit)))
 
-    def unit_scenario(self, index: int, unit: int) -> Scenario:
-        """Scenario ``index`` as unit ``unit`` drives it (its navigation power-on seed)."""
-        return dataclasses.replace(self.scenarios[index], imu_seed=nav_seed(self.unit_seed(unit)))
-
 
 def load(path: str | os.PathLike[str]) -> CampaignSpec:
     """Read and validate a campaign file; every referenced file is read now, before any work.
@@ -134,6 +130,14 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
     top.done()
     scenario.load_rig(compensation.rig)  # refuse a bad rig file now, not in every task
     return CampaignSpec(name, path, imu, count, first_seed, compensation, scenarios, series_hz)
+
+
+def is_campaign(path: str | os.PathLike[str]) -> bool:
+    """Whether the TOML file at ``path`` is a campaign (it has a ``[units]`` table); False if unreadable."""
+    try:
+        return "units" in read_toml(Path(path), "campaign")
+    except SinsInputError:
+        return False
 
 
 def _file(keys: TomlKeys, key: str, kind: scenario.PresetKind, base: Path) -> Path:

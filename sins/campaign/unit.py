@@ -6,6 +6,7 @@ so any worker, in any order, on any machine, computes the same rows.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -15,7 +16,7 @@ from sins.campaign.spec import CampaignSpec, nav_seed, rig_seed
 from sins.imu import CHANNELS
 
 #: The figures of a row, in the order of its columns (a :class:`sins.nav.metrics.DriftSummary`'s,
-#: then the held-back rig residual per channel).
+#: then the held-back rig residual's RMS and the bias left, per channel).
 SUMMARY_FIELDS = (
     "final_horizontal_m",
     "max_horizontal_m",
@@ -27,40 +28,57 @@ SUMMARY_FIELDS = (
     "drift_rate_m_per_h",
 )
 RESIDUAL_FIELDS = tuple(f"residual_{ch.replace('.', '_')}" for ch in CHANNELS)
+#: The bias each strategy leaves per channel: |mean| of corrected − reference on the held-back rig rows.
+BIAS_FIELDS = tuple(f"bias_left_{ch.replace('.', '_')}" for ch in CHANNELS)
 
 
 def run_unit(spec: CampaignSpec, unit: int) -> list[dict[str, Any]]:
-    """Every row of unit ``unit`` (0-based): one per scenario × strategy, in the campaign's order.
+    """Every row of unit ``unit`` (0-based): one per scenario × strategy, in the campaign's order
+    (:func:`run_units` of the one unit)."""
+    return run_units(spec, [unit])
 
-    The unit's rig session is simulated and every strategy fitted once; each scenario is then driven
-    with the navigation power-on (:func:`~sins.campaign.spec.nav_seed`), corrected by each strategy
-    and integrated by :func:`sins.pipeline.run_scenario`, the very path ``sins run`` takes.
+
+def run_units(spec: CampaignSpec, units: Sequence[int]) -> list[dict[str, Any]]:
+    """Every row of ``units``: by unit, then scenario and strategy in the campaign's order.
+
+    Each unit's rig session is simulated and every strategy fitted once
+    (:func:`sins.pipeline.fit_unit`); each scenario's trajectory is then generated once and driven by
+    every unit with its navigation power-on (:func:`~sins.campaign.spec.nav_seed`), corrected by each
+    strategy and integrated (:func:`sins.pipeline.run_units`): each unit's figures are those of
+    ``sins run`` on that unit, to the last bit.
     """
-    seed = spec.unit_seed(unit)
-    fitted = pipeline.fit_unit(spec.unit_imu(unit), spec.unit_compensation(unit))
-    rows = []
-    for index, base in enumerate(spec.scenarios):
-        sc = spec.unit_scenario(index, unit)
+    seeds = [spec.unit_seed(u) for u in units]
+    fitted = [pipeline.fit_unit(spec.unit_imu(u), spec.unit_compensation(u)) for u in units]
+    by_unit: list[list[dict[str, Any]]] = [[] for _ in units]
+    for base in spec.scenarios:
         keep_hz = spec.series_hz if spec.series_hz > 0 else 1.0 / max(base.rate_hz, 1.0)
-        result = pipeline.run_scenario(sc, keep_hz=keep_hz, unit=fitted)
-        for strategy, run in result.runs.items():
-            summary = run.summary.to_dict()
-            residual = run.residual_rms or {}
-            row: dict[str, Any] = {
-                "unit": unit,
-                "unit_seed": seed,
-                "rig_seed": rig_seed(seed),
-                "nav_seed": nav_seed(seed),
-                "scenario": base.name,
-                "strategy": strategy,
-                **{k: float(summary[k]) for k in SUMMARY_FIELDS},
-                **{
-                    f: float(residual.get(ch, np.nan))
-                    for f, ch in zip(RESIDUAL_FIELDS, CHANNELS, strict=True)
-                },
-            }
-            if spec.series_hz > 0:
-                row["series_t_s"] = run.errors.t.astype(np.float32).tolist()
-                row["series_horizontal_m"] = run.errors.horizontal_m.astype(np.float32).tolist()
-            rows.append(row)
+        results = pipeline.run_units(base, fitted, [nav_seed(s) for s in seeds], keep_hz)
+        for rows, unit, seed, f, result in zip(by_unit, units, seeds, fitted, results, strict=True):
+            rows.extend(_rows(spec, unit, seed, f, result))
+    return [row for rows in by_unit for row in rows]
+
+
+def _rows(
+    spec: CampaignSpec, unit: int, seed: int, fitted: pipeline.FittedUnit, result: pipeline.ScenarioRun
+) -> list[dict[str, Any]]:
+    rows = []
+    for strategy, run in result.runs.items():
+        summary = run.summary.to_dict()
+        residual = run.residual_rms or {}
+        bias = fitted.biases.get(strategy, {})
+        row: dict[str, Any] = {
+            "unit": unit,
+            "unit_seed": seed,
+            "rig_seed": rig_seed(seed),
+            "nav_seed": nav_seed(seed),
+            "scenario": result.scenario.name,
+            "strategy": strategy,
+            **{k: float(summary[k]) for k in SUMMARY_FIELDS},
+            **{f: float(residual.get(ch, np.nan)) for f, ch in zip(RESIDUAL_FIELDS, CHANNELS, strict=True)},
+            **{f: abs(float(bias.get(ch, np.nan))) for f, ch in zip(BIAS_FIELDS, CHANNELS, strict=True)},
+        }
+        if spec.series_hz > 0:
+            row["series_t_s"] = run.errors.t.astype(np.float32).tolist()
+            row["series_horizontal_m"] = run.errors.horizontal_m.astype(np.float32).tolist()
+        rows.append(row)
     return rows

@@ -137,7 +137,8 @@ class Oracle(Strategy):
 
 
 def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[str, float]]:
-    """Per channel, the RMS of reading − reference before and after correction (SI units).
+    """Per channel, the RMS of reading − reference before and after correction (SI units), and its mean
+    (``mean_before``, ``mean_after``: the bias left, which the RMS buries under the noise).
 
     Rows without a finite reference are left out.
     """
@@ -150,4 +151,13 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
     after = np.hstack([omega_ib_b - data.ref_gyro[ok], f_ib_b - data.ref_accel[ok]])
     rms = lambda x: np.sqrt(np.mean(x * x, axis=0))  # noqa: E731
     b, a = rms(before), rms(after)
-    return {ch: {"rms_before": float(b[i]), "rms_after": float(a[i])} for i, ch in enumerate(CHANNELS)}
+    mb, ma = before.mean(axis=0), after.mean(axis=0)
+    return {
+        ch: {
+            "rms_before": float(b[i]),
+            "rms_after": float(a[i]),
+            "mean_before": float(mb[i]),
+            "mean_after": float(ma[i]),
+        }
+        for i, ch in enumerate(CHANNELS)
+    }

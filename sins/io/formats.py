@@ -518,22 +518,41 @@ def read_json_document(
     return doc
 
 
+#: The process's umask, read once at import (reading it means setting it, which threads would race).
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
+
 @contextlib.contextmanager
-def _atomic(path: str | os.PathLike[str]) -> Iterator[TextIO]:
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A temporary file beside ``path`` to write, renamed to ``path`` when the block ends without an
+    error and removed otherwise: a reader never sees half a file, and an interrupted run leaves none.
+
+    The file gets the permissions a plain ``open`` would give it (``0o666`` less the umask), not the
+    owner-only mode of a temporary file.
+    """
     path = Path(path)
     directory = path.parent
     if not directory.is_dir():
         raise SinsInputError(f"{path}: directory {directory} does not exist")
     if path.is_dir():
         raise SinsInputError(f"{path}: is a directory, expected a file name to write")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    os.close(fd)
+    tmp = Path(name)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            yield fh
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
+
+
+@contextlib.contextmanager
+def _atomic(path: str | os.PathLike[str]) -> Iterator[TextIO]:
+    with atomic_path(path) as tmp, tmp.open("w", encoding="utf-8") as fh:
+        yield fh
 
 
 # --------------------------------------------------------------------------- rig recordings
