@@ -110,6 +110,7 @@ def aligned_run(
     config: ekf.FilterConfig,
     alignment: AlignmentConfig,
     position: tuple[float, float, float] | None = None,
+    heading: tuple[float, float] | None = None,
 ) -> ekf.AidedResult:
     """Align a unit that stands still at the start, then navigate with the fixes: the filter's whole run.
 
@@ -121,6 +122,9 @@ def aligned_run(
     alignment : the still window and the coarse alignment's span
     position : ``(lat, lon, h)`` of the unit (rad, rad, m); default the first fix (antenna and IMU are
         taken as one point for this start; the filter's position σ is the fix's)
+    heading : ``(yaw, 1σ)`` in rad from elsewhere (a magnetometer, a dual antenna) instead of
+        gyrocompassing: for a unit whose gyro bias is not well below ``Ω cos φ`` (a tactical unit's
+        5 °/h against 10.6 °/h at 45°), whose gyrocompass heading is tens of degrees off
 
     Returns
     -------
@@ -136,8 +140,12 @@ def aligned_run(
         sigma_pos = 0.1
     lat, lon, h = position
     q_nb = coarse_attitude(imu, alignment.coarse_s)
-    initial = strapdown.InitialState(lat=lat, lon=lon, h=h, v_n=np.zeros(3), q_nb=q_nb)
     P0 = coarse_covariance(config, lat, alignment.coarse_s, sigma_pos)
+    if heading is not None:
+        roll, pitch, _ = rotation.euler_from_quat(q_nb)
+        q_nb = rotation.quat_from_euler(roll, pitch, heading[0])
+        P0[ekf.ATT.stop - 1, ekf.ATT.stop - 1] = heading[1] ** 2
+    initial = strapdown.InitialState(lat=lat, lon=lon, h=h, v_n=np.zeros(3), q_nb=q_nb)
     still = [(float(imu.t[0]), float(imu.t[0] + alignment.static_s))]
     return ekf.run(imu, fixes, config, initial, zupt=still, P0=P0)
 
