@@ -72,6 +72,31 @@ class StrategyRun:
 
 
 @dataclass(frozen=True)
+class OutageError:
+    """The horizontal position error of an aided run over one outage window, m.
+
+    ``final_m`` is at the last IMU sample before the window's end (or the run's end), before any fix
+    corrects it; ``max_m`` the largest within the window.
+    """
+
+    start_s: float
+    end_s: float
+    final_m: float
+    max_m: float
+
+
+@dataclass(frozen=True)
+class AidedRun:
+    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`)."""
+
+    summary: DriftSummary
+    fixes: int
+    rejected: int
+    outages: tuple[OutageError, ...]
+    filter_grade: str = "navigation"
+
+
+@dataclass(frozen=True)
 class ScenarioRun:
     """A scenario's truth and one run per compensation strategy.
 
@@ -89,6 +114,7 @@ class ScenarioRun:
     truth: NavSeries
     runs: dict[str, StrategyRun]
     sensor_t: NDArray[np.float64] | None = None
+    aided: dict[str, AidedRun] = field(default_factory=dict)
 
 
 def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: PresetKind = "") -> Path:
@@ -168,7 +194,8 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
         truth_kept.append(truth_c.at(-1))
         solution_kept.append(solution_c.at(-1))
     run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
-    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run})
+    aided = aided_runs(sc, {"none": None}) if sc.aiding is not None else {}
+    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
 
 
 def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
@@ -214,7 +241,92 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
         truth_kept.append(last_truth)
     out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in runs.items()}
     sensor_t = step.mid_t.means()[:, 0]
-    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t)
+    aided = aided_runs(sc, dict(strategies), nav_model, spec.grade) if sc.aiding is not None else {}
+    return ScenarioRun(
+        scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t, aided=aided
+    )
+
+
+def aided_runs(
+    sc: Scenario,
+    strategies: dict[str, Strategy | None],
+    nav_model: ImuModel | None = None,
+    grade: str | None = None,
+) -> dict[str, AidedRun]:
+    """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
+
+    Whole arrays, not streamed: the truth and the readings are made again (the same, to the last
+    bit, as the streamed run's), the receiver rides the truth, and the filter starts from the truth's
+    first state or, with ``[alignment]``, from a static alignment. The filter is tuned to
+    ``[gnss] filter_grade``, else to the IMU model's grade, else to the navigation grade.
+
+    Parameters
+    ----------
+    sc : the scenario (``sc.aiding`` set)
+    strategies : name -> the strategy that corrects the readings (None: take them as they are)
+    nav_model : the unit's error model for this run (None: the ideal IMU)
+    grade : the IMU file's grade, if any
+    """
+    from sins.aiding import alignment, ekf, gnss
+
+    a = sc.aiding
+    assert a is not None
+    where = sc.source or sc.name
+    truth, ideal = simulate(sc)
+    temp = _cabin(sc, ideal.t)
+    readings = ideal
+    if nav_model is not None:
+        readings = nav_model.corrupt_increments(ideal, temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
+    receiver = gnss.GnssConfig(
+        rate_hz=a.rate_hz, sigma_pos_m=np.array(a.sigma_m), markov_sigma_m=np.array(a.markov_sigma_m),
+        markov_tau_s=a.markov_tau_s, sigma_vel_mps=a.sigma_vel_mps, lever_arm_b=np.array(a.lever_arm_m),
+        latency_s=a.latency_s, outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
+    )  # fmt: skip
+    fixes = gnss.simulate(truth, receiver, seed=a.seed)
+    filter_grade = a.filter_grade or grade or "navigation"
+    config = ekf.FilterConfig.for_grade(filter_grade)
+    heading = None
+    if a.static_s is not None:
+        still = truth.t <= truth.t[0] + a.static_s + 1e-9
+        if truth.t[-1] < truth.t[0] + a.static_s - 1e-9:
+            raise SinsInputError(
+                f"{where}: alignment.static_s: {a.static_s:g} s is longer than the run's "
+                f"{truth.t[-1] - truth.t[0]:g} s"
+            )
+        speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
+        turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
+        if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
+            raise SinsInputError(
+                f"{where}: alignment.static_s: the vehicle moves within the first {a.static_s:g} s "
+                f"(speed up to {speed:.3g} m/s); an alignment needs it still"
+            )
+        if a.heading_sigma_rad is not None:
+            draw = np.random.default_rng([a.seed, 3]).standard_normal()
+            heading = (float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad)
+    out = {}
+    for name, strategy in strategies.items():
+        corrected = readings if strategy is None else strategy.correct_increments(readings, temp)
+        if a.static_s is not None:
+            setup = alignment.AlignmentConfig(static_s=a.static_s, coarse_s=a.coarse_s)
+            result = alignment.aligned_run(corrected, fixes, config, setup, heading=heading)
+        else:
+            result = ekf.run(corrected, fixes, config, strapdown.InitialState.from_series(truth))
+        errors = nav_errors(result.nav, truth)
+        horizontal = errors.horizontal_m
+        windows = []
+        for start, end in a.outages:
+            if start >= truth.t[-1]:
+                continue
+            inside = np.flatnonzero((truth.t > start) & (truth.t < min(end, truth.t[-1]) + 1e-9))
+            if end < truth.t[-1]:  # the sample before the fix at the window's end
+                inside = inside[truth.t[inside] < end - 1e-9]
+            if inside.size == 0:
+                continue
+            windows.append(
+                OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
+            )
+        out[name] = AidedRun(summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade)
+    return out
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:

@@ -87,10 +87,11 @@ def coarse_covariance(config: ekf.FilterConfig, lat: float, seconds: float, posi
     """``P0`` after a coarse alignment of ``seconds``: the limits of the module docstring plus the noise.
 
     Tilt 1σ ``hypot(σ_ba, vrw/√T) / g``; heading ``hypot(σ_bg, arw/√T) / (Ω cos φ)`` plus
-    ``tan φ`` times the tilt, capped at 30°.
+    ``tan φ`` times the tilt; both capped at 30° (beyond, the filter's small angles mean little).
     """
     g = earth.G0
-    tilt = np.hypot(config.accel_bias_sigma, config.vrw_mps_rt_s / np.sqrt(seconds)) / g
+    cap = np.radians(30.0)
+    tilt = min(np.hypot(config.accel_bias_sigma, config.vrw_mps_rt_s / np.sqrt(seconds)) / g, cap)
     heading = (
         np.hypot(config.gyro_bias_sigma, config.arw_rad_rt_s / np.sqrt(seconds))
         / (earth.OMEGA_IE * np.cos(lat))
@@ -98,7 +99,7 @@ def coarse_covariance(config: ekf.FilterConfig, lat: float, seconds: float, posi
     )
     sigma = np.concatenate([
         np.full(3, position_sigma_m), np.full(3, config.zupt_sigma_mps),
-        [tilt, tilt, min(heading, np.radians(30.0))],
+        [tilt, tilt, min(heading, cap)],
         np.full(3, config.gyro_bias_sigma), np.full(3, config.accel_bias_sigma),
     ])  # fmt: skip
     return np.diag(sigma**2)
@@ -140,7 +141,8 @@ def aligned_run(
         sigma_pos = 0.1
     lat, lon, h = position
     q_nb = coarse_attitude(imu, alignment.coarse_s)
-    P0 = coarse_covariance(config, lat, alignment.coarse_s, sigma_pos)
+    averaged = float(imu.t[_window(imu, alignment.coarse_s)] - imu.t[0])  # at least one interval
+    P0 = coarse_covariance(config, lat, averaged, sigma_pos)
     if heading is not None:
         roll, pitch, _ = rotation.euler_from_quat(q_nb)
         q_nb = rotation.quat_from_euler(roll, pitch, heading[0])

@@ -136,7 +136,8 @@ def gauss_markov(t: Array, sigma: Array, tau_s: float, rng: np.random.Generator)
     if len(t) == 0:
         return out
     out[0] = sigma * rng.standard_normal(3)
-    phi = np.exp(-np.diff(t) / tau_s)
+    with np.errstate(over="ignore"):  # a vanishing τ: each step forgets the last (φ = 0)
+        phi = np.exp(-np.diff(t) / tau_s)
     drive = sigma * np.sqrt(1.0 - phi[:, None] ** 2) * rng.standard_normal((len(t) - 1, 3))
     for k in range(1, len(t)):
         out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
