@@ -28,6 +28,7 @@ from sins.nav.metrics import (
     kept_indices,
     nav_errors,
     summarize,
+    thinned_indices,
 )
 from sins.nav.vertical import VerticalMode
 from sins.scenario import PresetKind, Scenario, resolve_preset
@@ -87,13 +88,27 @@ class OutageError:
 
 @dataclass(frozen=True)
 class AidedRun:
-    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`)."""
+    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`).
+
+    The summary covers every sample; for display, ``errors`` are thinned as the scenario's plain
+    runs', and the filter's records (``t_cov``: each propagation step's end and each update) to at
+    most :data:`MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position NED m, velocity
+    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the estimated gyro
+    and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for the ideal IMU);
+    ``fix_t`` the fixes' times.
+    """
 
     summary: DriftSummary
     fixes: int
     rejected: int
     outages: tuple[OutageError, ...]
     filter_grade: str = "navigation"
+    errors: NavErrors | None = None
+    t_cov: NDArray[np.float64] | None = None
+    sigma: NDArray[np.float64] | None = None
+    bias: NDArray[np.float64] | None = None
+    true_bias: NDArray[np.float64] | None = None
+    fix_t: NDArray[np.float64] | None = None
 
 
 @dataclass(frozen=True)
@@ -194,7 +209,7 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0) -> ScenarioRun:
         truth_kept.append(truth_c.at(-1))
         solution_kept.append(solution_c.at(-1))
     run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
-    aided = aided_runs(sc, {"none": None}) if sc.aiding is not None else {}
+    aided = aided_runs(sc, {"none": None}, keep_every=keep_every) if sc.aiding is not None else {}
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
 
 
@@ -241,7 +256,9 @@ def _run_with_imu(sc: Scenario, keep_hz: float) -> ScenarioRun:
         truth_kept.append(last_truth)
     out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in runs.items()}
     sensor_t = step.mid_t.means()[:, 0]
-    aided = aided_runs(sc, dict(strategies), nav_model, spec.grade) if sc.aiding is not None else {}
+    aided = {}
+    if sc.aiding is not None:
+        aided = aided_runs(sc, dict(strategies), nav_model, spec.grade, keep_every=keep_every)
     return ScenarioRun(
         scenario=sc, samples=samples, truth=_join(truth_kept), runs=out, sensor_t=sensor_t, aided=aided
     )
@@ -252,6 +269,7 @@ def aided_runs(
     strategies: dict[str, Strategy | None],
     nav_model: ImuModel | None = None,
     grade: str | None = None,
+    keep_every: int = 1,
 ) -> dict[str, AidedRun]:
     """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
 
@@ -266,6 +284,7 @@ def aided_runs(
     strategies : name -> the strategy that corrects the readings (None: take them as they are)
     nav_model : the unit's error model for this run (None: the ideal IMU)
     grade : the IMU file's grade, if any
+    keep_every : the display series keep every ``keep_every``-th sample (and the last)
     """
     from sins.aiding import alignment, ekf, gnss
 
@@ -303,6 +322,13 @@ def aided_runs(
         if a.heading_sigma_rad is not None:
             draw = np.random.default_rng([a.seed, 3]).standard_normal()
             heading = (float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad)
+    true_bias = None
+    if nav_model is not None:
+        from sins.imu import Bias
+
+        gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
+        true_bias = np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
+    keep = None
     out = {}
     for name, strategy in strategies.items():
         corrected = readings if strategy is None else strategy.correct_increments(readings, temp)
@@ -325,7 +351,15 @@ def aided_runs(
             windows.append(
                 OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
             )
-        out[name] = AidedRun(summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade)
+        if keep is None:
+            keep = thinned_indices(len(truth.t), keep_every)
+            records = thinned_indices(len(result.t_cov), math.ceil(len(result.t_cov) / MAX_KEPT))
+        out[name] = AidedRun(
+            summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade,
+            errors=errors.at(keep), t_cov=result.t_cov[records], sigma=result.sigma()[records],
+            bias=np.hstack([result.gyro_bias, result.accel_bias])[records], true_bias=true_bias,
+            fix_t=np.asarray(fixes.t, dtype=float),
+        )  # fmt: skip
     return out
 
 

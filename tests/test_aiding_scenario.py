@@ -135,3 +135,34 @@ def test_a_scenario_without_gnss_reports_no_aided_runs(tmp_path: Path):
     assert rc == 0, err
     doc = json.loads((tmp_path / "plain.json").read_text())
     assert "aided by GNSS" not in out and "aided" not in doc and "outages" not in doc
+
+
+def test_rerun_shows_the_aided_errors_with_3_sigma_fixes_outages_and_biases(tmp_path: Path):
+    from test_viz import _read
+
+    from sins import viz
+    from sins.imu import CHANNELS, display_unit
+
+    result = pipeline.run_scenario(from_dict(DRIVE))
+    logged = _read(viz.save(result, tmp_path / "aided.rrd"))
+    aided = result.aided["none"]
+    assert aided.errors is not None and aided.sigma is not None and aided.bias is not None
+    assert aided.true_bias is not None and aided.t_cov is not None and aided.fix_t is not None
+    north = logged["/aided/north_m/none"]
+    # The last logged error is the run's final error; the bands are ±3 of the filter's σ.
+    assert north["scalars"][-1] == pytest.approx(aided.summary.final_north_m, abs=1e-9)
+    assert np.allclose(logged["/aided/north_m/none_plus_3sigma"]["scalars"], 3.0 * aided.sigma[:, 0])
+    assert np.allclose(
+        logged["/aided/yaw_deg/none_minus_3sigma"]["scalars"], -3.0 * np.degrees(aided.sigma[:, 8])
+    )
+    assert np.allclose(logged["/aided/horizontal_m/fixes"]["t"], aided.fix_t)
+    assert np.allclose(logged["/aided/horizontal_m/outages"]["t"], [100.0, 100.0, 130.0, 130.0])
+    for i, channel in enumerate(CHANNELS):
+        unit = display_unit(channel)[0]
+        entity = f"/aided/bias/{viz.imu_entity(channel)}"
+        assert np.allclose(logged[f"{entity}/true"]["scalars"], aided.true_bias[i] / unit)
+        assert np.allclose(logged[f"{entity}/none"]["scalars"], aided.bias[:, i] / unit)
+    # The drive's turns teach the filter the horizontal accelerometer biases: the last estimate is
+    # within 3σ of the unit's constant bias, give or take its bias instability (20 µg = 2e-4 m/s²).
+    last = aided.bias[-1, 3:5] - aided.true_bias[3:5]
+    assert np.all(np.abs(last) < 3.0 * aided.sigma[-1, 12:14] + 2e-4), (last, aided.sigma[-1, 12:14])
