@@ -343,9 +343,10 @@ def aided_runs(
         for start, end in a.outages:
             if start >= truth.t[-1]:
                 continue
-            inside = np.flatnonzero((truth.t > start) & (truth.t < min(end, truth.t[-1]) + 1e-9))
+            # Samples within 1 µs of an edge (a fix's, up to rounding) are the fix's, not the window's.
+            inside = np.flatnonzero((truth.t > start + 1e-6) & (truth.t < min(end, truth.t[-1]) + 1e-9))
             if end < truth.t[-1]:  # the sample before the fix at the window's end
-                inside = inside[truth.t[inside] < end - 1e-9]
+                inside = inside[truth.t[inside] < end - 1e-6]
             if inside.size == 0:
                 continue
             windows.append(
@@ -623,3 +624,90 @@ def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -
         out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
         out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
     return out
+
+
+@dataclass(frozen=True)
+class RecordingOutages:
+    """A real recording's IMU aided by its reference position as fixes, with outages opened in them.
+
+    ``outages`` are each window's horizontal error at its end and its maximum (:class:`OutageError`),
+    ``predicted_m`` the filter's horizontal 1σ at each window's end, ``free_m`` the error of the raw
+    readings (no bias correction) integrated over each window from the aided state at its start: what
+    the filter's estimate of the biases is worth. ``gyro_bias`` and
+    ``accel_bias`` are the final estimates (rad/s, m/s²); ``rms_m`` the horizontal RMS over the run.
+    """
+
+    outages: tuple[OutageError, ...]
+    predicted_m: tuple[float, ...]
+    free_m: tuple[float, ...]
+    gyro_bias: NDArray[np.float64]
+    accel_bias: NDArray[np.float64]
+    rms_m: float
+    fixes: int
+    rejected: int
+
+
+def psins_vehicle_outages(
+    outages: tuple[tuple[float, float], ...] = ((30.0, 45.0), (60.0, 80.0), (85.0, 95.0)),
+    *,
+    rate_hz: float = 1.0,
+    sigma_m: float = 0.5,
+    grade: str = "consumer",
+    root: str | os.PathLike[str] | None = None,
+) -> RecordingOutages:
+    """The PSINS vehicle recording's MEMS aided by the FOG-INS position as fixes, through outages.
+
+    The MEMS increments are integrated from the FOG-INS state (moved to the MEMS's place) at their
+    first time inside the reference; fixes are the FOG-INS position at ``rate_hz`` (its place, so the
+    lever arm is the reader's estimate of it, in MEMS axes) with ``sigma_m`` told to the filter; the
+    filter is tuned to ``grade`` (the file's MEMS has ≈ 0.06 °/s gyro and 5 mg accelerometer biases:
+    consumer grade). Errors are against the FOG-INS solution moved to the MEMS's place.
+    """
+    from sins.aiding import ekf, gnss
+    from sins.io.datasets.psins_vehicle import psins_alignment, read_psins_vehicle
+    from sins.nav import rotation
+
+    data, fog = read_psins_vehicle(root)
+    assert fog is not None
+    arm = psins_alignment(root).lever_arm_m  # the MEMS from the FOG-INS, MEMS axes
+    dt = 0.01  # the MEMS's increments: row k covers the 10 ms before t + 5 ms
+    t_end = data.t + 0.5 * dt
+    lat, lon, h = gnss.offset_position(fog.lat, fog.lon, fog.h, rotation.dcm_from_quat(fog.q_nb) @ arm)
+    truth = NavSeries(t=fog.t, lat=lat, lon=lon, h=h, v_n=fog.v_n, q_nb=fog.q_nb)
+    t = np.r_[t_end[0] - dt, t_end]
+    rows = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
+    k0, k1 = int(rows[0]), int(rows[-1])
+    imu = ImuIncrements(t=t[k0 : k1 + 1], dtheta_b=data.gyro[k0:k1] * dt, dv_b=data.accel[k0:k1] * dt)
+    start = strapdown.InitialState.from_series(truth.interpolate(imu.t[:1]))
+    fix_t = np.arange(np.ceil(imu.t[0] * rate_hz), imu.t[-1] * rate_hz) / rate_hz
+    at = fog.interpolate(fix_t)
+    fixes = gnss.GnssFixes(
+        t=fix_t, lat=at.lat, lon=at.lon, h=at.h, v_n=np.full((len(fix_t), 3), np.nan),
+        sigma_pos_m=np.full(3, sigma_m), lever_arm_b=-arm,
+    ).without([gnss.Outage(a, b) for a, b in outages])  # fmt: skip
+    config = ekf.FilterConfig.for_grade(
+        grade, position_sigma_m=sigma_m, velocity_sigma_mps=0.1, tilt_sigma_rad=np.radians(0.5),
+        heading_sigma_rad=np.radians(1.0),
+    )  # fmt: skip
+    result = ekf.run(imu, fixes, config, start)
+    reference = truth.interpolate(imu.t)
+    horizontal = nav_errors(result.nav, reference).horizontal_m
+    windows, predicted, free = [], [], []
+    for a, b in outages:
+        inside = np.flatnonzero((imu.t > a + 1e-6) & (imu.t < b - 1e-6))  # the fixes' samples are not in it
+        windows.append(OutageError(a, b, float(horizontal[inside[-1]]), float(horizontal[inside].max())))
+        row = int(np.flatnonzero((result.t_cov <= b + 1e-9) & ~result.after_update)[-1])
+        predicted.append(float(np.hypot(*result.sigma()[row, :2])))
+        # The raw readings from the aided state at the window's start (after its last fix).
+        k = int(inside[0]) - 1
+        steps = slice(k, int(inside[-1]))
+        seg = ImuIncrements(
+            t=imu.t[k : int(inside[-1]) + 1], dtheta_b=imu.dtheta_b[steps], dv_b=imu.dv_b[steps]
+        )
+        alone = strapdown.integrate(seg, strapdown.InitialState.from_series(result.nav, k))
+        free.append(float(nav_errors(alone.at(-1), reference.at(int(inside[-1]))).horizontal_m[0]))
+    return RecordingOutages(
+        outages=tuple(windows), predicted_m=tuple(predicted), free_m=tuple(free),
+        gyro_bias=result.gyro_bias[-1], accel_bias=result.accel_bias[-1],
+        rms_m=float(np.sqrt(np.mean(horizontal**2))), fixes=len(fixes), rejected=result.rejected,
+    )  # fmt: skip
