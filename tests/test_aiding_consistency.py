@@ -160,3 +160,22 @@ def test_outage_error_grows_as_the_covariance_at_its_start_predicts(outage):
     assert abs(ratio.mean() - 1.0) < 2.0 * spread, (ratio.mean(), spread)
     # The horizontal error is metres, not centimetres or kilometres: the test has teeth.
     assert 1.0 < np.sqrt(np.mean(np.sum(error**2, axis=1))) < 100.0
+
+
+def test_velocity_fixes_keep_the_filter_consistent():
+    """Position and velocity fixes at 2 Hz (the velocity's lever-arm term included): 30 runs, NEES
+    within its χ² band at most times and on average (spread sqrt(2·15/30))."""
+    truth, ideal = trajectory.generate(driving(50.0), 100.0)
+    receiver = gnss.GnssConfig(lever_arm_b=RECEIVER.lever_arm_b, sigma_vel_mps=0.05, rate_hz=2.0)
+    runs, nees, rejected = 30, [], 0
+    for run in range(runs):
+        result, b_g, b_a = one_run(truth, ideal, 2000 + run, receiver)
+        rows = np.flatnonzero(result.after_update)
+        e = state_errors(result, truth, b_g, b_a, rows)
+        nees.append(np.einsum("ki,kij,kj->k", e, np.linalg.inv(result.P[rows]), e))
+        rejected += result.rejected
+    assert rejected <= 4  # of ~9000 fixes at the 99.99 % gate
+    mean = np.array(nees).mean(axis=0)
+    low, high = chi2.ppf([0.025, 0.975], runs * 15) / runs
+    assert np.mean((mean > low) & (mean < high)) >= 0.85
+    assert abs(mean.mean() - 15.0) < 3.0 * np.sqrt(30.0 / runs)

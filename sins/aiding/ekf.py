@@ -203,7 +203,8 @@ class AidedResult:
     after_update : (m,) True where the record follows a measurement update
     fix_t : (k,) the GNSS fixes' times
     nis : (k,) each fix's position NIS (before its update)
-    accepted : (k,) whether the gate let the fix in
+    accepted : (k,) whether the gate let the fix's position in (its velocity, if any, is gated after
+        it, on its own NIS, and is used only with an accepted position)
     zupt_t : (j,) times of the zero-velocity updates
     """
 
