@@ -207,3 +207,4 @@ def test_a_wild_fix_is_gated_and_counted(driven):
     assert result.rejected == 1 and not result.accepted[30] and result.nis[30] > 1000
     assert np.all(result.accepted[np.arange(len(fixes)) != 30])
     assert np.max(np.abs(ekf.nav_error_state(result.nav, truth)[:, :2])) < 3.0
+    assert np.all(result.nav.q_nb[:, 3] >= 0.0)  # corrected rows keep the integrator's sign convention

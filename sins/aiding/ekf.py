@@ -396,7 +396,8 @@ def run(
                 feed_back()
                 nav = strapdown.current(state)
                 C_nb = rotation.dcm_from_quat(nav.q_nb)
-                omega_b = imu.dtheta_b[idx - 1] / dt_all[idx - 1] - b_g
+                last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
+                omega_b = imu.dtheta_b[last] / dt_all[last] - b_g
                 arm_rate_n = C_nb @ np.cross(omega_b, arm_b)
                 H = np.zeros((3, N_STATES))
                 H[:, VEL] = np.eye(3)
@@ -404,7 +405,8 @@ def run(
                 gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, R_vel)
         feed_back()
         nav = strapdown.current(state)
-        lat[idx], lon[idx], h[idx], v[idx], q[idx] = nav.lat, nav.lon, nav.h, nav.v_n, nav.q_nb
+        sign = -1.0 if nav.q_nb[3] < 0.0 else 1.0  # scalar part >= 0, as the integrator writes them
+        lat[idx], lon[idx], h[idx], v[idx], q[idx] = nav.lat, nav.lon, nav.h, nav.v_n, sign * nav.q_nb
         record(float(t[idx]), True)
 
     return AidedResult(
