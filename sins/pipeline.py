@@ -29,6 +29,7 @@ from sins.nav.metrics import (
     kept_indices,
     nav_errors,
     summarize,
+    thinned_indices,
 )
 from sins.nav.vertical import VerticalMode
 from sins.scenario import PresetKind, Scenario, resolve_preset
@@ -73,6 +74,45 @@ class StrategyRun:
 
 
 @dataclass(frozen=True)
+class OutageError:
+    """The horizontal position error of an aided run over one outage window, m.
+
+    ``final_m`` is at the last IMU sample before the window's end (or the run's end), before any fix
+    corrects it; ``max_m`` the largest within the window.
+    """
+
+    start_s: float
+    end_s: float
+    final_m: float
+    max_m: float
+
+
+@dataclass(frozen=True)
+class AidedRun:
+    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`).
+
+    The summary covers every sample; for display, ``errors`` are thinned as the scenario's plain
+    runs', and the filter's records (``t_cov``: each propagation step's end and each update) to at
+    most :data:`MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position NED m, velocity
+    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the estimated gyro
+    and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for the ideal IMU);
+    ``fix_t`` the fixes' times.
+    """
+
+    summary: DriftSummary
+    fixes: int
+    rejected: int
+    outages: tuple[OutageError, ...]
+    filter_grade: str = "navigation"
+    errors: NavErrors | None = None
+    t_cov: NDArray[np.float64] | None = None
+    sigma: NDArray[np.float64] | None = None
+    bias: NDArray[np.float64] | None = None
+    true_bias: NDArray[np.float64] | None = None
+    fix_t: NDArray[np.float64] | None = None
+
+
+@dataclass(frozen=True)
 class ScenarioRun:
     """A scenario's truth and one run per compensation strategy.
 
@@ -90,6 +130,7 @@ class ScenarioRun:
     truth: NavSeries
     runs: dict[str, StrategyRun]
     sensor_t: NDArray[np.float64] | None = None
+    aided: dict[str, AidedRun] = field(default_factory=dict)
 
 
 def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: PresetKind = "") -> Path:
@@ -171,7 +212,8 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = 
         truth_kept.append(truth_c.at(-1))
         solution_kept.append(solution_c.at(-1))
     run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
-    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run})
+    aided = aided_runs(sc, {"none": None}, keep_every=keep_every) if sc.aiding is not None else {}
+    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
 
 
 def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) -> ScenarioRun:
@@ -237,7 +279,7 @@ class _DrivenUnit:
         from sins.imu.stream import IncrementStream
 
         self.sc, self.unit, self.keep_every = sc, unit, keep_every
-        nav_model = unit.spec.model(run_seed=nav_seed)
+        self.nav_model = nav_model = unit.spec.model(run_seed=nav_seed)
         self.strategies = unit.for_run(nav_model)
         self.stream = IncrementStream(nav_model, nav_seed, 1.0 / sc.rate_hz)
         self.runs = {name: _StreamedRun(first, keep_every) for name in self.strategies}
@@ -265,9 +307,118 @@ class _DrivenUnit:
         out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in self.runs.items()}
         sensor_t = self.step.mid_t.means()[:, 0]
         sc = dataclasses.replace(self.sc, imu_seed=nav_seed)
+        aided = {}
+        if sc.aiding is not None:
+            strategies: dict[str, Strategy | None] = dict(self.strategies)
+            aided = aided_runs(sc, strategies, self.nav_model, self.unit.spec.grade, keep_every=keep_every)
         return ScenarioRun(
-            scenario=sc, samples=samples, truth=_join(self.truth_kept), runs=out, sensor_t=sensor_t
+            scenario=sc,
+            samples=samples,
+            truth=_join(self.truth_kept),
+            runs=out,
+            sensor_t=sensor_t,
+            aided=aided,
         )
+
+
+def aided_runs(
+    sc: Scenario,
+    strategies: dict[str, Strategy | None],
+    nav_model: ImuModel | None = None,
+    grade: str | None = None,
+    keep_every: int = 1,
+) -> dict[str, AidedRun]:
+    """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
+
+    Whole arrays, not streamed: the truth and the readings are made again (the same, to the last
+    bit, as the streamed run's), the receiver rides the truth, and the filter starts from the truth's
+    first state or, with ``[alignment]``, from a static alignment. The filter is tuned to
+    ``[gnss] filter_grade``, else to the IMU model's grade, else to the navigation grade.
+
+    Parameters
+    ----------
+    sc : the scenario (``sc.aiding`` set)
+    strategies : name -> the strategy that corrects the readings (None: take them as they are)
+    nav_model : the unit's error model for this run (None: the ideal IMU)
+    grade : the IMU file's grade, if any
+    keep_every : the display series keep every ``keep_every``-th sample (and the last)
+    """
+    from sins.aiding import alignment, ekf, gnss
+
+    a = sc.aiding
+    assert a is not None
+    where = sc.source or sc.name
+    truth, ideal = simulate(sc)
+    temp = _cabin(sc, ideal.t)
+    readings = ideal
+    if nav_model is not None:
+        readings = nav_model.corrupt_increments(ideal, temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
+    receiver = gnss.GnssConfig(
+        rate_hz=a.rate_hz, sigma_pos_m=np.array(a.sigma_m), markov_sigma_m=np.array(a.markov_sigma_m),
+        markov_tau_s=a.markov_tau_s, sigma_vel_mps=a.sigma_vel_mps, lever_arm_b=np.array(a.lever_arm_m),
+        latency_s=a.latency_s, outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
+    )  # fmt: skip
+    fixes = gnss.simulate(truth, receiver, seed=a.seed)
+    filter_grade = a.filter_grade or grade or "navigation"
+    config = ekf.FilterConfig.for_grade(filter_grade)
+    heading = None
+    if a.static_s is not None:
+        still = truth.t <= truth.t[0] + a.static_s + 1e-9
+        if truth.t[-1] < truth.t[0] + a.static_s - 1e-9:
+            raise SinsInputError(
+                f"{where}: alignment.static_s: {a.static_s:g} s is longer than the run's "
+                f"{truth.t[-1] - truth.t[0]:g} s"
+            )
+        speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
+        turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
+        if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
+            raise SinsInputError(
+                f"{where}: alignment.static_s: the vehicle moves within the first {a.static_s:g} s "
+                f"(speed up to {speed:.3g} m/s); an alignment needs it still"
+            )
+        if a.heading_sigma_rad is not None:
+            draw = np.random.default_rng([a.seed, 3]).standard_normal()
+            heading = (float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad)
+    true_bias = None
+    if nav_model is not None:
+        from sins.imu import Bias
+
+        gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
+        true_bias = np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
+    keep = None
+    out = {}
+    for name, strategy in strategies.items():
+        corrected = readings if strategy is None else strategy.correct_increments(readings, temp)
+        if a.static_s is not None:
+            setup = alignment.AlignmentConfig(static_s=a.static_s, coarse_s=a.coarse_s)
+            result = alignment.aligned_run(corrected, fixes, config, setup, heading=heading)
+        else:
+            result = ekf.run(corrected, fixes, config, strapdown.InitialState.from_series(truth))
+        errors = nav_errors(result.nav, truth)
+        horizontal = errors.horizontal_m
+        windows = []
+        for start, end in a.outages:
+            if start >= truth.t[-1]:
+                continue
+            # Samples within 1 µs of an edge (a fix's, up to rounding) are the fix's, not the window's.
+            inside = np.flatnonzero((truth.t > start + 1e-6) & (truth.t < min(end, truth.t[-1]) + 1e-9))
+            if end < truth.t[-1]:  # the sample before the fix at the window's end
+                inside = inside[truth.t[inside] < end - 1e-6]
+            if inside.size == 0:
+                continue
+            windows.append(
+                OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
+            )
+        if keep is None:
+            keep = thinned_indices(len(truth.t), keep_every)
+            records = thinned_indices(len(result.t_cov), math.ceil(len(result.t_cov) / MAX_KEPT))
+        out[name] = AidedRun(
+            summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade,
+            errors=errors.at(keep), t_cov=result.t_cov[records], sigma=result.sigma()[records],
+            bias=np.hstack([result.gyro_bias, result.accel_bias])[records], true_bias=true_bias,
+            fix_t=np.asarray(fixes.t, dtype=float),
+        )  # fmt: skip
+    return out
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
@@ -558,3 +709,90 @@ def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -
         out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
         out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
     return out
+
+
+@dataclass(frozen=True)
+class RecordingOutages:
+    """A real recording's IMU aided by its reference position as fixes, with outages opened in them.
+
+    ``outages`` are each window's horizontal error at its end and its maximum (:class:`OutageError`),
+    ``predicted_m`` the filter's horizontal 1σ at each window's end, ``free_m`` the error of the raw
+    readings (no bias correction) integrated over each window from the aided state at its start: what
+    the filter's estimate of the biases is worth. ``gyro_bias`` and
+    ``accel_bias`` are the final estimates (rad/s, m/s²); ``rms_m`` the horizontal RMS over the run.
+    """
+
+    outages: tuple[OutageError, ...]
+    predicted_m: tuple[float, ...]
+    free_m: tuple[float, ...]
+    gyro_bias: NDArray[np.float64]
+    accel_bias: NDArray[np.float64]
+    rms_m: float
+    fixes: int
+    rejected: int
+
+
+def psins_vehicle_outages(
+    outages: tuple[tuple[float, float], ...] = ((30.0, 45.0), (60.0, 80.0), (85.0, 95.0)),
+    *,
+    rate_hz: float = 1.0,
+    sigma_m: float = 0.5,
+    grade: str = "consumer",
+    root: str | os.PathLike[str] | None = None,
+) -> RecordingOutages:
+    """The PSINS vehicle recording's MEMS aided by the FOG-INS position as fixes, through outages.
+
+    The MEMS increments are integrated from the FOG-INS state (moved to the MEMS's place) at their
+    first time inside the reference; fixes are the FOG-INS position at ``rate_hz`` (its place, so the
+    lever arm is the reader's estimate of it, in MEMS axes) with ``sigma_m`` told to the filter; the
+    filter is tuned to ``grade`` (the file's MEMS has ≈ 0.06 °/s gyro and 5 mg accelerometer biases:
+    consumer grade). Errors are against the FOG-INS solution moved to the MEMS's place.
+    """
+    from sins.aiding import ekf, gnss
+    from sins.io.datasets.psins_vehicle import psins_alignment, read_psins_vehicle
+    from sins.nav import rotation
+
+    data, fog = read_psins_vehicle(root)
+    assert fog is not None
+    arm = psins_alignment(root).lever_arm_m  # the MEMS from the FOG-INS, MEMS axes
+    dt = 0.01  # the MEMS's increments: row k covers the 10 ms before t + 5 ms
+    t_end = data.t + 0.5 * dt
+    lat, lon, h = gnss.offset_position(fog.lat, fog.lon, fog.h, rotation.dcm_from_quat(fog.q_nb) @ arm)
+    truth = NavSeries(t=fog.t, lat=lat, lon=lon, h=h, v_n=fog.v_n, q_nb=fog.q_nb)
+    t = np.r_[t_end[0] - dt, t_end]
+    rows = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
+    k0, k1 = int(rows[0]), int(rows[-1])
+    imu = ImuIncrements(t=t[k0 : k1 + 1], dtheta_b=data.gyro[k0:k1] * dt, dv_b=data.accel[k0:k1] * dt)
+    start = strapdown.InitialState.from_series(truth.interpolate(imu.t[:1]))
+    fix_t = np.arange(np.ceil(imu.t[0] * rate_hz), imu.t[-1] * rate_hz) / rate_hz
+    at = fog.interpolate(fix_t)
+    fixes = gnss.GnssFixes(
+        t=fix_t, lat=at.lat, lon=at.lon, h=at.h, v_n=np.full((len(fix_t), 3), np.nan),
+        sigma_pos_m=np.full(3, sigma_m), lever_arm_b=-arm,
+    ).without([gnss.Outage(a, b) for a, b in outages])  # fmt: skip
+    config = ekf.FilterConfig.for_grade(
+        grade, position_sigma_m=sigma_m, velocity_sigma_mps=0.1, tilt_sigma_rad=np.radians(0.5),
+        heading_sigma_rad=np.radians(1.0),
+    )  # fmt: skip
+    result = ekf.run(imu, fixes, config, start)
+    reference = truth.interpolate(imu.t)
+    horizontal = nav_errors(result.nav, reference).horizontal_m
+    windows, predicted, free = [], [], []
+    for a, b in outages:
+        inside = np.flatnonzero((imu.t > a + 1e-6) & (imu.t < b - 1e-6))  # the fixes' samples are not in it
+        windows.append(OutageError(a, b, float(horizontal[inside[-1]]), float(horizontal[inside].max())))
+        row = int(np.flatnonzero((result.t_cov <= b + 1e-9) & ~result.after_update)[-1])
+        predicted.append(float(np.hypot(*result.sigma()[row, :2])))
+        # The raw readings from the aided state at the window's start (after its last fix).
+        k = int(inside[0]) - 1
+        steps = slice(k, int(inside[-1]))
+        seg = ImuIncrements(
+            t=imu.t[k : int(inside[-1]) + 1], dtheta_b=imu.dtheta_b[steps], dv_b=imu.dv_b[steps]
+        )
+        alone = strapdown.integrate(seg, strapdown.InitialState.from_series(result.nav, k))
+        free.append(float(nav_errors(alone.at(-1), reference.at(int(inside[-1]))).horizontal_m[0]))
+    return RecordingOutages(
+        outages=tuple(windows), predicted_m=tuple(predicted), free_m=tuple(free),
+        gyro_bias=result.gyro_bias[-1], accel_bias=result.accel_bias[-1],
+        rms_m=float(np.sqrt(np.mean(horizontal**2))), fixes=len(fixes), rejected=result.rejected,
+    )  # fmt: skip

@@ -10,7 +10,11 @@ What a run looks like in the viewer, against the ``sim_time`` timeline (seconds)
   velocity error magnitude (m/s), roll, pitch and yaw error (°);
 - ``imu/<channel>/<strategy>``: the error of the IMU stream each strategy
   integrated (reading − ideal; ``none`` is the raw error) in °/h and mg;
-- ``scenario`` and ``summary``: the scenario's description and the run's table.
+- ``scenario`` and ``summary``: the scenario's description and the run's table;
+- with ``[gnss]`` (aided runs): ``aided/<axis>/<strategy>`` the aided north, east, down position and
+  yaw errors, beside ``<strategy> ±3σ`` from the filter's covariance; ``aided/horizontal_m/<strategy>``
+  with the ``fixes`` (points at 0) and the ``outages`` (a step over each window);
+  ``aided/bias/<channel>/<strategy>`` the estimated bias beside the unit's ``true`` one, °/h and mg.
 
 Display series are the :class:`~sins.pipeline.ScenarioRun`'s thinned ones:
 navigation errors every ``round(rate / keep_hz)``-th sample plus the last
@@ -39,7 +43,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
 from sins.nav import earth
-from sins.pipeline import ScenarioRun, StrategyRun
+from sins.pipeline import AidedRun, ScenarioRun, StrategyRun
 from sins.series import NavSeries
 
 APPLICATION_ID = "sins"
@@ -159,6 +163,59 @@ def log_run(
             )
 
 
+#: Aided panels: entity name, title, the error series' column and the filter state's index (for ±3σ).
+AIDED_PANELS = (
+    ("north_m", "aided north error ±3σ, m", 0, 0),
+    ("east_m", "aided east error ±3σ, m", 1, 1),
+    ("down_m", "aided down error ±3σ, m", 2, 2),
+    ("yaw_deg", "aided yaw error ±3σ, °", 5, 8),
+)
+GREY = (150, 150, 150)
+
+
+def _line(
+    rec: rr.RecordingStream, entity: str, label: str, rgb: tuple[int, int, int], t: Any, y: Any
+) -> None:
+    rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
+    rec.send_columns(entity, indexes=_time(t), columns=rr.Scalars.columns(scalars=np.asarray(y, dtype=float)))
+
+
+def log_aided(
+    rec: rr.RecordingStream, name: str, run: AidedRun, *, prefix: str = "", outages: Any = ()
+) -> None:
+    """One strategy's aided run: its errors with the filter's ±3σ, the fixes and outages, its biases."""
+    if run.errors is None or run.t_cov is None or run.sigma is None or run.bias is None:
+        return
+    rgb = colour(name)
+    e = run.errors
+    columns = np.hstack([e.pos_ned_m, np.degrees(e.att_rpy_rad)])
+    for panel, _, column, state in AIDED_PANELS:
+        scale = np.degrees(1.0) if panel.endswith("deg") else 1.0
+        _line(rec, _join(prefix, "aided", panel, name), name, rgb, e.t, columns[:, column])
+        for sign, label in ((1.0, "+3σ"), (-1.0, "-3σ")):
+            entity = _join(prefix, "aided", panel, f"{name}_{'plus' if sign > 0 else 'minus'}_3sigma")
+            _line(rec, entity, f"{name} {label}", GREY, run.t_cov, sign * 3.0 * scale * run.sigma[:, state])
+    _line(rec, _join(prefix, "aided", "horizontal_m", name), name, rgb, e.t, e.horizontal_m)
+    if run.fix_t is not None and len(run.fix_t):
+        entity = _join(prefix, "aided", "horizontal_m", "fixes")
+        rec.log(entity, rr.SeriesPoints(names=["fixes"], colors=[GREY], marker_sizes=[1.0]), static=True)
+        rec.send_columns(
+            entity, indexes=_time(run.fix_t), columns=rr.Scalars.columns(scalars=np.zeros(len(run.fix_t)))
+        )
+    if len(outages):
+        top = float(np.max(e.horizontal_m)) if len(e.t) else 1.0
+        t = [x for start, end in outages for x in (start, start, end, end)]
+        y = [v for _ in outages for v in (0.0, top, top, 0.0)]
+        _line(rec, _join(prefix, "aided", "horizontal_m", "outages"), "outages", GREY, t, y)
+    for i, channel in enumerate(CHANNELS):
+        unit = display_unit(channel)[0]
+        base = _join(prefix, "aided", "bias", imu_entity(channel))
+        _line(rec, _join(base, name), name, rgb, run.t_cov, run.bias[:, i] / unit)
+        if run.true_bias is not None:
+            ends = run.t_cov[[0, -1]]
+            _line(rec, _join(base, "true"), "true", GREEN, ends, np.full(2, run.true_bias[i] / unit))
+
+
 def log_scenario_run(
     rec: rr.RecordingStream, result: ScenarioRun, *, summary: str = "", prefix: str = ""
 ) -> None:
@@ -171,6 +228,9 @@ def log_scenario_run(
     log_path(rec, "truth", truth, origin, prefix=prefix, axis_length_m=axis_length_m)
     for name, run in result.runs.items():
         log_run(rec, name, run, origin, sensor_t=result.sensor_t, prefix=prefix, axis_length_m=axis_length_m)
+    windows = result.scenario.aiding.outages if result.scenario.aiding is not None else ()
+    for name, aided in result.aided.items():
+        log_aided(rec, name, aided, prefix=prefix, outages=windows)
     sc = result.scenario
     description = (
         f"# {sc.name}\n\n{sc.description or ''}\n\n"
@@ -192,7 +252,9 @@ def _whole_run() -> rrb.TimeAxis:
     return rrb.TimeAxis(view_range=rrb.TimeRange(start=whole, end=whole))
 
 
-def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str = "") -> rrb.Blueprint:
+def blueprint(
+    strategies: Sequence[str], *, with_imu: bool = True, prefix: str = "", with_aided: bool = False
+) -> rrb.Blueprint:
     """The 3D paths beside the error panels; IMU errors and the summary in tabs below the errors.
 
     Every plot shows the whole run, not a window around the time cursor: drift is about the long run.
@@ -208,6 +270,23 @@ def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str =
             rrb.TimeSeriesView(
                 origin=_join(prefix, "imu", imu_entity(ch)),
                 name=f"{ch} error, {display_unit(ch)[1]}",
+                axis_x=axis,
+            )
+            for ch in CHANNELS
+        ]
+    if with_aided:
+        tabs += [
+            rrb.TimeSeriesView(origin=_join(prefix, "aided", panel), name=title, axis_x=axis)
+            for panel, title, _, _ in AIDED_PANELS
+        ]
+        tabs.append(rrb.TimeSeriesView(
+            origin=_join(prefix, "aided", "horizontal_m"), name="aided horizontal error, fixes, outages, m",
+            axis_x=axis,
+        ))  # fmt: skip
+        tabs += [
+            rrb.TimeSeriesView(
+                origin=_join(prefix, "aided", "bias", imu_entity(ch)),
+                name=f"{ch} bias estimated and true, {display_unit(ch)[1]}",
                 axis_x=axis,
             )
             for ch in CHANNELS
@@ -230,7 +309,9 @@ def blueprint(strategies: Sequence[str], *, with_imu: bool = True, prefix: str =
 
 def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=result.scenario.name)
-    return rec, blueprint(list(result.runs), with_imu=result.sensor_t is not None)
+    return rec, blueprint(
+        list(result.runs), with_imu=result.sensor_t is not None, with_aided=bool(result.aided)
+    )
 
 
 def check_rrd_path(path: str | os.PathLike[str]) -> Path:

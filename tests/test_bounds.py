@@ -77,6 +77,14 @@ FAST_WAYPOINTS = copy.deepcopy(WAYPOINTS)
 for _wp in FAST_WAYPOINTS["waypoint"]:
     _wp["speed_mps"] = 1e4  # legs of up to 1e6 m pass in 100 s
 
+# 30 s still at 20 Hz, aided by a receiver with every option, one outage, aligned over 20 s.
+AIDED = {**HOLD, "segment": [{"type": "hold", "duration_s": 30.0}],
+         "gnss": {"rate_hz": 1.0, "sigma_m": [1.5, 1.5, 3.0], "markov_sigma_m": [0.5, 0.5, 1.0],
+                  "markov_tau_s": 100.0, "sigma_vel_mps": 0.1, "lever_arm_m": [1.0, 0.0, -1.0],
+                  "latency_s": 0.1},
+         "outage": [{"start_s": 10.0, "end_s": 20.0}],
+         "alignment": {"static_s": 20.0, "coarse_s": 10.0, "heading_sigma_deg": 1.0}}  # fmt: skip
+
 #: Scenario field -> (document, path to set). Each key of SCENARIO_BOUNDS appears once.
 SCENARIO_FIELDS: dict[str, tuple[dict[str, Any], tuple[Any, ...]]] = {
     "imu.rate_hz": (HOLD, ("imu", "rate_hz")),
@@ -115,6 +123,18 @@ SCENARIO_FIELDS: dict[str, tuple[dict[str, Any], tuple[Any, ...]]] = {
     "waypoint.east_m": (FAST_WAYPOINTS, ("waypoint", 2, "east_m")),
     "waypoint.up_m": (FAST_WAYPOINTS, ("waypoint", 2, "up_m")),
     "waypoint.speed_mps": (WAYPOINTS, ("waypoint", 1, "speed_mps")),
+    "gnss.rate_hz": (AIDED, ("gnss", "rate_hz")),
+    "gnss.sigma_m": (AIDED, ("gnss", "sigma_m", None)),
+    "gnss.markov_sigma_m": (AIDED, ("gnss", "markov_sigma_m", None)),
+    "gnss.markov_tau_s": (AIDED, ("gnss", "markov_tau_s")),
+    "gnss.sigma_vel_mps": (AIDED, ("gnss", "sigma_vel_mps")),
+    "gnss.lever_arm_m": (AIDED, ("gnss", "lever_arm_m", None)),
+    "gnss.latency_s": (AIDED, ("gnss", "latency_s")),
+    "outage.start_s": (AIDED, ("outage", 0, "start_s")),
+    "outage.end_s": (AIDED, ("outage", 0, "end_s")),
+    "alignment.static_s": (AIDED, ("alignment", "static_s")),
+    "alignment.coarse_s": (AIDED, ("alignment", "coarse_s")),
+    "alignment.heading_sigma_deg": (AIDED, ("alignment", "heading_sigma_deg")),
 }
 
 #: Fields whose upper bound makes a run too long to try here: their value just inside is run at the
@@ -140,6 +160,16 @@ def _fits(doc: dict[str, Any], key: str, value: float, inside: bool = True) -> d
         doc["segment"][2]["to_speed_mps"] = 4.0
     if key == "waypoint.speed_mps" and value > 1e3:  # the path then lasts 5 ms: sample it at 100 kHz
         doc["imu"]["rate_hz"] = 100000.0
+    if key == "outage.start_s":  # the window still ends after it starts
+        doc["outage"][0]["end_s"] = max(doc["outage"][0]["end_s"], min(1e9, value + 10.0))
+    if key == "outage.end_s":
+        doc["outage"][0]["start_s"] = min(doc["outage"][0]["start_s"], value / 2)
+    if key in ("alignment.static_s", "alignment.coarse_s") and inside:  # still long enough, the coarse within
+        align = doc["alignment"]
+        align["static_s"] = max(align["static_s"], value) if key == "alignment.coarse_s" else value
+        align["coarse_s"] = min(align["coarse_s"], value) if key == "alignment.static_s" else value
+        doc["segment"][0]["duration_s"] = max(doc["segment"][0]["duration_s"], align["static_s"])
+        doc["imu"]["rate_hz"] = 1.0 if align["static_s"] > 100 else doc["imu"]["rate_hz"]
     return doc
 
 

@@ -45,6 +45,16 @@ def test_the_diagnosis_example_names_the_withheld_effect():
     assert out.strip().splitlines()[-1] == "first effect: gyro.temperature_bias", out
 
 
+def test_the_aided_example_rides_out_its_outage():
+    out = _run(sys.executable, str(EXAMPLES / "aided_drive.py"))
+    rows = {line.split()[0]: np.array(line.split()[1:], dtype=float) for line in out.splitlines()[1:]}
+    assert set(rows) == {"truth", "alignment"}
+    for outage_m, sigma_m, final_m, rejected in rows.values():
+        # Metres after 60 s, not tens; within 3σ of the filter's prediction (it does not model the unit's
+        # scale factors and misalignments); back to decimetres once the fixes return; no fix refused.
+        assert 1.0 < outage_m < 3.0 * sigma_m and final_m < 1.0 and rejected == 0, rows
+
+
 def test_the_example_scenario_runs_with_every_strategy():
     out = _run(sys.executable, "-m", "sins.cli", "run", str(EXAMPLES / "short_drive.toml"))
     for name in ("none", "oracle", "regression", "kohonen"):

@@ -24,6 +24,7 @@ RANKS = {
     "sins.nav": 2,
     "sins.imu": 3,
     "sins.io": 4,
+    "sins.aiding": 4,
     "sins.compensation": 5,
     "sins.gap": 5,
     "sins.scenario": 6,

@@ -337,6 +337,38 @@ def start(initial: InitialState, every: int = 1) -> Array:
     return state
 
 
+def current(state: Array) -> InitialState:
+    """The navigation state an integration state (from :func:`start` or :func:`advance`) holds now."""
+    return InitialState(
+        lat=float(state[_LAT]),
+        lon=float(state[_LON]),
+        h=float(state[_H]),
+        v_n=np.array(state[_V : _V + 3]),
+        q_nb=np.array(state[_Q : _Q + 4]),
+    )
+
+
+def moved(state: Array, to: InitialState) -> Array:
+    """A copy of an integration state set to the navigation state ``to``: a filter's correction.
+
+    The previous step's position and velocity move by the same amounts, so the next step's
+    mid-interval extrapolation sees the vehicle's motion, not the jump; the previous increments
+    (coning and sculling memory) are kept.
+    """
+    out = np.array(state, dtype=float)
+    d_lat, d_h = to.lat - out[_LAT], to.h - out[_H]
+    d_v = np.asarray(to.v_n, dtype=float) - out[_V : _V + 3]
+    out[_LAT], out[_LON], out[_H] = to.lat, to.lon, to.h
+    out[_V : _V + 3] = to.v_n
+    out[_LAT_P] += d_lat
+    out[_H_P] += d_h
+    out[_V_P : _V_P + 3] += d_v
+    q = np.asarray(to.q_nb, dtype=float)
+    out[_Q : _Q + 4] = q / np.linalg.norm(q)
+    out[_SIN_LAT], out[_COS_LAT] = np.sin(to.lat), np.cos(to.lat)
+    return out
+
+
 def advance(
     state: Array,
     imu: ImuIncrements,

@@ -37,6 +37,7 @@ from sins.scenario.build import MAX_LAT_DEG, build_motion, check_latitude, sampl
 from sins.scenario.files import RIG_BOUNDS, load_imu, load_rig, rig_rows
 from sins.scenario.presets import PresetKind, find_preset, preset_dir, presets, resolve_preset
 from sins.scenario.schema import (
+    AidingSpec,
     CompensationSpec,
     ImuSpec,
     Scenario,
@@ -64,6 +65,7 @@ __all__ = [
     "SCENARIO_BOUNDS",
     "SEGMENT_TYPES",
     "VERTICAL_MODES",
+    "AidingSpec",
     "Bound",
     "CompensationSpec",
     "ImuSpec",

@@ -59,6 +59,31 @@ class Scenario:
     imu_seed: int = 0
     compensation: CompensationSpec | None = None
     temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))  # (times_s, temps_degc)
+    aiding: AidingSpec | None = None
+
+
+@dataclass(frozen=True)
+class AidingSpec:
+    """A scenario's GNSS receiver, outages and alignment (``[gnss]``, ``[[outage]]``, ``[alignment]``), SI.
+
+    ``static_s`` None: the filter starts from the truth's first state; otherwise from a static alignment
+    over the first ``static_s`` seconds (``heading_sigma_rad`` set: the heading comes from elsewhere,
+    the truth's plus a draw of that spread, instead of gyrocompassing).
+    """
+
+    rate_hz: float
+    sigma_m: tuple[float, float, float]
+    markov_sigma_m: tuple[float, float, float]
+    markov_tau_s: float
+    sigma_vel_mps: float | None
+    lever_arm_m: tuple[float, float, float]
+    latency_s: float
+    seed: int
+    filter_grade: str | None
+    outages: tuple[tuple[float, float], ...]
+    static_s: float | None = None
+    coarse_s: float = 60.0
+    heading_sigma_rad: float | None = None
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,14 @@ import numpy as np
 from sins.nav import motion
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 from sins.scenario.presets import PresetKind, find_preset
-from sins.scenario.schema import CompensationSpec, Scenario, SegmentsSpec, TruthFileSpec, WaypointsSpec
+from sins.scenario.schema import (
+    AidingSpec,
+    CompensationSpec,
+    Scenario,
+    SegmentsSpec,
+    TruthFileSpec,
+    WaypointsSpec,
+)
 from sins.scenario.toml import MAX_SEED, Bound, TomlKeys, read_toml
 
 #: The values of ``[[segment]] type``.
@@ -75,7 +82,22 @@ SCENARIO_BOUNDS: dict[str, Bound] = {
     "waypoint.east_m": Bound(-1e6, 1e6, "m"),
     "waypoint.up_m": Bound(-1e5, 1e5, "m"),
     "waypoint.speed_mps": Bound(0.0, MAX_SPEED_MPS, "m/s", low_open=True),
+    "gnss.rate_hz": Bound(0.1, 10.0, "Hz", "a receiver's fix rates"),
+    "gnss.sigma_m": Bound(0.001, 1000.0, "m", "the filter divides by the fixes' variance"),
+    "gnss.markov_sigma_m": Bound(0.0, 1000.0, "m"),
+    "gnss.markov_tau_s": Bound(0.0, 1e6, "s", low_open=True),
+    "gnss.sigma_vel_mps": Bound(0.001, 100.0, "m/s", "the filter divides by the fixes' variance"),
+    "gnss.lever_arm_m": Bound(-100.0, 100.0, "m"),
+    "gnss.latency_s": Bound(0.0, 10.0, "s"),
+    "outage.start_s": Bound(0.0, MAX_DURATION_S, "s", high_open=True),
+    "outage.end_s": Bound(0.0, MAX_DURATION_S, "s", low_open=True),
+    "alignment.static_s": Bound(0.0, 3600.0, "s", low_open=True),
+    "alignment.coarse_s": Bound(0.0, 3600.0, "s", "at most static_s", low_open=True),
+    "alignment.heading_sigma_deg": Bound(0.0, 180.0, "°", low_open=True),
 }
+
+#: The grades the filter may be tuned to (``[gnss] filter_grade``): :data:`sins.imu.spec.GRADES`.
+FILTER_GRADES = ("consumer", "industrial", "tactical", "navigation")
 _B = SCENARIO_BOUNDS
 
 
@@ -115,6 +137,7 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     )
     vertical, tau = _navigation(top.sub("navigation"), rate_hz)
     trajectory = _trajectory(top, rate_hz, base)
+    aiding = _aiding(top)
     top.done()
     return Scenario(
         name=name,
@@ -128,6 +151,7 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
         imu_seed=imu_seed,
         compensation=compensation,
         temperature=temperature,
+        aiding=aiding,
     )
 
 
@@ -199,6 +223,61 @@ def _trajectory(top: TomlKeys, rate_hz: float, base: Path) -> SegmentsSpec | Way
     if top.has("initial"):
         raise top.error("not used with a [truth] trajectory (the truth's first row is the start)", "initial")
     return TruthFileSpec(path=(base / file))
+
+
+def _triple(keys: TomlKeys, key: str, default: list[float]) -> tuple[float, float, float]:
+    """Three bounded numbers (north, east, down or x, y, z); a single number stands for all three."""
+    bound = _B[f"{keys.where}.{key}"]
+    if keys.has(key) and not isinstance(keys.table[key], list):
+        value = keys.bounded(key, bound)
+        return value, value, value
+    values = keys.bounded_numbers(key, bound, default)
+    if len(values) != 3:
+        raise keys.error(f"expected 3 numbers (or one for all three), got {len(values)}", key)
+    return values[0], values[1], values[2]
+
+
+def _aiding(top: TomlKeys) -> AidingSpec | None:
+    """The ``[gnss]``, ``[[outage]]`` and ``[alignment]`` tables, or None without ``[gnss]``."""
+    if not top.has("gnss"):
+        for other in ("outage", "alignment"):
+            if top.has(other):
+                raise top.error("needs a [gnss] receiver to aid the navigation", other)
+        return None
+    gnss = top.sub("gnss")
+    sigma_vel = gnss.bounded("sigma_vel_mps", _B["gnss.sigma_vel_mps"]) if gnss.has("sigma_vel_mps") else None
+    grade = gnss.choice("filter_grade", FILTER_GRADES) if gnss.has("filter_grade") else None
+    rate_hz = gnss.bounded("rate_hz", _B["gnss.rate_hz"], 1.0)
+    sigma_m = _triple(gnss, "sigma_m", [1.5, 1.5, 3.0])
+    markov_sigma_m = _triple(gnss, "markov_sigma_m", [0.0, 0.0, 0.0])
+    markov_tau_s = gnss.bounded("markov_tau_s", _B["gnss.markov_tau_s"], 100.0)
+    lever_arm_m = _triple(gnss, "lever_arm_m", [0.0, 0.0, 0.0])
+    latency_s = gnss.bounded("latency_s", _B["gnss.latency_s"], 0.0)
+    seed = gnss.integer("seed", 0, high=MAX_SEED)
+    gnss.done()
+    outages = []
+    for out in top.tables("outage"):
+        start = out.bounded("start_s", _B["outage.start_s"])
+        end = out.bounded("end_s", _B["outage.end_s"])
+        if end <= start:
+            raise out.error(f"must come after start_s {start:g} s, got {end:g}", "end_s")
+        out.done()
+        outages.append((start, end))
+    static_s, coarse_s, heading = None, 60.0, None
+    if top.has("alignment"):
+        align = top.sub("alignment")
+        static_s = align.bounded("static_s", _B["alignment.static_s"], 300.0)
+        coarse_s = align.bounded("coarse_s", _B["alignment.coarse_s"], min(60.0, static_s))
+        if coarse_s > static_s:
+            raise align.error(f"must be at most static_s {static_s:g} s, got {coarse_s:g}", "coarse_s")
+        if align.has("heading_sigma_deg"):
+            heading = math.radians(align.bounded("heading_sigma_deg", _B["alignment.heading_sigma_deg"]))
+        align.done()
+    return AidingSpec(
+        rate_hz=rate_hz, sigma_m=sigma_m, markov_sigma_m=markov_sigma_m, markov_tau_s=markov_tau_s,
+        sigma_vel_mps=sigma_vel, lever_arm_m=lever_arm_m, latency_s=latency_s, seed=seed, filter_grade=grade,
+        outages=tuple(outages), static_s=static_s, coarse_s=coarse_s, heading_sigma_rad=heading,
+    )  # fmt: skip
 
 
 def _preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Path:

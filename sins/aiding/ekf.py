@@ -1,0 +1,417 @@
+"""Loosely coupled GNSS/INS: a 15-state error-state Kalman filter on filterpy, closed loop.
+
+The states are errors, estimate minus truth: position ``δr`` (NED, m), velocity ``δv_n`` (m/s),
+attitude ``φ`` (rad; the estimated ``C_nb`` is ``(I - [φ×]) C_nb``), gyro bias ``δb_g`` (rad/s)
+and accelerometer bias ``δb_a`` (m/s²), the estimated biases minus the true ones. Their dynamics
+(the ψ-angle model of Titterton & Weston, ch. 12, with the Earth-rate and transport-rate terms a
+vehicle sees)::
+
+    δṙ = δv                                 + (0, 0, ·) ,  δv̇_D gains (2g/R) δr_D
+    δv̇ = [f_n×] φ - (2 ω_ie + ω_en) × δv - C_nb δb_a
+    φ̇  = -(ω_ie + ω_en) × φ + δω_in(δr, δv) + C_nb δb_g
+    δḃ_g, δḃ_a: random walks
+
+The strapdown integrator (:mod:`sins.nav.strapdown`) carries the whole state between measurements,
+on readings corrected by the estimated biases; the covariance is propagated every
+``propagation_dt_s`` (1 s by default, not at the IMU rate) with the transition
+``Φ = I + F T + (F T)²/2`` and the discrete noise ``Q = Qc T + (F Qc + Qc Fᵀ) T²/2 + F Qc Fᵀ T³/3``
+built from the mean specific force, attitude and state over that stretch. After each update the
+estimated errors are fed back into the integrator and the biases, and the filter's state is reset to
+zero (closed loop).
+
+Measurements: a GNSS antenna position (lever arm ``l_b``: ``δr_a = δr + [(C_nb l_b)×] φ``), its
+velocity when the receiver gives one, and zero-velocity updates over windows known to be still.
+Each is gated on its normalised innovation squared (NIS); rejected fixes are counted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from filterpy.kalman import KalmanFilter
+from numpy.typing import NDArray
+from scipy.stats import chi2
+
+from sins.aiding.gnss import GnssFixes, check_fixes
+from sins.errors import SinsInputError
+from sins.imu import spec
+from sins.nav import earth, rotation, strapdown
+from sins.series import ImuIncrements, NavSeries
+
+Array = NDArray[np.float64]
+
+#: Slices of the error state.
+POS, VEL, ATT, BG, BA = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
+#: Number of states.
+N_STATES = 15
+#: NIS above this refuses a 3-component measurement (χ²₃ at 99.99 %).
+GATE_NIS = float(chi2.ppf(0.9999, 3))
+
+
+@dataclass(frozen=True)
+class FilterConfig:
+    """The filter's model of the IMU and its starting uncertainty.
+
+    Attributes
+    ----------
+    arw_rad_rt_s : gyro white noise (angle random walk), rad/√s
+    vrw_mps_rt_s : accelerometer white noise (velocity random walk), m/s/√s
+    gyro_bias_sigma : initial 1σ of the gyro biases, rad/s
+    accel_bias_sigma : initial 1σ of the accelerometer biases, m/s²
+    gyro_bias_walk : random-walk density of the gyro biases, rad/s/√s
+    accel_bias_walk : random-walk density of the accelerometer biases, m/s²/√s
+    position_sigma_m, velocity_sigma_mps : initial 1σ per axis
+    tilt_sigma_rad, heading_sigma_rad : initial 1σ of roll/pitch (``φ_N``, ``φ_E``) and heading (``φ_D``)
+    propagation_dt_s : the longest step of the covariance propagation, s
+    gate_nis : NIS above which a 3-component measurement is refused (None: no gate)
+    zupt_sigma_mps : 1σ of a zero-velocity update, m/s
+    zupt_rate_hz : zero-velocity updates per second inside a still window
+    """
+
+    arw_rad_rt_s: float
+    vrw_mps_rt_s: float
+    gyro_bias_sigma: float
+    accel_bias_sigma: float
+    gyro_bias_walk: float = 0.0
+    accel_bias_walk: float = 0.0
+    position_sigma_m: float = 5.0
+    velocity_sigma_mps: float = 0.5
+    tilt_sigma_rad: float = float(np.radians(1.0))
+    heading_sigma_rad: float = float(np.radians(5.0))
+    propagation_dt_s: float = 1.0
+    gate_nis: float | None = GATE_NIS
+    zupt_sigma_mps: float = 0.01
+    zupt_rate_hz: float = 10.0
+
+    def __post_init__(self) -> None:
+        """Refuse negative densities and sigmas, and steps that are not positive."""
+        for name in ("arw_rad_rt_s", "vrw_mps_rt_s", "gyro_bias_sigma", "accel_bias_sigma", "gyro_bias_walk",
+                     "accel_bias_walk"):  # fmt: skip
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise SinsInputError(f"filter {name} must be a non-negative number, got {value}")
+        for name in ("position_sigma_m", "velocity_sigma_mps", "tilt_sigma_rad", "heading_sigma_rad",
+                     "propagation_dt_s", "zupt_sigma_mps", "zupt_rate_hz"):  # fmt: skip
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise SinsInputError(f"filter {name} must be a positive number, got {value}")
+
+    @classmethod
+    def for_grade(cls, grade: str | spec.Grade, **overrides: float) -> FilterConfig:
+        """The filter tuned to a grade's noise and biases (bias instability as an equivalent random walk)."""
+        g = spec.GRADES[grade] if isinstance(grade, str) else grade
+        dph = np.radians(1.0) / 3600.0
+        tau = g.instability_tau_s
+        values: dict[str, float] = {
+            "arw_rad_rt_s": np.radians(g.arw_deg_per_rt_h) / 60.0,
+            "vrw_mps_rt_s": g.vrw_ug_per_rt_hz * 1e-6 * earth.G0,
+            "gyro_bias_sigma": float(np.hypot(g.gyro_bias_dph, g.gyro_turn_on_dph)) * dph,
+            "accel_bias_sigma": float(np.hypot(g.accel_bias_mg, g.accel_turn_on_mg)) * 1e-3 * earth.G0,
+            "gyro_bias_walk": g.gyro_instability_dph * dph * np.sqrt(2.0 / tau),
+            "accel_bias_walk": g.accel_instability_ug * 1e-6 * earth.G0 * np.sqrt(2.0 / tau),
+        }
+        values.update(overrides)
+        return cls(**{k: float(v) for k, v in values.items()})
+
+    def initial_covariance(self) -> Array:
+        """``P0``: the diagonal of the initial 1σ values, squared."""
+        sigma = np.concatenate([
+            np.full(3, self.position_sigma_m), np.full(3, self.velocity_sigma_mps),
+            [self.tilt_sigma_rad, self.tilt_sigma_rad, self.heading_sigma_rad],
+            np.full(3, self.gyro_bias_sigma), np.full(3, self.accel_bias_sigma),
+        ])  # fmt: skip
+        return np.diag(sigma**2)
+
+    def noise_density(self) -> Array:
+        """``Qc``: the continuous process noise, (15, 15)."""
+        q = np.concatenate([
+            np.zeros(3), np.full(3, self.vrw_mps_rt_s**2), np.full(3, self.arw_rad_rt_s**2),
+            np.full(3, self.gyro_bias_walk**2), np.full(3, self.accel_bias_walk**2),
+        ])  # fmt: skip
+        return np.diag(q)
+
+
+def error_dynamics(lat: float, h: float, v_n: Array, f_n: Array, C_nb: Array) -> Array:
+    """The error state's dynamics matrix ``F`` (15, 15) at one state (module docstring's equations).
+
+    Parameters
+    ----------
+    lat, h : position, rad and m
+    v_n : (3,) velocity, m/s
+    f_n : (3,) specific force in n, m/s²
+    C_nb : (3, 3) attitude
+    """
+    r_m, r_n, g = earth.radii_and_gravity_from_sin2(np.sin(lat) ** 2, h)
+    rm_h, rn_h = r_m + h, r_n + h
+    s, c = np.sin(lat), np.cos(lat)
+    w_ie = earth.OMEGA_IE * np.array([c, 0.0, -s])
+    w_en = np.array([v_n[1] / rn_h, -v_n[0] / rm_h, -v_n[1] * s / (c * rn_h)])
+    F = np.zeros((N_STATES, N_STATES))
+    F[POS, VEL] = np.eye(3)
+    F[5, 2] = 2.0 * g / np.sqrt(rm_h * rn_h)
+    F[VEL, VEL] = -rotation.skew(2.0 * w_ie + w_en)
+    F[VEL, ATT] = rotation.skew(f_n)
+    F[VEL, BA] = -C_nb
+    F[ATT, ATT] = -rotation.skew(w_ie + w_en)
+    F[6, 4] = 1.0 / rn_h
+    F[7, 3] = -1.0 / rm_h
+    F[8, 4] = -s / (c * rn_h)
+    F[6, 0] = -earth.OMEGA_IE * s / rm_h
+    F[8, 0] = -earth.OMEGA_IE * c / rm_h
+    F[ATT, BG] = C_nb
+    return F
+
+
+def discretize(F: Array, Qc: Array, dt: float) -> tuple[Array, Array]:
+    """Transition ``Φ`` and discrete noise ``Q`` over ``dt`` (second order in ``F dt``, third in ``Q``)."""
+    Fdt = F * dt
+    phi = np.eye(len(F)) + Fdt + 0.5 * Fdt @ Fdt
+    FQ = F @ Qc
+    Q = Qc * dt + (FQ + FQ.T) * (0.5 * dt * dt) + (F @ Qc @ F.T) * (dt**3 / 3.0)
+    return phi, Q
+
+
+def nav_error_state(nav: NavSeries, truth: NavSeries) -> Array:
+    """Position, velocity and attitude errors (estimate minus truth) in the filter's terms, (n, 9).
+
+    Position in NED metres at the truth's radii; attitude ``φ`` with ``C_est = (I - [φ×]) C_true``.
+    """
+    r_m, r_n = earth.radii(truth.lat)
+    d_r = np.stack([
+        (nav.lat - truth.lat) * (r_m + truth.h),
+        (nav.lon - truth.lon) * (r_n + truth.h) * np.cos(truth.lat),
+        -(nav.h - truth.h),
+    ], axis=1)  # fmt: skip
+    dq = rotation.quat_multiply(nav.q_nb, rotation.quat_conjugate(truth.q_nb))
+    phi = -rotation.rotvec_from_quat(dq)
+    return np.hstack([d_r, nav.v_n - truth.v_n, phi])
+
+
+@dataclass(frozen=True)
+class AidedResult:
+    """An aided run.
+
+    Attributes
+    ----------
+    nav : the corrected solution at every IMU sample time
+    t_cov : (m,) times of the covariance records: each propagation step's end and each update, s
+    P : (m, 15, 15) the covariance there
+    gyro_bias : (m, 3) the estimated gyro biases there, rad/s
+    accel_bias : (m, 3) the estimated accelerometer biases there, m/s²
+    after_update : (m,) True where the record follows a measurement update
+    fix_t : (k,) the GNSS fixes' times
+    nis : (k,) each fix's position NIS (before its update)
+    accepted : (k,) whether the gate let the fix's position in (its velocity, if any, is gated after
+        it, on its own NIS, and is used only with an accepted position)
+    zupt_t : (j,) times of the zero-velocity updates
+    """
+
+    nav: NavSeries
+    t_cov: Array
+    P: Array
+    gyro_bias: Array
+    accel_bias: Array
+    after_update: NDArray[np.bool_]
+    fix_t: Array
+    nis: Array
+    accepted: NDArray[np.bool_]
+    zupt_t: Array = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def rejected(self) -> int:
+        """The number of GNSS fixes the gate refused."""
+        return int(np.count_nonzero(~self.accepted))
+
+    def sigma(self) -> Array:
+        """The 1σ of every state at the records, (m, 15)."""
+        return np.sqrt(np.einsum("kii->ki", self.P))
+
+
+# Kinds of the measurement events.
+_FIX, _ZUPT = 0, 1
+
+
+def _events(
+    t: Array, fixes: GnssFixes, zupt: Sequence[tuple[float, float]], rate_hz: float
+) -> list[tuple[int, int, int]]:
+    """``(imu index, kind, row)`` of every measurement, in time order (a fix goes to its nearest sample)."""
+    n = len(t) - 1
+    out = []
+    idx = np.clip(np.searchsorted(t, fixes.t), 1, n)
+    nearer = np.abs(t[idx - 1] - fixes.t) < np.abs(t[idx] - fixes.t)
+    idx = np.where(nearer, idx - 1, idx)
+    out += [(int(k), _FIX, j) for j, k in enumerate(idx)]
+    for j, (start, end) in enumerate(zupt):
+        if not end > start:
+            raise SinsInputError(
+                f"zero-velocity window {j + 1}: ends at {end} s, not after its start {start} s"
+            )
+        times = np.arange(start + 1.0 / rate_hz, end + 1e-9, 1.0 / rate_hz)
+        ks = np.unique(np.clip(np.searchsorted(t, times), 1, n))
+        out += [(int(k), _ZUPT, j) for k in ks if t[0] < t[k] <= end + 1e-9]
+    out.sort()
+    return out
+
+
+def run(
+    imu: ImuIncrements,
+    fixes: GnssFixes,
+    config: FilterConfig,
+    initial: strapdown.InitialState,
+    *,
+    zupt: Sequence[tuple[float, float]] = (),
+    P0: Array | None = None,
+) -> AidedResult:
+    """Integrate an IMU aided by GNSS fixes (and zero-velocity windows), closed loop.
+
+    Parameters
+    ----------
+    imu : the readings (biased, noisy: what the unit gives)
+    fixes : the receiver's fixes within the IMU's span (:func:`sins.aiding.gnss.check_fixes` gates them)
+    config : the filter's IMU model and starting uncertainty
+    initial : the state the filter starts from at ``imu.t[0]`` (an alignment's, or the truth's)
+    zupt : windows ``(start, end)`` in s where the vehicle is known to stand still
+    P0 : (15, 15) initial covariance; default ``config.initial_covariance()``
+
+    Returns
+    -------
+    AidedResult
+    """
+    t = np.asarray(imu.t, dtype=float)
+    check_fixes(fixes, t)
+    n = len(imu.dtheta_b)
+    dt_all = np.diff(t)
+    step = max(1, round(config.propagation_dt_s / float(np.median(dt_all))))
+    events = [*_events(t, fixes, zupt, config.zupt_rate_hz), (n, -1, -1)]
+
+    kf = KalmanFilter(dim_x=N_STATES, dim_z=3)
+    kf.P = np.array(config.initial_covariance() if P0 is None else P0, dtype=float)
+    Qc = config.noise_density()
+    R_pos = np.diag(np.asarray(fixes.sigma_pos_m, dtype=float) ** 2)
+    R_vel = None if fixes.sigma_vel_mps is None else np.eye(3) * fixes.sigma_vel_mps**2
+    R_zupt = np.eye(3) * config.zupt_sigma_mps**2
+    arm_b = np.asarray(fixes.lever_arm_b, dtype=float)
+    gate = np.inf if config.gate_nis is None else config.gate_nis
+
+    state = strapdown.start(initial)
+    b_g, b_a = np.zeros(3), np.zeros(3)
+    lat, lon, h = np.empty(n + 1), np.empty(n + 1), np.empty(n + 1)
+    v, q = np.empty((n + 1, 3)), np.empty((n + 1, 4))
+    lat[0], lon[0], h[0], v[0], q[0] = initial.lat, initial.lon, initial.h, initial.v_n, state[6:10]
+    rec_t: list[float] = [t[0]]
+    rec_P: list[Array] = [kf.P.copy()]
+    rec_bg: list[Array] = [b_g.copy()]
+    rec_ba: list[Array] = [b_a.copy()]
+    rec_upd: list[bool] = [False]
+    nis = np.full(len(fixes.t), np.nan)
+    accepted = np.zeros(len(fixes.t), dtype=bool)
+    zupt_t: list[float] = []
+
+    def record(time: float, updated: bool) -> None:
+        rec_t.append(time)
+        rec_P.append(kf.P.copy())
+        rec_bg.append(b_g.copy())
+        rec_ba.append(b_a.copy())
+        rec_upd.append(updated)
+
+    def gated_update(z: Array, H: Array, R: Array) -> tuple[float, bool]:
+        S = H @ kf.P @ H.T + R
+        value = float(z @ np.linalg.solve(S, z))
+        if value > gate:
+            return value, False
+        kf.x = np.zeros((N_STATES, 1))
+        kf.update(z[:, None], R=R, H=H)
+        return value, True
+
+    def feed_back() -> None:
+        nonlocal state, b_g, b_a
+        dx = np.asarray(kf.x, dtype=float).ravel()
+        nav = strapdown.current(state)
+        r_m, r_n = earth.radii(nav.lat)
+        corrected = strapdown.InitialState(
+            lat=nav.lat - dx[0] / (r_m + nav.h),
+            lon=nav.lon - dx[1] / ((r_n + nav.h) * np.cos(nav.lat)),
+            h=nav.h + dx[2],
+            v_n=nav.v_n - dx[VEL],
+            q_nb=rotation.quat_multiply(rotation.quat_from_rotvec(dx[ATT]), nav.q_nb),
+        )
+        state = strapdown.moved(state, corrected)
+        b_g = b_g - dx[BG]
+        b_a = b_a - dx[BA]
+        kf.x = np.zeros((N_STATES, 1))
+
+    k = 0
+    for idx, kind, row in events:
+        while k < idx:
+            k_end = min(idx, k + step)
+            dts = dt_all[k:k_end, None]
+            dv_b = imu.dv_b[k:k_end] - b_a * dts
+            seg = ImuIncrements(t=t[k : k_end + 1], dtheta_b=imu.dtheta_b[k:k_end] - b_g * dts, dv_b=dv_b)
+            states, state = strapdown.advance(state, seg)
+            lat[k + 1 : k_end + 1], lon[k + 1 : k_end + 1], h[k + 1 : k_end + 1] = (
+                states.lat,
+                states.lon,
+                states.h,
+            )
+            v[k + 1 : k_end + 1], q[k + 1 : k_end + 1] = states.v_n, states.q_nb
+            C_all = rotation.dcm_from_quat(states.q_nb)
+            span = float(t[k_end] - t[k])
+            f_n = np.einsum("kij,kj->i", C_all, dv_b) / span
+            F = error_dynamics(
+                float(states.lat.mean()),
+                float(states.h.mean()),
+                states.v_n.mean(axis=0),
+                f_n,
+                C_all.mean(axis=0),
+            )
+            phi, Q = discretize(F, Qc, span)
+            kf.predict(F=phi, Q=Q)
+            record(float(t[k_end]), False)
+            k = k_end
+        if kind < 0:
+            break
+        nav = strapdown.current(state)
+        C_nb = rotation.dcm_from_quat(nav.q_nb)
+        if kind == _ZUPT:
+            H = np.zeros((3, N_STATES))
+            H[:, VEL] = np.eye(3)
+            gated_update(nav.v_n.copy(), H, R_zupt)
+            zupt_t.append(float(t[idx]))
+        else:
+            arm_n = C_nb @ arm_b
+            r_m, r_n = earth.radii(nav.lat)
+            late = t[idx] - fixes.t[row]  # the fix moved to the sample's time with the INS velocity
+            z = np.array([
+                (nav.lat - fixes.lat[row]) * (r_m + nav.h),
+                (nav.lon - fixes.lon[row]) * (r_n + nav.h) * np.cos(nav.lat),
+                -(nav.h - fixes.h[row]),
+            ]) + arm_n - nav.v_n * late  # fmt: skip
+            H = np.zeros((3, N_STATES))
+            H[:, POS] = np.eye(3)
+            H[:, ATT] = rotation.skew(arm_n)
+            nis[row], accepted[row] = gated_update(z, H, R_pos)
+            if accepted[row] and R_vel is not None:
+                feed_back()
+                nav = strapdown.current(state)
+                C_nb = rotation.dcm_from_quat(nav.q_nb)
+                last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
+                omega_b = imu.dtheta_b[last] / dt_all[last] - b_g
+                arm_rate_n = C_nb @ np.cross(omega_b, arm_b)
+                H = np.zeros((3, N_STATES))
+                H[:, VEL] = np.eye(3)
+                H[:, ATT] = rotation.skew(arm_rate_n)
+                gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, R_vel)
+        feed_back()
+        nav = strapdown.current(state)
+        sign = -1.0 if nav.q_nb[3] < 0.0 else 1.0  # scalar part >= 0, as the integrator writes them
+        lat[idx], lon[idx], h[idx], v[idx], q[idx] = nav.lat, nav.lon, nav.h, nav.v_n, sign * nav.q_nb
+        record(float(t[idx]), True)
+
+    return AidedResult(
+        nav=NavSeries(t=t, lat=lat, lon=lon, h=h, v_n=v, q_nb=q),
+        t_cov=np.array(rec_t), P=np.array(rec_P), gyro_bias=np.array(rec_bg), accel_bias=np.array(rec_ba),
+        after_update=np.array(rec_upd), fix_t=np.asarray(fixes.t, dtype=float), nis=nis, accepted=accepted,
+        zupt_t=np.array(zupt_t),
+    )  # fmt: skip

@@ -1,0 +1,168 @@
+"""Aiding from a scenario file: the ``[gnss]``, ``[[outage]]`` and ``[alignment]`` tables, ``sins run``'s
+aided report and JSON, and the one-line refusals.
+
+The run's figures are judged against physics, not against themselves: aided errors are metres where
+the free run's are kilometres; an outage's error at its end exceeds what the fixes hold before it; the
+per-outage error equals the aided solution's error at that sample (recomputed here with numpy from
+the library's run).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from conftest import refusal
+from test_fuzz import run_cli, to_toml
+
+from sins import pipeline
+from sins.scenario import from_dict
+
+DRIVE: dict[str, Any] = {
+    "name": "aided",
+    "imu": {"rate_hz": 50, "model": "tactical", "seed": 1},
+    "gnss": {"rate_hz": 1, "sigma_m": [1.5, 1.5, 3.0], "lever_arm_m": [1.0, 0.0, -1.2], "seed": 3},
+    "outage": [{"start_s": 100.0, "end_s": 130.0}],
+    "alignment": {"static_s": 60.0, "coarse_s": 30.0, "heading_sigma_deg": 1.0},
+    "initial": {"lat_deg": 45.0, "lon_deg": 7.6, "alt_m": 250.0, "yaw_deg": 30.0},
+    "segment": [
+        {"type": "hold", "duration_s": 60.0},
+        {"type": "accelerate", "duration_s": 12.0, "to_speed_mps": 15.0, "ramp_s": 2.0},
+        {"type": "turn", "duration_s": 20.0, "angle_deg": 90.0, "ramp_s": 2.0},
+        {"type": "hold", "duration_s": 80.0},
+    ],
+}
+
+
+def _with(**tables: Any) -> dict[str, Any]:
+    doc = copy.deepcopy(DRIVE)
+    for key, value in tables.items():
+        if value is None:
+            doc.pop(key, None)
+        else:
+            doc[key] = value
+    return doc
+
+
+@pytest.fixture(scope="module")
+def cli_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, dict[str, Any]]:
+    tmp = tmp_path_factory.mktemp("aided")
+    path = tmp / "aided.toml"
+    path.write_text(to_toml(DRIVE), encoding="utf-8")
+    rc, out, err = run_cli(["run", str(path), "--json", str(tmp / "out.json")])
+    assert rc == 0, err
+    return out, json.loads((tmp / "out.json").read_text())
+
+
+def test_run_reports_the_aided_errors_and_each_outage(cli_run):
+    out, doc = cli_run
+    assert "aided by GNSS at 1 Hz (1 outages), filter tuned to the tactical grade" in out
+    assert "started aligned over the first 60 s (heading from elsewhere)" in out
+    assert "100-130 s" in out
+    free, aided = doc["strategies"]["none"], doc["aided"]["none"]
+    assert free["final_horizontal_m"] > 100.0 and aided["final_horizontal_m"] < 3.0
+    assert aided["fixes"] == 173 - 29 and aided["rejected_fixes"] == 0  # 0..172 s, less 101..129 s
+    (window,) = doc["outages"]["none"]
+    assert (window["start_s"], window["end_s"]) == (100.0, 130.0)
+    # 30 s without fixes: metres, more than the fixes hold the run to, and the worst at the end.
+    assert 1.0 < window["final_horizontal_m"] < 30.0
+    assert window["final_horizontal_m"] == window["max_horizontal_m"] > aided["rms_horizontal_m"]
+
+
+def test_the_outage_error_is_the_solutions_error_at_that_sample():
+    sc = from_dict(_with(alignment=None))
+    result = pipeline.run_scenario(sc)
+    (window,) = result.aided["none"].outages
+    # The same aided run from the library's pieces: the error at the last sample before 130 s.
+    from sins.aiding import ekf, gnss
+    from sins.nav import earth, strapdown
+    from sins.scenario import load_imu
+
+    truth, ideal = pipeline.simulate(sc)
+    assert sc.imu_model is not None
+    readings = (
+        load_imu(sc.imu_model)
+        .model(run_seed=1)
+        .corrupt_increments(ideal, np.full(len(ideal.t), 20.0), seed=1, dt_nominal=1.0 / 50)
+    )
+    receiver = gnss.GnssConfig(lever_arm_b=np.array([1.0, 0.0, -1.2]), outages=(gnss.Outage(100.0, 130.0),))
+    fixes = gnss.simulate(truth, receiver, seed=3)
+    run = ekf.run(
+        readings, fixes, ekf.FilterConfig.for_grade("tactical"), strapdown.InitialState.from_series(truth)
+    )
+    k = int(np.searchsorted(truth.t, 130.0)) - 1
+    r_m, r_n = earth.radii(truth.lat[k])
+    north = (run.nav.lat[k] - truth.lat[k]) * (r_m + truth.h[k])
+    east = (run.nav.lon[k] - truth.lon[k]) * (r_n + truth.h[k]) * np.cos(truth.lat[k])
+    assert window.final_m == pytest.approx(np.hypot(north, east), rel=1e-6)
+    assert result.aided["none"].fixes == len(fixes)
+
+
+def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
+    refusal(
+        lambda: from_dict(_with(outage=[{"start_s": 50.0, "end_s": 40.0}])),
+        "outage[1].end_s",
+        "after start_s",
+    )
+    refusal(lambda: from_dict(_with(gnss=None)), "outage", "needs a [gnss] receiver")
+    refusal(lambda: from_dict(_with(gnss={"sigma_m": [1.0, 2.0]})), "gnss.sigma_m", "expected 3 numbers")
+    refusal(lambda: from_dict(_with(gnss={"rate_hz": 50})), "gnss.rate_hz", "<= 10 Hz")
+    refusal(lambda: from_dict(_with(gnss={"filter_grade": "fog"})), "gnss.filter_grade")
+    refusal(lambda: from_dict(_with(gnss={"antenna": 1})), "gnss.antenna", "unknown key")
+    refusal(lambda: from_dict(_with(alignment={"static_s": 30.0, "coarse_s": 40.0})), "alignment.coarse_s")
+    # A vehicle that moves within the alignment's window, and a window longer than the run.
+    moving = _with(alignment={"static_s": 70.0})
+    refusal(lambda: pipeline.run_scenario(from_dict(moving)), "alignment.static_s", "the vehicle moves")
+    long = _with(alignment={"static_s": 3000.0})
+    refusal(lambda: pipeline.run_scenario(from_dict(long)), "alignment.static_s", "longer than the run")
+    # Through the command line: exit 2 and the file's name.
+    path = tmp_path / "bad.toml"
+    path.write_text(to_toml(_with(outage=[{"start_s": 5.0, "end_s": 5.0}])), encoding="utf-8")
+    rc, _, err = run_cli(["run", str(path)])
+    assert rc == 2 and str(path) in err and "outage[1].end_s" in err and err.count("\n") <= 1
+
+
+def test_a_scenario_without_gnss_reports_no_aided_runs(tmp_path: Path):
+    plain = _with(gnss=None, outage=None, alignment=None, imu={"rate_hz": 20})
+    plain["segment"] = plain["segment"][:1]
+    path = tmp_path / "plain.toml"
+    path.write_text(to_toml(plain), encoding="utf-8")
+    rc, out, err = run_cli(["run", str(path), "--json", str(tmp_path / "plain.json")])
+    assert rc == 0, err
+    doc = json.loads((tmp_path / "plain.json").read_text())
+    assert "aided by GNSS" not in out and "aided" not in doc and "outages" not in doc
+
+
+def test_rerun_shows_the_aided_errors_with_3_sigma_fixes_outages_and_biases(tmp_path: Path):
+    from test_viz import _read
+
+    from sins import viz
+    from sins.imu import CHANNELS, display_unit
+
+    result = pipeline.run_scenario(from_dict(DRIVE))
+    logged = _read(viz.save(result, tmp_path / "aided.rrd"))
+    aided = result.aided["none"]
+    assert aided.errors is not None and aided.sigma is not None and aided.bias is not None
+    assert aided.true_bias is not None and aided.t_cov is not None and aided.fix_t is not None
+    north = logged["/aided/north_m/none"]
+    # The last logged error is the run's final error; the bands are ±3 of the filter's σ.
+    assert north["scalars"][-1] == pytest.approx(aided.summary.final_north_m, abs=1e-9)
+    assert np.allclose(logged["/aided/north_m/none_plus_3sigma"]["scalars"], 3.0 * aided.sigma[:, 0])
+    assert np.allclose(
+        logged["/aided/yaw_deg/none_minus_3sigma"]["scalars"], -3.0 * np.degrees(aided.sigma[:, 8])
+    )
+    assert np.allclose(logged["/aided/horizontal_m/fixes"]["t"], aided.fix_t)
+    assert np.allclose(logged["/aided/horizontal_m/outages"]["t"], [100.0, 100.0, 130.0, 130.0])
+    for i, channel in enumerate(CHANNELS):
+        unit = display_unit(channel)[0]
+        entity = f"/aided/bias/{viz.imu_entity(channel)}"
+        assert np.allclose(logged[f"{entity}/true"]["scalars"], aided.true_bias[i] / unit)
+        assert np.allclose(logged[f"{entity}/none"]["scalars"], aided.bias[:, i] / unit)
+    # The drive's turns teach the filter the horizontal accelerometer biases: the last estimate is
+    # within 3σ of the unit's constant bias, give or take its bias instability (20 µg = 2e-4 m/s²).
+    last = aided.bias[-1, 3:5] - aided.true_bias[3:5]
+    assert np.all(np.abs(last) < 3.0 * aided.sigma[-1, 12:14] + 2e-4), (last, aided.sigma[-1, 12:14])
