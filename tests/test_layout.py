@@ -26,6 +26,7 @@ RANKS = {
     "sins.io": 4,
     "sins.compensation": 5,
     "sins.gap": 5,
+    "sins.characterise": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
     "sins.quality": 8,
