@@ -139,8 +139,9 @@ def residual(t: Array, readings: Array, reference: Array | None = None, source: 
                 f"{name}: row {row + 1}: step {inner[int(np.argmax(off))]:g} s against the sampling step "
                 f"{dt:g} s; an Allan analysis needs uniform sampling"
             )
-    inside = np.concatenate([np.arange(a, b) for a, b in segments])
-    return Residual(values, dt, tuple(segments), source, raw[inside].mean(axis=0))
+    total = sum(raw[a:b].sum(axis=0) for a, b in segments)
+    mean = np.asarray(total, dtype=float) / sum(b - a for a, b in segments)
+    return Residual(values, dt, tuple(segments), source, mean)
 
 
 @dataclass(frozen=True)
