@@ -389,3 +389,78 @@ def test_psins_lasergyro_round_trip():
     assert one.partings
     for p in one.partings:
         assert p.channel in result.channels and p.tau_s[0] <= p.tau_s[1] and p.ratio > 0.0
+
+
+_DRIVE = """
+name = "short_drive"
+description = "two minutes: a hold, a start and a turn"
+[imu]
+rate_hz = 50
+[initial]
+lat_deg = 45.0
+lon_deg = 7.0
+alt_m = 200.0
+[[segment]]
+type = "hold"
+duration_s = 20
+[[segment]]
+type = "accelerate"
+duration_s = 10
+to_speed_mps = 10.0
+ramp_s = 2.0
+[[segment]]
+type = "turn"
+duration_s = 40
+rate_dps = 3.0
+ramp_s = 2.0
+[[segment]]
+type = "hold"
+duration_s = 50
+"""
+
+
+def test_moving_unit_with_its_truth(tmp_path, capsys):
+    """A moving unit (`sins simulate` of a short drive, numpy white noise added to its rates): with
+    `--truth` its motion is removed and the noise read back within 3σ on every channel; the motion itself
+    would otherwise dominate the curves."""
+    scen, imu_csv, truth = tmp_path / "drive.toml", tmp_path / "imu.csv", tmp_path / "truth.csv"
+    scen.write_text(_DRIVE)
+    assert (
+        cli.main(["simulate", str(scen), "--imu", str(imu_csv), "--truth", str(truth), "--form", "rate"]) == 0
+    )
+    samples, _ = io.read_imu(imu_csv)
+    assert isinstance(samples, ImuRates)
+    rng = np.random.default_rng(9)
+    density = np.r_[1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3]  # rad/√s, m/s/√s
+    dt = float(np.median(np.diff(samples.t)))
+    noise = density / math.sqrt(dt) * rng.standard_normal((len(samples.t), 6))
+    noisy = ImuRates(
+        t=samples.t, omega_ib_b=samples.omega_ib_b + noise[:, :3], f_ib_b=samples.f_ib_b + noise[:, 3:]
+    )
+    io.write_imu(imu_csv, noisy)
+    doc = tmp_path / "out.json"
+    assert cli.main(["characterise", str(imu_csv), "--truth", str(truth), "--json", str(doc)]) == 0
+    capsys.readouterr()
+    channels = json.loads(doc.read_text())["channels"]
+    for i, ch in enumerate(("gyro.x", "gyro.y", "gyro.z", "accel.x", "accel.y", "accel.z")):
+        white = channels[ch]["terms"]["white"]
+        assert white["resolved"] and abs(white["value"] - density[i]) <= 3.0 * white["sigma"], (ch, white)
+
+
+def test_rig_session_of_the_written_unit(tmp_path, capsys):
+    """The round trip through sins: a unit characterised, its file given to `sins calibrate`, the rig
+    recording characterised (its ref_ columns removed): the white noise comes back within 3σ."""
+    result = analysis.characterise(_residual(dict(arw=2e-4), n=1 << 14))
+    unit = model_file.write_model(tmp_path / "unit.toml", result)
+    rig = tmp_path / "rig.csv"
+    assert (
+        cli.main(["calibrate", "24pos_ratetable", "--imu", str(unit), "--out", str(rig), "--seed", "2"]) == 0
+    )
+    doc = tmp_path / "rig.json"
+    assert cli.main(["characterise", str(rig), "--json", str(doc)]) == 0
+    capsys.readouterr()
+    channels = json.loads(doc.read_text())["channels"]
+    for ch in ("gyro.x", "accel.z"):
+        white = channels[ch]["terms"]["white"]
+        wrote = result.channels[ch].fit.terms["white"].value
+        assert white["resolved"] and abs(white["value"] - wrote) <= 3.0 * white["sigma"], (ch, white, wrote)
