@@ -406,6 +406,9 @@ def test_psins_lasergyro_round_trip():
     assert one.partings
     for p in one.partings:
         assert p.channel in result.channels and p.tau_s[0] <= p.tau_s[1] and p.ratio > 0.0
+    assert any(not p.fitted for p in one.partings) and any(
+        r.fit.excluded_tau_s for r in result.channels.values()
+    )
 
 
 _DRIVE = """

@@ -75,18 +75,23 @@ class Parting:
     channel : ``gyro.x`` … ``accel.z``
     tau_s : ``(first, last)`` cluster time of the run, s
     ratio : the real Allan deviation over the simulated one where they part most
+    fitted : whether the run lies where the terms were fitted (False: cluster times the fit left out,
+        where the noise model was already found not to hold)
     """
 
     channel: str
     tau_s: tuple[float, float]
     ratio: float
+    fitted: bool = True
 
     def what(self) -> str:
         """In words: ``gyro.x: the real unit 3.2x the model at τ = 0.01-0.04 s``."""
         side = "above" if self.ratio > 1.0 else "below"
         a, b = self.tau_s
         span = f"{a:.3g} s" if a == b else f"{a:.3g}-{b:.3g} s"
-        return f"{self.channel}: the real unit {self.ratio:.3g}x the model's deviation ({side}) at τ = {span}"
+        where = "" if self.fitted else " (left out of the fit)"
+        what = f"the real unit {self.ratio:.3g}x the model's deviation ({side})"
+        return f"{self.channel}: {what} at τ = {span}{where}"
 
 
 @dataclass(frozen=True)
@@ -115,7 +120,13 @@ class ClosingCheck:
             "confidence": self.confidence,
             "channels": self.channels,
             "partings": [
-                {"channel": p.channel, "tau_s": list(p.tau_s), "ratio": p.ratio, "what": p.what()}
+                {
+                    "channel": p.channel,
+                    "tau_s": list(p.tau_s),
+                    "ratio": p.ratio,
+                    "fitted": p.fitted,
+                    "what": p.what(),
+                }
                 for p in self.partings
             ],
         }
@@ -152,6 +163,7 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = real.avar / simulated.avar
         parted = (ratio < lo) | (ratio > hi)
+        in_fit = ~np.isin(real.tau_s, np.asarray(r.fit.excluded_tau_s, dtype=float))
         channels[ch] = {
             "tau_s": real.tau_s.tolist(),
             "real_adev": real.adev.tolist(),
@@ -167,10 +179,15 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
                 k += 1
                 continue
             j = k
-            while j + 1 < len(parted) and parted[j + 1] and (ratio[j + 1] > 1.0) == (ratio[k] > 1.0):
+            while (
+                j + 1 < len(parted)
+                and parted[j + 1]
+                and (ratio[j + 1] > 1.0) == (ratio[k] > 1.0)
+                and in_fit[j + 1] == in_fit[k]
+            ):
                 j += 1
             run = np.sqrt(ratio[k : j + 1])
             worst = float(run[np.argmax(np.abs(np.log(run)))])
-            partings.append(Parting(ch, (float(real.tau_s[k]), float(real.tau_s[j])), worst))
+            partings.append(Parting(ch, (float(real.tau_s[k]), float(real.tau_s[j])), worst, bool(in_fit[k])))
             k = j + 1
     return ClosingCheck(seed, confidence, channels, tuple(partings))

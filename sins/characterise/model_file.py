@@ -114,6 +114,12 @@ def model_toml(result: Characterisation) -> str:
                 f"# {ch}: rate ramp R = {display(r.sensor, 'rate_ramp', ramp.value)} ± {sigma} {unit}, "
                 "not simulated (sins has no rate-ramp effect)"
             )
+        q, n = r.fit.terms["quantization"].value, r.fit.terms["white"].value or 0.0
+        if q is not None and n * math.sqrt(result.dt) < math.sqrt(12.0) * q / 2.0:
+            lines.append(
+                f"# {ch}: its white noise per sample is below half the quantization step: sins rounds a"
+                " nearly constant input to a sawtooth, not to the IEEE term's independent errors"
+            )
         for term in ("quantization", "white", "bias_instability", "rate_random_walk"):
             t = r.fit.terms[term]
             if not t.resolved and t.upper is not None:
