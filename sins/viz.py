@@ -39,6 +39,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 from numpy.typing import NDArray
 
+from sins.characterise import Characterisation
+from sins.characterise.check import ClosingCheck
 from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
@@ -545,3 +547,52 @@ def _log_campaign_group(
         width = 2.0 if q == 50 else 0.75
         rec.log(entity, rr.SeriesLines(names=[f"{strategy} p{q}"], colors=[rgb], widths=[width]), static=True)
         rec.send_columns(entity, indexes=_time(t), columns=rr.Scalars.columns(scalars=band))
+
+
+def log_characterisation(rec: rr.RecordingStream, result: Characterisation, closing: ClosingCheck) -> None:
+    """A characterisation and its closing check: per channel, the real Allan deviation with its
+    confidence band, the fitted model's and the simulated unit's (log10 of °/h or µg, by octave of the
+    cluster time), and the partings as text."""
+    from sins.characterise.analysis import ADEV_DISPLAY
+
+    for channel, r in result.channels.items():
+        size = ADEV_DISPLAY[r.sensor][0]
+        low, high = r.curve.interval()
+        curves = closing.channels[channel]
+        octave = rr.TimeColumn(ALLAN_TIMELINE, sequence=np.arange(len(r.curve.tau_s)))
+        for label, values, rgb in (
+            ("real", r.curve.adev, RED),
+            ("band_low", low, (240, 160, 160)),
+            ("band_high", high, (240, 160, 160)),
+            ("model", np.asarray(curves["model_adev"]), GREEN),
+            ("simulated", np.asarray(curves["sim_adev"]), BLUE),
+        ):
+            entity = _join("characterise", imu_entity(channel), label)
+            rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
+            scalars = np.log10(np.maximum(np.asarray(values, dtype=np.float64) / size, 1e-300))
+            rec.send_columns(entity, indexes=[octave], columns=rr.Scalars.columns(scalars=scalars))
+    lines = [f"{result.source}: {result.rows} rows at {1.0 / result.dt:.6g} Hz", "", "partings:"]
+    lines += [f"- {p.what()}" for p in closing.partings] or ["- none: within the bands everywhere"]
+    rec.log("characterise/report", rr.TextDocument("\n".join(lines), media_type="text/markdown"), static=True)
+
+
+def save_characterisation(
+    result: Characterisation, closing: ClosingCheck, path: str | os.PathLike[str]
+) -> Path:
+    """Write a characterisation's Allan curves to a ``.rrd`` file (through a temporary name)."""
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id="characterise")
+    views = [
+        rrb.TimeSeriesView(
+            origin=f"characterise/{imu_entity(ch)}",
+            name=f"{ch} Allan deviation (log10; τ = {result.dt:.3g} s · 2^k)",
+        )
+        for ch in result.channels
+    ]
+    bp = rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Grid(*views, name="Allan deviation: real, band, model, simulated"),
+            rrb.TextDocumentView(origin="characterise/report", name="report"),
+            column_shares=[3, 1],
+        )
+    )
+    return _write(path, rec, bp, lambda: log_characterisation(rec, result, closing))

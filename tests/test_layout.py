@@ -27,6 +27,7 @@ RANKS = {
     "sins.aiding": 4,
     "sins.compensation": 5,
     "sins.gap": 5,
+    "sins.characterise": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
     "sins.campaign": 8,

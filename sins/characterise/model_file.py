@@ -1,0 +1,147 @@
+"""The noise terms written as an IMU file sins can simulate (``scenarios/imu/*.toml``).
+
+The file has no grade: it is made of ``[[effect]]`` tables only, in the familiar units of
+:data:`sins.imu.spec.PARAMETERS`, so ``sins run`` (a scenario's ``[imu] model``) and ``sins calibrate --imu``
+read it as it is. Each term maps to one effect, per sensor and axis:
+
+* ``N`` → ``noise`` (``arw_deg_per_rt_h``, ``vrw_ug_per_rt_hz``);
+* the bias instability → ``bias_instability`` (``σ_b`` as ``sigma_dph`` / ``sigma_ug``, ``tau_s``);
+* ``K`` → ``rate_random_walk`` (``rrw_dph_per_rt_h``, ``rrw_ug_per_rt_s``);
+* ``Q`` → ``quantization``: sins rounds each increment to ``step · dt`` and carries the remainder, so the
+  angle (velocity) error is uniform in a step, ``Q = step · dt / √12``: ``step = √12 Q / dt`` (in the
+  rate form, which rounds each rate sample without a carry, that step is white noise instead);
+* ``R`` has no effect in sins: the file names it in a comment, not simulated.
+
+A term the recording does not resolve is written as zero, with its upper bound in a comment. The file
+has no deterministic errors (bias, scale factor, misalignment): an Allan analysis cannot see them. It is
+written under a temporary name and renamed, so a failure leaves no half-written file.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
+from sins.imu import spec
+from sins.imu.model import CHANNELS, DEG, MG, UG, ImuModel
+
+#: Per sensor, the effects written: (term, effect, parameter), the parameter in the file's unit.
+EFFECTS = {
+    "gyro": (
+        ("white", "gyro.noise", "arw_deg_per_rt_h"),
+        ("bias_instability", "gyro.bias_instability", "sigma_dph"),
+        ("rate_random_walk", "gyro.rate_random_walk", "rrw_dph_per_rt_h"),
+        ("quantization", "gyro.quantization", "step_dps"),
+    ),
+    "accel": (
+        ("white", "accel.noise", "vrw_ug_per_rt_hz"),
+        ("bias_instability", "accel.bias_instability", "sigma_ug"),
+        ("rate_random_walk", "accel.rate_random_walk", "rrw_ug_per_rt_s"),
+        ("quantization", "accel.quantization", "step_mg"),
+    ),
+}
+#: A bias instability's correlation time where the recording resolves none (its σ is then zero).
+DEFAULT_TAU_S = 100.0
+
+
+def _file_value(result: Characterisation, channel: str, term: str) -> float:
+    """The term of one channel in the file's unit (zero when not resolved)."""
+    r = result.channels[channel]
+    value = r.fit.terms[term].value
+    if value is None:
+        return 0.0
+    if term == "quantization":
+        step = math.sqrt(12.0) * value / result.dt  # rad/s or m/s²
+        return step / (DEG if r.sensor == "gyro" else MG)
+    if term == "white" and r.sensor == "gyro":
+        return value / (DEG / 60.0)
+    if r.sensor == "accel":
+        return value / UG
+    return value / DISPLAY["gyro"][term][0]
+
+
+def _axes(values: list[float]) -> str:
+    return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
+
+
+def effect_tables(result: Characterisation) -> list[tuple[str, dict[str, list[float]]]]:
+    """The file's ``[[effect]]`` tables: (effect name, parameters in the file's units, per axis).
+
+    A sensor is written when all three of its axes were characterised; an effect when one of its axes
+    has the term (``noise`` always, so the file is never empty).
+    """
+    tables = []
+    for sensor, effects in EFFECTS.items():
+        channels = [f"{sensor}.{a}" for a in "xyz"]
+        if not all(ch in result.channels for ch in channels):
+            continue
+        for term, name, key in effects:
+            values = [_file_value(result, ch, term) for ch in channels]
+            if term != "white" and not any(values):
+                continue
+            params = {key: values}
+            if term == "bias_instability":
+                params["tau_s"] = [result.channels[ch].fit.tau_c_s or DEFAULT_TAU_S for ch in channels]
+            tables.append((name, params))
+    return tables
+
+
+def imu_model(result: Characterisation) -> ImuModel:
+    """The model the file describes, built from the same tables (as ``sins.scenario.load_imu`` reads it)."""
+    return ImuModel(tuple(spec.effect_from_params(name, params) for name, params in effect_tables(result)))
+
+
+def model_toml(result: Characterisation) -> str:
+    """The IMU file's text for a characterisation (see the module's text)."""
+    lines = [
+        f"# IMU noise model from `sins characterise` of {result.source}",
+        f"# {result.rows} rows at {1.0 / result.dt:.6g} Hz, longest stretch {duration(result.length_s)}.",
+        "# Noise only: an Allan analysis does not see biases, scale factors or misalignments.",
+        "# Unresolved terms are zero here (their upper bounds in the comments).",
+    ]
+    for ch in CHANNELS:
+        if ch not in result.channels:
+            continue
+        r = result.channels[ch]
+        ramp = r.fit.terms["rate_ramp"]
+        unit = DISPLAY[r.sensor]["rate_ramp"][1]
+        if ramp.resolved:
+            sigma = display(r.sensor, "rate_ramp", ramp.sigma)
+            lines.append(
+                f"# {ch}: rate ramp R = {display(r.sensor, 'rate_ramp', ramp.value)} ± {sigma} {unit}, "
+                "not simulated (sins has no rate-ramp effect)"
+            )
+        q, n = r.fit.terms["quantization"].value, r.fit.terms["white"].value or 0.0
+        if q is not None and n * math.sqrt(result.dt) < math.sqrt(12.0) * q / 2.0:
+            lines.append(
+                f"# {ch}: its white noise per sample is below half the quantization step: sins rounds a"
+                " nearly constant input to a sawtooth, not to the IEEE term's independent errors"
+            )
+        for term in ("quantization", "white", "bias_instability", "rate_random_walk"):
+            t = r.fit.terms[term]
+            if not t.resolved and t.upper is not None:
+                size, symbol = DISPLAY[r.sensor][term]
+                lines.append(f"# {ch}: {term} not resolved, at most {t.upper / size:.4g} {symbol}")
+    for name, params in effect_tables(result):
+        lines += ["", "[[effect]]", f'name = "{name}"']
+        lines += [f"{key} = {_axes(values)}" for key, values in params.items()]
+    return "\n".join(lines) + "\n"
+
+
+def write_model(path: str | os.PathLike[str], result: Characterisation) -> Path:
+    """Write the IMU file for ``result`` at ``path`` atomically (a temporary name in the same folder, then
+    renamed); returns the path."""
+    path = Path(path)
+    text = model_toml(result)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or Path("."))
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
