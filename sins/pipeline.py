@@ -347,7 +347,6 @@ def aided_runs(
 
     a = sc.aiding
     assert a is not None
-    where = sc.source or sc.name
     truth, ideal = simulate(sc)
     temp = _cabin(sc, ideal.t)
     readings = ideal
@@ -361,30 +360,8 @@ def aided_runs(
     fixes = gnss.simulate(truth, receiver, seed=a.seed)
     filter_grade = a.filter_grade or grade or "navigation"
     config = ekf.FilterConfig.for_grade(filter_grade)
-    heading = None
-    if a.static_s is not None:
-        still = truth.t <= truth.t[0] + a.static_s + 1e-9
-        if truth.t[-1] < truth.t[0] + a.static_s - 1e-9:
-            raise SinsInputError(
-                f"{where}: alignment.static_s: {a.static_s:g} s is longer than the run's "
-                f"{truth.t[-1] - truth.t[0]:g} s"
-            )
-        speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
-        turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
-        if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
-            raise SinsInputError(
-                f"{where}: alignment.static_s: the vehicle moves within the first {a.static_s:g} s "
-                f"(speed up to {speed:.3g} m/s); an alignment needs it still"
-            )
-        if a.heading_sigma_rad is not None:
-            draw = np.random.default_rng([a.seed, 3]).standard_normal()
-            heading = (float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad)
-    true_bias = None
-    if nav_model is not None:
-        from sins.imu import Bias
-
-        gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
-        true_bias = np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
+    heading = _alignment_heading(sc, truth) if a.static_s is not None else None
+    true_bias = _true_bias(nav_model)
     keep = None
     out = {}
     for name, strategy in strategies.items():
@@ -395,20 +372,7 @@ def aided_runs(
         else:
             result = ekf.run(corrected, fixes, config, strapdown.InitialState.from_series(truth))
         errors = nav_errors(result.nav, truth)
-        horizontal = errors.horizontal_m
-        windows = []
-        for start, end in a.outages:
-            if start >= truth.t[-1]:
-                continue
-            # Samples within 1 µs of an edge (a fix's, up to rounding) are the fix's, not the window's.
-            inside = np.flatnonzero((truth.t > start + 1e-6) & (truth.t < min(end, truth.t[-1]) + 1e-9))
-            if end < truth.t[-1]:  # the sample before the fix at the window's end
-                inside = inside[truth.t[inside] < end - 1e-6]
-            if inside.size == 0:
-                continue
-            windows.append(
-                OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
-            )
+        windows = _outage_errors(a.outages, truth.t, errors.horizontal_m)
         if keep is None:
             keep = thinned_indices(len(truth.t), keep_every)
             records = thinned_indices(len(result.t_cov), math.ceil(len(result.t_cov) / MAX_KEPT))
@@ -419,6 +383,61 @@ def aided_runs(
             fix_t=np.asarray(fixes.t, dtype=float),
         )  # fmt: skip
     return out
+
+
+def _alignment_heading(sc: Scenario, truth: NavSeries) -> tuple[float, float] | None:
+    """The heading given to a static alignment (``[alignment] heading_sigma_deg``: the truth's, off by a
+    draw of that σ), or None to gyrocompass; refuses a vehicle that moves within ``static_s``."""
+    a = sc.aiding
+    assert a is not None and a.static_s is not None
+    where = sc.source or sc.name
+    still = truth.t <= truth.t[0] + a.static_s + 1e-9
+    if truth.t[-1] < truth.t[0] + a.static_s - 1e-9:
+        raise SinsInputError(
+            f"{where}: alignment.static_s: {a.static_s:g} s is longer than the run's "
+            f"{truth.t[-1] - truth.t[0]:g} s"
+        )
+    speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
+    turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
+    if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
+        raise SinsInputError(
+            f"{where}: alignment.static_s: the vehicle moves within the first {a.static_s:g} s "
+            f"(speed up to {speed:.3g} m/s); an alignment needs it still"
+        )
+    if a.heading_sigma_rad is None:
+        return None
+    draw = np.random.default_rng([a.seed, 3]).standard_normal()
+    return float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad
+
+
+def _true_bias(nav_model: ImuModel | None) -> NDArray[np.float64] | None:
+    """The unit's constant gyro and accelerometer biases (6,), to set beside the filter's estimates."""
+    if nav_model is None:
+        return None
+    from sins.imu import Bias
+
+    gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
+    return np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
+
+
+def _outage_errors(
+    outages: Sequence[tuple[float, float]], t: NDArray[np.float64], horizontal: NDArray[np.float64]
+) -> list[OutageError]:
+    """Each outage's horizontal error at its end (the sample before the fix that ends it) and its max."""
+    windows = []
+    for start, end in outages:
+        if start >= t[-1]:
+            continue
+        # Samples within 1 µs of an edge (a fix's, up to rounding) are the fix's, not the window's.
+        inside = np.flatnonzero((t > start + 1e-6) & (t < min(end, t[-1]) + 1e-9))
+        if end < t[-1]:  # the sample before the fix at the window's end
+            inside = inside[t[inside] < end - 1e-6]
+        if inside.size == 0:
+            continue
+        windows.append(
+            OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
+        )
+    return windows
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:

@@ -282,53 +282,107 @@ def run(
     t = np.asarray(imu.t, dtype=float)
     check_fixes(fixes, t)
     n = len(imu.dtheta_b)
-    dt_all = np.diff(t)
-    step = max(1, round(config.propagation_dt_s / float(np.median(dt_all))))
-    events = [*_events(t, fixes, zupt, config.zupt_rate_hz), (n, -1, -1)]
+    step = max(1, round(config.propagation_dt_s / float(np.median(np.diff(t)))))
+    loop = _ClosedLoop(imu, fixes, config, initial, P0)
+    k = 0
+    for idx, kind, row in [*_events(t, fixes, zupt, config.zupt_rate_hz), (n, -1, -1)]:
+        while k < idx:
+            k_end = min(idx, k + step)
+            loop.propagate(k, k_end)
+            k = k_end
+        if kind < 0:
+            break
+        if kind == _ZUPT:
+            loop.zero_velocity(idx)
+        else:
+            loop.fix(idx, row)
+        loop.feed_back()
+        loop.keep_update(idx)
+    return loop.result()
 
-    kf = KalmanFilter(dim_x=N_STATES, dim_z=3)
-    kf.P = np.array(config.initial_covariance() if P0 is None else P0, dtype=float)
-    Qc = config.noise_density()
-    R_pos = np.diag(np.asarray(fixes.sigma_pos_m, dtype=float) ** 2)
-    R_vel = None if fixes.sigma_vel_mps is None else np.eye(3) * fixes.sigma_vel_mps**2
-    R_zupt = np.eye(3) * config.zupt_sigma_mps**2
-    arm_b = np.asarray(fixes.lever_arm_b, dtype=float)
-    gate = np.inf if config.gate_nis is None else config.gate_nis
 
-    state = strapdown.start(initial)
-    b_g, b_a = np.zeros(3), np.zeros(3)
-    lat, lon, h = np.empty(n + 1), np.empty(n + 1), np.empty(n + 1)
-    v, q = np.empty((n + 1, 3)), np.empty((n + 1, 4))
-    lat[0], lon[0], h[0], v[0], q[0] = initial.lat, initial.lon, initial.h, initial.v_n, state[6:10]
-    rec_t: list[float] = [t[0]]
-    rec_P: list[Array] = [kf.P.copy()]
-    rec_bg: list[Array] = [b_g.copy()]
-    rec_ba: list[Array] = [b_a.copy()]
-    rec_upd: list[bool] = [False]
-    nis = np.full(len(fixes.t), np.nan)
-    accepted = np.zeros(len(fixes.t), dtype=bool)
-    zupt_t: list[float] = []
+class _ClosedLoop:
+    """The running filter of :func:`run`: the integrator's state, the estimated biases, the filterpy
+    filter, and what is recorded of them."""
 
-    def record(time: float, updated: bool) -> None:
-        rec_t.append(time)
-        rec_P.append(kf.P.copy())
-        rec_bg.append(b_g.copy())
-        rec_ba.append(b_a.copy())
-        rec_upd.append(updated)
+    def __init__(
+        self,
+        imu: ImuIncrements,
+        fixes: GnssFixes,
+        config: FilterConfig,
+        initial: strapdown.InitialState,
+        P0: Array | None,
+    ) -> None:
+        self.imu, self.fixes = imu, fixes
+        self.t = t = np.asarray(imu.t, dtype=float)
+        self.dt_all = np.diff(t)
+        n = len(imu.dtheta_b)
+        self.kf = kf = KalmanFilter(dim_x=N_STATES, dim_z=3)
+        kf.P = np.array(config.initial_covariance() if P0 is None else P0, dtype=float)
+        self.Qc = config.noise_density()
+        self.R_pos = np.diag(np.asarray(fixes.sigma_pos_m, dtype=float) ** 2)
+        self.R_vel = None if fixes.sigma_vel_mps is None else np.eye(3) * fixes.sigma_vel_mps**2
+        self.R_zupt = np.eye(3) * config.zupt_sigma_mps**2
+        self.arm_b = np.asarray(fixes.lever_arm_b, dtype=float)
+        self.gate = np.inf if config.gate_nis is None else config.gate_nis
+        self.state = strapdown.start(initial)
+        self.b_g, self.b_a = np.zeros(3), np.zeros(3)
+        self.lat, self.lon, self.h = np.empty(n + 1), np.empty(n + 1), np.empty(n + 1)
+        self.v, self.q = np.empty((n + 1, 3)), np.empty((n + 1, 4))
+        self.lat[0], self.lon[0], self.h[0] = initial.lat, initial.lon, initial.h
+        self.v[0], self.q[0] = initial.v_n, self.state[6:10]
+        self.rec_t: list[float] = [t[0]]
+        self.rec_P: list[Array] = [kf.P.copy()]
+        self.rec_bg: list[Array] = [self.b_g.copy()]
+        self.rec_ba: list[Array] = [self.b_a.copy()]
+        self.rec_upd: list[bool] = [False]
+        self.nis = np.full(len(fixes.t), np.nan)
+        self.accepted = np.zeros(len(fixes.t), dtype=bool)
+        self.zupt_t: list[float] = []
 
-    def gated_update(z: Array, H: Array, R: Array) -> tuple[float, bool]:
+    def record(self, time: float, updated: bool) -> None:
+        """Keep the covariance and biases at ``time``."""
+        self.rec_t.append(time)
+        self.rec_P.append(self.kf.P.copy())
+        self.rec_bg.append(self.b_g.copy())
+        self.rec_ba.append(self.b_a.copy())
+        self.rec_upd.append(updated)
+
+    def propagate(self, k: int, k_end: int) -> None:
+        """Integrate intervals ``k:k_end`` on bias-corrected readings; propagate the covariance over them."""
+        imu, t = self.imu, self.t
+        dts = self.dt_all[k:k_end, None]
+        dv_b = imu.dv_b[k:k_end] - self.b_a * dts
+        seg = ImuIncrements(t=t[k : k_end + 1], dtheta_b=imu.dtheta_b[k:k_end] - self.b_g * dts, dv_b=dv_b)
+        states, self.state = strapdown.advance(self.state, seg)
+        self.lat[k + 1 : k_end + 1], self.lon[k + 1 : k_end + 1] = states.lat, states.lon
+        self.h[k + 1 : k_end + 1] = states.h
+        self.v[k + 1 : k_end + 1], self.q[k + 1 : k_end + 1] = states.v_n, states.q_nb
+        C_all = rotation.dcm_from_quat(states.q_nb)
+        span = float(t[k_end] - t[k])
+        f_n = np.einsum("kij,kj->i", C_all, dv_b) / span
+        F = error_dynamics(
+            float(states.lat.mean()), float(states.h.mean()), states.v_n.mean(axis=0), f_n, C_all.mean(axis=0)
+        )
+        phi, Q = discretize(F, self.Qc, span)
+        self.kf.predict(F=phi, Q=Q)
+        self.record(float(t[k_end]), False)
+
+    def gated_update(self, z: Array, H: Array, R: Array) -> tuple[float, bool]:
+        """Update with ``z`` unless its NIS is above the gate; the NIS and whether it was used."""
+        kf = self.kf
         S = H @ kf.P @ H.T + R
         value = float(z @ np.linalg.solve(S, z))
-        if value > gate:
+        if value > self.gate:
             return value, False
         kf.x = np.zeros((N_STATES, 1))
         kf.update(z[:, None], R=R, H=H)
         return value, True
 
-    def feed_back() -> None:
-        nonlocal state, b_g, b_a
-        dx = np.asarray(kf.x, dtype=float).ravel()
-        nav = strapdown.current(state)
+    def feed_back(self) -> None:
+        """Move the estimated errors into the integrator and the biases; the filter's state back to 0."""
+        dx = np.asarray(self.kf.x, dtype=float).ravel()
+        nav = strapdown.current(self.state)
         r_m, r_n = earth.radii(nav.lat)
         corrected = strapdown.InitialState(
             lat=nav.lat - dx[0] / (r_m + nav.h),
@@ -337,81 +391,63 @@ def run(
             v_n=nav.v_n - dx[VEL],
             q_nb=rotation.quat_multiply(rotation.quat_from_rotvec(dx[ATT]), nav.q_nb),
         )
-        state = strapdown.moved(state, corrected)
-        b_g = b_g - dx[BG]
-        b_a = b_a - dx[BA]
-        kf.x = np.zeros((N_STATES, 1))
+        self.state = strapdown.moved(self.state, corrected)
+        self.b_g = self.b_g - dx[BG]
+        self.b_a = self.b_a - dx[BA]
+        self.kf.x = np.zeros((N_STATES, 1))
 
-    k = 0
-    for idx, kind, row in events:
-        while k < idx:
-            k_end = min(idx, k + step)
-            dts = dt_all[k:k_end, None]
-            dv_b = imu.dv_b[k:k_end] - b_a * dts
-            seg = ImuIncrements(t=t[k : k_end + 1], dtheta_b=imu.dtheta_b[k:k_end] - b_g * dts, dv_b=dv_b)
-            states, state = strapdown.advance(state, seg)
-            lat[k + 1 : k_end + 1], lon[k + 1 : k_end + 1], h[k + 1 : k_end + 1] = (
-                states.lat,
-                states.lon,
-                states.h,
-            )
-            v[k + 1 : k_end + 1], q[k + 1 : k_end + 1] = states.v_n, states.q_nb
-            C_all = rotation.dcm_from_quat(states.q_nb)
-            span = float(t[k_end] - t[k])
-            f_n = np.einsum("kij,kj->i", C_all, dv_b) / span
-            F = error_dynamics(
-                float(states.lat.mean()),
-                float(states.h.mean()),
-                states.v_n.mean(axis=0),
-                f_n,
-                C_all.mean(axis=0),
-            )
-            phi, Q = discretize(F, Qc, span)
-            kf.predict(F=phi, Q=Q)
-            record(float(t[k_end]), False)
-            k = k_end
-        if kind < 0:
-            break
-        nav = strapdown.current(state)
+    def zero_velocity(self, idx: int) -> None:
+        """A zero-velocity update at sample ``idx``."""
+        nav = strapdown.current(self.state)
+        H = np.zeros((3, N_STATES))
+        H[:, VEL] = np.eye(3)
+        self.gated_update(nav.v_n.copy(), H, self.R_zupt)
+        self.zupt_t.append(float(self.t[idx]))
+
+    def fix(self, idx: int, row: int) -> None:
+        """GNSS fix ``row`` at sample ``idx``: its antenna position, then its velocity if it has one."""
+        fixes, t = self.fixes, self.t
+        nav = strapdown.current(self.state)
         C_nb = rotation.dcm_from_quat(nav.q_nb)
-        if kind == _ZUPT:
+        arm_n = C_nb @ self.arm_b
+        r_m, r_n = earth.radii(nav.lat)
+        late = t[idx] - fixes.t[row]  # the fix moved to the sample's time with the INS velocity
+        z = np.array([
+            (nav.lat - fixes.lat[row]) * (r_m + nav.h),
+            (nav.lon - fixes.lon[row]) * (r_n + nav.h) * np.cos(nav.lat),
+            -(nav.h - fixes.h[row]),
+        ]) + arm_n - nav.v_n * late  # fmt: skip
+        H = np.zeros((3, N_STATES))
+        H[:, POS] = np.eye(3)
+        H[:, ATT] = rotation.skew(arm_n)
+        self.nis[row], self.accepted[row] = self.gated_update(z, H, self.R_pos)
+        if self.accepted[row] and self.R_vel is not None:
+            self.feed_back()
+            nav = strapdown.current(self.state)
+            C_nb = rotation.dcm_from_quat(nav.q_nb)
+            last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
+            omega_b = self.imu.dtheta_b[last] / self.dt_all[last] - self.b_g
+            arm_rate_n = C_nb @ np.cross(omega_b, self.arm_b)
             H = np.zeros((3, N_STATES))
             H[:, VEL] = np.eye(3)
-            gated_update(nav.v_n.copy(), H, R_zupt)
-            zupt_t.append(float(t[idx]))
-        else:
-            arm_n = C_nb @ arm_b
-            r_m, r_n = earth.radii(nav.lat)
-            late = t[idx] - fixes.t[row]  # the fix moved to the sample's time with the INS velocity
-            z = np.array([
-                (nav.lat - fixes.lat[row]) * (r_m + nav.h),
-                (nav.lon - fixes.lon[row]) * (r_n + nav.h) * np.cos(nav.lat),
-                -(nav.h - fixes.h[row]),
-            ]) + arm_n - nav.v_n * late  # fmt: skip
-            H = np.zeros((3, N_STATES))
-            H[:, POS] = np.eye(3)
-            H[:, ATT] = rotation.skew(arm_n)
-            nis[row], accepted[row] = gated_update(z, H, R_pos)
-            if accepted[row] and R_vel is not None:
-                feed_back()
-                nav = strapdown.current(state)
-                C_nb = rotation.dcm_from_quat(nav.q_nb)
-                last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
-                omega_b = imu.dtheta_b[last] / dt_all[last] - b_g
-                arm_rate_n = C_nb @ np.cross(omega_b, arm_b)
-                H = np.zeros((3, N_STATES))
-                H[:, VEL] = np.eye(3)
-                H[:, ATT] = rotation.skew(arm_rate_n)
-                gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, R_vel)
-        feed_back()
-        nav = strapdown.current(state)
-        sign = -1.0 if nav.q_nb[3] < 0.0 else 1.0  # scalar part >= 0, as the integrator writes them
-        lat[idx], lon[idx], h[idx], v[idx], q[idx] = nav.lat, nav.lon, nav.h, nav.v_n, sign * nav.q_nb
-        record(float(t[idx]), True)
+            H[:, ATT] = rotation.skew(arm_rate_n)
+            self.gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, self.R_vel)
 
-    return AidedResult(
-        nav=NavSeries(t=t, lat=lat, lon=lon, h=h, v_n=v, q_nb=q),
-        t_cov=np.array(rec_t), P=np.array(rec_P), gyro_bias=np.array(rec_bg), accel_bias=np.array(rec_ba),
-        after_update=np.array(rec_upd), fix_t=np.asarray(fixes.t, dtype=float), nis=nis, accepted=accepted,
-        zupt_t=np.array(zupt_t),
-    )  # fmt: skip
+    def keep_update(self, idx: int) -> None:
+        """The corrected state at sample ``idx`` replaces the integrated one; the record after it."""
+        nav = strapdown.current(self.state)
+        sign = -1.0 if nav.q_nb[3] < 0.0 else 1.0  # scalar part >= 0, as the integrator writes them
+        self.lat[idx], self.lon[idx], self.h[idx] = nav.lat, nav.lon, nav.h
+        self.v[idx], self.q[idx] = nav.v_n, sign * nav.q_nb
+        self.record(float(self.t[idx]), True)
+
+    def result(self) -> AidedResult:
+        """The run as :func:`run` returns it."""
+        fixes = self.fixes
+        return AidedResult(
+            nav=NavSeries(t=self.t, lat=self.lat, lon=self.lon, h=self.h, v_n=self.v, q_nb=self.q),
+            t_cov=np.array(self.rec_t), P=np.array(self.rec_P), gyro_bias=np.array(self.rec_bg),
+            accel_bias=np.array(self.rec_ba), after_update=np.array(self.rec_upd),
+            fix_t=np.asarray(fixes.t, dtype=float), nis=self.nis, accepted=self.accepted,
+            zupt_t=np.array(self.zupt_t),
+        )  # fmt: skip

@@ -348,27 +348,8 @@ def fit_points(
     if len(tau) < 2:
         empty = {n: Term(n, False, None, None, None, ()) for n in TERMS}
         return NoiseFit(empty, np.zeros(5), np.zeros((5, 5)), None, None, 0.0, 1)
-    # The Gauss–Markov bump is told from a rate random walk or white noise only when its peak lies inside.
-    lo, hi = 4.0 * tau[0], tau[-1] / 2.0
-    grid: list[float | None] = [None]
-    if hi > lo:
-        count = max(int(_GRID_PER_OCTAVE * math.log2(hi / lo)) + 1, 2)
-        grid += list(np.geomspace(lo, hi, count) / GM_PEAK_X)
-    results = []  # (score, chi2, tc, coefficients)
-    for tc in grid:
-        wa = white @ basis(tau, tc)
-        best_here = None
-        for subset in _SUBSETS:
-            cols = [k for k in subset if k != 2 or tc is not None]
-            c = np.zeros(5)
-            c[cols], chi2 = _nnls(wa[:, cols], wy)
-            score = chi2 + _PARAM_PENALTY * (np.count_nonzero(c) + (1 if c[2] > 0.0 else 0))
-            if best_here is None or score < best_here[0]:
-                best_here = (score, chi2, tc, c)
-        assert best_here is not None
-        results.append(best_here)
-    best = min(range(len(results)), key=lambda i: results[i][0])
-    _, chi2, tc, c = results[best]
+    results = _grid_fits(tau, white, wy)
+    _, chi2, tc, c = min(results, key=lambda r: r[0])
     # The Gauss–Markov column for a term not in the model: the best correlation time it had.
     gm_any = [r for r in results if r[2] is not None]
     tc_probe = tc if tc is not None else (min(gm_any, key=lambda r: r[1])[2] if gm_any else None)
@@ -376,30 +357,7 @@ def fit_points(
         tc_probe = float(tau[len(tau) // 2])
     if c[2] <= 0.0:
         tc = None
-    # Backward elimination: a term that leaving out costs less than RESOLVED_CHI2 goes, and the rest
-    # are fitted again without it (so the terms kept are the model the file simulates).
-    columns = [k for k in range(5) if c[k] > 0.0]
-    while True:
-        wa = white @ basis(tau, tc)
-        dof = max(len(tau) - len(columns) - (1 if tc is not None else 0), 1)
-        inflate = max(1.0, chi2 / dof)
-        gains = {}
-        for k in columns:
-            rest = [j for j in columns if j != k]
-            without = _nnls(wa[:, rest], wy)[1] if rest else float(wy @ wy)
-            gains[k] = (without - chi2) / inflate
-        weak = [k for k in columns if gains[k] < RESOLVED_CHI2]
-        if not weak:
-            break
-        columns.remove(min(weak, key=lambda k: gains[k]))
-        if 2 not in columns:
-            tc = None
-        c = np.zeros(5)
-        if columns:
-            c[columns], chi2 = _nnls((white @ basis(tau, tc))[:, columns], wy)
-        else:
-            chi2 = float(wy @ wy)
-        columns = [k for k in columns if c[k] > 0.0]
+    columns, c, chi2, tc, inflate, dof = _eliminate(tau, white, wy, c, chi2, tc)
     a = basis(tau, tc)
     cov = np.zeros((5, 5))
     if columns:
@@ -412,32 +370,106 @@ def fit_points(
         tc_range = (float(min(inside)) / half_step, float(max(inside)) * half_step)
     length = length_s if length_s is not None else float(curve.tau_s[-1]) * MIN_CLUSTERS
     dt = float(curve.tau_s[0] / curve.clusters[0])
-    a_probe = basis(tau, tc if tc is not None else tc_probe)
-    model = a_probe @ c
-    terms = {}
-    for k, name in enumerate(TERMS):
-        share = a_probe[:, k] * c[k] / np.maximum(model, 1e-300)
-        support = tuple(float(t) for t in tau[share >= 0.5])
-        if k in columns:
-            value = math.sqrt(c[k])
-            terms[name] = Term(
-                name, True, value, math.sqrt(max(cov[k, k], 0.0)) / (2.0 * value), None, support
-            )
-            continue
-        extended = sorted({*columns, k})
-        ce = np.zeros(5)
-        ce[extended], _ = _nnls((white @ a_probe)[:, extended], wy)
-        var = _covariance(a_probe, white, extended)[extended.index(k), extended.index(k)] * inflate
-        upper = math.sqrt(max(ce[k], 0.0) + 2.0 * math.sqrt(max(var, 0.0)))
-        size = np.zeros(5)
-        size[k] = upper**2
-        need_len, need_rate = needs(size, c, tc_probe, dt, length)
-        if need_len is None and need_rate is None and k >= 2:
-            # Bounded, not seen: a slow term smaller than its bound shows only at longer cluster times,
-            # two octaves beyond these at the least.
-            need_len = 4.0 * length
-        terms[name] = Term(name, False, None, None, upper, (), need_len, need_rate)
+    fit = _Fitted(tau, white, wy, c, cov, columns, tc, inflate)
+    terms = {name: _term(fit, k, name, tc_probe, dt, length) for k, name in enumerate(TERMS)}
     return NoiseFit(terms, c, cov, tc, tc_range, chi2, dof)
+
+
+#: One grid point's fit: (score, χ², correlation time or None, coefficients).
+_GridFit = tuple[float, float, float | None, Array]
+
+
+def _grid_fits(tau: Array, white: Array, wy: Array) -> list[_GridFit]:
+    """The best subset of terms for each correlation time of the grid (and for none)."""
+    # The Gauss–Markov bump is told from a rate random walk or white noise only when its peak lies inside.
+    lo, hi = 4.0 * tau[0], tau[-1] / 2.0
+    grid: list[float | None] = [None]
+    if hi > lo:
+        count = max(int(_GRID_PER_OCTAVE * math.log2(hi / lo)) + 1, 2)
+        grid += list(np.geomspace(lo, hi, count) / GM_PEAK_X)
+    results: list[_GridFit] = []
+    for tc in grid:
+        wa = white @ basis(tau, tc)
+        best_here: _GridFit | None = None
+        for subset in _SUBSETS:
+            cols = [k for k in subset if k != 2 or tc is not None]
+            c = np.zeros(5)
+            c[cols], chi2 = _nnls(wa[:, cols], wy)
+            score = chi2 + _PARAM_PENALTY * (np.count_nonzero(c) + (1 if c[2] > 0.0 else 0))
+            if best_here is None or score < best_here[0]:
+                best_here = (score, chi2, tc, c)
+        assert best_here is not None
+        results.append(best_here)
+    return results
+
+
+def _eliminate(
+    tau: Array, white: Array, wy: Array, c: Array, chi2: float, tc: float | None
+) -> tuple[list[int], Array, float, float | None, float, int]:
+    """Backward elimination: a term that leaving out costs less than RESOLVED_CHI2 goes, and the rest
+    are fitted again without it (so the terms kept are the model the file simulates). The columns
+    kept, coefficients, χ², correlation time, χ² inflation and degrees of freedom."""
+    columns = [k for k in range(5) if c[k] > 0.0]
+    while True:
+        wa = white @ basis(tau, tc)
+        dof = max(len(tau) - len(columns) - (1 if tc is not None else 0), 1)
+        inflate = max(1.0, chi2 / dof)
+        gains = {}
+        for k in columns:
+            rest = [j for j in columns if j != k]
+            without = _nnls(wa[:, rest], wy)[1] if rest else float(wy @ wy)
+            gains[k] = (without - chi2) / inflate
+        weak = [k for k in columns if gains[k] < RESOLVED_CHI2]
+        if not weak:
+            return columns, c, chi2, tc, inflate, dof
+        columns.remove(min(weak, key=lambda k: gains[k]))
+        if 2 not in columns:
+            tc = None
+        c = np.zeros(5)
+        if columns:
+            c[columns], chi2 = _nnls((white @ basis(tau, tc))[:, columns], wy)
+        else:
+            chi2 = float(wy @ wy)
+        columns = [k for k in columns if c[k] > 0.0]
+
+
+@dataclass(frozen=True)
+class _Fitted:
+    """What :func:`fit_points` settled on, for reading off each term."""
+
+    tau: Array
+    white: Array
+    wy: Array
+    c: Array
+    cov: Array
+    columns: list[int]
+    tc: float | None
+    inflate: float
+
+
+def _term(fit: _Fitted, k: int, name: str, tc_probe: float, dt: float, length: float) -> Term:
+    """Term ``k``: its value and σ where resolved, else its upper bound and what would resolve it."""
+    a_probe = basis(fit.tau, fit.tc if fit.tc is not None else tc_probe)
+    c = fit.c
+    model = a_probe @ c
+    share = a_probe[:, k] * c[k] / np.maximum(model, 1e-300)
+    support = tuple(float(t) for t in fit.tau[share >= 0.5])
+    if k in fit.columns:
+        value = math.sqrt(c[k])
+        return Term(name, True, value, math.sqrt(max(fit.cov[k, k], 0.0)) / (2.0 * value), None, support)
+    extended = sorted({*fit.columns, k})
+    ce = np.zeros(5)
+    ce[extended], _ = _nnls((fit.white @ a_probe)[:, extended], fit.wy)
+    var = _covariance(a_probe, fit.white, extended)[extended.index(k), extended.index(k)] * fit.inflate
+    upper = math.sqrt(max(ce[k], 0.0) + 2.0 * math.sqrt(max(var, 0.0)))
+    size = np.zeros(5)
+    size[k] = upper**2
+    need_len, need_rate = needs(size, c, tc_probe, dt, length)
+    if need_len is None and need_rate is None and k >= 2:
+        # Bounded, not seen: a slow term smaller than its bound shows only at longer cluster times,
+        # two octaves beyond these at the least.
+        need_len = 4.0 * length
+    return Term(name, False, None, None, upper, (), need_len, need_rate)
 
 
 def needs(
