@@ -12,12 +12,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 from conftest import refusal
 
 from sins import campaign, scenario
-from sins.campaign import engine, results
+from sins.campaign import engine, gate, results
 from sins.cli import main
 
 BIN = Path(sys.executable).parent
@@ -254,3 +255,62 @@ def test_the_cli_runs_a_campaign_and_refuses_workers_with_a_scheduler(
     assert "ran 2 units" in out and "car_drive_5min" in out and "regression" in out
     assert main(["campaign", str(path), "--workers", "1", "--scheduler", "tcp://x:1"]) == 2
     assert "--workers" in capsys.readouterr().err
+
+
+AIDED_DRIVE = """name = "aided"
+[imu]
+rate_hz = 100
+[gnss]
+rate_hz = 1
+seed = 3
+[[outage]]
+start_s = 40
+end_s = 70
+[initial]
+lat_deg = 45.0
+yaw_deg = 10.0
+[[segment]]
+type = "accelerate"
+duration_s = 20
+to_speed_mps = 12
+[[segment]]
+type = "turn"
+duration_s = 30
+angle_deg = 90
+[[segment]]
+type = "hold"
+duration_s = 50
+"""
+
+
+def test_an_aided_campaign_row_carries_the_outage_errors_sins_run_reports(tmp_path: Path) -> None:
+    """A [gnss] scenario in a campaign: each row adds the aided run's errors and each outage's, equal to
+    ``sins run``'s for the same unit; the summary and the gate carry them."""
+    (tmp_path / "aided.toml").write_text(AIDED_DRIVE)
+    path = _campaign(tmp_path, count=1)
+    path.write_text(path.read_text().replace('file = "car_drive_5min"', 'file = "aided.toml"'))
+    spec = campaign.load(path)
+    rows = campaign.run_unit(spec, 0)
+    (tmp_path / "unit.toml").write_text(f'grade = "tactical"\nunit_seed = {rows[0]["unit_seed"]}\n')
+    drive = AIDED_DRIVE.replace(
+        "[imu]\nrate_hz = 100\n", f'[imu]\nrate_hz = 100\nmodel = "unit.toml"\nseed = {rows[0]["nav_seed"]}\n'
+    )
+    drive += (
+        f'[compensation]\nrig = "24pos_ratetable"\nseed = {rows[0]["rig_seed"]}\n'
+        'strategies = ["none", "regression"]\n'
+    )
+    (tmp_path / "drive.toml").write_text(drive)
+    assert main(["run", str(tmp_path / "drive.toml"), "--json", str(tmp_path / "run.json")]) == 0
+    ran = json.loads((tmp_path / "run.json").read_text())
+    for row in rows:
+        outage = ran["outages"][row["strategy"]][0]
+        assert row["outage1_end_m"] == outage["final_horizontal_m"]
+        assert row["outage1_max_m"] == outage["max_horizontal_m"]
+        assert row["aided_final_horizontal_m"] == ran["aided"][row["strategy"]]["final_horizontal_m"]
+    table = pa.Table.from_pylist(rows)
+    summary = results.summarise(table, spec)
+    assert summary["groups"]["aided/regression"]["outage1_end_m"]["median"] == rows[-1]["outage1_end_m"]
+    assert {c.figure for c in gate.compare(summary, summary)} >= {
+        "outage1_end_m",
+        "aided_max_horizontal_m",
+    }

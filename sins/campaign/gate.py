@@ -25,8 +25,10 @@ from sins.campaign.results import SUMMARISED
 
 #: The campaign-wide false-alarm rate: the chance an unchanged strategy fails the gate.
 FALSE_ALARM = 0.01
-#: The figures gated: final and maximum horizontal error, and each channel's held-back rig residual
-#: (its RMS, and the bias left: a bias far below the noise shows in the mean, not in the RMS).
+#: The figures every campaign gates: final and maximum horizontal error, and each channel's held-back
+#: rig residual (its RMS, and the bias left: a bias far below the noise shows in the mean, not in the
+#: RMS). An aided scenario's rows add the aided run's errors and each outage's, gated as well: every
+#: figure the baseline holds per unit is.
 GATED = SUMMARISED
 
 Verdict = Literal["holds", "regressed", "missing"]
@@ -49,7 +51,7 @@ def compare(baseline: dict[str, Any], summary: dict[str, Any], alpha: float = FA
     pairs = []
     for group, base in baseline["groups"].items():
         now = summary["groups"].get(group)
-        for figure in GATED:
+        for figure in [f for f in base["values"] if f != "unit_seed"]:
             b = np.asarray(base["values"].get(figure, []), dtype=float)
             if np.isfinite(b).any():
                 pairs.append((group, figure, base, now))

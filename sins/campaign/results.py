@@ -109,11 +109,16 @@ def summarise(table: pa.Table, spec: CampaignSpec) -> dict[str, Any]:
     if table.num_rows:
         scenario = np.array(table.column("scenario").to_pylist())
         strategy = np.array(table.column("strategy").to_pylist())
+        # An aided scenario's rows add its aided run's and each outage's errors.
+        extra = [c for c in table.column_names if c.startswith(("aided_", "outage"))]
         for sc in spec.scenarios:
             for st in dict.fromkeys(["none", *spec.compensation.strategies]):
                 rows = (scenario == sc.name) & (strategy == st)
                 if rows.any():
-                    figures = {f: table.column(f).to_numpy()[rows] for f in SUMMARISED}
+                    figures = {
+                        f: np.asarray(table.column(f).to_numpy(zero_copy_only=False), dtype=float)[rows]
+                        for f in (*SUMMARISED, *extra)
+                    }
                     groups[f"{sc.name}/{st}"] = {
                         "scenario": sc.name,
                         "strategy": st,

@@ -77,6 +77,14 @@ def _rows(
             **{f: float(residual.get(ch, np.nan)) for f, ch in zip(RESIDUAL_FIELDS, CHANNELS, strict=True)},
             **{f: abs(float(bias.get(ch, np.nan))) for f, ch in zip(BIAS_FIELDS, CHANNELS, strict=True)},
         }
+        aided = result.aided.get(strategy)
+        if aided is not None:
+            # A [gnss] scenario: the aided run's figures, and each outage's error at its end and its max.
+            row["aided_final_horizontal_m"] = float(aided.summary.final_horizontal_m)
+            row["aided_max_horizontal_m"] = float(aided.summary.max_horizontal_m)
+            for i, outage in enumerate(aided.outages, start=1):
+                row[f"outage{i}_end_m"] = float(outage.final_m)
+                row[f"outage{i}_max_m"] = float(outage.max_m)
         if spec.series_hz > 0:
             row["series_t_s"] = run.errors.t.astype(np.float32).tolist()
             row["series_horizontal_m"] = run.errors.horizontal_m.astype(np.float32).tolist()
