@@ -218,6 +218,8 @@ def _aided_json(
     outages: dict[str, list[dict[str, float]]] = {}
     for name, run in result.aided.items():
         aided[name] = {**run.summary.to_dict(), "fixes": run.fixes, "rejected_fixes": run.rejected}
+        if run.restarts:
+            aided[name]["filter_restarts_s"] = list(run.restarts)
         _check_finite(aided[name], f"{path}: aided strategy {name}")
         outages[name] = [
             {
@@ -253,6 +255,10 @@ def _aided_report(
         f"started {start}",
         _fixed_width(head, rows),
     ]
+    for name, s in aided.items():
+        if s.get("filter_restarts_s"):
+            times = ", ".join(f"{t:g}" for t in s["filter_restarts_s"])
+            text.append(f"{name}: the filter diverged and started again from the fixes at {times} s")
     windows = [(name, o) for name, items in outages.items() for o in items]
     if windows:
         text.append("\nposition error per outage (horizontal, before the first fix after it)")

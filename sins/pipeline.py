@@ -96,7 +96,8 @@ class AidedRun:
     most :data:`MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position NED m, velocity
     m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the estimated gyro
     and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for the ideal IMU);
-    ``fix_t`` the fixes' times.
+    ``fix_t`` the fixes' times; ``restarts`` when the filter started again from a fix after a run of
+    refused ones (:class:`sins.aiding.ekf.FilterConfig` ``reinit_after``).
     """
 
     summary: DriftSummary
@@ -110,6 +111,7 @@ class AidedRun:
     bias: NDArray[np.float64] | None = None
     true_bias: NDArray[np.float64] | None = None
     fix_t: NDArray[np.float64] | None = None
+    restarts: tuple[float, ...] = ()  # times the filter started again after a run of refused fixes, s
 
 
 @dataclass(frozen=True)
@@ -380,7 +382,7 @@ def aided_runs(
             summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade,
             errors=errors.at(keep), t_cov=result.t_cov[records], sigma=result.sigma()[records],
             bias=np.hstack([result.gyro_bias, result.accel_bias])[records], true_bias=true_bias,
-            fix_t=np.asarray(fixes.t, dtype=float),
+            fix_t=np.asarray(fixes.t, dtype=float), restarts=tuple(float(x) for x in result.reinit_t),
         )  # fmt: skip
     return out
 

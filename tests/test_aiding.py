@@ -208,3 +208,34 @@ def test_a_wild_fix_is_gated_and_counted(driven):
     assert np.all(result.accepted[np.arange(len(fixes)) != 30])
     assert np.max(np.abs(ekf.nav_error_state(result.nav, truth)[:, :2])) < 3.0
     assert np.all(result.nav.q_nb[:, 3] >= 0.0)  # corrected rows keep the integrator's sign convention
+
+
+def test_a_diverged_filter_starts_again_from_the_fixes_instead_of_refusing_them_all():
+    """A gyro bias of 5000 °/h and an accelerometer bias of 5 mg (the filter, tuned to a tactical unit,
+    expects a few °/h and 1 mg) carried through a 40 s outage: every fix after it disagrees beyond the
+    gate (1000 °/h the filter still follows). Without restarts the filter refuses them all and ends
+    hundreds of metres off; with them it refuses five in a row, starts again from the sixth,
+    accepts the rest and ends within a few metres. A clean run never restarts."""
+    truth, ideal = trajectory.generate(drive(seconds_after=60.0), 100.0)
+    dt = np.diff(ideal.t)[:, None]
+    biased = dataclasses.replace(
+        ideal,
+        dtheta_b=ideal.dtheta_b + np.array([0.0, 0.0, D(5000.0) / 3600.0]) * dt,
+        dv_b=ideal.dv_b + np.array([5e-3 * earth.G0, 0.0, 0.0]) * dt,
+    )
+    receiver = gnss.GnssConfig(sigma_pos_m=np.full(3, 1.0), outages=(gnss.Outage(20.0, 60.0),))
+    fixes = gnss.simulate(truth, receiver, seed=4)
+    start = strapdown.InitialState.from_series(truth)
+    config = ekf.FilterConfig.for_grade("tactical", position_sigma_m=1.0, velocity_sigma_mps=0.1,
+                                        tilt_sigma_rad=D(0.05), heading_sigma_rad=D(0.2))  # fmt: skip
+    never = ekf.run(biased, fixes, dataclasses.replace(config, reinit_after=None), start)
+    again = ekf.run(biased, fixes, config, start)
+    after = fixes.t > 60.0
+    assert never.rejected >= int(after.sum()) - 1 and len(never.reinit_t) == 0
+    horizontal = lambda r: float(np.hypot(*ekf.nav_error_state(r.nav, truth)[-1, :2]))  # noqa: E731
+    assert horizontal(never) > 100.0
+    assert len(again.reinit_t) >= 1 and again.reinit_t[0] > 60.0
+    assert again.rejected <= 5 * len(again.reinit_t)
+    assert horizontal(again) < 5.0
+    clean = ekf.run(ideal, fixes, config, start)
+    assert len(clean.reinit_t) == 0 and clean.rejected == 0

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
@@ -68,6 +69,10 @@ class FilterConfig:
     gate_nis : NIS above which a 3-component measurement is refused (None: no gate)
     zupt_sigma_mps : 1σ of a zero-velocity update, m/s
     zupt_rate_hz : zero-velocity updates per second inside a still window
+    reinit_after : after this many position fixes refused in a row, the filter starts again from the
+        next one (its position taken, the covariance reset to the initial one widened by the
+        disagreement): a divergence, not bad luck (at the gate's 99.99 %, five refusals in a row of a
+        consistent filter have a chance of 1e-20). None: never.
     """
 
     arw_rad_rt_s: float
@@ -84,6 +89,7 @@ class FilterConfig:
     gate_nis: float | None = GATE_NIS
     zupt_sigma_mps: float = 0.01
     zupt_rate_hz: float = 10.0
+    reinit_after: int | None = 5
 
     def __post_init__(self) -> None:
         """Refuse negative densities and sigmas, and steps that are not positive."""
@@ -113,7 +119,8 @@ class FilterConfig:
             "accel_bias_walk": g.accel_instability_ug * 1e-6 * earth.G0 * np.sqrt(2.0 / tau),
         }
         values.update(overrides)
-        return cls(**{k: float(v) for k, v in values.items()})
+        floats: dict[str, Any] = {k: float(v) for k, v in values.items()}  # the float fields, by name
+        return cls(**floats)
 
     def initial_covariance(self) -> Array:
         """``P0``: the diagonal of the initial 1σ values, squared."""
@@ -206,6 +213,7 @@ class AidedResult:
     accepted : (k,) whether the gate let the fix's position in (its velocity, if any, is gated after
         it, on its own NIS, and is used only with an accepted position)
     zupt_t : (j,) times of the zero-velocity updates
+    reinit_t : times of the fixes the filter started again from, after a run of refused ones
     """
 
     nav: NavSeries
@@ -218,6 +226,7 @@ class AidedResult:
     nis: Array
     accepted: NDArray[np.bool_]
     zupt_t: Array = field(default_factory=lambda: np.zeros(0))
+    reinit_t: Array = field(default_factory=lambda: np.zeros(0))
 
     @property
     def rejected(self) -> int:
@@ -339,6 +348,9 @@ class _ClosedLoop:
         self.nis = np.full(len(fixes.t), np.nan)
         self.accepted = np.zeros(len(fixes.t), dtype=bool)
         self.zupt_t: list[float] = []
+        self.config = config
+        self.refused_in_a_row = 0
+        self.reinit_t: list[float] = []
 
     def record(self, time: float, updated: bool) -> None:
         """Keep the covariance and biases at ``time``."""
@@ -421,6 +433,10 @@ class _ClosedLoop:
         H[:, POS] = np.eye(3)
         H[:, ATT] = rotation.skew(arm_n)
         self.nis[row], self.accepted[row] = self.gated_update(z, H, self.R_pos)
+        self.refused_in_a_row = 0 if self.accepted[row] else self.refused_in_a_row + 1
+        if self.config.reinit_after is not None and self.refused_in_a_row >= self.config.reinit_after:
+            self.start_again(z, H, float(t[idx]))
+            self.accepted[row] = True
         if self.accepted[row] and self.R_vel is not None:
             self.feed_back()
             nav = strapdown.current(self.state)
@@ -432,6 +448,18 @@ class _ClosedLoop:
             H[:, VEL] = np.eye(3)
             H[:, ATT] = rotation.skew(arm_rate_n)
             self.gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, self.R_vel)
+
+    def start_again(self, z: Array, H: Array, time: float) -> None:
+        """Start the filter again from this fix: the covariance back to its initial value, the position
+        and velocity blocks widened by the disagreement ``z``, and the fix taken without the gate."""
+        P = self.config.initial_covariance()
+        P[POS, POS] += np.diag(z * z)
+        P[VEL, VEL] += np.diag((z / max(self.config.propagation_dt_s, 1.0)) ** 2)
+        self.kf.P = P
+        self.kf.x = np.zeros((N_STATES, 1))
+        self.kf.update(z[:, None], R=self.R_pos, H=H)
+        self.refused_in_a_row = 0
+        self.reinit_t.append(time)
 
     def keep_update(self, idx: int) -> None:
         """The corrected state at sample ``idx`` replaces the integrated one; the record after it."""
@@ -449,5 +477,5 @@ class _ClosedLoop:
             t_cov=np.array(self.rec_t), P=np.array(self.rec_P), gyro_bias=np.array(self.rec_bg),
             accel_bias=np.array(self.rec_ba), after_update=np.array(self.rec_upd),
             fix_t=np.asarray(fixes.t, dtype=float), nis=self.nis, accepted=self.accepted,
-            zupt_t=np.array(self.zupt_t),
+            zupt_t=np.array(self.zupt_t), reinit_t=np.array(self.reinit_t),
         )  # fmt: skip
