@@ -4,6 +4,7 @@ Usage::
 
     .venv/bin/python tools/bench_gap.py [--seeds 3] [--control-seeds 20] [--scales 1 3] [--effects NAME ...]
         [--controls NAME ...] [--rigs NAME ...] [--jobs 2] [--timing] [--verbose] [--save CASES.json]
+        [--load CASES.json ...] [--against REFERENCE.json]
     .venv/bin/python tools/bench_gap.py --load CASES.json [MORE.json ...] [--effects ...] [--rigs ...]
 
 For every library effect beyond the baseline, every seed, magnitude (``imu_spec.typical_effect``
@@ -18,7 +19,9 @@ below zero its best candidate's score stayed. Prints one line per injected effec
 matrix (injected × first diagnosed). ``--timing`` diagnoses one 30-minute, 100 Hz recording and
 prints the wall time. ``--save`` writes every case's result; ``--load`` summarises saved results
 without running anything, a later file's case replacing an earlier one's (a rig rerun after a
-change, merged with the rest).
+change, merged with the rest). ``--against`` compares case by case with a saved run (the reference
+run of the current figures is ``tools/reference/bench_gap_cases.json``): the cases it passed that
+these do not are listed as lost.
 
 Every rig procedure turns the unit as well as holding it still: an effect a rig never excites (a gyro
 scale factor under Earth rate alone) leaves the readings a baseline unit's, so its case would test
@@ -349,6 +352,10 @@ def main() -> None:
         "--load", metavar="CASES.json", nargs="+",
         help="summarise cases saved by --save instead of running any (later files replace earlier cases)",
     )  # fmt: skip
+    parser.add_argument(
+        "--against", metavar="REFERENCE.json",
+        help="compare case by case with a saved run: every case it passed that this one does not is listed",
+    )  # fmt: skip
     args = parser.parse_args()
 
     names = (["control"] if "control" in args.controls else []) + args.effects
@@ -357,6 +364,8 @@ def main() -> None:
         cases = [c for c in _load(args.load) if c["name"] in names and c["rig"] in args.rigs]
         print(f"{len(cases)} cases from {', '.join(args.load)}\n")
         _report([n for n in names if any(c["name"] == n for c in cases)], cases)
+        if args.against:
+            _compare(_load([args.against]), cases)
         return
 
     if args.timing:
@@ -378,6 +387,21 @@ def main() -> None:
     if args.save:
         io.write_json(args.save, {"format": "sins-bench-gap", "cases": cases})
     _report(names, cases)
+    if args.against:
+        _compare(_load([args.against]), cases)
+
+
+def _compare(reference: list[dict[str, Any]], cases: list[dict[str, Any]]) -> None:
+    """Case by case against a saved run: the cases it passed that these do not, and the reverse."""
+    key = lambda c: (c["name"], c["rig"], c["seed"], c["scale"])  # noqa: E731
+    now = {key(c): c for c in cases}
+    shared = [c for c in reference if key(c) in now]
+    lost = [c for c in shared if _passed(c) and not _passed(now[key(c)])]
+    gained = [c for c in shared if not _passed(c) and _passed(now[key(c)])]
+    print(f"\nagainst the reference: {len(shared)} cases in both; {len(lost)} lost, {len(gained)} gained")
+    for label, group in (("lost", lost), ("gained", gained)):
+        for c in group:
+            print(f"  {label}: {_case_line(now[key(c)]).strip()}")
 
 
 if __name__ == "__main__":

@@ -35,7 +35,15 @@ from sins.errors import SinsInputError
 from sins.gap import lattice
 from sins.gap.candidates import CANDIDATES, PROCESSES, Candidate, ReferenceInputs, reference_inputs
 from sins.gap.channel import ChannelModel
-from sins.gap.floor import SIGNIFICANT_RATIO, TINY, allan_curves, concentrates, noise_floor, quartile_shares
+from sins.gap.floor import (
+    FLOOR_DROP,
+    SIGNIFICANT_RATIO,
+    TINY,
+    allan_curves,
+    concentrates,
+    noise_floor,
+    quartile_shares,
+)
 from sins.gap.guards import (
     Choice,
     available,
@@ -363,7 +371,8 @@ def _report(
     # An effect that moves the reading by jumps (a clip reached, a delay across a step) lifts the
     # differences of the residual before it as well: where the accepted effects leave the
     # differences smaller, theirs are the white noise's (a heavy clip: 0.02-0.4 of the floor before).
-    floors = np.minimum(floors, _floors(after, s))
+    # Not below FLOOR_DROP of the floor before: what a near-exact model leaves is not noise.
+    floors = np.maximum(np.minimum(floors, _floors(after, s)), FLOOR_DROP * floors)
     withheld = s.withheld
     rms_before, rms_after = _rms(before, withheld), _rms(after, withheld)
     channels = {

@@ -28,6 +28,12 @@ Array = NDArray[np.float64]
 SIGNIFICANT_RATIO = 1.03
 #: Below any real sensor's noise (2e-5 °/h, 1e-11 g): the floor of noiseless (simulated) readings, SI units.
 TINY = 1e-10
+#: The most an accepted effect's residual may lower a channel's floor: the differences before an effect
+#: that moves the reading by jumps (a clip reached, a delay across a step) are lifted by the jumps, the
+#: floor after a heavy clip 0.02-0.4 of the one before; a floor a hundred times lower is no white noise
+#: but a model reproducing the readings all but exactly (a quantizer far coarser than the noise, its
+#: readings held on their levels: 2e-9 rad/s left of 7e-5).
+FLOOR_DROP = 0.01
 #: Input quartiles reported where the excess concentrates.
 _FEATURES = ("|ω|", "|f|", "temperature", "rate of change", "time")
 
