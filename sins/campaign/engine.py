@@ -27,7 +27,7 @@ from sins.errors import SinsInputError
 #: end, few enough that each task's start-up (a worker's first import of torch, say) is paid rarely.
 TASKS_PER_WORKER = 4
 #: The most units in one task (results stream back at least this often).
-MAX_UNITS_PER_TASK = 16
+MAX_UNITS_PER_TASK = 8
 
 
 @dataclass(frozen=True)
