@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -50,6 +51,22 @@ def _table(out: Path) -> dict[str, list[object]]:
     return pq.read_table(out / "results.parquet").to_pydict()
 
 
+def _sins_run_of(row: dict[str, Any], scenario_text: str, tmp_path: Path) -> dict[str, Any]:
+    """``sins run --json`` of a row's unit as a user would write it: an IMU file with its unit_seed, the
+    scenario with its navigation and rig power-ons; the JSON written."""
+    (tmp_path / "unit.toml").write_text(f'grade = "tactical"\nunit_seed = {row["unit_seed"]}\n')
+    drive = scenario_text.replace(
+        "[imu]\nrate_hz = 100\n", f'[imu]\nrate_hz = 100\nmodel = "unit.toml"\nseed = {row["nav_seed"]}\n'
+    )
+    drive += (
+        f'\n[compensation]\nrig = "24pos_ratetable"\nseed = {row["rig_seed"]}\n'
+        'strategies = ["none", "regression"]\n'
+    )
+    (tmp_path / "drive.toml").write_text(drive)
+    assert main(["run", str(tmp_path / "drive.toml"), "--json", str(tmp_path / "run.json")]) == 0
+    return dict(json.loads((tmp_path / "run.json").read_text()))
+
+
 # --------------------------------------------------------------------------- the single-unit path
 
 
@@ -59,18 +76,7 @@ def test_a_campaign_row_is_sins_run_of_that_unit_to_the_last_digit(tmp_path: Pat
     spec = campaign.load(_campaign(tmp_path))
     rows = campaign.run_unit(spec, 1)
     assert {r["unit_seed"] for r in rows} == {6}
-    (tmp_path / "unit.toml").write_text('grade = "tactical"\nunit_seed = 6\n')
-    drive = scenario.resolve_preset("car_drive_5min").read_text()
-    drive = drive.replace(
-        "[imu]\nrate_hz = 100\n", f'[imu]\nrate_hz = 100\nmodel = "unit.toml"\nseed = {rows[0]["nav_seed"]}\n'
-    )
-    drive += (
-        f'\n[compensation]\nrig = "24pos_ratetable"\nseed = {rows[0]["rig_seed"]}\n'
-        'strategies = ["none", "regression"]\n'
-    )
-    (tmp_path / "drive.toml").write_text(drive)
-    assert main(["run", str(tmp_path / "drive.toml"), "--json", str(tmp_path / "run.json")]) == 0
-    ran = json.loads((tmp_path / "run.json").read_text())["strategies"]
+    ran = _sins_run_of(rows[0], scenario.resolve_preset("car_drive_5min").read_text(), tmp_path)["strategies"]
     assert [r["strategy"] for r in rows] == list(ran) == ["none", "oracle", "regression"]
     for row in rows:
         single = ran[row["strategy"]]
@@ -291,17 +297,7 @@ def test_an_aided_campaign_row_carries_the_outage_errors_sins_run_reports(tmp_pa
     path.write_text(path.read_text().replace('file = "car_drive_5min"', 'file = "aided.toml"'))
     spec = campaign.load(path)
     rows = campaign.run_unit(spec, 0)
-    (tmp_path / "unit.toml").write_text(f'grade = "tactical"\nunit_seed = {rows[0]["unit_seed"]}\n')
-    drive = AIDED_DRIVE.replace(
-        "[imu]\nrate_hz = 100\n", f'[imu]\nrate_hz = 100\nmodel = "unit.toml"\nseed = {rows[0]["nav_seed"]}\n'
-    )
-    drive += (
-        f'[compensation]\nrig = "24pos_ratetable"\nseed = {rows[0]["rig_seed"]}\n'
-        'strategies = ["none", "regression"]\n'
-    )
-    (tmp_path / "drive.toml").write_text(drive)
-    assert main(["run", str(tmp_path / "drive.toml"), "--json", str(tmp_path / "run.json")]) == 0
-    ran = json.loads((tmp_path / "run.json").read_text())
+    ran = _sins_run_of(rows[0], AIDED_DRIVE, tmp_path)
     for row in rows:
         outage = ran["outages"][row["strategy"]][0]
         assert row["outage1_end_m"] == outage["final_horizontal_m"]
