@@ -807,6 +807,16 @@ def _positive(text: str) -> float:
     return value
 
 
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
+    return value
+
+
 def _fraction(text: str) -> float:
     value = float(text)
     if not 0.0 < value < 1.0:
@@ -913,7 +923,7 @@ def _add_campaign(sub: _Subparsers) -> None:
     p.add_argument("campaign", metavar="CAMPAIGN.toml", help="campaign file or preset (e.g. tactical_drives)")
     p.add_argument(
         "--workers",
-        type=int,
+        type=_count,
         metavar="N",
         help="processes of the local cluster (default: the machine's cores)",
     )

@@ -310,3 +310,15 @@ def test_an_aided_campaign_row_carries_the_outage_errors_sins_run_reports(tmp_pa
         "outage1_end_m",
         "aided_max_horizontal_m",
     }
+
+
+def test_an_unreachable_scheduler_is_refused_before_anything_is_written_and_a_bare_folder_restarts(
+    tmp_path: Path,
+) -> None:
+    """``--scheduler`` with no scheduler there: one line, and no results folder left to trip a rerun. A
+    folder that holds a campaign's description but no finished unit starts afresh without --resume."""
+    spec = campaign.load(_campaign(tmp_path, count=1))
+    refusal(lambda: engine.run(spec, tmp_path / "none", scheduler="tcp://127.0.0.1:1"), "cannot reach")
+    assert not (tmp_path / "none").exists()
+    results.prepare(tmp_path / "bare", spec, resume=False)  # a description, no parts
+    assert engine.run(spec, tmp_path / "bare", workers=1).units_run == 1

@@ -64,6 +64,8 @@ def run(
     from dask.distributed import Client, LocalCluster, as_completed
 
     start = time.perf_counter()
+    if scheduler:
+        _connect(scheduler).close()  # refuse an address with no scheduler before writing anything
     done = results.prepare(out, spec, resume)
     todo = [u for u in range(spec.count) if u not in done]
     if todo:

@@ -40,7 +40,8 @@ SUMMARISED = ("final_horizontal_m", "max_horizontal_m", *RESIDUAL_FIELDS, *BIAS_
 
 
 def prepare(out: Path, spec: CampaignSpec, resume: bool) -> set[int]:
-    """Create ``out`` (or check it on ``resume``); the units already done.
+    """Create ``out`` (or check it on ``resume``); the units already done. A folder whose campaign never
+    finished a unit (its cluster could not be reached, say) is started afresh.
 
     Raises
     ------
@@ -52,7 +53,7 @@ def prepare(out: Path, spec: CampaignSpec, resume: bool) -> set[int]:
     if out.exists() and not out.is_dir():
         raise SinsInputError(f"{out}: is a file, expected a folder for the campaign's results")
     existing = out / "campaign.json"
-    if existing.exists():
+    if existing.exists() and (resume or done_units(parts)):
         if not resume:
             raise SinsInputError(f"{out}: already holds a campaign's results; give --resume to continue it")
         held = io.read_json_document(existing, "campaign results folder", FORMAT)
