@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -317,10 +318,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_scenarios(args: argparse.Namespace) -> int:
     from sins import pipeline, scenario
 
-    for name, path in scenario.presets().items():
+    shipped = scenario.presets()
+    width = max(map(len, shipped), default=0)
+    for name, path in shipped.items():
         sc = scenario.load(path)
         marker = " (default)" if name == pipeline.DEFAULT_SCENARIO else ""
-        print(f"{name:<16} {sc.description}{marker}")
+        print(f"{name:<{width}}  {sc.description}{marker}")
     print(f"rig procedures (sins calibrate RIG): {', '.join(scenario.presets('rig'))}")
     print(f"IMU models (--imu): {', '.join(scenario.presets('imu'))}")
     print(f"campaigns (sins campaign NAME): {', '.join(scenario.presets('campaign'))}")
@@ -1044,6 +1047,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SinsInputError as exc:
         print(f"sins: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader of our output went away (`sins scenarios | head`): nothing to say, and nothing more
+        # to write to it; stdout is pointed at devnull so the interpreter's own flush at exit is quiet.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except OSError as exc:  # a full disk or a permission while writing
         print(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 2

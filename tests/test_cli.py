@@ -469,3 +469,14 @@ def test_bad_rig_file_gives_one_line(tmp_path: Path, capsys: pytest.CaptureFixtu
                "--out", str(tmp_path / "x.csv")])  # fmt: skip
     err = capsys.readouterr().err
     assert rc == 2 and "positions.count" in err and err.count("\n") == 1
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly() -> None:
+    """`sins scenarios | head -1`: the pipe's reader closes before sins writes; sins stops without a
+    message (it had printed "sins: error: : Broken pipe") and with the status a shell gives SIGPIPE."""
+    sins = Path(sys.executable).parent / "sins"
+    proc = subprocess.Popen([str(sins), "scenarios"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # before the interpreter has even started: every write meets a closed pipe
+    err = proc.stderr.read().decode()
+    assert proc.wait(60) == 141 and err == ""
