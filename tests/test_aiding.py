@@ -214,8 +214,8 @@ def test_a_diverged_filter_starts_again_from_the_fixes_instead_of_refusing_them_
     """A gyro bias of 5000 °/h and an accelerometer bias of 5 mg (the filter, tuned to a tactical unit,
     expects a few °/h and 1 mg) carried through a 40 s outage: every fix after it disagrees beyond the
     gate (1000 °/h the filter still follows). Without restarts the filter refuses them all and ends
-    hundreds of metres off; with them it refuses five in a row, starts again from the sixth,
-    accepts the rest and ends within a few metres. A clean run never restarts."""
+    hundreds of metres off; with them four are refused, it starts again from the fifth, accepts the
+    rest and ends within a few metres. A clean run never restarts."""
     truth, ideal = trajectory.generate(drive(seconds_after=60.0), 100.0)
     dt = np.diff(ideal.t)[:, None]
     biased = dataclasses.replace(

@@ -69,10 +69,10 @@ class FilterConfig:
     gate_nis : NIS above which a 3-component measurement is refused (None: no gate)
     zupt_sigma_mps : 1σ of a zero-velocity update, m/s
     zupt_rate_hz : zero-velocity updates per second inside a still window
-    reinit_after : after this many position fixes refused in a row, the filter starts again from the
-        next one (its position taken, the covariance reset to the initial one widened by the
-        disagreement): a divergence, not bad luck (at the gate's 99.99 %, five refusals in a row of a
-        consistent filter have a chance of 1e-20). None: never.
+    reinit_after : when this many position fixes in a row fail the gate, the filter starts again from
+        the last of them (its position taken, the covariance reset to the initial one widened by the
+        disagreement; the earlier ones count as refused): a divergence, not bad luck (at the gate's
+        99.99 %, five failures in a row of a consistent filter have a chance of 1e-20). None: never.
     """
 
     arw_rad_rt_s: float
