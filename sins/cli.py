@@ -383,7 +383,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
             part, _ = data.split(args.validation)
         with _progress_bar(f"fitting {args.strategy}", "training") as bar:
             if isinstance(strategy, ResidualStrategy) and bar is not None:
-                strategy.progress = lambda done, total: _advance(bar, done, total)
+                strategy.progress = _row_progress(bar)
             strategy.fit(part)
     except ValueError as exc:
         raise SinsInputError(f"{args.recording}: {exc}") from None

@@ -98,7 +98,7 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
     base = path.parent
     name = top.string("name", default=path.stem)
     units = top.sub("units")
-    imu = scenario.load_imu(_file(units, "imu", "imu", base))
+    imu = scenario.load_imu(scenario.preset_or_path(units, "imu", "imu", base))
     count = units.integer("count", 0, low=1, high=MAX_UNITS)
     if not units.has("count"):
         raise units.error("is required: how many units to draw", "count")
@@ -107,7 +107,7 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
     comp = top.sub("compensation")
     strategies = comp.strings("strategies", list(DEFAULT_STRATEGIES), tuple(VARIANTS))
     compensation = CompensationSpec(
-        rig=_file(comp, "rig", "rig", base),
+        rig=scenario.preset_or_path(comp, "rig", "rig", base),
         validation=comp.bounded("validation", _VALIDATION, 0.3),
         seed=0,  # each unit's own (rig_seed)
         strategies=tuple(dict.fromkeys(["oracle", *strategies])),
@@ -140,17 +140,9 @@ def is_campaign(path: str | os.PathLike[str]) -> bool:
         return False
 
 
-def _file(keys: TomlKeys, key: str, kind: scenario.PresetKind, base: Path) -> Path:
-    value = keys.string(key)
-    found = scenario.find_preset(value, kind, base)
-    if found is None:
-        raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
-    return found
-
-
 def _scenario(table: TomlKeys, base: Path) -> Scenario:
     """One ``[[scenario]]``: the file's motion, rate, vertical channel and cabin temperature."""
-    path = _file(table, "file", "", base)
+    path = scenario.preset_or_path(table, "file", "", base)
     table.done()
     try:
         sc = scenario.load(path)

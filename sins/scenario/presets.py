@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Literal
 
 from sins.errors import SinsInputError
+from sins.scenario.toml import TomlKeys
 
 #: A kind of preset: scenarios (``""``, the folder's top level), rig procedures, IMU models or campaigns.
 PresetKind = Literal["", "rig", "imu", "campaign"]
@@ -67,4 +68,14 @@ def resolve_preset(name_or_path: str | os.PathLike[str], kind: PresetKind = "") 
         raise SinsInputError(
             f"{name_or_path}: no such {_WHAT[kind]} file or preset (presets: {', '.join(known) or 'none'})"
         )
+    return path
+
+
+def preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Path:
+    """The file a TOML key names: a path relative to ``base`` (the naming file's folder), or a preset
+    name of ``kind``; a one-line error naming the file and key if it is neither."""
+    value = keys.string(key)
+    path = find_preset(value, kind, base)
+    if path is None:
+        raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
     return path

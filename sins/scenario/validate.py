@@ -16,7 +16,7 @@ import numpy as np
 
 from sins.nav import motion
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
-from sins.scenario.presets import PresetKind, find_preset
+from sins.scenario.presets import preset_or_path
 from sins.scenario.schema import (
     AidingSpec,
     CompensationSpec,
@@ -160,7 +160,7 @@ def _imu(
 ) -> tuple[float, Path | None, int, tuple[tuple[float, ...], tuple[float, ...]]]:
     """The ``[imu]`` table: rate (Hz), model file, seed and temperature profile (times s, °C)."""
     rate_hz = imu.bounded("rate_hz", _B["imu.rate_hz"], 100.0)
-    imu_model = _preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
+    imu_model = preset_or_path(imu, "model", "imu", base) if imu.has("model") else None
     imu_seed = imu.integer("seed", 0, high=MAX_SEED)
     temperature: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0,), (20.0,))
     if imu.has("temps_degc"):
@@ -181,7 +181,7 @@ def _compensation(comp: TomlKeys, imu_model: Path | None, base: Path) -> Compens
 
     names = comp.strings("strategies", ["none", "regression", "mlp", "kohonen"], tuple(VARIANTS))
     compensation = CompensationSpec(
-        rig=_preset_or_path(comp, "rig", "rig", base),
+        rig=preset_or_path(comp, "rig", "rig", base),
         validation=comp.bounded("validation", _B["compensation.validation"], 0.3),
         seed=comp.integer("seed", 0, high=MAX_SEED),
         strategies=tuple(dict.fromkeys(["oracle", *names])),  # the oracle is every table's reference
@@ -278,15 +278,6 @@ def _aiding(top: TomlKeys) -> AidingSpec | None:
         sigma_vel_mps=sigma_vel, lever_arm_m=lever_arm_m, latency_s=latency_s, seed=seed, filter_grade=grade,
         outages=tuple(outages), static_s=static_s, coarse_s=coarse_s, heading_sigma_rad=heading,
     )  # fmt: skip
-
-
-def _preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Path:
-    """A file named by ``key``: a path relative to the scenario, or a preset name of ``kind``."""
-    value = keys.string(key)
-    path = find_preset(value, kind, base)
-    if path is None:
-        raise keys.error(f"no such file or {kind} preset: {value!r}", key)
-    return path
 
 
 def _position(init: TomlKeys) -> tuple[float, float, float]:
