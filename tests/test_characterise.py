@@ -361,8 +361,16 @@ def _real(name: str, folder: str) -> tuple[analysis.Characterisation, check.Clos
     return result, check.closing_check(result, model, seed=1), check.closing_check(result, model, seed=2)
 
 
-def _within_model(closing: check.ClosingCheck, result: analysis.Characterisation) -> float:
-    """The share of points where the simulated curve lies within the band about the fitted model's."""
+def _within_model(
+    closing: check.ClosingCheck, result: analysis.Characterisation, fast_gm: bool = True
+) -> float:
+    """The share of points where the simulated curve lies within the band about the fitted model's.
+
+    ``fast_gm=False`` leaves out the cluster times of at most four samples on channels whose Gauss–Markov
+    bias has a correlation time under 20 samples: there the simulated bias (sampled, and integrated by the
+    trapezoid rule) has less Allan variance than the continuous form the fit uses, by ``O(dt/T)`` (15 %
+    of the deviation at one sample for ``T`` of ten).
+    """
     from scipy import stats
 
     inside = total = 0
@@ -370,8 +378,12 @@ def _within_model(closing: check.ClosingCheck, result: analysis.Characterisation
         edf = result.channels[ch].curve.edf
         ratio = np.asarray(c["sim_adev"]) ** 2 / np.asarray(c["model_adev"]) ** 2
         lo, hi = stats.chi2.ppf(0.005, edf) / edf, stats.chi2.ppf(0.995, edf) / edf
-        inside += int(np.sum((ratio >= lo) & (ratio <= hi)))
-        total += len(ratio)
+        keep = np.ones(len(ratio), dtype=bool)
+        tau_c = result.channels[ch].fit.tau_c_s
+        if not fast_gm and tau_c is not None and tau_c < 20.0 * result.dt:
+            keep = np.asarray(c["tau_s"]) > 4.5 * result.dt
+        inside += int(np.sum(((ratio >= lo) & (ratio <= hi))[keep]))
+        total += int(keep.sum())
     return inside / total
 
 
@@ -392,23 +404,67 @@ def test_ferraris_round_trip(capsys):
             assert p.tau_s[1] <= 2.5 * result.dt or abs(math.log(p.ratio)) < 0.25, p.what()
 
 
+def _rocking_hz(name: str, folder: str) -> tuple[float, float]:
+    """The frequency (1-4 Hz) where the ring-laser unit's x gyro and y accelerometer are most coherent, and
+    that coherence: the base rocking about the x axis turns the gyro and tilts gravity into the y axis."""
+    from scipy import signal
+
+    from sins.io import datasets
+
+    data = datasets.load(name)
+    f, c = signal.coherence(data.gyro[:, 0], data.accel[:, 1], fs=1.0 / float(np.median(np.diff(data.t))),
+                            nperseg=4096)  # fmt: skip
+    band = (f > 1.0) & (f < 4.0)
+    k = int(np.argmax(c[band]))
+    return float(f[band][k]), float(c[band][k])
+
+
 def test_psins_lasergyro_round_trip():
-    """The static ring-laser INS (31 min at 100 Hz): the real curves part from the simulated ones where the
-    bursty output and the base's motion lie outside the IEEE model, and each parting is named with its
-    channel, cluster times and factor. (The simulation does not follow the fitted model everywhere
-    either: the unit's quantization is coarse against its noise, and sins's rounding of a nearly constant
-    input is a sawtooth, not the IEEE term's independent errors; see docs/guide/characterise.md.)"""
-    result, one, _ = _real("psins_lasergyro", "psins_lasergyro_static")
-    assert any(
-        r.fit.terms["white"].resolved or r.fit.terms["quantization"].resolved
-        for r in result.channels.values()
-    )
-    assert one.partings
-    for p in one.partings:
-        assert p.channel in result.channels and p.tau_s[0] <= p.tau_s[1] and p.ratio > 0.0
-    assert any(not p.fitted for p in one.partings) and any(
-        r.fit.excluded_tau_s for r in result.channels.values()
-    )
+    """The static ring-laser INS (31 min at 100 Hz): its quantization is coarse against its noise, so the
+    file simulates the IEEE Q term as white noise of the integrated output (``quantization_noise``), not as
+    rounding (a sawtooth on a nearly constant input); the simulation then follows the fitted model at
+    95 % of points or more, and at the points the fit kept the curves part only where the real unit's
+    curve is not its noise:
+
+    * the base rocks near 2 Hz about its horizontal axes (the x gyro and y accelerometer coherent above
+      0.9 there): a line whose Allan hump lies at ``0.371/f``, which the fit can only follow with a
+      Gauss–Markov bias whose hump is broader; those channels part within a factor 5 of the hump;
+    * at the longest cluster times, above the model but below it plus a rate random walk at the bound the
+      fit gave it (a slow term the 31 min do not resolve);
+    * elsewhere at most one point a seed, by chance (about 40 points at 99 %: 0.4 expected).
+
+    Before ``quantization_noise`` the z gyro parted at τ = 0.16-0.64 s and the x accelerometer at
+    0.01-0.08 s, where the term dominates (15 of 55 points in all)."""
+    result, one, two = _real("psins_lasergyro", "psins_lasergyro_static")
+    names = {name for name, _ in model_file.effect_tables(result)}
+    assert {"gyro.quantization_noise", "accel.quantization_noise"} <= names
+    assert not names & {"gyro.quantization", "accel.quantization"}
+    for ch, r in result.channels.items():
+        if r.fit.terms["quantization"].resolved:
+            assert not model_file.rounding_is_dithered(result, ch)
+    for closing in (one, two):  # 99 % bands: 0.99 expected
+        assert _within_model(closing, result, fast_gm=False) >= 0.97
+    f_hz, coherence = _rocking_hz("psins_lasergyro", "psins_lasergyro_static")
+    assert coherence > 0.9
+    hump_s = 0.371 / f_hz
+    for closing in (one, two):
+        chance = 0
+        for p in closing.partings:
+            if not p.fitted:
+                continue
+            if p.channel in ("gyro.x", "gyro.y", "accel.x", "accel.y"):
+                assert hump_s / 5.0 <= p.tau_s[0] and p.tau_s[1] <= hump_s * 5.0, p.what()
+                continue
+            c, r = closing.channels[p.channel], result.channels[p.channel]
+            tau = np.asarray(c["tau_s"])
+            at = (tau >= p.tau_s[0]) & (tau <= p.tau_s[1])
+            k_upper = r.fit.terms["rate_random_walk"].upper or 0.0
+            slow = np.asarray(c["model_adev"])[at] ** 2 + k_upper**2 * tau[at] / 3.0
+            if p.ratio > 1.0 and p.tau_s[0] >= tau[-1] / 4.0:
+                assert np.all(np.asarray(c["real_adev"])[at] ** 2 <= slow), p.what()
+            else:
+                chance += int(at.sum())
+        assert chance <= 1, [p.what() for p in closing.partings]
 
 
 _DRIVE = """

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from sins import compensation, pipeline, scenario
-from sins.imu import Quantization, TimeOffset, spec
+from sins.imu import Quantization, QuantizationNoise, TimeOffset, spec
 from sins.imu.stream import IncrementStream
 from sins.nav import motion, trajectory
 from sins.nav.metrics import BlockMeans, block_means
@@ -56,6 +56,7 @@ def _model(saturation_dps: float | None = None, delays_s: tuple[float, float] = 
     effects += [TimeOffset("gyro", np.array([delays_s[0], 0.0, -0.002])),
                 TimeOffset("accel", np.array([0.0, delays_s[1], 0.004]))]  # fmt: skip
     effects += [Quantization("accel", np.full(3, 2e-3))]
+    effects += [QuantizationNoise("gyro", np.full(3, 5e-6)), QuantizationNoise("accel", np.full(3, 1e-4))]
     model = spec.draw_unit("tactical", 3).with_effects(*effects)
     if saturation_dps is not None:
         from sins.imu import Saturation

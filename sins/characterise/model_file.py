@@ -7,9 +7,20 @@ read it as it is. Each term maps to one effect, per sensor and axis:
 * ``N`` → ``noise`` (``arw_deg_per_rt_h``, ``vrw_ug_per_rt_hz``);
 * the bias instability → ``bias_instability`` (``σ_b`` as ``sigma_dph`` / ``sigma_ug``, ``tau_s``);
 * ``K`` → ``rate_random_walk`` (``rrw_dph_per_rt_h``, ``rrw_ug_per_rt_s``);
-* ``Q`` → ``quantization``: sins rounds each increment to ``step · dt`` and carries the remainder, so the
-  angle (velocity) error is uniform in a step, ``Q = step · dt / √12``: ``step = √12 Q / dt`` (in the
-  rate form, which rounds each rate sample without a carry, that step is white noise instead);
+* ``Q`` → ``quantization_noise`` (``q_arcsec``, ``q_ug_s``: ``q = Q``) where the white noise per sample
+  is below half a step of the quantizer that ``Q`` would mean (``N √dt < √12 Q / 2``, no white noise
+  included), else ``quantization`` (``step_dps``, ``step_mg``).
+  The term is white noise of the integrated output (Allan variance ``3Q²/τ²``), which
+  ``quantization_noise`` simulates exactly (:class:`~sins.imu.QuantizationNoise`). ``quantization``
+  rounds each increment to ``step · dt`` and carries the remainder, so the angle (velocity) error is
+  uniform in a step, ``Q = step · dt / √12``: ``step = √12 Q / dt`` (in the rate form, which rounds
+  each rate sample without a carry, that step is white noise instead); but the rounding errors are
+  independent from sample to sample, as the term needs, only when the input moves by about half a step
+  or more between samples (its white noise of ``N √dt`` per sample, at a standard deviation of half a
+  step, leaves the remainder's law uniform to 1 %: ``exp(−π²/2)``). Below that, a unit at rest rounds
+  to a deterministic sawtooth, whose Allan curve is not the term's (the PSINS ring-laser unit parted
+  from it at 15 of 55 points so), and the file has the noise instead; above it, the rounding is the
+  unit's own (its readings on a lattice, as the gap diagnosis sees them);
 * ``R`` has no effect in sins: the file names it in a comment, not simulated.
 
 A term the recording does not resolve is written as zero, with its upper bound in a comment. The file
@@ -35,23 +46,39 @@ EFFECTS = {
         ("bias_instability", "gyro.bias_instability", "sigma_dph"),
         ("rate_random_walk", "gyro.rate_random_walk", "rrw_dph_per_rt_h"),
         ("quantization", "gyro.quantization", "step_dps"),
+        ("quantization_noise", "gyro.quantization_noise", "q_arcsec"),
     ),
     "accel": (
         ("white", "accel.noise", "vrw_ug_per_rt_hz"),
         ("bias_instability", "accel.bias_instability", "sigma_ug"),
         ("rate_random_walk", "accel.rate_random_walk", "rrw_ug_per_rt_s"),
         ("quantization", "accel.quantization", "step_mg"),
+        ("quantization_noise", "accel.quantization_noise", "q_ug_s"),
     ),
 }
 #: A bias instability's correlation time where the recording resolves none (its σ is then zero).
 DEFAULT_TAU_S = 100.0
 
 
+def rounding_is_dithered(result: Characterisation, channel: str) -> bool:
+    """Whether a channel's white noise per sample reaches half the step of the quantizer its ``Q`` means
+    (``N √dt ≥ √12 Q / 2``): then rounding with the remainder carried makes the term's independent
+    errors, and the file writes ``quantization``; else ``quantization_noise`` (see the module's text)."""
+    fit = result.channels[channel].fit
+    q, n = fit.terms["quantization"].value, fit.terms["white"].value or 0.0
+    return q is None or n * math.sqrt(result.dt) >= math.sqrt(12.0) * q / 2.0
+
+
 def _file_value(result: Characterisation, channel: str, term: str) -> float:
-    """The term of one channel in the file's unit (zero when not resolved)."""
+    """The term of one channel in the file's unit (zero when not resolved, or when the channel's ``Q``
+    goes to the other of ``quantization`` and ``quantization_noise``)."""
     r = result.channels[channel]
+    dithered = rounding_is_dithered(result, channel)
+    if term == "quantization_noise":
+        value = None if dithered else r.fit.terms["quantization"].value
+        return 0.0 if value is None else value / DISPLAY[r.sensor]["quantization"][0]
     value = r.fit.terms[term].value
-    if value is None:
+    if value is None or (term == "quantization" and not dithered):
         return 0.0
     if term == "quantization":
         step = math.sqrt(12.0) * value / result.dt  # rad/s or m/s²
@@ -114,11 +141,11 @@ def model_toml(result: Characterisation) -> str:
                 f"# {ch}: rate ramp R = {display(r.sensor, 'rate_ramp', ramp.value)} ± {sigma} {unit}, "
                 "not simulated (sins has no rate-ramp effect)"
             )
-        q, n = r.fit.terms["quantization"].value, r.fit.terms["white"].value or 0.0
-        if q is not None and n * math.sqrt(result.dt) < math.sqrt(12.0) * q / 2.0:
+        if not rounding_is_dithered(result, ch):
             lines.append(
-                f"# {ch}: its white noise per sample is below half the quantization step: sins rounds a"
-                " nearly constant input to a sawtooth, not to the IEEE term's independent errors"
+                f"# {ch}: Q as white noise of the integrated output (quantization_noise): its white noise"
+                " per sample is below half the step Q means, and rounding a nearly constant input would"
+                " make a sawtooth, not the IEEE term's independent errors"
             )
         for term in ("quantization", "white", "bias_instability", "rate_random_walk"):
             t = r.fit.terms[term]

@@ -16,7 +16,9 @@ this order, whatever the order of effects in a model:
    ``temperature_bias``, ``temperature_scale``, ``size_effect``;
 3. stochastic biases, added: ``bias_instability`` (Gauss–Markov),
    ``rate_random_walk``;
-4. white ``noise``;
+4. white ``noise``, and ``quantization_noise`` (white noise of the integrated output: the increment
+   of interval ``k`` gains ``e_k − e_{k−1}``, the IEEE quantization term; see
+   :class:`QuantizationNoise`);
 5. ``saturation``: clipped at ``± limit``;
 6. ``quantization``: rounded to the step (increments carry the remainder to
    the next sample, as integrating IMUs do, so the error does not accumulate).
@@ -304,6 +306,48 @@ class Noise(Effect):
 
 
 @dataclass(frozen=True)
+class QuantizationNoise(Effect):
+    """White noise of the integrated output: the IEEE Std 952 / 1293 quantization term ``Q``.
+
+    ``q`` (rad for a gyro, m/s for an accelerometer) is the standard deviation of an error ``e_k`` in
+    the angle (velocity) the unit has integrated up to its ``k``-th output, independent from output
+    to output; the increment of interval ``k`` gains ``e_k − e_{k−1}`` (its mean rate that over the
+    step ``dt``). Its Allan variance is ``3 q²/τ²`` at every cluster time ``τ = m·dt``, exactly (a
+    cluster's mean is ``(e_end − e_start)/τ`` and three independent ``e`` enter each difference), and
+    its two-sided spectrum per sample is ``4 sin²(π f dt) q²/dt²``: the term as the standards define
+    it and as :mod:`sins.characterise.terms` fits it.
+
+    Why an effect of its own, not :class:`Quantization`: the term describes a quantizer whose error is
+    independent from sample to sample. A rounding quantizer's is only when the input moves by more
+    than about half a step between samples (its own noise, or a ring-laser gyro's mechanical dither,
+    randomises the remainder). On a nearly constant input (a unit at rest under Earth rate and
+    gravity) rounding with the remainder carried makes a deterministic sawtooth instead, whose Allan
+    curve has lobes where the term has a ``τ⁻¹`` slope; :class:`Quantization` models that output as it
+    is (rounded to the unit's step) and stays as it was.
+
+    Why white angle noise rather than a dithered quantizer: the term gives one number, ``Q``; a
+    dithered quantizer needs a step and a dither law, and its output lies on a lattice. A real unit's
+    ``Q`` is often not its count's ``step/√12`` (readout timing and bursts add to it: the PSINS
+    ring-laser unit's accelerometers show ``Q`` ≈ 133 µg·s on a count of 125 µg·s, 3.7 times
+    ``125/√12``), so a lattice of ``√12 Q`` would be no more the unit's than none. The error is
+    Gaussian: the term fixes only its variance, and the Allan variance and spectrum above hold for any
+    law of that variance (a uniform rounding error included). With :class:`Quantization` in the same
+    model the running sum is rounded after this noise is added: a quantizer dithered by it.
+
+    In rate form the sample ``k`` gains ``(e_k − e_{k−1}) / dt`` (``dt`` the median step): the
+    reading taken as the interval's mean rate, as a sampled output's is.
+    """
+
+    q: Array = _array(check="nonneg")
+    kind: ClassVar[str] = "quantization_noise"
+    stage: ClassVar[str] = "noise"
+
+    def angle_errors(self, rng: np.random.Generator, n: int) -> Array:
+        """``n`` independent errors of the integrated output (n, 3), rad or m/s."""
+        return self.q * rng.standard_normal((n, 3))
+
+
+@dataclass(frozen=True)
 class BiasInstability(Effect):
     """First-order Gauss–Markov bias: stationary standard deviation ``sigma``, correlation time ``tau``, s."""
 
@@ -359,7 +403,7 @@ class Quantization(Effect):
 EFFECT_TYPES: tuple[type[Effect], ...] = (
     Bias, ScaleMisalignment, GSensitivity, Noise, BiasInstability, RateRandomWalk, ScaleNonlinearity,
     ScaleAsymmetry, G2Sensitivity, TemperatureBias, TemperatureScale, TimeOffset, Quantization, Saturation,
-    SizeEffect,
+    SizeEffect, QuantizationNoise,
 )  # fmt: skip
 
 #: Every effect name of the library.
@@ -476,6 +520,10 @@ class ImuModel:
                 y = y + noise.density / np.sqrt(step) * random_stream(seed, noise.name).standard_normal(
                     y.shape
                 )
+            qnoise = self.effect_of(sensor, QuantizationNoise)
+            if qnoise is not None and len(t) > 1:
+                e = qnoise.angle_errors(random_stream(seed, qnoise.name), len(t) + 1)
+                y = y + np.diff(e, axis=0) / np.median(dt)
             y = self._clip_and_round(sensor, y, scale=1.0)
             out.append(y)
         return ImuRates(t=t, omega_ib_b=out[0], f_ib_b=out[1])

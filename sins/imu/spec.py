@@ -173,6 +173,16 @@ _SPECS: dict[str, EffectSpec] = {
     "accel.quantization": EffectSpec(
         imu.Quantization, "output resolution", (_v("step_mg", "step", imu.MG, "mg", 0.0, 1e5),)
     ),
+    "gyro.quantization_noise": EffectSpec(
+        imu.QuantizationNoise,
+        "white noise of the integrated angle (IEEE quantization term Q)",
+        (_v("q_arcsec", "q", DEG / 3600.0, "arcsec", 0.0, 1e5),),
+    ),
+    "accel.quantization_noise": EffectSpec(
+        imu.QuantizationNoise,
+        "white noise of the integrated velocity (IEEE quantization term Q)",
+        (_v("q_ug_s", "q", imu.UG, "µg·s", 0.0, 1e7),),
+    ),
     "gyro.saturation": EffectSpec(
         imu.Saturation, "output clipped at ± limit", (_v("limit_dps", "limit", DEG, "°/s", 1e-3, 1e6),)
     ),

@@ -5,8 +5,9 @@
 increments in chunks, it gives the same readings to the last bit, because everything that crosses a
 chunk boundary is carried rather than recomputed:
 
-* each random process (white noise, bias instability, rate random walk) draws from its own generator,
-  which a chunk continues where the last left it, and its state (the bias at the last sample) goes on;
+* each random process (white noise, quantization noise, bias instability, rate random walk) draws from
+  its own generator, which a chunk continues where the last left it, and its state (the bias at the last
+  sample, the quantization noise's last error of the integrated output) goes on;
 * the deterministic errors at an interval's Gauss nodes need the rate reconstructed from the
   neighbouring intervals' means, and a delayed channel the input ``delay`` earlier: the stream keeps
   :meth:`IncrementStream.margin` intervals on each side of those it writes, and writes an interval only
@@ -34,6 +35,7 @@ from sins.imu.model import (
     Inputs,
     Noise,
     Quantization,
+    QuantizationNoise,
     RateRandomWalk,
     Saturation,
     cubic_hermite,
@@ -64,6 +66,9 @@ class _Sensor:
     processes: list[_Process]
     noise: Noise | None
     noise_rng: np.random.Generator | None
+    qnoise: QuantizationNoise | None = None
+    qnoise_rng: np.random.Generator | None = None
+    qnoise_last: Array | None = None  # the integrated output's error at the last written sample
     cum: Array = field(default_factory=lambda: np.zeros(3))  # ideal running integral at the window start
     quant_sum: Array = field(default_factory=lambda: np.zeros(3))  # running sum before rounding
     quant_out: Array = field(default_factory=lambda: np.zeros(3))  # its last rounded value
@@ -132,7 +137,9 @@ class IncrementStream:
         ]
         noise = self.model.effect_of(sensor, Noise)
         rng = None if noise is None else random_stream(self.seed, noise.name)
-        return _Sensor(processes, noise, rng)
+        qnoise = self.model.effect_of(sensor, QuantizationNoise)
+        qrng = None if qnoise is None else random_stream(self.seed, qnoise.name)
+        return _Sensor(processes, noise, rng, qnoise, qrng)
 
     def margin(self) -> int:
         """Intervals of context kept on each side of those written: the reconstruction's neighbours,
@@ -222,6 +229,8 @@ class IncrementStream:
             # White noise as each interval's mean rate: density / sqrt(dt) per interval.
             z = state.noise_rng.standard_normal((n_out, 3))
             noise_rate = state.noise.density / np.sqrt(dt[rows])[:, None] * z
+        if state.qnoise is not None and state.qnoise_rng is not None:
+            noise_rate = noise_rate + self._quantization_noise(state, n_out) / dt[rows][:, None]
         nodes = node_inputs.nodes
         sat = model.effect_of(sensor, Saturation)
         deterministic = any(e.stage == "deterministic" for e in model.effects_of(sensor))
@@ -288,6 +297,17 @@ class IncrementStream:
         rate_at = _reconstruct(inc / np.diff(t)[:, None], t, t)[0]
         shifted = cubic_hermite(t, cum, rate_at, np.clip(t - delay, t[0], t[-1]))
         return np.diff(shifted, axis=0)
+
+    @staticmethod
+    def _quantization_noise(state: _Sensor, n: int) -> Array:
+        """The next ``n`` increments' share of the quantization noise (n, 3): ``e_k − e_{k−1}``, the
+        errors of the integrated output continued from the last chunk's (the first drawn once)."""
+        assert state.qnoise is not None and state.qnoise_rng is not None
+        if state.qnoise_last is None:
+            state.qnoise_last = state.qnoise.angle_errors(state.qnoise_rng, 1)[0]
+        e = np.vstack([state.qnoise_last, state.qnoise.angle_errors(state.qnoise_rng, n)])
+        state.qnoise_last = e[-1].copy()
+        return np.diff(e, axis=0)
 
     @staticmethod
     def _quantized(state: _Sensor, inc: Array, step: Array) -> Array:
