@@ -219,6 +219,13 @@ def _aided_json(
     outages: dict[str, list[dict[str, float]]] = {}
     for name, run in result.aided.items():
         aided[name] = {**run.summary.to_dict(), "fixes": run.fixes, "rejected_fixes": run.rejected}
+        if result.scenario.aiding.sigma_vel_mps is not None:
+            aided[name]["rejected_velocity_fixes"] = run.velocity_rejected
+        aided[name] |= {"alignment": run.alignment, "alignment_start_s": run.start_s}
+        if run.alignment == "static":
+            aided[name]["alignment_static_s"] = run.static_s
+        if run.heading_sigma_deg is not None:
+            aided[name]["alignment_heading_sigma_deg"] = run.heading_sigma_deg
         if run.restarts:
             aided[name]["filter_restarts_s"] = list(run.restarts)
         _check_finite(aided[name], f"{path}: aided strategy {name}")
@@ -239,16 +246,14 @@ def _aided_report(
 ) -> str:
     """The aided runs' table and, if any, the errors per outage."""
     a = sc.aiding
-    start = (
-        f"aligned over the first {a.static_s:g} s"
-        + (" (heading from elsewhere)" if a.heading_sigma_rad is not None else "")
-        if a.static_s is not None
-        else "from the truth's first state"
-    )
+    start = _alignment_text(a, next(iter(aided.values())))
+    columns: tuple[tuple[str, str, str], ...]
     columns = (("final hor m", "final_horizontal_m", "{:.3f}"), ("max hor m", "max_horizontal_m", "{:.3f}"),
                ("rms hor m", "rms_horizontal_m", "{:.3f}"), ("final D m", "final_down_m", "{:.3f}"),
                ("yaw °", "final_yaw_deg", "{:.4f}"), ("fixes", "fixes", "{:d}"),
                ("rejected", "rejected_fixes", "{:d}"))  # fmt: skip
+    if a.sigma_vel_mps is not None:
+        columns += (("rejected v", "rejected_velocity_fixes", "{:d}"),)
     head = ["strategy"] + [c[0] for c in columns]
     rows = [[name] + [fmt.format(s[key]) for _, key, fmt in columns] for name, s in aided.items()]
     text = [
@@ -267,6 +272,19 @@ def _aided_report(
                  f"{o['max_horizontal_m']:.3f}"] for name, o in windows]  # fmt: skip
         text.append(_fixed_width(["strategy", "outage", "at end m", "max m"], rows))
     return "\n".join(text)
+
+
+def _alignment_text(a: Any, run: dict[str, Any]) -> str:
+    """How the aided runs started (the alignment that ran), for the report's heading line."""
+    if run["alignment"] == "static":
+        where = " (heading from elsewhere)" if a.heading_sigma_rad is not None else ""
+        return f"aligned over the first {run['alignment_static_s']:g} s{where}"
+    if run["alignment"] == "gnss_velocity":
+        return (
+            f"aligned in motion at {run['alignment_start_s']:g} s, heading from the GNSS velocity "
+            f"(1σ {run['alignment_heading_sigma_deg']:.2f}°); errors from then"
+        )
+    return "from the truth's first state"
 
 
 def _scenario_json(sc: Any, path: Path, n: int) -> dict[str, Any]:

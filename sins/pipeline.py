@@ -40,6 +40,8 @@ from sins.scenario import presets as presets
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 if TYPE_CHECKING:
+    from sins.aiding.ekf import AidedResult, FilterConfig
+    from sins.aiding.gnss import GnssFixes
     from sins.compensation import Strategy
     from sins.gap import GapReport
     from sins.imu import ImuModel
@@ -97,7 +99,8 @@ class AidedRun:
     m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the estimated gyro
     and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for the ideal IMU);
     ``fix_t`` the fixes' times; ``restarts`` when the filter started again from a fix after a run of
-    refused ones (:class:`sins.aiding.ekf.FilterConfig` ``reinit_after``).
+    refused ones (:class:`sins.aiding.ekf.FilterConfig` ``reinit_after``). An in-motion alignment
+    starts the filter at ``start_s``: the summary and ``errors`` cover the run from there.
     """
 
     summary: DriftSummary
@@ -112,6 +115,11 @@ class AidedRun:
     true_bias: NDArray[np.float64] | None = None
     fix_t: NDArray[np.float64] | None = None
     restarts: tuple[float, ...] = ()  # times the filter started again after a run of refused fixes, s
+    alignment: str = "truth"  # how the filter started: "static", "gnss_velocity" or "truth"
+    start_s: float = 0.0  # when it started (an in-motion alignment's fix), s
+    static_s: float = 0.0  # a static alignment's still window, s
+    heading_sigma_deg: float | None = None  # the in-motion alignment's heading 1σ told to the filter, °
+    velocity_rejected: int = 0  # GNSS velocities the gate refused (with velocity fixes)
 
 
 @dataclass(frozen=True)
@@ -333,8 +341,9 @@ def aided_runs(
     """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
 
     Whole arrays, not streamed: the truth and the readings are made again (the same, to the last
-    bit, as the streamed run's), the receiver rides the truth, and the filter starts from the truth's
-    first state or, with ``[alignment]``, from a static alignment. The filter is tuned to
+    bit, as the streamed run's), the receiver rides the truth, and the filter starts from an alignment
+    (``[alignment]``, :func:`_alignment_plan`: still, in motion from the GNSS velocity, or the truth's
+    first state where the scenario says ``method = "truth"``). The filter is tuned to
     ``[gnss] filter_grade``, else to the IMU model's grade, else to the navigation grade.
 
     Parameters
@@ -345,7 +354,7 @@ def aided_runs(
     grade : the IMU file's grade, if any
     keep_every : the display series keep every ``keep_every``-th sample (and the last)
     """
-    from sins.aiding import alignment, ekf, gnss
+    from sins.aiding import ekf, gnss
 
     a = sc.aiding
     assert a is not None
@@ -357,53 +366,135 @@ def aided_runs(
     receiver = gnss.GnssConfig(
         rate_hz=a.rate_hz, sigma_pos_m=np.array(a.sigma_m), markov_sigma_m=np.array(a.markov_sigma_m),
         markov_tau_s=a.markov_tau_s, sigma_vel_mps=a.sigma_vel_mps, lever_arm_b=np.array(a.lever_arm_m),
-        latency_s=a.latency_s, outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
+        latency_s=a.latency_s, compensate_latency=a.compensate_latency,
+        outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
     )  # fmt: skip
     fixes = gnss.simulate(truth, receiver, seed=a.seed)
     filter_grade = a.filter_grade or grade or "navigation"
     config = ekf.FilterConfig.for_grade(filter_grade)
-    heading = _alignment_heading(sc, truth) if a.static_s is not None else None
+    plan = _alignment_plan(sc, truth, config)
     true_bias = _true_bias(nav_model)
     keep = None
     out = {}
     for name, strategy in strategies.items():
         corrected = readings if strategy is None else strategy.correct_increments(readings, temp)
-        if a.static_s is not None:
-            setup = alignment.AlignmentConfig(static_s=a.static_s, coarse_s=a.coarse_s)
-            result = alignment.aligned_run(corrected, fixes, config, setup, heading=heading)
-        else:
-            result = ekf.run(corrected, fixes, config, strapdown.InitialState.from_series(truth))
-        errors = nav_errors(result.nav, truth)
-        windows = _outage_errors(a.outages, truth.t, errors.horizontal_m)
+        result, k, heading_sigma = _aligned_run(plan, corrected, fixes, config, truth)
+        ran = truth if k == 0 else truth.at(np.arange(k, len(truth.t)))
+        errors = nav_errors(result.nav, ran)
+        windows = _outage_errors(a.outages, ran.t, errors.horizontal_m)
         if keep is None:
-            keep = thinned_indices(len(truth.t), keep_every)
+            keep = thinned_indices(len(ran.t), keep_every)
             records = thinned_indices(len(result.t_cov), math.ceil(len(result.t_cov) / MAX_KEPT))
         out[name] = AidedRun(
             summarize(errors), len(fixes), result.rejected, tuple(windows), filter_grade,
             errors=errors.at(keep), t_cov=result.t_cov[records], sigma=result.sigma()[records],
             bias=np.hstack([result.gyro_bias, result.accel_bias])[records], true_bias=true_bias,
             fix_t=np.asarray(fixes.t, dtype=float), restarts=tuple(float(x) for x in result.reinit_t),
+            alignment=plan.method, start_s=float(ran.t[0]), static_s=plan.static_s,
+            heading_sigma_deg=None if heading_sigma is None else math.degrees(heading_sigma),
+            velocity_rejected=result.velocity_rejected,
         )  # fmt: skip
     return out
 
 
-def _alignment_heading(sc: Scenario, truth: NavSeries) -> tuple[float, float] | None:
+#: The shortest stop at the start an automatic alignment aligns still on, s.
+AUTO_MIN_STOP_S = 30.0
+#: The longest still window an automatic alignment uses (the fine alignment gains little after), s.
+AUTO_MAX_STATIC_S = 300.0
+
+
+@dataclass(frozen=True)
+class _AlignmentPlan:
+    """How every strategy's aided run starts (``[alignment]`` resolved against the trajectory)."""
+
+    method: str  # "static", "gnss_velocity" or "truth"
+    static_s: float = 0.0
+    coarse_s: float = 0.0
+    heading: tuple[float, float] | None = None  # a static alignment's heading from elsewhere, rad
+    min_speed_mps: float = 5.0
+    sideslip_sigma_rad: float = 0.0
+    where: str = ""  # the scenario, for the in-motion alignment's refusal
+
+
+def _alignment_plan(sc: Scenario, truth: NavSeries, config: FilterConfig) -> _AlignmentPlan:
+    """``[alignment]`` resolved: ``auto`` aligns still on a stop at the start of ``static_s`` (default any
+    of :data:`AUTO_MIN_STOP_S` or more, up to :data:`AUTO_MAX_STATIC_S` used) where gyrocompassing
+    finds north within :data:`sins.aiding.alignment.GYROCOMPASS_MAX_SIGMA_RAD` (or the heading comes
+    from elsewhere), and in motion from the GNSS velocity otherwise."""
+    from sins.aiding import alignment
+
+    a = sc.aiding
+    assert a is not None
+    method, static_s = a.alignment, a.static_s
+    if method == "auto":
+        stop = _initial_stop_s(truth)
+        static_s = static_s if static_s is not None else min(stop, AUTO_MAX_STATIC_S)
+        coarse = min(a.coarse_s, static_s)
+        north = a.heading_sigma_rad is not None or (
+            coarse > 0
+            and np.sqrt(alignment.coarse_covariance(config, float(truth.lat[0]), coarse, 1.0)[8, 8])
+            <= alignment.GYROCOMPASS_MAX_SIGMA_RAD
+        )
+        enough = stop >= max(static_s, AUTO_MIN_STOP_S) - 1e-9
+        method = "static" if enough and north else "gnss_velocity"
+    if method == "static":
+        assert static_s is not None
+        plan = _AlignmentPlan("static", static_s, min(a.coarse_s, static_s))
+        return dataclasses.replace(plan, heading=_alignment_heading(sc, truth, static_s))
+    return _AlignmentPlan(
+        method, min_speed_mps=a.min_speed_mps, sideslip_sigma_rad=a.sideslip_sigma_rad,
+        where=str(sc.source or sc.name),
+    )  # fmt: skip
+
+
+def _initial_stop_s(truth: NavSeries) -> float:
+    """How long the vehicle stands still (no speed, no turn) from the first sample, s."""
+    yaw = np.unwrap(truth.euler()[2])
+    moving = (np.linalg.norm(truth.v_n, axis=1) > 1e-6) | (np.abs(yaw - yaw[0]) > 1e-9)
+    if not moving.any():
+        return float(truth.t[-1] - truth.t[0])
+    return float(truth.t[max(int(np.argmax(moving)) - 1, 0)] - truth.t[0])
+
+
+def _aligned_run(
+    plan: _AlignmentPlan, imu: ImuIncrements, fixes: GnssFixes, config: FilterConfig, truth: NavSeries
+) -> tuple[AidedResult, int, float | None]:
+    """One strategy's aided run as ``plan`` starts it: the result, the sample it starts at, and the
+    in-motion alignment's heading σ (rad; None for the others)."""
+    from sins.aiding import alignment, ekf
+
+    if plan.method == "static":
+        setup = alignment.AlignmentConfig(static_s=plan.static_s, coarse_s=plan.coarse_s)
+        return alignment.aligned_run(imu, fixes, config, setup, heading=plan.heading), 0, None
+    if plan.method == "gnss_velocity":
+        motion = alignment.MotionConfig(
+            min_speed_mps=plan.min_speed_mps, sideslip_sigma_rad=plan.sideslip_sigma_rad
+        )
+        try:
+            start, result = alignment.in_motion_run(imu, fixes, config, motion)
+        except SinsInputError as exc:
+            raise SinsInputError(f"{plan.where}: {exc}") from None
+        return result, start.index, start.heading_sigma_rad
+    return ekf.run(imu, fixes, config, strapdown.InitialState.from_series(truth)), 0, None
+
+
+def _alignment_heading(sc: Scenario, truth: NavSeries, static_s: float) -> tuple[float, float] | None:
     """The heading given to a static alignment (``[alignment] heading_sigma_deg``: the truth's, off by a
     draw of that σ), or None to gyrocompass; refuses a vehicle that moves within ``static_s``."""
     a = sc.aiding
-    assert a is not None and a.static_s is not None
+    assert a is not None
     where = sc.source or sc.name
-    still = truth.t <= truth.t[0] + a.static_s + 1e-9
-    if truth.t[-1] < truth.t[0] + a.static_s - 1e-9:
+    still = truth.t <= truth.t[0] + static_s + 1e-9
+    if truth.t[-1] < truth.t[0] + static_s - 1e-9:
         raise SinsInputError(
-            f"{where}: alignment.static_s: {a.static_s:g} s is longer than the run's "
+            f"{where}: alignment.static_s: {static_s:g} s is longer than the run's "
             f"{truth.t[-1] - truth.t[0]:g} s"
         )
     speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
     turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
     if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
         raise SinsInputError(
-            f"{where}: alignment.static_s: the vehicle moves within the first {a.static_s:g} s "
+            f"{where}: alignment.static_s: the vehicle moves within the first {static_s:g} s "
             f"(speed up to {speed:.3g} m/s); an alignment needs it still"
         )
     if a.heading_sigma_rad is None:

@@ -58,6 +58,8 @@ def one_run(truth: NavSeries, ideal: ImuIncrements, run: int, receiver: gnss.Gns
     ))  # fmt: skip
     readings = unit.corrupt_increments(ideal, seed=run)
     fixes = gnss.simulate(truth, receiver, seed=run)
+    # The filter alone: it starts from the truth moved by an error drawn from its P0, not from an
+    # alignment (whose errors are not P0's draws), so that NEES tests the filter's covariance only.
     start = strapdown.InitialState.from_series(truth)
     r_m, r_n = earth.radii(start.lat)
     start = strapdown.InitialState(

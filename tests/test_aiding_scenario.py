@@ -74,7 +74,8 @@ def test_run_reports_the_aided_errors_and_each_outage(cli_run):
 
 
 def test_the_outage_error_is_the_solutions_error_at_that_sample():
-    sc = from_dict(_with(alignment=None))
+    # The filter alone, from the truth's first state (without [alignment] the run would align itself).
+    sc = from_dict(_with(alignment={"method": "truth"}))
     result = pipeline.run_scenario(sc)
     (window,) = result.aided["none"].outages
     # The same aided run from the library's pieces: the error at the last sample before 130 s.

@@ -85,6 +85,13 @@ AIDED = {**HOLD, "segment": [{"type": "hold", "duration_s": 30.0}],
          "outage": [{"start_s": 10.0, "end_s": 20.0}],
          "alignment": {"static_s": 20.0, "coarse_s": 10.0, "heading_sigma_deg": 1.0}}  # fmt: skip
 
+# A drive from rest to 20 m/s and on, aligned in motion from the GNSS velocity.
+MOVING_AIDED = {**HOLD, "segment": [{"type": "accelerate", "duration_s": 10.0, "to_speed_mps": 20.0},
+                                    {"type": "hold", "duration_s": 20.0}],
+                "gnss": {"rate_hz": 1.0, "sigma_vel_mps": 0.1},
+                "alignment": {"method": "gnss_velocity", "min_speed_mps": 5.0,
+                              "sideslip_sigma_deg": 1.0}}  # fmt: skip
+
 #: Scenario field -> (document, path to set). Each key of SCENARIO_BOUNDS appears once.
 SCENARIO_FIELDS: dict[str, tuple[dict[str, Any], tuple[Any, ...]]] = {
     "imu.rate_hz": (HOLD, ("imu", "rate_hz")),
@@ -135,6 +142,8 @@ SCENARIO_FIELDS: dict[str, tuple[dict[str, Any], tuple[Any, ...]]] = {
     "alignment.static_s": (AIDED, ("alignment", "static_s")),
     "alignment.coarse_s": (AIDED, ("alignment", "coarse_s")),
     "alignment.heading_sigma_deg": (AIDED, ("alignment", "heading_sigma_deg")),
+    "alignment.min_speed_mps": (MOVING_AIDED, ("alignment", "min_speed_mps")),
+    "alignment.sideslip_sigma_deg": (MOVING_AIDED, ("alignment", "sideslip_sigma_deg")),
 }
 
 #: Fields whose upper bound makes a run too long to try here: their value just inside is run at the
@@ -170,6 +179,8 @@ def _fits(doc: dict[str, Any], key: str, value: float, inside: bool = True) -> d
         align["coarse_s"] = min(align["coarse_s"], value) if key == "alignment.static_s" else value
         doc["segment"][0]["duration_s"] = max(doc["segment"][0]["duration_s"], align["static_s"])
         doc["imu"]["rate_hz"] = 1.0 if align["static_s"] > 100 else doc["imu"]["rate_hz"]
+    if key == "alignment.min_speed_mps" and inside and value > 20.0:  # the drive reaches that speed
+        doc["segment"][0]["to_speed_mps"] = value
     return doc
 
 

@@ -21,7 +21,9 @@ zero (closed loop).
 
 Measurements: a GNSS antenna position (lever arm ``l_b``: ``δr_a = δr + [(C_nb l_b)×] φ``), its
 velocity when the receiver gives one, and zero-velocity updates over windows known to be still.
-Each is gated on its normalised innovation squared (NIS); rejected fixes are counted.
+Each is gated on its normalised innovation squared (NIS); rejected fixes are counted (positions and
+velocities apart). A fix with a known latency (``GnssFixes.latency_s``) is compared with the solution
+kept at its time of validity, less the feedback applied since: the difference is today's error.
 """
 
 from __future__ import annotations
@@ -214,6 +216,9 @@ class AidedResult:
         it, on its own NIS, and is used only with an accepted position)
     zupt_t : (j,) times of the zero-velocity updates
     reinit_t : times of the fixes the filter started again from, after a run of refused ones
+    velocity_tried : (k,) whether the fix's velocity met the gate (a receiver's velocity, with an
+        accepted position); empty without velocity fixes
+    velocity_accepted : (k,) whether the gate let it in
     """
 
     nav: NavSeries
@@ -227,11 +232,18 @@ class AidedResult:
     accepted: NDArray[np.bool_]
     zupt_t: Array = field(default_factory=lambda: np.zeros(0))
     reinit_t: Array = field(default_factory=lambda: np.zeros(0))
+    velocity_tried: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    velocity_accepted: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def rejected(self) -> int:
-        """The number of GNSS fixes the gate refused."""
+        """The number of GNSS fixes the gate refused (their positions)."""
         return int(np.count_nonzero(~self.accepted))
+
+    @property
+    def velocity_rejected(self) -> int:
+        """The number of GNSS velocities the gate refused (of those it met: an accepted fix's)."""
+        return int(np.count_nonzero(self.velocity_tried & ~self.velocity_accepted))
 
     def sigma(self) -> Array:
         """The 1σ of every state at the records, (m, 15)."""
@@ -348,9 +360,15 @@ class _ClosedLoop:
         self.nis = np.full(len(fixes.t), np.nan)
         self.accepted = np.zeros(len(fixes.t), dtype=bool)
         self.zupt_t: list[float] = []
+        self.vel_tried = np.zeros(len(fixes.t), dtype=bool)
+        self.vel_accepted = np.zeros(len(fixes.t), dtype=bool)
         self.config = config
         self.refused_in_a_row = 0
         self.reinit_t: list[float] = []
+        self.k_now = 0  # the sample the integrator's state is at
+        # With a latency: the feedback (sample, δr, δv) applied, to bring an older solution's error up to now.
+        self.fed_k: list[int] = []
+        self.fed_dx: list[Array] = []
 
     def record(self, time: float, updated: bool) -> None:
         """Keep the covariance and biases at ``time``."""
@@ -378,6 +396,7 @@ class _ClosedLoop:
         )
         phi, Q = discretize(F, self.Qc, span)
         self.kf.predict(F=phi, Q=Q)
+        self.k_now = k_end
         self.record(float(t[k_end]), False)
 
     def gated_update(self, z: Array, H: Array, R: Array) -> tuple[float, bool]:
@@ -404,6 +423,9 @@ class _ClosedLoop:
             q_nb=rotation.quat_multiply(rotation.quat_from_rotvec(dx[ATT]), nav.q_nb),
         )
         self.state = strapdown.moved(self.state, corrected)
+        if self.fixes.latency_s > 0:
+            self.fed_k.append(self.k_now)
+            self.fed_dx.append(dx[:6].copy())
         self.b_g = self.b_g - dx[BG]
         self.b_a = self.b_a - dx[BA]
         self.kf.x = np.zeros((N_STATES, 1))
@@ -418,17 +440,13 @@ class _ClosedLoop:
 
     def fix(self, idx: int, row: int) -> None:
         """GNSS fix ``row`` at sample ``idx``: its antenna position, then its velocity if it has one."""
-        fixes, t = self.fixes, self.t
-        nav = strapdown.current(self.state)
-        C_nb = rotation.dcm_from_quat(nav.q_nb)
+        t = self.t
+        lat, lon, h, v_n, q_nb, fed = self.solution_at(idx, float(self.fixes.t[row] - self.fixes.latency_s))
+        C_nb = rotation.dcm_from_quat(q_nb)
         arm_n = C_nb @ self.arm_b
-        r_m, r_n = earth.radii(nav.lat)
-        late = t[idx] - fixes.t[row]  # the fix moved to the sample's time with the INS velocity
-        z = np.array([
-            (nav.lat - fixes.lat[row]) * (r_m + nav.h),
-            (nav.lon - fixes.lon[row]) * (r_n + nav.h) * np.cos(nav.lat),
-            -(nav.h - fixes.h[row]),
-        ]) + arm_n - nav.v_n * late  # fmt: skip
+        z = self.position_difference(row, lat, lon, h) + arm_n - fed[POS]
+        if self.fixes.latency_s == 0:  # the fix moved to the sample's time with the INS velocity
+            z = z - v_n * (t[idx] - self.fixes.t[row])
         H = np.zeros((3, N_STATES))
         H[:, POS] = np.eye(3)
         H[:, ATT] = rotation.skew(arm_n)
@@ -439,15 +457,67 @@ class _ClosedLoop:
             self.accepted[row] = True
         if self.accepted[row] and self.R_vel is not None:
             self.feed_back()
-            nav = strapdown.current(self.state)
-            C_nb = rotation.dcm_from_quat(nav.q_nb)
-            last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
-            omega_b = self.imu.dtheta_b[last] / self.dt_all[last] - self.b_g
-            arm_rate_n = C_nb @ np.cross(omega_b, self.arm_b)
-            H = np.zeros((3, N_STATES))
-            H[:, VEL] = np.eye(3)
-            H[:, ATT] = rotation.skew(arm_rate_n)
-            self.gated_update(nav.v_n + arm_rate_n - fixes.v_n[row], H, self.R_vel)
+            self.velocity_fix(idx, row)
+
+    def position_difference(self, row: int, lat: float, lon: float, h: float) -> Array:
+        """The solution ``(lat, lon, h)`` less fix ``row``'s position, NED m."""
+        fixes = self.fixes
+        r_m, r_n = earth.radii(lat)
+        return np.array([
+            (lat - fixes.lat[row]) * (r_m + h),
+            (lon - fixes.lon[row]) * (r_n + h) * np.cos(lat),
+            -(h - fixes.h[row]),
+        ])  # fmt: skip
+
+    def velocity_fix(self, idx: int, row: int) -> None:
+        """Fix ``row``'s antenna velocity at sample ``idx`` (after its position)."""
+        _, _, _, v_n, q_nb, fed = self.solution_at(idx, float(self.fixes.t[row] - self.fixes.latency_s))
+        assert self.R_vel is not None
+        C_nb = rotation.dcm_from_quat(q_nb)
+        last = max(idx, 1) - 1  # the interval ending at the fix's sample (the first at the start)
+        omega_b = self.imu.dtheta_b[last] / self.dt_all[last] - self.b_g
+        arm_rate_n = C_nb @ np.cross(omega_b, self.arm_b)
+        H = np.zeros((3, N_STATES))
+        H[:, VEL] = np.eye(3)
+        H[:, ATT] = rotation.skew(arm_rate_n)
+        self.vel_tried[row] = True
+        _, self.vel_accepted[row] = self.gated_update(
+            v_n + arm_rate_n - fed[VEL] - self.fixes.v_n[row], H, self.R_vel
+        )
+
+    def solution_at(self, idx: int, t_valid: float) -> tuple[float, float, float, Array, Array, Array]:
+        """The solution at a fix's time of validity ``t_valid`` (at most sample ``idx``, now) and the
+        feedback applied since (6,: δr, δv; the solution's error then, less it, is its error now).
+
+        Without latency, or with the time at or after now: the current state, no feedback.
+        """
+        nav = strapdown.current(self.state)
+        now = (float(nav.lat), float(nav.lon), float(nav.h), np.asarray(nav.v_n), np.asarray(nav.q_nb))
+        if self.fixes.latency_s == 0 or t_valid >= self.t[idx]:
+            return (*now, np.zeros(6))
+        t = self.t
+        j = int(np.clip(np.searchsorted(t[: idx + 1], t_valid), 1, idx))
+        w = float(np.clip((t_valid - t[j - 1]) / (t[j] - t[j - 1]), 0.0, 1.0))
+
+        def between(a: Array) -> Array:
+            return np.asarray((1.0 - w) * a[j - 1] + w * a[j])
+
+        # Feedback after t_valid counts whole, but the history keeps an update's sample corrected (before
+        # now's): at sample j, the interpolation already holds w of it.
+        fed = np.zeros(6)
+        for k, dx in zip(reversed(self.fed_k), reversed(self.fed_dx), strict=True):
+            if t[k] <= t_valid:
+                break
+            fed += dx * (1.0 - w if k == j < idx else 1.0)
+        q = self.q[j] if w >= 0.5 else self.q[j - 1]
+        return (
+            float(between(self.lat)),
+            float(between(self.lon)),
+            float(between(self.h)),
+            between(self.v),
+            q,
+            fed,
+        )
 
     def start_again(self, z: Array, H: Array, time: float) -> None:
         """Start the filter again from this fix: the covariance back to its initial value, the position
@@ -478,4 +548,5 @@ class _ClosedLoop:
             accel_bias=np.array(self.rec_ba), after_update=np.array(self.rec_upd),
             fix_t=np.asarray(fixes.t, dtype=float), nis=self.nis, accepted=self.accepted,
             zupt_t=np.array(self.zupt_t), reinit_t=np.array(self.reinit_t),
+            velocity_tried=self.vel_tried, velocity_accepted=self.vel_accepted,
         )  # fmt: skip

@@ -2,8 +2,9 @@
 
 Each fix reports the antenna, ``lever_arm_b`` from the IMU in the body frame, with white noise and an
 optional first-order Gauss–Markov error per NED axis (exact discretisation, started from its
-stationary law). A latency makes a fix stamped ``t`` report the antenna at ``t - latency_s``: an
-error the filter does not model. Outages are time windows with no fixes.
+stationary law). A latency makes a fix stamped ``t`` report the antenna at ``t - latency_s``; the
+fixes carry it (``GnssFixes.latency_s``, unless ``compensate_latency`` is off) and the filter compares
+each with its solution at that time of validity. Outages are time windows with no fixes.
 
 :func:`check_fixes` is the gate for fixes from a file or a user: NaN, time that does not increase,
 fixes outside the IMU's span and outage windows that end before they start are refused with one
@@ -49,6 +50,8 @@ class GnssConfig:
     sigma_vel_mps : white-noise standard deviation of velocity fixes, m/s; None: position only
     lever_arm_b : (3,) antenna position from the IMU, body frame, m
     latency_s : a fix stamped ``t`` reports the antenna at ``t - latency_s``, s
+    compensate_latency : the filter is told ``latency_s`` and compares each fix with its solution at
+        the fix's time of validity; False: it takes the fix as of its stamp (the latency an error)
     outages : windows without fixes
     """
 
@@ -59,6 +62,7 @@ class GnssConfig:
     sigma_vel_mps: float | None = None
     lever_arm_b: Array = field(default_factory=lambda: np.zeros(3))
     latency_s: float = 0.0
+    compensate_latency: bool = True
     outages: tuple[Outage, ...] = ()
 
     def __post_init__(self) -> None:
@@ -96,6 +100,7 @@ class GnssFixes:
     sigma_pos_m : (3,) the position noise the filter is told, NED, m
     sigma_vel_mps : the velocity noise, m/s (None: no velocity fixes)
     lever_arm_b : (3,) antenna position from the IMU, body frame, m
+    latency_s : the latency the filter is told: a fix stamped ``t`` holds at ``t - latency_s``, s
     """
 
     t: Array
@@ -106,6 +111,12 @@ class GnssFixes:
     sigma_pos_m: Array
     sigma_vel_mps: float | None = None
     lever_arm_b: Array = field(default_factory=lambda: np.zeros(3))
+    latency_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuse a latency that is not a non-negative number."""
+        if not (np.isfinite(self.latency_s) and self.latency_s >= 0):
+            raise SinsInputError(f"gnss latency_s must be a non-negative number, got {self.latency_s}")
 
     @classmethod
     def empty(cls, sigma_pos_m: float = 1.0) -> GnssFixes:
@@ -124,9 +135,14 @@ class GnssFixes:
         keep = np.ones(len(self.t), dtype=bool)
         for o in outages:
             keep &= ~((self.t > o.start_s) & (self.t < o.end_s))
+        return self.select(keep)
+
+    def select(self, keep: NDArray[np.bool_]) -> GnssFixes:
+        """The fixes where ``keep`` (k,) is True."""
         return GnssFixes(
             t=self.t[keep], lat=self.lat[keep], lon=self.lon[keep], h=self.h[keep], v_n=self.v_n[keep],
             sigma_pos_m=self.sigma_pos_m, sigma_vel_mps=self.sigma_vel_mps, lever_arm_b=self.lever_arm_b,
+            latency_s=self.latency_s,
         )  # fmt: skip
 
 
@@ -193,6 +209,7 @@ def simulate(truth: NavSeries, config: GnssConfig, seed: int) -> GnssFixes:
     fixes = GnssFixes(
         t=t, lat=lat, lon=lon, h=h, v_n=v_n, sigma_pos_m=np.hypot(config.sigma_pos_m, config.markov_sigma_m),
         sigma_vel_mps=config.sigma_vel_mps, lever_arm_b=config.lever_arm_b,
+        latency_s=config.latency_s if config.compensate_latency else 0.0,
     )  # fmt: skip
     return fixes.without(config.outages)
 

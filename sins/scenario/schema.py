@@ -6,6 +6,7 @@ a file or checks a value.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -66,9 +67,13 @@ class Scenario:
 class AidingSpec:
     """A scenario's GNSS receiver, outages and alignment (``[gnss]``, ``[[outage]]``, ``[alignment]``), SI.
 
-    ``static_s`` None: the filter starts from the truth's first state; otherwise from a static alignment
-    over the first ``static_s`` seconds (``heading_sigma_rad`` set: the heading comes from elsewhere,
-    the truth's plus a draw of that spread, instead of gyrocompassing).
+    ``alignment`` says how the filter starts: ``"static"`` a static alignment over the first ``static_s``
+    seconds (``heading_sigma_rad`` set: the heading comes from elsewhere, the truth's plus a draw of that
+    spread, instead of gyrocompassing); ``"gnss_velocity"`` in motion, heading from the course over
+    ground once the speed reaches ``min_speed_mps`` (``sideslip_sigma_rad`` the angle between them);
+    ``"truth"`` the truth's first state; ``"auto"`` (no ``[alignment]``) static where the trajectory
+    starts with a long enough stop (``static_s``, None: any of 30 s or more) and the gyros can find
+    north, in motion otherwise. ``compensate_latency``: the filter is told ``latency_s``.
     """
 
     rate_hz: float
@@ -84,6 +89,10 @@ class AidingSpec:
     static_s: float | None = None
     coarse_s: float = 60.0
     heading_sigma_rad: float | None = None
+    alignment: str = "auto"
+    min_speed_mps: float = 5.0
+    sideslip_sigma_rad: float = math.radians(1.0)
+    compensate_latency: bool = True
 
 
 @dataclass(frozen=True)

@@ -94,6 +94,17 @@ SCENARIO_BOUNDS: dict[str, Bound] = {
     "alignment.static_s": Bound(0.0, 3600.0, "s", low_open=True),
     "alignment.coarse_s": Bound(0.0, 3600.0, "s", "at most static_s", low_open=True),
     "alignment.heading_sigma_deg": Bound(0.0, 180.0, "°", low_open=True),
+    "alignment.min_speed_mps": Bound(0.1, MAX_SPEED_MPS, "m/s", "below it the course over ground is noise"),
+    "alignment.sideslip_sigma_deg": Bound(0.0, 30.0, "°", "the filter's small angles"),
+}
+
+#: How an aided run starts (``[alignment] method``); ``auto`` picks ``static`` or ``gnss_velocity``.
+ALIGNMENT_METHODS = ("auto", "static", "gnss_velocity", "truth")
+#: The ``[alignment]`` keys each method reads (``auto`` reads them all).
+_ALIGNMENT_KEYS = {
+    "static": ("static_s", "coarse_s", "heading_sigma_deg"),
+    "gnss_velocity": ("min_speed_mps", "sideslip_sigma_deg"),
+    "truth": (),
 }
 
 #: The grades the filter may be tuned to (``[gnss] filter_grade``): :data:`sins.imu.spec.GRADES`.
@@ -254,6 +265,7 @@ def _aiding(top: TomlKeys) -> AidingSpec | None:
     lever_arm_m = _triple(gnss, "lever_arm_m", [0.0, 0.0, 0.0])
     latency_s = gnss.bounded("latency_s", _B["gnss.latency_s"], 0.0)
     seed = gnss.integer("seed", 0, high=MAX_SEED)
+    compensate = gnss.boolean("compensate_latency", True)
     gnss.done()
     outages = []
     for out in top.tables("outage"):
@@ -263,21 +275,42 @@ def _aiding(top: TomlKeys) -> AidingSpec | None:
             raise out.error(f"must come after start_s {start:g} s, got {end:g}", "end_s")
         out.done()
         outages.append((start, end))
-    static_s, coarse_s, heading = None, 60.0, None
-    if top.has("alignment"):
-        align = top.sub("alignment")
-        static_s = align.bounded("static_s", _B["alignment.static_s"], 300.0)
-        coarse_s = align.bounded("coarse_s", _B["alignment.coarse_s"], min(60.0, static_s))
-        if coarse_s > static_s:
-            raise align.error(f"must be at most static_s {static_s:g} s, got {coarse_s:g}", "coarse_s")
-        if align.has("heading_sigma_deg"):
-            heading = math.radians(align.bounded("heading_sigma_deg", _B["alignment.heading_sigma_deg"]))
-        align.done()
+    align = _alignment(top)
     return AidingSpec(
         rate_hz=rate_hz, sigma_m=sigma_m, markov_sigma_m=markov_sigma_m, markov_tau_s=markov_tau_s,
         sigma_vel_mps=sigma_vel, lever_arm_m=lever_arm_m, latency_s=latency_s, seed=seed, filter_grade=grade,
-        outages=tuple(outages), static_s=static_s, coarse_s=coarse_s, heading_sigma_rad=heading,
+        outages=tuple(outages), compensate_latency=compensate, **align,
     )  # fmt: skip
+
+
+def _alignment(top: TomlKeys) -> dict[str, Any]:
+    """The ``[alignment]`` table as :class:`AidingSpec`'s fields (none: ``auto``, each default)."""
+    if not top.has("alignment"):
+        return {}
+    align = top.sub("alignment")
+    # A table with static_s and no method is the static alignment it always was.
+    method = align.choice("method", ALIGNMENT_METHODS, "static" if align.has("static_s") else "auto")
+    for other, keys in _ALIGNMENT_KEYS.items():
+        for key in keys:
+            if method not in ("auto", other) and align.has(key):
+                raise align.error(f"is not read by method {method!r} (only by {other!r} or 'auto')", key)
+    out: dict[str, Any] = {"alignment": method}
+    if method == "static" or align.has("static_s"):
+        out["static_s"] = align.bounded("static_s", _B["alignment.static_s"], 300.0)
+    limit = out.get("static_s", 3600.0)
+    out["coarse_s"] = align.bounded("coarse_s", _B["alignment.coarse_s"], min(60.0, limit))
+    if out["coarse_s"] > limit:
+        raise align.error(f"must be at most static_s {limit:g} s, got {out['coarse_s']:g}", "coarse_s")
+    if align.has("heading_sigma_deg"):
+        out["heading_sigma_rad"] = math.radians(
+            align.bounded("heading_sigma_deg", _B["alignment.heading_sigma_deg"])
+        )
+    out["min_speed_mps"] = align.bounded("min_speed_mps", _B["alignment.min_speed_mps"], 5.0)
+    out["sideslip_sigma_rad"] = math.radians(
+        align.bounded("sideslip_sigma_deg", _B["alignment.sideslip_sigma_deg"], 1.0)
+    )
+    align.done()
+    return out
 
 
 def _position(init: TomlKeys) -> tuple[float, float, float]:
