@@ -201,6 +201,24 @@ class PeakRss:
         self._thread.join()
 
 
+def _wait_for_workers_to_exit(timeout_s: float = 30.0) -> None:
+    """Until the last cluster's workers are gone (at most ``timeout_s``): the next cluster's peak
+    memory must not count them."""
+
+    def big_children() -> bool:
+        for p in psutil.Process().children(recursive=True):
+            try:
+                if p.memory_info().rss > 100e6:
+                    return True
+            except psutil.Error:  # gone meanwhile
+                pass
+        return False
+
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end and big_children():
+        time.sleep(0.2)
+
+
 def cluster_rates(folder: Path, units: int, workers: list[int], strategies: list[str]) -> None:
     """Campaigns of ``units`` units on local clusters of each ``workers`` count."""
     spec = load(folder, units, strategies)
@@ -208,6 +226,7 @@ def cluster_rates(folder: Path, units: int, workers: list[int], strategies: list
     for n in workers:
         with PeakRss() as rss:
             run = engine.run(spec, folder / f"out{units}-{n}", workers=n)
+        _wait_for_workers_to_exit()
         unit_hours = units * streams_of(spec)
         rates[n] = rate = unit_hours / run.wall_s
         print(
