@@ -26,6 +26,8 @@ from sins.nav.metrics import (
     DriftAccumulator,
     DriftSummary,
     NavErrors,
+    TruthFrame,
+    errors_against,
     kept_indices,
     nav_errors,
     summarize,
@@ -262,15 +264,14 @@ def run_units(
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
         first = trajectory.start_state(motion)
-        chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
+        chunks = _prefetched(_shared(sc, trajectory.generate_chunks(motion, sc.rate_hz)))
         driven = [
             _DrivenUnit(sc, unit, seed, first, keep_every)
             for unit, seed in zip(units, nav_seeds, strict=True)
         ]
-        for truth_c, ideal_c in chunks:
-            cabin = _cabin(sc, ideal_c.t)
+        for frame, ideal6, ideal_c, cabin in chunks:
             for d in driven:
-                d.push(truth_c, ideal_c, cabin)
+                d.push(frame, ideal6, ideal_c, cabin)
         for d in driven:
             d.finish()
     except ValueError as exc:
@@ -278,6 +279,16 @@ def run_units(
             raise
         raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
     return [d.result(seed) for d, seed in zip(driven, nav_seeds, strict=True)]
+
+
+def _shared(
+    sc: Scenario, chunks: Iterator[tuple[NavSeries, ImuIncrements]]
+) -> Iterator[tuple[TruthFrame, NDArray[np.float64], ImuIncrements, NDArray[np.float64]]]:
+    """What every unit needs of each generated chunk, made once (on the prefetching thread): the
+    truth's frame (:class:`sins.nav.metrics.TruthFrame`), the ideal increments as (n, 6) and as they
+    are, and the cabin temperature at their times."""
+    for truth, ideal in chunks:
+        yield TruthFrame.of(truth), np.hstack([ideal.dtheta_b, ideal.dv_b]), ideal, _cabin(sc, ideal.t)
 
 
 class _DrivenUnit:
@@ -298,9 +309,12 @@ class _DrivenUnit:
             sc, self.strategies, self.runs, self.pending, self.truth_kept, keep_every, float(first.h[0])
         )
 
-    def push(self, truth: NavSeries, ideal: ImuIncrements, cabin: NDArray[np.float64]) -> None:
-        """A generated chunk: corrupt it, and correct and integrate what the stream writes."""
-        self.pending.add(truth, ideal)
+    def push(
+        self, frame: TruthFrame, ideal6: NDArray[np.float64], ideal: ImuIncrements, cabin: NDArray[np.float64]
+    ) -> None:
+        """A generated chunk (its truth's frame, its ideal increments also as (n, 6)): corrupt it, and
+        correct and integrate what the stream writes."""
+        self.pending.add(frame, ideal6)
         self.step(self.stream.push(ideal, cabin))
 
     def finish(self) -> None:
@@ -606,33 +620,30 @@ class _Pending:
     interval only once the intervals after it have come."""
 
     def __init__(self) -> None:
-        self._truth: list[NavSeries] = []
-        self._ideal: list[ImuIncrements] = []
+        self._chunks: list[tuple[TruthFrame, NDArray[np.float64]]] = []
+        self._used = 0  # rows of the first chunk already taken
         self.last_truth: NavSeries | None = None
 
-    def add(self, truth: NavSeries, ideal: ImuIncrements) -> None:
-        """A generated chunk: the truth at ``ideal.t[1:]`` and the ideal increments."""
-        self._truth.append(truth)
-        self._ideal.append(ideal)
+    def add(self, frame: TruthFrame, ideal: NDArray[np.float64]) -> None:
+        """A generated chunk: the truth's frame at ``t[1:]`` and the ideal increments (n, 6)."""
+        self._chunks.append((frame, ideal))
 
-    def take(self, n: int) -> tuple[NavSeries, NDArray[np.float64]]:
-        """The next ``n`` intervals' truth states (at their ends) and ideal increments (n, 6)."""
-        truth, ideal = [], []
+    def take(self, n: int) -> tuple[TruthFrame, NDArray[np.float64]]:
+        """The next ``n`` intervals' truth (at their ends) and ideal increments (n, 6)."""
+        frames, ideal = [], []
         while n:
-            t0, i0 = self._truth[0], self._ideal[0]
-            m = min(n, len(t0.t))
-            truth.append(t0.at(np.arange(m)))
-            ideal.append(np.hstack([i0.dtheta_b[:m], i0.dv_b[:m]]))
-            if m == len(t0.t):
-                self._truth.pop(0)
-                self._ideal.pop(0)
-            else:
-                self._truth[0] = t0.at(np.arange(m, len(t0.t)))
-                self._ideal[0] = ImuIncrements(t=i0.t[m:], dtheta_b=i0.dtheta_b[m:], dv_b=i0.dv_b[m:])
+            frame, inc = self._chunks[0]
+            m = min(n, len(frame) - self._used)
+            frames.append(frame.rows(self._used, self._used + m))
+            ideal.append(inc[self._used : self._used + m])
+            self._used += m
+            if self._used == len(frame):
+                self._chunks.pop(0)
+                self._used = 0
             n -= m
-        joined = _join(truth)
-        self.last_truth = joined.at(-1)
-        return joined, np.vstack(ideal)
+        joined = TruthFrame.join(frames)
+        self.last_truth = joined.truth(slice(-1, None))
+        return joined, ideal[0] if len(ideal) == 1 else np.vstack(ideal)
 
 
 class _StreamedRun:
@@ -676,25 +687,25 @@ class _ChunkStep:
         if n == 0:
             return
         sc = self.sc
-        truth, ideal = self.pending.take(n)
+        frame, ideal = self.pending.take(n)
         temp = _cabin(sc, corrupted.t)
         dt = np.diff(corrupted.t)[:, None]
         keep = kept_indices(self.samples + 1, n, self.keep_every)
-        h_ref = np.concatenate([[self.h_prev], truth.h]) if sc.vertical != "free" else None
+        h_ref = np.concatenate([[self.h_prev], frame.h]) if sc.vertical != "free" else None
         for name, strategy in self.strategies.items():
             run = self.runs[name]
             corrected = strategy.correct_increments(corrupted, temp)
             solution, run.state = strapdown.advance(
                 run.state, corrected, vertical=sc.vertical, h_ref=h_ref, vertical_tau_s=sc.vertical_tau_s
             )
-            run.errors.add(nav_errors(solution, truth))
+            run.errors.add(*errors_against(solution, frame))
             run.kept.append(solution.at(keep))
             run.last = solution.at(-1)
             run.sensor.add((np.hstack([corrected.dtheta_b, corrected.dv_b]) - ideal) / dt)
         self.mid_t.add(0.5 * (corrupted.t[:-1] + corrupted.t[1:])[:, None])
-        self.truth_kept.append(truth.at(keep))
+        self.truth_kept.append(frame.truth(keep))
         self.samples += n
-        self.h_prev = float(truth.h[-1])
+        self.h_prev = float(frame.h[-1])
 
 
 def _prefetched(items: Iterator[T]) -> Iterator[T]:

@@ -322,3 +322,16 @@ def test_an_unreachable_scheduler_is_refused_before_anything_is_written_and_a_ba
     assert not (tmp_path / "none").exists()
     results.prepare(tmp_path / "bare", spec, resume=False)  # a description, no parts
     assert engine.run(spec, tmp_path / "bare", workers=1).units_run == 1
+
+
+def test_a_worker_running_a_task_imports_neither_the_engine_nor_pyarrow() -> None:
+    # A worker unpickles the task by its module: what that module imports every worker holds in memory
+    # (pyarrow alone ~40 MB a worker, against the 1 GB a campaign may use).
+    assert engine.task.__module__ == "sins.campaign.unit"
+    code = (
+        "import sys, sins.campaign.unit; "
+        "print(sorted(m for m in ('pyarrow', 'dask', 'distributed', 'sins.campaign.engine', 'torch') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -64,3 +64,88 @@ def test_accumulator_in_chunks_equals_one_pass():
     kept = acc.kept()
     np.testing.assert_array_equal(kept.t, np.append(e.t[::7], e.t[-1]))  # every 7th, then the last
     np.testing.assert_array_equal(kept.pos_ned_m[-1], e.pos_ned_m[-1])
+
+
+def _random_pair(n: int, seed: int) -> tuple[NavSeries, NavSeries]:
+    """A truth wandering over the globe (both hemispheres, the antimeridian) and an estimate off it by
+    metres, the longitude error sometimes across ±π."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.01
+    lat = rng.uniform(-1.4, 1.4, n)
+    lon = rng.uniform(-np.pi, np.pi, n)
+    h = rng.uniform(-100.0, 9000.0, n)
+    q = Rotation.random(n, random_state=rng).as_quat()
+    truth = _series(t, lat, lon, h, rng.normal(0, 30, (n, 3)), q)
+    d_lon = rng.normal(0, 1e-5, n)
+    d_lon[::50] += 2 * np.pi * rng.choice([-1.0, 1.0], len(d_lon[::50]))  # wrapped back by the error
+    q_est = Rotation.from_rotvec(rng.normal(0, 0.05, (n, 3))) * Rotation.from_quat(q)
+    est = _series(
+        t, lat + rng.normal(0, 1e-5, n), lon + d_lon, h + rng.normal(0, 5, n),
+        truth.v_n + rng.normal(0, 0.1, (n, 3)), q_est.as_quat(),
+    )  # fmt: skip
+    est.q_nb[0] = rotation.quat_from_euler(0.3, np.pi / 2, 1.1)  # gimbal lock takes its own branch
+    return est, truth
+
+
+def test_the_compiled_errors_equal_the_numpy_expressions_to_the_last_bit():
+    # The errors of one pass of compiled code against the module docstring's numpy expressions (as
+    # nav_errors computed them before): the same operations in the same order, so equal, not close.
+    # Attitude: against the compiled euler_errors (held to the rotation module above), bit for bit.
+    from sins.nav.metrics import TruthFrame, errors_against
+
+    est, truth = _random_pair(3000, 5)
+    errors, horizontal = errors_against(est, TruthFrame.of(truth))
+    r_m, r_n = earth.radii(truth.lat)
+    north = (est.lat - truth.lat) * (r_m + truth.h)
+    east = rotation.wrap_angle(est.lon - truth.lon) * (r_n + truth.h) * np.cos(truth.lat)
+    np.testing.assert_array_equal(errors.pos_ned_m, np.column_stack([north, east, -(est.h - truth.h)]))
+    np.testing.assert_array_equal(errors.vel_ned_mps, est.v_n - truth.v_n)
+    np.testing.assert_array_equal(errors.att_rpy_rad, euler_errors(est.q_nb, truth.q_nb))
+    np.testing.assert_array_equal(horizontal, np.hypot(north, east))
+    np.testing.assert_array_equal(errors.t, est.t)
+    assert np.abs(errors.pos_ned_m[:, 1]).max() < 1e3  # the ±2π longitude jumps were wrapped
+
+
+def test_a_truth_frame_slices_and_joins_as_its_truth():
+    from sins.nav.metrics import TruthFrame
+
+    est, truth = _random_pair(400, 6)
+    frame = TruthFrame.of(truth)
+    joined = TruthFrame.join([frame.rows(0, 150), frame.rows(150, 151), frame.rows(151, 400)])
+    np.testing.assert_array_equal(joined.data, frame.data)
+    back = frame.truth(np.array([3, 7, 399]))
+    for name in ("t", "lat", "lon", "h", "v_n", "q_nb"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(truth, name)[[3, 7, 399]])
+    np.testing.assert_array_equal(frame.h, truth.h)
+    # Errors against rows of the frame are the rows of the errors against the whole.
+    from sins.nav.metrics import errors_against
+
+    whole, _ = errors_against(est, frame)
+    part, _ = errors_against(est.at(slice(150, 400)), frame.rows(150, 400))
+    np.testing.assert_array_equal(part.att_rpy_rad, whole.att_rpy_rad[150:])
+    with pytest.raises(ValueError, match="400 states, the truth frame 250"):
+        errors_against(est, frame.rows(150, 400))
+
+
+def test_max_abs_columns_is_numpys_nan_included():
+    from sins.nav.metrics import _max_abs_columns
+
+    x = np.random.default_rng(7).normal(size=(500, 3))
+    np.testing.assert_array_equal(_max_abs_columns(x), np.abs(x).max(axis=0))
+    x[10, 1] = np.nan  # numpy's max propagates a NaN: a diverged run must not look bounded
+    x[400, 2] = np.nan
+    x[499, 2] = 99.0
+    np.testing.assert_array_equal(_max_abs_columns(x), np.abs(x).max(axis=0))
+    x[0, 0] = np.nan
+    np.testing.assert_array_equal(_max_abs_columns(x), np.abs(x).max(axis=0))
+
+
+def test_accumulator_with_the_horizontal_given_equals_without():
+    from sins.nav.metrics import TruthFrame, errors_against
+
+    est, truth = _random_pair(1000, 8)
+    errors, horizontal = errors_against(est, TruthFrame.of(truth))
+    a, b = DriftAccumulator(keep_every=9), DriftAccumulator(keep_every=9)
+    a.add(errors)
+    b.add(errors, horizontal)
+    assert a.summary() == b.summary()

@@ -187,3 +187,51 @@ def test_a_long_runs_thinned_series_stay_bounded():
     assert run.samples == 6 * 3600 * 100
     assert len(run.truth.t) <= pipeline.MAX_KEPT + 2
     assert len(run.runs["none"].errors.t) <= pipeline.MAX_KEPT + 2
+
+
+def test_the_compiled_recursions_equal_the_array_code_they_replace():
+    # Each compiled loop against the numpy/scipy code it replaced (written out here), to the last bit:
+    # the same operations in the same order, so equal, not close.
+    from scipy.signal import lfilter
+
+    from sins.imu.stream import _gauss_markov_kernel, _reconstruct_own, _running_sum
+
+    rng = np.random.default_rng(SEED)
+    n = 5000
+    dt = 0.01 * (1.0 + 1e-13 * rng.normal(size=n - 1))  # regular up to the time stamps' rounding
+    tau, sigma = np.array([30.0, 300.0, 3000.0]), np.array([1e-6, 2e-5, 3e-4])
+    xi = rng.normal(size=(n - 1, 3))
+    phi = np.exp(-dt[:, None] / tau)
+    drive = sigma * np.sqrt(1.0 - phi * phi) * xi
+    start = sigma * rng.normal(size=3)
+    # Regular samples: one coefficient a channel, scipy's linear filter.
+    a = np.exp(-0.01 / tau)
+    expected = np.empty((n, 3))
+    expected[0] = start
+    for i in range(3):
+        expected[1:, i], _ = lfilter([1.0], [1.0, -a[i]], drive[:, i], zi=[a[i] * start[i]])
+    out = np.empty((n, 3))
+    out[0] = start
+    _gauss_markov_kernel(phi, sigma, xi, a, out)
+    np.testing.assert_array_equal(out, expected)
+    # Irregular samples: each interval's own coefficient, step by step.
+    for k in range(1, n):
+        expected[k] = phi[k - 1] * expected[k - 1] + drive[k - 1]
+    _gauss_markov_kernel(phi, sigma, xi, np.zeros(0), out)
+    np.testing.assert_array_equal(out, expected)
+    # The quadratic reconstruction at a Gauss node, the array expressions of issue 20.
+    mean = rng.normal(size=(n, 3)) * np.array([1e-3, 1.0, 1e3])
+    steps = 0.01 + 1e-4 * rng.random(n)
+    for s in (-0.5 / np.sqrt(3.0), 0.5 / np.sqrt(3.0)):
+        for m in (mean, mean[:1], mean[:2]):
+            prev, nxt = np.vstack([m[:1], m[:-1]]), np.vstack([m[1:], m[-1:]])
+            slope, curve = 0.5 * (nxt - prev), 0.5 * (nxt - 2.0 * m + prev)
+            if len(m) > 1:
+                slope[0], slope[-1] = nxt[0] - prev[0], nxt[-1] - prev[-1]
+                curve[0] = curve[-1] = 0.0
+            value, rate = _reconstruct_own(m, steps[: len(m)], s)
+            np.testing.assert_array_equal(value, m + slope * s + curve * (s * s - 1.0 / 12.0))
+            np.testing.assert_array_equal(rate, (slope + 2.0 * curve * s) / steps[: len(m), None])
+    # The running integral carried past trimmed intervals: a cumulative sum's last row.
+    cum0 = rng.normal(size=3)
+    np.testing.assert_array_equal(_running_sum(cum0, mean), np.cumsum(np.vstack([cum0, mean]), axis=0)[-1])

@@ -1,34 +1,47 @@
-"""Campaign throughput: unit-hours per second on a local dask cluster, and one stream's time by stage.
+"""Campaign throughput: one core's time per stream-sample by stage, units sharing a trajectory, and
+unit-hours per second on a local dask cluster of 1 and 2 workers, with the peak memory.
 
 Usage::
 
     .venv/bin/python tools/bench_campaign.py [--units 8] [--workers 1 2] [--strategies none regression]
+        [--cluster-units 48] [--direct]
 
-Part 1 runs a campaign of ``--units`` tactical units, each calibrated on the 24-position + rate-table
-rig and driven through the one-hour ``car_drive`` once per strategy, on a local cluster of each
-``--workers`` count, and prints the wall time, unit-hours per second (one unit-hour: one strategy's
-hour of 100 Hz samples, corrupted, corrected, integrated and reduced), and the time 1,000 unit-hours
-would take at that rate. Part 2 times one hour's stages in this process (medians of 3): generating
-the truth and ideal IMU, corrupting, correcting with regression, integrating, reducing the errors.
-The machine is shared: compare figures of one run only.
+A unit is a tactical unit calibrated on the 24-position + rate-table rig and driven through the
+one-hour ``car_drive`` once per strategy (the oracle always comes too: three streams with the
+defaults); one unit-hour is one stream's hour of 100 Hz samples, corrupted, corrected, integrated
+and reduced to its errors against the truth.
+
+First, while this process holds little beyond what ``sins campaign`` would, a campaign of
+``--cluster-units`` units on a local cluster of each ``--workers`` count: wall time, unit-hours per
+second, the time 1,000 unit-hours would take at that rate, the ratio of the rates, and the peak
+resident memory of this process and its workers together (sampled every 0.2 s); ``--direct`` runs
+334 units (1,002 unit-hours) on the last ``--workers`` count instead of projecting. Then ``--units``
+units in this process as a campaign task runs them (``sins.campaign.unit.run_units``: rig fits, then
+one generated trajectory driven by every unit), the main thread's CPU time split by stage (generation
+runs on a second thread and is counted apart), in ns of one core per stream-sample. Last, the CPU
+time per stream-sample of units driven one call each and all sharing one trajectory. CPU times stand
+up to a shared machine better than wall times; compare figures of one run only.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import statistics
+import collections
 import tempfile
+import threading
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
-import numpy as np
+import psutil
 
-from sins import campaign, pipeline, scenario
-from sins.campaign import engine
-from sins.imu.stream import IncrementStream
-from sins.nav import strapdown, trajectory
-from sins.nav.metrics import nav_errors
+from sins import campaign, compensation, pipeline
+from sins.campaign import engine, unit
+from sins.compensation import base
+from sins.imu import stream
+from sins.nav import metrics
 
 CAMPAIGN = """name = "bench"
 [units]
@@ -44,108 +57,208 @@ file = "car_drive"
 series_hz = 0.01
 """
 
-
-def cluster_rates(units: int, workers: list[int], strategies: list[str]) -> None:
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "bench.toml"
-        path.write_text(CAMPAIGN.format(units=units, strategies=repr(strategies).replace("'", '"')))
-        spec = campaign.load(path)
-        streams = len(dict.fromkeys(["none", *spec.compensation.strategies]))
-        for n in workers:
-            run = engine.run(spec, Path(tmp) / f"out{n}", workers=n)
-            unit_hours = units * streams
-            rate = unit_hours / run.wall_s
-            print(
-                f"{n} worker(s): {units} units x {streams} streams of 1 h at 100 Hz in {run.wall_s:.1f} s: "
-                f"{rate:.2f} unit-hours/s ({rate * 360_000 / 1e6:.2f} M samples/s); "
-                f"1,000 unit-hours would take {1000 / rate:.0f} s"
-            )
+SAMPLES_PER_HOUR = 360_000
+#: The stage that runs on the prefetching thread, shared by the units of a task.
+GENERATE = "generate: truth, ideal IMU, truth frames"
 
 
-def stages(repeats: int = 3) -> None:
-    """One stream's hour, stage by stage, chunk by chunk as ``sins run`` and a campaign go."""
-    sc = scenario.load(scenario.resolve_preset("car_drive"))
-    spec = scenario.load_imu(scenario.resolve_preset("tactical", "imu"))
-    comp = scenario.CompensationSpec(
-        scenario.resolve_preset("24pos_ratetable", "rig"), 0.3, 2, ("regression",)
-    )
-    regression = pipeline.fit_unit(spec, comp).strategies["regression"]
-    model = spec.model(run_seed=1)
-    motion = scenario.build_motion(sc)
-    times: dict[str, list[float]] = {k: [] for k in ("generate", "corrupt", "correct", "integrate", "reduce")}
-    n = 0
-    for _ in range(repeats):
-        spent = dict.fromkeys(times, 0.0)
-        t0 = time.perf_counter()
-        chunks = list(trajectory.generate_chunks(motion, sc.rate_hz))
-        spent["generate"] = time.perf_counter() - t0
-        stream = IncrementStream(model, 1, 1.0 / sc.rate_hz)
-        state = strapdown.start(strapdown.InitialState.from_series(trajectory.start_state(motion)))
-        n = 0
-        for truth_c, ideal_c in chunks:
-            t1 = time.perf_counter()
-            # The stream writes an interval once its neighbours have come: compare like with like below.
-            corrupted = stream.push(ideal_c, np.full(len(ideal_c.t), 20.0))
-            t2 = time.perf_counter()
-            corrected = regression.correct_increments(corrupted, np.full(len(corrupted.t), 20.0))
-            t3 = time.perf_counter()
-            solution, state = strapdown.advance(state, corrected)
-            t4 = time.perf_counter()
-            m = len(solution.t)
-            nav_errors(
-                solution, truth_c.at(np.arange(min(m, len(truth_c.t)))) if m <= len(truth_c.t) else truth_c
-            )
-            t5 = time.perf_counter()
-            for k, v in zip(
-                ("corrupt", "correct", "integrate", "reduce"),
-                (t2 - t1, t3 - t2, t4 - t3, t5 - t4),
-                strict=True,
-            ):
-                spent[k] += v
-            n += m
-        for k, v in spent.items():
-            times[k].append(v)
-    total = sum(statistics.median(v) for v in times.values())
-    print(f"one stream, 1 h at 100 Hz ({n} samples, {len(chunks)} chunks), medians of {repeats}:")
-    for k, v in times.items():
-        m = statistics.median(v)
-        print(f"  {k:<10} {m:6.3f} s  {m / n * 1e9:6.0f} ns/sample  {100 * m / total:4.0f} %")
-    print(f"  {'total':<10} {total:6.3f} s  {total / n * 1e9:6.0f} ns/sample")
+def load(folder: Path, units: int, strategies: list[str]) -> campaign.CampaignSpec:
+    """The benchmark's campaign of ``units`` units, written to ``folder``."""
+    path = folder / "bench.toml"
+    path.write_text(CAMPAIGN.format(units=units, strategies=repr(strategies).replace("'", '"')))
+    return campaign.load(path)
 
 
-def sharing(units: int = 8) -> None:
-    """Per unit-hour, ``units`` units driven one call each against all in one call sharing the trajectory."""
-    sc = scenario.load(scenario.resolve_preset("car_drive"))
-    spec = scenario.load_imu(scenario.resolve_preset("tactical", "imu"))
-    comp = scenario.CompensationSpec(
-        scenario.resolve_preset("24pos_ratetable", "rig"), 0.3, 2, ("regression",)
-    )
-    fitted = [pipeline.fit_unit(dataclasses.replace(spec, unit_seed=u), comp) for u in range(1, units + 1)]
-    seeds = list(range(1, units + 1))
-    t0 = time.perf_counter()
-    for f, seed in zip(fitted, seeds, strict=True):
-        pipeline.run_units(sc, [f], [seed], keep_hz=0.01)
-    alone = (time.perf_counter() - t0) / units
-    t0 = time.perf_counter()
-    pipeline.run_units(sc, fitted, seeds, keep_hz=0.01)
-    shared = (time.perf_counter() - t0) / units
-    per_sample_ns = shared / 3 * 1e9 / 360_000  # three streams: none, the oracle, regression
+def streams_of(spec: campaign.CampaignSpec) -> int:
+    """Streams per unit and scenario: none, every strategy, the oracle (a campaign always has it)."""
+    assert spec.compensation is not None
+    return len(dict.fromkeys(["none", *spec.compensation.strategies]))
+
+
+@contextmanager
+def stage_clock() -> Iterator[collections.Counter[str]]:
+    """Main-thread CPU seconds per stage while in the block, by wrapping the stages' entry points."""
+    spent: collections.Counter[str] = collections.Counter()
+    wrapped = [
+        (pipeline, "fit_unit", "fit: rig session and strategies"),
+        (stream.IncrementStream, "push", "corrupt"),
+        (stream.IncrementStream, "finish", "corrupt"),
+        (base.NoCompensation, "correct_increments", "correct: none"),
+        (base.Oracle, "correct_increments", "correct: oracle"),
+        (compensation.Regression, "correct_increments", "correct: regression"),
+        (pipeline.strapdown, "advance", "integrate"),
+        (pipeline, "errors_against", "reduce: errors against the truth"),
+        (metrics.DriftAccumulator, "add", "reduce: statistics, thinned series"),
+        (metrics.BlockMeans, "add", "sensor error block means"),
+    ]
+    saved = [(obj, name, getattr(obj, name)) for obj, name, _ in wrapped]
+
+    def timed(fn: Callable[..., Any], label: str) -> Callable[..., Any]:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            t0 = time.thread_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent[label] += time.thread_time() - t0
+
+        return call
+
+    def timed_items(fn: Callable[..., Iterator[Any]], label: str) -> Callable[..., Iterator[Any]]:
+        # A generator runs on the thread that asks for its next item: the prefetching one.
+        def items(*args: Any, **kwargs: Any) -> Iterator[Any]:
+            it = fn(*args, **kwargs)
+            while True:
+                t0 = time.thread_time()
+                item = next(it, None)
+                spent[label] += time.thread_time() - t0
+                if item is None:
+                    return
+                yield item
+
+        return items
+
+    for (obj, name, label), (_, _, fn) in zip(wrapped, saved, strict=True):
+        setattr(obj, name, timed(fn, label))
+    shared = pipeline._shared
+    pipeline._shared = timed_items(shared, GENERATE)  # type: ignore[assignment]
+    try:
+        yield spent
+    finally:
+        for obj, name, fn in saved:
+            setattr(obj, name, fn)
+        pipeline._shared = shared  # type: ignore[assignment]
+
+
+def stages(spec: campaign.CampaignSpec, units: int) -> None:
+    """CPU time per stream-sample by stage, for ``units`` units run as one campaign task."""
+    unit.run_units(spec, [0])  # compiled kernels loaded, caches warm
+    with stage_clock() as spent:
+        main0 = time.thread_time()
+        unit.run_units(spec, list(range(1, units + 1)))
+        main = time.thread_time() - main0
+    samples = units * streams_of(spec) * SAMPLES_PER_HOUR
     print(
-        f"{units} units of 1 h (3 streams each) on one core: {alone:.2f} s a unit driven alone, "
-        f"{shared:.2f} s sharing one trajectory ({alone / shared:.2f}x; "
-        f"{per_sample_ns:.0f} ns per stream-sample)"
+        f"{units} units x {streams_of(spec)} streams of 1 h at 100 Hz in one task (this process), "
+        f"CPU time per stream-sample:"
     )
+    on_main = {k: v for k, v in spent.items() if k != GENERATE}
+    rows = [*sorted(on_main.items()), ("other (main thread)", main - sum(on_main.values()))]
+    rows.append((GENERATE + " (second thread)", spent[GENERATE]))
+    cpu = main + spent[GENERATE]
+    for label, seconds in rows:
+        print(f"  {label:<52} {seconds / units:6.3f} s/unit {seconds / samples * 1e9:6.0f} ns  "
+              f"{100 * seconds / cpu:4.0f} %")  # fmt: skip
+    print(f"  {'total':<52} {cpu / units:6.3f} s/unit {cpu / samples * 1e9:6.0f} ns")
+
+
+def sharing(spec: campaign.CampaignSpec, units: int) -> None:
+    """CPU time per stream-sample of units driven one call each against all sharing one trajectory."""
+    fitted = [pipeline.fit_unit(spec.unit_imu(u), spec.unit_compensation(u)) for u in range(units)]
+    seeds = [campaign.nav_seed(spec.unit_seed(u)) for u in range(units)]
+    base_sc = spec.scenarios[0]
+    samples = units * streams_of(spec) * SAMPLES_PER_HOUR
+    t0 = time.process_time()
+    for f, seed in zip(fitted, seeds, strict=True):
+        pipeline.run_units(base_sc, [f], [seed], keep_hz=0.01)
+    alone = time.process_time() - t0
+    t0 = time.process_time()
+    pipeline.run_units(base_sc, fitted, seeds, keep_hz=0.01)
+    shared = time.process_time() - t0
+    print(
+        f"driving only (fits apart), CPU per stream-sample: {alone / samples * 1e9:.0f} ns a unit alone, "
+        f"{shared / samples * 1e9:.0f} ns {units} units sharing one trajectory ({alone / shared:.2f}x)"
+    )
+
+
+class PeakRss:
+    """The largest resident memory of this process and its descendants together, sampled."""
+
+    def __init__(self, every_s: float = 0.2) -> None:
+        self.peak = 0
+        self.at_peak: list[int] = []  # each process's memory at the peak, largest first
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._watch, args=(every_s,), daemon=True)
+
+    def _watch(self, every_s: float) -> None:
+        me = psutil.Process()
+        while not self._stop.is_set():
+            sizes = []
+            for p in [me, *me.children(recursive=True)]:
+                try:
+                    sizes.append(p.memory_info().rss)
+                except psutil.Error:
+                    pass
+            if sum(sizes) > self.peak:
+                self.peak, self.at_peak = sum(sizes), sorted(sizes, reverse=True)
+            self._stop.wait(every_s)
+
+    def __enter__(self) -> PeakRss:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def _wait_for_workers_to_exit(timeout_s: float = 30.0) -> None:
+    """Until the last cluster's workers are gone (at most ``timeout_s``): the next cluster's peak
+    memory must not count them."""
+
+    def big_children() -> bool:
+        for p in psutil.Process().children(recursive=True):
+            try:
+                if p.memory_info().rss > 100e6:
+                    return True
+            except psutil.Error:  # gone meanwhile
+                pass
+        return False
+
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end and big_children():
+        time.sleep(0.2)
+
+
+def cluster_rates(folder: Path, units: int, workers: list[int], strategies: list[str]) -> None:
+    """Campaigns of ``units`` units on local clusters of each ``workers`` count."""
+    spec = load(folder, units, strategies)
+    rates = {}
+    for n in workers:
+        with PeakRss() as rss:
+            run = engine.run(spec, folder / f"out{units}-{n}", workers=n)
+        _wait_for_workers_to_exit()
+        unit_hours = units * streams_of(spec)
+        rates[n] = rate = unit_hours / run.wall_s
+        print(
+            f"{n} worker(s): {units} units x {streams_of(spec)} streams of 1 h at 100 Hz in "
+            f"{run.wall_s:.1f} s (cluster start-up included): {rate:.2f} unit-hours/s "
+            f"({rate * SAMPLES_PER_HOUR / 1e6:.2f} M samples/s); 1,000 unit-hours would take "
+            f"{1000 / rate:.0f} s; peak memory {rss.peak / 1e6:.0f} MB "
+            f"({' + '.join(f'{m / 1e6:.0f}' for m in rss.at_peak)} MB by process)"
+        )
+    if 1 in rates and 2 in rates:
+        print(f"2 workers / 1 worker: {rates[2] / rates[1]:.2f}x the rate")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--units", type=int, default=8)
+    parser.add_argument("--units", type=int, default=8, help="units of parts 1 and 2")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--strategies", nargs="+", default=["none", "regression"])
+    parser.add_argument("--cluster-units", type=int, default=48, help="units of part 3's campaigns")
+    parser.add_argument("--direct", action="store_true", help="part 3: 1,002 unit-hours, last worker count")
     args = parser.parse_args()
-    stages()
-    sharing()
-    cluster_rates(args.units, args.workers, args.strategies)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        spec = load(folder, max(args.units, args.cluster_units) + 1, args.strategies)
+        # The clusters first, while this process holds little beyond what `sins campaign` would.
+        if args.direct:
+            units = -(-1000 // streams_of(spec))
+            cluster_rates(folder, units, args.workers[-1:], args.strategies)
+        else:
+            cluster_rates(folder, args.cluster_units, args.workers, args.strategies)
+        stages(spec, args.units)
+        sharing(spec, args.units)
 
 
 if __name__ == "__main__":

@@ -20,7 +20,7 @@ from typing import Any
 
 from sins.campaign import results
 from sins.campaign.spec import CampaignSpec
-from sins.campaign.unit import run_units
+from sins.campaign.unit import task
 from sins.errors import SinsInputError
 
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
@@ -86,9 +86,7 @@ def run(
             size = max(1, min(MAX_UNITS_PER_TASK, math.ceil(len(todo) / (TASKS_PER_WORKER * n_workers))))
             batches = [todo[i : i + size] for i in range(0, len(todo), size)]
             futures = [
-                client.submit(
-                    _run_units, spec, batch, key=f"sins-campaign-{spec.name}-{batch[0]}-{batch[-1]}"
-                )
+                client.submit(task, spec, batch, key=f"sins-campaign-{spec.name}-{batch[0]}-{batch[-1]}")
                 for batch in batches
             ]
             finished = len(done)
@@ -106,11 +104,6 @@ def run(
     summary = results.summarise(table, spec)
     results.write_summary(out, summary)
     return CampaignRun(out, len(todo), len(done), time.perf_counter() - start, summary)
-
-
-def _run_units(spec: CampaignSpec, units: list[int]) -> tuple[list[int], list[dict[str, Any]]]:
-    """A task: the rows of ``units``, on a worker."""
-    return units, run_units(spec, units)
 
 
 def _connect(address: str) -> Any:

@@ -585,7 +585,7 @@ class ImuModel:
         err = np.zeros_like(u)
         for e in self.effects_of(sensor):
             if e.stage == "deterministic":
-                err = err + e.error(inputs, u)
+                np.add(err, e.error(inputs, u), out=err)  # in place: the same sums, no new array each
         return err
 
     def _stochastic(self, sensor: str, t: Array, seed: int | None) -> Array:

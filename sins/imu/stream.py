@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -206,7 +207,7 @@ class IncrementStream:
             return
         for sensor, inc in self._inc.items():
             state = self._sensors[sensor]
-            state.cum = np.cumsum(np.vstack([state.cum, inc[:drop]]), axis=0)[-1]
+            state.cum = _running_sum(state.cum, inc[:drop])
             self._inc[sensor] = inc[drop:]
         self._t = self._t[drop:]
         if self._temp is not None:
@@ -269,6 +270,7 @@ class IncrementStream:
         """The random biases' sum at ``t`` (the written intervals' ends), each process continued."""
         total = np.zeros((len(t), 3))
         dt = np.diff(t)
+        uniform: bool | None = None  # asked once, if a process needs it
         for p in state.processes:
             values = np.empty((len(t), 3))
             e = p.effect
@@ -276,10 +278,9 @@ class IncrementStream:
                 values[0] = e.sigma * p.rng.standard_normal(3) if p.value is None else p.value
                 xi = p.rng.standard_normal((len(dt), 3))
                 phi = np.exp(-dt[:, None] / e.tau)
-                drive = e.sigma * np.sqrt(1.0 - phi * phi) * xi
-                _gauss_markov(
-                    phi, drive, values, np.exp(-self.dt_nominal / e.tau) if uniform_steps(t) else None
-                )
+                uniform = uniform_steps(t) if uniform is None else uniform
+                a = np.exp(-self.dt_nominal / e.tau) if uniform else np.zeros(0)
+                _gauss_markov_kernel(phi, np.ascontiguousarray(e.sigma), xi, a, values)
             else:
                 start = np.zeros(3) if p.value is None else p.value
                 steps = e.density * np.sqrt(dt)[:, None] * p.rng.standard_normal((len(dt), 3))
@@ -322,19 +323,30 @@ class IncrementStream:
         return np.where(active, out, inc)
 
 
-def _gauss_markov(phi: Array, drive: Array, out: Array, a: Array | None) -> None:
-    """``out[k] = φ out[k-1] + drive[k-1]`` in place from ``out[0]``: with one coefficient per channel
-    ``a`` (regular samples) a linear filter does it in C; else step by step with each interval's ``phi``."""
-    from scipy.signal import lfilter
+@numba.njit(cache=True, nogil=True)
+def _gauss_markov_kernel(phi: Array, sigma: Array, xi: Array, a: Array, out: Array) -> None:
+    """``out[k] = φ out[k-1] + σ sqrt(1 - φ²) ξ[k-1]`` in place from ``out[0]``, per channel.
 
-    if len(phi) == 0:
-        return
-    if a is not None:
+    With one coefficient per channel ``a`` (3,) (regular samples) the recursion uses it, else (``a``
+    empty) each interval's ``phi``; the drive still takes each interval's ``phi``. The arithmetic of
+    the linear filter (``scipy.signal.lfilter``) this replaces, to the last bit (``tests/test_stream.py``).
+    """
+    uniform = a.shape[0] > 0
+    for k in range(1, out.shape[0]):
         for i in range(3):
-            out[1:, i], _ = lfilter([1.0], [1.0, -a[i]], drive[:, i], zi=[a[i] * out[0, i]])
-        return
-    for k in range(1, len(out)):
-        out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
+            p = phi[k - 1, i]
+            drive = sigma[i] * np.sqrt(1.0 - p * p) * xi[k - 1, i]
+            out[k, i] = (a[i] if uniform else p) * out[k - 1, i] + drive
+
+
+@numba.njit(cache=True, nogil=True)
+def _running_sum(start: Array, rows: Array) -> Array:
+    """``start`` plus every row of ``rows`` (m, 3), added in order (a cumulative sum's last row)."""
+    out = start.copy()
+    for k in range(rows.shape[0]):
+        for i in range(3):
+            out[i] = out[i] + rows[k, i]
+    return out
 
 
 def _reconstruct(mean: Array, t: Array, when: Array) -> tuple[Array, Array]:
@@ -358,14 +370,24 @@ def _reconstruct(mean: Array, t: Array, when: Array) -> tuple[Array, Array]:
 
 
 def _reconstruct_own(mean: Array, dt: Array, s: float) -> tuple[Array, Array]:
-    """:func:`_reconstruct` at local coordinate ``s`` of every interval (by slices, no search)."""
-    n = len(mean)
-    prev = np.vstack([mean[:1], mean[:-1]])
-    nxt = np.vstack([mean[1:], mean[-1:]])
-    slope = 0.5 * (nxt - prev)
-    curve = 0.5 * (nxt - 2.0 * mean + prev)
-    if n > 1:  # one-sided at the two ends, as in _reconstruct
-        slope[0], slope[-1] = nxt[0] - prev[0], nxt[-1] - prev[-1]
-        curve[0] = curve[-1] = 0.0
-    value = mean + slope * s + curve * (s * s - 1.0 / 12.0)
-    return value, (slope + 2.0 * curve * s) / dt[:, None]
+    """:func:`_reconstruct` at local coordinate ``s`` of every interval (by index, no search)."""
+    value, rate = np.empty_like(mean), np.empty_like(mean)
+    _reconstruct_own_kernel(np.ascontiguousarray(mean), np.ascontiguousarray(dt), s, value, rate)
+    return value, rate
+
+
+@numba.njit(cache=True, nogil=True)
+def _reconstruct_own_kernel(mean: Array, dt: Array, s: float, value: Array, rate: Array) -> None:
+    """The quadratic through interval ``k``'s neighbours' means (one-sided at the two ends), at ``s``;
+    the arithmetic of the array expressions it replaces, to the last bit (``tests/test_stream.py``)."""
+    n = mean.shape[0]
+    q = s * s - 1.0 / 12.0
+    for k in range(n):
+        prev, nxt = max(k - 1, 0), min(k + 1, n - 1)
+        end = n > 1 and (k == 0 or k == n - 1)
+        for i in range(3):
+            m, mp, mn = mean[k, i], mean[prev, i], mean[nxt, i]
+            slope = mn - mp if end else 0.5 * (mn - mp)
+            curve = 0.0 if end else 0.5 * (mn - 2.0 * m + mp)
+            value[k, i] = m + slope * s + curve * q
+            rate[k, i] = (slope + 2.0 * curve * s) / dt[k]

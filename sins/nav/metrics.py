@@ -14,7 +14,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import earth, rotation
+from sins.nav import earth
 from sins.series import NavSeries
 
 Array = NDArray[np.float64]
@@ -67,39 +67,149 @@ def nav_errors(estimate: NavSeries, truth: NavSeries) -> NavErrors:
             raise ValueError("the estimate and the truth share no time span")
         estimate = estimate.at(np.flatnonzero(inside))
         truth = truth.interpolate(estimate.t)
-    r_m, r_n = earth.radii(truth.lat)
-    pos = np.column_stack(
-        [
-            (estimate.lat - truth.lat) * (r_m + truth.h),
-            rotation.wrap_angle(estimate.lon - truth.lon) * (r_n + truth.h) * np.cos(truth.lat),
-            -(estimate.h - truth.h),
-        ]
+    return errors_against(estimate, TruthFrame.of(truth))[0]
+
+
+#: The columns of a :class:`TruthFrame`'s ``data``.
+_T, _LAT, _LON, _H, _V, _Q, _RM_H, _RN_H, _COS_LAT, _EULER = 0, 1, 2, 3, 4, 7, 11, 12, 13, 14
+_FRAME_COLUMNS = 17
+
+
+@dataclass(frozen=True)
+class TruthFrame:
+    """A truth series and what every estimate compared with it needs, computed once.
+
+    Many streams (strategies, units) are compared with one truth: its radii, ``cos lat`` and Euler
+    angles are the same for all of them. ``data`` (n, 17) holds per row ``t``, ``lat``, ``lon``,
+    ``h``, ``v_n`` (3), ``q_nb`` (4), ``R_M + h``, ``R_N + h``, ``cos lat`` and roll, pitch, yaw:
+    one array, so that a frame is sliced and joined as cheaply as one.
+    """
+
+    data: Array
+
+    @classmethod
+    def of(cls, truth: NavSeries) -> TruthFrame:
+        """The frame of ``truth``."""
+        r_m, r_n = earth.radii(truth.lat)
+        data = np.empty((len(truth.t), _FRAME_COLUMNS))
+        data[:, _T], data[:, _LAT], data[:, _LON], data[:, _H] = truth.t, truth.lat, truth.lon, truth.h
+        data[:, _V:_Q], data[:, _Q:_RM_H] = truth.v_n, truth.q_nb
+        data[:, _RM_H], data[:, _RN_H] = r_m + truth.h, r_n + truth.h
+        data[:, _COS_LAT] = np.cos(truth.lat)
+        data[:, _EULER:] = _euler_angles(np.ascontiguousarray(truth.q_nb, dtype=float))
+        return cls(data)
+
+    def __len__(self) -> int:
+        return len(self.data)
+
+    @property
+    def t(self) -> Array:
+        """The times (n,), s."""
+        return self.data[:, _T]
+
+    @property
+    def h(self) -> Array:
+        """The heights (n,), m."""
+        return self.data[:, _H]
+
+    def rows(self, start: int, stop: int) -> TruthFrame:
+        """Rows ``start .. stop`` (a view)."""
+        return TruthFrame(self.data[start:stop])
+
+    def truth(self, index: NDArray[np.integer] | slice = slice(None)) -> NavSeries:
+        """The truth's states at ``index``."""
+        d = self.data[index]
+        return NavSeries(t=d[:, _T], lat=d[:, _LAT], lon=d[:, _LON], h=d[:, _H], v_n=d[:, _V:_Q],
+                         q_nb=d[:, _Q:_RM_H])  # fmt: skip
+
+    @staticmethod
+    def join(frames: list[TruthFrame]) -> TruthFrame:
+        """The frames one after the other."""
+        return frames[0] if len(frames) == 1 else TruthFrame(np.concatenate([f.data for f in frames]))
+
+
+def errors_against(estimate: NavSeries, frame: TruthFrame) -> tuple[NavErrors, Array]:
+    """Errors of ``estimate`` against the truth of ``frame`` at the same times, and the horizontal
+    error (n,), m, in one compiled pass.
+
+    The same arithmetic, in the same order, as the numpy expressions in the module docstring
+    (``tests/test_metrics.py`` holds it to them, to the last bit).
+    """
+    n = len(estimate.t)
+    if len(frame) != n:
+        raise ValueError(f"the estimate has {n} states, the truth frame {len(frame)}")
+    pos, vel, att, hor = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n)
+    lat, lon, h, v, q = (
+        np.ascontiguousarray(a, dtype=float)
+        for a in (estimate.lat, estimate.lon, estimate.h, estimate.v_n, estimate.q_nb)
     )
-    att = euler_errors(estimate.q_nb, truth.q_nb)
-    return NavErrors(t=estimate.t, pos_ned_m=pos, vel_ned_mps=estimate.v_n - truth.v_n, att_rpy_rad=att)
+    _errors_kernel(lat, lon, h, v, q, np.ascontiguousarray(frame.data), pos, vel, att, hor)
+    return NavErrors(t=estimate.t, pos_ned_m=pos, vel_ned_mps=vel, att_rpy_rad=att), hor
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _euler(x: float, y: float, z: float, w: float) -> tuple[float, float, float]:
+    """ZYX Euler angles (roll, pitch, yaw) of a scalar-last quaternion, as :mod:`sins.nav.rotation`."""
+    c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
+    c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
+    pitch = np.arctan2(-c20, np.hypot(c00, c10))
+    if np.hypot(c21, c22) < 1e-12:  # gimbal lock: roll 0, yaw takes the rest
+        return 0.0, pitch, np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
+    return np.arctan2(c21, c22), pitch, np.arctan2(c10, c00)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _wrap(d: float) -> float:
+    return d - 2.0 * np.pi * np.round(d / (2.0 * np.pi))
+
+
+@numba.njit(cache=True, nogil=True)
+def _euler_angles(q: Array) -> Array:
+    out = np.empty((q.shape[0], 3))
+    for k in range(q.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = _euler(q[k, 0], q[k, 1], q[k, 2], q[k, 3])
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
 def _euler_errors(q_est: Array, q_true: Array) -> Array:
     n = q_est.shape[0]
     out = np.empty((n, 3))
-    angles = np.empty((2, 3))
     for k in range(n):
-        for j in range(2):
-            q = q_est[k] if j == 0 else q_true[k]
-            x, y, z, w = q[0], q[1], q[2], q[3]
-            c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
-            c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
-            angles[j, 1] = np.arctan2(-c20, np.hypot(c00, c10))
-            if np.hypot(c21, c22) < 1e-12:  # gimbal lock: roll 0, yaw takes the rest
-                angles[j, 0] = 0.0
-                angles[j, 2] = np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
-            else:
-                angles[j, 0] = np.arctan2(c21, c22)
-                angles[j, 2] = np.arctan2(c10, c00)
+        e = _euler(q_est[k, 0], q_est[k, 1], q_est[k, 2], q_est[k, 3])
+        r = _euler(q_true[k, 0], q_true[k, 1], q_true[k, 2], q_true[k, 3])
         for i in range(3):
-            d = angles[0, i] - angles[1, i]
-            out[k, i] = d - 2.0 * np.pi * np.round(d / (2.0 * np.pi))
+            out[k, i] = _wrap(e[i] - r[i])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _errors_kernel(
+    lat: Array, lon: Array, h: Array, v: Array, q: Array, ref: Array,
+    pos: Array, vel: Array, att: Array, hor: Array,
+) -> None:  # fmt: skip
+    for k in range(lat.shape[0]):
+        r = ref[k]
+        pos[k, 0] = (lat[k] - r[_LAT]) * r[_RM_H]
+        pos[k, 1] = _wrap(lon[k] - r[_LON]) * r[_RN_H] * r[_COS_LAT]
+        pos[k, 2] = -(h[k] - r[_H])
+        for i in range(3):
+            vel[k, i] = v[k, i] - r[_V + i]
+        e = _euler(q[k, 0], q[k, 1], q[k, 2], q[k, 3])
+        for i in range(3):
+            att[k, i] = _wrap(e[i] - r[_EULER + i])
+        hor[k] = np.hypot(pos[k, 0], pos[k, 1])
+
+
+@numba.njit(cache=True, nogil=True)
+def _max_abs_columns(x: Array) -> Array:
+    """``np.abs(x).max(axis=0)`` of an (n, k) array, NaN propagated as numpy does, in one pass."""
+    out = np.abs(x[0].copy())
+    for k in range(1, x.shape[0]):
+        for i in range(x.shape[1]):
+            a = abs(x[k, i])
+            if a > out[i] or a != a:
+                out[i] = a
     return out
 
 
@@ -165,17 +275,18 @@ class DriftAccumulator:
         self._max_att = np.zeros(3)
         self._kept: list[NavErrors] = []
 
-    def add(self, errors: NavErrors) -> None:
-        """Take the next chunk (times continue the previous chunk's)."""
+    def add(self, errors: NavErrors, horizontal: Array | None = None) -> None:
+        """Take the next chunk (times continue the previous chunk's); ``horizontal``: its horizontal
+        error if already computed (:func:`errors_against`)."""
         n = len(errors.t)
         if n == 0:
             return
-        hor = errors.horizontal_m
+        hor = errors.horizontal_m if horizontal is None else horizontal
         if self._t0 is None:
             self._t0 = float(errors.t[0])
         self._max_hor = max(self._max_hor, float(hor.max()))
         self._sum_hor2 += float(np.dot(hor, hor))
-        self._max_att = np.maximum(self._max_att, np.abs(errors.att_rpy_rad).max(axis=0))
+        self._max_att = np.maximum(self._max_att, _max_abs_columns(np.ascontiguousarray(errors.att_rpy_rad)))
         if self.keep_every:
             keep = kept_indices(self._count, n, self.keep_every)
             if keep.size:
