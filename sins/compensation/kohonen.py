@@ -231,7 +231,8 @@ class LocalLinearMap(ResidualStrategy):
             blend = neighbourhood_weights(pl.grid, width, pl.codebook)
             centres = _centres(pl.codebook, pl.win_cols, pl.plane_cols)
             designs.append(_local_design(points.x[:, pl.plane_cols], centres, blend, pl.winners))
-            penalties.append(_smoothness(centres, pl.grid))
+            across = [i for i, c in enumerate(pl.plane_cols) if c not in pl.win_cols]
+            penalties.append(_smoothness(centres, pl.grid, across))
             blends.append(blend)
         design = sparse.hstack(designs).tocsr()
         smooth = sparse.block_diag(penalties).tocsr()
@@ -299,9 +300,12 @@ def _centres(codebook: Array, win_cols: list[int], plane_cols: list[int]) -> Arr
     return centres
 
 
-def _smoothness(centres: Array, grid: Array) -> Any:
+def _smoothness(centres: Array, grid: Array, across: list[int]) -> Any:
     """Rows ``a_i + B_i (c_j − c_i) − a_j`` for every pair of lattice neighbours, both ways (sparse):
-    neighbours' planes agree where they meet."""
+    neighbours' planes agree where they meet. And, for the plane columns the map is not placed over
+    (``across``: the rate and force a temperature chain's planes slope in), rows ``B_i − B_j``: the
+    meeting rows cannot tie those slopes (the centres differ only in temperature), so without these each
+    node would take its slope from the few orientations the rig held at its temperature."""
     from scipy import sparse
 
     k, d = centres.shape
@@ -313,7 +317,18 @@ def _smoothness(centres: Array, grid: Array) -> Any:
     rows = np.repeat(np.arange(m), d + 2)
     cols = np.column_stack([a * (d + 1), a[:, None] * (d + 1) + 1 + np.arange(d), b * (d + 1)])
     vals = np.column_stack([np.ones(m), centres[b] - centres[a], -np.ones(m)])
-    return sparse.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(m, k * (d + 1)))
+    meet = sparse.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(m, k * (d + 1)))
+    if not across or len(grid) == 1:
+        return meet
+    slope = np.asarray(across, dtype=np.intp)
+    n = len(edges) * len(slope)
+    rows = np.repeat(np.arange(n), 2)
+    cols = np.column_stack(
+        [(edges[:, :1] * (d + 1) + 1 + slope).ravel(), (edges[:, 1:] * (d + 1) + 1 + slope).ravel()]
+    )
+    vals = np.tile([1.0, -1.0], n)
+    tie = sparse.csr_matrix((vals, (rows, cols.ravel())), shape=(n, k * (d + 1)))
+    return sparse.vstack([meet, tie])
 
 
 def batch_map(x: Array, grid: Array, iterations: int) -> Array:
