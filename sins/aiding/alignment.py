@@ -246,12 +246,8 @@ def _gnss_velocity(fixes: GnssFixes, baseline_s: float) -> tuple[Array, Array, A
         span = fixes.t[j] - fixes.t[i]
         if span > baseline_s + 1.5 * step:  # an outage between: not a chord of the motion
             continue
-        r_m, r_n = earth.radii(fixes.lat[j])
-        v[j] = np.array([
-            (fixes.lat[j] - fixes.lat[i]) * (r_m + fixes.h[j]),
-            (fixes.lon[j] - fixes.lon[i]) * (r_n + fixes.h[j]) * np.cos(fixes.lat[j]),
-            -(fixes.h[j] - fixes.h[i]),
-        ]) / span  # fmt: skip
+        lat, lon, h = fixes.lat, fixes.lon, fixes.h
+        v[j] = earth.ned_offset(lat[j], lon[j], h[j], lat[i], lon[i], h[i]) / span
         sigma[j] = np.sqrt(2.0) * np.asarray(fixes.sigma_pos_m, dtype=float) / span
         lag[j] = 0.5 * span  # the chord is the velocity at its middle
     return v, sigma, lag

@@ -187,12 +187,7 @@ def nav_error_state(nav: NavSeries, truth: NavSeries) -> Array:
 
     Position in NED metres at the truth's radii; attitude ``φ`` with ``C_est = (I - [φ×]) C_true``.
     """
-    r_m, r_n = earth.radii(truth.lat)
-    d_r = np.stack([
-        (nav.lat - truth.lat) * (r_m + truth.h),
-        (nav.lon - truth.lon) * (r_n + truth.h) * np.cos(truth.lat),
-        -(nav.h - truth.h),
-    ], axis=1)  # fmt: skip
+    d_r = -earth.ned_offset(truth.lat, truth.lon, truth.h, nav.lat, nav.lon, nav.h)
     dq = rotation.quat_multiply(nav.q_nb, rotation.quat_conjugate(truth.q_nb))
     phi = -rotation.rotvec_from_quat(dq)
     return np.hstack([d_r, nav.v_n - truth.v_n, phi])
@@ -444,7 +439,8 @@ class _ClosedLoop:
         lat, lon, h, v_n, q_nb, fed = self.solution_at(idx, float(self.fixes.t[row] - self.fixes.latency_s))
         C_nb = rotation.dcm_from_quat(q_nb)
         arm_n = C_nb @ self.arm_b
-        z = self.position_difference(row, lat, lon, h) + arm_n - fed[POS]
+        fixes = self.fixes
+        z = earth.ned_offset(lat, lon, h, fixes.lat[row], fixes.lon[row], fixes.h[row]) + arm_n - fed[POS]
         if self.fixes.latency_s == 0:  # the fix moved to the sample's time with the INS velocity
             z = z - v_n * (t[idx] - self.fixes.t[row])
         H = np.zeros((3, N_STATES))
@@ -458,16 +454,6 @@ class _ClosedLoop:
         if self.accepted[row] and self.R_vel is not None:
             self.feed_back()
             self.velocity_fix(idx, row)
-
-    def position_difference(self, row: int, lat: float, lon: float, h: float) -> Array:
-        """The solution ``(lat, lon, h)`` less fix ``row``'s position, NED m."""
-        fixes = self.fixes
-        r_m, r_n = earth.radii(lat)
-        return np.array([
-            (lat - fixes.lat[row]) * (r_m + h),
-            (lon - fixes.lon[row]) * (r_n + h) * np.cos(lat),
-            -(h - fixes.h[row]),
-        ])  # fmt: skip
 
     def velocity_fix(self, idx: int, row: int) -> None:
         """Fix ``row``'s antenna velocity at sample ``idx`` (after its position)."""

@@ -115,6 +115,14 @@ def local_ned(lat: Floats, lon: Floats, h: Floats, lat0: float, lon0: float, h0:
     return np.stack([north, east, down], axis=-1)
 
 
+def ned_offset(lat: Floats, lon: Floats, h: Floats, lat0: Floats, lon0: Floats, h0: Floats) -> Floats:
+    """``(lat, lon, h)`` less ``(lat0, lon0, h0)`` in north-east-down metres, (..., 3): the small-angle
+    form at the first position's radii and ``cos lat``, for positions metres apart (a filter's
+    innovation, an estimate's error, a chord between fixes); :func:`local_ned` for long paths."""
+    r_m, r_n = radii(lat)
+    return np.stack([(lat - lat0) * (r_m + h), (lon - lon0) * (r_n + h) * np.cos(lat), -(h - h0)], axis=-1)
+
+
 def schuler_period(lat: Floats, h: Floats = 0.0) -> Floats:
     """Schuler period ``2π sqrt(R/g)`` in seconds, with ``R`` the mean radius ``sqrt(R_M R_N)``."""
     r_m, r_n = radii(lat)
