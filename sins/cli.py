@@ -973,14 +973,20 @@ def _add_check(sub: _Subparsers) -> None:
     p.set_defaults(func=_cmd_check)
 
 
-def _add_gap(sub: _Subparsers) -> None:
-    p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
-    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+def _add_dataset(p: argparse.ArgumentParser) -> None:
+    """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
+    command's start)."""
     p.add_argument(
         "--dataset", metavar="NAME",
         help="a real dataset from the data root instead of a file: ferraris, psins_vehicle, psins_lasergyro, "
         "broad_05, broad_18",
     )  # fmt: skip
+
+
+def _add_gap(sub: _Subparsers) -> None:
+    p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+    _add_dataset(p)
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
     p.add_argument("--model", metavar="MODEL.toml", help="the simulation's IMU model (default: the baseline)")
     p.add_argument(
@@ -1005,11 +1011,7 @@ def _add_characterise(sub: _Subparsers) -> None:
         "characterise", help="Allan analysis of a recording: IEEE noise terms, an IMU file, the closing check"
     )
     p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
-    p.add_argument(
-        "--dataset", metavar="NAME",
-        help="a real dataset from the data root instead of a file: psins_lasergyro, ferraris, psins_vehicle, "
-        "broad_05, broad_18",
-    )  # fmt: skip
+    _add_dataset(p)
     p.add_argument("--static", action="store_true", help="the unit stood still: its readings as they are")
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of a moving unit's recording"

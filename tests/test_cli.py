@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import re
@@ -480,3 +481,17 @@ def test_a_reader_that_goes_away_ends_the_command_quietly() -> None:
     proc.stdout.close()  # before the interpreter has even started: every write meets a closed pipe
     err = proc.stderr.read().decode()
     assert proc.wait(60) == 141 and err == ""
+
+
+def test_the_dataset_option_names_every_dataset_the_library_reads() -> None:
+    """``--dataset``'s help is written out (the CLI does not import the readers to start); it must
+    name exactly the datasets ``sins.io.datasets`` can load."""
+    from sins.cli import build_parser
+    from sins.io import datasets
+
+    for command in ("gap", "characterise"):
+        sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+        option = next(a for a in sub.choices[command]._actions if "--dataset" in a.option_strings)
+        assert option.help is not None
+        named = option.help.split(": ", 1)[1].split(", ")
+        assert sorted(named) == sorted(datasets.NAMES), (command, named)
