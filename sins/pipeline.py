@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io, scenario
+from sins import io, rowwise, scenario
 from sins.errors import MissingInputError, SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
@@ -689,7 +689,7 @@ class _ChunkStep:
         sc = self.sc
         frame, ideal = self.pending.take(n)
         temp = _cabin(sc, corrupted.t)
-        dt = np.diff(corrupted.t)[:, None]
+        dt = np.diff(corrupted.t)
         keep = kept_indices(self.samples + 1, n, self.keep_every)
         h_ref = np.concatenate([[self.h_prev], frame.h]) if sc.vertical != "free" else None
         for name, strategy in self.strategies.items():
@@ -701,7 +701,7 @@ class _ChunkStep:
             run.errors.add(*errors_against(solution, frame))
             run.kept.append(solution.at(keep))
             run.last = solution.at(-1)
-            run.sensor.add((np.hstack([corrected.dtheta_b, corrected.dv_b]) - ideal) / dt)
+            run.sensor.add(rowwise.diff_over_col(np.hstack([corrected.dtheta_b, corrected.dv_b]), ideal, dt))
         self.mid_t.add(0.5 * (corrupted.t[:-1] + corrupted.t[1:])[:, None])
         self.truth_kept.append(frame.truth(keep))
         self.samples += n

@@ -84,6 +84,26 @@ def test_rig_errors_separate_truth_from_reference():
     np.testing.assert_allclose(clean.accel, clean.ref_accel, rtol=0, atol=1e-12)
 
 
+def test_a_rig_without_errors_of_its_own_moves_every_session_alike_and_shares_it_read_only():
+    """Campaign units share the motion of an error-free rig (computed once); a rig with errors draws
+    them per session; the shared arrays cannot be written by one session under another's feet."""
+    exact = calibration.rig_motion(FAST, seed=1)
+    assert calibration.rig_motion(FAST, seed=2) is exact
+    fresh = calibration._rig_motion.__wrapped__(FAST, 2)  # computed again, not taken from the cache
+    for name in ("t", "omega_ib_b", "f_ib_b", "ref_omega_ib_b", "ref_f_ib_b", "temp"):
+        assert np.array_equal(getattr(fresh, name), getattr(exact, name)), name
+        assert not getattr(exact, name).flags.writeable
+    with pytest.raises(ValueError, match="read-only"):
+        exact.f_ib_b[0, 0] = 0.0
+    rough = RigProcedure(positions=6, position_dwell_s=2.0, rate_table=None, orientation_error_deg=0.1)
+    a, b = calibration.rig_motion(rough, seed=1), calibration.rig_motion(rough, seed=2)
+    assert not np.array_equal(a.f_ib_b, b.f_ib_b)
+    np.testing.assert_array_equal(a.ref_f_ib_b, b.ref_f_ib_b)  # the rig says the same; the unit differs
+    unit = imu_spec.draw_unit("tactical", unit_seed=3, run_seed=4)
+    one, two = calibration.simulate_rig(FAST, unit, seed=5), calibration.simulate_rig(FAST, unit, seed=6)
+    assert one.ref_gyro is two.ref_gyro and not np.array_equal(one.gyro, two.gyro)  # fresh noise each
+
+
 def test_least_squares_recovers_the_33_coefficients_over_many_units():
     """z = (estimate - truth) / standard error must be standard normal.
 

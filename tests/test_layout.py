@@ -18,6 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "sins"
 RANKS = {
     "sins": 0,
     "sins.errors": 0,
+    "sins.rowwise": 0,
     "sins.nav.rotation": 0,
     "sins.nav.earth": 0,
     "sins.series": 1,

@@ -170,6 +170,63 @@ def sharing(spec: campaign.CampaignSpec, units: int) -> None:
     )
 
 
+class _RegressionOnly(pipeline.FittedUnit):
+    """A fitted unit driven with ``regression`` alone: no ``none`` or oracle stream beside it."""
+
+    def for_run(self, nav_model: Any) -> dict[str, Any]:
+        return {"regression": self.strategies["regression"]}
+
+
+def _drive(job: tuple[Any, list[_RegressionOnly], list[int]]) -> float:
+    """Drive fitted units through the scenario in tasks of 8 sharing a trajectory, as a campaign task
+    does; the process's CPU seconds."""
+    sc, fitted, seeds = job
+    t0 = time.process_time()
+    for i in range(0, len(fitted), 8):
+        pipeline.run_units(sc, fitted[i : i + 8], seeds[i : i + 8], keep_hz=0.01)
+    return time.process_time() - t0
+
+
+def kernel(spec: campaign.CampaignSpec, units: int, workers: list[int]) -> None:
+    """Issue 21's unit-hour: one unit driven one hour at 100 Hz, its readings corrupted, corrected with
+    ``regression`` and integrated once, and reduced to its errors; the units fitted beforehand (their
+    cost printed apart). Wall time on process pools of each ``workers`` count, each worker warmed first
+    (compiled kernels loaded)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    t0 = time.process_time()
+    fitted = []
+    for u in range(units):
+        f = pipeline.fit_unit(spec.unit_imu(u), spec.unit_compensation(u))
+        fitted.append(_RegressionOnly(f.spec, f.compensation, f.strategies, f.residuals, f.biases))
+    fit_s = time.process_time() - t0
+    seeds = [campaign.nav_seed(spec.unit_seed(u)) for u in range(units)]
+    sc = spec.scenarios[0]
+    print(
+        f"kernel: {units} units fitted in {fit_s:.1f} s of CPU ({fit_s / units:.3f} s a unit: rig session, "
+        f"none and regression fits, residuals)"
+    )
+    rates = {}
+    for n in workers:
+        with ProcessPoolExecutor(n) as pool:
+            list(pool.map(_drive, [(sc, fitted[:1], seeds[:1])] * n))  # warm every worker
+            share = -(-units // n)
+            jobs = [(sc, fitted[i : i + share], seeds[i : i + share]) for i in range(0, units, share)]
+            t0 = time.perf_counter()
+            cpu = sum(pool.map(_drive, jobs))
+            wall = time.perf_counter() - t0
+        rates[n] = rate = units / wall
+        ns = cpu / units / SAMPLES_PER_HOUR * 1e9
+        print(
+            f"kernel on {n} process(es): {units} unit-hours (corrupt, correct with regression, integrate, "
+            f"reduce) in {wall:.1f} s: {rate:.2f} unit-hours/s, {ns:.0f} ns "
+            f"of CPU a unit-sample; 1,000 unit-hours would take {1000 / rate:.0f} s "
+            f"({1000 * fit_s / units / n:.0f} s more to fit 1,000 units on {n})"
+        )
+    if 1 in rates and 2 in rates:
+        print(f"kernel, 2 processes / 1: {rates[2] / rates[1]:.2f}x the rate")
+
+
 class PeakRss:
     """The largest resident memory of this process and its descendants together, sampled."""
 
@@ -247,10 +304,18 @@ def main() -> None:
     parser.add_argument("--strategies", nargs="+", default=["none", "regression"])
     parser.add_argument("--cluster-units", type=int, default=48, help="units of part 3's campaigns")
     parser.add_argument("--direct", action="store_true", help="part 3: 1,002 unit-hours, last worker count")
+    parser.add_argument(
+        "--kernel-units", type=int, default=32, help="units of the kernel's throughput (0: skip it)"
+    )
+    parser.add_argument("--only-kernel", action="store_true", help="the kernel's throughput alone")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         spec = load(folder, max(args.units, args.cluster_units) + 1, args.strategies)
+        if args.kernel_units:
+            kernel(load(folder, args.kernel_units, ["regression"]), args.kernel_units, args.workers)
+        if args.only_kernel:
+            return
         # The clusters first, while this process holds little beyond what `sins campaign` would.
         if args.direct:
             units = -(-1000 // streams_of(spec))

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rowwise
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, ImuModel
 from sins.series import CalibrationData, ImuIncrements, ImuRates
@@ -55,10 +56,12 @@ class Strategy(ABC):
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """Correct increments through their mean rate over each interval (``temp`` at ``imu.t``)."""
-        dt = np.diff(imu.t)[:, None]
+        dt = np.diff(imu.t)
         mid_temp = None if temp is None else 0.5 * (np.asarray(temp)[:-1] + np.asarray(temp)[1:])
-        omega_ib_b, f_ib_b = self.correct(imu.dtheta_b / dt, imu.dv_b / dt, mid_temp)
-        return ImuIncrements(t=imu.t, dtheta_b=omega_ib_b * dt, dv_b=f_ib_b * dt)
+        omega_ib_b, f_ib_b = self.correct(imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None], mid_temp)
+        return ImuIncrements(
+            t=imu.t, dtheta_b=rowwise.mul_col(omega_ib_b, dt), dv_b=rowwise.mul_col(f_ib_b, dt)
+        )
 
     def get_state(self) -> dict[str, Any]:
         """What :func:`save` writes: the fitted attributes, as plain lists and numbers."""

@@ -22,6 +22,7 @@ on the reference inputs, with standard errors from the residuals.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,7 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rowwise
 from sins.imu import ImuModel
+from sins.imu.model import apply_matrix
 from sins.nav import earth, rotation
 from sins.series import CalibrationData, ImuRates, RigPhase
 
@@ -271,6 +274,49 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
     -------
     CalibrationData with one phase per static position and per rate-table run
     """
+    motion = rig_motion(procedure, seed)
+    readings = model.corrupt_rates(
+        ImuRates(t=motion.t, omega_ib_b=motion.omega_ib_b, f_ib_b=motion.f_ib_b), temp=motion.temp, seed=seed
+    )
+    return CalibrationData(
+        t=motion.t,
+        gyro=readings.omega_ib_b,
+        accel=readings.f_ib_b,
+        ref_gyro=motion.ref_omega_ib_b,
+        ref_accel=motion.ref_f_ib_b,
+        temp=motion.temp,
+        phases=motion.phases,
+        source="simulated rig",
+    )
+
+
+@dataclass(frozen=True)
+class RigMotion:
+    """What a rig session's unit undergoes and what the rig says it does: times (s), the true and the
+    reference angular rate (rad/s) and specific force (m/s²) in the body frame, (n, 3) each, the
+    chamber temperature (°C) and the phases. Its arrays are read-only: sessions share them."""
+
+    t: Array
+    omega_ib_b: Array
+    f_ib_b: Array
+    ref_omega_ib_b: Array
+    ref_f_ib_b: Array
+    temp: Array
+    phases: tuple[RigPhase, ...]
+
+
+def rig_motion(procedure: RigProcedure, seed: int | None = None) -> RigMotion:
+    """The session's motion: the rig's own errors drawn from ``seed``.
+
+    A rig without errors of its own (``orientation_error_deg`` and ``rate_error_ppm`` zero) moves
+    every unit alike, so a campaign's units share one computation of it (the last few are kept).
+    """
+    errors = procedure.orientation_error_deg != 0.0 or procedure.rate_error_ppm != 0.0
+    return _rig_motion(procedure, seed if errors else None)
+
+
+@functools.lru_cache(maxsize=4)
+def _rig_motion(procedure: RigProcedure, seed: int | None) -> RigMotion:
     rng = np.random.default_rng([0 if seed is None else seed, 7])
     sigma = np.radians(procedure.orientation_error_deg)
     lat = np.radians(procedure.lat_deg)
@@ -299,19 +345,25 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
 
                 line.add(f"table {axis} {orient}", "rotation", duration, true_c, c, actual, nominal, pieces)
     t = np.concatenate(line.t)
-    omega, f = np.concatenate(line.omega), np.concatenate(line.f)
-    temp = procedure.temperature.at(t)
-    readings = model.corrupt_rates(ImuRates(t=t, omega_ib_b=omega, f_ib_b=f), temp=temp, seed=seed)
-    return CalibrationData(
+    motion = RigMotion(
         t=t,
-        gyro=readings.omega_ib_b,
-        accel=readings.f_ib_b,
-        ref_gyro=np.concatenate(line.ref_omega),
-        ref_accel=np.concatenate(line.ref_f),
-        temp=temp,
+        omega_ib_b=np.concatenate(line.omega),
+        f_ib_b=np.concatenate(line.f),
+        ref_omega_ib_b=np.concatenate(line.ref_omega),
+        ref_f_ib_b=np.concatenate(line.ref_f),
+        temp=procedure.temperature.at(t),
         phases=tuple(line.phases),
-        source="simulated rig",
     )
+    for a in (
+        motion.t,
+        motion.omega_ib_b,
+        motion.f_ib_b,
+        motion.ref_omega_ib_b,
+        motion.ref_f_ib_b,
+        motion.temp,
+    ):
+        a.flags.writeable = False
+    return motion
 
 
 # --------------------------------------------------------------------------- the seed model's fit
@@ -361,8 +413,8 @@ def invert_seed_model(
     ``accel = n + A0 + A n`` is solved for ``n`` first; then
     ``gyro = ω + B0 + B ω + K n`` for ``ω``.
     """
-    n = (accel - A0) @ np.linalg.inv(np.eye(3) + A).T
-    w = (gyro - B0 - n @ K.T) @ np.linalg.inv(np.eye(3) + B).T
+    n = apply_matrix(np.linalg.inv(np.eye(3) + A), rowwise.sub_row(accel, A0))
+    w = apply_matrix(np.linalg.inv(np.eye(3) + B), rowwise.sub_row(gyro, B0) - apply_matrix(K, n))
     return w, n
 
 

@@ -29,6 +29,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rowwise
 from sins.imu.model import (
     SENSORS,
     BiasInstability,
@@ -39,6 +40,8 @@ from sins.imu.model import (
     QuantizationNoise,
     RateRandomWalk,
     Saturation,
+    TemperatureBias,
+    TemperatureScale,
     cubic_hermite,
     random_stream,
     uniform_steps,
@@ -191,7 +194,10 @@ class IncrementStream:
         lo, hi = self._written, max(end, self._written)
         if hi == lo:
             return self._empty()
-        nodes = _NodeInputs(self._t, self._inc, self._temp)
+        # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
+        # is a few per cent of a tactical unit's corruption, for nothing.
+        needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in self.model.effects)
+        nodes = _NodeInputs(self._t, self._inc, self._temp if needs_temp else None)
         out = [self._sensor_readings(s, lo, hi, nodes) for s in SENSORS]
         t_out = self._t[lo : hi + 1]
         self._written = hi
@@ -229,7 +235,7 @@ class IncrementStream:
         if state.noise is not None and state.noise_rng is not None:
             # White noise as each interval's mean rate: density / sqrt(dt) per interval.
             z = state.noise_rng.standard_normal((n_out, 3))
-            noise_rate = state.noise.density / np.sqrt(dt[rows])[:, None] * z
+            noise_rate = rowwise.row_over_col(state.noise.density, np.sqrt(dt[rows])) * z
         if state.qnoise is not None and state.qnoise_rng is not None:
             noise_rate = noise_rate + self._quantization_noise(state, n_out) / dt[rows][:, None]
         nodes = node_inputs.nodes
@@ -237,7 +243,8 @@ class IncrementStream:
         deterministic = any(e.stage == "deterministic" for e in model.effects_of(sensor))
         delay = model.delay_of(sensor)
         total = np.empty((n_out, 3))
-        step = dt[rows][:, None]
+        step = dt[rows]
+        half_step = 0.5 * step
         for d in np.unique(delay):
             cols = delay == d
             shifted = self._shifted(ideal, t, float(d), state.cum)[rows] if d else ideal[rows]
@@ -246,7 +253,7 @@ class IncrementStream:
                 if deterministic:
                     for j in range(len(nodes)):
                         err = model.deterministic_error(sensor, node_inputs(j, float(d)))[rows]
-                        part += 0.5 * step * err
+                        part += rowwise.mul_col(err, half_step)
                 # The ideal part stays exact; only the errors come from the reconstruction.
                 total[:, cols] = (shifted + part)[:, cols]
                 continue
@@ -257,10 +264,10 @@ class IncrementStream:
                 b = np.column_stack([np.interp(at, t[lo : hi + 1], bias[:, i]) for i in range(3)])
                 u = inputs.of(sensor)[rows]
                 rate = u + model.deterministic_error(sensor, inputs)[rows] + b + noise_rate
-                part += 0.5 * step * np.clip(rate, -sat.limit, sat.limit)
+                part += rowwise.mul_col(np.clip(rate, -sat.limit, sat.limit), half_step)
             total[:, cols] = part[:, cols]
         if sat is None:
-            total = total + (0.5 * (bias[:-1] + bias[1:]) + noise_rate) * step
+            total = total + rowwise.mul_col(0.5 * (bias[:-1] + bias[1:]) + noise_rate, step)
         q = model.effect_of(sensor, Quantization)
         if q is not None and (q.step > 0).any():
             total = self._quantized(state, total, q.step * self.dt_nominal)
@@ -277,13 +284,13 @@ class IncrementStream:
             if isinstance(e, BiasInstability):
                 values[0] = e.sigma * p.rng.standard_normal(3) if p.value is None else p.value
                 xi = p.rng.standard_normal((len(dt), 3))
-                phi = np.exp(-dt[:, None] / e.tau)
+                phi = np.exp(rowwise.col_over_row(-dt, e.tau))
                 uniform = uniform_steps(t) if uniform is None else uniform
                 a = np.exp(-self.dt_nominal / e.tau) if uniform else np.zeros(0)
                 _gauss_markov_kernel(phi, np.ascontiguousarray(e.sigma), xi, a, values)
             else:
                 start = np.zeros(3) if p.value is None else p.value
-                steps = e.density * np.sqrt(dt)[:, None] * p.rng.standard_normal((len(dt), 3))
+                steps = rowwise.outer(np.sqrt(dt), e.density) * p.rng.standard_normal((len(dt), 3))
                 values = np.cumsum(np.vstack([start, steps]), axis=0)
             p.value = values[-1].copy()
             total += values
