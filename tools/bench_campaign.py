@@ -1,26 +1,32 @@
-"""Campaign throughput: one core's time per stream-sample by stage, units sharing a trajectory, and
-unit-hours per second on a local dask cluster of 1 and 2 workers, with the peak memory.
+"""Campaign throughput: issue 21's unit-hour on 1 and 2 processes, stream-hours per second of campaigns
+on a local dask cluster of 1 and 2 workers with their peak memory, one core's time per stream-sample by
+stage, and units sharing a trajectory.
 
 Usage::
 
     .venv/bin/python tools/bench_campaign.py [--units 8] [--workers 1 2] [--strategies none regression]
-        [--cluster-units 48] [--direct]
+        [--cluster-units 48] [--direct] [--kernel-units 32] [--only-kernel]
 
-A unit is a tactical unit calibrated on the 24-position + rate-table rig and driven through the
-one-hour ``car_drive`` once per strategy (the oracle always comes too: three streams with the
-defaults); one unit-hour is one stream's hour of 100 Hz samples, corrupted, corrected, integrated
-and reduced to its errors against the truth.
+First the kernel (``--kernel-units`` units, 0 to skip): issue 21's unit-hour is one unit driven one
+hour at 100 Hz, its readings corrupted, corrected with ``regression`` and integrated once, reduced to
+its errors against the truth. The units are fitted first (their CPU time printed apart), then driven
+in tasks of 8 sharing a trajectory on process pools of each ``--workers`` count: wall time, unit-hours
+per second, the time 1,000 would take, and the ratio of the rates.
 
-First, while this process holds little beyond what ``sins campaign`` would, a campaign of
-``--cluster-units`` units on a local cluster of each ``--workers`` count: wall time, unit-hours per
-second, the time 1,000 unit-hours would take at that rate, the ratio of the rates, and the peak
-resident memory of this process and its workers together (sampled every 0.2 s); ``--direct`` runs
-334 units (1,002 unit-hours) on the last ``--workers`` count instead of projecting. Then ``--units``
-units in this process as a campaign task runs them (``sins.campaign.unit.run_units``: rig fits, then
-one generated trajectory driven by every unit), the main thread's CPU time split by stage (generation
-runs on a second thread and is counted apart), in ns of one core per stream-sample. Last, the CPU
-time per stream-sample of units driven one call each and all sharing one trajectory. CPU times stand
-up to a shared machine better than wall times; compare figures of one run only.
+Then campaigns, where a unit is a tactical unit calibrated on the 24-position + rate-table rig and
+driven through the one-hour ``car_drive`` once per strategy, ``none`` and the oracle always with them
+(three streams with the defaults): a stream-hour is one stream's hour of 100 Hz samples, corrupted
+(once per unit for all its streams), corrected, integrated and reduced. A campaign of
+``--cluster-units`` units on a local cluster of each ``--workers`` count (``--direct``: 334 units,
+1,002 stream-hours, on the last count): wall time, stream-hours per second, and the peak memory of
+this process and its workers together, sampled every 0.2 s, both proportional (PSS: a shared library
+page split among the processes that map it, the tree's cost to the machine) and resident (RSS: counted
+in every process). Then ``--units`` units in this process as a campaign task runs them
+(``sins.campaign.unit.run_units``: rig fits, then one generated trajectory driven by every unit), the
+main thread's CPU time split by stage (generation runs on a second thread and is counted apart), in ns
+of one core per stream-sample. Last, the CPU time per stream-sample of units driven one call each and
+all sharing one trajectory. CPU times stand up to a shared machine better than wall times; compare
+figures of one run only.
 """
 
 from __future__ import annotations
@@ -227,29 +233,35 @@ def kernel(spec: campaign.CampaignSpec, units: int, workers: list[int]) -> None:
         print(f"kernel, 2 processes / 1: {rates[2] / rates[1]:.2f}x the rate")
 
 
-class PeakRss:
-    """The largest resident memory of this process and its descendants together, sampled."""
+class PeakMemory:
+    """The largest memory of this process and its descendants together, sampled: resident (RSS, every
+    shared library page counted once per process that maps it) and proportional (PSS, a shared page
+    split among the processes that share it, so the sum is what the tree costs the machine)."""
 
     def __init__(self, every_s: float = 0.2) -> None:
-        self.peak = 0
-        self.at_peak: list[int] = []  # each process's memory at the peak, largest first
+        self.peak = 0  # RSS
+        self.peak_pss = 0
+        self.at_peak: list[int] = []  # each process's RSS at the RSS peak, largest first
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._watch, args=(every_s,), daemon=True)
 
     def _watch(self, every_s: float) -> None:
         me = psutil.Process()
         while not self._stop.is_set():
-            sizes = []
+            sizes, pss = [], 0
             for p in [me, *me.children(recursive=True)]:
                 try:
-                    sizes.append(p.memory_info().rss)
-                except psutil.Error:
-                    pass
+                    info = p.memory_full_info()
+                except psutil.Error:  # gone meanwhile
+                    continue
+                sizes.append(info.rss)
+                pss += info.pss
             if sum(sizes) > self.peak:
                 self.peak, self.at_peak = sum(sizes), sorted(sizes, reverse=True)
+            self.peak_pss = max(self.peak_pss, pss)
             self._stop.wait(every_s)
 
-    def __enter__(self) -> PeakRss:
+    def __enter__(self) -> PeakMemory:
         self._thread.start()
         return self
 
@@ -281,17 +293,18 @@ def cluster_rates(folder: Path, units: int, workers: list[int], strategies: list
     spec = load(folder, units, strategies)
     rates = {}
     for n in workers:
-        with PeakRss() as rss:
+        with PeakMemory() as rss:
             run = engine.run(spec, folder / f"out{units}-{n}", workers=n)
         _wait_for_workers_to_exit()
         unit_hours = units * streams_of(spec)
         rates[n] = rate = unit_hours / run.wall_s
+        by_process = " + ".join(f"{m / 1e6:.0f}" for m in rss.at_peak)
         print(
             f"{n} worker(s): {units} units x {streams_of(spec)} streams of 1 h at 100 Hz in "
-            f"{run.wall_s:.1f} s (cluster start-up included): {rate:.2f} unit-hours/s "
-            f"({rate * SAMPLES_PER_HOUR / 1e6:.2f} M samples/s); 1,000 unit-hours would take "
-            f"{1000 / rate:.0f} s; peak memory {rss.peak / 1e6:.0f} MB "
-            f"({' + '.join(f'{m / 1e6:.0f}' for m in rss.at_peak)} MB by process)"
+            f"{run.wall_s:.1f} s (cluster start-up included): {rate:.2f} stream-hours/s "
+            f"({rate * SAMPLES_PER_HOUR / 1e6:.2f} M samples/s); 1,000 stream-hours would take "
+            f"{1000 / rate:.0f} s; peak memory {rss.peak_pss / 1e6:.0f} MB proportional (PSS), "
+            f"{rss.peak / 1e6:.0f} MB resident ({by_process} MB by process)"
         )
     if 1 in rates and 2 in rates:
         print(f"2 workers / 1 worker: {rates[2] / rates[1]:.2f}x the rate")
@@ -303,7 +316,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--strategies", nargs="+", default=["none", "regression"])
     parser.add_argument("--cluster-units", type=int, default=48, help="units of part 3's campaigns")
-    parser.add_argument("--direct", action="store_true", help="part 3: 1,002 unit-hours, last worker count")
+    parser.add_argument(
+        "--direct", action="store_true", help="334 units (1,002 stream-hours) on the last worker count"
+    )
     parser.add_argument(
         "--kernel-units", type=int, default=32, help="units of the kernel's throughput (0: skip it)"
     )
