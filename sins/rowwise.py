@@ -7,10 +7,13 @@ Why: numpy's broadcasting over a short inner axis runs its inner loop once per r
 corruption, the corrections and the reduction. Each kernel does one IEEE operation per element, the one
 numpy does, so the results are numpy's to the last bit (``tests/test_rows.py``); they never fuse two
 operations (no multiply-add), so no rounding moves; a division by zero gives numpy's ±inf or NaN
-(numba's ``error_model="numpy"``), not an exception.
+(numba's ``error_model="numpy"``), not an exception. Arrays of other shapes or types go to numpy's own
+expression, so they broadcast, or fail, as numpy would.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numba
 import numpy as np
@@ -102,13 +105,28 @@ def _diff_over_col(a: Array, b: Array, c: Array, out: Array) -> None:
             out[k, i] = (a[k, i] - b[k, i]) / ck
 
 
-def _floats(x: Array) -> Array:
-    return np.asarray(x, dtype=np.float64)
+def _rows_and_vector(a: Any, v: Any) -> bool:
+    """Whether the kernels apply: float64 arrays, ``a`` (n, k) and ``v`` (k,)."""
+    return _floats(a, v) and a.ndim == 2 and v.shape == (a.shape[1],)
+
+
+def _rows_and_column(a: Any, c: Any) -> bool:
+    """Whether the kernels apply: float64 arrays, ``a`` (n, k) and ``c`` (n,)."""
+    return _floats(a, c) and a.ndim == 2 and c.shape == (a.shape[0],)
+
+
+def _floats(*xs: Any) -> bool:
+    return all(isinstance(x, np.ndarray) and x.dtype == np.float64 for x in xs)
+
+
+# Each function below runs its kernel on the shapes and type it names and hands anything else to numpy's
+# own expression, so that other shapes broadcast, and bad ones fail, exactly as numpy's would.
 
 
 def add_row(a: Array, v: Array, out: Array | None = None) -> Array:
     """``a + v``: the vector ``v`` (k,) added to every row of ``a`` (n, k) (into ``out`` if given)."""
-    a, v = _floats(a), _floats(v)
+    if not _rows_and_vector(a, v) or (out is not None and out.shape != a.shape):
+        return np.add(a, v, out=out)
     out = np.empty(a.shape) if out is None else out
     _add_row(a, v, out)
     return out
@@ -116,15 +134,26 @@ def add_row(a: Array, v: Array, out: Array | None = None) -> Array:
 
 def sub_row(a: Array, v: Array) -> Array:
     """``a - v``: the vector ``v`` (k,) taken from every row of ``a`` (n, k)."""
-    a, v = _floats(a), _floats(v)
+    if not _rows_and_vector(a, v):
+        return np.subtract(a, v)
     out = np.empty(a.shape)
     _sub_row(a, v, out)
     return out
 
 
+def mul_row(a: Array, v: Array) -> Array:
+    """``a * v``: every row of ``a`` (n, k) times the vector ``v`` (k,), element by element."""
+    if not _rows_and_vector(a, v):
+        return np.multiply(a, v)
+    out = np.empty(a.shape)
+    _mul_row(a, v, out)
+    return out
+
+
 def mul_col(a: Array, c: Array) -> Array:
     """``a * c[:, None]``: row ``j`` of ``a`` (n, k) times ``c[j]``."""
-    a, c = _floats(a), _floats(c)
+    if not _rows_and_column(a, c):
+        return np.multiply(a, np.asarray(c)[:, None])
     out = np.empty(a.shape)
     _mul_col(a, c, out)
     return out
@@ -133,39 +162,39 @@ def mul_col(a: Array, c: Array) -> Array:
 def diff_over_col(a: Array, b: Array, c: Array) -> Array:
     """``(a - b) / c[:, None]``: the difference of two (n, k) arrays, row ``j`` over ``c[j]`` (a mean rate
     from two sets of increments over their intervals ``c``)."""
-    a, b, c = _floats(a), _floats(b), _floats(c)
-    if a.shape != b.shape:
-        raise ValueError(f"shapes differ: {a.shape} and {b.shape}")
+    if not (_rows_and_column(a, c) and _floats(b) and b.shape == a.shape):
+        return np.divide(np.subtract(a, b), np.asarray(c)[:, None])
     out = np.empty(a.shape)
     _diff_over_col(a, b, c, out)
     return out
 
 
-def mul_row(a: Array, v: Array) -> Array:
-    """``a * v``: every row of ``a`` (n, k) times the vector ``v`` (k,), element by element."""
-    a, v = _floats(a), _floats(v)
-    out = np.empty(a.shape)
-    _mul_row(a, v, out)
-    return out
-
-
 def outer(c: Array, v: Array) -> Array:
     """``c[:, None] * v``: (n, k), element ``[j, i]`` is ``c[j] * v[i]``."""
+    if not _column_and_vector(c, v):
+        return np.multiply(np.asarray(c)[:, None], v)
     return _outer_of(c, v, divide=False, column_first=True)
 
 
 def col_over_row(c: Array, v: Array) -> Array:
     """``c[:, None] / v``: (n, k), element ``[j, i]`` is ``c[j] / v[i]``."""
+    if not _column_and_vector(c, v):
+        return np.divide(np.asarray(c)[:, None], v)
     return _outer_of(c, v, divide=True, column_first=True)
 
 
 def row_over_col(v: Array, c: Array) -> Array:
     """``v / c[:, None]``: (n, k), element ``[j, i]`` is ``v[i] / c[j]``."""
+    if not _column_and_vector(c, v):
+        return np.divide(v, np.asarray(c)[:, None])
     return _outer_of(c, v, divide=True, column_first=False)
 
 
+def _column_and_vector(c: Any, v: Any) -> bool:
+    return _floats(c, v) and c.ndim == 1 and v.ndim == 1
+
+
 def _outer_of(c: Array, v: Array, divide: bool, column_first: bool) -> Array:
-    c, v = _floats(c).reshape(-1), _floats(v).reshape(-1)
     out = np.empty((c.shape[0], v.shape[0]))
     _outer(c, v, out, divide, column_first)
     return out

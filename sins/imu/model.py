@@ -451,7 +451,7 @@ def apply_matrix(matrix: NDArray[Any], rows: NDArray[Any]) -> Array:
 
     Through a C-ordered copy of the transpose: numpy's ``matmul`` takes a loop five times slower for
     a transposed (Fortran-ordered) 3×3 on thousands of rows, with the same arithmetic (the same
-    bits from 2 rows up, ``tests/test_imu.py``); a single row goes the way ``@`` sends it.
+    bits from 2 rows up, ``tests/test_rowwise.py``); a single row goes the way ``@`` sends it.
     """
     if rows.ndim == 2 and rows.shape[0] > 1:
         return np.asarray(rows @ np.ascontiguousarray(matrix.T), dtype=np.float64)
