@@ -101,7 +101,10 @@ def test_a_rig_without_errors_of_its_own_moves_every_session_alike_and_shares_it
     np.testing.assert_array_equal(a.ref_f_ib_b, b.ref_f_ib_b)  # the rig says the same; the unit differs
     unit = imu_spec.draw_unit("tactical", unit_seed=3, run_seed=4)
     one, two = calibration.simulate_rig(FAST, unit, seed=5), calibration.simulate_rig(FAST, unit, seed=6)
-    assert one.ref_gyro is two.ref_gyro and not np.array_equal(one.gyro, two.gyro)  # fresh noise each
+    np.testing.assert_array_equal(one.ref_gyro, two.ref_gyro)
+    assert not np.array_equal(one.gyro, two.gyro)  # fresh noise each
+    one.ref_gyro[0, 0] = 1.0  # a session is the caller's own to change
+    assert two.ref_gyro[0, 0] != 1.0 and calibration.rig_motion(FAST).ref_omega_ib_b[0, 0] != 1.0
 
 
 def test_least_squares_recovers_the_33_coefficients_over_many_units():

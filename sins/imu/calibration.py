@@ -25,7 +25,7 @@ from __future__ import annotations
 import functools
 import itertools
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import NDArray
@@ -278,13 +278,13 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
     readings = model.corrupt_rates(
         ImuRates(t=motion.t, omega_ib_b=motion.omega_ib_b, f_ib_b=motion.f_ib_b), temp=motion.temp, seed=seed
     )
-    return CalibrationData(
-        t=motion.t,
+    return CalibrationData(  # copies of the shared motion: a session is the caller's to change
+        t=motion.t.copy(),
         gyro=readings.omega_ib_b,
         accel=readings.f_ib_b,
-        ref_gyro=motion.ref_omega_ib_b,
-        ref_accel=motion.ref_f_ib_b,
-        temp=motion.temp,
+        ref_gyro=motion.ref_omega_ib_b.copy(),
+        ref_accel=motion.ref_f_ib_b.copy(),
+        temp=motion.temp.copy(),
         phases=motion.phases,
         source="simulated rig",
     )
@@ -294,7 +294,8 @@ def simulate_rig(procedure: RigProcedure, model: ImuModel, seed: int | None = No
 class RigMotion:
     """What a rig session's unit undergoes and what the rig says it does: times (s), the true and the
     reference angular rate (rad/s) and specific force (m/s²) in the body frame, (n, 3) each, the
-    chamber temperature (°C) and the phases. Its arrays are read-only: sessions share them."""
+    chamber temperature (°C) and the phases. Its arrays are read-only: sessions share them, and each
+    :func:`simulate_rig` hands its caller copies."""
 
     t: Array
     omega_ib_b: Array
@@ -354,15 +355,10 @@ def _rig_motion(procedure: RigProcedure, seed: int | None) -> RigMotion:
         temp=procedure.temperature.at(t),
         phases=tuple(line.phases),
     )
-    for a in (
-        motion.t,
-        motion.omega_ib_b,
-        motion.f_ib_b,
-        motion.ref_omega_ib_b,
-        motion.ref_f_ib_b,
-        motion.temp,
-    ):
-        a.flags.writeable = False
+    for f in fields(motion):
+        value = getattr(motion, f.name)
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
     return motion
 
 
