@@ -206,56 +206,80 @@ def run_unit(task: tuple[str, int, tuple[str, ...], float]) -> dict[str, Any]:
             "fit_s": fit_s, "guard": guard, "fit_rows": len(fit_data)}  # fmt: skip
 
 
+def _having(rows: list[dict[str, Any]], strategy: str) -> list[dict[str, Any]]:
+    """The units a strategy was run on (a run may leave the slow pure variants out)."""
+    return [c for c in rows if strategy in c["residual"]["same"]]
+
+
+def _affected(c: dict[str, Any], judge: str, strategy: str) -> float:
+    """The affected channel's residual × noise (the worst channel for a seed-model unit)."""
+    r = c["residual"][judge][strategy]
+    return float(r[c["channel"]] if c["channel"] >= 0 else max(r))
+
+
+def _drift_ratio(rows: list[dict[str, Any]], strategy: str) -> float:
+    """Mean 1-h drift over regression's mean on the same units."""
+    rows = [c for c in _having(rows, strategy) if c["drift"]]
+    if not rows:
+        return float("nan")
+    return float(
+        np.mean([c["drift"][strategy] for c in rows]) / np.mean([c["drift"]["regression"] for c in rows])
+    )
+
+
+def _strategies(cases: list[dict[str, Any]]) -> list[str]:
+    seen = {s for c in cases for s in c["residual"]["same"]}
+    return [s for s in STRATEGIES if s in seen]
+
+
 def summarise(cases: list[dict[str, Any]]) -> None:
     regimes = [r for r in REGIMES if any(c["regime"] == r for c in cases)]
     for regime in regimes:
         rows = [c for c in cases if c["regime"] == regime]
-        strategies = list(rows[0]["residual"]["same"])
         print(f"\n{regime}: {len(rows)} units (affected channel: residual x noise per judged procedure; "
-              "worst channel over all; 1-h drift)")  # fmt: skip
+              "worst channel over all; 1-h drift; units, where a strategy ran on fewer)")  # fmt: skip
         head = " ".join(f"{j:>11}" for j in JUDGES)
         print(f"{'strategy':<20} {head} {'worst':>7} {'drift km':>9} {'/ regr.':>7} {'fit s':>6}")
-        mean_drift = {
-            s: np.mean([c["drift"][s] for c in rows]) if rows[0]["drift"] else np.nan for s in strategies
-        }
-        for s in strategies:
-            cells = []
-            worst = 0.0
-            for j in JUDGES:
-                vals = [c["residual"][j][s][c["channel"]] if c["channel"] >= 0 else max(c["residual"][j][s])
-                        for c in rows]  # fmt: skip
-                cells.append(f"{np.mean(vals):11.3f}")
-                worst = max(worst, max(max(c["residual"][j][s]) for c in rows))
-            ratio = mean_drift[s] / mean_drift.get("regression", np.nan)
-            fit_s = np.median([c["fit_s"][s] for c in rows])
+        for s in _strategies(rows):
+            mine = _having(rows, s)
+            cells = [f"{np.mean([_affected(c, j, s) for c in mine]):11.3f}" for j in JUDGES]
+            worst = max(max(c["residual"][j][s]) for c in mine for j in JUDGES)
+            drift = np.mean([c["drift"][s] for c in mine]) if mine[0]["drift"] else np.nan
+            fit_s = np.median([c["fit_s"][s] for c in mine])
+            fewer = f" ({len(mine)} units)" if len(mine) != len(rows) else ""
             print(
-                f"{s:<20} {' '.join(cells)} {worst:7.3f} {mean_drift[s] / 1e3:9.2f} {ratio:7.3f} {fit_s:6.1f}"
+                f"{s:<20} {' '.join(cells)} {worst:7.3f} {drift / 1e3:9.2f} {_drift_ratio(rows, s):7.3f} "
+                f"{fit_s:6.1f}{fewer}"
             )
 
 
 def markdown(cases: list[dict[str, Any]], strategies: tuple[str, ...] = STRATEGIES[1:]) -> None:
     """The README's two tables: per regime and strategy, the affected channel's residual × noise (mean over
     units) on the worst judged procedure, with the procedure's initial; and the mean 1-h drift over
-    regression's."""
+    regression's on the same units. A strategy run on fewer units than the regime's count says how many."""
     regimes = [r for r in REGIMES if any(c["regime"] == r for c in cases)]
     head = "| regime | units | " + " | ".join(strategies) + " |"
     rule = "|---|---|" + "---|" * len(strategies)
     print("Residual × noise on the affected channel (seed: worst channel), worst judged procedure "
           "(s same, r sins rig, f faces, t tumble):\n")  # fmt: skip
     print(head + "\n" + rule)
+
+    def fewer(rows: list[dict[str, Any]], s: str) -> str:
+        n = len(_having(rows, s))
+        return f" ({n})" if n != len(rows) else ""
+
     for regime in regimes:
         rows = [c for c in cases if c["regime"] == regime]
         cells = []
         for s in strategies:
-            means = {}
-            for j in JUDGES:
-                vals = [c["residual"][j][s][c["channel"]] if c["channel"] >= 0 else max(c["residual"][j][s])
-                        for c in rows]  # fmt: skip
-                means[j] = float(np.mean(vals))
+            means = {j: float(np.mean([_affected(c, j, s) for c in _having(rows, s)])) for j in JUDGES}
             worst = max(means, key=means.__getitem__)
-            cells.append(f"{means[worst]:.2f} {worst[0]}")
+            cells.append(f"{means[worst]:.2f} {worst[0]}{fewer(rows, s)}")
         print(f"| {regime} | {len(rows)} | " + " | ".join(cells) + " |")
-    print("\n1-hour drive, mean final horizontal error over regression's (regression's in km):\n")
+    print(
+        "\n1-hour drive, mean final horizontal error over regression's on the same units "
+        "(regression's in km):\n"
+    )
     print(head + "\n" + rule)
     for regime in regimes:
         rows = [c for c in cases if c["regime"] == regime and c["drift"]]
@@ -263,9 +287,7 @@ def markdown(cases: list[dict[str, Any]], strategies: tuple[str, ...] = STRATEGI
             continue
         ref = float(np.mean([c["drift"]["regression"] for c in rows]))
         cells = [
-            f"{np.mean([c['drift'][s] for c in rows]) / ref:.2f}"
-            if s != "regression"
-            else f"1 ({ref / 1e3:.1f})"
+            f"{_drift_ratio(rows, s):.2f}{fewer(rows, s)}" if s != "regression" else f"1 ({ref / 1e3:.1f})"
             for s in strategies
         ]
         print(f"| {regime} | {len(rows)} | " + " | ".join(cells) + " |")
@@ -286,7 +308,7 @@ def main() -> None:
     if args.load:
         cases = [c for path in args.load for c in json.loads(path.read_text())["cases"]]
         if args.markdown:
-            markdown(cases, tuple(s for s in STRATEGIES[1:] if s in cases[0]["residual"]["same"]))
+            markdown(cases, tuple(s for s in _strategies(cases) if s != "none"))
         else:
             summarise(cases)
         return
