@@ -24,58 +24,39 @@ Array = NDArray[np.float64]
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _add_row(a: Array, v: Array, out: Array) -> None:
-    if a.shape[1] == 3:  # unrolled: the common width, and twice as fast as the loop below
-        v0, v1, v2 = v[0], v[1], v[2]
-        for k in range(a.shape[0]):
-            out[k, 0] = a[k, 0] + v0
-            out[k, 1] = a[k, 1] + v1
-            out[k, 2] = a[k, 2] + v2
-        return
+    # Three columns, unrolled: twice as fast as a loop over the columns.
+    v0, v1, v2 = v[0], v[1], v[2]
     for k in range(a.shape[0]):
-        for i in range(a.shape[1]):
-            out[k, i] = a[k, i] + v[i]
+        out[k, 0] = a[k, 0] + v0
+        out[k, 1] = a[k, 1] + v1
+        out[k, 2] = a[k, 2] + v2
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _sub_row(a: Array, v: Array, out: Array) -> None:
-    if a.shape[1] == 3:
-        v0, v1, v2 = v[0], v[1], v[2]
-        for k in range(a.shape[0]):
-            out[k, 0] = a[k, 0] - v0
-            out[k, 1] = a[k, 1] - v1
-            out[k, 2] = a[k, 2] - v2
-        return
+    v0, v1, v2 = v[0], v[1], v[2]
     for k in range(a.shape[0]):
-        for i in range(a.shape[1]):
-            out[k, i] = a[k, i] - v[i]
+        out[k, 0] = a[k, 0] - v0
+        out[k, 1] = a[k, 1] - v1
+        out[k, 2] = a[k, 2] - v2
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _mul_col(a: Array, c: Array, out: Array) -> None:
-    if a.shape[1] == 3:
-        for k in range(a.shape[0]):
-            ck = c[k]
-            out[k, 0] = a[k, 0] * ck
-            out[k, 1] = a[k, 1] * ck
-            out[k, 2] = a[k, 2] * ck
-        return
     for k in range(a.shape[0]):
-        for i in range(a.shape[1]):
-            out[k, i] = a[k, i] * c[k]
+        ck = c[k]
+        out[k, 0] = a[k, 0] * ck
+        out[k, 1] = a[k, 1] * ck
+        out[k, 2] = a[k, 2] * ck
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _mul_row(a: Array, v: Array, out: Array) -> None:
-    if a.shape[1] == 3:
-        v0, v1, v2 = v[0], v[1], v[2]
-        for k in range(a.shape[0]):
-            out[k, 0] = a[k, 0] * v0
-            out[k, 1] = a[k, 1] * v1
-            out[k, 2] = a[k, 2] * v2
-        return
+    v0, v1, v2 = v[0], v[1], v[2]
     for k in range(a.shape[0]):
-        for i in range(a.shape[1]):
-            out[k, i] = a[k, i] * v[i]
+        out[k, 0] = a[k, 0] * v0
+        out[k, 1] = a[k, 1] * v1
+        out[k, 2] = a[k, 2] * v2
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -106,25 +87,26 @@ def _diff_over_col(a: Array, b: Array, c: Array, out: Array) -> None:
 
 
 def _rows_and_vector(a: Any, v: Any) -> bool:
-    """Whether the kernels apply: float64 arrays, ``a`` (n, k) and ``v`` (k,)."""
-    return _floats(a, v) and a.ndim == 2 and v.shape == (a.shape[1],)
+    """Whether the row kernels apply: float64 arrays, ``a`` (n, 3) and ``v`` (3,)."""
+    return _floats(a, v) and a.ndim == 2 and a.shape[1] == 3 and v.shape == (3,)
 
 
-def _rows_and_column(a: Any, c: Any) -> bool:
-    """Whether the kernels apply: float64 arrays, ``a`` (n, k) and ``c`` (n,)."""
-    return _floats(a, c) and a.ndim == 2 and c.shape == (a.shape[0],)
+def _rows_and_column(a: Any, c: Any, any_width: bool = False) -> bool:
+    """Whether the kernels apply: float64 arrays, ``a`` (n, 3) (any (n, k) with ``any_width``), ``c`` (n,)."""
+    return _floats(a, c) and a.ndim == 2 and (any_width or a.shape[1] == 3) and c.shape == (a.shape[0],)
 
 
 def _floats(*xs: Any) -> bool:
     return all(isinstance(x, np.ndarray) and x.dtype == np.float64 for x in xs)
 
 
-# Each function below runs its kernel on the shapes and type it names and hands anything else to numpy's
-# own expression, so that other shapes broadcast, and bad ones fail, exactly as numpy's would.
+# Each function below runs its kernel on the shapes and type it names (three columns: the samples' axes;
+# `diff_over_col` any width) and hands anything else to numpy's own expression, so that other shapes
+# broadcast, and bad ones fail, exactly as numpy's would.
 
 
 def add_row(a: Array, v: Array, out: Array | None = None) -> Array:
-    """``a + v``: the vector ``v`` (k,) added to every row of ``a`` (n, k) (into ``out`` if given)."""
+    """``a + v``: the vector ``v`` (3,) added to every row of ``a`` (n, 3) (into ``out`` if given)."""
     if not _rows_and_vector(a, v) or (out is not None and out.shape != a.shape):
         return np.add(a, v, out=out)
     out = np.empty(a.shape) if out is None else out
@@ -133,7 +115,7 @@ def add_row(a: Array, v: Array, out: Array | None = None) -> Array:
 
 
 def sub_row(a: Array, v: Array) -> Array:
-    """``a - v``: the vector ``v`` (k,) taken from every row of ``a`` (n, k)."""
+    """``a - v``: the vector ``v`` (3,) taken from every row of ``a`` (n, 3)."""
     if not _rows_and_vector(a, v):
         return np.subtract(a, v)
     out = np.empty(a.shape)
@@ -142,7 +124,7 @@ def sub_row(a: Array, v: Array) -> Array:
 
 
 def mul_row(a: Array, v: Array) -> Array:
-    """``a * v``: every row of ``a`` (n, k) times the vector ``v`` (k,), element by element."""
+    """``a * v``: every row of ``a`` (n, 3) times the vector ``v`` (3,), element by element."""
     if not _rows_and_vector(a, v):
         return np.multiply(a, v)
     out = np.empty(a.shape)
@@ -151,7 +133,7 @@ def mul_row(a: Array, v: Array) -> Array:
 
 
 def mul_col(a: Array, c: Array) -> Array:
-    """``a * c[:, None]``: row ``j`` of ``a`` (n, k) times ``c[j]``."""
+    """``a * c[:, None]``: row ``j`` of ``a`` (n, 3) times ``c[j]``."""
     if not _rows_and_column(a, c):
         return np.multiply(a, np.asarray(c)[:, None])
     out = np.empty(a.shape)
@@ -162,7 +144,7 @@ def mul_col(a: Array, c: Array) -> Array:
 def diff_over_col(a: Array, b: Array, c: Array) -> Array:
     """``(a - b) / c[:, None]``: the difference of two (n, k) arrays, row ``j`` over ``c[j]`` (a mean rate
     from two sets of increments over their intervals ``c``)."""
-    if not (_rows_and_column(a, c) and _floats(b) and b.shape == a.shape):
+    if not (_rows_and_column(a, c, any_width=True) and _floats(b) and b.shape == a.shape):
         return np.divide(np.subtract(a, b), np.asarray(c)[:, None])
     out = np.empty(a.shape)
     _diff_over_col(a, b, c, out)

@@ -127,6 +127,9 @@ class IncrementStream:
         self.seed = seed
         self.dt_nominal = dt_nominal
         self._sensors = {s: self._sensor(s) for s in SENSORS}
+        # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
+        # is a few per cent of a tactical unit's corruption, for nothing.
+        self._needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in model.effects)
         self._t: Array | None = None  # buffered sample times (window start .. latest)
         self._inc: dict[str, Array] = {}  # buffered ideal increments per sensor
         self._temp: Array | None = None
@@ -194,10 +197,7 @@ class IncrementStream:
         lo, hi = self._written, max(end, self._written)
         if hi == lo:
             return self._empty()
-        # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
-        # is a few per cent of a tactical unit's corruption, for nothing.
-        needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in self.model.effects)
-        nodes = _NodeInputs(self._t, self._inc, self._temp if needs_temp else None)
+        nodes = _NodeInputs(self._t, self._inc, self._temp if self._needs_temp else None)
         out = [self._sensor_readings(s, lo, hi, nodes) for s in SENSORS]
         t_out = self._t[lo : hi + 1]
         self._written = hi
