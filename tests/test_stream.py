@@ -202,19 +202,20 @@ def test_the_compiled_recursions_equal_the_array_code_they_replace():
     tau, sigma = np.array([30.0, 300.0, 3000.0]), np.array([1e-6, 2e-5, 3e-4])
     xi = rng.normal(size=(n - 1, 3))
     phi = np.exp(-dt[:, None] / tau)
-    drive = sigma * np.sqrt(1.0 - phi * phi) * xi
     start = sigma * rng.normal(size=3)
     # Regular samples: one coefficient a channel, scipy's linear filter.
     a = np.exp(-0.01 / tau)
+    drive = sigma * np.sqrt(1.0 - a * a) * xi
     expected = np.empty((n, 3))
     expected[0] = start
     for i in range(3):
         expected[1:, i], _ = lfilter([1.0], [1.0, -a[i]], drive[:, i], zi=[a[i] * start[i]])
     out = np.empty((n, 3))
     out[0] = start
-    _gauss_markov_kernel(phi, sigma, xi, a, out)
+    _gauss_markov_kernel(np.zeros((0, 3)), sigma, xi, a, out)
     np.testing.assert_array_equal(out, expected)
     # Irregular samples: each interval's own coefficient, step by step.
+    drive = sigma * np.sqrt(1.0 - phi * phi) * xi
     for k in range(1, n):
         expected[k] = phi[k - 1] * expected[k - 1] + drive[k - 1]
     _gauss_markov_kernel(phi, sigma, xi, np.zeros(0), out)

@@ -40,6 +40,7 @@ only, so adding or withholding one effect leaves the others' draws unchanged;
 from __future__ import annotations
 
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
@@ -142,9 +143,19 @@ class Effect:
         """The effect's name, ``SENSOR.EFFECT`` (``gyro.bias``)."""
         return f"{self.sensor}.{self.kind}"
 
+    #: Whether the error is affine in the true inputs (``b + M ω + K f``): its integral over an interval
+    #: is then :meth:`integrated_error` of the interval's ideal increments, exactly, and the increment
+    #: form needs no rate reconstructed at Gauss nodes for it.
+    affine: ClassVar[bool] = False
+
     def error(self, inputs: Inputs, u: Array) -> Array:
         """Additive error (n, 3) given the inputs and this sensor's (possibly delayed) input ``u``."""
         raise NotImplementedError
+
+    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
+        """An affine effect's error integrated over each interval (n, 3), from the intervals' lengths
+        ``step`` (n,), s, this sensor's ideal increments ``own`` and the accelerometers' ``dv`` (n, 3)."""
+        raise NotImplementedError(f"{self.name} is not affine in the inputs")
 
 
 @dataclass(frozen=True)
@@ -153,10 +164,15 @@ class Bias(Effect):
 
     value: Array = _array()
     kind: ClassVar[str] = "bias"
+    affine: ClassVar[bool] = True
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """The bias ``b`` at every sample."""
         return rowwise.add_row(np.zeros(u.shape), self.value)
+
+    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
+        """``b Δt``."""
+        return rowwise.outer(step, self.value)
 
 
 @dataclass(frozen=True)
@@ -165,10 +181,15 @@ class ScaleMisalignment(Effect):
 
     matrix: Array = _array((3, 3))
     kind: ClassVar[str] = "scale_misalignment"
+    affine: ClassVar[bool] = True
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """``M u``."""
         return apply_matrix(self.matrix, u)
+
+    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
+        """``M Δu``: the matrix applied to the sensor's own increments."""
+        return apply_matrix(self.matrix, own)
 
 
 @dataclass(frozen=True)
@@ -178,10 +199,15 @@ class GSensitivity(Effect):
     matrix: Array = _array((3, 3))
     kind: ClassVar[str] = "g_sensitivity"
     sensors: ClassVar[tuple[str, ...]] = ("gyro",)
+    affine: ClassVar[bool] = True
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """``K f`` from the specific force ``f_ib_b``."""
         return apply_matrix(self.matrix, inputs.f_ib_b)
+
+    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
+        """``K Δv``: the matrix applied to the accelerometers' increments."""
+        return apply_matrix(self.matrix, dv)
 
 
 @dataclass(frozen=True)
@@ -364,8 +390,11 @@ class BiasInstability(Effect):
         out[0] = self.sigma * rng.standard_normal(3)
         xi = rng.standard_normal((len(t) - 1, 3))
         phi = np.exp(-dt[:, None] / self.tau)
+        uniform = uniform_steps(t)
+        if uniform and len(phi):  # one coefficient a channel, the median step's
+            phi = np.median(phi, axis=0)
         drive = self.sigma * np.sqrt(1.0 - phi * phi) * xi
-        _ar1(phi, drive, out, uniform_steps(t))
+        _ar1(np.atleast_2d(phi), drive, out, uniform)
         return out
 
 
@@ -416,14 +445,15 @@ BASELINE = ("gyro.bias", "accel.bias", "gyro.scale_misalignment", "accel.scale_m
 
 
 def _ar1(phi: Array, drive: Array, out: Array, uniform: bool) -> None:
-    """``out[k] = phi[k-1] out[k-1] + drive[k-1]`` (in place), vectorised over channels."""
+    """``out[k] = phi[k-1] out[k-1] + drive[k-1]`` (in place), vectorised over channels; ``uniform``:
+    ``phi`` is one row (1, 3), every interval's."""
     from scipy.signal import lfilter
 
     if len(phi) == 0:
         return
     if uniform:  # one coefficient: a linear filter does it in C
         for i in range(3):
-            a = float(np.median(phi[:, i]))
+            a = float(phi[0, i])
             out[1:, i], _ = lfilter([1.0], [1.0, -a], drive[:, i], zi=[a * out[0, i]])
         return
     for k in range(1, len(out)):
@@ -598,11 +628,14 @@ class ImuModel:
         off = self.effect_of(sensor, TimeOffset)
         return np.zeros(3) if off is None else off.delay
 
-    def deterministic_error(self, sensor: str, inputs: Inputs) -> Array:
-        """The sum of the sensor's deterministic errors (n, 3) at these true inputs (no delay, no noise)."""
+    def deterministic_error(
+        self, sensor: str, inputs: Inputs, effects: Sequence[Effect] | None = None
+    ) -> Array:
+        """The sum of the sensor's deterministic errors (n, 3) at these true inputs (no delay, no noise);
+        ``effects``: only those of them (default: all)."""
         u = inputs.of(sensor)
         err = np.zeros_like(u)
-        for e in self.effects_of(sensor):
+        for e in self.effects_of(sensor) if effects is None else effects:
             if e.stage == "deterministic":
                 np.add(err, e.error(inputs, u), out=err)  # in place: the same sums, no new array each
         return err

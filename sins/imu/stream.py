@@ -9,7 +9,9 @@ chunk boundary is carried rather than recomputed:
   its own generator, which a chunk continues where the last left it, and its state (the bias at the last
   sample, the quantization noise's last error of the integrated output) goes on;
 * the deterministic errors at an interval's Gauss nodes need the rate reconstructed from the
-  neighbouring intervals' means, and a delayed channel the input ``delay`` earlier: the stream keeps
+  neighbouring intervals' means (an effect affine in the inputs needs no nodes: its integral is the
+  effect applied to the ideal increments, exactly), and a delayed channel the input ``delay``
+  earlier: the stream keeps
   :meth:`IncrementStream.margin` intervals on each side of those it writes, and writes an interval only
   once its later neighbours have come;
 * a delayed channel interpolates the running integral of its input, carried as the sum of every
@@ -33,6 +35,7 @@ from sins import rowwise
 from sins.imu.model import (
     SENSORS,
     BiasInstability,
+    Effect,
     ImuModel,
     Inputs,
     Noise,
@@ -67,6 +70,7 @@ class _Process:
 class _Sensor:
     """What one sensor carries from chunk to chunk."""
 
+    name: str
     processes: list[_Process]
     noise: Noise | None
     noise_rng: np.random.Generator | None
@@ -76,6 +80,8 @@ class _Sensor:
     cum: Array = field(default_factory=lambda: np.zeros(3))  # ideal running integral at the window start
     quant_sum: Array = field(default_factory=lambda: np.zeros(3))  # running sum before rounding
     quant_out: Array = field(default_factory=lambda: np.zeros(3))  # its last rounded value
+    affine: list[Effect] = field(default_factory=list)  # deterministic effects integrated exactly
+    curved: list[Effect] = field(default_factory=list)  # the others, at the Gauss nodes
 
 
 class _NodeInputs:
@@ -84,11 +90,26 @@ class _NodeInputs:
     temperature of the moment the channel measured."""
 
     def __init__(self, t: Array, inc: dict[str, Array], temp: Array | None) -> None:
-        self.t, self.temp = t, temp
+        self.t, self.temp, self.inc = t, temp, inc
         self.dt = np.diff(t)
-        self.means = {sensor: inc[sensor] / self.dt[:, None] for sensor in SENSORS}
-        self.nodes = [0.5 * (t[:-1] + t[1:]) + s * self.dt for s in _NODES]
+        self._means: dict[str, Array] = {}
+        self._nodes: list[Array] = []
         self._cache: dict[tuple[int, float], Inputs] = {}
+
+    @property
+    def means(self) -> dict[str, Array]:
+        """Each sensor's mean rate over each buffered interval (made when first asked)."""
+        if not self._means:
+            self._means = {sensor: self.inc[sensor] / self.dt[:, None] for sensor in SENSORS}
+        return self._means
+
+    @property
+    def nodes(self) -> list[Array]:
+        """The times of every buffered interval's two Gauss nodes (made when first asked)."""
+        if not self._nodes:
+            t = self.t
+            self._nodes = [0.5 * (t[:-1] + t[1:]) + s * self.dt for s in _NODES]
+        return self._nodes
 
     def __call__(self, j: int, d: float) -> Inputs:
         """The inputs at Gauss node ``j`` of every buffered interval, delayed by ``d`` s."""
@@ -146,7 +167,10 @@ class IncrementStream:
         rng = None if noise is None else random_stream(self.seed, noise.name)
         qnoise = self.model.effect_of(sensor, QuantizationNoise)
         qrng = None if qnoise is None else random_stream(self.seed, qnoise.name)
-        return _Sensor(processes, noise, rng, qnoise, qrng)
+        deterministic = [e for e in self.model.effects_of(sensor) if e.stage == "deterministic"]
+        return _Sensor(sensor, processes, noise, rng, qnoise, qrng,
+                       affine=[e for e in deterministic if e.affine],
+                       curved=[e for e in deterministic if not e.affine])  # fmt: skip
 
     def margin(self) -> int:
         """Intervals of context kept on each side of those written: the reconstruction's neighbours,
@@ -238,9 +262,7 @@ class IncrementStream:
             noise_rate = rowwise.row_over_col(state.noise.density, np.sqrt(dt[rows])) * z
         if state.qnoise is not None and state.qnoise_rng is not None:
             noise_rate = noise_rate + self._quantization_noise(state, n_out) / dt[rows][:, None]
-        nodes = node_inputs.nodes
         sat = model.effect_of(sensor, Saturation)
-        deterministic = any(e.stage == "deterministic" for e in model.effects_of(sensor))
         delay = model.delay_of(sensor)
         total = np.empty((n_out, 3))
         step = dt[rows]
@@ -248,17 +270,14 @@ class IncrementStream:
         for d in np.unique(delay):
             cols = delay == d
             shifted = self._shifted(ideal, t, float(d), state.cum)[rows] if d else ideal[rows]
-            part = np.zeros((n_out, 3))
             if sat is None:
-                if deterministic:
-                    for j in range(len(nodes)):
-                        err = model.deterministic_error(sensor, node_inputs(j, float(d)))[rows]
-                        part += rowwise.mul_col(err, half_step)
                 # The ideal part stays exact; only the errors come from the reconstruction.
-                total[:, cols] = (shifted + part)[:, cols]
+                errors = self._integrated_errors(state, rows, float(d), node_inputs)
+                total[:, cols] = (shifted + errors)[:, cols]
                 continue
             # Saturation clips the whole reading (input, errors, biases, noise) at the nodes.
-            for j, when in enumerate(nodes):
+            part = np.zeros((n_out, 3))
+            for j, when in enumerate(node_inputs.nodes):
                 inputs = node_inputs(j, float(d))
                 at = when[rows]
                 b = np.column_stack([np.interp(at, t[lo : hi + 1], bias[:, i]) for i in range(3)])
@@ -273,6 +292,29 @@ class IncrementStream:
             total = self._quantized(state, total, q.step * self.dt_nominal)
         return total
 
+    def _integrated_errors(self, state: _Sensor, rows: slice, d: float, node_inputs: _NodeInputs) -> Array:
+        """The sensor's deterministic errors integrated over the intervals ``rows`` of the buffer, its
+        input delayed by ``d`` s.
+
+        The quadratic through the neighbours' means keeps each interval's mean, and the two-point Gauss
+        rule is exact for it: an affine effect's integral is therefore the effect applied to the ideal
+        increments (:meth:`sins.imu.model.Effect.integrated_error`), with no reconstruction. Delayed
+        inputs and the other effects take the two Gauss nodes of the reconstructed rate.
+        """
+        model, step = self.model, node_inputs.dt[rows]
+        at_nodes = state.curved if d == 0.0 else state.affine + state.curved
+        part = np.zeros((len(step), 3))
+        if d == 0.0:
+            own, dv = node_inputs.inc[state.name][rows], node_inputs.inc["accel"][rows]
+            for e in state.affine:
+                part += e.integrated_error(step, own, dv)
+        if at_nodes:
+            half_step = 0.5 * step
+            for j in range(len(_NODES)):
+                err = model.deterministic_error(state.name, node_inputs(j, d), at_nodes)[rows]
+                part += rowwise.mul_col(err, half_step)
+        return part
+
     def _bias(self, state: _Sensor, t: Array) -> Array:
         """The random biases' sum at ``t`` (the written intervals' ends), each process continued."""
         total = np.zeros((len(t), 3))
@@ -284,9 +326,11 @@ class IncrementStream:
             if isinstance(e, BiasInstability):
                 values[0] = e.sigma * p.rng.standard_normal(3) if p.value is None else p.value
                 xi = p.rng.standard_normal((len(dt), 3))
-                phi = np.exp(rowwise.col_over_row(-dt, e.tau))
                 uniform = uniform_steps(t) if uniform is None else uniform
-                a = np.exp(-self.dt_nominal / e.tau) if uniform else np.zeros(0)
+                if uniform:  # one coefficient a channel: no exponential per interval
+                    a, phi = np.exp(-self.dt_nominal / e.tau), np.zeros((0, 3))
+                else:
+                    a, phi = np.zeros(0), np.exp(rowwise.col_over_row(-dt, e.tau))
                 _gauss_markov_kernel(phi, np.ascontiguousarray(e.sigma), xi, a, values)
             else:
                 start = np.zeros(3) if p.value is None else p.value
@@ -334,16 +378,21 @@ class IncrementStream:
 def _gauss_markov_kernel(phi: Array, sigma: Array, xi: Array, a: Array, out: Array) -> None:
     """``out[k] = φ out[k-1] + σ sqrt(1 - φ²) ξ[k-1]`` in place from ``out[0]``, per channel.
 
-    With one coefficient per channel ``a`` (3,) (regular samples) the recursion uses it, else (``a``
-    empty) each interval's ``phi``; the drive still takes each interval's ``phi``. The arithmetic of
-    the linear filter (``scipy.signal.lfilter``) this replaces, to the last bit (``tests/test_stream.py``).
+    With one coefficient per channel ``a`` (3,) (regular samples) ``φ = a`` throughout and ``phi`` is not
+    read; else (``a`` empty) each interval's ``phi`` (n - 1, 3). The arithmetic of the linear filter
+    (``scipy.signal.lfilter``) of :meth:`sins.imu.model.BiasInstability.process`, to the last bit
+    (``tests/test_stream.py``).
     """
-    uniform = a.shape[0] > 0
+    if a.shape[0] > 0:
+        drive = sigma * np.sqrt(1.0 - a * a)
+        for k in range(1, out.shape[0]):
+            for i in range(3):
+                out[k, i] = a[i] * out[k - 1, i] + drive[i] * xi[k - 1, i]
+        return
     for k in range(1, out.shape[0]):
         for i in range(3):
             p = phi[k - 1, i]
-            drive = sigma[i] * np.sqrt(1.0 - p * p) * xi[k - 1, i]
-            out[k, i] = (a[i] if uniform else p) * out[k - 1, i] + drive
+            out[k, i] = p * out[k - 1, i] + sigma[i] * np.sqrt(1.0 - p * p) * xi[k - 1, i]
 
 
 @numba.njit(cache=True, nogil=True)
