@@ -102,6 +102,21 @@ def test_linear_strategy_corrects_increments_exactly():
     assert np.abs(corrupted.dtheta_b - ideal.dtheta_b).max() > 1e-6  # there was something to remove
 
 
+def test_regression_corrects_increments_as_the_rate_form_does():
+    # The seed model is affine: inverted on the increments (biases times the step) it gives the rate
+    # form's correction of the mean rate times the step, but for rounding.
+    model = _unit("consumer", 4, noise=False)
+    strategy = compensation.make("regression").fit(calibration.simulate_rig(FAST, model, seed=4))
+    motion = SegmentMotion.from_segments(Start(0.7, 0.1, 50.0, 10.0), [Hold(2), Turn(5, 0.4, 1.0), Hold(2)])
+    _, ideal = trajectory.generate(motion, 100.0)
+    corrupted = model.corrupt_increments(ideal, seed=2)
+    direct = strategy.correct_increments(corrupted)
+    via_rates = compensation.Strategy.correct_increments(strategy, corrupted)
+    np.testing.assert_allclose(direct.dtheta_b, via_rates.dtheta_b, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(direct.dv_b, via_rates.dv_b, rtol=0, atol=1e-14)
+    assert not np.array_equal(direct.dtheta_b, corrupted.dtheta_b)
+
+
 def test_model_files_round_trip_and_refuse_other_versions(tmp_path: Path):
     data = calibration.simulate_rig(FAST, _unit("industrial", 2), seed=2)
     strategy = compensation.make("regression_robust").fit(data)

@@ -212,8 +212,8 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     assert "chosen on 3 folds of" in out and "gyro size" in out and "accel size" in out
     assert sum(line.split()[0] in imu.CHANNELS for line in out.splitlines()) == 6
     doc = json.loads((tmp_path / "k.json").read_text())
-    assert doc["version"] == compensation.FORMAT_VERSION == 2
-    assert {"configs_", "cv_scores_", "guard_", "used_", "base_"} <= set(doc["state"])
+    assert doc["version"] == compensation.FORMAT_VERSION == 3
+    assert {"configs_", "cv_scores_", "guard_", "used_", "base_", "terms_"} <= set(doc["state"])
     assert (
         main(["fit", str(rec), "--strategy", "regression", "--no-guard", "--out", str(tmp_path / "r.json")])
         == 2

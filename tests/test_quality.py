@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -49,12 +50,19 @@ def test_a_degraded_strategy_fails_the_gate_and_is_named(
     capsys.readouterr()
 
     original = compensation.Regression.correct
+    original_increments = compensation.Regression.correct_increments
 
     def degraded(self, gyro, accel, temp=None):  # type: ignore[no-untyped-def]
         w, f = original(self, gyro, accel, temp)
         return w + 1e-4, f  # 20 °/h left in every gyro: +20 % over 30 °/h of noise per sample
 
+    def degraded_increments(self, imu, temp=None):  # type: ignore[no-untyped-def]
+        # The same 20 °/h on the increments, which regression corrects without the rate form.
+        out = original_increments(self, imu, temp)
+        return dataclasses.replace(out, dtheta_b=out.dtheta_b + 1e-4 * np.diff(imu.t)[:, None])
+
     monkeypatch.setattr(compensation.Regression, "correct", degraded)  # fmt: skip
+    monkeypatch.setattr(compensation.Regression, "correct_increments", degraded_increments)  # fmt: skip
     assert main(["check", str(small_suite), "--baseline", str(baseline)]) == 1
     out = capsys.readouterr().out
     assert "linear/regression final_horizontal_m: regressed by +" in out

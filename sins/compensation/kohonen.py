@@ -159,8 +159,9 @@ class LocalLinearMap(ResidualStrategy):
         guard_z: float = 2.0,
         seed: int = 0,
         n_jobs: int = 2,
+        physics: bool = True,
     ) -> None:
-        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs)
+        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
         self.sizes = tuple(int(n) for n in sizes)
         self.sigmas = tuple(float(s) for s in sigmas)
         self.smoothing = smoothing

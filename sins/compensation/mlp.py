@@ -286,8 +286,9 @@ class ResidualMLP(ResidualStrategy):
         guard_z: float = 2.0,
         seed: int = 0,
         n_jobs: int = 2,
+        physics: bool = True,
     ) -> None:
-        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs)
+        super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
         self.hidden_sizes = tuple(tuple(int(h) for h in hs) for hs in hidden_sizes)
         self.decays = tuple(float(d) for d in decays)
 

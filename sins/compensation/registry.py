@@ -20,7 +20,7 @@ from sins.compensation.base import Strategy
 from sins.errors import SinsInputError
 
 #: Version of the model file format; bump it when the saved state changes meaning.
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 FORMAT_NAME = "sins.compensation"
 
 #: Registered class names: where each class lives (``module:Class``).

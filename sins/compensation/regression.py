@@ -8,7 +8,7 @@ import numpy as np
 
 from sins.compensation.base import Array, Strategy
 from sins.imu import calibration
-from sins.series import CalibrationData
+from sins.series import CalibrationData, ImuIncrements
 
 
 class Regression(Strategy):
@@ -41,6 +41,14 @@ class Regression(Strategy):
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Invert the fitted seed model exactly (``temp`` unused)."""
         return calibration.invert_seed_model(self.B0_, self.B_, self.K_, self.A0_, self.A_, gyro, accel)
+
+    def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
+        """Invert the seed model on the increments themselves: it is affine, so the mean rate's
+        correction times the step is the increment's, with no division by the step and product back."""
+        dtheta_b, dv_b = calibration.invert_seed_model(
+            self.B0_, self.B_, self.K_, self.A0_, self.A_, imu.dtheta_b, imu.dv_b, dt=np.diff(imu.t)
+        )
+        return ImuIncrements(t=imu.t, dtheta_b=dtheta_b, dv_b=dv_b)
 
 
 def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes: int = 5) -> Array:

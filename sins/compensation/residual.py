@@ -1,9 +1,11 @@
 """Physics first, then learning: the machinery shared by the learned strategies ``mlp`` and ``kohonen``.
 
 A learned strategy here starts from the seed model's least-squares fit
-(:class:`~sins.compensation.Regression`) and learns only what that fit leaves:
-the residual ``x̂ − x_ref`` of the regression-corrected readings ``x̂``
-against the rig's reference. Consequences, each a reason for the design:
+(:class:`~sins.compensation.Regression`), adds the temperature terms each
+channel's held-back blocks ask for (:mod:`sins.compensation.terms`), and learns
+only what those leave: the residual ``x̂ − x_ref`` of the regression-corrected
+readings ``x̂`` against the rig's reference, less the terms. Consequences, each a
+reason for the design:
 
 * **Inputs are the reference, not the readings.** The residual is learned as a
   function of the rig's reference inputs (noise-free), so a learner cannot
@@ -33,9 +35,10 @@ against the rig's reference. Consequences, each a reason for the design:
   trained on their residuals and scored on the fold's: the held-back blocks
   are orientations, rates and temperatures the learner did not see.
 * **An honest guard.** Per channel, the chosen learner's held-back gain over
-  regression (sum of squared residuals) is compared with its sampling error
-  over the held-back blocks; a channel whose gain is not above ``guard_z``
-  standard errors predicts regression's correction (unless ``guard=False``).
+  regression and the terms (sum of squared residuals) is compared with its
+  sampling error over the held-back blocks; a channel whose gain is not above
+  ``guard_z`` standard errors predicts their correction (unless ``guard=False``).
+  The terms pass the same test against regression alone.
 
 Subclasses supply the learner: its candidate settings, training and prediction.
 """
@@ -52,6 +55,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation import terms
 from sins.compensation.base import Strategy
 from sins.compensation.regression import Regression
 from sins.imu import CHANNELS
@@ -187,12 +191,20 @@ class ResidualStrategy(Strategy):
     guard : fall back to regression on channels where the learner does not earn its place
     guard_z : standard errors the held-back gain must exceed
     seed : fold assignment and the learner's own randomness
+    physics : first fit each channel the physics terms (:mod:`sins.compensation.terms`) that earn their
+        place on the held-back blocks, and learn what they leave
     n_jobs : threads that train the cross-validation's candidates side by side; the results do not depend
         on it (each training is sequential and seeded on its own), so it is not saved with the model
     """
 
     def __init__(
-        self, folds: int = 3, guard: bool = True, guard_z: float = 2.0, seed: int = 0, n_jobs: int = 2
+        self,
+        folds: int = 3,
+        guard: bool = True,
+        guard_z: float = 2.0,
+        seed: int = 0,
+        n_jobs: int = 2,
+        physics: bool = True,
     ) -> None:
         if folds < 2:
             raise ValueError(f"folds must be 2 or more, got {folds}")
@@ -203,13 +215,15 @@ class ResidualStrategy(Strategy):
         self.guard_z = guard_z
         self.seed = seed
         self.n_jobs = n_jobs
+        self.physics = physics
         #: Called as ``progress(done, total)`` as the cross-validation's trainings finish (a progress
         #: bar, say); not a parameter, and not saved.
         self.progress: Callable[[int, int], None] | None = None
 
     def params(self) -> dict[str, Any]:
-        """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``."""
-        return {"folds": self.folds, "guard": self.guard, "guard_z": self.guard_z, "seed": self.seed}
+        """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``, ``physics``."""
+        return {"folds": self.folds, "guard": self.guard, "guard_z": self.guard_z, "seed": self.seed,
+                "physics": self.physics}  # fmt: skip
 
     # ------------------------------------------------------------------ what a learner supplies
 
@@ -255,10 +269,35 @@ class ResidualStrategy(Strategy):
         n_blocks = int(block[-1]) + 1
         fold = (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[block]
         self.blocks_, self.cv_folds_ = n_blocks, self.folds
+        # Each fold's regression, refitted without the fold: the held-back residuals the terms and the
+        # learners are chosen on.
+        folds: list[tuple[int, NDArray[np.bool_], Array]] = []
+        for k in range(self.folds):
+            train = fold != k
+            try:
+                fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
+            except ValueError:
+                continue  # this fold's training part cannot determine the seed model
+            folds.append((k, train, self._targets(fold_base, data)))
+        # Physics first: the terms least squares carries, each channel's chosen on the held-back blocks.
+        x_terms = self._term_inputs(data.ref_gyro, data.ref_accel, data.temp)
+        groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
+        if self.physics:
+            groups = terms.choose(x_terms, [(train, t) for _, train, t in folds], block, self.guard_z)
         targets = self._targets(base, data)
+        self.terms_ = {
+            ch: {"groups": list(g), "coef": terms.fit(terms.design(g, c, x_terms), targets[:, c]).tolist()}
+            for c, (ch, g) in enumerate(zip(CHANNELS, groups, strict=True))
+            if g
+        }
+        targets = targets - self._terms(x_terms, range(6))
         sigma = np.sqrt(np.mean(targets**2, axis=0))
         self.sigma_ = np.where(sigma > 0, sigma, 1.0)
-        trials = self._cross_validate(data, scaled, block, fold)
+        # The learners learn what regression and the terms leave, both refitted without the fold.
+        for i, (k, train, t) in enumerate(folds):
+            left = t - terms.predict(groups, self._fold_terms(groups, x_terms, train, t), x_terms, range(6))
+            folds[i] = (k, train, left)
+        trials = self._cross_validate(scaled, block, folds)
         self.learners_: dict[str, Any] = {}
         self.configs_: dict[str, dict[str, Any]] = {}
         self.cv_scores_ = {s: {k: t.score for k, t in trials[s].items()} for s in SENSORS}
@@ -280,19 +319,29 @@ class ResidualStrategy(Strategy):
         self.fit_seconds_ = time.perf_counter() - started
         return self
 
+    @staticmethod
+    def _fold_terms(
+        groups: list[tuple[str, ...]], x: terms.Inputs, train: NDArray[np.bool_], targets: Array
+    ) -> list[Array]:
+        """The chosen terms' coefficients fitted on one fold's training rows."""
+        x_train = x.rows(train)
+        return [
+            terms.fit(terms.design(g, c, x_train), targets[train, c]) if g else np.zeros(0)
+            for c, g in enumerate(groups)
+        ]
+
     def _cross_validate(
-        self, data: CalibrationData, scaled: dict[str, Array], block: NDArray[np.intp], fold: NDArray[np.intp]
+        self,
+        scaled: dict[str, Array],
+        block: NDArray[np.intp],
+        folds: list[tuple[int, NDArray[np.bool_], Array]],
     ) -> dict[str, dict[str, _Trial]]:
-        """Per sensor and candidate setting, its held-back record over the folds: for each fold the
-        regression is refitted on the others and every candidate trained on their residuals."""
+        """Per sensor and candidate setting, its held-back record over the folds: for each fold ``k``,
+        every candidate trained on the residuals its training rows leave (regression and the chosen
+        terms, refitted without the fold) and scored on the fold's."""
         jobs: list[tuple[str, dict[str, Any], Points, Points, slice, int]] = []
-        for k in range(self.folds):
-            train, held = fold != k, fold == k
-            try:
-                fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
-            except ValueError:
-                continue  # this fold's training part cannot determine the seed model
-            fold_targets = self._targets(fold_base, data)
+        for k, train, fold_targets in folds:
+            held = ~train
             for si, sensor in enumerate(SENSORS):
                 cols = slice(3 * si, 3 * si + 3)
                 pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train])
@@ -354,6 +403,25 @@ class ResidualStrategy(Strategy):
             t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
         return input_columns(sensor, w / s["rate"], f / s["accel"], t)
 
+    def _term_inputs(self, w: Array, f: Array, temp: Array | None) -> terms.Inputs:
+        """The terms' inputs, in the learners' physical scales (rate, ``G0``, half the temperature span)."""
+        s = self.scaling_
+        t = None
+        if self.uses_temp_:
+            if temp is None:
+                raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
+            t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
+        return terms.Inputs(w / s["rate"], f / s["accel"], t)
+
+    def _terms(self, x: terms.Inputs, channels: range) -> Array:
+        """The chosen terms' residual on ``channels`` (n, len(channels)); 0 on a channel without."""
+        chosen = self.terms_
+        groups = [tuple(chosen[ch]["groups"]) if ch in chosen else () for ch in CHANNELS]
+        coef = [
+            np.asarray(chosen[ch]["coef"], dtype=float) if ch in chosen else np.zeros(0) for ch in CHANNELS
+        ]
+        return terms.predict(groups, coef, x, channels)
+
     def _residual(self, sensor: str, x: Array) -> Array:
         """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
         goes on along its edge slope (a one-sided difference over the last 0.1 % of the range) for up
@@ -387,12 +455,16 @@ class ResidualStrategy(Strategy):
         w_hat, f_hat = self._base_strategy().correct(gyro, accel)
         hat = (w_hat, f_hat)
         w, f = w_hat, f_hat
+        with_terms = bool(self.terms_)
         for _ in range(1 + _PASSES):
             out = []
+            x_terms = self._term_inputs(w, f, temp) if with_terms else None
             for si, sensor in enumerate(SENSORS):
                 mask = self.used_[3 * si : 3 * si + 3]
-                pred = self._residual(sensor, self._scale(sensor, w, f, temp)) if mask.any() else 0.0
-                out.append(hat[si] - pred * mask)
+                pred = self._residual(sensor, self._scale(sensor, w, f, temp)) * mask if mask.any() else 0.0
+                if x_terms is not None:
+                    pred = pred + self._terms(x_terms, range(3 * si, 3 * si + 3))
+                out.append(hat[si] - pred)
             w, f = out
         return w, f
 
@@ -412,13 +484,17 @@ class ResidualStrategy(Strategy):
         return cache[sensor]
 
     def guard_report(self) -> str:
-        """One line per channel: the learner's held-back gain over regression and whether it is used."""
+        """One line per channel: the physics terms it took, the learner's held-back gain over them and
+        whether the learner is used."""
         lines = []
         for ch, g in self.guard_.items():
-            verdict = "learned" if g["earns_its_place"] else "regression"
+            groups = self.terms_.get(ch, {}).get("groups", [])
+            base = "regression" + "".join(f" + {t}" for t in groups)
+            verdict = "learned" if g["earns_its_place"] else base
             forced = " (guard off)" if not self.guard and not g["earns_its_place"] else ""
             gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
-            lines.append(f"{ch:<8} held-back gain {gain:+7.2f} % ± {se:.2f} %  -> {verdict}{forced}")
+            learner = f"learner's held-back gain {gain:+7.2f} % ± {se:.2f} %"
+            lines.append(f"{ch:<8} {base:<26} {learner}  -> {verdict}{forced}")
         return "\n".join(lines)
 
     def get_state(self) -> dict[str, Any]:

@@ -402,15 +402,19 @@ class SeedModelFit:
 
 
 def invert_seed_model(
-    B0: Array, B: Array, K: Array, A0: Array, A: Array, gyro: Array, accel: Array
+    B0: Array, B: Array, K: Array, A0: Array, A: Array, gyro: Array, accel: Array, dt: Array | None = None
 ) -> tuple[Array, Array]:
     """The angular rate and specific force (n, 3) that the seed model maps to these readings.
 
     ``accel = n + A0 + A n`` is solved for ``n`` first; then
-    ``gyro = ω + B0 + B ω + K n`` for ``ω``.
+    ``gyro = ω + B0 + B ω + K n`` for ``ω``. With ``dt`` (n,), s, the readings are increments over
+    intervals of those lengths and so is the answer: the model is affine, so an interval's integral
+    obeys it with the biases times ``dt``.
     """
-    n = apply_matrix(np.linalg.inv(np.eye(3) + A), rowwise.sub_row(accel, A0))
-    w = apply_matrix(np.linalg.inv(np.eye(3) + B), rowwise.sub_row(gyro, B0) - apply_matrix(K, n))
+    a0, b0 = (A0, B0) if dt is None else (rowwise.outer(dt, A0), rowwise.outer(dt, B0))
+    sub = rowwise.sub_row if dt is None else np.subtract
+    n = apply_matrix(np.linalg.inv(np.eye(3) + A), sub(accel, a0))
+    w = apply_matrix(np.linalg.inv(np.eye(3) + B), sub(gyro, b0) - apply_matrix(K, n))
     return w, n
 
 
