@@ -101,7 +101,7 @@ def test_a_nonlinear_effect_is_learned_on_one_rig_and_holds_on_others(sessions, 
             assert (by_strategy[name] <= 1.05).sum() >= 5, (judge, name, by_strategy[name])
 
 
-def test_a_temperature_scale_the_fitting_rig_confounds_with_its_table_holds_on_tumbling(sessions):
+def test_a_temperature_scale_the_fitting_rig_confounds_with_its_table_holds_on_tumbling(sessions, tmp_path):
     """A gyro scale factor that drifts with temperature, on a rig that turns its table only while the
     chamber warms: a learner alone cannot tell temperature from rate there, and on continuous tumbling
     (all axes at once, 15-30 °C, 50 Hz) leaves 1.23x (mlp) and 1.27x (kohonen) the noise on this unit
@@ -123,5 +123,11 @@ def test_a_temperature_scale_the_fitting_rig_confounds_with_its_table_holds_on_t
         if name != "regression":
             assert strategy.terms_["gyro.y"]["groups"] == ["temperature"], name
             assert set(strategy.terms_) == {"gyro.y"}, (name, strategy.terms_)
+            # The model file carries the terms: the same corrections to the last bit.
+            compensation.save(strategy, tmp_path / f"{name}.json")
+            again = compensation.load(tmp_path / f"{name}.json")
+            for a, b in zip(again.correct(data.gyro, data.accel, data.temp),
+                            strategy.correct(data.gyro, data.accel, data.temp), strict=True):  # fmt: skip
+                np.testing.assert_array_equal(a, b)
     assert residual["regression"] > 2.0, residual
     assert residual["mlp"] <= 1.05 and residual["kohonen"] <= 1.05, residual
