@@ -99,6 +99,11 @@ def input_columns(sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
     return np.hstack(parts)
 
 
+def _columns(sensor: str, x: terms.Inputs) -> Array:
+    """:func:`input_columns` of scaled inputs."""
+    return input_columns(sensor, x.w, x.f, x.t)
+
+
 def segment(scaled: Array, t: Array) -> NDArray[np.intp]:
     """Block index of every row: a new block where the coarse cell of ``scaled`` (n, d) changes, merged
     to at least 1 s and split to at most 20 s."""
@@ -264,7 +269,8 @@ class ResidualStrategy(Strategy):
         self.base_ = base.get_state()
         self._base = base
         self._set_scaling(data)
-        scaled = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
+        x_terms = self._scaled(data.ref_gyro, data.ref_accel, data.temp)
+        scaled = {s: _columns(s, x_terms) for s in SENSORS}
         block = segment(scaled["gyro"][:, :6], data.t)
         n_blocks = int(block[-1]) + 1
         fold = (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[block]
@@ -280,7 +286,6 @@ class ResidualStrategy(Strategy):
                 continue  # this fold's training part cannot determine the seed model
             folds.append((k, train, self._targets(fold_base, data)))
         # Physics first: the terms least squares carries, each channel's chosen on the held-back blocks.
-        x_terms = self._term_inputs(data.ref_gyro, data.ref_accel, data.temp)
         groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
         if self.physics:
             groups = terms.choose(x_terms, [(train, t) for _, train, t in folds], block, self.guard_z)
@@ -394,17 +399,9 @@ class ResidualStrategy(Strategy):
         box = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
         self.box_ = {s: [box[s].min(axis=0).tolist(), box[s].max(axis=0).tolist()] for s in SENSORS}
 
-    def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
-        s = self.scaling_
-        t = None
-        if self.uses_temp_:
-            if temp is None:
-                raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
-            t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
-        return input_columns(sensor, w / s["rate"], f / s["accel"], t)
-
-    def _term_inputs(self, w: Array, f: Array, temp: Array | None) -> terms.Inputs:
-        """The terms' inputs, in the learners' physical scales (rate, ``G0``, half the temperature span)."""
+    def _scaled(self, w: Array, f: Array, temp: Array | None) -> terms.Inputs:
+        """Rate, force and temperature in the physical scales (the rig's largest rate, ``G0``, half the
+        temperature span about its centre): the terms' inputs, and the learners' (:meth:`_scale`)."""
         s = self.scaling_
         t = None
         if self.uses_temp_:
@@ -412,6 +409,10 @@ class ResidualStrategy(Strategy):
                 raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
             t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
         return terms.Inputs(w / s["rate"], f / s["accel"], t)
+
+    def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
+        """A sensor's learner inputs (:func:`input_columns`) in the physical scales."""
+        return _columns(sensor, self._scaled(w, f, temp))
 
     def _terms(self, x: terms.Inputs, channels: range) -> Array:
         """The chosen terms' residual on ``channels`` (n, len(channels)); 0 on a channel without."""
@@ -456,14 +457,16 @@ class ResidualStrategy(Strategy):
         hat = (w_hat, f_hat)
         w, f = w_hat, f_hat
         with_terms = bool(self.terms_)
+        if not (with_terms or self.used_.any()):
+            return w, f
         for _ in range(1 + _PASSES):
             out = []
-            x_terms = self._term_inputs(w, f, temp) if with_terms else None
+            x = self._scaled(w, f, temp)  # once a pass, for the terms and both sensors' learners
             for si, sensor in enumerate(SENSORS):
                 mask = self.used_[3 * si : 3 * si + 3]
-                pred = self._residual(sensor, self._scale(sensor, w, f, temp)) * mask if mask.any() else 0.0
-                if x_terms is not None:
-                    pred = pred + self._terms(x_terms, range(3 * si, 3 * si + 3))
+                pred = self._residual(sensor, _columns(sensor, x)) * mask if mask.any() else 0.0
+                if with_terms:
+                    pred = pred + self._terms(x, range(3 * si, 3 * si + 3))
                 out.append(hat[si] - pred)
             w, f = out
         return w, f

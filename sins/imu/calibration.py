@@ -411,10 +411,12 @@ def invert_seed_model(
     intervals of those lengths and so is the answer: the model is affine, so an interval's integral
     obeys it with the biases times ``dt``.
     """
-    a0, b0 = (A0, B0) if dt is None else (rowwise.outer(dt, A0), rowwise.outer(dt, B0))
-    sub = rowwise.sub_row if dt is None else np.subtract
-    n = apply_matrix(np.linalg.inv(np.eye(3) + A), sub(accel, a0))
-    w = apply_matrix(np.linalg.inv(np.eye(3) + B), sub(gyro, b0) - apply_matrix(K, n))
+    if dt is None:
+        accel_0, gyro_0 = rowwise.sub_row(accel, A0), rowwise.sub_row(gyro, B0)
+    else:
+        accel_0, gyro_0 = accel - rowwise.outer(dt, A0), gyro - rowwise.outer(dt, B0)
+    n = apply_matrix(np.linalg.inv(np.eye(3) + A), accel_0)
+    w = apply_matrix(np.linalg.inv(np.eye(3) + B), gyro_0 - apply_matrix(K, n))
     return w, n
 
 
