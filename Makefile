@@ -19,7 +19,7 @@ run: $(STAMP)
 # BLAS/OpenMP thread per worker: a pool per worker beside torch's oversubscribed the two cores and made
 # the gap diagnosis four times slower (2.0 s -> 8.1 s a case). torch's and OpenBLAS's AVX2 kernels on
 # any x86-64 machine: their AVX-512 ones round differently, and the mlp that L-BFGS trains from the
-# rounded data is another network (the quality suite's mlp drifts 477 m on AVX2, 591 m on AVX-512); the
+# rounded data is another network (the quality suite's mlp drifts 643 m on AVX2, 545 m on AVX-512); the
 # shipped baselines were measured on AVX2 kernels.
 test: lint
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 ATEN_CPU_CAPABILITY=avx2 OPENBLAS_CORETYPE=Haswell \

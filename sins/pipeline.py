@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io, rowwise, scenario
+from sins import io, scenario
 from sins.errors import MissingInputError, SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
@@ -249,7 +249,11 @@ def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) 
 
 
 def run_units(
-    sc: Scenario, units: Sequence[FittedUnit], nav_seeds: Sequence[int], keep_hz: float = 10.0
+    sc: Scenario,
+    units: Sequence[FittedUnit],
+    nav_seeds: Sequence[int],
+    keep_hz: float = 10.0,
+    sensor_errors: bool = True,
 ) -> list[ScenarioRun]:
     """Drive several fitted units through one scenario, sharing its trajectory.
 
@@ -257,6 +261,8 @@ def run_units(
     ``nav_seeds[i]``), corrects and integrates every chunk in turn, exactly as it would alone:
     each result equals :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the
     last bit. Memory is bounded by the chunk and the thinned series, whatever the duration.
+    ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which
+    a campaign does not keep: ~10 ns of a unit-sample's ~300).
     """
     if len(units) != len(nav_seeds):
         raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
@@ -265,13 +271,16 @@ def run_units(
         keep_every = _keep_every(sc, motion, keep_hz)
         first = trajectory.start_state(motion)
         chunks = _prefetched(_shared(sc, trajectory.generate_chunks(motion, sc.rate_hz)))
+        pending = _Pending()  # one for all the units: they take the same rows, mostly at the same time
         driven = [
-            _DrivenUnit(sc, unit, seed, first, keep_every)
+            _DrivenUnit(sc, unit, seed, first, keep_every, pending, sensor_errors)
             for unit, seed in zip(units, nav_seeds, strict=True)
         ]
         for frame, ideal6, ideal_c, cabin in chunks:
+            pending.add(frame, ideal6)
             for d in driven:
-                d.push(frame, ideal6, ideal_c, cabin)
+                d.push(ideal_c, cabin)
+            pending.release(min(d.step.samples for d in driven))
         for d in driven:
             d.finish()
     except ValueError as exc:
@@ -295,7 +304,14 @@ class _DrivenUnit:
     """One unit's navigation power-on through a scenario: its stream, its strategies' runs."""
 
     def __init__(
-        self, sc: Scenario, unit: FittedUnit, nav_seed: int, first: NavSeries, keep_every: int
+        self,
+        sc: Scenario,
+        unit: FittedUnit,
+        nav_seed: int,
+        first: NavSeries,
+        keep_every: int,
+        pending: _Pending,
+        sensor_errors: bool = True,
     ) -> None:
         from sins.imu.stream import IncrementStream
 
@@ -304,17 +320,21 @@ class _DrivenUnit:
         self.strategies = unit.for_run(nav_model)
         self.stream = IncrementStream(nav_model, nav_seed, 1.0 / sc.rate_hz)
         self.runs = {name: _StreamedRun(first, keep_every) for name in self.strategies}
-        self.truth_kept, self.pending = [first], _Pending()
+        self.truth_kept = [first]
         self.step = _ChunkStep(
-            sc, self.strategies, self.runs, self.pending, self.truth_kept, keep_every, float(first.h[0])
+            sc,
+            self.strategies,
+            self.runs,
+            pending,
+            self.truth_kept,
+            keep_every,
+            float(first.h[0]),
+            sensor_errors,
         )
 
-    def push(
-        self, frame: TruthFrame, ideal6: NDArray[np.float64], ideal: ImuIncrements, cabin: NDArray[np.float64]
-    ) -> None:
-        """A generated chunk (its truth's frame, its ideal increments also as (n, 6)): corrupt it, and
+    def push(self, ideal: ImuIncrements, cabin: NDArray[np.float64]) -> None:
+        """A generated chunk (its truth already added to the units' pending rows): corrupt it, and
         correct and integrate what the stream writes."""
-        self.pending.add(frame, ideal6)
         self.step(self.stream.push(ideal, cabin))
 
     def finish(self) -> None:
@@ -324,12 +344,15 @@ class _DrivenUnit:
     def result(self, nav_seed: int) -> ScenarioRun:
         """The unit's runs, as :func:`run_scenario` gives them."""
         samples, keep_every = self.step.samples, self.keep_every
-        last_truth = self.pending.last_truth
+        last_truth = self.step.last_truth
         if samples % keep_every and last_truth is not None:
             self.truth_kept.append(last_truth)
         residuals = self.unit.residuals
-        out = {name: run.result(residuals.get(name), samples, keep_every) for name, run in self.runs.items()}
-        sensor_t = self.step.mid_t.means()[:, 0]
+        out = {
+            name: run.result(residuals.get(name), samples, keep_every, self.step.sensor_errors)
+            for name, run in self.runs.items()
+        }
+        sensor_t = self.step.mid_t.means()[:, 0] if self.step.sensor_errors else None
         sc = dataclasses.replace(self.sc, imu_seed=nav_seed)
         aided = {}
         if sc.aiding is not None:
@@ -616,34 +639,41 @@ def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> 
 
 
 class _Pending:
-    """Truth states and ideal increments generated but not yet integrated: the corruption writes an
-    interval only once the intervals after it have come."""
+    """Truth states and ideal increments generated but not yet integrated by every unit: a unit's
+    corruption writes an interval only once the intervals after it have come. The units driven
+    together take the same rows (all of them, as soon as their streams' margins agree), so the rows
+    of a take are joined once for all of them."""
 
     def __init__(self) -> None:
-        self._chunks: list[tuple[TruthFrame, NDArray[np.float64]]] = []
-        self._used = 0  # rows of the first chunk already taken
-        self.last_truth: NavSeries | None = None
+        self._chunks: list[tuple[int, TruthFrame, NDArray[np.float64]]] = []  # (first row, frame, ideal)
+        self._end = 0  # rows added
+        self._last: tuple[tuple[int, int], tuple[TruthFrame, NDArray[np.float64]]] | None = None
 
     def add(self, frame: TruthFrame, ideal: NDArray[np.float64]) -> None:
         """A generated chunk: the truth's frame at ``t[1:]`` and the ideal increments (n, 6)."""
-        self._chunks.append((frame, ideal))
+        self._chunks.append((self._end, frame, ideal))
+        self._end += len(frame)
 
-    def take(self, n: int) -> tuple[TruthFrame, NDArray[np.float64]]:
-        """The next ``n`` intervals' truth (at their ends) and ideal increments (n, 6)."""
+    def take(self, start: int, n: int) -> tuple[TruthFrame, NDArray[np.float64]]:
+        """Rows ``start .. start + n``: the intervals' truth (at their ends) and ideal increments (n, 6)."""
+        if self._last is not None and self._last[0] == (start, n):
+            return self._last[1]
         frames, ideal = [], []
-        while n:
-            frame, inc = self._chunks[0]
-            m = min(n, len(frame) - self._used)
-            frames.append(frame.rows(self._used, self._used + m))
-            ideal.append(inc[self._used : self._used + m])
-            self._used += m
-            if self._used == len(frame):
-                self._chunks.pop(0)
-                self._used = 0
-            n -= m
-        joined = TruthFrame.join(frames)
-        self.last_truth = joined.truth(slice(-1, None))
-        return joined, ideal[0] if len(ideal) == 1 else np.vstack(ideal)
+        for first, frame, inc in self._chunks:
+            lo, hi = max(start - first, 0), min(start + n - first, len(frame))
+            if lo < hi:
+                frames.append(frame.rows(lo, hi))
+                ideal.append(inc[lo:hi])
+        if sum(len(f) for f in frames) != n:
+            raise RuntimeError(f"rows {start}..{start + n} are not all pending")  # a bug, not bad input
+        taken = TruthFrame.join(frames), ideal[0] if len(ideal) == 1 else np.vstack(ideal)
+        self._last = (start, n), taken
+        return taken
+
+    def release(self, before: int) -> None:
+        """Drop the chunks every unit has taken: those that end at or before row ``before``."""
+        while self._chunks and self._chunks[0][0] + len(self._chunks[0][1]) <= before:
+            self._chunks.pop(0)
 
 
 class _StreamedRun:
@@ -657,12 +687,13 @@ class _StreamedRun:
         self.last: NavSeries = first
         self.sensor = BlockMeans(keep_every)
 
-    def result(self, residual: dict[str, float] | None, samples: int, keep_every: int) -> StrategyRun:
+    def result(
+        self, residual: dict[str, float] | None, samples: int, keep_every: int, sensor_errors: bool = True
+    ) -> StrategyRun:
         """The run's thinned solution and errors, its summary over every sample."""
         kept = self.kept + ([self.last] if samples % keep_every else [])
-        return StrategyRun(
-            _join(kept), self.errors.kept(), self.errors.summary(), residual, self.sensor.means()
-        )
+        sensor = self.sensor.means() if sensor_errors else None
+        return StrategyRun(_join(kept), self.errors.kept(), self.errors.summary(), residual, sensor)
 
 
 @dataclass
@@ -676,8 +707,10 @@ class _ChunkStep:
     truth_kept: list[NavSeries]
     keep_every: int
     h_prev: float  # the truth's height at the last integrated sample (the vertical aiding's start)
+    sensor_errors: bool = True  # the block means of each stream's sensor errors, and their times
     samples: int = 0
     mid_t: BlockMeans = field(init=False)  # the block means' times: the intervals' mid-times
+    last_truth: NavSeries | None = None  # the truth at the last integrated sample
 
     def __post_init__(self) -> None:
         self.mid_t = BlockMeans(self.keep_every)
@@ -687,7 +720,8 @@ class _ChunkStep:
         if n == 0:
             return
         sc = self.sc
-        frame, ideal = self.pending.take(n)
+        frame, ideal = self.pending.take(self.samples, n)
+        self.last_truth = frame.truth(slice(-1, None))
         temp = _cabin(sc, corrupted.t)
         dt = np.diff(corrupted.t)
         keep = kept_indices(self.samples + 1, n, self.keep_every)
@@ -700,9 +734,11 @@ class _ChunkStep:
             )
             run.errors.add(*errors_against(solution, frame))
             run.kept.append(solution.at(keep))
-            run.last = solution.at(-1)
-            run.sensor.add(rowwise.diff_over_col(np.hstack([corrected.dtheta_b, corrected.dv_b]), ideal, dt))
-        self.mid_t.add(0.5 * (corrupted.t[:-1] + corrupted.t[1:])[:, None])
+            run.last = solution.at(np.array([-1]))  # a copy: a view would hold the chunk's solution
+            if self.sensor_errors:
+                run.sensor.add_difference((corrected.dtheta_b, corrected.dv_b), ideal, dt)
+        if self.sensor_errors:
+            self.mid_t.add(0.5 * (corrupted.t[:-1] + corrupted.t[1:])[:, None])
         self.truth_kept.append(frame.truth(keep))
         self.samples += n
         self.h_prev = float(frame.h[-1])

@@ -98,6 +98,42 @@ def test_a_stream_in_chunks_of_any_size_reads_as_the_whole_array_to_the_last_bit
         np.testing.assert_array_equal(out.dv_b, whole.dv_b)
 
 
+def test_a_plain_unit_writes_each_chunk_at_once_and_reads_as_the_whole_array():
+    """A unit of affine effects, random biases and white noise needs no neighbours: the stream keeps no
+    margin, writes every interval of a chunk as it comes, and still reads as the whole array."""
+    imu, temp = _drive()
+    model = spec.draw_unit("tactical", 3)  # bias, scale/misalignment, g-sensitivity, noise, bias instability
+    stream = IncrementStream(model, 7, 0.01)
+    assert stream.margin() == 0 and IncrementStream(_model(), 7, 0.01).margin() > 0
+    first = stream.push(ImuIncrements(imu.t[:11], imu.dtheta_b[:10], imu.dv_b[:10]), temp[:11])
+    assert len(first) == 10
+    whole = model.corrupt_increments(imu, temp=temp, seed=7, dt_nominal=0.01)
+    assert np.abs(whole.dtheta_b - imu.dtheta_b).max() > 1e-6
+    rng = np.random.default_rng(SEED + 3)
+    for sizes in ([1] * 40 + [len(imu)], list(rng.integers(1, 700, 200))):
+        out = _streamed(model, imu, temp, [int(s) for s in sizes])
+        np.testing.assert_array_equal(out.dtheta_b, whole.dtheta_b)
+        np.testing.assert_array_equal(out.dv_b, whole.dv_b)
+
+
+def test_units_of_different_margins_driven_together_read_as_each_alone():
+    """A task's units share the generated rows; a unit whose stream keeps a margin (a delayed channel)
+    takes them later than a plain one, and each still gets its own run, to the last bit."""
+    sc = scenario.load(pipeline.resolve_scenario("car_drive_5min"))
+    plain = scenario.ImuSpec("tactical", 3, (), ())
+    delayed = scenario.ImuSpec("tactical", 4, (TimeOffset("gyro", np.array([0.013, 0.0, -0.002])),), ())
+    units = [pipeline.fit_unit(s, None) for s in (plain, delayed)]
+    together = pipeline.run_units(sc, units, [5, 6], keep_hz=1.0)
+    for unit, seed, run in zip(units, [5, 6], together, strict=True):
+        alone = pipeline.run_units(sc, [unit], [seed], keep_hz=1.0)[0]
+        assert run.runs.keys() == alone.runs.keys()
+        for name, r in run.runs.items():
+            assert r.summary == alone.runs[name].summary
+            np.testing.assert_array_equal(r.errors.pos_ned_m, alone.runs[name].errors.pos_ned_m)
+            np.testing.assert_array_equal(r.sensor_error, alone.runs[name].sensor_error)
+    assert together[0].runs["none"].summary != together[1].runs["none"].summary
+
+
 def test_a_stream_refuses_chunks_that_do_not_follow_each_other():
     imu, temp = _drive()
     stream = IncrementStream(_model(), 1, 0.01)
@@ -118,6 +154,13 @@ def test_block_means_fed_in_chunks_are_the_whole_arrays():
         k += size
     acc.add(values[k:])
     np.testing.assert_allclose(acc.means(), block_means(values, 10), rtol=1e-13, atol=1e-15)
+    # Fed as parts less a reference over a step, without the rows being made: the same sums, bit for bit.
+    ref, step = rng.normal(size=(1003, 4)), rng.uniform(0.5, 2.0, 1003)
+    made, parts = BlockMeans(10), BlockMeans(10)
+    for lo, hi in ((0, 5), (5, 5), (5, 438), (438, 1003)):
+        made.add((values[lo:hi] - ref[lo:hi]) / step[lo:hi, None])
+        parts.add_difference((values[lo:hi, :1], values[lo:hi, 1:]), ref[lo:hi], step[lo:hi])
+    np.testing.assert_array_equal(parts.means(), made.means())
 
 
 def _whole_array_run(

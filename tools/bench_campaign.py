@@ -10,8 +10,9 @@ Usage::
 First the kernel (``--kernel-units`` units, 0 to skip): issue 21's unit-hour is one unit driven one
 hour at 100 Hz, its readings corrupted, corrected with ``regression`` and integrated once, reduced to
 its errors against the truth. The units are fitted first (their CPU time printed apart), then driven
-in tasks of 8 sharing a trajectory on process pools of each ``--workers`` count: wall time, unit-hours
-per second, the time 1,000 would take, and the ratio of the rates.
+in tasks sharing a trajectory (as many units as a 1,000-unit campaign puts in one) on process pools
+of each ``--workers`` count: wall time, unit-hours per second, the time 1,000 would take, and the
+ratio of the rates.
 
 Then campaigns, where a unit is a tactical unit calibrated on the 24-position + rate-table rig and
 driven through the one-hour ``car_drive`` once per strategy, ``none`` and the oracle always with them
@@ -95,7 +96,6 @@ def stage_clock() -> Iterator[collections.Counter[str]]:
         (pipeline.strapdown, "advance", "integrate"),
         (pipeline, "errors_against", "reduce: errors against the truth"),
         (metrics.DriftAccumulator, "add", "reduce: statistics, thinned series"),
-        (metrics.BlockMeans, "add", "sensor error block means"),
     ]
     saved = [(obj, name, getattr(obj, name)) for obj, name, _ in wrapped]
 
@@ -165,10 +165,10 @@ def sharing(spec: campaign.CampaignSpec, units: int) -> None:
     samples = units * streams_of(spec) * SAMPLES_PER_HOUR
     t0 = time.process_time()
     for f, seed in zip(fitted, seeds, strict=True):
-        pipeline.run_units(base_sc, [f], [seed], keep_hz=0.01)
+        pipeline.run_units(base_sc, [f], [seed], keep_hz=0.01, sensor_errors=False)
     alone = time.process_time() - t0
     t0 = time.process_time()
-    pipeline.run_units(base_sc, fitted, seeds, keep_hz=0.01)
+    pipeline.run_units(base_sc, fitted, seeds, keep_hz=0.01, sensor_errors=False)
     shared = time.process_time() - t0
     print(
         f"driving only (fits apart), CPU per stream-sample: {alone / samples * 1e9:.0f} ns a unit alone, "
@@ -183,13 +183,22 @@ class _RegressionOnly(pipeline.FittedUnit):
         return {"regression": self.strategies["regression"]}
 
 
-def _drive(job: tuple[Any, list[_RegressionOnly], list[int]]) -> float:
-    """Drive fitted units through the scenario in tasks of 8 sharing a trajectory, as a campaign task
-    does; the process's CPU seconds."""
-    sc, fitted, seeds = job
+def _fit(job: tuple[campaign.CampaignSpec, int]) -> tuple[_RegressionOnly, float]:
+    """Unit ``u`` fitted, and the CPU seconds it took."""
+    spec, u = job
     t0 = time.process_time()
-    for i in range(0, len(fitted), 8):
-        pipeline.run_units(sc, fitted[i : i + 8], seeds[i : i + 8], keep_hz=0.01)
+    f = pipeline.fit_unit(spec.unit_imu(u), spec.unit_compensation(u))
+    only = _RegressionOnly(f.spec, f.compensation, f.strategies, f.residuals, f.biases)
+    return only, time.process_time() - t0
+
+
+def _drive(job: tuple[Any, list[_RegressionOnly], list[int], int]) -> float:
+    """Drive fitted units through the scenario in tasks of ``size`` sharing a trajectory, as a campaign
+    task does; the process's CPU seconds."""
+    sc, fitted, seeds, size = job
+    t0 = time.process_time()
+    for i in range(0, len(fitted), size):
+        pipeline.run_units(sc, fitted[i : i + size], seeds[i : i + size], keep_hz=0.01, sensor_errors=False)
     return time.process_time() - t0
 
 
@@ -200,12 +209,10 @@ def kernel(spec: campaign.CampaignSpec, units: int, workers: list[int]) -> None:
     (compiled kernels loaded)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    t0 = time.process_time()
-    fitted = []
-    for u in range(units):
-        f = pipeline.fit_unit(spec.unit_imu(u), spec.unit_compensation(u))
-        fitted.append(_RegressionOnly(f.spec, f.compensation, f.strategies, f.residuals, f.biases))
-    fit_s = time.process_time() - t0
+    with ProcessPoolExecutor(max(workers)) as pool:  # the fits, on every process
+        done = list(pool.map(_fit, [(spec, u) for u in range(units)], chunksize=8))
+    fitted = [f for f, _ in done]
+    fit_s = sum(cpu for _, cpu in done)
     seeds = [campaign.nav_seed(spec.unit_seed(u)) for u in range(units)]
     sc = spec.scenarios[0]
     print(
@@ -215,9 +222,11 @@ def kernel(spec: campaign.CampaignSpec, units: int, workers: list[int]) -> None:
     rates, core_rate = {}, 0.0
     for n in workers:
         with ProcessPoolExecutor(n) as pool:
-            list(pool.map(_drive, [(sc, fitted[:1], seeds[:1])] * n))  # warm every worker
+            list(pool.map(_drive, [(sc, fitted[:1], seeds[:1], 1)] * n))  # warm every worker
             share = -(-units // n)
-            jobs = [(sc, fitted[i : i + share], seeds[i : i + share]) for i in range(0, units, share)]
+            # Tasks as large as a campaign of 1,000 units on n workers would run.
+            size = engine.units_per_task(1000, n)
+            jobs = [(sc, fitted[i : i + share], seeds[i : i + share], size) for i in range(0, units, share)]
             t0 = time.perf_counter()
             cpu = sum(pool.map(_drive, jobs))
             wall = time.perf_counter() - t0

@@ -26,8 +26,17 @@ from sins.errors import SinsInputError
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
 #: end, few enough that each task's start-up (a worker's first import of torch, say) is paid rarely.
 TASKS_PER_WORKER = 4
-#: The most units in one task (results stream back at least this often).
-MAX_UNITS_PER_TASK = 8
+#: The most units in one task: a task's units share each scenario's generated trajectory (its cost
+#: split among them: ~70 ns a unit-sample of a tactical unit's ~410 with 8 units, ~18 with 32), and a
+#: task is what a lost worker costs and how often results come back (32 one-hour units of
+#: ``regression`` alone: ~2 min of a core).
+MAX_UNITS_PER_TASK = 32
+
+
+def units_per_task(units: int, workers: int) -> int:
+    """How many of ``units`` one task runs on ``workers`` workers: :data:`TASKS_PER_WORKER` tasks a
+    worker, at most :data:`MAX_UNITS_PER_TASK` units a task."""
+    return max(1, min(MAX_UNITS_PER_TASK, math.ceil(units / (TASKS_PER_WORKER * max(1, workers)))))
 
 
 @dataclass(frozen=True)
@@ -83,7 +92,7 @@ def run(
             client = Client(cluster)
         try:
             n_workers = max(1, len(client.scheduler_info()["workers"]))
-            size = max(1, min(MAX_UNITS_PER_TASK, math.ceil(len(todo) / (TASKS_PER_WORKER * n_workers))))
+            size = units_per_task(len(todo), n_workers)
             batches = [todo[i : i + size] for i in range(0, len(todo), size)]
             futures = [
                 client.submit(task, spec, batch, key=f"sins-campaign-{spec.name}-{batch[0]}-{batch[-1]}")

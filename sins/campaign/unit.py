@@ -53,7 +53,8 @@ def run_units(spec: CampaignSpec, units: Sequence[int]) -> list[dict[str, Any]]:
     by_unit: list[list[dict[str, Any]]] = [[] for _ in units]
     for base in spec.scenarios:
         keep_hz = spec.series_hz if spec.series_hz > 0 else 1.0 / max(base.rate_hz, 1.0)
-        results = pipeline.run_units(base, fitted, [nav_seed(s) for s in seeds], keep_hz)
+        # No sensor-error block means: a plot's, and the rows do not keep them.
+        results = pipeline.run_units(base, fitted, [nav_seed(s) for s in seeds], keep_hz, sensor_errors=False)
         for rows, unit, seed, f, result in zip(by_unit, units, seeds, fitted, results, strict=True):
             rows.extend(_rows(spec, unit, seed, f, result))
     return [row for rows in by_unit for row in rows]

@@ -27,12 +27,11 @@ import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rowwise
 from sins.imu import ImuModel
-from sins.imu.model import apply_matrix
 from sins.nav import earth, rotation
 from sins.series import CalibrationData, ImuRates, RigPhase
 
@@ -411,13 +410,47 @@ def invert_seed_model(
     intervals of those lengths and so is the answer: the model is affine, so an interval's integral
     obeys it with the biases times ``dt``.
     """
-    if dt is None:
-        accel_0, gyro_0 = rowwise.sub_row(accel, A0), rowwise.sub_row(gyro, B0)
-    else:
-        accel_0, gyro_0 = accel - rowwise.outer(dt, A0), gyro - rowwise.outer(dt, B0)
-    n = apply_matrix(np.linalg.inv(np.eye(3) + A), accel_0)
-    w = apply_matrix(np.linalg.inv(np.eye(3) + B), gyro_0 - apply_matrix(K, n))
+    gyro, accel = np.ascontiguousarray(gyro, dtype=float), np.ascontiguousarray(accel, dtype=float)
+    if gyro.shape != accel.shape or gyro.ndim != 2 or gyro.shape[1] != 3:
+        raise ValueError(f"gyro and accel must both be (n, 3), got {gyro.shape} and {accel.shape}")
+    step = np.zeros(0) if dt is None else np.ascontiguousarray(dt, dtype=float)
+    if dt is not None and step.shape != (len(gyro),):
+        raise ValueError(f"dt must be ({len(gyro)},), got {step.shape}")
+    w, n = np.empty_like(gyro), np.empty_like(accel)
+    coefficients = {"B0": B0, "B": B, "K": K, "A0": A0, "A": A}
+    for name, value in coefficients.items():
+        shape = (3,) if name.endswith("0") else (3, 3)
+        if np.shape(value) != shape:
+            raise ValueError(f"{name} must be of shape {shape}, got {np.shape(value)}")
+    b_inv = np.asarray(np.linalg.inv(np.eye(3) + B), dtype=np.float64)
+    a_inv = np.asarray(np.linalg.inv(np.eye(3) + A), dtype=np.float64)
+    b0, k, a0 = (np.ascontiguousarray(x, dtype=np.float64) for x in (B0, K, A0))
+    _invert_kernel(b_inv, a_inv, b0, k, a0, gyro, accel, step, w, n)
     return w, n
+
+
+# "contract" fuses multiply-adds: it changes only last bits (as in sins.nav.strapdown's kernel).
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _invert_kernel(
+    b_inv: Array, a_inv: Array, b0: Array, k: Array, a0: Array, gyro: Array, accel: Array, dt: Array,
+    w: Array, n: Array,
+) -> None:  # fmt: skip
+    """:func:`invert_seed_model` row by row, in one pass: ``n = (I + A)⁻¹ (accel − A0)``, then
+    ``w = (I + B)⁻¹ (gyro − B0 − K n)``, the biases times ``dt[r]`` (``dt`` with no rows: rates)."""
+    increments = dt.shape[0] > 0
+    for r in range(gyro.shape[0]):
+        scale = dt[r] if increments else 1.0
+        a_x, a_y, a_z = accel[r, 0] - a0[0] * scale, accel[r, 1] - a0[1] * scale, accel[r, 2] - a0[2] * scale
+        n_x = a_inv[0, 0] * a_x + a_inv[0, 1] * a_y + a_inv[0, 2] * a_z
+        n_y = a_inv[1, 0] * a_x + a_inv[1, 1] * a_y + a_inv[1, 2] * a_z
+        n_z = a_inv[2, 0] * a_x + a_inv[2, 1] * a_y + a_inv[2, 2] * a_z
+        g_x = gyro[r, 0] - b0[0] * scale - (k[0, 0] * n_x + k[0, 1] * n_y + k[0, 2] * n_z)
+        g_y = gyro[r, 1] - b0[1] * scale - (k[1, 0] * n_x + k[1, 1] * n_y + k[1, 2] * n_z)
+        g_z = gyro[r, 2] - b0[2] * scale - (k[2, 0] * n_x + k[2, 1] * n_y + k[2, 2] * n_z)
+        n[r, 0], n[r, 1], n[r, 2] = n_x, n_y, n_z
+        w[r, 0] = b_inv[0, 0] * g_x + b_inv[0, 1] * g_y + b_inv[0, 2] * g_z
+        w[r, 1] = b_inv[1, 0] * g_x + b_inv[1, 1] * g_y + b_inv[1, 2] * g_z
+        w[r, 2] = b_inv[2, 0] * g_x + b_inv[2, 1] * g_y + b_inv[2, 2] * g_z
 
 
 def fit_seed_model(

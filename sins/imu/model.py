@@ -44,6 +44,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -143,18 +144,18 @@ class Effect:
         """The effect's name, ``SENSOR.EFFECT`` (``gyro.bias``)."""
         return f"{self.sensor}.{self.kind}"
 
-    #: Whether the error is affine in the true inputs (``b + M ω + K f``): its integral over an interval
-    #: is then :meth:`integrated_error` of the interval's ideal increments, exactly, and the increment
-    #: form needs no rate reconstructed at Gauss nodes for it.
+    #: Whether the error is affine in the true inputs, ``b + M u + K f`` (:meth:`affine_terms`): its
+    #: integral over an interval is then ``b Δt + M Δu + K Δv`` of the interval's ideal increments,
+    #: exactly, and the increment form needs no rate reconstructed at Gauss nodes for it.
     affine: ClassVar[bool] = False
 
     def error(self, inputs: Inputs, u: Array) -> Array:
         """Additive error (n, 3) given the inputs and this sensor's (possibly delayed) input ``u``."""
         raise NotImplementedError
 
-    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
-        """An affine effect's error integrated over each interval (n, 3), from the intervals' lengths
-        ``step`` (n,), s, this sensor's ideal increments ``own`` and the accelerometers' ``dv`` (n, 3)."""
+    def affine_terms(self) -> tuple[Array, Array, Array]:
+        """An affine effect's ``b`` (3,), ``M`` (3, 3) on the sensor's own input and ``K`` (3, 3) on the
+        specific force, its error being ``b + M u + K f``."""
         raise NotImplementedError(f"{self.name} is not affine in the inputs")
 
 
@@ -170,9 +171,9 @@ class Bias(Effect):
         """The bias ``b`` at every sample."""
         return rowwise.add_row(np.zeros(u.shape), self.value)
 
-    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
-        """``b Δt``."""
-        return rowwise.outer(step, self.value)
+    def affine_terms(self) -> tuple[Array, Array, Array]:
+        """``b``, no matrices."""
+        return self.value, np.zeros((3, 3)), np.zeros((3, 3))
 
 
 @dataclass(frozen=True)
@@ -187,9 +188,9 @@ class ScaleMisalignment(Effect):
         """``M u``."""
         return apply_matrix(self.matrix, u)
 
-    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
-        """``M Δu``: the matrix applied to the sensor's own increments."""
-        return apply_matrix(self.matrix, own)
+    def affine_terms(self) -> tuple[Array, Array, Array]:
+        """``M`` on the sensor's own input."""
+        return np.zeros(3), self.matrix, np.zeros((3, 3))
 
 
 @dataclass(frozen=True)
@@ -205,9 +206,9 @@ class GSensitivity(Effect):
         """``K f`` from the specific force ``f_ib_b``."""
         return apply_matrix(self.matrix, inputs.f_ib_b)
 
-    def integrated_error(self, step: Array, own: Array, dv: Array) -> Array:
-        """``K Δv``: the matrix applied to the accelerometers' increments."""
-        return apply_matrix(self.matrix, dv)
+    def affine_terms(self) -> tuple[Array, Array, Array]:
+        """``K`` on the specific force."""
+        return np.zeros(3), np.zeros((3, 3)), self.matrix
 
 
 @dataclass(frozen=True)
@@ -463,17 +464,30 @@ def _ar1(phi: Array, drive: Array, out: Array, uniform: bool) -> None:
 def uniform_steps(t: Array) -> bool:
     """Whether ``t`` is sampled regularly: its steps equal to 1 ppm of their median or to the
     rounding of the time stamps (which grows with ``|t|``)."""
-    dt = np.diff(t)
-    if len(dt) == 0:
+    t = np.ascontiguousarray(t, dtype=float)
+    if len(t) < 2:
         return True
-    spread = float(dt.max() - dt.min())
-    rounding = 16.0 * np.finfo(float).eps * float(np.abs(t).max())
+    low, high, largest = _step_range(t)
+    spread = high - low
+    rounding = 16.0 * np.finfo(float).eps * largest
     # The median lies between the smallest and largest step: most calls are settled without it.
-    if spread <= 1e-6 * float(dt.min()) + rounding:
+    if spread <= 1e-6 * low + rounding:
         return True
-    if spread > 1e-6 * float(dt.max()) + rounding:
+    if spread > 1e-6 * high + rounding:
         return False
-    return bool(spread <= 1e-6 * np.median(dt) + rounding)
+    return bool(spread <= 1e-6 * np.median(np.diff(t)) + rounding)
+
+
+@numba.njit(cache=True, nogil=True)
+def _step_range(t: Array) -> tuple[float, float, float]:
+    """The smallest and largest step of ``t`` (at least two samples) and its largest ``|t|``, in one
+    pass (each chunk of a stream asks)."""
+    low = high = t[1] - t[0]
+    largest = max(abs(t[0]), abs(t[1]))
+    for k in range(2, t.shape[0]):
+        step = t[k] - t[k - 1]
+        low, high, largest = min(low, step), max(high, step), max(largest, abs(t[k]))
+    return low, high, largest
 
 
 def apply_matrix(matrix: NDArray[Any], rows: NDArray[Any]) -> Array:

@@ -25,6 +25,7 @@ chunk's own steps (a stream of regular chunks and the whole array agree).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numba
@@ -82,6 +83,11 @@ class _Sensor:
     quant_out: Array = field(default_factory=lambda: np.zeros(3))  # its last rounded value
     affine: list[Effect] = field(default_factory=list)  # deterministic effects integrated exactly
     curved: list[Effect] = field(default_factory=list)  # the others, at the Gauss nodes
+    #: The affine effects' ``b``, ``M``, ``K`` summed (:meth:`sins.imu.model.Effect.affine_terms`).
+    terms: tuple[Array, Array, Array] = field(default_factory=lambda: (np.zeros(3), np.zeros((3, 3)),
+                                                                       np.zeros((3, 3))))  # fmt: skip
+    #: Nothing but affine effects, random biases and white noise: one compiled pass writes the readings.
+    plain: bool = False
 
 
 class _NodeInputs:
@@ -95,6 +101,14 @@ class _NodeInputs:
         self._means: dict[str, Array] = {}
         self._nodes: list[Array] = []
         self._cache: dict[tuple[int, float], Inputs] = {}
+        self._uniform: dict[tuple[int, int], bool] = {}
+
+    def uniform(self, lo: int, hi: int) -> bool:
+        """Whether the samples ``lo .. hi`` are regular (:func:`~sins.imu.model.uniform_steps`), asked
+        once for both sensors."""
+        if (lo, hi) not in self._uniform:
+            self._uniform[lo, hi] = uniform_steps(self.t[lo : hi + 1])
+        return self._uniform[lo, hi]
 
     @property
     def means(self) -> dict[str, Array]:
@@ -151,6 +165,7 @@ class IncrementStream:
         # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
         # is a few per cent of a tactical unit's corruption, for nothing.
         self._needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in model.effects)
+        self._delayed = any(model.delay_of(s).any() for s in SENSORS)
         self._t: Array | None = None  # buffered sample times (window start .. latest)
         self._inc: dict[str, Array] = {}  # buffered ideal increments per sensor
         self._temp: Array | None = None
@@ -168,13 +183,28 @@ class IncrementStream:
         qnoise = self.model.effect_of(sensor, QuantizationNoise)
         qrng = None if qnoise is None else random_stream(self.seed, qnoise.name)
         deterministic = [e for e in self.model.effects_of(sensor) if e.stage == "deterministic"]
-        return _Sensor(sensor, processes, noise, rng, qnoise, qrng,
-                       affine=[e for e in deterministic if e.affine],
-                       curved=[e for e in deterministic if not e.affine])  # fmt: skip
+        affine = [e for e in deterministic if e.affine]
+        curved = [e for e in deterministic if not e.affine]
+        terms = [np.zeros(3), np.zeros((3, 3)), np.zeros((3, 3))]
+        for e in affine:
+            terms = [total + term for total, term in zip(terms, e.affine_terms(), strict=True)]
+        q = self.model.effect_of(sensor, Quantization)
+        plain = (
+            not curved
+            and qnoise is None
+            and not self.model.delay_of(sensor).any()
+            and self.model.effect_of(sensor, Saturation) is None
+            and (q is None or not q.step.any())
+        )
+        return _Sensor(sensor, processes, noise, rng, qnoise, qrng, affine=affine, curved=curved,
+                       terms=(terms[0], terms[1], terms[2]), plain=plain)  # fmt: skip
 
     def margin(self) -> int:
         """Intervals of context kept on each side of those written: the reconstruction's neighbours,
-        and the largest delay's reach."""
+        and the largest delay's reach; none where every sensor is plain (each interval's reading is
+        its own increments', its random biases' and its noise's)."""
+        if all(state.plain for state in self._sensors.values()):
+            return 0
         delay = max(float(np.abs(self.model.delay_of(s)).max()) for s in SENSORS)
         return math.ceil(delay / self.dt_nominal) + 3
 
@@ -185,15 +215,16 @@ class IncrementStream:
             raise ValueError("the stream is finished")
         if len(imu.t) < 2:
             return self._empty()
-        if self._t is None:
-            self._t = np.asarray(imu.t, dtype=float)
-            self._inc = {"gyro": imu.dtheta_b, "accel": imu.dv_b}
-            self._temp = None if temp is None else np.asarray(temp, dtype=float)
-        else:
+        if self._t is not None:
             if imu.t[0] != self._t[-1]:
                 raise ValueError(f"chunks must follow each other: {imu.t[0]} after {self._t[-1]}")
             if (temp is None) != (self._temp is None):
                 raise ValueError("give the temperature with every chunk or with none")
+        if self._t is None or len(self._t) == 1:  # nothing buffered but the last time: no copy
+            self._t = np.asarray(imu.t, dtype=float)
+            self._inc = {"gyro": imu.dtheta_b, "accel": imu.dv_b}
+            self._temp = None if temp is None else np.asarray(temp, dtype=float)
+        else:
             self._t = np.concatenate([self._t, imu.t[1:]])
             self._inc = {"gyro": np.vstack([self._inc["gyro"], imu.dtheta_b]),
                          "accel": np.vstack([self._inc["accel"], imu.dv_b])}  # fmt: skip
@@ -237,7 +268,8 @@ class IncrementStream:
             return
         for sensor, inc in self._inc.items():
             state = self._sensors[sensor]
-            state.cum = _running_sum(state.cum, inc[:drop])
+            if self._delayed:  # only a delayed channel reads the running integral
+                state.cum = _running_sum(state.cum, inc[:drop])
             self._inc[sensor] = inc[drop:]
         self._t = self._t[drop:]
         if self._temp is not None:
@@ -254,7 +286,15 @@ class IncrementStream:
         dt = node_inputs.dt
         rows = slice(lo, hi)
         n_out = hi - lo
-        bias = self._bias(state, t[lo : hi + 1])  # at the written intervals' ends
+        bias = self._bias(state, t[lo : hi + 1], lambda: node_inputs.uniform(lo, hi))  # at their ends
+        if state.plain:  # the general path's arithmetic, in one pass and without its temporaries
+            z, density = np.zeros((0, 3)), np.zeros(3)
+            if state.noise is not None and state.noise_rng is not None:
+                z, density = state.noise_rng.standard_normal((n_out, 3)), state.noise.density
+            out = np.empty((n_out, 3))
+            _plain_kernel(ideal[rows], node_inputs.inc["accel"][rows], dt[rows], *state.terms, bias,
+                          density, z, True, out)  # fmt: skip
+            return out
         noise_rate = np.zeros((n_out, 3))
         if state.noise is not None and state.noise_rng is not None:
             # White noise as each interval's mean rate: density / sqrt(dt) per interval.
@@ -298,16 +338,17 @@ class IncrementStream:
 
         The quadratic through the neighbours' means keeps each interval's mean, and the two-point Gauss
         rule is exact for it: an affine effect's integral is therefore the effect applied to the ideal
-        increments (:meth:`sins.imu.model.Effect.integrated_error`), with no reconstruction. Delayed
-        inputs and the other effects take the two Gauss nodes of the reconstructed rate.
+        increments, ``b Δt + M Δu + K Δv`` (:meth:`sins.imu.model.Effect.affine_terms`), with no
+        reconstruction. Delayed inputs and the other effects take the two Gauss nodes of the
+        reconstructed rate.
         """
         model, step = self.model, node_inputs.dt[rows]
         at_nodes = state.curved if d == 0.0 else state.affine + state.curved
         part = np.zeros((len(step), 3))
-        if d == 0.0:
+        if d == 0.0 and state.affine:
             own, dv = node_inputs.inc[state.name][rows], node_inputs.inc["accel"][rows]
-            for e in state.affine:
-                part += e.integrated_error(step, own, dv)
+            none = np.zeros((0, 3))
+            _plain_kernel(own, dv, step, *state.terms, none, np.zeros(3), none, False, part)
         if at_nodes:
             half_step = 0.5 * step
             for j in range(len(_NODES)):
@@ -315,19 +356,17 @@ class IncrementStream:
                 part += rowwise.mul_col(err, half_step)
         return part
 
-    def _bias(self, state: _Sensor, t: Array) -> Array:
+    def _bias(self, state: _Sensor, t: Array, uniform: Callable[[], bool]) -> Array:
         """The random biases' sum at ``t`` (the written intervals' ends), each process continued."""
-        total = np.zeros((len(t), 3))
+        total: Array | None = None
         dt = np.diff(t)
-        uniform: bool | None = None  # asked once, if a process needs it
         for p in state.processes:
             values = np.empty((len(t), 3))
             e = p.effect
             if isinstance(e, BiasInstability):
                 values[0] = e.sigma * p.rng.standard_normal(3) if p.value is None else p.value
                 xi = p.rng.standard_normal((len(dt), 3))
-                uniform = uniform_steps(t) if uniform is None else uniform
-                if uniform:  # one coefficient a channel: no exponential per interval
+                if uniform():  # one coefficient a channel: no exponential per interval
                     a, phi = np.exp(-self.dt_nominal / e.tau), np.zeros((0, 3))
                 else:
                     a, phi = np.zeros(0), np.exp(rowwise.col_over_row(-dt, e.tau))
@@ -337,8 +376,8 @@ class IncrementStream:
                 steps = rowwise.outer(np.sqrt(dt), e.density) * p.rng.standard_normal((len(dt), 3))
                 values = np.cumsum(np.vstack([start, steps]), axis=0)
             p.value = values[-1].copy()
-            total += values
-        return total
+            total = values if total is None else total + values
+        return np.zeros((len(t), 3)) if total is None else total
 
     @staticmethod
     def _shifted(inc: Array, t: Array, delay: float, cum0: Array) -> Array:
@@ -385,14 +424,43 @@ def _gauss_markov_kernel(phi: Array, sigma: Array, xi: Array, a: Array, out: Arr
     """
     if a.shape[0] > 0:
         drive = sigma * np.sqrt(1.0 - a * a)
+        a0, a1, a2, d0, d1, d2 = a[0], a[1], a[2], drive[0], drive[1], drive[2]
+        v0, v1, v2 = out[0, 0], out[0, 1], out[0, 2]  # the state in registers, not read back
         for k in range(1, out.shape[0]):
-            for i in range(3):
-                out[k, i] = a[i] * out[k - 1, i] + drive[i] * xi[k - 1, i]
+            v0 = a0 * v0 + d0 * xi[k - 1, 0]
+            v1 = a1 * v1 + d1 * xi[k - 1, 1]
+            v2 = a2 * v2 + d2 * xi[k - 1, 2]
+            out[k, 0], out[k, 1], out[k, 2] = v0, v1, v2
         return
     for k in range(1, out.shape[0]):
         for i in range(3):
             p = phi[k - 1, i]
             out[k, i] = p * out[k - 1, i] + sigma[i] * np.sqrt(1.0 - p * p) * xi[k - 1, i]
+
+
+# "contract" fuses multiply-adds, which changes only last bits (as in sins.nav.strapdown's kernel).
+@numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+def _plain_kernel(
+    own: Array, dv: Array, step: Array, b: Array, m: Array, k: Array, bias: Array, density: Array,
+    z: Array, with_input: bool, out: Array,
+) -> None:  # fmt: skip
+    """Readings of intervals of length ``step`` (n,) from the ideal increments ``own`` and the
+    accelerometers' ``dv`` (n, 3): ``Δu + (b Δt + M Δu + K Δv) + (b̄ + σ/√Δt z) Δt``, with ``b̄`` the
+    mean of the random bias ``bias`` (n + 1, 3) at the interval's ends and ``σ`` the white noise
+    ``density`` driven by ``z`` (n, 3); ``bias`` or ``z`` with no rows: none; not ``with_input``:
+    the errors alone, without ``Δu``."""
+    random, noisy = bias.shape[0] > 0, z.shape[0] > 0
+    for r in range(own.shape[0]):
+        dt = step[r]
+        per_root_dt = 1.0 / np.sqrt(dt) if noisy else 0.0  # one division a row, not one a channel
+        o0, o1, o2, d0, d1, d2 = own[r, 0], own[r, 1], own[r, 2], dv[r, 0], dv[r, 1], dv[r, 2]
+        for i in range(3):
+            error = b[i] * dt + (m[i, 0] * o0 + m[i, 1] * o1 + m[i, 2] * o2)
+            error += k[i, 0] * d0 + k[i, 1] * d1 + k[i, 2] * d2
+            rate = 0.5 * (bias[r, i] + bias[r + 1, i]) if random else 0.0
+            if noisy:
+                rate += density[i] * per_root_dt * z[r, i]
+            out[r, i] = (own[r, i] + error if with_input else error) + rate * dt
 
 
 @numba.njit(cache=True, nogil=True)

@@ -43,7 +43,10 @@ class NavErrors:
     @property
     def horizontal_m(self) -> Array:
         """Horizontal position error (n,), m: the norm of the north and east errors."""
-        return np.hypot(self.pos_ned_m[:, 0], self.pos_ned_m[:, 1])
+        north, east = self.pos_ned_m[:, 0], self.pos_ned_m[:, 1]
+        return np.sqrt(
+            north * north + east * east
+        )  # errors far below hypot's overflow, at a quarter of its cost
 
     def at(self, index: NDArray[np.integer] | slice) -> NavErrors:
         """The errors at ``index``."""
@@ -152,8 +155,8 @@ def _euler(x: float, y: float, z: float, w: float) -> tuple[float, float, float]
     """ZYX Euler angles (roll, pitch, yaw) of a scalar-last quaternion, as :mod:`sins.nav.rotation`."""
     c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
     c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
-    pitch = np.arctan2(-c20, np.hypot(c00, c10))
-    if np.hypot(c21, c22) < 1e-12:  # gimbal lock: roll 0, yaw takes the rest
+    pitch = np.arctan2(-c20, np.sqrt(c00 * c00 + c10 * c10))
+    if c21 * c21 + c22 * c22 < 1e-24:  # gimbal lock: roll 0, yaw takes the rest
         return 0.0, pitch, np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     return np.arctan2(c21, c22), pitch, np.arctan2(c10, c00)
 
@@ -198,7 +201,7 @@ def _errors_kernel(
         e = _euler(q[k, 0], q[k, 1], q[k, 2], q[k, 3])
         for i in range(3):
             att[k, i] = _wrap(e[i] - r[_EULER + i])
-        hor[k] = np.hypot(pos[k, 0], pos[k, 1])
+        hor[k] = np.sqrt(pos[k, 0] * pos[k, 0] + pos[k, 1] * pos[k, 1])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -363,7 +366,11 @@ def block_means(values: Array, every: int) -> Array:
 
 class BlockMeans:
     """:func:`block_means` of rows fed chunk by chunk: means of consecutive blocks of ``every`` rows
-    counted from the first row fed, the last block possibly shorter (a block may span chunks)."""
+    counted from the first row fed, the last block possibly shorter (a block may span chunks).
+
+    A block's rows are summed in order, one compiled pass a chunk (:func:`block_means`' pairwise sums
+    may differ in the last bits).
+    """
 
     def __init__(self, every: int) -> None:
         if every < 1:
@@ -375,22 +382,29 @@ class BlockMeans:
 
     def add(self, values: Array) -> None:
         """Take the next rows (n, k)."""
-        start = 0
-        if self._count and len(values):  # fill the open block first
-            take = min(self.every - self._count, len(values))
-            assert self._partial is not None
-            self._partial = self._partial + values[:take].sum(axis=0)
-            self._count += take
-            start = take
-            if self._count == self.every:
-                self._means.append((self._partial / self.every)[None])
-                self._partial, self._count = None, 0
-        rest = values[start:]
-        whole = len(rest) - len(rest) % self.every
-        if whole:
-            self._means.append(block_means(rest[:whole], self.every))
-        if whole < len(rest):
-            self._partial, self._count = rest[whole:].sum(axis=0), len(rest) - whole
+        self.add_difference((values,), np.zeros((0, 0)), np.zeros(0))
+
+    def add_difference(self, parts: tuple[Array, ...], reference: Array, step: Array) -> None:
+        """Take the next rows ``(parts side by side − reference) / step``, without making them: ``parts``
+        (n, k_i) each, ``reference`` (n, Σ k_i) and ``step`` (n,), or either with no rows for none."""
+        values = [np.ascontiguousarray(p, dtype=float) for p in parts]
+        width = sum(v.shape[1] for v in values)
+        if self._partial is None:
+            self._partial = np.zeros(width)
+        if not values[0].shape[0]:
+            return
+        every, count = self.every, self._count
+        blocks = (count + values[0].shape[0]) // every
+        out = np.empty((blocks, width))
+        ref = np.ascontiguousarray(reference, dtype=float)
+        step = np.ascontiguousarray(step, dtype=float)
+        offset = 0
+        for v in values:
+            _block_sums(v, ref, offset, step, every, count, self._partial[offset : offset + v.shape[1]], out)
+            offset += v.shape[1]
+        self._count = (count + values[0].shape[0]) % every
+        if blocks:
+            self._means.append(out)
 
     def means(self) -> Array:
         """The block means so far, the open block's included, (m, k)."""
@@ -399,6 +413,28 @@ class BlockMeans:
             assert self._partial is not None
             parts.append((self._partial / self._count)[None])
         return np.concatenate(parts) if parts else np.zeros((0, 0))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")  # numpy's division: no zero check a row
+def _block_sums(
+    values: Array, ref: Array, offset: int, step: Array, every: int, count: int, partial: Array, out: Array
+) -> None:
+    """Columns ``offset ..`` of ``out``: the means of the blocks ``values`` completes, of the rows
+    ``(values − ref[:, offset ..]) / step`` (``ref`` or ``step`` with no rows: none), the open block's
+    sum ``partial`` (``count`` rows) carried in place."""
+    width, has_ref, has_step = values.shape[1], ref.shape[0] > 0, step.shape[0] > 0
+    block = 0
+    for k in range(values.shape[0]):
+        for i in range(width):
+            x = values[k, i] - ref[k, offset + i] if has_ref else values[k, i]
+            partial[i] += x / step[k] if has_step else x
+        count += 1
+        if count == every:
+            for i in range(width):
+                out[block, offset + i] = partial[i] / every
+                partial[i] = 0.0
+            block += 1
+            count = 0
 
 
 def summarize(errors: NavErrors) -> DriftSummary:
