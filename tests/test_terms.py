@@ -64,9 +64,30 @@ def test_pure_noise_takes_no_terms_at_the_guards_rate():
     assert with_guard < without
 
 
-def test_without_temperature_no_term_is_tried():
-    assert terms.subsets(with_temperature=False) == []
-    assert terms.subsets(with_temperature=True) == [("temperature",)]
+def test_each_vocabulary_effect_is_told_from_the_others():
+    # The vocabulary's forms on numpy-made residuals, 0.3 of the noise at full scale: a scale
+    # nonlinearity (u²) on gyro x, an asymmetry (|u|) on gyro z, an anisoelastic drift (f_x f_z) on gyro
+    # y, an asymmetry on accel y. Held in blocks of many rates and orientations, the even forms u² and
+    # |u| part, and each channel takes its own group alone.
+    rng = np.random.default_rng(12)
+    x, block, fold = _inputs(rng)
+    r = rng.normal(size=(ROWS, 6))
+    r[:, 0] += 0.3 * x.w[:, 0] ** 2
+    r[:, 1] += 0.3 * x.f[:, 0] * x.f[:, 2]
+    r[:, 2] += 0.3 * np.abs(x.w[:, 2])
+    r[:, 4] += 0.3 * np.abs(x.f[:, 1])
+    chosen = terms.choose(x, _folds(r, fold), block, z=2.0)
+    assert chosen == [("squares",), ("g2",), ("asymmetry",), (), ("asymmetry",), ()]
+    # g2's columns: f², then f_x f_y, f_x f_z, f_y f_z (the 11th of 1, ω, f, f², f_x f_y, f_x f_z).
+    assert terms.fit(terms.design(chosen[1], 1, x), r[:, 1])[11] == pytest.approx(0.3, abs=0.05)
+
+
+def test_a_channel_tries_the_groups_its_sensor_may_take():
+    assert terms.subsets(with_temperature=False, channel=3) == [
+        ("squares",), ("asymmetry",), ("squares", "asymmetry")
+    ]  # fmt: skip
+    assert ("g2",) in terms.subsets(with_temperature=False, channel=0)
+    assert len(terms.subsets(with_temperature=True, channel=0)) == 15
     x = terms.Inputs(np.zeros((4, 3)), np.zeros((4, 3)), None)
     with pytest.raises(ValueError, match="temperature"):
         terms.design(("temperature",), 0, x)
@@ -89,3 +110,22 @@ def test_the_group_is_fitted_with_the_seed_columns_as_one_least_squares():
     assert joint[-1] == pytest.approx(0.3, rel=1e-9)
     alone = np.column_stack([np.ones(ROWS), x.t, x.t**2, x.t * x.w[:, 1]])
     assert abs(np.linalg.lstsq(alone, r, rcond=None)[0][-1] - 0.3) > 0.03  # measured 0.242: 19 % off
+
+
+def test_a_form_the_rig_does_not_show_takes_no_coefficient():
+    # A faces-down rig points one axis at a time along gravity: the products f_j f_k of g2 are rounding
+    # (~1e-17) there. Scaled to unit RMS, that rounding took a coefficient of ~1e12 and the correction
+    # blew up (1e30 the noise) on any other orientation; such a column now gets 0.
+    rng = np.random.default_rng(4)
+    faces = np.repeat(np.vstack([np.eye(3), -np.eye(3)]), 500, axis=0)
+    f = faces + 1e-17 * rng.normal(size=faces.shape)
+    x = terms.Inputs(rng.uniform(-1.0, 1.0, (len(f), 3)), f, None)
+    r = 0.3 * f[:, 0] ** 2 + 0.01 * rng.normal(size=len(f))
+    coef = terms.fit(terms.design(("g2",), 0, x), r)
+    assert np.all(coef[10:] == 0.0)  # f_x f_y, f_x f_z, f_y f_z: not shown
+    assert np.abs(coef).max() < 1.0
+    tilted = terms.Inputs(x.w[:1], np.full((1, 3), 3**-0.5), None)
+    assert (
+        abs(float(terms.predict([("g2",)] + [()] * 5, [coef] + [np.zeros(0)] * 5, tilted, range(1))[0, 0]))
+        < 1.0
+    )

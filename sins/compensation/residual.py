@@ -1,7 +1,7 @@
 """Physics first, then learning: the machinery shared by the learned strategies ``mlp`` and ``kohonen``.
 
 A learned strategy here starts from the seed model's least-squares fit
-(:class:`~sins.compensation.Regression`), adds the temperature terms each
+(:class:`~sins.compensation.Regression`), adds the physics terms each
 channel's held-back blocks ask for (:mod:`sins.compensation.terms`), and learns
 only what those leave: the residual ``x̂ − x_ref`` of the regression-corrected
 readings ``x̂`` against the rig's reference, less the terms. Consequences, each a
