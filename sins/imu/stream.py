@@ -143,16 +143,16 @@ class _NodeInputs:
 class IncrementStream:
     """Readings of ``model`` as increments, from ideal increments pushed chunk by chunk.
 
+    Chunks must follow each other (each chunk's ``imu.t[0]`` is the last chunk's final time). Each
+    :meth:`push` returns the intervals now complete, :meth:`finish` the rest; together they are
+    :meth:`sins.imu.ImuModel.corrupt_increments` of the whole, to the last bit.
+
     Parameters
     ----------
     model : the IMU's error model
     seed : the run's seed for stochastic effects
     dt_nominal : the sampling step, s: the quantization step of an increment is the rate step times it,
         and the bias instability's recursion uses it on regular samples (one value for every chunk)
-
-    Chunks must follow each other (each chunk's ``imu.t[0]`` is the last chunk's final time). Each
-    :meth:`push` returns the intervals now complete, :meth:`finish` the rest; together they are
-    :meth:`sins.imu.ImuModel.corrupt_increments` of the whole, to the last bit.
     """
 
     def __init__(self, model: ImuModel, seed: int | None, dt_nominal: float) -> None:
