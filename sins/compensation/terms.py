@@ -139,8 +139,7 @@ def choose(
     for c in range(6):
         options = subsets(x.t is not None, c)
         full = design(options[-1], c, x)
-        seed_cols = 1 + 3 + 3
-        columns = {s: _columns_of(s, options[-1], c, seed_cols) for s in options}
+        columns = {s: _columns_of(s, options[-1], c, x.rows(np.arange(1))) for s in options}
         gains: dict[tuple[str, ...], list[Array]] = {s: [] for s in options}
         for train, targets in fold_targets:
             held = ~train
@@ -189,17 +188,19 @@ def _forward(
 
 
 def _columns_of(
-    groups: tuple[str, ...], every: tuple[str, ...], channel: int, seed_cols: int
+    groups: tuple[str, ...], every: tuple[str, ...], channel: int, row: Inputs
 ) -> NDArray[np.intp]:
-    """The columns of :func:`design` with ``groups`` within its design with the groups ``every``."""
-    widths = {"temperature": 3, "squares": 1, "asymmetry": 1, "g2": 6 if channel < 3 else 0}
-    cols, at = list(range(seed_cols)), seed_cols
+    """The columns of :func:`design` with ``groups`` within its design with the groups ``every``, each
+    group's width read off :func:`design` of one ``row``."""
+    seed = design((), channel, row).shape[1]
+    cols, at = list(range(seed)), seed
     for group in GROUPS:
         if group not in every:
             continue
+        width = design((group,), channel, row).shape[1] - seed
         if group in groups:
-            cols += range(at, at + widths[group])
-        at += widths[group]
+            cols += range(at, at + width)
+        at += width
     return np.array(cols, dtype=np.intp)
 
 

@@ -162,6 +162,7 @@ class IncrementStream:
         self.seed = seed
         self.dt_nominal = dt_nominal
         self._sensors = {s: self._sensor(s) for s in SENSORS}
+        self._margin = self._context()
         # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
         # is a few per cent of a tactical unit's corruption, for nothing.
         self._needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in model.effects)
@@ -203,6 +204,10 @@ class IncrementStream:
         """Intervals of context kept on each side of those written: the reconstruction's neighbours,
         and the largest delay's reach; none where every sensor is plain (each interval's reading is
         its own increments', its random biases' and its noise's)."""
+        return self._margin
+
+    def _context(self) -> int:
+        """:meth:`margin`, from the model (fixed for the stream's life)."""
         if all(state.plain for state in self._sensors.values()):
             return 0
         delay = max(float(np.abs(self.model.delay_of(s)).max()) for s in SENSORS)
