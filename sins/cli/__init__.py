@@ -1,0 +1,88 @@
+"""The ``sins`` command: one module per subcommand, each a thin shell over library calls.
+
+Each command module has ``add(subparsers)``, which adds its parser and sets ``func`` to the function that
+runs it; :mod:`~sins.cli.common` holds what they share. Bad input ends in one line on stderr
+(``sins: error: …``) and exit status 2; never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Sequence
+
+from sins import __version__
+from sins.cli import (
+    calibrate,
+    campaign,
+    characterise,
+    check,
+    effects,
+    evaluate,
+    fit,
+    gap,
+    integrate,
+    run,
+    scenarios,
+    simulate,
+)
+from sins.cli.common import Subparsers
+from sins.errors import MissingInputError, SinsInputError
+
+#: Every subcommand, in the order ``sins --help`` lists them.
+SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
+    run.add,
+    integrate.add,
+    simulate.add,
+    calibrate.add,
+    fit.add,
+    evaluate.add,
+    check.add,
+    campaign.add,
+    gap.add,
+    characterise.add,
+    effects.add,
+    scenarios.add,
+)
+
+#: The flag that gives what a :class:`MissingInputError` says is missing.
+_FLAG_FOR = {"truth": "--truth TRUTH.csv"}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``sins`` command's argument parser, one subcommand per action."""
+    parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
+    parser.add_argument("--version", action="version", version=f"sins {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except MissingInputError as exc:
+        flag = _FLAG_FOR.get(exc.needs)
+        print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)
+        return 2
+    except SinsInputError as exc:
+        print(f"sins: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        # The reader of our output went away (`sins scenarios | head`): nothing to say, and nothing more
+        # to write to it; stdout is pointed at devnull so the interpreter's own flush at exit is quiet.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except OSError as exc:  # a full disk or a permission while writing
+        print(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("sins: interrupted", file=sys.stderr)
+        return 130
+
+
+__all__ = ["SUBCOMMANDS", "build_parser", "main"]

@@ -1,0 +1,69 @@
+"""``sins campaign``: a Monte-Carlo campaign of many units on a dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from sins.cli.common import Subparsers, count, progress_bar, row_progress
+from sins.errors import SinsInputError
+
+
+def _cmd_campaign(args: argparse.Namespace) -> int:
+    from sins import campaign
+    from sins.campaign import engine, results
+
+    if args.workers is not None and args.scheduler:
+        raise SinsInputError("--workers: the scheduler's cluster has its own workers; give one of the two")
+    from sins import scenario
+
+    spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)  # before the work, not after
+    out = args.out or Path(f"{spec.name}-campaign")
+    strategies = dict.fromkeys(["none", *spec.compensation.strategies])
+    print(
+        f"campaign {spec.name}: {spec.count} units x {len(spec.scenarios)} scenarios x "
+        f"{len(strategies)} strategies -> {out}"
+    )
+    with progress_bar(f"campaign {spec.name}", "unit") as bar:
+        progress = row_progress(bar) or engine.log_progress()
+        done = engine.run(spec, out, args.workers, args.scheduler, args.resume, progress)
+    resumed = f" ({done.units_resumed} already done)" if done.units_resumed else ""
+    print(f"ran {done.units_run} units in {done.wall_s:.1f} s{resumed}")
+    for line in results.table_lines(done.summary):
+        print(line)
+    written = f"{out / 'results.parquet'} and {out / 'summary.json'}"
+    if args.rerun:
+        import pyarrow.parquet as pq
+
+        from sins import viz
+
+        viz.save_campaign(pq.read_table(out / "results.parquet").to_pydict(), args.rerun)
+        written = f"{out / 'results.parquet'}, {out / 'summary.json'} and {args.rerun}"
+    print(f"wrote {written}")
+    return 0
+
+
+def add(sub: Subparsers) -> None:
+    """Add ``sins campaign`` to ``sub``."""
+    p = sub.add_parser(
+        "campaign", help="Monte-Carlo campaign: units x scenarios x strategies, on a dask cluster"
+    )
+    p.add_argument("campaign", metavar="CAMPAIGN.toml", help="campaign file or preset (e.g. tactical_drives)")
+    p.add_argument(
+        "--workers",
+        type=count,
+        metavar="N",
+        help="processes of the local cluster (default: the machine's cores)",
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing dask cluster (tcp://HOST:PORT)")
+    p.add_argument("--out", type=Path, metavar="DIR", help="results folder (default: NAME-campaign)")
+    p.add_argument("--resume", action="store_true", help="continue the campaign from what --out holds")
+    p.add_argument(
+        "--rerun", type=Path, metavar="OUT.rrd",
+        help="log the spread: percentile bands of horizontal error over time, each unit's final error",
+    )  # fmt: skip
+    p.set_defaults(func=_cmd_campaign)

@@ -1,0 +1,161 @@
+"""``sins characterise``: the Allan analysis of a recording, an IMU file of its terms, the closing check."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from sins.cli.common import Subparsers, add_dataset, fixed_width
+from sins.errors import MissingInputError, SinsInputError
+
+if TYPE_CHECKING:
+    from sins.characterise.analysis import Characterisation, Residual
+    from sins.characterise.check import ClosingCheck
+
+
+def _characterise_inputs(args: argparse.Namespace) -> Residual:
+    """``sins characterise``'s residual: a dataset, a rig recording less its reference, an IMU recording
+    less its trajectory's ideal readings, or a static unit's readings as they are."""
+    import numpy as np
+
+    from sins import characterise, io, pipeline
+    from sins.series import ImuRates
+
+    if (args.recording is None) == (args.dataset is None):
+        raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
+    if args.static and args.truth is not None:
+        raise SinsInputError("characterise: --static and --truth exclude each other")
+    if args.dataset is not None:
+        from sins.io import datasets
+
+        if args.truth is not None or args.static:
+            raise SinsInputError(
+                "characterise: --truth and --static go with a RECORDING.csv, not with --dataset"
+            )
+        data, _ = datasets.load_with_truth(args.dataset)
+        source = args.dataset
+    elif args.truth is not None or any(c.startswith("ref_") for c in io.read_columns(args.recording)):
+        data, _ = pipeline.gap_data(args.recording, args.truth)
+        source = str(args.recording)
+    elif args.static:
+        samples, _ = io.read_imu(args.recording)
+        if isinstance(samples, ImuRates):
+            t, readings = samples.t, np.hstack([samples.omega_ib_b, samples.f_ib_b])
+        else:
+            dt = np.diff(samples.t)[:, None]
+            t = 0.5 * (samples.t[:-1] + samples.t[1:])
+            readings = np.hstack([samples.dtheta_b, samples.dv_b]) / dt
+        return characterise.residual(t, readings, None, str(args.recording))
+    else:
+        raise MissingInputError(
+            f"{args.recording}: no ref_ columns; a moving unit needs its trajectory, a static one --static",
+            needs="truth",
+        )
+    readings = np.hstack([data.gyro, data.accel])
+    reference = np.hstack([data.ref_gyro, data.ref_accel])
+    return characterise.residual(data.t, readings, reference, source)
+
+
+def _cmd_characterise(args: argparse.Namespace) -> int:
+    from sins import characterise, io, scenario
+    from sins.characterise import check, model_file
+
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)
+    res = _characterise_inputs(args)
+    result = characterise.characterise(res)
+    print(_format_characterisation(result))
+    document = result.to_dict()
+    model = None
+    if args.out:
+        model_file.write_model(args.out, result)
+        model = scenario.load_imu(args.out).model()
+        print(f"\nwrote {args.out} (noise only; sins run and sins calibrate --imu read it)")
+    else:
+        model = model_file.imu_model(result)
+    closing = check.closing_check(result, model, seed=args.seed)
+    print(_format_closing(closing))
+    document["closing_check"] = closing.to_dict()
+    if args.json:
+        io.write_json(args.json, document)
+    if args.rerun:
+        viz.save_characterisation(result, closing, args.rerun)
+        print(f"wrote {args.rerun}")
+    return 0
+
+
+def _format_characterisation(result: Characterisation) -> str:
+    """``sins characterise``'s table: each channel's IEEE terms in familiar units, ± 1σ, or what an
+    unresolved term would need."""
+    from sins.characterise import TERMS
+    from sins.characterise.analysis import DISPLAY, display, duration
+    from sins.characterise.terms import SYMBOLS
+
+    head = [
+        f"{result.source}: {result.rows} rows at {1.0 / result.dt:.6g} Hz in {len(result.segments)} "
+        f"segment(s), the longest {duration(result.length_s)}",
+        "IEEE Std 952/1293 terms fitted jointly to the overlapping Allan deviation (± 1σ); "
+        "B is the Gauss–Markov bias's σ, T its correlation time",
+    ]
+    rows = []
+    for ch, r in result.channels.items():
+        for name in TERMS:
+            t = r.fit.terms[name]
+            unit = DISPLAY[r.sensor][name][1]
+            if t.resolved:
+                text = f"{display(r.sensor, name, t.value)} ± {display(r.sensor, name, t.sigma)}"
+                support = f"τ {t.support_tau_s[0]:.3g}-{t.support_tau_s[-1]:.3g} s" if t.support_tau_s else ""
+                if name == "bias_instability" and r.fit.tau_c_range_s:
+                    lo, hi = r.fit.tau_c_range_s
+                    support = f"T {r.fit.tau_c_s:.3g} s ({lo:.3g}-{hi:.3g}); " + support
+                if name == "rate_ramp":
+                    support += " (not simulated)"
+            else:
+                text = f"not resolved (< {display(r.sensor, name, t.upper)})"
+                support = ""
+                if t.needs_length_s:
+                    support = f"needs ≥ {duration(t.needs_length_s)} of recording"
+                elif t.needs_rate_hz:
+                    support = f"needs sampling at ≥ {t.needs_rate_hz:.3g} Hz"
+            rows.append([ch, SYMBOLS[name], text, unit, support])
+        if r.fit.excluded_tau_s:
+            taus = r.fit.excluded_tau_s
+            rows.append(
+                [ch, "", "model does not hold", "", f"τ {', '.join(f'{x:.3g}' for x in taus)} s left out"]
+            )
+    return "\n".join(head) + "\n" + fixed_width(["channel", "term", "value", "unit", "support"], rows)
+
+
+def _format_closing(closing: ClosingCheck) -> str:
+    """The closing check in words: where the simulated unit's Allan curves part from the real ones."""
+    lines = [
+        f"\nclosing check: the model simulated as long as the recording (seed {closing.seed}); curves part "
+        f"where their ratio leaves the {100 * closing.confidence:g} % F interval"
+    ]
+    if not closing.partings:
+        lines.append("  the simulated curves lie within the bands at every cluster time")
+    lines += [f"  {p.what()}" for p in closing.partings]
+    return "\n".join(lines)
+
+
+def add(sub: Subparsers) -> None:
+    """Add ``sins characterise`` to ``sub``."""
+    p = sub.add_parser(
+        "characterise", help="Allan analysis of a recording: IEEE noise terms, an IMU file, the closing check"
+    )
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+    add_dataset(p)
+    p.add_argument("--static", action="store_true", help="the unit stood still: its readings as they are")
+    p.add_argument(
+        "--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of a moving unit's recording"
+    )
+    p.add_argument("--out", type=Path, metavar="IMU.toml", help="write the noise model as an IMU file")
+    p.add_argument(
+        "--json", type=Path, metavar="OUT.json", help="write the curves, terms and check (SI units)"
+    )
+    p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
+    p.add_argument("--seed", type=int, default=0, help="the closing simulation's seed (default 0)")
+    p.set_defaults(func=_cmd_characterise)

@@ -1,0 +1,99 @@
+"""``sins check``: the compensation-quality gate, a suite or a campaign against its baseline."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from sins.cli.common import Subparsers, fixed_width, progress_bar, row_progress
+from sins.errors import SinsInputError
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from sins import quality, scenario
+    from sins.campaign.spec import is_campaign
+
+    path = Path(args.suite)
+    if not path.exists() and scenario.find_preset(args.suite, "campaign") is not None:
+        path = scenario.resolve_preset(args.suite, "campaign")
+    if is_campaign(path):
+        return _check_campaign(args, path)
+    suite = quality.load_suite(path)
+    if not args.update_baseline and not Path(args.baseline).exists():
+        raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
+    if not args.update_baseline:
+        baseline = quality.read_baseline(args.baseline)  # refuse early, before the runs
+    measured = quality.measure(suite)
+    if args.update_baseline:
+        quality.write_baseline(args.baseline, measured, suite)
+        count = sum(len(m) for s in measured.values() for m in s.values())
+        print(f"wrote {args.baseline}: {count} metrics of {len(measured)} cases")
+        return 0
+    changes = quality.compare(baseline, measured, suite.tolerances)
+    rows = []
+    for c in changes:
+        rel = "" if c.relative is None else f"{100 * c.relative:+.2f} %"
+        fmt = lambda x: "-" if x is None else f"{x:.6g}"  # noqa: E731
+        rows.append([f"{c.case}/{c.strategy}", c.metric, fmt(c.baseline), fmt(c.value), rel, c.verdict])
+    print(fixed_width(["case/strategy", "metric", "baseline", "now", "change", "verdict"], rows))
+    bad = [c for c in changes if c.verdict in ("regressed", "missing")]
+    tol = ", ".join(f"{k} {100 * v:g} %" for k, v in suite.tolerances.items())
+    if bad:
+        print(f"\n{len(bad)} of {len(changes)} metrics regressed or went missing (tolerances: {tol})")
+        for c in bad:
+            rel = "" if c.relative is None else f" by {100 * c.relative:+.2f} %"
+            print(f"  {c.case}/{c.strategy} {c.metric}: {c.verdict}{rel}")
+        return 1
+    print(f"\nall {len(changes)} metrics hold (tolerances: {tol})")
+    return 0
+
+
+def _check_campaign(args: argparse.Namespace, path: Path) -> int:
+    """``sins check`` on a campaign: its distributions against a baseline summary (sins.campaign.gate)."""
+    import tempfile
+
+    from sins import campaign, io
+    from sins.campaign import engine, gate, results
+
+    spec = campaign.load(path)
+    if not args.update_baseline and not Path(args.baseline).exists():
+        raise SinsInputError(f"{args.baseline}: no such campaign baseline; create it with --update-baseline")
+    baseline = None if args.update_baseline else results.read_summary(args.baseline)  # refuse early
+    with tempfile.TemporaryDirectory() as tmp, progress_bar(f"campaign {spec.name}", "unit") as bar:
+        done = engine.run(spec, Path(tmp) / "out", progress=row_progress(bar))
+    if baseline is None:
+        io.write_json(args.baseline, gate.baseline_of(done.summary))
+        print(f"wrote {args.baseline}: {len(done.summary['groups'])} groups of {spec.count} units")
+        return 0
+    checks = gate.compare(baseline, done.summary)
+    rows = [
+        [c.group, c.figure, c.test or "-", f"{c.median_ratio:.4g}", f"{c.p_value:.3g}", c.verdict]
+        for c in checks
+    ]
+    print(fixed_width(["scenario/strategy", "figure", "test", "median now/base", "p", "verdict"], rows))
+    bad = [c for c in checks if c.verdict != "holds"]
+    each = gate.FALSE_ALARM / max(1, len(checks))
+    level = f"false-alarm rate {gate.FALSE_ALARM:g} over the {len(checks)} tests, each at {each:.2g}"
+    if bad:
+        print(f"\n{len(bad)} of {len(checks)} figures regressed or went missing ({level})")
+        for c in bad:
+            print(f"  {c.group} {c.figure}: {c.verdict} (p = {c.p_value:.3g}, median x{c.median_ratio:.4g})")
+        return 1
+    print(f"\nall {len(checks)} figures hold ({level})")
+    return 0
+
+
+def add(sub: Subparsers) -> None:
+    """Add ``sins check`` to ``sub``."""
+    p = sub.add_parser(
+        "check", help="the compensation-quality gate: a suite or a campaign against its baseline"
+    )
+    p.add_argument(
+        "suite", metavar="SUITE.toml",
+        help="a quality suite, or a campaign file or preset (its distributions gated: sins.campaign.gate)",
+    )  # fmt: skip
+    p.add_argument("--baseline", type=Path, required=True, metavar="BASELINE.json")
+    p.add_argument(
+        "--update-baseline", action="store_true", help="write the measured metrics as the baseline"
+    )
+    p.set_defaults(func=_cmd_check)

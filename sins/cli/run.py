@@ -1,0 +1,191 @@
+"""``sins run``: a scenario simulated, integrated and summarised per strategy; shown in Rerun."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from sins.cli.common import (
+    Subparsers,
+    check_finite,
+    check_viewer_args,
+    display_unit,
+    fixed_width,
+    format_table,
+    show,
+)
+from sins.errors import SinsInputError
+from sins.scenario.budget import check_scenario_size
+
+if TYPE_CHECKING:
+    from sins.pipeline import ScenarioRun
+    from sins.scenario import AidingSpec, Scenario
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from sins import io, pipeline, scenario
+
+    check_viewer_args(args)
+    path = pipeline.resolve_scenario(args.scenario)
+    sc = scenario.load(path)
+    check_scenario_size(sc, path, "running")
+    try:
+        result = pipeline.run_scenario(sc)
+    except ValueError as exc:  # a rig session that cannot be fitted, say
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{path}: {exc}") from None
+    scenario.check_latitude(sc, result.truth)
+    summaries: dict[str, dict[str, Any]] = {name: run.summary.to_dict() for name, run in result.runs.items()}
+    for name, summary in summaries.items():
+        check_finite(summary, f"{path}: strategy {name}")
+    n = result.samples
+    imu_note = f", IMU {sc.imu_model.stem} (seed {sc.imu_seed})" if sc.imu_model else ", ideal IMU"
+    report = [
+        f"scenario {sc.name}: {sc.description or path}\n"
+        f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s){imu_note}, vertical channel {sc.vertical}; "
+        "errors are estimate - truth",
+        format_table(summaries),
+    ]
+    residuals = {name: run.residual_rms for name, run in result.runs.items() if run.residual_rms is not None}
+    if residuals:
+        report.append("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
+        report.append(format_residuals(residuals))
+    aided, outages = _aided_json(result, path)
+    if aided:
+        grade = next(iter(result.aided.values())).filter_grade
+        report.append(_aided_report(sc, aided, outages, grade))
+    print("\n".join(report))
+    for name, run in result.runs.items():
+        if run.residual_rms is not None:
+            summaries[name]["residual_rms"] = run.residual_rms
+    if args.json:
+        document: dict[str, Any] = {"scenario": _scenario_json(sc, path, n), "strategies": summaries}
+        if aided:
+            document |= {"aided": aided, "outages": outages}
+        io.write_json(args.json, document)
+    show(args, result, "\n".join(report))
+    return 0
+
+
+def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
+    """Strategy × channel residual RMS (°/h, mg) and the mean ratio to the oracle's (nan without one)."""
+    from sins.imu import CHANNELS as _CHANNELS
+
+    head = ["strategy", *(f"{c} {display_unit(c)[1]}" for c in _CHANNELS), "× oracle"]
+    oracle = residuals.get("oracle")
+    rows = []
+    for name, ch in residuals.items():
+        cells = [f"{ch[c] / display_unit(c)[0]:.3f}" for c in _CHANNELS]
+        # Over the channels the oracle leaves any error on (a noiseless channel's floor is 0).
+        ratios = [ch[c] / oracle[c] for c in _CHANNELS if oracle and oracle[c] > 0]
+        ratio = sum(ratios) / len(ratios) if ratios else float("nan")
+        rows.append([name, *cells, f"{ratio:.3f}"])
+    return fixed_width(head, rows)
+
+
+def _aided_json(
+    result: ScenarioRun, path: Path
+) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, float]]]]:
+    """The aided runs' summaries (with their fix counts) and their errors per outage, as JSON objects."""
+    aided: dict[str, dict[str, Any]] = {}
+    outages: dict[str, list[dict[str, float]]] = {}
+    aiding = result.scenario.aiding
+    if aiding is None:
+        return aided, outages
+    for name, run in result.aided.items():
+        aided[name] = {**run.summary.to_dict(), "fixes": run.fixes, "rejected_fixes": run.rejected}
+        if aiding.sigma_vel_mps is not None:
+            aided[name]["rejected_velocity_fixes"] = run.velocity_rejected
+        aided[name] |= {"alignment": run.alignment, "alignment_start_s": run.start_s}
+        if run.alignment == "static":
+            aided[name]["alignment_static_s"] = run.static_s
+        if run.heading_sigma_deg is not None:
+            aided[name]["alignment_heading_sigma_deg"] = run.heading_sigma_deg
+        if run.restarts:
+            aided[name]["filter_restarts_s"] = list(run.restarts)
+        check_finite(aided[name], f"{path}: aided strategy {name}")
+        outages[name] = [
+            {
+                "start_s": o.start_s,
+                "end_s": o.end_s,
+                "final_horizontal_m": o.final_m,
+                "max_horizontal_m": o.max_m,
+            }
+            for o in run.outages
+        ]
+    return aided, outages
+
+
+def _aided_report(
+    sc: Scenario, aided: dict[str, dict[str, Any]], outages: dict[str, list[dict[str, float]]], grade: str
+) -> str:
+    """The aided runs' table and, if any, the errors per outage."""
+    a = sc.aiding
+    assert a is not None  # only aided scenarios have aided runs
+    start = _alignment_text(a, next(iter(aided.values())))
+    columns: tuple[tuple[str, str, str], ...]
+    columns = (("final hor m", "final_horizontal_m", "{:.3f}"), ("max hor m", "max_horizontal_m", "{:.3f}"),
+               ("rms hor m", "rms_horizontal_m", "{:.3f}"), ("final D m", "final_down_m", "{:.3f}"),
+               ("yaw °", "final_yaw_deg", "{:.4f}"), ("fixes", "fixes", "{:d}"),
+               ("rejected", "rejected_fixes", "{:d}"))  # fmt: skip
+    if a.sigma_vel_mps is not None:
+        columns += (("rejected v", "rejected_velocity_fixes", "{:d}"),)
+    head = ["strategy"] + [c[0] for c in columns]
+    rows = [[name] + [fmt.format(s[key]) for _, key, fmt in columns] for name, s in aided.items()]
+    text = [
+        f"\naided by GNSS at {a.rate_hz:g} Hz ({len(a.outages)} outages), filter tuned to the {grade} grade, "
+        f"started {start}",
+        fixed_width(head, rows),
+    ]
+    for name, s in aided.items():
+        if s.get("filter_restarts_s"):
+            times = ", ".join(f"{t:g}" for t in s["filter_restarts_s"])
+            text.append(f"{name}: the filter diverged and started again from the fixes at {times} s")
+    windows = [(name, o) for name, items in outages.items() for o in items]
+    if windows:
+        text.append("\nposition error per outage (horizontal, before the first fix after it)")
+        rows = [[name, f"{o['start_s']:g}-{o['end_s']:g} s", f"{o['final_horizontal_m']:.3f}",
+                 f"{o['max_horizontal_m']:.3f}"] for name, o in windows]  # fmt: skip
+        text.append(fixed_width(["strategy", "outage", "at end m", "max m"], rows))
+    return "\n".join(text)
+
+
+def _alignment_text(a: AidingSpec, run: dict[str, Any]) -> str:
+    """How the aided runs started (the alignment that ran), for the report's heading line."""
+    if run["alignment"] == "static":
+        where = " (heading from elsewhere)" if a.heading_sigma_rad is not None else ""
+        return f"aligned over the first {run['alignment_static_s']:g} s{where}"
+    if run["alignment"] == "gnss_velocity":
+        return (
+            f"aligned in motion at {run['alignment_start_s']:g} s, heading from the GNSS velocity "
+            f"(1σ {run['alignment_heading_sigma_deg']:.2f}°); errors from then"
+        )
+    return "from the truth's first state"
+
+
+def _scenario_json(sc: Scenario, path: Path, n: int) -> dict[str, Any]:
+    return {
+        "name": sc.name,
+        "file": str(path),
+        "rate_hz": sc.rate_hz,
+        "samples": n,
+        "duration_s": n / sc.rate_hz,
+        "vertical": sc.vertical,
+    }
+
+
+def add(sub: Subparsers) -> None:
+    """Add ``sins run`` to ``sub``."""
+    p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
+    p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
+    p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
+    p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="save the run as a Rerun recording")
+    p.add_argument("--spawn", action="store_true", help="show the run in the native Rerun viewer")
+    p.add_argument(
+        "--serve", action="store_true",
+        help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
+    )  # fmt: skip
+    p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
+    p.set_defaults(func=_cmd_run)
