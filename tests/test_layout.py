@@ -29,6 +29,7 @@ RANKS = {
     "sins.compensation": 5,
     "sins.gap": 5,
     "sins.characterise": 5,
+    "sins.inspection": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
     "sins.campaign": 8,
