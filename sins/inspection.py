@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.errors import SinsInputError
 from sins.io import axes
 from sins.io import units as unitdefs
 from sins.io.recording import Recording
@@ -147,7 +148,14 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     -------
     Inspection
         figures and findings; no findings for a clean recording.
+
+    Raises
+    ------
+    SinsInputError
+        fewer than two readings.
     """
+    if len(rec.imu) < 2:
+        raise SinsInputError(f"{rec.source}: {len(rec.imu)} reading(s); inspecting needs two or more")
     t, w, f = rec.mean_rates()
     stamps = rec.imu.t if rec.form == "increment" else t
     dt = np.diff(stamps)
@@ -485,17 +493,24 @@ def _frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
     if seen[k] == "d" and k == 2:
         return []
     fits = [a for a in axes.right_handed_frames() if a[k] == seen[k]]
-    fits.sort(key=lambda a: (a not in ("flu", "rfu"), a))
-    files = [axes.frame_letters(axes.frame_matrix(a) @ current) for a in fits]
-    named = {"flu": "ROS, REP 103", "rfu": "x right, y forward: axes named after ENU"}
-    listed = ", ".join(f"{a} ({named[s]})" if s in named else a for a, s in zip(files, fits, strict=True))
+    files = sorted(
+        (axes.frame_letters(axes.frame_matrix(a) @ current) for a in fits),
+        key=lambda a: (a not in _PREFERRED, _PREFERRED.index(a) if a in _PREFERRED else 0, a),
+    )
+    listed = ", ".join(f"{a} ({_NAMED[a]})" if a in _NAMED else a for a in files)
     where = "xyz"[k]
     return [Finding(
         "axes",
-        f"at rest gravity points along {'-' if seen[k] == 'd' else '+'}{where} as read: {where} points "
-        f"{'down' if seen[k] == 'd' else 'up'}, where FRD's z points down; likely axes: {listed}",
+        f"at rest the specific force (which points up) lies along {'-' if seen[k] == 'd' else '+'}{where} as "
+        f"read: {where} points {'down' if seen[k] == 'd' else 'up'}, where FRD's z points down; likely "
+        f"axes of the file: {listed}",
         option="frame", value=files[0],
     )]  # fmt: skip
+
+
+#: Frames named first, and what they are.
+_PREFERRED = ("frd", "flu", "rfu")
+_NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward: axes named after ENU"}
 
 
 # --------------------------------------------------------------------------- clipping

@@ -45,6 +45,7 @@ CONFINED = {
     "minisom": {"sins.compensation.kohonen"},
     "dask": {"sins.campaign.engine"},
     "distributed": {"sins.campaign.engine"},
+    "rosbags": {"sins.io.bags"},
 }
 
 

@@ -246,8 +246,12 @@ def test_bag_refusals_are_one_line(tmp_path: Path, bags: dict[str, Path]) -> Non
     refusal(lambda: io.read_recording_any(renamed), "ros1 bag file", "name ending .bag")
 
 
-def _static_flu_bag(path: Path, seconds: float = 120.0) -> Path:
-    """A still unit heading north-east at 45° N: gravity and Earth's rate in FLU, with white noise."""
+def _static_flu_bag(
+    path: Path, seconds: float = 120.0, axes_of: np.ndarray = FLU, stretch: float = 1.0
+) -> Path:
+    """A still unit heading north-east at 45° N: gravity and Earth's rate with white noise, on FLU axes
+    (``axes_of`` the signs that turn FRD into the bag's axes), stamped ``stretch`` times slower than its
+    recorder's clock."""
     rng = np.random.default_rng(SEED + 1)
     n = int(seconds * 100)
     lat, yaw = np.radians(45.0), np.radians(45.0)
@@ -257,10 +261,26 @@ def _static_flu_bag(path: Path, seconds: float = 120.0) -> Path:
     g = 9.8061992  # Somigliana's normal gravity at 45° N, sea level (1e-7 is far below the noise)
     d = {
         "ns": T0_NS + np.arange(n, dtype=np.int64) * 10_000_000,
-        "w": (w_frd + 3e-4 * rng.standard_normal((n, 3))) * FLU,
-        "f": ([0.0, 0.0, -g] + 0.01 * rng.standard_normal((n, 3))) * FLU,
+        "w": (w_frd + 3e-4 * rng.standard_normal((n, 3))) * axes_of,
+        "f": (np.array([0.0, 0.0, -g]) + 0.01 * rng.standard_normal((n, 3))) * axes_of,
     }
-    return _write_bag(path, "ros2", d, odometry=False, fixes=False)
+    stamps = T0_NS + np.round(np.arange(n) * 10_000_000 * stretch).astype(np.int64)
+    return _write_bag(path, "ros2", d, odometry=False, fixes=False, stamps=stamps)
+
+
+def test_inspect_on_bags_names_frd_readings_and_a_drifting_sensor_clock(tmp_path: Path) -> None:
+    def findings(bag: Path, *options: str) -> list[tuple[str, str | None]]:
+        out = tmp_path / "inspect.json"
+        assert main(["inspect", str(bag), *options, "--json", str(out)]) == 0
+        return [(f["code"], f["value"]) for f in json.loads(out.read_text(encoding="utf-8"))["findings"]]
+
+    assert findings(_static_flu_bag(tmp_path / "flu", 30.0)) == []
+    # A driver that wrote FRD into ROS's FLU message: read as FLU, z points up; the file's axes are frd.
+    frd = _static_flu_bag(tmp_path / "frd", 30.0, axes_of=np.ones(3))
+    assert findings(frd) == [("axes", "frd")]
+    assert findings(frd, "--frame", "frd") == []
+    # Header stamps 2 % slower than the recorder's clock over the same 30 s.
+    assert findings(_static_flu_bag(tmp_path / "slow", 30.0, stretch=1.02)) == [("clock_mismatch", None)]
 
 
 def test_characterise_static_on_a_bag_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -473,3 +493,17 @@ def test_the_cli_reads_a_sins_csv_as_before_and_refuses_options_that_do_not_appl
                            "no such file or folder")  # fmt: skip
     with pytest.raises(SinsInputError):
         io.read_recording_any(path, units="gyro=deg/s", frame="frd", columns="dv_x=gyro_x")
+
+
+def test_the_formats_guide_lists_every_unit_and_spelling() -> None:
+    """Every unit and alias the readers accept is in the guide's table, so the two cannot drift apart."""
+    from sins.io import units
+
+    guide = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "formats.md").read_text(
+        encoding="utf-8"
+    )
+    for key, table in units.UNITS.items():
+        row = next(line for line in guide.splitlines() if line.startswith(f"| `{key}` |"))
+        assert [u.strip(" `") for u in row.split("|")[3].split(",")] == list(table), key
+    for alias in units.ALIASES:
+        assert f"`{alias}`" in guide, alias

@@ -11,7 +11,9 @@ from sins.cli.common import (
     check_finite,
     format_table,
     positive,
+    progress_bar,
     recording_options,
+    row_progress,
 )
 from sins.nav.vertical import VERTICAL_MODES
 
@@ -19,9 +21,9 @@ from sins.nav.vertical import VERTICAL_MODES
 def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins import io, pipeline
 
-    run = pipeline.integrate_recording(
-        args.imu, args.truth, args.vertical, args.vertical_tau_s, reading=recording_options(args)
-    )
+    with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
+        reading = {**recording_options(args), "progress": row_progress(bar)}
+        run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s, reading)
     summary = run.summary.to_dict()
     against = args.truth or "its own reference"
     check_finite(summary, f"{args.imu}: against {against}")
