@@ -74,6 +74,22 @@ def _odometry_msg(ts, ns: int, p: np.ndarray, q: np.ndarray, v_body: np.ndarray)
     )  # fmt: skip
 
 
+def _pose_msg(ts, kind: str, ns: int, p: np.ndarray, q: np.ndarray):  # type: ignore[no-untyped-def]
+    """A ``geometry_msgs/PoseStamped`` or ``TransformStamped`` of the body in ``odom``."""
+    t = ts.types
+    quat = t["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2], w=q[3])
+    if kind == "pose":
+        pose = t["geometry_msgs/msg/Pose"](position=t["geometry_msgs/msg/Point"](x=p[0], y=p[1], z=p[2]),
+                                           orientation=quat)  # fmt: skip
+        return t["geometry_msgs/msg/PoseStamped"](header=_header(ts, ns, "odom"), pose=pose)
+    moved = t["geometry_msgs/msg/Transform"](
+        translation=t["geometry_msgs/msg/Vector3"](x=p[0], y=p[1], z=p[2]), rotation=quat
+    )
+    return t["geometry_msgs/msg/TransformStamped"](
+        header=_header(ts, ns, "odom"), child_frame_id="base_link", transform=moved
+    )
+
+
 def _fix_msg(ts, ns: int, lat: float, lon: float, alt: float, status: int):  # type: ignore[no-untyped-def]
     t = ts.types
     return t["sensor_msgs/msg/NavSatFix"](
@@ -111,6 +127,7 @@ def _write_bag(
     odometry: bool = True,
     fixes: bool = True,
     stamps: np.ndarray | None = None,
+    pose: str = "odometry",
 ) -> Path:
     """A bag of ``kind`` ("ros1", "ros2", "ros2-mcap") with the readings on each IMU topic (in FLU, as
     ROS has them), odometry at every fourth reading and a fix every tenth (the first without a fix)."""
@@ -126,7 +143,9 @@ def _write_bag(
     stamps = d["ns"] if stamps is None else stamps
     with writer:
         imu = [writer.add_connection(name, "sensor_msgs/msg/Imu", typestore=ts) for name in imu_topics]
-        odo = writer.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts) if odometry else None
+        pose_type = {"odometry": "nav_msgs/msg/Odometry", "pose": "geometry_msgs/msg/PoseStamped",
+                     "transform": "geometry_msgs/msg/TransformStamped"}[pose]  # fmt: skip
+        odo = writer.add_connection("/odom", pose_type, typestore=ts) if odometry else None
         gps = writer.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=ts) if fixes else None
         for k, ns in enumerate(d["ns"].tolist()):
             received = ns + 2_000_000  # the recorder gets each message 2 ms after its stamp
@@ -134,8 +153,11 @@ def _write_bag(
                 msg = _imu_msg(ts, int(stamps[k]), d["w"][k], d["f"][k], k)
                 writer.write(c, received, serialize(msg, "sensor_msgs/msg/Imu"))
             if odo is not None and k % 4 == 0:
-                msg = _odometry_msg(ts, ns, d["p"][k], d["q"][k], d["v_body"][k])
-                writer.write(odo, received, serialize(msg, "nav_msgs/msg/Odometry"))
+                if pose == "odometry":
+                    msg = _odometry_msg(ts, ns, d["p"][k], d["q"][k], d["v_body"][k])
+                else:
+                    msg = _pose_msg(ts, pose, ns, d["p"][k], d["q"][k])
+                writer.write(odo, received, serialize(msg, pose_type))
             if gps is not None and k % 10 == 0:
                 msg = _fix_msg(ts, ns, 45.0 + 1e-5 * k, 7.5, 250.0 + k, -1 if k == 0 else 0)
                 writer.write(gps, received, serialize(msg, "sensor_msgs/msg/NavSatFix"))
@@ -200,6 +222,23 @@ def test_a_bags_odometry_is_the_truth_in_ned_and_frd_placed_at_the_first_valid_f
     # Velocity: the body's 10 m/s forward and 0.02 m/s up, in NED; the same 1e-5 rad turn at most.
     v = 10.0 * np.column_stack([np.sin(d["yaw_enu"][::4]), np.cos(d["yaw_enu"][::4]), np.zeros(100)])
     np.testing.assert_allclose(truth.v_n, v + np.array([0.0, 0.0, -0.02]), rtol=0, atol=2e-4)
+
+
+@pytest.mark.parametrize("pose", ["pose", "transform"])
+def test_poses_and_transforms_are_a_truth_with_differentiated_velocity(tmp_path: Path, pose: str) -> None:
+    d = _bag_data()
+    rec = io.read_recording_any(_write_bag(tmp_path / pose, "ros2", d, pose=pose), origin=(0.8, 0.1, 50.0))
+    assert rec.truth is not None and any("as given" in note for note in rec.notes)
+    ned = local_ned(rec.truth.lat, rec.truth.lon, rec.truth.h, 0.8, 0.1, 50.0)
+    p = d["p"][::4]
+    np.testing.assert_allclose(ned, np.column_stack([p[:, 1], p[:, 0], -p[:, 2]]), rtol=0, atol=1e-6)
+    # Differences of 25 Hz poses on an arc turning 0.05 rad/s at 10 m/s. The path (a cumulative sum at
+    # 100 Hz) lags its velocity by half a step: 0.05 × 0.005 × 10 = 2.5e-3 m/s inside, where the
+    # differences are central; the two ends' one-sided ones turn 0.02 s more: 1e-2 m/s more.
+    yaw = d["yaw_enu"][::4]
+    v = np.column_stack([10.0 * np.sin(yaw), 10.0 * np.cos(yaw), np.full(100, -0.02)])
+    np.testing.assert_allclose(rec.truth.v_n[1:-1], v[1:-1], rtol=0, atol=3e-3)
+    np.testing.assert_allclose(rec.truth.v_n[[0, -1]], v[[0, -1]], rtol=0, atol=1.5e-2)
 
 
 def test_an_imu_topic_is_chosen_when_there_are_several(tmp_path: Path) -> None:

@@ -126,23 +126,41 @@ def read_bag(
             f"{path}: {bag_kind(path)} file: rosbags reads it only under a name ending {suffix}"
         )
     try:
-        return _read(path, topic, truth_topic, m_frame, frame, origin, progress)
+        got = _collect(path, topic, truth_topic, progress)
     except (SinsInputError, KeyboardInterrupt):
         raise
     except Exception as exc:  # rosbags raises a dozen types (and struct, sqlite, zstd ones) on damaged files
         text = " ".join(str(exc).split()) or type(exc).__name__
         raise SinsInputError(f"{path}: cannot read it as a bag: {text}") from None
+    notes = list(got.notes)
+    imu, t0, receive_t, more = _imu(path, got.imu_topic, got.rows[got.imu_topic], m_frame, frame)
+    notes += more
+    fixes = None if got.fix_topic is None else _fixes(path, got.fix_topic, got.rows[got.fix_topic], t0)
+    truth = None
+    if got.ref_topic is not None:
+        ref = got.ref_topic
+        truth, more = _truth(path, ref, got.types[ref], got.rows[ref], t0, fixes, origin)
+        notes += more
+    return BagRead(imu, t0, receive_t, got.imu_topic, truth, got.ref_topic, fixes.fixes if fixes else None,
+                   tuple(notes) + (fixes.notes if fixes else ()))  # fmt: skip
 
 
-def _read(
-    path: Path,
-    topic: str | None,
-    truth_topic: str | None,
-    m_frame: Array,
-    frame: str,
-    origin: tuple[float, float, float] | None,
-    progress: Callable[[int, int], None] | None,
-) -> BagRead:
+@dataclass(frozen=True)
+class _Collected:
+    """The messages' numbers per topic (see :func:`_row`), the topics' types, the chosen topics."""
+
+    rows: dict[str, list[tuple[Any, ...]]]
+    types: dict[str, str]
+    imu_topic: str
+    ref_topic: str | None
+    fix_topic: str | None
+    notes: tuple[str, ...]
+
+
+def _collect(
+    path: Path, topic: str | None, truth_topic: str | None, progress: Callable[[int, int], None] | None
+) -> _Collected:
+    """Choose the topics and read their messages' numbers (everything rosbags is asked for is here)."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
@@ -160,15 +178,7 @@ def _read(
             rows[conn.topic].append(_row(types[conn.topic], msg, received))
             if progress is not None and (done % 20000 == 0 or done == total):
                 progress(done, total)
-    imu, t0, receive_t, more = _imu(path, imu_topic, rows[imu_topic], m_frame, frame)
-    notes += more
-    fixes = None if fix_topic is None else _fixes(path, fix_topic, rows[fix_topic], t0)
-    truth = None
-    if ref_topic is not None:
-        truth, more = _truth(path, ref_topic, types[ref_topic], rows[ref_topic], t0, fixes, origin)
-        notes += more
-    return BagRead(imu, t0, receive_t, imu_topic, truth, ref_topic, fixes.fixes if fixes else None,
-                   tuple(notes) + (fixes.notes if fixes else ()))  # fmt: skip
+    return _Collected(rows, types, imu_topic, ref_topic, fix_topic, tuple(notes))
 
 
 def _listing(types: dict[str, str]) -> str:

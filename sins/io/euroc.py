@@ -19,7 +19,6 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,27 +117,25 @@ def read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
         a header not starting with ``#timestamp``; a row with another number of cells; a cell that
         is not a number or not finite (naming the line and column); stamps that do not increase.
     """
-    with _open(path) as fh:
-        header = fh.readline()
-        if not header.lstrip("\ufeff").startswith("#timestamp"):
-            raise SinsInputError(
-                f"{path}:1: expected the ASL header '#timestamp [ns],...', found {header[:40]!r}"
-            )
-        names = [c.strip() for c in header.split(",")]
-        if len(names) < width + 1:
-            raise SinsInputError(
-                f"{path}:1: expected {width + 1} or more columns, the header has {len(names)}"
-            )
-        stamps: list[int] = []
-        rows: list[list[float]] = []
-        for number, line in enumerate(fh, start=2):
-            if not line.strip():
-                continue
-            cells = line.split(",")
-            if len(cells) != len(names):
-                raise SinsInputError(f"{path}:{number}: expected {len(names)} values, found {len(cells)}")
-            stamps.append(_int_cell(path, number, names[0], cells[0]))
-            rows.append([_float_cell(path, number, names[i + 1], cells[i + 1]) for i in range(width)])
+    lines = _lines(path)
+    header = lines[0] if lines else ""
+    if not header.lstrip("\ufeff").startswith("#timestamp"):
+        raise SinsInputError(
+            f"{path}:1: expected the ASL header '#timestamp [ns],...', found {header[:40]!r}"
+        )
+    names = [c.strip() for c in header.split(",")]
+    if len(names) < width + 1:
+        raise SinsInputError(f"{path}:1: expected {width + 1} or more columns, the header has {len(names)}")
+    stamps: list[int] = []
+    rows: list[list[float]] = []
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if len(cells) != len(names):
+            raise SinsInputError(f"{path}:{number}: expected {len(names)} values, found {len(cells)}")
+        stamps.append(_int_cell(path, number, names[0], cells[0]))
+        rows.append([_float_cell(path, number, names[i + 1], cells[i + 1]) for i in range(width)])
     if not stamps:
         raise SinsInputError(f"{path}: no data rows after the header")
     t = np.array(stamps, dtype=np.int64)
@@ -151,12 +148,14 @@ def read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
     return t, np.array(rows, dtype=float).reshape(len(rows), width)
 
 
-def _open(path: Path) -> TextIO:
-    """``path`` opened as text, or a one-line error (missing, a folder, unreadable)."""
+def _lines(path: Path) -> list[str]:
+    """``path``'s lines, or a one-line error (missing, a folder, unreadable, not UTF-8)."""
     try:
-        return open(path, encoding="utf-8-sig")
+        return path.read_text(encoding="utf-8-sig").splitlines()
     except FileNotFoundError:
         raise SinsInputError(f"{path}: no such file") from None
+    except UnicodeDecodeError as exc:
+        raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
 
