@@ -499,13 +499,12 @@ def _frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
     )
     listed = ", ".join(f"{a} ({_NAMED[a]})" if a in _NAMED else a for a in files)
     where = "xyz"[k]
-    return [Finding(
-        "axes",
-        f"at rest the specific force (which points up) lies along {'-' if seen[k] == 'd' else '+'}{where} as "
-        f"read: {where} points {'down' if seen[k] == 'd' else 'up'}, where FRD's z points down; likely "
-        f"axes of the file: {listed}",
-        option="frame", value=files[0],
-    )]  # fmt: skip
+    sign, way = ("-", "down") if seen[k] == "d" else ("+", "up")
+    what = (f"at rest the specific force (which points up) lies along {sign}{where} as read: {where} points "
+            f"{way}, where FRD's z points down; likely axes of the file: {listed}")  # fmt: skip
+    if files[0] in _PREFERRED:
+        return [Finding("axes", what, option="frame", value=files[0])]
+    return [Finding("axes", what, advice="pass --frame with the letters of the file's axes (one of these)")]
 
 
 #: Frames named first, and what they are.

@@ -36,7 +36,7 @@ def format_inspection(rec: Recording, result: Inspection) -> str:
     """The report: what was read, the figures, then each likely mistake with what to pass instead."""
     lines = [
         f"{result.source}: {rec.kind}, {result.form} form, {result.rows} rows over {result.span_s:.6g} s "
-        f"at {result.rate_hz:.6g} Hz (interval jitter {100 * result.jitter:.2g} % RMS), "
+        f"at {result.rate_hz:.6g} Hz (interval jitter {100 * result.jitter:.2f} % RMS), "
         f"{len(result.gaps)} gap(s)"
     ]
     lines += [f"  {note}" for note in rec.notes]
