@@ -10,8 +10,10 @@ names the axis pointing right. The time stamps give the rate, its jitter and the
 readings at a channel's extreme give clipping. Each finding names the reader option (and its value)
 that mends it, or says what to do where no option does; a clean recording gives none.
 
-Rest is found from the data alone: one-second windows whose readings vary least (within 3× the
-quietest 5 %) and whose means agree with theirs (within 6 standard errors), two seconds at least.
+Rest is found from the data alone: among the one-second windows whose readings vary least (within 3×
+the quietest 5 %), the largest group whose means agree (within 6 standard errors), two seconds at least.
+Where a fifth of the quiet windows hold gravity 20° or more away from it (a rig session, a hand-held
+unit), the axes are not judged.
 """
 
 from __future__ import annotations
@@ -91,8 +93,10 @@ class Clipping:
 @dataclass(frozen=True)
 class Rest:
     """The readings at rest: how long, the mean specific force and rate (SI, FRD as read), their sizes
-    against normal gravity and Earth's rate, and whether the rate's mean is resolved (its standard error
-    below a tenth of it, the windows agreeing)."""
+    against normal gravity and Earth's rate, whether the rate's mean is resolved (its standard error
+    below a tenth of it, the windows agreeing), and ``orientations``: 2 where a fifth or more of the
+    quiet windows hold gravity 20° or more away (a rig session, a hand-held unit), whose axes the rest
+    then does not show."""
 
     seconds: float
     specific_force: tuple[float, float, float]
@@ -100,6 +104,7 @@ class Rest:
     gravity_ratio: float
     earth_rate_ratio: float
     rate_resolved: bool
+    orientations: int = 1
 
 
 @dataclass(frozen=True)
@@ -167,7 +172,7 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     findings: list[Finding] = []
     findings += _time_findings(rec, med, jitter, gaps, stated, rate_hz is not None)
     windows = _windows(w, f, med)
-    rest = _rest(windows, w, f, med) if windows is not None else None
+    rest = _rest(windows, med) if windows is not None else None
     findings += _rest_findings(rec, rest, med)
     frame = _axes(windows, rest, f)
     findings += _frame_findings(rec, frame)
@@ -287,7 +292,7 @@ def _windows(w: Array, f: Array, med: float) -> _Windows | None:
     )  # fmt: skip
 
 
-def _rest(win: _Windows, w: Array, f: Array, med: float) -> Rest | None:
+def _rest(win: _Windows, med: float) -> Rest | None:
     """The windows at rest (see the module docstring) and their means, or None (less than two seconds)."""
     quiet = np.ones(len(win.mean_w), dtype=bool)
     for spread in (win.spread_w, win.spread_f):
@@ -295,12 +300,12 @@ def _rest(win: _Windows, w: Array, f: Array, med: float) -> Rest | None:
         quiet &= spread <= 3.0 * floor + 1e-12 * float(np.median(spread) + 1e-300)
     if quiet.sum() < 2:
         return None
-    ref_w, ref_f = np.median(win.mean_w[quiet], axis=0), np.median(win.mean_f[quiet], axis=0)
     root = np.sqrt(win.length)
-    tol_w = 6.0 * float(np.median(win.spread_w[quiet])) / root + 1e-15
-    tol_f = 6.0 * float(np.median(win.spread_f[quiet])) / root + 1e-15
-    rest = quiet & (np.linalg.norm(win.mean_w - ref_w, axis=1) <= tol_w)
-    rest &= np.linalg.norm(win.mean_f - ref_f, axis=1) <= tol_f
+    tol = (6.0 * float(np.median(win.spread_w[quiet])) / root + 1e-15,
+           6.0 * float(np.median(win.spread_f[quiet])) / root + 1e-15)  # fmt: skip
+    ref = _largest_cluster(win, np.flatnonzero(quiet), tol)
+    rest = quiet & (np.linalg.norm(win.mean_w - win.mean_w[ref], axis=1) <= tol[0])
+    rest &= np.linalg.norm(win.mean_f - win.mean_f[ref], axis=1) <= tol[1]
     seconds = float(rest.sum() * win.length * med)
     if seconds < 2.0 or rest.sum() < 2:
         return None
@@ -310,6 +315,9 @@ def _rest(win: _Windows, w: Array, f: Array, med: float) -> Rest | None:
     stderr = noise / np.sqrt(rest.sum() * win.length)
     scatter = float(np.linalg.norm(win.mean_w[rest].std(axis=0)))
     agreeing = scatter <= max(0.2 * size_w, 3.0 * noise / root)
+    # Quiet windows whose gravity points 20° or more away from the rest's: other orientations at rest.
+    up = win.mean_f[quiet] / np.linalg.norm(win.mean_f[quiet], axis=1)[:, None]
+    turned = up @ (mean_f / np.linalg.norm(mean_f)) < np.cos(np.radians(20.0))
     return Rest(
         seconds=seconds,
         specific_force=(float(mean_f[0]), float(mean_f[1]), float(mean_f[2])),
@@ -317,7 +325,24 @@ def _rest(win: _Windows, w: Array, f: Array, med: float) -> Rest | None:
         gravity_ratio=float(np.linalg.norm(mean_f)) / GRAVITY,
         earth_rate_ratio=size_w / OMEGA_IE,
         rate_resolved=bool(size_w > 0 and stderr < 0.1 * size_w and agreeing and rest.sum() >= 3),
+        orientations=bool(turned.mean() > 0.2) + 1,
     )
+
+
+def _largest_cluster(win: _Windows, quiet: NDArray[np.intp], tol: tuple[float, float]) -> int:
+    """The quiet window whose means the most other quiet windows agree with (a still unit's one
+    orientation; a rig's or a drive's longest), among at most 400 of them spread over the recording."""
+    candidates = quiet if len(quiet) <= 400 else quiet[np.linspace(0, len(quiet) - 1, 400).astype(int)]
+    best, most = int(candidates[0]), -1
+    for start in range(0, len(candidates), 20):  # blocks of 20: (20, quiet) distances at a time
+        block = candidates[start : start + 20]
+        near = np.ones((len(block), len(quiet)), dtype=bool)
+        for means, limit in ((win.mean_w, tol[0]), (win.mean_f, tol[1])):
+            near &= np.linalg.norm(means[block][:, None, :] - means[quiet][None, :, :], axis=2) <= limit
+        counts = near.sum(axis=1)
+        if counts.max() > most:
+            best, most = int(block[int(np.argmax(counts))]), int(counts.max())
+    return best
 
 
 def _rest_findings(rec: Recording, rest: Rest | None, med: float) -> list[Finding]:
@@ -438,7 +463,9 @@ def _range_findings(rec: Recording, w: Array) -> list[Finding]:
 def _axes(win: _Windows | None, rest: Rest | None, f: Array) -> str | None:
     """The readings' axes as far as the data show them, in :mod:`sins.io.axes` letters with ``_`` for an
     axis they do not fix: the vertical from gravity, the lateral from the turns. None: no axis points
-    down (within 25°) or no gravity is seen."""
+    down (within 25°), no gravity is seen, or the unit rested in several orientations."""
+    if rest is not None and rest.orientations > 1:
+        return None
     up = np.asarray(rest.specific_force) if rest is not None else f.mean(axis=0)
     if not np.linalg.norm(up) > 0:
         return None

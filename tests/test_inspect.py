@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import dataset_folder
 
 from sins import inspection, io
 from sins.cli import main
@@ -236,3 +237,30 @@ def test_quantized_readings_clip_only_far_from_their_median() -> None:
     assert inspection.inspect(still).findings == ()
     clipped = inspection.inspect(quantized(_clipped(drive())))
     assert [f.code for f in clipped.findings] == ["clipping", "clipping"]
+
+
+# --------------------------------------------------------------------------- a real recording
+
+FERRARIS = dataset_folder("imucal_ferraris") / "example_ferraris_session.csv"
+FERRARIS_COLUMNS = "gyro_x=gyr_x,gyro_y=gyr_y,gyro_z=gyr_z,accel_x=acc_x,accel_y=acc_y,accel_z=acc_z"
+
+
+@pytest.mark.skipif(not FERRARIS.is_file(), reason=f"real data absent: {FERRARIS}")
+def test_a_real_uncalibrated_mems_session(tmp_path: Path) -> None:
+    """imucal's hand-turned Ferraris session (deg/s, m/s², 102.4 Hz, no time column; SOURCE.md): read
+    as rad/s its hand turns reach 895 'rad/s', which names deg/s; read right, its first hold (x up) shows
+    the unit's uncalibrated offset, 10.34 m/s² (SOURCE.md's own numpy check: 10.341), and the gyro bias
+    SOURCE.md gives, [-0.60, -0.37, 0.06] °/s; the six holds' orientations keep the axes unjudged."""
+    local = tmp_path / "ferraris.csv"
+    local.symlink_to(FERRARIS)
+    found = inspect_cli(local, "--columns", FERRARIS_COLUMNS, "--rate", "102.4")["findings"]
+    assert sorted((f["code"], f["value"]) for f in found) == [
+        ("gravity_size", None),
+        ("gyro_range", "gyro=deg/s"),
+    ]
+    doc = inspect_cli(local, "--columns", FERRARIS_COLUMNS, "--rate", "102.4", "--units", "gyro=deg/s")
+    assert [f["code"] for f in doc["findings"]] == ["gravity_size"]
+    rest = doc["rest"]
+    assert rest["gravity_ratio"] * inspection.GRAVITY == pytest.approx(10.341, abs=0.02)
+    np.testing.assert_allclose(np.degrees(rest["rate"]), [-0.60, -0.37, 0.06], atol=0.02)
+    assert rest["orientations"] == 2 and doc["axes"] is None
