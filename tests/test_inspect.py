@@ -264,3 +264,30 @@ def test_a_real_uncalibrated_mems_session(tmp_path: Path) -> None:
     assert rest["gravity_ratio"] * inspection.GRAVITY == pytest.approx(10.341, abs=0.02)
     np.testing.assert_allclose(np.degrees(rest["rate"]), [-0.60, -0.37, 0.06], atol=0.02)
     assert rest["orientations"] == 2 and doc["axes"] is None
+
+
+LASERGYRO = dataset_folder("psins_lasergyro_static") / "lasergyro.imu.xz"
+
+
+@pytest.mark.skipif(not LASERGYRO.is_file(), reason=f"real data absent: {LASERGYRO}")
+def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
+    """PSINS's static ring-laser INS (31 min at 100 Hz, read and turned into FRD by its dataset reader):
+    it resolves Earth's rate, so it is silent read right, and its rate read as deg/s is named."""
+    from sins.io.datasets import read_psins_lasergyro
+
+    data = read_psins_lasergyro()
+    units = {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
+    rec = io.Recording(ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel), "lasergyro", "sins csv",
+                       units=units)  # fmt: skip
+    result = inspection.inspect(rec)
+    assert result.findings == () and result.axes == "__d"
+    assert result.rest is not None and result.rest.rate_resolved
+    # A navigation-grade unit: Earth's rate (SOURCE.md: 15.041 °/h, its latitude's) and gravity within
+    # 1 % of the nominal 7.292e-5 rad/s and 9.806 m/s² (measured: 0.998 and 0.999).
+    assert result.rest.earth_rate_ratio == pytest.approx(1.0, abs=0.01)
+    assert result.rest.gravity_ratio == pytest.approx(1.0, abs=0.01)
+    in_degrees = io.Recording(ImuRates(t=data.t, omega_ib_b=np.degrees(data.gyro), f_ib_b=data.accel),
+                              "lasergyro", "sins csv", units=units)  # fmt: skip
+    assert [(f.code, f.value) for f in inspection.inspect(in_degrees).findings] == [
+        ("gyro_unit", "gyro=deg/s")
+    ]
