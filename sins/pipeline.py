@@ -9,11 +9,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -770,18 +770,27 @@ def _join(parts: list[NavSeries]) -> NavSeries:
 
 def integrate_recording(
     imu_path: str | os.PathLike[str],
-    truth_path: str | os.PathLike[str],
+    truth_path: str | os.PathLike[str] | None,
     vertical: VerticalMode = "free",
     vertical_tau_s: float = 10.0,
+    reading: Mapping[str, Any] | None = None,
 ) -> StrategyRun:
     """Integrate a recorded IMU file from its truth's first state; errors against the truth.
 
     Increment form: the first row's interval starts at the truth's first time.
     Rate form: the samples are integrated to increments between rows, and the
     run starts at the first row's time, which must lie within the truth.
+    ``imu_path`` is any recording :func:`sins.io.read_recording_any` reads (``reading`` are its
+    options); without ``truth_path`` the recording's own reference is the truth (a bag's poses).
     """
-    truth = io.read_truth(truth_path)
-    samples, table = io.read_imu(imu_path)
+    truth = io.read_truth(truth_path) if truth_path is not None else None
+    t_start = None if truth is None else float(truth.t[0])
+    rec = io.read_recording_any(imu_path, t_start=t_start, **(reading or {}))
+    if truth is None:
+        if rec.truth is None:
+            raise MissingInputError(f"{imu_path}: the recording has no reference trajectory", needs="truth")
+        truth = rec.truth
+    samples = rec.imu
     imu: ImuIncrements
     if isinstance(samples, ImuRates):
         if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
@@ -793,7 +802,12 @@ def integrate_recording(
             raise SinsInputError(f"{imu_path}: need at least two rate samples")
         imu = samples.to_increments()
     else:
-        imu = io.increments_from_table(table, float(truth.t[0]))
+        imu = samples
+        if not imu.t[0] >= truth.t[0]:
+            raise SinsInputError(
+                f"{imu_path}: the first interval starts at {imu.t[0]:g} s, before the truth's first "
+                f"time {truth.t[0]:g} s"
+            )
     if imu.t[-1] > truth.t[-1] + 1e-9:
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
         if inside < 2:

@@ -357,7 +357,7 @@ def test_bad_input_subprocess(case: str, short_files: dict[str, Path], tmp_path:
 
 def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as info:
-        main(["integrate", "imu.csv"])  # --truth is required
+        main(["integrate"])  # the recording is required
     assert info.value.code == 2
     assert "Traceback" not in capsys.readouterr().err
 

@@ -29,6 +29,7 @@ RANKS = {
     "sins.compensation": 5,
     "sins.gap": 5,
     "sins.characterise": 5,
+    "sins.inspection": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
     "sins.campaign": 8,
@@ -44,6 +45,7 @@ CONFINED = {
     "minisom": {"sins.compensation.kohonen"},
     "dask": {"sins.campaign.engine"},
     "distributed": {"sins.campaign.engine"},
+    "rosbags": {"sins.io.bags"},
 }
 
 

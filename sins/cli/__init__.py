@@ -22,6 +22,7 @@ from sins.cli import (
     evaluate,
     fit,
     gap,
+    inspect,
     integrate,
     run,
     scenarios,
@@ -42,12 +43,13 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     campaign.add,
     gap.add,
     characterise.add,
+    inspect.add,
     effects.add,
     scenarios.add,
 )
 
 #: The flag that gives what a :class:`MissingInputError` says is missing.
-_FLAG_FOR = {"truth": "--truth TRUTH.csv"}
+_FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topic": "--truth-topic TOPIC"}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import Subparsers, add_dataset, fixed_width
+from sins.cli.common import Subparsers, add_dataset, add_recording_options, fixed_width, recording_options
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
@@ -20,7 +20,6 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     import numpy as np
 
     from sins import characterise, io, pipeline
-    from sins.series import ImuRates
 
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
@@ -35,18 +34,12 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
             )
         data, _ = datasets.load_with_truth(args.dataset)
         source = args.dataset
-    elif args.truth is not None or any(c.startswith("ref_") for c in io.read_columns(args.recording)):
+    elif args.truth is not None or _rig_recording(args):
         data, _ = pipeline.gap_data(args.recording, args.truth)
         source = str(args.recording)
     elif args.static:
-        samples, _ = io.read_imu(args.recording)
-        if isinstance(samples, ImuRates):
-            t, readings = samples.t, np.hstack([samples.omega_ib_b, samples.f_ib_b])
-        else:
-            dt = np.diff(samples.t)[:, None]
-            t = 0.5 * (samples.t[:-1] + samples.t[1:])
-            readings = np.hstack([samples.dtheta_b, samples.dv_b]) / dt
-        return characterise.residual(t, readings, None, str(args.recording))
+        t, omega, force = io.read_recording_any(args.recording, **recording_options(args)).mean_rates()
+        return characterise.residual(t, np.hstack([omega, force]), None, str(args.recording))
     else:
         raise MissingInputError(
             f"{args.recording}: no ref_ columns; a moving unit needs its trajectory, a static one --static",
@@ -55,6 +48,16 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     readings = np.hstack([data.gyro, data.accel])
     reference = np.hstack([data.ref_gyro, data.ref_accel])
     return characterise.residual(data.t, readings, reference, source)
+
+
+def _rig_recording(args: argparse.Namespace) -> bool:
+    """A sins CSV with ``ref_`` columns: a rig recording, read as such unless reader options are given."""
+    from sins import io
+
+    options = [v for k, v in recording_options(args).items() if k != "rate_hz"]
+    if any(v is not None for v in options) or io.recording.recording_kind(args.recording) != "sins csv":
+        return False
+    return any(c.startswith("ref_") for c in io.read_columns(args.recording))
 
 
 def _cmd_characterise(args: argparse.Namespace) -> int:
@@ -146,7 +149,7 @@ def add(sub: Subparsers) -> None:
     p = sub.add_parser(
         "characterise", help="Allan analysis of a recording: IEEE noise terms, an IMU file, the closing check"
     )
-    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING")
     add_dataset(p)
     p.add_argument("--static", action="store_true", help="the unit stood still: its readings as they are")
     p.add_argument(
@@ -158,4 +161,5 @@ def add(sub: Subparsers) -> None:
     )
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
     p.add_argument("--seed", type=int, default=0, help="the closing simulation's seed (default 0)")
+    add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)

@@ -136,6 +136,67 @@ def add_dataset(p: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """The options that say how to read a recording that is not a sins CSV (``sins.io.read_recording_any``;
+    the formats guide lists them): every command that takes a recording path adds them, and passes
+    :func:`recording_options` on."""
+    g = p.add_argument_group(
+        "recording formats",
+        "a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file or a "
+        "EuRoC/TUM-VI folder (docs/guide/formats.md)",
+    )
+    g.add_argument("--topic", metavar="TOPIC", help="a bag's sensor_msgs/Imu topic, where it has several")
+    g.add_argument(
+        "--truth-topic", metavar="TOPIC",
+        help="a bag's reference topic (Odometry, PoseStamped, TransformStamped), where it has several",
+    )  # fmt: skip
+    g.add_argument(
+        "--columns", metavar="MAP", help="a CSV's own columns, sins name=file column: t=time,gyro_x=wx,..."
+    )
+    g.add_argument(
+        "--units", metavar="MAP",
+        help="the readings' units: t=ms,gyro=deg/s,accel=g (keys t, gyro, accel, dtheta, dv, temp)",
+    )  # fmt: skip
+    g.add_argument(
+        "--frame", metavar="AXES",
+        help="the readings' axes, three letters from f/b, r/l, d/u: frd (default), flu (ROS; bags' default)",
+    )  # fmt: skip
+    g.add_argument(
+        "--rate", type=positive, metavar="HZ",
+        help="the sampling rate: the times of a CSV without a time column; else the rate stated for the unit",
+    )  # fmt: skip
+    g.add_argument(
+        "--origin", metavar="LAT,LON,H",
+        help="where a bag's or EuRoC's local reference frame lies, degrees, degrees, metres "
+        "(default: a bag's first NavSatFix, else 0,0,0)",
+    )  # fmt: skip
+
+
+def recording_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of ``sins.io.read_recording_any`` from :func:`add_recording_options`'s flags."""
+    return {
+        "topic": args.topic,
+        "truth_topic": args.truth_topic,
+        "columns": args.columns,
+        "units": args.units,
+        "frame": args.frame,
+        "rate_hz": args.rate,
+        "origin": None if args.origin is None else _origin(args.origin),
+    }
+
+
+def _origin(text: str) -> tuple[float, float, float]:
+    """``(lat, lon, h)`` in rad, rad, m from ``"LAT,LON,H"`` in degrees, degrees, metres."""
+    parts = text.split(",")
+    try:
+        lat, lon, h = (float(p) for p in parts)
+    except ValueError:
+        raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
+    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= 1e5):
+        raise SinsInputError(f"--origin {text!r}: latitude within ±90°, longitude ±360°, height ±1e5 m")
+    return math.radians(lat), math.radians(lon), h
+
+
 def check_viewer_args(args: argparse.Namespace) -> None:
     """Refuse what cannot work before the run, not after it."""
     if not (args.rerun or args.spawn or args.serve):

@@ -5,30 +5,43 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from sins.cli.common import Subparsers, check_finite, format_table, positive
+from sins.cli.common import (
+    Subparsers,
+    add_recording_options,
+    check_finite,
+    format_table,
+    positive,
+    progress_bar,
+    recording_options,
+    row_progress,
+)
 from sins.nav.vertical import VERTICAL_MODES
 
 
 def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins import io, pipeline
 
-    run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s)
+    with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
+        reading = {**recording_options(args), "progress": row_progress(bar)}
+        run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s, reading)
     summary = run.summary.to_dict()
-    check_finite(summary, f"{args.imu}: against {args.truth}")
-    print(
-        f"{args.imu}: {len(run.solution.t) - 1} intervals against {args.truth}; errors are estimate - truth"
-    )
+    against = args.truth or "its own reference"
+    check_finite(summary, f"{args.imu}: against {against}")
+    print(f"{args.imu}: {len(run.solution.t) - 1} intervals against {against}; errors are estimate - truth")
     print(format_table({"none": summary}))
     if args.json:
-        io.write_json(args.json, {"imu": str(args.imu), "truth": str(args.truth), **summary})
+        truth = None if args.truth is None else str(args.truth)
+        io.write_json(args.json, {"imu": str(args.imu), "truth": truth, **summary})
     return 0
 
 
 def add(sub: Subparsers) -> None:
     """Add ``sins integrate`` to ``sub``."""
-    p = sub.add_parser("integrate", help="integrate a recorded IMU CSV against its truth CSV")
-    p.add_argument("imu", type=Path, metavar="IMU.csv")
-    p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
+    p = sub.add_parser("integrate", help="integrate a recorded IMU against its truth")
+    p.add_argument("imu", type=Path, metavar="RECORDING")
+    p.add_argument(
+        "--truth", type=Path, metavar="TRUTH.csv", help="the truth (default: the recording's own reference)"
+    )
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.add_argument(
         "--vertical",
@@ -39,4 +52,5 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--vertical-tau-s", type=positive, default=10.0, help="time constant of 'damp', s (default 10)"
     )
+    add_recording_options(p)
     p.set_defaults(func=_cmd_integrate)

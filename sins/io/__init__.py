@@ -1,5 +1,6 @@
-"""Files: sins's CSV formats and JSON documents (:mod:`~sins.io.formats`), and readers of real recordings
-(:mod:`~sins.io.datasets`).
+"""Files: sins's CSV formats and JSON documents (:mod:`~sins.io.formats`), recordings in other formats
+(:func:`~sins.io.recording.read_recording_any`: ROS bags, MCAP, EuRoC/TUM-VI, CSVs with their own columns),
+and readers of real recordings (:mod:`~sins.io.datasets`).
 
 The formats' public names are importable from here (``from sins import io; io.read_imu(path)``).
 """
@@ -33,15 +34,18 @@ from sins.io.formats import (
     write_table,
     write_truth,
 )
+from sins.io.recording import KINDS, Recording, read_recording_any
 
 __all__ = [
     "INCREMENT_COLUMNS",
+    "KINDS",
     "PHASE_KINDS",
     "RATE_COLUMNS",
     "RECORDING_COLUMNS",
     "REF_COLUMNS",
     "STATIC_RATE_TOL",
     "TRUTH_COLUMNS",
+    "Recording",
     "Table",
     "atomic_path",
     "check_range",
@@ -55,6 +59,7 @@ __all__ = [
     "read_imu",
     "read_json_document",
     "read_recording",
+    "read_recording_any",
     "read_table",
     "read_truth",
     "write_imu",

@@ -1,0 +1,597 @@
+"""A recording's sanity check: rate, jitter, gaps, clipping, and the unit and frame mistakes its data show.
+
+:func:`inspect` reads nothing but the readings (and the stamps' other clocks where a recording has
+them). At rest the specific force is gravity, about 9.806 m/s² pointing up, and the angular rate is
+Earth's, 7.292e-5 rad/s: a size off by a unit's factor names the unit (g read as m/s², deg/s read as
+rad/s), a size of gravity × the sample interval names increments read as rates, and gravity along +z
+names a z axis pointing up (FLU, or axes named after ENU) where FRD's points down. In motion, a land
+vehicle's lateral specific force follows its yaw rate (``v · r``, the vehicle driving forward), which
+names the axis pointing right. The time stamps give the rate, its jitter and the gaps; runs of equal
+readings at a channel's extreme give clipping. Each finding names the reader option (and its value)
+that mends it, or says what to do where no option does; a clean recording gives none.
+
+Rest is found from the data alone: among the one-second windows whose readings vary least (within 3×
+the quietest 5 %), the largest group whose means agree (within 6 standard errors), two seconds at least.
+Where a fifth of the quiet windows hold gravity 20° or more away from it (a rig session, a hand-held
+unit), the axes are not judged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.errors import SinsInputError
+from sins.io import axes
+from sins.io import units as unitdefs
+from sins.io.recording import Recording
+from sins.nav.earth import OMEGA_IE
+from sins.series import ImuRates
+
+Array = NDArray[np.float64]
+
+#: Normal gravity halfway between the equator's 9.780 and the poles' 9.832 m/s².
+GRAVITY = 9.806
+#: Gravity's size at rest counts as right within this fraction (latitude ±0.27 %, a consumer unit's
+#: 13 mg bias 1.3 %).
+GRAVITY_TOL = 0.015
+#: A unit's factor is named when the size at rest is within this fraction of what it gives.
+UNIT_TOL = 0.05
+#: The fastest rate any IMU measures (4000 °/s), rad/s.
+MAX_GYRO_RADPS = 70.0
+#: Plausible IMU sampling rates, Hz, for naming a time unit.
+PLAUSIBLE_HZ = (10.0, 10_000.0)
+#: A stated rate and the stamps' may differ by this fraction.
+RATE_TOL = 0.005
+#: Jitter of the sample interval (RMS, fraction of it) worth a word.
+JITTER_TOL = 0.05
+#: The common full-scale ranges, for naming a clipping level (°/s, g).
+FULL_SCALES = {"gyro": (125, 250, 300, 500, 1000, 2000, 4000), "accel": (2, 4, 5, 8, 10, 16, 30, 50, 200)}
+
+#: Rate units and the increment units that go with them (for "increments read as rates").
+_INCREMENT_UNIT = {"rad/s": "rad", "mrad/s": "mrad", "deg/s": "deg", "m/s^2": "m/s", "cm/s^2": "cm/s",
+                   "ft/s^2": "ft/s", "g": "g*s", "mg": "mg*s", "ug": "ug*s"}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One likely mistake: ``code`` (stable), ``what`` the data show (one line, with figures), the reader
+    option that mends it and its ``value`` (``option="units", value="accel=g"``: ``--units accel=g``),
+    or ``advice`` where no option does."""
+
+    code: str
+    what: str
+    option: str | None = None
+    value: str | None = None
+    advice: str = ""
+
+
+@dataclass(frozen=True)
+class Gap:
+    """A stretch without samples: from ``start_s`` for ``length_s``, about ``missing`` samples."""
+
+    start_s: float
+    length_s: float
+    missing: int
+
+
+@dataclass(frozen=True)
+class Clipping:
+    """Readings stuck at a channel's extreme ``level`` (SI): ``samples`` in ``runs``, the first at
+    ``first_s``."""
+
+    channel: str
+    level: float
+    samples: int
+    runs: int
+    first_s: float
+
+
+@dataclass(frozen=True)
+class Rest:
+    """The readings at rest: how long, the mean specific force and rate (SI, FRD as read), their sizes
+    against normal gravity and Earth's rate, whether the rate's mean is resolved (its standard error
+    below a tenth of it, the windows agreeing), and ``orientations``: 2 where a fifth or more of the
+    quiet windows hold gravity 20° or more away (a rig session, a hand-held unit), whose axes the rest
+    then does not show."""
+
+    seconds: float
+    specific_force: tuple[float, float, float]
+    rate: tuple[float, float, float]
+    gravity_ratio: float
+    earth_rate_ratio: float
+    rate_resolved: bool
+    orientations: int = 1
+
+
+@dataclass(frozen=True)
+class Inspection:
+    """What :func:`inspect` found: the figures, and the :class:`Finding` list (empty when clean)."""
+
+    source: str
+    form: str
+    rows: int
+    span_s: float
+    rate_hz: float
+    jitter: float
+    stated_rate_hz: float | None
+    gaps: tuple[Gap, ...]
+    rest: Rest | None
+    clipping: tuple[Clipping, ...]
+    axes: str | None
+    findings: tuple[Finding, ...] = field(default=())
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain types for JSON (SI units)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """One-second windows of the mean rates: per window the mean and the spread of ω and f."""
+
+    length: int
+    mean_w: Array
+    mean_f: Array
+    spread_w: Array
+    spread_f: Array
+
+
+def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
+    """Check a recording (see the module docstring).
+
+    Parameters
+    ----------
+    rec : the recording as read (:func:`sins.io.read_recording_any`): its ``units``, ``frame`` and
+        ``column_map`` say how it was read, so that a finding names what to pass instead
+    rate_hz : the unit's stated sampling rate, Hz (overrides the recording's own ``stated_rate_hz``)
+
+    Returns
+    -------
+    Inspection
+        figures and findings; no findings for a clean recording.
+
+    Raises
+    ------
+    SinsInputError
+        fewer than two readings.
+    """
+    if len(rec.imu) < 2:
+        raise SinsInputError(f"{rec.source}: {len(rec.imu)} reading(s); inspecting needs two or more")
+    t, w, f = rec.mean_rates()
+    stamps = rec.imu.t if rec.form == "increment" else t
+    dt = np.diff(stamps)
+    med = float(np.median(dt)) if len(dt) else float("nan")
+    steady = dt[(dt > 0.5 * med) & (dt < 1.5 * med)]
+    jitter = float(np.std(steady) / med) if steady.size > 1 else 0.0
+    gaps = _gaps(stamps, dt, med, jitter)
+    stated = rate_hz if rate_hz is not None else rec.stated_rate_hz
+    findings: list[Finding] = []
+    findings += _time_findings(rec, med, jitter, gaps, stated, rate_hz is not None)
+    windows = _windows(w, f, med)
+    rest = _rest(windows, med) if windows is not None else None
+    findings += _rest_findings(rec, rest, med)
+    frame = _axes(windows, rest, f)
+    findings += _frame_findings(rec, frame)
+    findings += _range_findings(rec, w)
+    clipping = _clipping(rec)
+    findings += [_clip_finding(c) for c in clipping]
+    return Inspection(
+        source=rec.source, form=rec.form, rows=len(rec.imu), span_s=float(stamps[-1] - stamps[0]),
+        rate_hz=1.0 / med, jitter=jitter, stated_rate_hz=stated, gaps=gaps, rest=rest, clipping=clipping,
+        axes=frame, findings=tuple(findings),
+    )  # fmt: skip
+
+
+# --------------------------------------------------------------------------- time
+
+
+def _gaps(t: Array, dt: Array, med: float, jitter: float) -> tuple[Gap, ...]:
+    """Intervals longer than 1.5 steps (more where the stamps jitter): one or more samples missing."""
+    limit = med * max(1.5, 1.0 + 5.0 * jitter)
+    return tuple(
+        Gap(start_s=float(t[i]), length_s=float(dt[i]), missing=max(1, round(dt[i] / med) - 1))
+        for i in np.flatnonzero(dt > limit)
+    )
+
+
+def _time_findings(
+    rec: Recording, med: float, jitter: float, gaps: tuple[Gap, ...], stated: float | None, given: bool
+) -> list[Finding]:
+    out = []
+    rate = 1.0 / med
+    if not rec.time_from_rate and not PLAUSIBLE_HZ[0] / 10 <= rate <= PLAUSIBLE_HZ[1] * 10:
+        out.append(_time_unit(rec, med))
+    if stated is not None and abs(rate / stated - 1.0) > RATE_TOL:
+        by = "the given rate" if given else rec.stated_by
+        out.append(Finding(
+            "rate_mismatch",
+            f"the stamps give {rate:.6g} Hz, {100 * (rate / stated - 1):+.1f} % against the stated "
+            f"{stated:.6g} Hz ({by})",
+            advice="sins integrates over the stamps: if they are right, the stated rate is not; if the "
+            "unit's clock is right and the stamps' is not, every integrated angle and velocity is off "
+            "by as much",
+        ))  # fmt: skip
+    out += _clock_findings(rec)
+    if gaps:
+        longest = max(gaps, key=lambda g: g.length_s)
+        out.append(Finding(
+            "gaps",
+            f"{len(gaps)} gap(s) in the stamps, {sum(g.missing for g in gaps)} samples missing; the longest "
+            f"{longest.length_s:.3g} s at t = {longest.start_s:.6g} s",
+            advice="sins integrates across a gap as one interval, as if the readings changed linearly "
+            "over it: trim the recording there, or read it in parts",
+        ))  # fmt: skip
+    if jitter > JITTER_TOL:
+        out.append(Finding(
+            "jitter",
+            f"the sample interval jitters by {100 * jitter:.1f} % (RMS) of its {med:.6g} s",
+            advice="stamps taken on arrival rather than at sampling; sins integrates over them as they are",
+        ))  # fmt: skip
+    return out
+
+
+def _time_unit(rec: Recording, med: float) -> Finding:
+    """The samples come implausibly slowly or fast: the time unit that gives a plausible rate."""
+    unit = rec.units.get("t", "s")
+    raw = med / unitdefs.UNITS["t"][unit]
+    fits = [
+        u for u, k in unitdefs.UNITS["t"].items() if PLAUSIBLE_HZ[0] <= 1.0 / (raw * k) <= PLAUSIBLE_HZ[1]
+    ]
+    what = f"the samples come at {1.0 / med:.3g} Hz (one every {med:.3g} s), no IMU's rate"
+    if not fits or rec.kind not in ("sins csv", "csv columns"):
+        return Finding("time_unit", what, advice="check the time column's unit")
+    best = fits[0]
+    rate = 1.0 / (raw * unitdefs.UNITS["t"][best])
+    return Finding(
+        "time_unit", f"{what}: the times are likely in {best} ({rate:.3g} Hz)",
+        option="units", value=_units_with(rec, t=best),
+    )  # fmt: skip
+
+
+def _clock_findings(rec: Recording) -> list[Finding]:
+    """A bag's stamps against its recorder's clock over the same readings (a sensor clock's drift)."""
+    if rec.receive_t is None or len(rec.receive_t) < 2:
+        return []
+    stamped = float(rec.imu.t[-1] - rec.imu.t[0])
+    received = float(rec.receive_t[-1] - rec.receive_t[0])
+    if received < 10.0 or abs(stamped / received - 1.0) <= RATE_TOL:
+        return []
+    return [Finding(
+        "clock_mismatch",
+        f"the header stamps span {stamped:.6g} s, the recorder's clock {received:.6g} s over the same "
+        f"readings ({100 * (stamped / received - 1):+.1f} %)",
+        advice="the sensor's clock or the recorder's runs off; sins integrates over the header stamps",
+    )]  # fmt: skip
+
+
+def _units_with(rec: Recording, **changes: str) -> str:
+    """The units text to pass: what was given (units other than SI) with ``changes``."""
+    given = {k: v for k, v in rec.units.items() if v != unitdefs.SI.get(k)}
+    given.update(changes)
+    return unitdefs.spec_text({k: v for k, v in given.items() if v != unitdefs.SI.get(k)} or changes)
+
+
+# --------------------------------------------------------------------------- rest
+
+
+def _windows(w: Array, f: Array, med: float) -> _Windows | None:
+    """One-second windows (at least 8 samples, and 8 windows), or None for a recording too short."""
+    length = max(8, round(1.0 / med)) if np.isfinite(med) and med > 0 else 8
+    count = len(w) // length
+    if count < 8:
+        return None
+    cut = count * length
+    ww, ff = w[:cut].reshape(count, length, 3), f[:cut].reshape(count, length, 3)
+    return _Windows(
+        length=length, mean_w=ww.mean(axis=1), mean_f=ff.mean(axis=1),
+        spread_w=np.linalg.norm(ww.std(axis=1), axis=1), spread_f=np.linalg.norm(ff.std(axis=1), axis=1),
+    )  # fmt: skip
+
+
+def _rest(win: _Windows, med: float) -> Rest | None:
+    """The windows at rest (see the module docstring) and their means, or None (less than two seconds)."""
+    quiet = np.ones(len(win.mean_w), dtype=bool)
+    for spread in (win.spread_w, win.spread_f):
+        floor = float(np.percentile(spread, 5))
+        quiet &= spread <= 3.0 * floor + 1e-12 * float(np.median(spread) + 1e-300)
+    if quiet.sum() < 2:
+        return None
+    root = np.sqrt(win.length)
+    tol = (6.0 * float(np.median(win.spread_w[quiet])) / root + 1e-15,
+           6.0 * float(np.median(win.spread_f[quiet])) / root + 1e-15)  # fmt: skip
+    ref = _largest_cluster(win, np.flatnonzero(quiet), tol)
+    rest = quiet & (np.linalg.norm(win.mean_w - win.mean_w[ref], axis=1) <= tol[0])
+    rest &= np.linalg.norm(win.mean_f - win.mean_f[ref], axis=1) <= tol[1]
+    seconds = float(rest.sum() * win.length * med)
+    if seconds < 2.0 or rest.sum() < 2:
+        return None
+    mean_w, mean_f = win.mean_w[rest].mean(axis=0), win.mean_f[rest].mean(axis=0)
+    size_w = float(np.linalg.norm(mean_w))
+    noise = float(np.median(win.spread_w[rest]))
+    stderr = noise / np.sqrt(rest.sum() * win.length)
+    scatter = float(np.linalg.norm(win.mean_w[rest].std(axis=0)))
+    agreeing = scatter <= max(0.2 * size_w, 3.0 * noise / root)
+    # Quiet windows whose gravity points 20° or more away from the rest's: other orientations at rest.
+    up = win.mean_f[quiet] / np.linalg.norm(win.mean_f[quiet], axis=1)[:, None]
+    turned = up @ (mean_f / np.linalg.norm(mean_f)) < np.cos(np.radians(20.0))
+    return Rest(
+        seconds=seconds,
+        specific_force=(float(mean_f[0]), float(mean_f[1]), float(mean_f[2])),
+        rate=(float(mean_w[0]), float(mean_w[1]), float(mean_w[2])),
+        gravity_ratio=float(np.linalg.norm(mean_f)) / GRAVITY,
+        earth_rate_ratio=size_w / OMEGA_IE,
+        rate_resolved=bool(size_w > 0 and stderr < 0.1 * size_w and agreeing and rest.sum() >= 3),
+        orientations=bool(turned.mean() > 0.2) + 1,
+    )
+
+
+def _largest_cluster(win: _Windows, quiet: NDArray[np.intp], tol: tuple[float, float]) -> int:
+    """The quiet window whose means the most other quiet windows agree with (a still unit's one
+    orientation; a rig's or a drive's longest), among at most 400 of them spread over the recording."""
+    candidates = quiet if len(quiet) <= 400 else quiet[np.linspace(0, len(quiet) - 1, 400).astype(int)]
+    best, most = int(candidates[0]), -1
+    for start in range(0, len(candidates), 20):  # blocks of 20: (20, quiet) distances at a time
+        block = candidates[start : start + 20]
+        near = np.ones((len(block), len(quiet)), dtype=bool)
+        for means, limit in ((win.mean_w, tol[0]), (win.mean_f, tol[1])):
+            near &= np.linalg.norm(means[block][:, None, :] - means[quiet][None, :, :], axis=2) <= limit
+        counts = near.sum(axis=1)
+        if counts.max() > most:
+            best, most = int(block[int(np.argmax(counts))]), int(counts.max())
+    return best
+
+
+def _rest_findings(rec: Recording, rest: Rest | None, med: float) -> list[Finding]:
+    if rest is None:
+        return []
+    out = _gravity_findings(rec, rest, med)
+    if not any(f.code in ("increments_as_rates", "rates_as_increments") for f in out):
+        out += _earth_rate_findings(rec, rest)
+    return out
+
+
+def _unit_for(rec: Recording, key: str, ratio: float) -> str | None:
+    """The unit of ``key`` under which a size ``ratio`` × the expected one would be right, if any
+    other than the one read with."""
+    current = rec.units.get(key, unitdefs.SI[key])
+    wanted = unitdefs.UNITS[key][current] / ratio
+    for unit, k in unitdefs.UNITS[key].items():
+        if abs(wanted / k - 1.0) < UNIT_TOL and unit != current:
+            return unit
+    return None
+
+
+def _gravity_findings(rec: Recording, rest: Rest, med: float) -> list[Finding]:
+    """Gravity's size at rest against normal gravity: a unit, a form, a rate or a scale error."""
+    rho = rest.gravity_ratio
+    size = rho * GRAVITY
+    if abs(rho - 1.0) <= GRAVITY_TOL:
+        return []
+    key = "accel" if rec.form == "rate" else "dv"
+    seen = f"at rest |f| = {size:.4g} m/s², {rho:.4g} × gravity"
+    if rec.form == "rate" and abs(rho / med - 1.0) < UNIT_TOL:
+        return [_form_finding(rec, "increments_as_rates", f"{seen}, gravity × the {med:.3g} s interval: "
+                              "the columns hold increments (dθ, dv), read as rates")]  # fmt: skip
+    if rec.form == "increment" and abs(rho * med - 1.0) < UNIT_TOL:
+        return [_form_finding(rec, "rates_as_increments", f"{seen}, gravity / the {med:.3g} s interval: "
+                              "the columns hold rates (ω, f), read as increments")]  # fmt: skip
+    unit = _unit_for(rec, key, rho)
+    if unit is not None:
+        return [Finding(f"{key}_unit", f"{seen}: the {key} readings are in {unit}",
+                        option="units", value=_units_with(rec, **{key: unit}))]  # fmt: skip
+    if abs(rho - 1.0) < 0.15:
+        off = 100 * (rho - 1.0)
+        if rec.form == "increment":
+            what = (f"{seen} (dv over the stamped intervals): the intervals are {off:+.1f} % off their "
+                    f"stamps (the unit samples at {1.0 / (med * rho):.5g} Hz, not {1.0 / med:.5g} Hz), "
+                    f"or the accelerometers' scale is {off:+.1f} % off")  # fmt: skip
+            if rec.time_from_rate and rec.stated_rate_hz:
+                return [Finding("interval", what, option="rate", value=f"{rec.stated_rate_hz / rho:.6g}")]
+            return [
+                Finding("interval", what, advice="check the stamps against the unit's own sampling clock")
+            ]
+        return [Finding("gravity_size", f"{seen}: a scale error of {off:+.1f} % or a bias of "
+                        f"{size - GRAVITY:+.3g} m/s² on the vertical axis",
+                        advice="calibrate the unit or check its range setting")]  # fmt: skip
+    return [Finding("gravity_unknown", f"{seen}, which no unit sins knows explains",
+                    advice="check the accelerometer columns and their units")]  # fmt: skip
+
+
+def _form_finding(rec: Recording, code: str, what: str) -> Finding:
+    """Name the columns as the other form (keeping the file columns and their units)."""
+    to_increment = code == "increments_as_rates"
+    pairs = (("gyro", "dtheta"), ("accel", "dv")) if to_increment else (("dtheta", "gyro"), ("dv", "accel"))
+    mapping = rec.column_map
+    if not mapping:
+        return Finding(code, what, advice="the recording's format says they are rates: check the source")
+    columns = ",".join(
+        f"{new}_{a}={mapping.get(f'{old}_{a}', f'{old}_{a}')}" for old, new in pairs for a in "xyz"
+    )
+    if "t" in mapping and mapping["t"] != "t":
+        columns = f"t={mapping['t']}," + columns
+    units = {k: v for k, v in rec.units.items() if v != unitdefs.SI.get(k) and k in ("t", "temp")}
+    for old, new in pairs:
+        given = rec.units.get(old, unitdefs.SI[old])
+        if given != unitdefs.SI[old]:
+            back = {v: k for k, v in _INCREMENT_UNIT.items()}
+            units[new] = (_INCREMENT_UNIT if to_increment else back).get(given, unitdefs.SI[new])
+    value = columns if not units else f"{columns} (and units {unitdefs.spec_text(units)})"
+    return Finding(code, what, option="columns", value=value)
+
+
+def _earth_rate_findings(rec: Recording, rest: Rest) -> list[Finding]:
+    """Earth's rate at rest: a size off by a unit's factor names the unit (when the mean is resolved)."""
+    ratio = rest.earth_rate_ratio
+    if not rest.rate_resolved or 0.5 <= ratio <= 2.0:
+        return []
+    key = "gyro" if rec.form == "rate" else "dtheta"
+    unit = _unit_for(rec, key, ratio)
+    if unit is None:
+        return []
+    size = ratio * OMEGA_IE
+    bias_dph = np.degrees(size) * 3600.0
+    return [Finding(
+        f"{key}_unit",
+        f"at rest |ω| = {size:.4g} rad/s, {ratio:.4g} × Earth's rate: the {key} readings are in {unit} "
+        f"(or the unit's bias is {bias_dph:.3g} °/h)",
+        option="units", value=_units_with(rec, **{key: unit}),
+    )]  # fmt: skip
+
+
+def _range_findings(rec: Recording, w: Array) -> list[Finding]:
+    """Rates beyond any gyro's range: degrees read as radians."""
+    top = float(np.abs(w).max()) if w.size else 0.0
+    if top <= MAX_GYRO_RADPS:
+        return []
+    key = "gyro" if rec.form == "rate" else "dtheta"
+    current = rec.units.get(key, unitdefs.SI[key])
+    degree = "deg/s" if key == "gyro" else "deg"
+    what = f"the gyros reach {top:.4g} rad/s ({np.degrees(top):.4g} °/s), beyond any IMU's range"
+    if current == unitdefs.SI[key]:
+        return [Finding(f"{key}_range", f"{what}: degrees read as radians", option="units",
+                        value=_units_with(rec, **{key: degree}))]  # fmt: skip
+    return [Finding(f"{key}_range", what, advice="check the gyro columns and their units")]
+
+
+# --------------------------------------------------------------------------- axes
+
+
+def _axes(win: _Windows | None, rest: Rest | None, f: Array) -> str | None:
+    """The readings' axes as far as the data show them, in :mod:`sins.io.axes` letters with ``_`` for an
+    axis they do not fix: the vertical from gravity, the lateral from the turns. None: no axis points
+    down (within 25°), no gravity is seen, or the unit rested in several orientations."""
+    if rest is not None and rest.orientations > 1:
+        return None
+    up = np.asarray(rest.specific_force) if rest is not None else f.mean(axis=0)
+    if not np.linalg.norm(up) > 0:
+        return None
+    down = -up / np.linalg.norm(up)
+    k = int(np.argmax(np.abs(down)))
+    if abs(down[k]) < 0.9:
+        return None
+    letters = ["_", "_", "_"]
+    letters[k] = "d" if down[k] > 0 else "u"
+    lateral = _lateral(win, down, k) if win is not None else None
+    if lateral is not None:
+        j, right = lateral
+        letters[j] = "r" if right else "l"
+        d_vec, r_vec = np.zeros(3), np.zeros(3)
+        d_vec[k], r_vec[j] = np.sign(down[k]), 1.0 if right else -1.0
+        forward = np.cross(r_vec, d_vec)  # x = y × z in FRD: forward = right × down
+        i = 3 - j - k
+        letters[i] = "f" if forward[i] > 0 else "b"
+    return "".join(letters)
+
+
+def _lateral(win: _Windows, down: Array, k: int) -> tuple[int, bool] | None:
+    """The horizontal axis whose specific force follows the yaw rate (``v · r``, driving forward) and
+    whether it points right; None without turns enough to tell (the correlation under 0.6, or the other
+    axis's over half of it)."""
+    yaw = win.mean_w @ down
+    if np.std(yaw) <= 5.0 * float(np.median(win.spread_w)) / np.sqrt(win.length):
+        return None
+    corr = {}
+    for j in (a for a in range(3) if a != k):
+        x = win.mean_f[:, j]
+        corr[j] = float(np.corrcoef(x, yaw)[0, 1]) if np.std(x) > 0 else 0.0
+    best = max(corr, key=lambda a: abs(corr[a]))
+    other = next(a for a in corr if a != best)
+    if abs(corr[best]) < 0.6 or abs(corr[other]) > 0.5 * abs(corr[best]):
+        return None
+    return best, corr[best] > 0
+
+
+def _frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
+    """The file's axes when the data show they are not FRD: letters to pass as the frame."""
+    if seen is None:
+        return []
+    current = axes.frame_matrix(rec.frame)
+    if "_" not in seen:
+        if seen == axes.FRD:
+            return []
+        file_axes = axes.frame_letters(axes.frame_matrix(seen) @ current)
+        return [Finding("axes", f"the data show the readings' axes are {seen} (gravity at rest, the lateral "
+                        "force in turns), not FRD", option="frame", value=file_axes)]  # fmt: skip
+    k = next(i for i, c in enumerate(seen) if c != "_")
+    if seen[k] == "d" and k == 2:
+        return []
+    fits = [a for a in axes.right_handed_frames() if a[k] == seen[k]]
+    files = sorted(
+        (axes.frame_letters(axes.frame_matrix(a) @ current) for a in fits),
+        key=lambda a: (a not in _PREFERRED, _PREFERRED.index(a) if a in _PREFERRED else 0, a),
+    )
+    listed = ", ".join(f"{a} ({_NAMED[a]})" if a in _NAMED else a for a in files)
+    where = "xyz"[k]
+    sign, way = ("-", "down") if seen[k] == "d" else ("+", "up")
+    what = (f"at rest the specific force (which points up) lies along {sign}{where} as read: {where} points "
+            f"{way}, where FRD's z points down; likely axes of the file: {listed}")  # fmt: skip
+    if files[0] in _PREFERRED:
+        return [Finding("axes", what, option="frame", value=files[0])]
+    return [Finding("axes", what, advice="pass --frame with the letters of the file's axes (one of these)")]
+
+
+#: Frames named first, and what they are.
+_PREFERRED = ("frd", "flu", "rfu")
+_NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward: axes named after ENU"}
+
+
+# --------------------------------------------------------------------------- clipping
+
+
+def _clipping(rec: Recording) -> tuple[Clipping, ...]:
+    """Channels whose readings stick at their extreme: runs of three or more equal readings there (see
+    :func:`_stuck` for quantized readings)."""
+    imu = rec.imu
+    if isinstance(imu, ImuRates):
+        values, t, names = np.hstack([imu.omega_ib_b, imu.f_ib_b]), imu.t, ("gyro", "accel")
+    else:
+        values, t, names = np.hstack([imu.dtheta_b, imu.dv_b]), imu.t[1:], ("dtheta", "dv")
+    out = []
+    for c in range(6):
+        v = values[:, c]
+        for level in (float(v.max()), float(v.min())):
+            found = _stuck(v, level)
+            if found is not None:
+                samples, runs, first = found
+                out.append(Clipping(f"{names[c // 3]}_{'xyz'[c % 3]}", level, samples, runs, float(t[first])))
+    return tuple(out)
+
+
+def _stuck(v: Array, level: float) -> tuple[int, int, int] | None:
+    """``(samples, runs, first row)`` of the runs of three or more readings equal to ``level``. Readings
+    that take fewer distinct values than half their count are quantized: there a still unit's noise sits
+    on its few levels for several readings, so a run counts only more than 10 steps from the median."""
+    at = v == level
+    if at.sum() < 3:
+        return None
+    levels = np.unique(v)
+    if len(levels) < len(v) / 2:
+        step = float(np.min(np.diff(levels))) if len(levels) > 1 else 0.0
+        if abs(level - float(np.median(v))) <= 10.0 * step:
+            return None
+    edges = np.diff(np.concatenate([[0], at.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long = (stops - starts) >= 3
+    if not long.any():
+        return None
+    return int((stops - starts)[long].sum()), int(long.sum()), int(starts[long][0])
+
+
+def _clip_finding(c: Clipping) -> Finding:
+    gyro = c.channel.startswith(("gyro", "dtheta"))
+    unit, scale = ("°/s", np.degrees(1.0)) if gyro else ("g", 1.0 / 9.80665)
+    shown = c.level * scale
+    scales = FULL_SCALES["gyro" if gyro else "accel"]
+    near = next((s for s in scales if abs(abs(shown) / s - 1.0) < 0.02), None)
+    full = f", a ±{near:g} {unit} full scale" if near is not None and c.channel[0] in "ga" else ""
+    return Finding(
+        "clipping",
+        f"{c.channel} sticks at {c.level:+.6g} (SI; {shown:+.4g} {unit}{full}) on {c.samples} readings in "
+        f"{c.runs} run(s), the first at t = {c.first_s:.6g} s",
+        advice="the unit saturated: its readings there are not the motion; use a wider range or leave "
+        "those stretches out",
+    )

@@ -1,0 +1,279 @@
+"""One entry point for an IMU recording in any format sins reads: :func:`read_recording_any`.
+
+It picks the reader by what the path is: a folder with ``metadata.yaml`` (a ROS 2 bag), a ROS 1 bag or
+an MCAP file (by their first bytes, :mod:`sins.io.bags`), a EuRoC/TUM-VI folder or ASL file
+(:mod:`sins.io.euroc`), else a CSV: sins's own IMU forms (:func:`sins.io.read_imu`) or, with
+``columns`` or ``units``, one with its own columns and units (:mod:`sins.io.columns`). Every reader
+returns a :class:`Recording`: readings in SI on FRD axes, and the reference trajectory where the
+recording has one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.errors import SinsInputError
+from sins.io import axes, bags, euroc, formats
+from sins.io import columns as column_reader
+from sins.io import units as unitdefs
+from sins.series import ImuIncrements, ImuRates, NavSeries
+
+Array = NDArray[np.float64]
+
+#: What :attr:`Recording.kind` may be.
+KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """An IMU recording in sins's terms.
+
+    Attributes
+    ----------
+    imu : the readings, SI, FRD body axes: :class:`ImuRates`, or :class:`ImuIncrements` (sins's
+        increment form; ``t[0]`` as :func:`read_recording_any`'s ``t_start`` says)
+    source : the path, for messages
+    kind : one of :data:`KINDS`
+    truth : the reference trajectory (a bag's poses, a EuRoC reference) at its own times, or None
+    units : ``{key: unit}`` the file's readings were taken to be in (:mod:`sins.io.units`), every key of
+        the form; what :func:`sins.inspection.inspect` reasons from
+    frame : the axes the readings were taken to be on (:mod:`sins.io.axes`) before the turn into FRD
+    notes : what was converted or left out, one line each, for the user
+    t0_ns : the absolute stamp (ns since the epoch) of ``t = 0`` where the times were made relative to
+        it (bags, EuRoC), else None
+    stated_rate_hz, stated_by : a sampling rate stated beside the stamps (EuRoC's ``sensor.yaml``, a
+        given rate) and by what, else None and ""
+    receive_t : a bag's recorder times of the readings, s from ``t0_ns`` (another clock than the stamps)
+    temp : (n,) °C, or None
+    fixes : a bag's ``NavSatFix`` positions, or None
+    time_from_rate : the times were made from a given rate (the file has no time column)
+    column_map : a CSV's sins column names and the file columns read for them (``{}`` for other kinds)
+    """
+
+    imu: ImuRates | ImuIncrements
+    source: str
+    kind: str
+    truth: NavSeries | None = None
+    units: Mapping[str, str] = field(default_factory=dict)
+    frame: str = axes.FRD
+    notes: tuple[str, ...] = ()
+    t0_ns: int | None = None
+    stated_rate_hz: float | None = None
+    stated_by: str = ""
+    receive_t: Array | None = None
+    temp: Array | None = None
+    fixes: bags.GeodeticFixes | None = None
+    time_from_rate: bool = False
+    column_map: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def form(self) -> str:
+        """``"rate"`` or ``"increment"``."""
+        return "rate" if isinstance(self.imu, ImuRates) else "increment"
+
+    def mean_rates(self) -> tuple[Array, Array, Array]:
+        """``(t, omega_ib_b, f_ib_b)``: the readings as rates (s, rad/s, m/s²); increments divided by
+        their intervals, at the intervals' midpoints."""
+        if isinstance(self.imu, ImuRates):
+            return self.imu.t, self.imu.omega_ib_b, self.imu.f_ib_b
+        dt = np.diff(self.imu.t)[:, None]
+        mid = 0.5 * (self.imu.t[:-1] + self.imu.t[1:])
+        return mid, self.imu.dtheta_b / dt, self.imu.dv_b / dt
+
+
+def recording_kind(path: Path) -> str:
+    """The :data:`KINDS` entry a path reads as (``"sins csv"`` standing for any CSV).
+
+    Raises
+    ------
+    SinsInputError
+        a path that does not exist, or a folder that is neither a ROS 2 bag nor a EuRoC/TUM-VI one.
+    """
+    if not path.exists():
+        raise SinsInputError(f"{path}: no such file or folder")
+    kind = bags.bag_kind(path)
+    if kind is not None:
+        return kind
+    if euroc.locate(path) is not None:
+        return "euroc"
+    if path.is_dir():
+        raise SinsInputError(
+            f"{path}: a folder, but neither a ROS 2 bag (metadata.yaml) nor a EuRoC/TUM-VI recording "
+            "(mav0/imu0/data.csv)"
+        )
+    return "sins csv"
+
+
+def read_recording_any(
+    path: str | os.PathLike[str],
+    topic: str | None = None,
+    columns: str | Mapping[str, str] | None = None,
+    units: str | Mapping[str, str] | None = None,
+    *,
+    frame: str | None = None,
+    rate_hz: float | None = None,
+    truth_topic: str | None = None,
+    origin: tuple[float, float, float] | None = None,
+    t_start: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Recording:
+    """Read an IMU recording in any format sins knows (see the module docstring).
+
+    Parameters
+    ----------
+    path : a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file, or a
+        EuRoC/TUM-VI folder
+    topic : a bag's IMU topic, where it has several ``sensor_msgs/Imu`` topics
+    columns : a CSV's own columns, ``"t=time,gyro_x=wx,..."`` (:mod:`sins.io.columns`)
+    units : the readings' units, ``"t=ms,gyro=deg/s,accel=g"`` (:mod:`sins.io.units`); for a bag or
+        EuRoC (SI by their definitions) a unit rescales what they hold
+    frame : the readings' axes (:mod:`sins.io.axes`); None: ``flu`` for bags (REP 103), ``frd`` otherwise
+        (EuRoC's S taken as it is)
+    rate_hz : the sampling rate, Hz: the times of a CSV without a time column; elsewhere the stated rate
+        :func:`sins.inspection.inspect` checks the stamps against
+    truth_topic : a bag's reference topic, where it has several
+    origin : ``(lat, lon, h)`` in rad, rad, m, where a local reference frame starts (bags: default the
+        first fix, else 0°, 0°, 0 m; EuRoC: default 0°, 0°, 0 m)
+    t_start : increment form: where the first interval starts (a truth's first time); None: the first
+        row's time less the first step
+    progress : ``progress(done, total)`` while a bag is read
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the path, and the line, column, topic or message where it applies; also an
+        option that does not apply to the path's kind (``columns`` for a bag, ``topic`` for a CSV).
+    MissingInputError
+        a bag with several IMU topics and no ``topic`` (``needs="topic"``), or a ``truth_topic`` the
+        bag lacks (``needs="truth_topic"``).
+    """
+    path = Path(path)
+    kind = recording_kind(path)
+    _check_options(path, kind, topic=topic, columns=columns, truth_topic=truth_topic, origin=origin)
+    chosen = _units(units)
+    if kind == "sins csv" and (columns is not None or units is not None or rate_hz is not None):
+        rec = _read_columns(path, columns, chosen, rate_hz, frame or axes.FRD, t_start)
+    elif kind == "sins csv":
+        rec = _read_sins(path, frame or axes.FRD, t_start)
+    elif kind == "euroc":
+        got = euroc.read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
+        rec = Recording(got.imu, str(path), kind, got.truth, _si("rate"), frame or axes.FRD, got.notes,
+                        got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "")  # fmt: skip
+    else:
+        read = bags.read_bag(
+            path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
+        )
+        rec = Recording(read.imu, str(path), kind, read.truth, _si("rate"), frame or axes.FLU, read.notes,
+                        read.t0_ns, receive_t=read.receive_t, fixes=read.fixes)  # fmt: skip
+    if kind not in ("sins csv", "csv columns") and chosen:
+        rec = _rescaled(rec, chosen)
+    if rate_hz is not None and not rec.time_from_rate:
+        rec = _with(rec, stated_rate_hz=float(rate_hz), stated_by="the given rate")
+    return rec
+
+
+def _si(form: str) -> dict[str, str]:
+    return {k: unitdefs.SI[k] for k in unitdefs.FORM_KEYS[form] if k != "temp"}
+
+
+def _units(spec: str | Mapping[str, str] | None) -> dict[str, str]:
+    return unitdefs.parse_units(spec)
+
+
+def _check_options(path: Path, kind: str, **given: object) -> None:
+    """Refuse an option the path's kind has no use for, rather than ignore it."""
+    applies = {
+        "topic": ("ros1 bag", "ros2 bag", "mcap"),
+        "truth_topic": ("ros1 bag", "ros2 bag", "mcap"),
+        "columns": ("sins csv",),
+        "origin": ("ros1 bag", "ros2 bag", "mcap", "euroc"),
+    }
+    for name, value in given.items():
+        if value is not None and kind not in applies[name]:
+            raise SinsInputError(f"{name}: does not apply to {path}, a {_described(kind)}")
+
+
+def _described(kind: str) -> str:
+    return {"sins csv": "CSV file", "euroc": "EuRoC/TUM-VI recording", "mcap": "MCAP file"}.get(kind, kind)
+
+
+def _read_sins(path: Path, frame: str, t_start: float | None) -> Recording:
+    """sins's own IMU CSV (either form), turned from ``frame`` into FRD."""
+    samples, table = formats.read_imu(path)
+    if isinstance(samples, ImuIncrements) and t_start is not None:
+        samples = formats.increments_from_table(table, float(t_start))
+    temp = table.column("temp").copy() if table.has("temp") else None
+    form = "rate" if isinstance(samples, ImuRates) else "increment"
+    names = formats.RATE_COLUMNS if form == "rate" else formats.INCREMENT_COLUMNS
+    rec = Recording(samples, str(path), "sins csv", units=_si(form), frame=axes.FRD, temp=temp,
+                    column_map={n: n for n in names})  # fmt: skip
+    return _turned(rec, frame)
+
+
+def _read_columns(
+    path: Path, columns: str | Mapping[str, str] | None, chosen: dict[str, str], rate_hz: float | None,
+    frame: str, t_start: float | None,
+) -> Recording:  # fmt: skip
+    """A CSV through :mod:`sins.io.columns`, turned from ``frame`` into FRD."""
+    got = column_reader.read_columns_csv(path, columns, chosen, rate_hz)
+    imu = got.imu
+    if isinstance(imu, ImuIncrements) and t_start is not None:
+        if not t_start < imu.t[1]:
+            raise SinsInputError(
+                f"{path}: the first increment ends at {formats.format_number(imu.t[1])} s, not after the "
+                f"start time {formats.format_number(t_start)} s"
+            )
+        imu = ImuIncrements(t=np.concatenate([[t_start], imu.t[1:]]), dtheta_b=imu.dtheta_b, dv_b=imu.dv_b)
+    renamed = {k: v for k, v in got.mapping.items() if k != v}
+    notes = [f"columns {', '.join(f'{k}={v}' for k, v in renamed.items())}"] if renamed else []
+    if any(v != unitdefs.SI[k] for k, v in got.units.items()):
+        notes.append(f"units {unitdefs.spec_text(got.units)} converted to SI")
+    if got.time_from_rate:
+        notes.append(f"no time column: times are row / {rate_hz:g} Hz")
+    rec = Recording(imu, str(path), "csv columns", units=got.units, temp=got.temp, notes=tuple(notes),
+                    time_from_rate=got.time_from_rate,
+                    stated_rate_hz=rate_hz if got.time_from_rate else None,
+                    stated_by="the given rate" if got.time_from_rate else "",
+                    column_map=got.mapping)  # fmt: skip
+    return _turned(rec, frame)
+
+
+def _turned(rec: Recording, frame: str) -> Recording:
+    """``rec`` (on FRD as read) taken to be on ``frame``: turned into FRD, the frame and a note kept."""
+    m = axes.frame_matrix(frame)
+    if frame.lower() == axes.FRD:
+        return rec
+    imu = rec.imu
+    if isinstance(imu, ImuRates):
+        imu = ImuRates(t=imu.t, omega_ib_b=axes.to_frd(imu.omega_ib_b, m), f_ib_b=axes.to_frd(imu.f_ib_b, m))
+    else:
+        imu = ImuIncrements(t=imu.t, dtheta_b=axes.to_frd(imu.dtheta_b, m), dv_b=axes.to_frd(imu.dv_b, m))
+    return _with(
+        rec, imu=imu, frame=frame.lower(), notes=(*rec.notes, f"axes {frame.lower()} turned into FRD")
+    )
+
+
+def _rescaled(rec: Recording, chosen: dict[str, str]) -> Recording:
+    """A bag's or EuRoC's readings (SI by definition) rescaled as ``chosen`` says they really are."""
+    unitdefs.check_form(chosen, rec.form, rec.source)
+    for key, why in (("temp", "has no temperature"), ("t", "is stamped in nanoseconds by its format")):
+        if key in chosen:
+            raise SinsInputError(f"units: {key} does not apply: {rec.source} {why}")
+    imu = rec.imu
+    assert isinstance(imu, ImuRates)  # bags and EuRoC hold rates
+    imu = ImuRates(t=imu.t, omega_ib_b=imu.omega_ib_b * unitdefs.factor(chosen, "gyro"),
+                   f_ib_b=imu.f_ib_b * unitdefs.factor(chosen, "accel"))  # fmt: skip
+    merged = {**rec.units, **chosen}
+    note = f"units {unitdefs.spec_text(chosen)} converted to SI"
+    return _with(rec, imu=imu, units=merged, notes=(*rec.notes, note))
+
+
+def _with(rec: Recording, **changes: object) -> Recording:
+    return dataclasses.replace(rec, **changes)  # type: ignore[arg-type]

@@ -1,0 +1,293 @@
+"""``sins inspect`` on recordings written here with numpy: silent on clean ones, and each planted mistake
+named with the option that mends it (and gone once that option is passed)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import dataset_folder
+
+from sins import inspection, io
+from sins.cli import main
+from sins.series import ImuRates
+
+OMEGA = 7.292115e-5  # Earth's rate, rad/s
+G = 9.8062  # normal gravity at 45° N, m/s²
+LAT = np.radians(45.0)
+RATE = ("t", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+INCREMENT = ("t", "dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z")
+
+
+# --------------------------------------------------------------------------- numpy recordings
+
+
+def static(seconds: float = 120.0, rate: float = 100.0, grade: str = "tactical", seed: int = 1) -> dict:
+    """A still, level unit heading 30°: Earth's rate and gravity on FRD axes, a bias and white noise.
+
+    Tactical: 0.1 °/√h and 100 µg/√Hz (2.9e-4 rad/s and 0.01 m/s² a sample at 100 Hz), 1 °/h and 1 mg
+    biases; MEMS: ten times the noise, 200 °/h and 10 mg.
+    """
+    rng = np.random.default_rng(seed)
+    n = int(seconds * rate)
+    gyro_sigma, accel_sigma, gyro_bias, accel_bias = {
+        "tactical": (2.9e-4, 0.01, np.radians(1.0) / 3600, 0.0098),
+        "mems": (2.9e-3, 0.1, np.radians(200.0) / 3600, 0.098),
+    }[grade]
+    yaw = np.radians(30.0)
+    w_n = OMEGA * np.array([np.cos(LAT), 0.0, -np.sin(LAT)])
+    w_b = np.array([np.cos(yaw) * w_n[0], -np.sin(yaw) * w_n[0], w_n[2]])
+    unit = rng.standard_normal((2, 3))
+    unit /= np.linalg.norm(unit, axis=1)[:, None]
+    return {
+        "t": np.arange(n) / rate,
+        "w": w_b + gyro_bias * unit[0] + gyro_sigma * rng.standard_normal((n, 3)),
+        "f": [0.0, 0.0, -G] + accel_bias * unit[1] + accel_sigma * rng.standard_normal((n, 3)),
+    }
+
+
+def drive(rate: float = 100.0, seed: int = 2) -> dict:
+    """A level car on FRD axes: 30 s still, then accelerations, turns both ways and a stop; the specific
+    force is (dv/dt, v · yaw rate, -g) and the rate Earth's plus the yaw rate (tactical noise)."""
+    rng = np.random.default_rng(seed)
+    plan = [(30, 0.0, 0.0), (10, 1.5, 0.0), (15, 0.0, 0.0), (15, 0.0, 6.0), (10, 0.0, 0.0), (15, 0.0, -6.0),
+            (10, 0.0, 0.0), (8, 0.0, 10.0), (12, 0.0, 0.0), (10, -1.5, 0.0), (15, 0.0, 0.0)]  # fmt: skip
+    n = int(sum(p[0] for p in plan) * rate)
+    accel, yaw_rate = np.zeros(n), np.zeros(n)
+    k = 0
+    for seconds, a, peak_dps in plan:
+        m = int(seconds * rate)
+        accel[k : k + m] = a
+        yaw_rate[k : k + m] = 2.0 * np.radians(peak_dps) * np.sin(np.pi * np.arange(m) / m) ** 2
+        k += m
+    speed = np.cumsum(accel) / rate
+    yaw = np.radians(10.0) + np.cumsum(yaw_rate) / rate
+    w_n = OMEGA * np.array([np.cos(LAT), 0.0, -np.sin(LAT)])
+    w = np.column_stack([np.cos(yaw) * w_n[0], -np.sin(yaw) * w_n[0], w_n[2] + yaw_rate])
+    f = np.column_stack([accel, speed * yaw_rate, np.full(n, -G)])
+    return {
+        "t": np.arange(n) / rate,
+        "w": w + 4.8e-6 + 2.9e-4 * rng.standard_normal((n, 3)),
+        "f": f + [0.005, -0.004, 0.006] + 0.01 * rng.standard_normal((n, 3)),
+    }
+
+
+def write(path: Path, t: np.ndarray, a: np.ndarray, b: np.ndarray, names: tuple[str, ...] = RATE) -> Path:
+    """A sins-style CSV written with numpy alone (17 digits)."""
+    np.savetxt(
+        path, np.column_stack([t, a, b]), delimiter=",", fmt="%.17g", header=",".join(names), comments=""
+    )
+    return path
+
+
+def inspect_cli(path: Path, *options: str) -> dict:
+    """``sins inspect PATH --json`` as a user runs it; the JSON document."""
+    out = path.with_suffix(".json")
+    assert main(["inspect", str(path), *options, "--json", str(out)]) == 0
+    return json.loads(out.read_text(encoding="utf-8"))
+
+
+def flag(finding: dict) -> list[str]:
+    """The option a finding names, as command-line arguments."""
+    return [{"rate": "--rate"}.get(finding["option"], "--" + finding["option"]), finding["value"]]
+
+
+# --------------------------------------------------------------------------- clean recordings
+
+
+@pytest.mark.parametrize("grade", ["tactical", "mems"])
+def test_a_clean_static_recording_is_silent(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], grade: str
+) -> None:
+    d = static(grade=grade)
+    doc = inspect_cli(write(tmp_path / "still.csv", d["t"], d["w"], d["f"]))
+    assert doc["findings"] == []
+    assert "no likely mistakes found" in capsys.readouterr().out
+    # The figures the silence rests on: all of it at rest, gravity's size within a bias (1 mg tactical,
+    # 10 mg MEMS) of normal gravity, and Earth's rate within the tactical bias (1 of its 15 °/h).
+    assert doc["rest"]["seconds"] == pytest.approx(120.0, abs=1.0)
+    assert doc["rest"]["gravity_ratio"] == pytest.approx(1.0, abs=0.011)
+    if grade == "tactical":
+        assert doc["rest"]["earth_rate_ratio"] == pytest.approx(1.0, abs=0.1)
+    assert doc["rate_hz"] == pytest.approx(100.0) and doc["gaps"] == [] and doc["clipping"] == []
+
+
+def test_a_clean_drive_is_silent_and_its_axes_are_frd(tmp_path: Path) -> None:
+    d = drive()
+    doc = inspect_cli(write(tmp_path / "drive.csv", d["t"], d["w"], d["f"]))
+    assert doc["findings"] == []
+    assert doc["axes"] == "frd"  # gravity at rest gives d, the turns' lateral force r, and so f
+    assert doc["rest"]["seconds"] >= 30.0
+
+
+# --------------------------------------------------------------------------- planted mistakes
+
+FLU = np.array([1.0, -1.0, -1.0])
+
+
+def _rfu(a: np.ndarray) -> np.ndarray:
+    """FRD rows on axes named after ENU: x right, y forward, z up."""
+    return np.column_stack([a[:, 1], a[:, 0], -a[:, 2]])
+
+
+def _gap(d: dict) -> dict:
+    keep = np.r_[0:6000, 6050 : len(d["t"])]  # 50 rows at 100 Hz: 0.5 s
+    return {k: v[keep] for k, v in d.items()}
+
+
+def _clipped(d: dict) -> dict:
+    w = d["w"].copy()
+    w[:, 2] = np.clip(w[:, 2], -0.15, 0.15)  # turns reach 0.21 rad/s (12 °/s)
+    return {**d, "w": w}
+
+
+def _slow(d: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Increments of a unit sampling at 98 Hz, stamped as if at 100 Hz: a 2 % rate error."""
+    return d["t"][1:] + 0.01, d["w"][1:] / 98.0, d["f"][1:] / 98.0, INCREMENT
+
+
+#: name: (recording, its rows as (t, a, b, header), the finding's code, the option and value that mend it)
+PLANTED: dict[str, tuple[Callable[[], dict], Callable[[dict], tuple], str, str | None, str | None]] = {
+    "deg/s read as rad/s": (static, lambda d: (d["t"], np.degrees(d["w"]), d["f"], RATE), "gyro_unit",
+                            "units", "gyro=deg/s"),
+    "g read as m/s²": (static, lambda d: (d["t"], d["w"], d["f"] / 9.80665, RATE), "accel_unit", "units",
+                       "accel=g"),
+    "ms read as s": (static, lambda d: (1000.0 * d["t"], d["w"], d["f"], RATE), "time_unit", "units", "t=ms"),
+    "FLU axes": (static, lambda d: (d["t"], d["w"] * FLU, d["f"] * FLU, RATE), "axes", "frame", "flu"),
+    "ENU-named axes": (drive, lambda d: (d["t"], _rfu(d["w"]), _rfu(d["f"]), RATE), "axes", "frame", "rfu"),
+    "increments read as rates": (static, lambda d: (d["t"], d["w"] / 100.0, d["f"] / 100.0, RATE),
+                                 "increments_as_rates", "columns",
+                                 "dtheta_x=gyro_x,dtheta_y=gyro_y,dtheta_z=gyro_z,dv_x=accel_x,dv_y=accel_y,"
+                                 "dv_z=accel_z"),
+    "2 % rate error": (static, _slow, "interval", None, None),
+    "0.5 s gap": (lambda: _gap(drive()), lambda d: (d["t"], d["w"], d["f"], RATE), "gaps", None, None),
+    "clipping": (lambda: _clipped(drive()), lambda d: (d["t"], d["w"], d["f"], RATE), "clipping", None, None),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", list(PLANTED))
+def test_each_planted_mistake_is_named_with_what_to_pass(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
+) -> None:
+    make, rows, code, option, value = PLANTED[name]
+    t, a, b, header = rows(make())
+    path = write(tmp_path / "rec.csv", t, a, b, header)
+    doc = inspect_cli(path)
+    found = [f for f in doc["findings"] if f["code"] == code]
+    assert len(found) >= 1, doc["findings"]
+    # Nothing else is blamed (a clipped or gapped drive, say, is not also a frame mistake).
+    assert {f["code"] for f in doc["findings"]} == {code}, doc["findings"]
+    printed = capsys.readouterr().out
+    if option is None:
+        assert found[0]["advice"] and found[0]["advice"] in printed
+        return
+    assert (found[0]["option"], found[0]["value"]) == (option, value)
+    assert f"pass --{option} {value}" in printed
+    # The advice taken, the recording reads clean.
+    assert inspect_cli(path, *flag(found[0]))["findings"] == []
+
+
+def test_the_planted_figures(tmp_path: Path) -> None:
+    """What the findings say, against what was planted."""
+    d = _gap(drive())
+    gaps = inspect_cli(write(tmp_path / "gap.csv", d["t"], d["w"], d["f"]))["gaps"]
+    assert len(gaps) == 1 and gaps[0]["start_s"] == pytest.approx(59.99) and gaps[0]["missing"] == 50
+    d = _clipped(drive())
+    clips = inspect_cli(write(tmp_path / "clip.csv", d["t"], d["w"], d["f"]))["clipping"]
+    assert {(c["channel"], c["level"]) for c in clips} == {("gyro_z", 0.15), ("gyro_z", -0.15)}
+    assert sum(c["samples"] for c in clips) == int(np.sum(np.abs(d["w"][:, 2]) == 0.15))
+    slow = inspect_cli(write(tmp_path / "slow.csv", *_slow(static())))["findings"][0]
+    assert "98.0" in slow["what"] and "+2.0 %" in slow["what"]
+
+
+def test_a_stated_rate_is_checked_against_the_stamps(tmp_path: Path) -> None:
+    d = static(seconds=30.0, rate=98.0)
+    path = write(tmp_path / "rec.csv", d["t"], d["w"], d["f"])
+    assert inspect_cli(path, "--rate", "98")["findings"] == []
+    found = inspect_cli(path, "--rate", "100")["findings"]
+    assert [f["code"] for f in found] == ["rate_mismatch"] and "-2.0 %" in found[0]["what"]
+
+
+def test_mistakes_on_top_of_given_units_keep_them(tmp_path: Path) -> None:
+    """A file in deg/s whose accelerations are in g, read with gyro=deg/s only: pass both."""
+    d = static(seconds=30.0)
+    path = write(tmp_path / "rec.csv", d["t"], np.degrees(d["w"]), d["f"] / 9.80665)
+    found = inspect_cli(path, "--units", "gyro=deg/s")["findings"]
+    assert [(f["option"], f["value"]) for f in found] == [("units", "gyro=deg/s,accel=g")]
+    assert inspect_cli(path, "--units", "gyro=deg/s,accel=g")["findings"] == []
+
+
+def test_quantized_readings_clip_only_far_from_their_median() -> None:
+    """A quiet unit read through 16-bit steps (0.061 °/s, 0.6 mg: 3.7 and 0.6 times its noise) sits on its
+    extreme step for runs of three at rest, which is not clipping; the same steps on a clipped drive are."""
+    lsb_w, lsb_f = np.radians(0.061), 0.6e-3 * 9.80665
+
+    def quantized(d: dict) -> io.Recording:
+        w, f = np.round(d["w"] / lsb_w) * lsb_w, np.round(d["f"] / lsb_f) * lsb_f
+        units = {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
+        return io.Recording(ImuRates(t=d["t"], omega_ib_b=w, f_ib_b=f), "quantized", "sins csv", units=units)
+
+    still = quantized(static(seconds=60.0))
+    w_x = still.imu.omega_ib_b[:, 0]
+    at_top = np.diff(np.concatenate([[0], (w_x == w_x.max()).astype(int), [0]]))
+    assert (np.flatnonzero(at_top == -1) - np.flatnonzero(at_top == 1)).max() >= 3  # the case is there
+    assert inspection.inspect(still).findings == ()
+    clipped = inspection.inspect(quantized(_clipped(drive())))
+    assert [f.code for f in clipped.findings] == ["clipping", "clipping"]
+
+
+# --------------------------------------------------------------------------- a real recording
+
+FERRARIS = dataset_folder("imucal_ferraris") / "example_ferraris_session.csv"
+FERRARIS_COLUMNS = "gyro_x=gyr_x,gyro_y=gyr_y,gyro_z=gyr_z,accel_x=acc_x,accel_y=acc_y,accel_z=acc_z"
+
+
+@pytest.mark.skipif(not FERRARIS.is_file(), reason=f"real data absent: {FERRARIS}")
+def test_a_real_uncalibrated_mems_session(tmp_path: Path) -> None:
+    """imucal's hand-turned Ferraris session (deg/s, m/s², 102.4 Hz, no time column; SOURCE.md): read
+    as rad/s its hand turns reach 895 'rad/s', which names deg/s; read right, its first hold (x up) shows
+    the unit's uncalibrated offset, 10.34 m/s² (SOURCE.md's own numpy check: 10.341), and the gyro bias
+    SOURCE.md gives, [-0.60, -0.37, 0.06] °/s; the six holds' orientations keep the axes unjudged."""
+    local = tmp_path / "ferraris.csv"
+    local.symlink_to(FERRARIS)
+    found = inspect_cli(local, "--columns", FERRARIS_COLUMNS, "--rate", "102.4")["findings"]
+    assert sorted((f["code"], f["value"]) for f in found) == [
+        ("gravity_size", None),
+        ("gyro_range", "gyro=deg/s"),
+    ]
+    doc = inspect_cli(local, "--columns", FERRARIS_COLUMNS, "--rate", "102.4", "--units", "gyro=deg/s")
+    assert [f["code"] for f in doc["findings"]] == ["gravity_size"]
+    rest = doc["rest"]
+    assert rest["gravity_ratio"] * inspection.GRAVITY == pytest.approx(10.341, abs=0.02)
+    np.testing.assert_allclose(np.degrees(rest["rate"]), [-0.60, -0.37, 0.06], atol=0.02)
+    assert rest["orientations"] == 2 and doc["axes"] is None
+
+
+LASERGYRO = dataset_folder("psins_lasergyro_static") / "lasergyro.imu.xz"
+
+
+@pytest.mark.skipif(not LASERGYRO.is_file(), reason=f"real data absent: {LASERGYRO}")
+def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
+    """PSINS's static ring-laser INS (31 min at 100 Hz, read and turned into FRD by its dataset reader):
+    it resolves Earth's rate, so it is silent read right, and its rate read as deg/s is named."""
+    from sins.io.datasets import read_psins_lasergyro
+
+    data = read_psins_lasergyro()
+    units = {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
+    rec = io.Recording(ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel), "lasergyro", "sins csv",
+                       units=units)  # fmt: skip
+    result = inspection.inspect(rec)
+    assert result.findings == () and result.axes == "__d"
+    assert result.rest is not None and result.rest.rate_resolved
+    # A navigation-grade unit: Earth's rate (SOURCE.md: 15.041 °/h, its latitude's) and gravity within
+    # 1 % of the nominal 7.292e-5 rad/s and 9.806 m/s² (measured: 0.998 and 0.999).
+    assert result.rest.earth_rate_ratio == pytest.approx(1.0, abs=0.01)
+    assert result.rest.gravity_ratio == pytest.approx(1.0, abs=0.01)
+    in_degrees = io.Recording(ImuRates(t=data.t, omega_ib_b=np.degrees(data.gyro), f_ib_b=data.accel),
+                              "lasergyro", "sins csv", units=units)  # fmt: skip
+    assert [(f.code, f.value) for f in inspection.inspect(in_degrees).findings] == [
+        ("gyro_unit", "gyro=deg/s")
+    ]
