@@ -2,7 +2,10 @@
 
 Frozen dataclasses of plain arrays. A :class:`NavSeries` is both a truth
 trajectory and an integrated solution; IMU data come in the two forms of the
-package docstring, :class:`ImuIncrements` and :class:`ImuRates`.
+package docstring, :class:`ImuIncrements` and :class:`ImuRates`. A rig's
+readings beside per-sample reference inputs are :class:`CalibrationData`; a
+real unit's readings beside a reference trajectory at the reference's own
+epochs are a :class:`ReferencedRecording`.
 """
 
 from __future__ import annotations
@@ -339,3 +342,38 @@ class CalibrationData:
             t=part.t, gyro=part.gyro, accel=part.accel, ref_gyro=part.ref_gyro, ref_accel=part.ref_accel,
             temp=part.temp, phases=tuple(phases), source=self.source,
         )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ReferencedRecording:
+    """A real unit's readings beside a reference trajectory sampled at its own epochs.
+
+    The reference knows where the unit was and how it was turned (an optical motion capture, a
+    better INS), not what the sensors should have read: rates and specific forces follow from it
+    only by differentiation, which raises its noise, so compensation on such a recording is fitted
+    on the angle and velocity changes between reference epochs (:mod:`sins.compensation.intervals`).
+
+    Attributes
+    ----------
+    imu : the readings as increments in the unit's own axes (rate-form recordings are integrated by
+        the trapezoid rule between samples); ``imu.t`` (n+1,) are the step boundaries
+    reference : the reference at its epochs (m,), in the navigation frame (NED) of the package, the
+        attitude that of the unit's own axes; every state finite, epochs within ``imu.t``'s span
+    judged : (n+1,) bool, at the step boundaries ``imu.t``: the times figures are judged at (BROAD's
+        movement phases), or None for all
+    sensor : the unit's identity where the recording gives one ("BROAD IMU B"), else ""
+    reference_name : what the reference is, for reports
+    source : where the data came from, for messages
+    """
+
+    imu: ImuIncrements
+    reference: NavSeries
+    judged: NDArray[np.bool_] | None = None
+    sensor: str = ""
+    reference_name: str = "reference"
+    source: str = ""
+
+    @property
+    def rate_hz(self) -> float:
+        """The readings' median sample rate, Hz."""
+        return float(1.0 / np.median(np.diff(self.imu.t)))

@@ -32,6 +32,7 @@ RANKS = {
     "sins.inspection": 5,
     "sins.scenario": 6,
     "sins.pipeline": 7,
+    "sins.referenced": 7,
     "sins.campaign": 8,
     "sins.quality": 9,
     "sins.viz": 10,

@@ -11,6 +11,11 @@ Every strategy follows one interface (scikit-learn style):
 * ``predict_error(gyro, accel, temp)`` is ``readings - correct(readings)``, the
   error each channel is believed to carry.
 
+A strategy fitted against a real unit's reference may also carry ``time_offset_s_``: how late the gyro
+and the accelerometer read (s, (2,); a filter's delay). ``correct_rates`` and ``correct_increments``,
+which see whole streams, read each sensor that much later before correcting; ``correct``, sample by
+sample, cannot and does not.
+
 The strategies themselves live in the modules beside this one; :mod:`sins.compensation.registry` makes
 them by name and keeps their model files.
 """
@@ -35,6 +40,12 @@ class Strategy(ABC):
     """A compensation strategy (see the module docstring)."""
 
     name: ClassVar[str] = ""
+    #: How late the gyro and the accelerometer read, s (see the module docstring); set by a fit against a
+    #: real unit's reference, absent otherwise.
+    time_offset_s_: Array
+    #: What the strategy was fitted on, where a real unit's recording says: ``sensor``, ``rate_hz``,
+    #: ``reference``; absent otherwise.
+    fitted_on_: dict[str, Any]
 
     @abstractmethod
     def fit(self, data: CalibrationData) -> Strategy:
@@ -50,17 +61,48 @@ class Strategy(ABC):
         return gyro - omega_ib_b, accel - f_ib_b
 
     def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
-        """Correct rate-form samples ``omega_ib_b`` and ``f_ib_b`` (``temp`` at ``rates.t``)."""
+        """Correct rate-form samples ``omega_ib_b`` and ``f_ib_b`` (``temp`` at ``rates.t``), each
+        sensor read ``time_offset_s_`` later first where the strategy has one."""
+        rates = self.aligned_rates(rates)
         omega_ib_b, f_ib_b = self.correct(rates.omega_ib_b, rates.f_ib_b, temp)
         return ImuRates(t=rates.t, omega_ib_b=omega_ib_b, f_ib_b=f_ib_b)
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
-        """Correct increments through their mean rate over each interval (``temp`` at ``imu.t``)."""
+        """Correct increments through their mean rate over each interval (``temp`` at ``imu.t``), each
+        sensor read ``time_offset_s_`` later first where the strategy has one."""
+        imu = self.aligned_increments(imu)
         dt = np.diff(imu.t)
         mid_temp = None if temp is None else 0.5 * (np.asarray(temp)[:-1] + np.asarray(temp)[1:])
         omega_ib_b, f_ib_b = self.correct(imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None], mid_temp)
         return ImuIncrements(
             t=imu.t, dtheta_b=rowwise.mul_col(omega_ib_b, dt), dv_b=rowwise.mul_col(f_ib_b, dt)
+        )
+
+    def aligned_rates(self, rates: ImuRates) -> ImuRates:
+        """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends
+        held), or as they are without a time offset."""
+        offsets = getattr(self, "time_offset_s_", None)
+        if offsets is None or not np.any(offsets):
+            return rates
+        later = lambda x, tau: np.stack(  # noqa: E731
+            [np.interp(rates.t + tau, rates.t, x[:, i]) for i in range(3)], axis=1
+        )
+        return ImuRates(
+            t=rates.t, omega_ib_b=later(rates.omega_ib_b, offsets[0]), f_ib_b=later(rates.f_ib_b, offsets[1])
+        )
+
+    def aligned_increments(self, imu: ImuIncrements) -> ImuIncrements:
+        """``imu`` with each sensor read ``time_offset_s_`` later
+        (:func:`sins.compensation.intervals.shift_increments`), or as it is without a time offset."""
+        offsets = getattr(self, "time_offset_s_", None)
+        if offsets is None or not np.any(offsets):
+            return imu
+        from sins.compensation.intervals import shift_increments
+
+        return ImuIncrements(
+            t=imu.t,
+            dtheta_b=shift_increments(imu, float(offsets[0]), accel=False).dtheta_b,
+            dv_b=shift_increments(imu, float(offsets[1]), gyro=False).dv_b,
         )
 
     def get_state(self) -> dict[str, Any]:

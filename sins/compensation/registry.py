@@ -29,6 +29,7 @@ CLASSES: dict[str, str] = {
     "oracle": "sins.compensation.base:Oracle",
     "regression": "sins.compensation.regression:Regression",
     "regression_extended": "sins.compensation.regression:ExtendedRegression",
+    "regression_rest": "sins.compensation.rest:RestAware",
     "mlp": "sins.compensation.mlp:ResidualMLP",
     "mlp_pure": "sins.compensation.mlp:MLP",
     "kohonen": "sins.compensation.kohonen:LocalLinearMap",
@@ -52,6 +53,7 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "regression": ("regression", {}),
     "regression_robust": ("regression", {"robust": True}),
     "regression_extended": ("regression_extended", {}),
+    "regression_rest": ("regression_rest", {}),
     "mlp": ("mlp", {}),
     "mlp_pure": ("mlp_pure", {}),
     "mlp_seed": ("mlp_pure", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
@@ -60,7 +62,16 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
 }
 
 #: Names a model file may carry (the registered classes that can be fitted).
-SAVED_STRATEGIES = ("none", "regression", "regression_extended", "mlp", "mlp_pure", "kohonen", "kohonen_pure")
+SAVED_STRATEGIES = (
+    "none",
+    "regression",
+    "regression_extended",
+    "regression_rest",
+    "mlp",
+    "mlp_pure",
+    "kohonen",
+    "kohonen_pure",
+)
 
 
 def make(name: str, **params: Any) -> Strategy:

@@ -34,7 +34,13 @@ class Regression(Strategy):
     def fit(self, data: CalibrationData) -> Regression:
         """Fit the seed model by least squares (Huber-weighted if ``robust``); returns self."""
         weights = _huber_weights(data, self.huber_k, self.g_sensitivity) if self.robust else None
-        fit = calibration.fit_seed_model(data, g_sensitivity=self.g_sensitivity, weights=weights)
+        return self.set_fit(
+            calibration.fit_seed_model(data, g_sensitivity=self.g_sensitivity, weights=weights)
+        )
+
+    def set_fit(self, fit: calibration.SeedModelFit) -> Regression:
+        """Take the coefficients of a seed-model fit made elsewhere (on a real unit's intervals,
+        :mod:`sins.compensation.intervals`) as this strategy's; returns self."""
         self.B0_, self.B_, self.K_, self.A0_, self.A_ = fit.B0, fit.B, fit.K, fit.A0, fit.A
         return self
 

@@ -20,15 +20,12 @@ Array = NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True)
-def _propagate(t: Array, omega: Array, q0: Array, out: Array) -> None:
-    """Trapezoidal steps: the rate over ``(t[k-1], t[k]]`` is the mean of its two samples."""
+def _propagate(dtheta: Array, q0: Array, out: Array) -> None:
+    """``out[k] = out[k-1] ⊗ exp(dtheta[k-1])``: each step's rotation vector applied in body axes."""
     x, y, z, w = q0[0], q0[1], q0[2], q0[3]
     out[0, 0], out[0, 1], out[0, 2], out[0, 3] = x, y, z, w
-    for k in range(1, t.shape[0]):
-        dt = t[k] - t[k - 1]
-        rx = 0.5 * (omega[k - 1, 0] + omega[k, 0]) * dt
-        ry = 0.5 * (omega[k - 1, 1] + omega[k, 1]) * dt
-        rz = 0.5 * (omega[k - 1, 2] + omega[k, 2]) * dt
+    for k in range(1, out.shape[0]):
+        rx, ry, rz = dtheta[k - 1, 0], dtheta[k - 1, 1], dtheta[k - 1, 2]
         angle = np.sqrt(rx * rx + ry * ry + rz * rz)
         # sin(a/2)/a by its series where a is small: full precision at rest.
         if angle < 1e-4:
@@ -61,14 +58,33 @@ def propagate(t: Array, omega_nb_b: Array, q0_nb: Array) -> Array:
     -------
     (n, 4) unit quaternions ``q_nb``, scalar-last; row 0 is ``q0_nb`` normalised.
     """
-    t = np.ascontiguousarray(t, dtype=float)
-    omega = np.ascontiguousarray(omega_nb_b, dtype=float)
+    t = np.asarray(t, dtype=float)
+    omega = np.asarray(omega_nb_b, dtype=float)
     if omega.shape != (len(t), 3):
         raise ValueError(f"omega_nb_b has shape {omega.shape}; expected ({len(t)}, 3)")
+    dtheta = 0.5 * (omega[:-1] + omega[1:]) * np.diff(t)[:, None]
+    return propagate_increments(dtheta, q0_nb)
+
+
+def propagate_increments(dtheta_nb_b: Array, q0_nb: Array) -> Array:
+    """The attitude ``q_nb`` after each of ``n`` steps of body rotation, open loop.
+
+    Each step is the rotation by its rotation vector in body axes, ``q ← q ⊗ exp(dθ)``: exact for a
+    rate of fixed direction over the step (the coning within a step is the increments' business).
+
+    Parameters
+    ----------
+    dtheta_nb_b : (n, 3) rad, each step's rotation of the body relative to the navigation frame
+    q0_nb : (4,) the attitude before the first step, scalar-last
+
+    Returns
+    -------
+    (n + 1, 4) unit quaternions ``q_nb``, scalar-last; row 0 is ``q0_nb`` normalised.
+    """
+    dtheta = np.ascontiguousarray(dtheta_nb_b, dtype=float).reshape(-1, 3)
     q0 = np.asarray(q0_nb, dtype=float)
-    out = np.empty((len(t), 4))
-    if len(t):
-        _propagate(t, omega, q0 / np.linalg.norm(q0), out)
+    out = np.empty((len(dtheta) + 1, 4))
+    _propagate(dtheta, q0 / np.linalg.norm(q0), out)
     return out
 
 

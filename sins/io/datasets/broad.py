@@ -22,7 +22,7 @@ from scipy.signal import savgol_filter
 
 from sins.errors import SinsInputError
 from sins.io.datasets.matfile import check_mat_v5
-from sins.io.datasets.root import check_magnitude, dataset_file
+from sins.io.datasets.root import check_magnitude, data_root, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
 from sins.nav import earth, rotation
 from sins.series import CalibrationData
@@ -75,7 +75,7 @@ _MIN_CORRELATION = 0.5
 def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
     """One BROAD trial, ``broad_mocap/<stem>.mat``, with its reference from the optical data.
 
-    ``trial`` is a stem of :data:`BROAD_TRIALS` or its number (``"05"``, ``"5"``, ``"18"``).
+    ``trial`` is a trial's file stem or its number (``"05"``, ``"5"``, ``"18"``; see :func:`trials`).
 
     Readings: the file's ``imu_gyr`` (rad/s) and ``imu_acc`` (m/s²) as they are, in the IMU's own
     axes. Time is ``row / 285.714`` s with ``row`` the file's row (the file has no time stamps), so
@@ -131,7 +131,7 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
 
     Parameters
     ----------
-    trial : a stem of :data:`BROAD_TRIALS`, or its leading number
+    trial : a trial's file stem, or its leading number (:func:`trials`)
     root : the data root, or None for :func:`data_root`
 
     Returns
@@ -147,7 +147,7 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
         that is not a MATLAB v5 MAT file or lacks a variable, too few rows with an optical reference,
         or optical and inertial data that do not correlate.
     """
-    stem = _stem(trial)
+    stem = _stem(trial, root)
     path = dataset_file(BROAD_FOLDER, f"{stem}.mat", root)
     gyr, acc, quat, pos = _load(str(path))
     dt = 1.0 / BROAD_RATE_HZ
@@ -206,19 +206,42 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
     )
 
 
-def _stem(trial: str) -> str:
-    """The file stem of ``trial``: a stem of :data:`BROAD_TRIALS` or its number."""
+def trials(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
+    """The BROAD trials in the data root's ``broad_mocap/``, by number: every ``NN_*.mat`` there.
+
+    BROAD has 39 trials; the project keeps two (:data:`BROAD_TRIALS`). A user who has more puts them in
+    the folder and each becomes ``broad_NN``. Without the folder, the two kept trials are named.
+
+    Returns
+    -------
+    ``{"05": "05_undisturbed_slow_rotation_with_breaks_B", ...}`` in number order
+    """
+    folder = data_root(root) / BROAD_FOLDER
+    found = {s[:2]: s for s in BROAD_TRIALS}
+    if folder.is_dir():
+        found = {p.stem[:2]: p.stem for p in folder.glob("*.mat") if re.fullmatch(r"\d\d_.+", p.stem)}
+    return dict(sorted(found.items()))
+
+
+def sensor_of(stem: str) -> str:
+    """The IMU a trial was recorded with: the letter that ends its name (BROAD's units A–D), or "" when
+    its name carries none (the combined and magnet trials)."""
+    letter = re.search(r"_([A-D])$", stem)
+    return f"BROAD IMU {letter.group(1)} (myon aktos-t)" if letter else ""
+
+
+def _stem(trial: str, root: str | os.PathLike[str] | None = None) -> str:
+    """The file stem of ``trial``: a trial's stem or its number."""
     text = str(trial).strip()
-    if text in BROAD_TRIALS:
+    known = trials(root)
+    if text in known.values():
         return text
-    if re.fullmatch(r"\d{1,2}", text):
-        for stem in BROAD_TRIALS:
-            if int(stem[:2]) == int(text):
-                return stem
-    numbers = ", ".join(s[:2] for s in BROAD_TRIALS)
+    if re.fullmatch(r"\d{1,2}", text) and f"{int(text):02d}" in known:
+        return known[f"{int(text):02d}"]
+    numbers = ", ".join(known)
     raise SinsInputError(
-        f"trial {trial!r}: unknown BROAD trial; expected one of {', '.join(BROAD_TRIALS)} or its number "
-        f"({numbers})"
+        f"trial {trial!r}: no such BROAD trial in {data_root(root) / BROAD_FOLDER}; expected a trial's "
+        f"number ({numbers}) or its file stem"
     )
 
 

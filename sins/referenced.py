@@ -1,0 +1,237 @@
+"""Compensation of a real unit against its reference trajectory: fitted on intervals, judged open loop.
+
+:func:`fit` fits any strategy on a :class:`~sins.series.ReferencedRecording`: the seed model and the
+sensors' time offsets on the intervals between reference epochs (:mod:`sins.compensation.intervals`),
+then, for strategies that learn more than the seed model, on the per-sample references the intervals
+give. :func:`open_loop_attitude` judges a strategy the way an orientation benchmark does: the corrected
+gyro integrated alone from the reference's first attitude, scored against the reference on the judged
+rows. :func:`drive_errors` judges it the way a navigator does: the corrected unit navigating free
+inertial from the reference's state, attitude and velocity errors over a window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins import compensation
+from sins.compensation import Strategy, intervals
+from sins.compensation.intervals import INTERVAL_S, IntervalFit
+from sins.compensation.regression import Regression
+from sins.errors import SinsInputError
+from sins.nav import attitude, strapdown
+from sins.nav.attitude import AttitudeRmse
+from sins.nav.metrics import nav_errors
+from sins.series import ImuIncrements, ReferencedRecording
+
+Array = NDArray[np.float64]
+
+#: Strategies whose whole model is the seed model: they take the interval fit's coefficients as they are.
+_SEED_ONLY = ("regression", "regression_robust")
+#: The model the PSINS demo's filter estimates: gyro and accelerometer biases alone.
+BIAS_ONLY = "bias_only"
+
+
+@dataclass(frozen=True)
+class Fitted:
+    """A strategy fitted against a reference, with the interval fit it started from."""
+
+    strategy: Strategy
+    intervals: IntervalFit
+
+
+def fit(
+    name: str,
+    rec: ReferencedRecording,
+    *,
+    interval_s: float = INTERVAL_S,
+    params: dict[str, Any] | None = None,
+) -> Fitted:
+    """Fit strategy ``name`` on ``rec`` against its reference.
+
+    The seed model, the gyro's and the accelerometer's time offsets and the accelerometer's lever arm
+    are fitted on intervals of ``interval_s``; ``regression`` (``regression_robust``: Huber-weighted
+    intervals) is that fit; :data:`BIAS_ONLY` the biases alone (the model of the PSINS demo's filter);
+    every other strategy is fitted by its own ``fit`` on the per-sample references the intervals give
+    (:func:`~sins.compensation.intervals.interval_reference`) and reads the readings at the fitted time
+    offsets. ``none`` learns nothing and shifts nothing.
+
+    Raises
+    ------
+    SinsInputError
+        when the recording cannot determine the model (one line naming the recording).
+    """
+    where = rec.source or "recording"
+    try:
+        if name == BIAS_ONLY:
+            return _bias_only(rec, interval_s)
+        fitted = intervals.fit_intervals(rec, interval_s=interval_s, robust=name == "regression_robust")
+        strategy = compensation.make(name, **(params or {}))
+        if name == "none":
+            return Fitted(strategy, fitted)
+        if name in _SEED_ONLY:
+            assert isinstance(strategy, Regression)
+            strategy.set_fit(fitted.seed)
+        else:
+            strategy.fit(intervals.interval_reference(rec, fitted))
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{where}: {exc}") from None
+    strategy.time_offset_s_ = np.array([fitted.time_offset_s, fitted.accel_time_offset_s])
+    strategy.fitted_on_ = fitted_on(rec)
+    return Fitted(strategy, fitted)
+
+
+def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
+    """What a model file records of the recording it was fitted on: the unit, its rate, the reference."""
+    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name}
+
+
+def _bias_only(rec: ReferencedRecording, interval_s: float) -> Fitted:
+    """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
+    fitted = intervals.fit_biases(rec, interval_s=interval_s)
+    strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
+    strategy.fitted_on_ = fitted_on(rec)
+    return Fitted(strategy, fitted)
+
+
+def corrected(
+    strategy: Strategy | None, rec: ReferencedRecording, *, bias_from_rest: bool = False
+) -> ImuIncrements:
+    """``rec``'s increments corrected by ``strategy`` (None: as they are); with ``bias_from_rest`` the
+    gyro bias is then set again from the opening rest (:func:`opening_rest`): what a user does with a
+    calibration from another day.
+
+    Raises
+    ------
+    SinsInputError
+        with ``bias_from_rest``, when the recording does not open with a rest.
+    """
+    imu = rec.imu if strategy is None else strategy.correct_increments(rec.imu)
+    if not bias_from_rest:
+        return imu
+    rest = opening_rest(rec)
+    dt = np.diff(imu.t)
+    bias = imu.dtheta_b[rest].sum(axis=0) / dt[rest].sum()
+    return ImuIncrements(t=imu.t, dtheta_b=imu.dtheta_b - bias * dt[:, None], dv_b=imu.dv_b)
+
+
+#: The shortest opening rest that :func:`opening_rest` accepts, s.
+MIN_OPENING_REST_S = 2.0
+
+
+def opening_rest(rec: ReferencedRecording) -> slice:
+    """The steps of the recording's opening rest: up to the first judged row where the recording marks
+    its judged rows (BROAD's movement phases), else while the reference stays within 0.5° of its first
+    attitude and 2 cm/s of rest.
+
+    Raises
+    ------
+    SinsInputError
+        when that rest is shorter than :data:`MIN_OPENING_REST_S`.
+    """
+    t = rec.imu.t
+    if rec.judged is not None and rec.judged.any():
+        end_t = t[int(np.argmax(rec.judged))]
+    else:
+        ref = rec.reference
+        turn = attitude.attitude_errors(ref.q_nb, np.broadcast_to(ref.q_nb[0], ref.q_nb.shape))[0]
+        moving = (turn > np.radians(0.5)) | (np.linalg.norm(ref.v_n, axis=1) > 0.02)
+        end_t = ref.t[int(np.argmax(moving))] if moving.any() else ref.t[-1]
+    start = int(np.searchsorted(t, rec.reference.t[0]))
+    stop = int(np.searchsorted(t, end_t)) - 1
+    if stop <= start or t[stop] - t[start] < MIN_OPENING_REST_S:
+        raise SinsInputError(
+            f"{rec.source or 'recording'}: no opening rest of {MIN_OPENING_REST_S:g} s to take the gyro "
+            "bias from"
+        )
+    return slice(start, stop)
+
+
+def open_loop_attitude(
+    strategy: Strategy | None, rec: ReferencedRecording, *, bias_from_rest: bool = False
+) -> AttitudeRmse:
+    """The corrected gyro integrated alone from the reference's first attitude, scored against the
+    reference on the judged rows (BROAD's total, heading and inclination RMSE)."""
+    imu = corrected(strategy, rec, bias_from_rest=bias_from_rest)
+    ref = rec.reference
+    first = int(np.searchsorted(imu.t, ref.t[0]))
+    q = attitude.propagate_increments(imu.dtheta_b[first:], ref.q_nb[0])
+    at = np.searchsorted(imu.t, ref.t)
+    on_grid = np.abs(imu.t[np.minimum(at, len(imu.t) - 1)] - ref.t) <= 1e-9 * np.maximum(1.0, np.abs(ref.t))
+    estimate = q[at[on_grid] - first]
+    judged = np.ones(int(on_grid.sum()), dtype=bool) if rec.judged is None else rec.judged[at[on_grid]]
+    return attitude.attitude_rmse(estimate, ref.q_nb[on_grid], judged)
+
+
+@dataclass(frozen=True)
+class DriveErrors:
+    """Free-inertial errors over a window: RMS and final attitude (roll, pitch, yaw, deg) and velocity
+    (north, east, down, m/s) errors, and the horizontal position error at the end, m."""
+
+    start_s: float
+    end_s: float
+    attitude_rms_deg: tuple[float, float, float]
+    attitude_final_deg: tuple[float, float, float]
+    velocity_rms_mps: tuple[float, float, float]
+    velocity_final_mps: tuple[float, float, float]
+    horizontal_final_m: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The figures as a JSON object."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
+
+
+def drive_errors(
+    strategy: Strategy | None, rec: ReferencedRecording, start_s: float, end_s: float
+) -> DriveErrors:
+    """The corrected unit navigating free inertial over ``[start_s, end_s]`` from the reference's state
+    there (attitude, velocity, position at the reference's point), errors against the reference at
+    its epochs in the window; ``end_s`` is clipped to the reference's last epoch. The vertical channel
+    is held to the reference's height (a free vertical channel diverges and says nothing of the
+    compensation)."""
+    imu = corrected(strategy, rec)
+    a = int(np.searchsorted(imu.t, start_s))
+    b = int(np.searchsorted(imu.t, min(end_s, rec.reference.t[-1]), side="right")) - 1
+    if b - a < 10 or imu.t[a] < rec.reference.t[0] or imu.t[b] > rec.reference.t[-1]:
+        raise SinsInputError(
+            f"{rec.source or 'recording'}: {start_s:g}..{end_s:g} s is not within the reference "
+            f"({rec.reference.t[0]:g}..{rec.reference.t[-1]:g} s)"
+        )
+    seg = ImuIncrements(t=imu.t[a : b + 1], dtheta_b=imu.dtheta_b[a:b], dv_b=imu.dv_b[a:b])
+    truth = rec.reference.interpolate(seg.t)
+    solution = strapdown.integrate(
+        seg, strapdown.InitialState.from_series(truth, 0), vertical="hold", h_ref=truth.h
+    )
+    err = nav_errors(solution, truth)
+    inside = (rec.reference.t >= seg.t[0]) & (rec.reference.t <= seg.t[-1])
+    rows = np.searchsorted(seg.t, rec.reference.t[inside])
+    rows = rows[rows < len(seg.t)]
+    att, vel = np.degrees(err.att_rpy_rad[rows]), err.vel_ned_mps[rows]
+    three = lambda x: (float(x[0]), float(x[1]), float(x[2]))  # noqa: E731
+    return DriveErrors(
+        start_s=float(seg.t[0]), end_s=float(seg.t[-1]),
+        attitude_rms_deg=three(np.sqrt(np.mean(att * att, axis=0))), attitude_final_deg=three(att[-1]),
+        velocity_rms_mps=three(np.sqrt(np.mean(vel * vel, axis=0))), velocity_final_mps=three(vel[-1]),
+        horizontal_final_m=float(err.horizontal_m[-1]),
+    )  # fmt: skip
+
+
+def between(rec: ReferencedRecording, start_s: float, end_s: float) -> ReferencedRecording:
+    """The part of ``rec`` within ``[start_s, end_s]`` (steps and reference epochs)."""
+    t = rec.imu.t
+    a = int(np.searchsorted(t, start_s))
+    b = int(np.searchsorted(t, end_s, side="right")) - 1
+    inside = np.flatnonzero((rec.reference.t >= t[a]) & (rec.reference.t <= t[b]))
+    return ReferencedRecording(
+        imu=ImuIncrements(t=t[a : b + 1], dtheta_b=rec.imu.dtheta_b[a:b], dv_b=rec.imu.dv_b[a:b]),
+        reference=rec.reference.at(inside),
+        judged=None if rec.judged is None else rec.judged[a : b + 1],
+        sensor=rec.sensor,
+        reference_name=rec.reference_name,
+        source=rec.source,
+    )
