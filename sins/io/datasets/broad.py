@@ -210,7 +210,8 @@ def trials(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     """The BROAD trials in the data root's ``broad_mocap/``, by number: every ``NN_*.mat`` there.
 
     BROAD has 39 trials; the project keeps two (:data:`BROAD_TRIALS`). A user who has more puts them in
-    the folder and each becomes ``broad_NN``. Without the folder, the two kept trials are named.
+    the folder and each becomes ``broad_NN``. Without the folder, or with none there, the two kept trials
+    are named (their readers then say the files are missing).
 
     Returns
     -------
@@ -219,7 +220,7 @@ def trials(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     folder = data_root(root) / BROAD_FOLDER
     found = {s[:2]: s for s in BROAD_TRIALS}
     if folder.is_dir():
-        found = {p.stem[:2]: p.stem for p in folder.glob("*.mat") if re.fullmatch(r"\d\d_.+", p.stem)}
+        found = {p.stem[:2]: p.stem for p in folder.glob("*.mat") if re.fullmatch(r"\d\d_.+", p.stem)} or found
     return dict(sorted(found.items()))
 
 
@@ -240,7 +241,7 @@ def _stem(trial: str, root: str | os.PathLike[str] | None = None) -> str:
         return known[f"{int(text):02d}"]
     numbers = ", ".join(known)
     raise SinsInputError(
-        f"trial {trial!r}: no such BROAD trial in {data_root(root) / BROAD_FOLDER}; expected a trial's "
+        f"trial {trial!r}: unknown BROAD trial in {data_root(root) / BROAD_FOLDER}; expected a trial's "
         f"number ({numbers}) or its file stem"
     )
 
