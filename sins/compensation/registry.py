@@ -33,6 +33,7 @@ CLASSES: dict[str, str] = {
     "mlp_pure": "sins.compensation.mlp:MLP",
     "kohonen": "sins.compensation.kohonen:LocalLinearMap",
     "kohonen_pure": "sins.compensation.kohonen:Kohonen",
+    "ferraris": "sins.compensation.ferraris:Ferraris",
 }
 
 
@@ -57,10 +58,13 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "mlp_seed": ("mlp_pure", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
     "kohonen": ("kohonen", {}),
     "kohonen_pure": ("kohonen_pure", {}),
+    "ferraris": ("ferraris", {}),
 }
 
 #: Names a model file may carry (the registered classes that can be fitted).
-SAVED_STRATEGIES = ("none", "regression", "regression_extended", "mlp", "mlp_pure", "kohonen", "kohonen_pure")
+SAVED_STRATEGIES = (
+    "none", "regression", "regression_extended", "mlp", "mlp_pure", "kohonen", "kohonen_pure", "ferraris",
+)  # fmt: skip
 
 
 def make(name: str, **params: Any) -> Strategy:
