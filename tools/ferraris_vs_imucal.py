@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import dataclasses
 import importlib.metadata
 import json
 import math
@@ -74,8 +75,8 @@ def as_snapshot(cal: ImucalCalibration, g: float) -> ImucalCalibration:
     )  # fmt: skip
 
 
-def fmt(x: float) -> str:
-    return "—" if not np.isfinite(x) else f"{x:.6g}"
+def fmt(x: float, digits: int = 6) -> str:
+    return "—" if not np.isfinite(x) else f"{x:.{digits}g}"
 
 
 def comparison_table(fitted: Ferraris, reference: ImucalCalibration) -> None:
@@ -87,7 +88,7 @@ def comparison_table(fitted: Ferraris, reference: ImucalCalibration) -> None:
         entry = ",".join(str(i + 1) for i in row.entry)
         print(
             f"| {row.parameter} ({UNIT_TEXT[row.parameter]}) | {entry} | {fmt(row.reference)} "
-            f"| {fmt(row.sins)} | {delta:.2e} | {fmt(row.se)} | {fmt(ratio)} |"
+            f"| {fmt(row.sins)} | {delta:.1e} | {fmt(row.se, 3)} | {fmt(ratio, 2)} |"
         )
 
 
@@ -148,6 +149,40 @@ def session_table(name: str, data: CalibrationData) -> None:
         print(f"| {label} | {cells} | {math.sqrt(float(np.mean(errs**2))):.2f} |")
 
 
+def accelerometer_axes(data: CalibrationData, fitted: Ferraris) -> CalibrationData:
+    """The session with each turn's angle about the axis its mean corrected specific force points along
+    (the vertical, if the unit turned about it), in place of the body axis."""
+    _, f = fitted.correct(data.gyro, data.accel)
+    phases = []
+    for p in data.phases:
+        if p.angle_rad is not None:
+            k = "xyz".index(p.name[0])
+            up = f[p.start : p.stop].mean(axis=0)
+            up = up / (np.linalg.norm(up) * np.sign(up[k]))  # the axis, pointing along +k
+            angle = p.angle_rad[k]  # the turn's signed angle about its own axis
+            p = dataclasses.replace(p, angle_rad=(angle * up[0], angle * up[1], angle * up[2]))
+        phases.append(p)
+    return dataclasses.replace(data, phases=tuple(phases))
+
+
+def axes_table(data: CalibrationData) -> None:
+    """How far the accelerometer sees each turn's axis off the body axis, and what taking the turns
+    about those axes does to the motions between holds."""
+    fitted = Ferraris().fit(data)
+    moved = accelerometer_axes(data, fitted)
+    tilts = []
+    for p in moved.phases:
+        if p.angle_rad is not None:
+            along = abs(p.angle_rad["xyz".index(p.name[0])]) / np.linalg.norm(p.angle_rad)
+            tilts.append(f"{math.degrees(math.acos(along)):.2f}°")
+    print(f"\nThe turns' axes as the accelerometer sees them, off the body axes: {', '.join(tilts)}")
+    for label, d in (("body axes (imucal's)", data), ("the accelerometer's axes", moved)):
+        c = check_session(Ferraris().fit(d), data)
+        if c.transitions:
+            rms = math.sqrt(float(np.mean(np.degrees([t.error_rad for t in c.transitions]) ** 2)))
+            print(f"turns about {label}: the motions between holds, RMS {rms:.2f}°")
+
+
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     data = datasets.read_ferraris_annotated()
@@ -167,6 +202,7 @@ def main() -> None:
     print(f"sins, mapped the same way, against the snapshot: {worst_mapped(fitted, snap, g)}")
     for name in ("ferraris", "ferraris_annotated"):
         session_table(name, datasets.load(name))
+        axes_table(datasets.load(name))
 
 
 def worst_mapped(fitted: Ferraris, snap: ImucalCalibration, g: float) -> str:
