@@ -292,7 +292,9 @@ def test_a_recording_without_the_session_is_refused_in_one_line() -> None:
     renamed = tuple(
         RigPhase(p.name, p.start, p.stop, p.kind, None) if p.name == "y_rot" else p for p in data.phases
     )
-    refusal(lambda: fit(CalibrationData(**{**vars(data), "phases": renamed})), "turn 'y_rot'", "known angle")
+    refusal(
+        lambda: fit(CalibrationData(**{**vars(data), "phases": renamed})), "turn 'y_rot'", "no known angle"
+    )
     flipped = data.ref_accel.copy()
     (x_a,) = [p for p in data.phases if p.name == "x_a"]
     flipped[x_a.start : x_a.stop] *= -1.0
@@ -309,7 +311,12 @@ def test_a_recording_without_the_session_is_refused_in_one_line() -> None:
         lambda: fit(CalibrationData(**{**vars(data), "phases": cut})),
         "turn 'x_rot' does not begin and end at rest", "whole",
     )  # fmt: skip
-    refusal(lambda: fit(data.split(0.3)[0]), "turn 'x_rot'", "known angle")
+    refusal(lambda: fit(data.split(0.3)[0]), "turn 'x_rot' has no known angle", "nothing held back")
+    sideways = tuple(
+        RigPhase(p.name, p.start, p.stop, p.kind, (0.0, 0.0, -6.0)) if p.name == "x_rot" else p
+        for p in data.phases
+    )
+    refusal(lambda: fit(CalibrationData(**{**vars(data), "phases": sideways})), "turn 'x_rot'", "about x")
 
 
 # --------------------------------------------------------------------------- the annotated session's reader

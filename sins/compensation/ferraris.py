@@ -194,11 +194,16 @@ def _session_phases(data: CalibrationData) -> tuple[list[RigPhase], list[RigPhas
         if not np.isfinite(data.ref_gyro[p.start : p.stop]).all():
             raise SinsInputError(f"{where}: hold {p.name!r} has no reference rate on some rows (0 at rest)")
     for k, p in enumerate(turns):
-        angle = None if p.angle_rad is None else np.asarray(p.angle_rad, dtype=float)
-        if angle is None or p.stop - p.start < 7 or not abs(angle[k]) > 0.95 * np.linalg.norm(angle):
+        if p.angle_rad is None:
             raise SinsInputError(
-                f"{where}: turn {p.name!r} must be a phase of seven or more rows with a known angle about "
-                f"{'xyz'[k]} (angle_rad; found {p.angle_rad}, {p.stop - p.start} rows)"
+                f"{where}: turn {p.name!r} has no known angle (angle_rad); a turn's angle holds for the "
+                "whole turn only, so fit on the whole session with nothing held back"
+            )
+        angle = np.asarray(p.angle_rad, dtype=float)
+        if p.stop - p.start < 7 or not abs(angle[k]) > 0.95 * np.linalg.norm(angle):
+            raise SinsInputError(
+                f"{where}: turn {p.name!r} must be a phase of seven or more rows turning about "
+                f"{'xyz'[k]} (found {p.stop - p.start} rows, angle_rad {p.angle_rad})"
             )
     return holds, turns
 
