@@ -24,6 +24,7 @@ import dataclasses
 import importlib.metadata
 import json
 import math
+import sys
 
 import numpy as np
 import pandas as pd
@@ -32,6 +33,7 @@ from imucal import FerrarisCalibration, ferraris_regions_from_df
 from sins import compensation
 from sins.compensation.base import NoCompensation, Strategy
 from sins.compensation.ferraris import Ferraris, ImucalCalibration, check_session, compare_with_imucal
+from sins.errors import SinsInputError
 from sins.io import datasets
 from sins.io.datasets import ferraris as reader
 from sins.series import CalibrationData
@@ -215,4 +217,8 @@ def worst_mapped(fitted: Ferraris, snap: ImucalCalibration, g: float) -> str:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except SinsInputError as exc:  # the data not found, say: one line and status 2, as the CLI does
+        print(f"ferraris_vs_imucal: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
