@@ -131,8 +131,8 @@ def add_dataset(p: argparse.ArgumentParser) -> None:
     command's start)."""
     p.add_argument(
         "--dataset", metavar="NAME",
-        help="a real dataset from the data root instead of a file: ferraris, psins_vehicle, psins_lasergyro, "
-        "broad_05, broad_18",
+        help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
+        "psins_vehicle, psins_lasergyro, broad_05, broad_18",
     )  # fmt: skip
 
 

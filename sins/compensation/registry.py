@@ -34,6 +34,7 @@ CLASSES: dict[str, str] = {
     "mlp_pure": "sins.compensation.mlp:MLP",
     "kohonen": "sins.compensation.kohonen:LocalLinearMap",
     "kohonen_pure": "sins.compensation.kohonen:Kohonen",
+    "ferraris": "sins.compensation.ferraris:Ferraris",
 }
 
 
@@ -59,6 +60,7 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "mlp_seed": ("mlp_pure", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
     "kohonen": ("kohonen", {}),
     "kohonen_pure": ("kohonen_pure", {}),
+    "ferraris": ("ferraris", {}),
 }
 
 #: Names a model file may carry (the registered classes that can be fitted).
@@ -67,6 +69,7 @@ SAVED_STRATEGIES = (
     "regression",
     "regression_extended",
     "regression_rest",
+    "ferraris",
     "mlp",
     "mlp_pure",
     "kohonen",

@@ -15,7 +15,13 @@ import numpy as np
 
 from sins.errors import SinsInputError
 from sins.io.datasets.broad import BROAD_TRIALS, read_broad
-from sins.io.datasets.ferraris import FERRARIS_FOLDER, FERRARIS_RATE_HZ, FERRARIS_SECTIONS, read_ferraris
+from sins.io.datasets.ferraris import (
+    FERRARIS_FOLDER,
+    FERRARIS_RATE_HZ,
+    FERRARIS_SECTIONS,
+    read_ferraris,
+    read_ferraris_annotated,
+)
 from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
 from sins.io.datasets.psins_vehicle import read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
@@ -24,6 +30,7 @@ from sins.series import CalibrationData, NavSeries
 #: Dataset names for :func:`load`, and what each is.
 NAMES = {
     "ferraris": "imucal's hand-made Ferraris session of a MEMS IMU (static holds only have a reference)",
+    "ferraris_annotated": "imucal's annotated Ferraris session (raw counts, 204.8 Hz, its nine sections)",
     "psins_vehicle": "PSINS vehicle MEMS IMU against its FOG-INS, as 0.1 s means (the INS's own rate)",
     "psins_lasergyro": "PSINS static ring-laser INS against Earth rate and gravity",
     **{f"broad_{s[:2]}": f"BROAD trial {s}: a MEMS IMU against optical motion capture" for s in BROAD_TRIALS},
@@ -58,6 +65,8 @@ def load_with_truth(
 def _load(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
     if name == "ferraris":
         return read_ferraris(root)
+    if name == "ferraris_annotated":
+        return read_ferraris_annotated(root)
     if name == "psins_lasergyro":
         return read_psins_lasergyro(root)
     if name.startswith("broad_") and name in NAMES:
@@ -77,6 +86,7 @@ __all__ = [
     "load_with_truth",
     "read_broad",
     "read_ferraris",
+    "read_ferraris_annotated",
     "read_psins_lasergyro",
     "read_psins_vehicle",
 ]

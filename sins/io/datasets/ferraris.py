@@ -1,8 +1,11 @@
-"""The imucal Ferraris session (``imucal_ferraris/``; MIT licence, MaD Lab, FAU Erlangen-Nürnberg,
+"""The imucal Ferraris sessions (``imucal_ferraris/``; MIT licence, MaD Lab, FAU Erlangen-Nürnberg,
 github.com/mad-lab-fau/imucal)
-    A hand-performed Ferraris calibration of an unnamed MEMS IMU: six static
+    Hand-performed Ferraris calibrations of unnamed MEMS IMUs: six static
     holds with each axis up and down, then one turn about each axis.
-    :func:`read_ferraris` returns it as :class:`~sins.series.CalibrationData`.
+    :func:`read_ferraris` returns the example session (physical units, a
+    continuous recording with a section list) and :func:`read_ferraris_annotated`
+    the annotated session (raw counts, only the sections) as
+    :class:`~sins.series.CalibrationData`.
 """
 
 from __future__ import annotations
@@ -41,6 +44,19 @@ FERRARIS_HEIGHT_M = 0.0
 #: The sections of a Ferraris session, as imucal names them.
 FERRARIS_SECTIONS = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot")
 _FERRARIS_COLUMNS = ("n_samples", "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z")
+
+#: Sample rate of the annotated session, Hz: imucal's ``tests/test_calibration_calculation.py`` passes
+#: 204.8 Hz when it calibrates it (SOURCE.md), and its turns then integrate to 354–367°.
+ANNOTATED_RATE_HZ = 204.8
+#: One accelerometer count of the annotated session, m/s²: 9.81/2048, a 16-bit reading over ±16 g.
+#: The lab's own conversion: every reading of its example session is a whole multiple of it (to 2e-13).
+ANNOTATED_ACCEL_MPS2_PER_COUNT = 9.81 / 2048.0
+#: One gyro count of the annotated session, °/s: 2000/2¹⁵, a 16-bit reading over ±2000 °/s; again the
+#: conversion behind the example session (its gyro readings are whole multiples, to 2e-12).
+ANNOTATED_GYRO_DPS_PER_COUNT = 2000.0 / 32768.0
+#: The annotated session's turns, deg: +360 about each axis (see :func:`read_ferraris_annotated`).
+ANNOTATED_TURN_DEG = 360.0
+_ANNOTATED_COLUMNS = ("samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 
 
 def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = "example") -> CalibrationData:
@@ -109,6 +125,17 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
         limit = np.degrees(MAX_RATE_RADPS) if name.startswith("gyr") else MAX_FORCE_MPS2
         io.check_range(table, name, d[:, i + 1], -limit, limit, "reading", "°/s" if i < 3 else "m/s²")
 
+    return _session(
+        samples / FERRARIS_RATE_HZ, np.radians(d[:, 1:4]), d[:, 4:7].copy(), sections, -360.0, str(csv_path)
+    )
+
+
+def _session(
+    t: Array, gyro: Array, accel: Array, sections: dict[str, tuple[int, int]], turn_deg: float, source: str
+) -> CalibrationData:
+    """The readings with the Ferraris references: ``±g`` and rate 0 in the holds, a turn of ``turn_deg``
+    about each rotation section's own axis, NaN elsewhere (see :func:`read_ferraris`)."""
+    n = len(t)
     g = float(earth.normal_gravity(math.radians(FERRARIS_LAT_DEG), FERRARIS_HEIGHT_M))
     ref_gyro = np.full((n, 3), np.nan)
     ref_accel = np.full((n, 3), np.nan)
@@ -117,7 +144,7 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
         axis = "xyz".index(name[0])
         if name.endswith("_rot"):
             angle = [0.0, 0.0, 0.0]
-            angle[axis] = -2.0 * math.pi
+            angle[axis] = math.radians(turn_deg)
             phases.append(RigPhase(name, start, stop, "rotation", (angle[0], angle[1], angle[2])))
         else:
             ref_gyro[start:stop] = 0.0
@@ -125,15 +152,120 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
             ref_accel[start:stop, axis] = g if name.endswith("_p") else -g
             phases.append(RigPhase(name, start, stop, "static"))
     return CalibrationData(
-        t=samples / FERRARIS_RATE_HZ,
-        gyro=np.radians(d[:, 1:4]),
-        accel=d[:, 4:7].copy(),
-        ref_gyro=ref_gyro,
-        ref_accel=ref_accel,
-        temp=None,
-        phases=tuple(phases),
-        source=str(csv_path),
-    )
+        t=t, gyro=gyro, accel=accel, ref_gyro=ref_gyro, ref_accel=ref_accel, temp=None,
+        phases=tuple(phases), source=source,
+    )  # fmt: skip
+
+
+def read_ferraris_annotated(
+    root: str | os.PathLike[str] | None = None, *, turn_deg: float = ANNOTATED_TURN_DEG
+) -> CalibrationData:
+    """imucal's annotated Ferraris session ``annotated_session.csv``: raw counts, sections named per row.
+
+    The file holds only the nine sections, its rows grouped by name; ``samples`` numbers them 0, 1, …
+    with the sections laid end to end in the order x_p, x_a, … z_rot. Rows are returned in that order
+    and ``t = samples / 204.8`` s (:data:`ANNOTATED_RATE_HZ`): the time between sections in the original
+    recording is not in the file, so the phases abut and no motion lies between them.
+
+    Readings: the counts times the lab's own conversion of its example session (a 16-bit unit at ±16 g
+    and ±2000 °/s: :data:`ANNOTATED_ACCEL_MPS2_PER_COUNT`, :data:`ANNOTATED_GYRO_DPS_PER_COUNT`), so
+    that a calibration finds percent-sized errors, not a unit conversion; uncalibrated. No temperature.
+
+    Reference: as :func:`read_ferraris`'s, except the turns' angle, ``turn_deg`` about each rotation's
+    axis. imucal's convention is −360° (clockwise seen from the axis's tip), but this session's turns
+    read +367°, +354° and +355°: taken as −360°, the gyro's scale-and-misalignment matrix has
+    determinant −1 (imucal's own snapshot calibration of this file has ``R_g`` ≈ −I), a gyro triad
+    left-handed against its accelerometer, which no IMU is built as. These turns went the other way,
+    and the default is +360°.
+
+    Parameters
+    ----------
+    root : the data root, or None for :func:`data_root`
+    turn_deg : the angle of each turn about its own axis, deg
+
+    Returns
+    -------
+    CalibrationData
+        ``t`` (n,) s, ``gyro`` (n, 3) rad/s, ``accel`` (n, 3) m/s², references as in
+        :func:`read_ferraris`, nine phases; ``source`` the CSV path.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file and line: a missing file or column, an unknown or missing section,
+        a section whose rows are not contiguous in ``samples``, ``samples`` not 0, 1, … n−1.
+    """
+    csv_path = dataset_file(FERRARIS_FOLDER, "annotated_session.csv", root)
+    table = io.read_table(csv_path, required=("part", *_ANNOTATED_COLUMNS), select=_ANNOTATED_COLUMNS)
+    parts = _read_parts(csv_path, table)
+    d = table.data
+    n = len(d)
+    samples = d[:, 0]
+    order = np.argsort(samples, kind="stable")
+    expected = np.arange(n)
+    if not np.array_equal(samples[order], expected):
+        r = int(order[np.argmax(samples[order] != expected)])
+        raise SinsInputError(
+            f"{csv_path}:{io.line_of_row(csv_path, table.first_data_line - 1, r)}: column 'samples': "
+            f"{io.format_number(samples[r])}: the samples must number the {n} rows 0, 1, … {n - 1}, each once"
+        )
+    accel = d[:, 1:4] * ANNOTATED_ACCEL_MPS2_PER_COUNT
+    gyro = np.radians(d[:, 4:7] * ANNOTATED_GYRO_DPS_PER_COUNT)
+    for i, name in enumerate(_ANNOTATED_COLUMNS[1:]):
+        limit, unit = (MAX_FORCE_MPS2, "m/s²") if i < 3 else (MAX_RATE_RADPS, "rad/s")
+        values = accel[:, i] if i < 3 else gyro[:, i - 3]
+        io.check_range(table, name, values, -limit, limit, "reading (converted)", unit)
+    sections = _annotated_sections(csv_path, table, parts, order)
+    t = expected / ANNOTATED_RATE_HZ
+    return _session(t, gyro[order], accel[order], sections, turn_deg, str(csv_path))
+
+
+def _read_parts(path: Path, table: io.Table) -> list[str]:
+    """The ``part`` cell of every data row of ``table`` (blank and ``#`` lines skipped, as read_table)."""
+    column = io.read_columns(path).index("part")
+    parts: list[str] = []
+    with open(path, encoding="utf-8-sig") as fh:
+        for number, text in enumerate(fh, start=1):
+            if number < table.first_data_line or not text.strip() or text.lstrip().startswith("#"):
+                continue
+            parts.append(text.rstrip("\r\n").split(",")[column].strip())
+    if len(parts) != len(table.data):  # read_table has checked every row; this guards the two parsers
+        raise SinsInputError(f"{path}: {len(parts)} rows of column 'part' for {len(table.data)} data rows")
+    return parts
+
+
+def _annotated_sections(
+    path: Path, table: io.Table, parts: list[str], order: NDArray[np.intp]
+) -> dict[str, tuple[int, int]]:
+    """``{section: (start, stop)}`` rows, in ``samples`` order, of the annotated file's ``part`` column."""
+
+    def where(row: int) -> str:
+        return f"{path}:{io.line_of_row(path, table.first_data_line - 1, row)}"
+
+    known = set(FERRARIS_SECTIONS)
+    for r, name in enumerate(parts):
+        if name not in known:
+            raise SinsInputError(
+                f"{where(r)}: column 'part': unknown section {name!r} "
+                f"(expected {', '.join(FERRARIS_SECTIONS)})"
+            )
+    ordered = [parts[r] for r in order]
+    out: dict[str, tuple[int, int]] = {}
+    start = 0
+    for k in range(1, len(ordered) + 1):
+        if k == len(ordered) or ordered[k] != ordered[start]:
+            name = ordered[start]
+            if name in out:
+                raise SinsInputError(
+                    f"{where(int(order[start]))}: column 'part': section {name!r} is not one run of "
+                    f"consecutive samples (it resumes at sample {start})"
+                )
+            out[name] = (start, k)
+            start = k
+    for name in FERRARIS_SECTIONS:
+        if name not in out:
+            raise SinsInputError(f"{path}: column 'part': missing section {name!r}")
+    return out
 
 
 def _ferraris_sections(path: Path, n_rows: int) -> dict[str, tuple[int, int]]:
