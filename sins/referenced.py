@@ -11,7 +11,10 @@ inertial from the reference's state, attitude and velocity errors over a window.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,11 +24,13 @@ from sins import compensation
 from sins.compensation import Strategy, intervals
 from sins.compensation.intervals import INTERVAL_S, IntervalFit
 from sins.compensation.regression import Regression
+from sins.compensation.residual import ResidualStrategy
 from sins.errors import SinsInputError
+from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
 from sins.nav.metrics import nav_errors
-from sins.series import ImuIncrements, ReferencedRecording
+from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -49,6 +54,7 @@ def fit(
     *,
     interval_s: float = INTERVAL_S,
     params: dict[str, Any] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Fitted:
     """Fit strategy ``name`` on ``rec`` against its reference.
 
@@ -57,7 +63,8 @@ def fit(
     intervals) is that fit; :data:`BIAS_ONLY` the biases alone (the model of the PSINS demo's filter);
     every other strategy is fitted by its own ``fit`` on the per-sample references the intervals give
     (:func:`~sins.compensation.intervals.interval_reference`) and reads the readings at the fitted time
-    offsets. ``none`` learns nothing and shifts nothing.
+    offsets. ``none`` learns nothing and shifts nothing. ``progress(done, total)`` is handed to the
+    learned strategies' training.
 
     Raises
     ------
@@ -76,6 +83,8 @@ def fit(
             assert isinstance(strategy, Regression)
             strategy.set_fit(fitted.seed)
         else:
+            if progress is not None and isinstance(strategy, ResidualStrategy):
+                strategy.progress = progress
             strategy.fit(intervals.interval_reference(rec, fitted))
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
@@ -156,16 +165,31 @@ def open_loop_attitude(
     strategy: Strategy | None, rec: ReferencedRecording, *, bias_from_rest: bool = False
 ) -> AttitudeRmse:
     """The corrected gyro integrated alone from the reference's first attitude, scored against the
-    reference on the judged rows (BROAD's total, heading and inclination RMSE)."""
+    reference on the judged rows (BROAD's total, heading and inclination RMSE). The gyro's increments
+    are turns in inertial space; the navigation frame's own turn (Earth's rate: its vertical part only
+    where the reference's heading is not north) is taken out (:func:`frame_turn`)."""
     imu = corrected(strategy, rec, bias_from_rest=bias_from_rest)
     ref = rec.reference
     first = int(np.searchsorted(imu.t, ref.t[0]))
-    q = attitude.propagate_increments(imu.dtheta_b[first:], ref.q_nb[0])
+    q = attitude.propagate_increments(imu.dtheta_b[first:], ref.q_nb[0], frame_turn(rec)[first:])
     at = np.searchsorted(imu.t, ref.t)
     on_grid = np.abs(imu.t[np.minimum(at, len(imu.t) - 1)] - ref.t) <= 1e-9 * np.maximum(1.0, np.abs(ref.t))
     estimate = q[at[on_grid] - first]
     judged = np.ones(int(on_grid.sum()), dtype=bool) if rec.judged is None else rec.judged[at[on_grid]]
     return attitude.attitude_rmse(estimate, ref.q_nb[on_grid], judged)
+
+
+def frame_turn(rec: ReferencedRecording) -> Array:
+    """The navigation frame's turn in inertial space over each step, rad (n, 3) in its axes: Earth's rate
+    at the reference's mean latitude (its vertical part only where ``heading_known`` is False; the
+    transport rate of a room or a slow vehicle is left out)."""
+    from sins.nav import earth
+
+    lat = float(np.mean(rec.reference.lat))
+    w_ie = np.array(np.broadcast_arrays(*earth.earth_rate_n(lat)), dtype=float).reshape(3)
+    if not rec.heading_known:
+        w_ie[:2] = 0.0
+    return np.asarray(np.outer(np.diff(rec.imu.t), w_ie))
 
 
 @dataclass(frozen=True)
@@ -234,4 +258,114 @@ def between(rec: ReferencedRecording, start_s: float, end_s: float) -> Reference
         sensor=rec.sensor,
         reference_name=rec.reference_name,
         source=rec.source,
+        heading_known=rec.heading_known,
     )
+
+
+def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str) -> ReferencedRecording:
+    """A user's readings beside their reference trajectory (a truth CSV, a bag's poses, a EuRoC
+    ground truth): rate-form readings integrated between samples by the trapezoid rule.
+
+    Raises
+    ------
+    SinsInputError
+        when the reference does not overlap the readings in time.
+    """
+    if isinstance(imu, ImuRates):
+        dt = np.diff(imu.t)[:, None]
+        imu = ImuIncrements(
+            t=imu.t,
+            dtheta_b=0.5 * (imu.omega_ib_b[:-1] + imu.omega_ib_b[1:]) * dt,
+            dv_b=0.5 * (imu.f_ib_b[:-1] + imu.f_ib_b[1:]) * dt,
+        )
+    inside = np.flatnonzero((truth.t >= imu.t[0]) & (truth.t <= imu.t[-1]))
+    if len(inside) < 2:
+        raise SinsInputError(
+            f"{source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the readings "
+            f"({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
+        )
+    return ReferencedRecording(
+        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source
+    )
+
+
+def read_inputs(
+    recording: str | os.PathLike[str] | None,
+    *,
+    dataset: str | None = None,
+    truth: str | os.PathLike[str] | None = None,
+    options: dict[str, Any] | None = None,
+) -> CalibrationData | ReferencedRecording | Recording:
+    """What ``sins fit``, ``evaluate`` and ``correct`` work on, from a dataset name or a recording:
+
+    * a dataset whose reference is a trajectory (BROAD, the PSINS drive): a :class:`ReferencedRecording`;
+      another dataset (the Ferraris session, the still ring-laser unit): its :class:`CalibrationData`;
+    * a sins rig recording (``ref_*`` columns): its :class:`CalibrationData`;
+    * any other recording (:func:`sins.io.read_recording_any`: a CSV, a bag, a EuRoC folder) with a
+      reference (``truth``, or the recording's own): a :class:`ReferencedRecording`; without one, the
+      :class:`~sins.io.Recording` itself (what ``correct`` needs, and ``fit`` refuses).
+
+    Raises
+    ------
+    SinsInputError
+        for both or neither of a recording and a dataset, ``truth`` beside a dataset, and as the readers do.
+    """
+    from sins import io
+    from sins.io import datasets
+
+    if (recording is None) == (dataset is None):
+        raise SinsInputError("give a RECORDING or --dataset NAME (one of them)")
+    if dataset is not None:
+        if truth is not None:
+            raise SinsInputError("--truth goes with a RECORDING, not with --dataset")
+        referenced = datasets.load_reference(dataset)
+        return referenced if referenced is not None else datasets.load(dataset)
+    path = Path(recording)  # type: ignore[arg-type]
+    if (
+        path.is_file()
+        and path.suffix.lower() == ".csv"
+        and any(c.startswith("ref_") for c in io.read_columns(path))
+    ):
+        if truth is not None:
+            raise SinsInputError(
+                f"{path}: a rig recording carries its reference (ref_ columns); drop --truth"
+            )
+        data = io.read_recording(path)
+        io.check_recording_range(path, data)
+        return data
+    reference = None if truth is None else io.read_truth(truth)
+    start = None if reference is None else float(reference.t[0])
+    rec = io.read_recording_any(path, **(options or {}), t_start=start)
+    reference = reference if reference is not None else rec.truth
+    if reference is None:
+        return rec
+    return from_recording(rec.imu, reference, str(path))
+
+
+def check_fitted_on(
+    strategy: Strategy, rec: ReferencedRecording | CalibrationData | Recording, where: str
+) -> None:
+    """Refuse a model fitted on another unit (both named) or, when it reads the sensors at time offsets
+    or tracks rests (both set in samples' terms), at another rate (more than 5 % apart).
+
+    Raises
+    ------
+    SinsInputError
+        naming both units or both rates.
+    """
+    fitted = getattr(strategy, "fitted_on_", None)
+    if not isinstance(fitted, dict):
+        return
+    sensor = getattr(rec, "sensor", "")
+    if fitted.get("sensor") and sensor and fitted["sensor"] != sensor:
+        raise SinsInputError(
+            f"{where}: the model was fitted on {fitted['sensor']}; this recording is {sensor}"
+        )
+    rate = fitted.get("rate_hz")
+    t = rec.imu.t if isinstance(rec, ReferencedRecording | Recording) else rec.t
+    here = float(1.0 / np.median(np.diff(t)))
+    if isinstance(rate, float) and abs(here - rate) > 0.05 * rate:
+        raise SinsInputError(
+            f"{where}: the model was fitted on readings at {rate:.6g} Hz, its time offsets in those terms; "
+            f"this recording is at {here:.6g} Hz"
+        )

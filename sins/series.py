@@ -364,6 +364,8 @@ class ReferencedRecording:
     sensor : the unit's identity where the recording gives one ("BROAD IMU B"), else ""
     reference_name : what the reference is, for reports
     source : where the data came from, for messages
+    heading_known : whether the reference's north is true north; where it is not (a motion capture's
+        room frame), only the vertical part of Earth's rate is known in its axes
     """
 
     imu: ImuIncrements
@@ -372,6 +374,7 @@ class ReferencedRecording:
     sensor: str = ""
     reference_name: str = "reference"
     source: str = ""
+    heading_known: bool = True
 
     @property
     def rate_hz(self) -> float:

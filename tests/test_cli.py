@@ -489,9 +489,9 @@ def test_the_dataset_option_names_every_dataset_the_library_reads() -> None:
     from sins.cli import build_parser
     from sins.io import datasets
 
-    for command in ("gap", "characterise"):
+    for command in ("gap", "characterise", "fit", "evaluate", "correct"):
         sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
         option = next(a for a in sub.choices[command]._actions if "--dataset" in a.option_strings)
         assert option.help is not None
-        named = option.help.split(": ", 1)[1].split(", ")
+        named = option.help.split(": ", 1)[1].split(" (")[0].split(", ")
         assert sorted(named) == sorted(datasets.NAMES), (command, named)

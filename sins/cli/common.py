@@ -132,7 +132,8 @@ def add_dataset(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--dataset", metavar="NAME",
         help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
-        "psins_vehicle, psins_lasergyro, broad_05, broad_18",
+        "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
+        "root's broad_mocap/)",
     )  # fmt: skip
 
 

@@ -4,65 +4,213 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from sins.cli.common import Subparsers, fraction, progress_bar, row_progress, settings
+from sins.cli.common import (
+    Subparsers,
+    add_dataset,
+    add_recording_options,
+    fixed_width,
+    fraction,
+    positive,
+    progress_bar,
+    recording_options,
+    row_progress,
+    settings,
+)
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    from sins.compensation import Strategy
+    from sins.series import CalibrationData, ReferencedRecording
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
-    from sins import compensation, io
-    from sins.compensation.residual import ResidualStrategy
+    from sins import compensation, io, referenced
+    from sins.series import CalibrationData, ReferencedRecording
 
-    data = io.read_recording(args.recording)
-    io.check_recording_range(args.recording, data)
+    _check_args(args)
+    where = args.dataset or str(args.recording)
+    inputs = referenced.read_inputs(
+        args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
+    )
+    if isinstance(inputs, ReferencedRecording):
+        strategy, document = _fit_referenced(args, inputs, where)
+    elif isinstance(inputs, CalibrationData):
+        strategy, document = _fit_rig(args, inputs, where)
+    else:
+        raise SinsInputError(
+            f"{where}: no reference to fit against; give the recording's trajectory with --truth TRUTH.csv "
+            "(or a rig recording with ref_ columns, or a bag or EuRoC folder with ground truth)"
+        )
+    compensation.save(strategy, args.out)
+    if args.json:
+        io.write_json(args.json, {"model": str(args.out), "recording": where, **document})
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    """Refuse what cannot work before reading anything."""
     if args.strategy == "oracle":
         raise SinsInputError(
             "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
         )
+    from sins import referenced
+    from sins.compensation import VARIANTS
+
+    if args.strategy not in VARIANTS and args.strategy != referenced.BIAS_ONLY:
+        known = ", ".join(n for n in VARIANTS if n != "oracle")
+        raise SinsInputError(
+            f"--strategy {args.strategy!r}: unknown (known: {known}, {referenced.BIAS_ONLY})"
+        )
     if args.no_guard and args.strategy not in ("mlp", "kohonen"):
         raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
+
+
+def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tuple[Strategy, dict[str, Any]]:
+    """A rig recording (per-sample reference inputs): the strategy's own fit on its rows."""
+    from sins import compensation
+    from sins.compensation import coefficients
+    from sins.compensation.residual import ResidualStrategy
+    from sins.imu import calibration
+
+    if args.strategy == "bias_only":
+        raise SinsInputError(
+            f"--strategy bias_only: fits a trajectory's reference; {where} is a rig recording"
+        )
     try:
-        params = {"guard": False} if args.no_guard else {}
-        strategy = compensation.make(args.strategy, **params)
-        part = data
-        if args.validation:
-            part, _ = data.split(args.validation)
+        strategy = compensation.make(args.strategy, **({"guard": False} if args.no_guard else {}))
+        part = data.split(args.validation)[0] if args.validation else data
         with progress_bar(f"fitting {args.strategy}", "training") as bar:
             if isinstance(strategy, ResidualStrategy) and bar is not None:
                 strategy.progress = row_progress(bar)
             strategy.fit(part)
     except ValueError as exc:
-        raise SinsInputError(f"{args.recording}: {exc}") from None
-    compensation.save(strategy, args.out)
+        raise SinsInputError(f"{where}: {exc}") from None
     held = f" (the last {args.validation:g} of each phase held back)" if args.validation else ""
-    print(f"fitted {args.strategy} on {len(part)} of {len(data)} rows of {args.recording}{held}")
+    print(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
+    document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}
     if isinstance(strategy, ResidualStrategy):
         print(
             f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks: "
             + "; ".join(f"{s} {settings(c)}" for s, c in strategy.configs_.items())
         )
         print(strategy.guard_report())
-    print(f"wrote {args.out}")
-    return 0
+    # The seed model's coefficients with their standard errors: the strategy's own for regression, the
+    # stage the learners start from for the others.
+    try:
+        seed = calibration.fit_seed_model(part)
+        with_k = True
+    except ValueError:
+        try:  # a session whose turns give only their angles (Ferraris) cannot tell K
+            seed, with_k = calibration.fit_seed_model(part, g_sensitivity=False), False
+        except ValueError:
+            return strategy, document
+    if strategy.name != "none":
+        table = coefficients.engineering(seed, g_sensitivity=with_k)
+        _print_coefficients(table, "least squares of the seed model on the rows (± 1σ)")
+        document["coefficients"] = [c.to_dict() for c in table]
+    return strategy, document
+
+
+def _fit_referenced(
+    args: argparse.Namespace, rec: ReferencedRecording, where: str
+) -> tuple[Strategy, dict[str, Any]]:
+    """A recording beside its reference trajectory: the seed model on intervals, then the strategy."""
+    import numpy as np
+
+    from sins import referenced
+    from sins.compensation import coefficients
+
+    part = rec
+    if args.validation:
+        span = rec.imu.t[-1] - rec.imu.t[0]
+        part = referenced.between(rec, rec.imu.t[0], rec.imu.t[-1] - args.validation * span)
+    params = {"guard": False} if args.no_guard else {}
+    with progress_bar(f"fitting {args.strategy}", "training") as bar:
+        fitted = referenced.fit(
+            args.strategy, part, interval_s=args.interval_s, params=params, progress=row_progress(bar)
+        )
+    fit = fitted.intervals
+    held = f", the last {args.validation:g} of its span held back" if args.validation else ""
+    print(
+        f"fitted {fitted.strategy.label} on {where} ({rec.sensor or 'unit'} against {rec.reference_name}"
+        f"{held}): {fit.intervals} intervals of {fit.interval_s:g} s"
+    )
+    print(f"reference: {fit.quality.summary()}")
+    table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    _print_coefficients(table, "the seed model on the intervals (± 1σ)")
+    if fit.g_sensitivity_test is not None:
+        kept, gain, se = fit.g_sensitivity_test
+        verdict = "kept" if kept else "left out (zero)"
+        print(f"g-sensitivity {verdict}: it predicts held-back intervals by {gain:.3g} ± {se:.3g} rad²")
+    document: dict[str, Any] = {
+        "strategy": fitted.strategy.label,
+        "intervals": fit.intervals,
+        "interval_s": fit.interval_s,
+        "coefficients": [c.to_dict() for c in table],
+        "reference_quality": fit.quality.__dict__,
+        "g_sensitivity": fit.g_sensitivity,
+    }
+    if args.strategy != referenced.BIAS_ONLY:
+        arm = np.asarray(fit.lever_arm_m) * 1e3
+        print(
+            f"time offsets (the readings lag the reference): gyro {fit.time_offset_s * 1e3:.3f} ± "
+            f"{fit.time_offset_se_s * 1e3:.3f} ms, accelerometer {fit.accel_time_offset_s * 1e3:.3f} ± "
+            f"{fit.accel_time_offset_se_s * 1e3:.3f} ms; accelerometer {arm[0]:.1f}, {arm[1]:.1f}, "
+            f"{arm[2]:.1f} mm from the reference's point"
+        )
+        document |= {
+            "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
+            "time_offset_se_ms": {
+                "gyro": fit.time_offset_se_s * 1e3,
+                "accel": fit.accel_time_offset_se_s * 1e3,
+            },
+            "lever_arm_mm": arm.tolist(),
+        }
+    return fitted.strategy, document
+
+
+def _print_coefficients(table: list[Any], title: str) -> None:
+    from sins.compensation import coefficients
+
+    print(title)
+    print(fixed_width(["sensor", "term", "axis", "value", "unit"], coefficients.table_rows(table)))
 
 
 def add(sub: Subparsers) -> None:
     """Add ``sins fit`` to ``sub``."""
-    p = sub.add_parser("fit", help="fit a compensation strategy on a rig recording")
-    p.add_argument("recording", type=Path, metavar="RECORDING.csv")
+    p = sub.add_parser(
+        "fit", help="fit a compensation strategy on a rig recording or a recording beside its reference"
+    )
+    p.add_argument("recording", nargs="?", metavar="RECORDING", help="a rig CSV, or a recording with --truth")
+    add_dataset(p)
+    p.add_argument(
+        "--truth", type=Path, metavar="TRUTH.csv",
+        help="the recording's reference trajectory (attitude and velocity): the fit is made on intervals",
+    )  # fmt: skip
     p.add_argument(
         "--strategy", required=True,
-        help="none, regression, regression_robust, regression_extended, mlp, kohonen "
-        "(or the seed paper's mlp_pure, mlp_seed, kohonen_pure)",
+        help="none, regression, regression_robust, regression_extended, regression_rest, mlp, kohonen, "
+        "bias_only (or the seed paper's mlp_pure, mlp_seed, kohonen_pure)",
     )  # fmt: skip
     p.add_argument(
         "--validation", type=fraction, metavar="FRACTION",
         help="hold back the last FRACTION of every phase (of the whole recording if it has no phases)",
     )  # fmt: skip
     p.add_argument(
+        "--interval-s", type=positive, default=1.0, metavar="S",
+        help="against a reference trajectory: the interval between the reference epochs compared (default 1)",
+    )  # fmt: skip
+    p.add_argument(
         "--no-guard", action="store_true",
         help="mlp, kohonen: use the learned correction on every channel, even where it does not beat "
         "regression on held-back blocks",
     )  # fmt: skip
+    p.add_argument(
+        "--json", type=Path, metavar="OUT.json", help="also write the coefficients and the fit's figures"
+    )
     p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
+    add_recording_options(p)
     p.set_defaults(func=_cmd_fit)

@@ -40,6 +40,8 @@ class Strategy(ABC):
     """A compensation strategy (see the module docstring)."""
 
     name: ClassVar[str] = ""
+    #: The variant it was made as (``regression_robust`` is a ``regression``; :func:`make` sets it).
+    variant: str = ""
     #: How late the gyro and the accelerometer read, s (see the module docstring); set by a fit against a
     #: real unit's reference, absent otherwise.
     time_offset_s_: Array
@@ -54,6 +56,11 @@ class Strategy(ABC):
     @abstractmethod
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Estimated true angular rate and specific force (n, 3) from readings (n, 3)."""
+
+    @property
+    def label(self) -> str:
+        """What to call it in reports: its variant's name, else its class's."""
+        return self.variant or self.name
 
     def predict_error(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """The error believed to be in each reading: ``readings - correct(readings)``."""
@@ -182,8 +189,11 @@ class Oracle(Strategy):
 
 
 def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[str, float]]:
-    """Per channel, the RMS of reading − reference before and after correction (SI units), and its mean
-    (``mean_before``, ``mean_after``: the bias left, which the RMS buries under the noise).
+    """Per channel, the RMS of reading − reference before and after correction (SI units), its mean
+    (``mean_before``, ``mean_after``: the bias left, which the RMS buries under the noise), and
+    ``beyond_noise``: the RMS after correction less the white noise's share, ``√max(rms² − σ², 0)``, with
+    ``σ`` the residual's sample-to-sample spread (``std(Δr)/√2``, which a bias or a slow error does not
+    raise): what the model leaves that is not noise.
 
     Rows without a finite reference are left out.
     """
@@ -197,12 +207,15 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
     rms = lambda x: np.sqrt(np.mean(x * x, axis=0))  # noqa: E731
     b, a = rms(before), rms(after)
     mb, ma = before.mean(axis=0), after.mean(axis=0)
+    noise = np.std(np.diff(after, axis=0), axis=0) / np.sqrt(2.0) if len(after) > 2 else np.zeros(6)
+    beyond = np.sqrt(np.maximum(a * a - noise * noise, 0.0))
     return {
         ch: {
             "rms_before": float(b[i]),
             "rms_after": float(a[i]),
             "mean_before": float(mb[i]),
             "mean_after": float(ma[i]),
+            "beyond_noise": float(beyond[i]),
         }
         for i, ch in enumerate(CHANNELS)
     }

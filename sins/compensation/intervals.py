@@ -8,11 +8,13 @@ between two reference epochs, what the corrected readings integrate to with what
 happened:
 
 * gyro: the rotation the corrected increments compose to, ``R_meas = Π exp(dθ_j)``, against the
-  reference's ``R_ref = C_a^T C_b``; the residual ``log(R_meas^T R_ref)`` (a rotation vector in the
-  interval's end axes) is linear, to first order, in a change of the coefficients: a change ``δ_j`` of
-  step ``j``'s increment turns it by ``Q_b^T Q_j δ_j`` (``Q`` the attitude the corrected increments
-  integrate to). Gauss–Newton iterates to the least squares; the composition is exact, so fast turning
-  within an interval (the coning a sum of rates would miss) costs nothing.
+  reference's ``R_ref = C_a^T Φ C_b`` (``Φ`` the navigation frame's own turn in inertial space over the
+  interval: Earth's rate, and the transport rate of a moving reference); the residual
+  ``log(R_meas^T R_ref)`` (a rotation vector in the interval's end axes) is linear, to first order, in
+  a change of the coefficients: a change ``δ_j`` of step ``j``'s increment turns it by
+  ``Q_b^T Q_j δ_j`` (``Q`` the attitude the corrected increments integrate to). Gauss–Newton iterates
+  to the least squares; the composition is exact, so fast turning within an interval (the coning a sum
+  of rates would miss) costs nothing.
 * accelerometer: the velocity change the corrected increments make, turned into NED by the reference's
   attitude at the interval's start carried through the interval by the gyro, with normal gravity and the
   Coriolis and transport terms, against the reference's velocity change: linear in the coefficients.
@@ -42,9 +44,11 @@ from sins.series import CalibrationData, ImuIncrements, ReferencedRecording
 Array = NDArray[np.float64]
 Index = NDArray[np.intp]
 
-#: Default interval between reference epochs, s: long beside a motion capture's frame (1/120 s) and the
-#: smoothing of a navigation solution's output, short beside a MEMS bias's wander.
-INTERVAL_S = 0.2
+#: Default interval between reference epochs, s: long beside a motion capture's frame (1/120 s) and a
+#: navigation solution's output step, so that the reference's noise at the two ends weighs little
+#: against the turn and the velocity change between them (what a scale factor is read from grows with
+#: the interval, that noise does not); short beside a MEMS bias's wander and a reference's gaps.
+INTERVAL_S = 1.0
 #: Gauss–Newton stops when no coefficient moves by more than this many of its standard errors.
 _CONVERGED_SE = 1e-3
 _MAX_ITERATIONS = 8
@@ -69,9 +73,18 @@ class Intervals:
     v_stop: Array
     lat: Array
     h: Array
+    frame_turn: Array  # (k, 3, 3): the navigation frame's turn in inertial space over each interval
 
     def __len__(self) -> int:
         return len(self.start)
+
+    def body_turn(self) -> Array:
+        """The body's turn in inertial space over each interval by the reference, ``C_a^T Φ C_b`` (k, 3, 3),
+        ``Φ`` the navigation frame's own turn (Earth's rate, and the transport rate of a moving
+        reference): what the gyro's increments compose to."""
+        return np.asarray(
+            np.einsum("kji,kjl,klm->kim", _dcm(self.q_start), self.frame_turn, _dcm(self.q_stop))
+        )
 
 
 @dataclass(frozen=True)
@@ -222,10 +235,19 @@ def choose_intervals(rec: ReferencedRecording, interval_s: float = INTERVAL_S) -
         )
     a, z = np.array([e[0] for e in ends]), np.array([e[1] for e in ends])
     i, j = first[a], first[z]
+    lat, h = 0.5 * (states.lat[i] + states.lat[j]), 0.5 * (states.h[i] + states.h[j])
+    v = 0.5 * (states.v_n[i] + states.v_n[j])
+    w_in = np.stack(np.broadcast_arrays(*earth.earth_rate_n(lat)), axis=1)
+    if rec.heading_known:
+        w_in = w_in + np.stack(earth.transport_rate_n(lat, h, v[:, 0], v[:, 1]), axis=1)
+    else:  # a room frame of unknown heading: only Earth's rate about the vertical is known in its axes
+        w_in[:, :2] = 0.0
+    span = t[boundary[z]] - t[boundary[a]]
+    turn = rotation.dcm_from_quat(rotation.quat_from_rotvec(w_in * span[:, None]))
     return Intervals(
         start=boundary[a], stop=boundary[z],
         q_start=states.q_nb[i], q_stop=states.q_nb[j], v_start=states.v_n[i], v_stop=states.v_n[j],
-        lat=0.5 * (states.lat[i] + states.lat[j]), h=0.5 * (states.h[i] + states.h[j]),
+        lat=lat, h=h, frame_turn=np.asarray(turn, dtype=float),
     )  # fmt: skip
 
 
@@ -342,8 +364,7 @@ def _fit_gyro(
     """Gauss–Newton on the gyro's coefficients (B0, B, K if asked, τ if asked). Returns the fit, τ and
     its standard error, the residuals, the weights, the iterations, and the last linearisation as
     pseudo-observations ``z ≈ x θ`` (``x`` (k, 3, p), ``z`` (k, 3)) for :func:`_keeps_k`."""
-    c_a, c_b = _dcm(iv.q_start), _dcm(iv.q_stop)
-    r_ref = np.einsum("kji,kjl->kil", c_a, c_b)  # C_a^T C_b: the body's turn over the interval
+    r_ref = iv.body_turn()
     weights: Array | None = None
     cov = np.zeros((0, 0))
     iteration = 0
@@ -602,9 +623,9 @@ def interval_reference(
     corrected = fit.corrected(imu)
     q = attitude.propagate_increments(corrected.dtheta_b, np.array([0.0, 0.0, 0.0, 1.0]))
     rot = _dcm(q)
-    c_a, c_b = _dcm(iv.q_start), _dcm(iv.q_stop)
+    c_a = _dcm(iv.q_start)
     r_meas = np.einsum("kji,kjl->kil", rot[iv.start], rot[iv.stop])
-    r_ref = np.einsum("kji,kjl->kil", c_a, c_b)
+    r_ref = iv.body_turn()
     y_gyro = rotation.rotvec_from_quat(rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, r_ref)))
     ref_gyro = np.full((len(dt), 3), np.nan)
     ref_accel = np.full((len(dt), 3), np.nan)
@@ -648,8 +669,8 @@ def fit_biases(rec: ReferencedRecording, *, interval_s: float = INTERVAL_S) -> I
         B0=np.zeros(3), B=zeros, K=zeros, A0=np.zeros(3), A=zeros,
         B0_se=nan3, B_se=nan33, K_se=nan33, A0_se=nan3, A_se=nan33, residual_rms=np.full(6, np.nan),
     )  # fmt: skip
-    c_ref_a, c_ref_b = _dcm(iv.q_start), _dcm(iv.q_stop)
-    r_ref = np.einsum("kji,kjl->kil", c_ref_a, c_ref_b)
+    c_ref_a = _dcm(iv.q_start)
+    r_ref = iv.body_turn()
     expected = _expected_dv(iv, dt)
     for _ in range(3):  # the gyro's bias moves the attitude the accelerometer is turned by
         corrected = correct_increments(imu, seed)

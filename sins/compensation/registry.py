@@ -82,7 +82,9 @@ def make(name: str, **params: Any) -> Strategy:
     if name not in VARIANTS:
         raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
     cls_name, defaults = VARIANTS[name]
-    return strategy_class(cls_name)(**{**defaults, **params})
+    strategy = strategy_class(cls_name)(**{**defaults, **params})
+    strategy.variant = name
+    return strategy
 
 
 # --------------------------------------------------------------------------- model files
@@ -95,6 +97,7 @@ def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
         "version": FORMAT_VERSION,
         "sins": __version__,
         "strategy": strategy.name,
+        "variant": strategy.label,
         "params": strategy.params(),
         "state": strategy.get_state(),
     }
@@ -130,6 +133,8 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     try:
         strategy = strategy_class(name)(**params)
         strategy.set_state(state)
+        variant = doc.get("variant", name)
+        strategy.variant = variant if isinstance(variant, str) and variant in VARIANTS else name
         # A probe: a state of the wrong shape or kind fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))

@@ -20,11 +20,24 @@ Array = NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True)
-def _propagate(dtheta: Array, q0: Array, out: Array) -> None:
-    """``out[k] = out[k-1] ⊗ exp(dtheta[k-1])``: each step's rotation vector applied in body axes."""
+def _propagate(dtheta: Array, q0: Array, frame: Array, out: Array) -> None:
+    """``out[k] = exp(-frame[k-1]) ⊗ out[k-1] ⊗ exp(dtheta[k-1])``: each step's rotation vector applied in
+    body axes, and the navigation frame's own turn (``frame``, rotation vectors in its axes) taken out."""
     x, y, z, w = q0[0], q0[1], q0[2], q0[3]
     out[0, 0], out[0, 1], out[0, 2], out[0, 3] = x, y, z, w
     for k in range(1, out.shape[0]):
+        fx, fy, fz = -frame[k - 1, 0], -frame[k - 1, 1], -frame[k - 1, 2]
+        fa = np.sqrt(fx * fx + fy * fy + fz * fz)
+        if fa > 0.0:
+            fs = np.sin(0.5 * fa) / fa
+            ex, ey, ez, ew = fs * fx, fs * fy, fs * fz, np.cos(0.5 * fa)
+            # q ← e ⊗ q
+            x, y, z, w = (
+                ew * x + ex * w + ey * z - ez * y,
+                ew * y - ex * z + ey * w + ez * x,
+                ew * z + ex * y - ey * x + ez * w,
+                ew * w - ex * x - ey * y - ez * z,
+            )
         rx, ry, rz = dtheta[k - 1, 0], dtheta[k - 1, 1], dtheta[k - 1, 2]
         angle = np.sqrt(rx * rx + ry * ry + rz * rz)
         # sin(a/2)/a by its series where a is small: full precision at rest.
@@ -66,25 +79,31 @@ def propagate(t: Array, omega_nb_b: Array, q0_nb: Array) -> Array:
     return propagate_increments(dtheta, q0_nb)
 
 
-def propagate_increments(dtheta_nb_b: Array, q0_nb: Array) -> Array:
+def propagate_increments(dtheta_b: Array, q0_nb: Array, frame_turn_n: Array | None = None) -> Array:
     """The attitude ``q_nb`` after each of ``n`` steps of body rotation, open loop.
 
     Each step is the rotation by its rotation vector in body axes, ``q ← q ⊗ exp(dθ)``: exact for a
     rate of fixed direction over the step (the coning within a step is the increments' business).
+    With ``frame_turn_n``, the increments are the body's turn in inertial space (a gyro's) and the
+    navigation frame turns too (Earth's rate, ``ω_in`` times the step): ``q ← exp(−φ) ⊗ q ⊗ exp(dθ)``.
 
     Parameters
     ----------
-    dtheta_nb_b : (n, 3) rad, each step's rotation of the body relative to the navigation frame
+    dtheta_b : (n, 3) rad, each step's rotation of the body (relative to the navigation frame, or to
+        inertial space with ``frame_turn_n``)
     q0_nb : (4,) the attitude before the first step, scalar-last
+    frame_turn_n : (n, 3) or (3,) rad, the navigation frame's turn over each step in its own axes, or None
 
     Returns
     -------
     (n + 1, 4) unit quaternions ``q_nb``, scalar-last; row 0 is ``q0_nb`` normalised.
     """
-    dtheta = np.ascontiguousarray(dtheta_nb_b, dtype=float).reshape(-1, 3)
+    dtheta = np.ascontiguousarray(dtheta_b, dtype=float).reshape(-1, 3)
+    frame = np.zeros((len(dtheta), 3)) if frame_turn_n is None else np.asarray(frame_turn_n, dtype=float)
+    frame = np.ascontiguousarray(np.broadcast_to(frame, (len(dtheta), 3)))
     q0 = np.asarray(q0_nb, dtype=float)
     out = np.empty((len(dtheta) + 1, 4))
-    _propagate(dtheta, q0 / np.linalg.norm(q0), out)
+    _propagate(dtheta, q0 / np.linalg.norm(q0), frame, out)
     return out
 
 

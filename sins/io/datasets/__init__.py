@@ -25,7 +25,7 @@ from sins.io.datasets.ferraris import (
 from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
 from sins.io.datasets.psins_vehicle import read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
-from sins.series import CalibrationData, NavSeries
+from sins.series import CalibrationData, NavSeries, ReferencedRecording
 
 #: Dataset names for :func:`load`, and what each is.
 NAMES = {
@@ -35,6 +35,46 @@ NAMES = {
     "psins_lasergyro": "PSINS static ring-laser INS against Earth rate and gravity",
     **{f"broad_{s[:2]}": f"BROAD trial {s}: a MEMS IMU against optical motion capture" for s in BROAD_TRIALS},
 }
+
+
+#: The datasets whose reference is a trajectory (attitude and velocity at its own epochs) rather than
+#: per-sample inputs: :func:`load_reference` gives them; a BROAD trial's name is any ``broad_NN``.
+TRAJECTORY_REFERENCES = ("psins_vehicle", "broad_NN")
+
+
+def names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
+    """:data:`NAMES`, with every BROAD trial in the data root's ``broad_mocap/`` (a user who has more of
+    BROAD's 39 trials puts them there; each ``NN_*.mat`` is ``broad_NN``)."""
+    from sins.io.datasets.broad import trials
+
+    found = {
+        f"broad_{n}": f"BROAD trial {stem}: a MEMS IMU against optical motion capture"
+        for n, stem in trials(root).items()
+    }
+    return {**{k: v for k, v in NAMES.items() if not k.startswith("broad_")}, **found}
+
+
+def load_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording | None:
+    """A dataset by name as readings beside its reference trajectory, or None where its reference is not a
+    trajectory (``ferraris``: static holds and turns of known angle; ``psins_lasergyro``: a still unit).
+
+    Raises
+    ------
+    SinsInputError
+        for an unknown name (listing the known ones), or as the readers do.
+    """
+    known = names(root)
+    if name not in known:
+        raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(known)})")
+    if name == "psins_vehicle":
+        from sins.io.datasets.psins_reference import read_psins_vehicle_reference
+
+        return read_psins_vehicle_reference(root)
+    if name.startswith("broad_"):
+        from sins.io.datasets.broad_reference import read_broad_reference
+
+        return read_broad_reference(name.removeprefix("broad_"), root)
+    return None
 
 
 def load(name: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
@@ -69,9 +109,9 @@ def _load(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
         return read_ferraris_annotated(root)
     if name == "psins_lasergyro":
         return read_psins_lasergyro(root)
-    if name.startswith("broad_") and name in NAMES:
+    if name.startswith("broad_") and name in names(root):
         return read_broad(name.removeprefix("broad_"), root)
-    raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(NAMES)})")
+    raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(names(root))})")
 
 
 __all__ = [
@@ -81,9 +121,12 @@ __all__ = [
     "FERRARIS_RATE_HZ",
     "FERRARIS_SECTIONS",
     "NAMES",
+    "TRAJECTORY_REFERENCES",
     "data_root",
     "load",
+    "load_reference",
     "load_with_truth",
+    "names",
     "read_broad",
     "read_ferraris",
     "read_ferraris_annotated",

@@ -220,7 +220,9 @@ def trials(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     folder = data_root(root) / BROAD_FOLDER
     found = {s[:2]: s for s in BROAD_TRIALS}
     if folder.is_dir():
-        found = {p.stem[:2]: p.stem for p in folder.glob("*.mat") if re.fullmatch(r"\d\d_.+", p.stem)} or found
+        found = {
+            p.stem[:2]: p.stem for p in folder.glob("*.mat") if re.fullmatch(r"\d\d_.+", p.stem)
+        } or found
     return dict(sorted(found.items()))
 
 

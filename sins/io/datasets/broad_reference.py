@@ -102,6 +102,7 @@ def read_broad_reference(trial: str, root: str | os.PathLike[str] | None = None)
         sensor=sensor_of(stem),
         reference_name="optical motion capture (OptiTrack, 8 cameras)",
         source=str(path),
+        heading_known=False,
     )
 
 

@@ -1,0 +1,257 @@
+"""Compensation fitted against a reference trajectory on intervals (sins.compensation.intervals,
+sins.referenced, ``sins fit/evaluate/correct`` with a reference), judged on data sins did not make: a
+unit of known errors written with numpy whose reference is ten times noisier than the sensor
+(tests/numpy_referenced.py), BROAD's motion capture and the PSINS drive (skipped without the data)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy_referenced import GRAVITY, HEIGHT_M, LAT_DEG, session, typical_unit
+from scipy.spatial.transform import Rotation
+
+from sins import compensation, referenced
+from sins.cli import main
+from sins.compensation import coefficients, intervals
+from sins.imu.calibration import SeedModelFit
+from sins.io.datasets.root import data_root
+from sins.nav import earth
+from sins.series import ImuRates, NavSeries
+
+DATA = data_root()
+BROAD = DATA / "broad_mocap" / "05_undisturbed_slow_rotation_with_breaks_B.mat"
+BROAD_18 = DATA / "broad_mocap" / "18_undisturbed_fast_translation_with_breaks_B.mat"
+PSINS = DATA / "psins_fog_mems_vehicle" / "transfer_align_fog_mems.mat"
+needs_broad = pytest.mark.skipif(
+    not (BROAD.exists() and BROAD_18.exists()), reason=f"BROAD trials not in {DATA}"
+)
+needs_psins = pytest.mark.skipif(not PSINS.exists(), reason=f"the PSINS drive is not in {DATA}")
+
+
+def _recording(seed: int, **kwargs: float) -> tuple[referenced.ReferencedRecording, object]:
+    rng = np.random.default_rng(seed)
+    unit = typical_unit(rng)
+    s = session(rng, unit, **kwargs)
+    lat = np.full(len(s.t_ref), math.radians(LAT_DEG))
+    truth = NavSeries(
+        t=s.t_ref,
+        lat=lat,
+        lon=np.zeros(len(s.t_ref)),
+        h=np.full(len(s.t_ref), HEIGHT_M),
+        v_n=s.v_n,
+        q_nb=s.q_nb,
+    )
+    rec = referenced.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, "numpy unit")
+    return rec, unit
+
+
+def test_the_generator_agrees_with_the_physics_sins_assumes() -> None:
+    """The test's gravity constant is WGS84's normal gravity at its latitude (1e-8 m/s²): otherwise the
+    accelerometer's bias would absorb the difference."""
+    assert float(earth.normal_gravity(math.radians(LAT_DEG), HEIGHT_M)) == pytest.approx(GRAVITY, abs=1e-8)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_known_unit_is_recovered_within_its_standard_errors_with_a_reference_ten_times_noisier(
+    seed: int,
+) -> None:
+    """Reference noise ten times the sensor's over an interval: every coefficient (biases, scale and
+    misalignment, both time offsets) within 4 standard errors of the truth, and the standard errors
+    honest: the RMS of the z-scores between 0.4 and 2 (a z-score RMS far below 1 would mean the stated
+    errors are inflated, far above that they are too small; 3 × 27 coefficients scatter by ~0.14)."""
+    rec, unit = _recording(seed)
+    fit = intervals.fit_intervals(rec, g_sensitivity=False)
+    s = fit.seed
+    truth = np.concatenate(
+        [unit.B0, unit.B.ravel(), unit.A0, unit.A.ravel(), [unit.gyro_delay_s, unit.accel_delay_s]]
+    )
+    est = np.concatenate([s.B0, s.B.ravel(), s.A0, s.A.ravel(), [fit.time_offset_s, fit.accel_time_offset_s]])
+    se = np.concatenate(
+        [s.B0_se, s.B_se.ravel(), s.A0_se, s.A_se.ravel(), [fit.time_offset_se_s, fit.accel_time_offset_se_s]]
+    )
+    z = (est - truth) / se
+    assert np.all(np.abs(z) < 4.0), z.round(2)
+    assert 0.4 < float(np.sqrt(np.mean(z * z))) < 2.0, z.round(2)
+    # The errors are worth having: scale factors to better than 500 ppm, biases to 30 °/h and 2 mg.
+    assert np.all(s.B_se < 5e-4) and np.all(np.degrees(s.B0_se) * 3600 < 30) and np.all(s.A0_se < 2e-2)
+
+
+def test_fast_turning_within_an_interval_costs_nothing() -> None:
+    """Intervals of 5 s over rates of up to 60 °/s (turns of 100° and more that do not commute): the
+    composed rotation keeps the scale factors within their standard errors, where summing the rates
+    would not."""
+    rec, unit = _recording(4)
+    fit = intervals.fit_intervals(rec, interval_s=5.0, g_sensitivity=False)
+    z = (fit.seed.B - unit.B) / fit.seed.B_se
+    assert np.all(np.abs(z) < 4.0), z.round(2)
+
+
+def test_the_learners_see_what_the_seed_model_leaves() -> None:
+    """The per-sample references reproduce the seed model: regression fitted on them lands on the
+    interval fit's coefficients within its standard errors."""
+    rec, _ = _recording(5)
+    fit = intervals.fit_intervals(rec, g_sensitivity=False)
+    data = intervals.interval_reference(rec, fit)
+    again = compensation.make("regression", g_sensitivity=False).fit(data)
+    assert np.all(np.abs(again.B_ - fit.seed.B) < 2.0 * fit.seed.B_se)
+    assert np.all(np.abs(again.B0_ - fit.seed.B0) < 2.0 * fit.seed.B0_se)
+
+
+def test_the_coefficients_in_an_engineers_units() -> None:
+    zeros, nan = np.zeros((3, 3)), np.full((3, 3), np.nan)
+    seed = SeedModelFit(
+        B0=np.radians(np.array([1.0, 0.0, 0.0])) / 3600.0,
+        B=np.array([[1e-6, 0.0, 0.0], [1e-3, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        K=zeros + np.radians(1.0 / 3600.0) / 9.80665, A0=np.array([9.80665e-6, 0.0, 0.0]), A=zeros,
+        B0_se=np.full(3, np.nan), B_se=nan, K_se=nan, A0_se=np.zeros(3), A_se=zeros, residual_rms=np.zeros(6),
+    )  # fmt: skip
+    table = {(c.sensor, c.term, c.axis): c for c in coefficients.engineering(seed)}
+    assert table["gyro", "bias", "x"].value == pytest.approx(1.0) and table["gyro", "bias", "x"].unit == "°/h"
+    assert (
+        table["gyro", "scale", "x"].value == pytest.approx(1.0) and table["gyro", "scale", "x"].unit == "ppm"
+    )
+    assert table["gyro", "misalignment", "y←x"].value == pytest.approx(1.0)
+    assert table["gyro", "g_sensitivity", "z←y"].value == pytest.approx(1.0)
+    assert (
+        table["accel", "bias", "x"].value == pytest.approx(1.0) and table["accel", "bias", "x"].unit == "µg"
+    )
+    assert table["gyro", "bias", "x"].to_dict()["se"] is None
+
+
+def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Path) -> None:
+    """The CLI as a user runs it: a rate CSV and a truth CSV written with numpy; the model file keeps the
+    time offsets; evaluate reports the open-loop attitude; correct writes readings that equal the
+    strategy's own correction of them."""
+    rng = np.random.default_rng(7)
+    s = session(rng, typical_unit(rng), duration_s=120.0)
+    imu = tmp_path / "imu.csv"
+    truth = tmp_path / "truth.csv"
+    rows = np.column_stack([s.t, s.gyro, s.accel])
+    np.savetxt(imu, rows, delimiter=",", header="t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="")
+    ypr = Rotation.from_quat(s.q_nb).as_euler("ZYX", degrees=True)
+    m = len(s.t_ref)
+    t_rows = np.column_stack(
+        [
+            s.t_ref,
+            np.full(m, LAT_DEG),
+            np.zeros(m),
+            np.full(m, HEIGHT_M),
+            s.v_n,
+            ypr[:, 2],
+            ypr[:, 1],
+            ypr[:, 0],
+        ]
+    )
+    np.savetxt(truth, t_rows, delimiter=",", header="t,lat,lon,alt,vn,ve,vd,roll,pitch,yaw", comments="")
+    model, report = tmp_path / "m.json", tmp_path / "e.json"
+    assert (
+        main(["fit", str(imu), "--truth", str(truth), "--strategy", "regression", "--out", str(model)]) == 0
+    )
+    saved = json.loads(model.read_text())
+    assert saved["variant"] == "regression" and len(saved["state"]["time_offset_s_"]) == 2
+    assert main(["evaluate", str(model), str(imu), "--truth", str(truth), "--json", str(report)]) == 0
+    doc = json.loads(report.read_text())
+    # Two minutes of a 0.1 °/s-bias unit turning back and forth: the raw gyro drifts ~2°; the fit's own
+    # bias error (its standard error here, ~15 °/h, is the reference's noise) leaves a few tenths.
+    assert doc["open_loop_attitude"]["total_deg"] < 0.5 * doc["open_loop_attitude_raw"]["total_deg"]
+    out = tmp_path / "corrected.csv"
+    assert main(["correct", str(model), str(imu), "--out", str(out)]) == 0
+    lines = [line for line in out.read_text().splitlines() if not line.startswith("#")]
+    assert lines[0] == "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    back = np.loadtxt(lines[1:], delimiter=",")
+    strategy = compensation.load(model)
+    expected = strategy.correct_rates(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel))
+    assert np.array_equal(back[:, 0], s.t)
+    np.testing.assert_allclose(back[:, 1:4], expected.omega_ib_b, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(back[:, 4:7], expected.f_ib_b, rtol=0, atol=1e-15)
+
+
+def test_refusals_in_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rng = np.random.default_rng(8)
+    s = session(rng, typical_unit(rng), duration_s=60.0)
+    imu = tmp_path / "imu.csv"
+    np.savetxt(imu, np.column_stack([s.t, s.gyro, s.accel]), delimiter=",",
+               header="t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="")  # fmt: skip
+    late = tmp_path / "late.csv"
+    rows = [[1000.0, 45, 0, 0, 0, 0, 0, 0, 0, 0], [1001.0, 45, 0, 0, 0, 0, 0, 0, 0, 0]]
+    np.savetxt(late, rows, delimiter=",", header="t,lat,lon,alt,vn,ve,vd,roll,pitch,yaw", comments="")
+    cases = [
+        (
+            ["fit", "--dataset", "nowhere", "--strategy", "regression", "--out", "m.json"],
+            "no dataset 'nowhere'",
+        ),
+        (["fit", str(imu), "--strategy", "regression", "--out", "m.json"], "no reference to fit against"),
+        (
+            ["fit", str(imu), "--truth", str(late), "--strategy", "regression", "--out", "m.json"],
+            "does not overlap",
+        ),
+        (["fit", str(imu), "--strategy", "nonsense", "--out", "m.json"], "unknown"),
+    ]
+    for argv, text in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert text in err and err.count("\n") == 1, err
+
+
+@needs_broad
+def test_broad_fitted_on_one_trial_and_judged_on_the_other(tmp_path: Path) -> None:
+    """BROAD's unit B, both ways: the report carries BROAD's three figures; ``none`` (the raw gyro)
+    reproduces an independent scipy integration within 5 % (Earth's vertical rate, which sins takes out,
+    is 0.3° of 30°); the fitted model removes most of the raw drift (the bar: a fifth); and the gyro's
+    time offset, a property of the unit, agrees between the trials within three standard errors."""
+    import scipy.io
+
+    offsets = {}
+    for fit_on, judge in (("05", "18"), ("18", "05")):
+        model, out = tmp_path / f"m{fit_on}.json", tmp_path / f"e{judge}.json"
+        assert main(["fit", "--dataset", f"broad_{fit_on}", "--strategy", "regression", "--out", str(model),
+                     "--json", str(tmp_path / f"f{fit_on}.json")]) == 0  # fmt: skip
+        assert main(["evaluate", str(model), "--dataset", f"broad_{judge}", "--json", str(out)]) == 0
+        doc = json.loads(out.read_text())
+        att = doc["open_loop_attitude"]
+        assert set(att) >= {"total_deg", "heading_deg", "inclination_deg"}
+        raw = doc["open_loop_attitude_raw"]["total_deg"]
+        assert att["total_deg"] < 0.2 * raw
+        mat = scipy.io.loadmat(BROAD if judge == "05" else BROAD_18, squeeze_me=True)
+        assert raw == pytest.approx(_independent_raw(mat), rel=0.05)
+        fitted = json.loads((tmp_path / f"f{fit_on}.json").read_text())
+        offsets[fit_on] = (fitted["time_offset_ms"]["gyro"], fitted["time_offset_se_ms"]["gyro"])
+    (a, sa), (b, sb) = offsets["05"], offsets["18"]
+    assert abs(a - b) < 3.0 * math.hypot(sa, sb), offsets
+
+
+def _independent_raw(mat: dict[str, np.ndarray]) -> float:
+    """BROAD's total RMSE of the raw gyro integrated from the first valid optical orientation, with scipy
+    (rectangle rule: each sample turns the step before it), over the movement rows."""
+    gyr, q, moving = mat["imu_gyr"], mat["opt_quat"], mat["movement"].astype(bool)
+    ok = np.isfinite(q).all(axis=1)
+    first = int(np.argmax(ok))
+    steps = Rotation.from_rotvec(gyr[first + 1 :] / float(mat["sampling_rate"]))
+    att = [Rotation.from_quat(q[first][[1, 2, 3, 0]])]
+    for r in steps:
+        att.append(att[-1] * r)
+    est = Rotation.concatenate(att)
+    rows = np.arange(first, len(q))
+    judged = ok[rows] & moving[rows]
+    err = (est[judged] * Rotation.from_quat(q[rows][judged][:, [1, 2, 3, 0]]).inv()).magnitude()
+    return float(np.degrees(np.sqrt(np.mean(err * err))))
+
+
+@needs_psins
+def test_psins_drive_fitted_on_70_s_and_judged_on_the_last_30() -> None:
+    """The PSINS drive: the gyro biases fitted on the first 70 s against the FOG-INS agree with the file's
+    own ``eb0`` (the demo's reference value, not used by the fit) within 0.005 °/s; the corrected MEMS
+    navigating free from the FOG-INS state over the last 30 s ends nearer than the raw one by ten times."""
+    from sins.io.datasets.psins_reference import psins_file_biases, read_psins_vehicle_reference
+
+    rec = read_psins_vehicle_reference()
+    fitted = referenced.fit("regression", referenced.between(rec, rec.imu.t[0], 70.0))
+    eb0, _ = psins_file_biases()
+    assert np.all(np.abs(np.degrees(fitted.intervals.seed.B0 - eb0)) < 0.005)
+    raw = referenced.drive_errors(None, rec, 70.0, 100.0)
+    fixed = referenced.drive_errors(fitted.strategy, rec, 70.0, 100.0)
+    assert fixed.horizontal_final_m < 0.1 * raw.horizontal_final_m
