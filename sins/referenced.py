@@ -89,7 +89,8 @@ def fit(
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
-        raise SinsInputError(f"{where}: {exc}") from None
+        text = str(exc)
+        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
     strategy.time_offset_s_ = np.array([fitted.time_offset_s, fitted.accel_time_offset_s])
     strategy.fitted_on_ = fitted_on(rec)
     return Fitted(strategy, fitted)
@@ -161,22 +162,56 @@ def opening_rest(rec: ReferencedRecording) -> slice:
     return slice(start, stop)
 
 
-def open_loop_attitude(
+@dataclass(frozen=True)
+class OpenLoop:
+    """The open-loop attitude's errors at the reference's epochs on the readings' grid: ``t`` (m,) s,
+    ``total``, ``heading``, ``inclination`` (m,) rad, ``judged`` (m,) the rows the figures count."""
+
+    t: Array
+    total: Array
+    heading: Array
+    inclination: Array
+    judged: NDArray[np.bool_]
+
+    def rmse(self) -> AttitudeRmse:
+        """BROAD's three RMS figures over the judged rows, degrees."""
+        rms = lambda e: float(np.degrees(np.sqrt(np.mean(e[self.judged] ** 2))))  # noqa: E731
+        return AttitudeRmse(rms(self.total), rms(self.heading), rms(self.inclination), int(self.judged.sum()))
+
+
+def open_loop(
     strategy: Strategy | None, rec: ReferencedRecording, *, bias_from_rest: bool = False
-) -> AttitudeRmse:
-    """The corrected gyro integrated alone from the reference's first attitude, scored against the
-    reference on the judged rows (BROAD's total, heading and inclination RMSE). The gyro's increments
-    are turns in inertial space; the navigation frame's own turn (Earth's rate: its vertical part only
-    where the reference's heading is not north) is taken out (:func:`frame_turn`)."""
+) -> OpenLoop:
+    """The corrected gyro integrated alone from the reference's first attitude, and its errors against
+    the reference. The gyro's increments are turns in inertial space; the navigation frame's own turn
+    (Earth's rate: its vertical part only where the reference's heading is not north) is taken out
+    (:func:`frame_turn`).
+
+    Raises
+    ------
+    SinsInputError
+        when no judged row has a reference on the readings' grid.
+    """
     imu = corrected(strategy, rec, bias_from_rest=bias_from_rest)
     ref = rec.reference
     first = int(np.searchsorted(imu.t, ref.t[0]))
     q = attitude.propagate_increments(imu.dtheta_b[first:], ref.q_nb[0], frame_turn(rec)[first:])
     at = np.searchsorted(imu.t, ref.t)
     on_grid = np.abs(imu.t[np.minimum(at, len(imu.t) - 1)] - ref.t) <= 1e-9 * np.maximum(1.0, np.abs(ref.t))
-    estimate = q[at[on_grid] - first]
+    total, heading, inclination = attitude.attitude_errors(q[at[on_grid] - first], ref.q_nb[on_grid])
     judged = np.ones(int(on_grid.sum()), dtype=bool) if rec.judged is None else rec.judged[at[on_grid]]
-    return attitude.attitude_rmse(estimate, ref.q_nb[on_grid], judged)
+    if not judged.any():
+        raise SinsInputError(
+            f"{rec.source or 'recording'}: no judged row has a reference on the readings' times"
+        )
+    return OpenLoop(ref.t[on_grid], total, heading, inclination, np.asarray(judged, dtype=bool))
+
+
+def open_loop_attitude(
+    strategy: Strategy | None, rec: ReferencedRecording, *, bias_from_rest: bool = False
+) -> AttitudeRmse:
+    """:func:`open_loop`'s figures: BROAD's total, heading and inclination RMSE over the judged rows."""
+    return open_loop(strategy, rec, bias_from_rest=bias_from_rest).rmse()
 
 
 def frame_turn(rec: ReferencedRecording) -> Array:

@@ -46,6 +46,7 @@ from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
 from sins.nav import earth
 from sins.pipeline import AidedRun, ScenarioRun, StrategyRun
+from sins.referenced import OpenLoop
 from sins.series import NavSeries
 
 APPLICATION_ID = "sins"
@@ -488,6 +489,36 @@ def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
         )
     )
     return _write(path, rec, bp, lambda: log_gap(rec, report))
+
+
+def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, summary: str = "") -> Path:
+    """Open-loop attitude errors (:func:`sins.referenced.open_loop`) of several corrections in a ``.rrd``
+    file: per correction, its total, heading and inclination error over time, degrees (NaN outside the
+    judged rows, so that the rests the benchmark does not count show as gaps)."""
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id="open_loop")
+    axis = _whole_run()
+    parts = ("total", "heading", "inclination")
+    views = [
+        rrb.TimeSeriesView(origin=f"open_loop/{part}", name=f"{part} error, °", axis_x=axis) for part in parts
+    ]
+    bp = rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(*views),
+            rrb.TextDocumentView(origin="open_loop/report", name="report"),
+            column_shares=[3, 1],
+        )
+    )
+
+    def log() -> None:
+        rec.log("open_loop/report", rr.TextDocument(summary), static=True)
+        for label, run in runs.items():
+            for part in parts:
+                values = np.degrees(np.where(run.judged, getattr(run, part), np.nan))
+                entity = _join("open_loop", part, _slug(label))
+                rec.log(entity, rr.SeriesLines(colors=[colour(label)], names=[label]), static=True)
+                rec.send_columns(entity, indexes=_time(run.t), columns=rr.Scalars.columns(scalars=values))
+
+    return _write(path, rec, bp, log)
 
 
 #: The percentiles of a campaign's horizontal error drawn over time, per strategy (a band and its median).

@@ -153,8 +153,25 @@ def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Pat
     )
     saved = json.loads(model.read_text())
     assert saved["variant"] == "regression" and len(saved["state"]["time_offset_s_"]) == 2
-    assert main(["evaluate", str(model), str(imu), "--truth", str(truth), "--json", str(report)]) == 0
+    rrd = tmp_path / "open_loop.rrd"
+    argv = [
+        "evaluate",
+        str(model),
+        str(imu),
+        "--truth",
+        str(truth),
+        "--json",
+        str(report),
+        "--rerun",
+        str(rrd),
+    ]
+    assert main(argv) == 0
     doc = json.loads(report.read_text())
+    # The Rerun recording holds the very errors the figures are made of.
+    logged = _rerun_scalars(rrd, "open_loop/total/regression")
+    assert np.degrees(np.sqrt(np.mean(np.radians(logged) ** 2))) == pytest.approx(
+        doc["open_loop_attitude"]["total_deg"], rel=1e-9
+    )
     # Two minutes of a 0.1 °/s-bias unit turning back and forth: the raw gyro drifts ~2°; the fit's own
     # bias error (its standard error here, ~15 °/h, is the reference's noise) leaves a few tenths.
     assert doc["open_loop_attitude"]["total_deg"] < 0.5 * doc["open_loop_attitude_raw"]["total_deg"]
@@ -168,6 +185,19 @@ def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Pat
     assert np.array_equal(back[:, 0], s.t)
     np.testing.assert_allclose(back[:, 1:4], expected.omega_ib_b, rtol=0, atol=1e-15)
     np.testing.assert_allclose(back[:, 4:7], expected.f_ib_b, rtol=0, atol=1e-15)
+
+
+def _rerun_scalars(path: Path, entity: str) -> np.ndarray:
+    import rerun as rr
+
+    values = []
+    for chunk in rr.chunk.RrdReader(path).stream():
+        if chunk.entity_path.lstrip("/") == entity and not chunk.is_static:
+            batch = chunk.to_record_batch()
+            name = next(n for n in batch.schema.names if n.endswith(":scalars"))
+            values.append(np.array(batch.column(name).to_pylist(), dtype=float).reshape(-1))
+    out = np.concatenate(values)
+    return out[np.isfinite(out)]
 
 
 def test_refusals_in_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

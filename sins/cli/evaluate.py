@@ -89,10 +89,14 @@ def _evaluate_referenced(
     rest), and with ``--drive`` the corrected unit's free-inertial drift over a window."""
     from sins import referenced
 
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)  # before the work, not after
     if args.last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - args.last * span, rec.imu.t[-1])
-    rows, attitude = [], {}
+    rows, attitude, runs = [], {}, {}
     variants: list[tuple[str, Strategy | None, bool]] = [
         ("none (raw readings)", None, False),
         (strategy.label, strategy, False),
@@ -100,7 +104,8 @@ def _evaluate_referenced(
     if args.bias_from_rest:
         variants.append((f"{strategy.label}, gyro bias from the opening rest", strategy, True))
     for label, s, rest in variants:
-        r = referenced.open_loop_attitude(s, rec, bias_from_rest=rest)
+        runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
+        r = runs[label].rmse()
         attitude[label] = r.to_dict()
         rows.append([label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}"])
     judged = "the judged rows (movement phases)" if rec.judged is not None else "every reference epoch"
@@ -117,6 +122,14 @@ def _evaluate_referenced(
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
     if args.drive:
         document["drive"] = _drive(args, strategy, rec)
+    if args.rerun:
+        from sins import viz
+
+        summary = f"{args.model} ({strategy.label}) on {where}\n\n" + fixed_width(
+            ["readings", "total", "heading", "inclination"], rows
+        )
+        viz.save_open_loop(runs, args.rerun, summary=summary)
+        print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
     return document
 
 
@@ -164,5 +177,9 @@ def add(sub: Subparsers) -> None:
         help="against a trajectory: also navigate free inertial from the reference's state over START:END s",
     )  # fmt: skip
     p.add_argument("--json", type=Path, metavar="OUT.json")
+    p.add_argument(
+        "--rerun", type=Path, metavar="OUT.rrd",
+        help="against a trajectory: log the open-loop attitude errors over time for the Rerun viewer",
+    )  # fmt: skip
     add_recording_options(p)
     p.set_defaults(func=_cmd_evaluate)

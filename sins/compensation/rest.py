@@ -34,8 +34,11 @@ MIN_REST_S = 1.0
 #: A window is at rest below this many times the 95th percentile of the fit's rest windows' RMS.
 REST_MARGIN = 1.5
 #: The reference is still where its rate is below this, rad/s (0.5 °/s: far below hand motion, above a
-#: motion capture's differentiated noise at rest).
+#: motion capture's differentiated noise at rest) ...
 STILL_RATE = np.radians(0.5)
+#: ... and its specific force within this of gravity's, shaking by less than this, m/s² (a vehicle's
+#: vibration is several times more).
+STILL_FORCE = 0.1
 
 
 class RestAware(Regression):
@@ -60,7 +63,14 @@ class RestAware(Regression):
         omega, _ = self.correct(data.gyro, data.accel)
         dt = float(np.median(np.diff(data.t)))
         rms = _window_rms(omega, dt)
+        # Still by the reference: hardly turning, and the specific force gravity's alone (a vehicle cruising
+        # straight turns as little as a unit at rest, but it shakes).
+        force = np.linalg.norm(_smooth(data.ref_accel, dt), axis=1)
+        shake = np.linalg.norm(_smooth(data.ref_accel, dt) - data.ref_accel, axis=1)
         calm = ok & (np.linalg.norm(_smooth(data.ref_gyro, dt), axis=1) < STILL_RATE)
+        calm &= (np.abs(force - np.median(force[calm])) < STILL_FORCE) & (
+            _smooth(shake[:, None], dt)[:, 0] < STILL_FORCE
+        )
         still = _long_runs(calm, round(MIN_REST_S / dt))
         moving = ok & ~calm
         if still.sum() < round(MIN_REST_S / dt) or moving.sum() < round(MIN_REST_S / dt):
