@@ -118,6 +118,17 @@ def count(text: str) -> int:
     return value
 
 
+def seed(text: str) -> int:
+    """An argument type: a seed, a whole number in [0, 2⁶³ − 1] (what a TOML file's seeds take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if not 0 <= value <= 2**63 - 1:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1], got {text}")
+    return value
+
+
 def fraction(text: str) -> float:
     """An argument type: a fraction in (0, 1)."""
     value = float(text)

@@ -13,6 +13,7 @@ from sins.cli.common import (
     display_unit,
     fixed_width,
     format_table,
+    seed,
     show,
 )
 from sins.errors import SinsInputError
@@ -28,7 +29,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     check_viewer_args(args)
     path = pipeline.resolve_scenario(args.scenario)
-    sc = scenario.load(path)
+    sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)
     check_scenario_size(sc, path, "running")
     try:
         result = pipeline.run_scenario(sc)
@@ -180,6 +181,14 @@ def add(sub: Subparsers) -> None:
     """Add ``sins run`` to ``sub``."""
     p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
+    p.add_argument(
+        "--imu", metavar="GRADE|IMU.toml",
+        help="the unit to drive: an IMU preset (consumer, industrial, tactical, navigation, ...) or an IMU "
+        "file, instead of the scenario's [imu] model",
+    )  # fmt: skip
+    p.add_argument(
+        "--seed", type=seed, metavar="N", help="the navigation run's power-on, instead of [imu] seed"
+    )
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="save the run as a Rerun recording")
     p.add_argument("--spawn", action="store_true", help="show the run in the native Rerun viewer")
