@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -51,6 +51,9 @@ if TYPE_CHECKING:
     from sins.nav.motion import Motion
 
 T = TypeVar("T")
+
+#: A progress callback: ``progress(done, total)``.
+Progress = Callable[[int, int], None]
 
 #: The most samples a run's thinned series keep (an hour at 10 Hz): a longer run keeps them sparser.
 MAX_KEPT = 36_000
@@ -251,22 +254,27 @@ def navigate(
     return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
 
 
-def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None) -> ScenarioRun:
+def run_scenario(
+    sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None, progress: Progress | None = None
+) -> ScenarioRun:
     """Simulate a scenario and integrate its IMU stream.
 
     Without an IMU model the one run is ``"none"``: the ideal IMU, streamed
     chunk by chunk, so memory stays bounded whatever the duration. With one
     (``[imu] model``), see :func:`_run_with_imu`. ``unit`` (from :func:`fit_unit`) replaces the
     scenario's IMU file and compensation: a campaign fits a unit once and drives it through
-    every scenario; the navigation run's power-on is still ``sc.imu_seed``.
+    every scenario; the navigation run's power-on is still ``sc.imu_seed``. ``progress(samples_done,
+    samples)`` is called as chunks are integrated (a scenario with an IMU and no ``unit`` fits its
+    strategies first, silently: :func:`fit_unit` takes its own ``progress``).
     """
     if sc.imu_model is not None or unit is not None:
-        return _run_with_imu(sc, keep_hz, unit)
+        return _run_with_imu(sc, keep_hz, unit, progress)
     try:
         motion = scenario.build_motion(sc)
         first = trajectory.start_state(motion)
         chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
         keep_every = _keep_every(sc, motion, keep_hz)
+        total = int(scenario.sample_count(sc, motion))
         state = strapdown.start(strapdown.InitialState.from_series(first))
         acc = DriftAccumulator(keep_every)
         acc.add(nav_errors(first, first))
@@ -283,6 +291,8 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = 
             truth_kept.append(truth_c.at(keep))
             solution_kept.append(solution_c.at(keep))
             samples += len(truth_c.t)
+            if progress is not None:
+                progress(samples, total)
             h_prev = float(truth_c.h[-1])
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
@@ -296,7 +306,9 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = 
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
 
 
-def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) -> ScenarioRun:
+def _run_with_imu(
+    sc: Scenario, keep_hz: float, unit: FittedUnit | None = None, progress: Progress | None = None
+) -> ScenarioRun:
     """The scenario with a corrupted IMU, once per compensation strategy on the same stream.
 
     The rig session and the navigation run are two power-ons of the same unit
@@ -313,7 +325,7 @@ def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) 
     if unit is None:
         assert sc.imu_model is not None
         unit = fit_unit(scenario.load_imu(sc.imu_model), sc.compensation)
-    return run_units(sc, [unit], [sc.imu_seed], keep_hz)[0]
+    return run_units(sc, [unit], [sc.imu_seed], keep_hz, progress=progress)[0]
 
 
 def run_units(
@@ -322,6 +334,7 @@ def run_units(
     nav_seeds: Sequence[int],
     keep_hz: float = 10.0,
     sensor_errors: bool = True,
+    progress: Progress | None = None,
 ) -> list[ScenarioRun]:
     """Drive several fitted units through one scenario, sharing its trajectory.
 
@@ -330,13 +343,15 @@ def run_units(
     each result equals :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the
     last bit. Memory is bounded by the chunk and the thinned series, whatever the duration.
     ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which
-    a campaign does not keep: ~10 ns of a unit-sample's ~300).
+    a campaign does not keep: ~10 ns of a unit-sample's ~300). ``progress(samples_done, samples)`` is
+    called as the chunks are integrated.
     """
     if len(units) != len(nav_seeds):
         raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
     try:
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
+        total = int(scenario.sample_count(sc, motion))
         first = trajectory.start_state(motion)
         chunks = _prefetched(_shared(sc, trajectory.generate_chunks(motion, sc.rate_hz)))
         pending = _Pending()  # one for all the units: they take the same rows, mostly at the same time
@@ -349,6 +364,8 @@ def run_units(
             for d in driven:
                 d.push(ideal_c, cabin)
             pending.release(min(d.step.samples for d in driven))
+            if progress is not None:
+                progress(min(d.step.samples for d in driven), total)
         for d in driven:
             d.finish()
     except ValueError as exc:
@@ -677,10 +694,13 @@ class FittedUnit:
         return out
 
 
-def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> FittedUnit:
+def fit_unit(
+    spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None, progress: Progress | None = None
+) -> FittedUnit:
     """Simulate the unit's rig session (power-on ``comp.seed``) and fit every strategy of ``comp``.
 
-    Without ``comp``, only ``"none"``.
+    Without ``comp``, only ``"none"``. ``progress(strategies_done, strategies)`` is called as each is
+    fitted and judged.
     """
     from sins import compensation
     from sins.imu import calibration
@@ -703,6 +723,8 @@ def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> 
         channels = compensation.residual_rms(judged, held)
         residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
         biases[name] = {ch: v["mean_after"] for ch, v in channels.items()}
+        if progress is not None:
+            progress(len(residuals), len(comp.strategies))
     return FittedUnit(spec, comp, strategies, residuals, biases)
 
 

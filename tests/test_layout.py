@@ -34,12 +34,14 @@ RANKS = {
     "sins.campaign": 8,
     "sins.quality": 9,
     "sins.viz": 10,
+    "sins.plots": 10,
     "sins.cli": 11,
 }
 
 #: Third-party libraries confined to the modules that need them.
 CONFINED = {
     "rerun": {"sins.viz"},
+    "matplotlib": {"sins.plots"},
     "torch": {"sins.compensation.mlp"},
     "minisom": {"sins.compensation.kohonen"},
     "dask": {"sins.campaign.engine"},

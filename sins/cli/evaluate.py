@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from sins.cli.common import Subparsers, check_finite, display_unit, fraction
+from sins.cli.common import Subparsers, add_plot, check_finite, check_plot, display_unit, fraction, save_plot
 from sins.errors import SinsInputError
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins import compensation, io
 
+    check_plot(args)
     strategy = compensation.load(args.model)
     data = io.read_recording(args.recording)
     io.check_recording_range(args.recording, data)
@@ -33,6 +34,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         io.write_json(
             args.json, {"model": str(args.model), "recording": str(args.recording), "channels": channels}
         )
+    if args.plot:
+        from sins import plots
+
+        title = f"{args.model} ({strategy.name}) on {args.recording}, {scope}"
+        save_plot(args.plot, lambda: plots.evaluate_figure(channels, title), title)
     return 0
 
 
@@ -46,4 +52,5 @@ def add(sub: Subparsers) -> None:
         help="judge only the last FRACTION of every phase (of the whole recording if it has no phases)",
     )  # fmt: skip
     p.add_argument("--json", type=Path, metavar="OUT.json")
+    add_plot(p, "the RMS error per channel before and after")
     p.set_defaults(func=_cmd_evaluate)

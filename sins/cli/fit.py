@@ -11,6 +11,7 @@ from sins.errors import SinsInputError
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from sins import compensation, io
+    from sins.compensation.mlp import MLP
     from sins.compensation.residual import ResidualStrategy
 
     data = io.read_recording(args.recording)
@@ -27,8 +28,9 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         part = data
         if args.validation:
             part, _ = data.split(args.validation)
-        with progress_bar(f"fitting {args.strategy}", "training") as bar:
-            if isinstance(strategy, ResidualStrategy) and bar is not None:
+        unit = "epochs" if isinstance(strategy, MLP) else "trainings"
+        with progress_bar(f"fitting {args.strategy}", unit) as bar:
+            if isinstance(strategy, ResidualStrategy | MLP):  # the strategies whose fits take long
                 strategy.progress = row_progress(bar)
             strategy.fit(part)
     except ValueError as exc:

@@ -20,7 +20,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     sc = pipeline.with_unit(scenario.load(path), args.model, args.seed)
     columns = len(io.RATE_COLUMNS if args.form == "rate" else io.INCREMENT_COLUMNS) + 1
     check_scenario_size(sc, path, "simulating", {args.imu: columns, args.truth: len(io.TRUTH_COLUMNS)})
-    sim = pipeline.simulate_readings(sc, args.form, ideal=args.ideal)
+    with progress_bar(f"simulating {sc.name}", ""):
+        sim = pipeline.simulate_readings(sc, args.form, ideal=args.ideal)
     scenario.check_latitude(sc, sim.truth)
     unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
     model = "" if sim.model is None else f", IMU file {sim.model}"
