@@ -294,3 +294,31 @@ def test_gap_gives_the_same_answer_on_either_imu_form(folder: Path, capsys) -> N
             assert inc["channels"][channel][key] == pytest.approx(values[key], rel=0.02), (channel, key)
     z = rate["channels"]["gyro.z"]
     assert z["rms_before"] > 1.2 * z["noise_floor"] and z["rms_after"] < 1.05 * z["noise_floor"]
+
+
+# --------------------------------------------------------------------------- effects --grades
+
+
+def test_effects_lists_every_grades_values(capsys) -> None:
+    """``sins effects --grades``: a column per grade and a row per value of the grade definitions in
+    code, each printed as defined (the values are short decimals, so %g prints them exactly)."""
+    import dataclasses
+
+    from sins.imu.spec import GRADES
+
+    assert main(["effects", "--grades"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("value"))
+    assert lines[head].split()[-len(GRADES) :] == list(GRADES)
+    rows = [line.split() for line in lines[head + 1 :]]
+    fields = [
+        f.name
+        for f in dataclasses.fields(next(iter(GRADES.values())))
+        if f.name not in ("name", "description")
+    ]
+    assert len(rows) == len(fields)
+    for row, name in zip(rows, fields, strict=True):
+        values = [float(v) for v in row[-len(GRADES) :]]
+        assert values == [getattr(g, name) for g in GRADES.values()], name
+    for grade in GRADES.values():
+        assert any(grade.description in line for line in lines[:head])
