@@ -45,9 +45,9 @@ def grade_table() -> str:
     head = ["value", "unit", *(g.name for g in grades)]
     about = "\n".join(f"  {g.name}: {g.description}" for g in grades)
     return (
-        "IMU grades (sins run --imu GRADE, or grade = in an IMU file): a unit draws its bias, scale factors,\n"
-        "misalignments and g-sensitivity from normal spreads of these 1σ (turn-on: again at each power-on);\n"
-        "noise and bias instability are the grade's own values\n"
+        "IMU grades (sins run --imu GRADE, or grade = in an IMU file): a unit draws its bias, scale\n"
+        "factors, misalignments and g-sensitivity from normal spreads of these 1σ (turn-on: again at each\n"
+        "power-on); noise and bias instability are the grade's own values\n"
         f"{about}\n\n{fixed_width(head, rows)}"
     )
 
