@@ -946,8 +946,9 @@ def gap_data(
     interval starts at the truth's first time): each interval's mean rate (increment / its length) at
     its mid-time beside the ideal rate's mean over the same interval (Simpson's rule on the splines),
     so that every error linear in the input (bias, scale, misalignment, g-sensitivity) compares
-    exactly; an error nonlinear in the input differs from its value at the mean input by a fraction
-    ``(dt·ω')²/12`` of its size, and white noise keeps its density.
+    exactly; one quadratic in it (``k2·u²``) differs from its value at the mean input by ``k2`` times
+    the input's variance over the interval (``(dt·u̇)²/12`` for a steady change), and white noise keeps
+    its density.
 
     Raises
     ------
