@@ -3,20 +3,14 @@
 The columns are those of a truth file (:data:`~sins.io.formats.TRUTH_COLUMNS`), so a solution reads back
 with :func:`~sins.io.formats.read_truth` and compares with any other tool's trajectory:
 
-=======  =====================================================  ======
-column   what                                                   unit
-=======  =====================================================  ======
-t        time                                                   s
-lat      geodetic latitude (WGS84)                              °
-lon      longitude                                              °
-alt      ellipsoidal height                                     m
-vn       velocity north                                         m/s
-ve       velocity east                                          m/s
-vd       velocity down                                          m/s
-roll     ZYX Euler roll of the body (FRD) from NED              °
-pitch    ZYX Euler pitch                                        °
-yaw      ZYX Euler yaw, clockwise from north                    °
-=======  =====================================================  ======
+| column | what | unit |
+|---|---|---|
+| t | time | s |
+| lat | geodetic latitude (WGS84) | ° |
+| lon | longitude | ° |
+| alt | ellipsoidal height | m |
+| vn, ve, vd | velocity north, east, down | m/s |
+| roll, pitch, yaw | ZYX Euler angles of the body (FRD) from NED; yaw clockwise from north | ° |
 
 A Parquet file holds the same columns as float64, each field's unit in its metadata (``unit``).
 """
