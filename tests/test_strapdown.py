@@ -82,7 +82,7 @@ def _streamed_rms(motion, rate, vertical):
     """The horizontal RMS error of :func:`run` over the whole motion, generated and integrated chunk by
     chunk as ``sins run`` streams: the same figure to rounding (1e-15 apart, measured at every rate
     here), at a chunk's memory where the 400 Hz hour whole held 1.4 million samples (the file's peak
-    RSS 1.23 GB, now 0.72 GB) and in about half the time."""
+    RSS 1.2 GB, now 0.7 GB) and in about half the time."""
     first = trajectory.start_state(motion)
     state = strapdown.start(strapdown.InitialState.from_series(first))
     errors = DriftAccumulator(keep_every=0)
