@@ -30,6 +30,7 @@ RANKS = {
     "sins.gap": 5,
     "sins.characterise": 5,
     "sins.scenario": 6,
+    "sins.recordings": 6.5,  # above the scenario files it reads, below the runs that use it
     "sins.pipeline": 7,
     "sins.campaign": 8,
     "sins.quality": 9,
