@@ -6,14 +6,17 @@ STAMP := $(VENV)/.installed
 
 .PHONY: run test lint docs clean clean-cache
 
+# Quiet: one line says what happens; pip's -qq keeps its errors and drops its notices and warnings (a
+# machine's pip configuration may name index folders it lacks, one warning per package looked up).
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(VENV)/bin/python -m pip install --quiet -e '.[test,dev]'
-	touch $(STAMP)
+	@echo "installing sins and its dependencies into $(VENV) (first use: a minute or two)"
+	@$(PYTHON) -m venv $(VENV)
+	@$(VENV)/bin/python -m pip install -qq --upgrade pip
+	@$(VENV)/bin/python -m pip install -qq -e '.[test,dev]'
+	@touch $(STAMP)
 
 run: $(STAMP)
-	$(VENV)/bin/sins run
+	@$(VENV)/bin/sins run
 
 # Both cores: test files are dealt to two workers whole (a file's module fixtures are built once). One
 # BLAS/OpenMP thread per worker: a pool per worker beside torch's oversubscribed the two cores and made

@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io, scenario
-from sins.errors import MissingInputError, SinsInputError
+from sins import scenario
+from sins.errors import SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
     BlockMeans,
@@ -34,6 +34,16 @@ from sins.nav.metrics import (
     thinned_indices,
 )
 from sins.nav.vertical import VerticalMode
+
+# Readings as files hold them live in sins.recordings; these names were (and are) importable from here.
+from sins.recordings import Recording as Recording
+from sins.recordings import SimulatedReadings as SimulatedReadings
+from sins.recordings import cabin_temperature as _cabin
+from sins.recordings import gap_data as gap_data
+from sins.recordings import load_recording as load_recording
+from sins.recordings import simulate as simulate
+from sins.recordings import simulate_readings as simulate_readings
+from sins.recordings import with_unit as with_unit
 from sins.scenario import PresetKind, Scenario, resolve_preset
 
 # Re-exported: the presets lived here before they moved down to sins.scenario.
@@ -50,6 +60,9 @@ if TYPE_CHECKING:
     from sins.nav.motion import Motion
 
 T = TypeVar("T")
+
+#: A progress callback: ``progress(done, total)``.
+Progress = Callable[[int, int], None]
 
 #: The most samples a run's thinned series keep (an hour at 10 Hz): a longer run keeps them sparser.
 MAX_KEPT = 36_000
@@ -153,16 +166,6 @@ def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: PresetKi
     return resolve_preset(DEFAULT_SCENARIO if name_or_path is None else name_or_path, kind)
 
 
-def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
-    """Truth and exact ideal IMU of a scenario."""
-    try:
-        return trajectory.generate(scenario.build_motion(sc), sc.rate_hz)
-    except ValueError as exc:
-        if isinstance(exc, SinsInputError):
-            raise
-        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
-
-
 def navigate(
     imu: ImuIncrements, truth: NavSeries, vertical: VerticalMode = "free", vertical_tau_s: float = 10.0
 ) -> StrategyRun:
@@ -183,22 +186,27 @@ def navigate(
     return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
 
 
-def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None) -> ScenarioRun:
+def run_scenario(
+    sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None, progress: Progress | None = None
+) -> ScenarioRun:
     """Simulate a scenario and integrate its IMU stream.
 
     Without an IMU model the one run is ``"none"``: the ideal IMU, streamed
     chunk by chunk, so memory stays bounded whatever the duration. With one
     (``[imu] model``), see :func:`_run_with_imu`. ``unit`` (from :func:`fit_unit`) replaces the
     scenario's IMU file and compensation: a campaign fits a unit once and drives it through
-    every scenario; the navigation run's power-on is still ``sc.imu_seed``.
+    every scenario; the navigation run's power-on is still ``sc.imu_seed``. ``progress(samples_done,
+    samples)`` is called as chunks are integrated (a scenario with an IMU and no ``unit`` fits its
+    strategies first, silently: :func:`fit_unit` takes its own ``progress``).
     """
     if sc.imu_model is not None or unit is not None:
-        return _run_with_imu(sc, keep_hz, unit)
+        return _run_with_imu(sc, keep_hz, unit, progress)
     try:
         motion = scenario.build_motion(sc)
         first = trajectory.start_state(motion)
         chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
         keep_every = _keep_every(sc, motion, keep_hz)
+        total = int(scenario.sample_count(sc, motion))
         state = strapdown.start(strapdown.InitialState.from_series(first))
         acc = DriftAccumulator(keep_every)
         acc.add(nav_errors(first, first))
@@ -215,6 +223,8 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = 
             truth_kept.append(truth_c.at(keep))
             solution_kept.append(solution_c.at(keep))
             samples += len(truth_c.t)
+            if progress is not None:
+                progress(samples, total)
             h_prev = float(truth_c.h[-1])
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
@@ -228,7 +238,9 @@ def run_scenario(sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = 
     return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
 
 
-def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) -> ScenarioRun:
+def _run_with_imu(
+    sc: Scenario, keep_hz: float, unit: FittedUnit | None = None, progress: Progress | None = None
+) -> ScenarioRun:
     """The scenario with a corrupted IMU, once per compensation strategy on the same stream.
 
     The rig session and the navigation run are two power-ons of the same unit
@@ -245,7 +257,7 @@ def _run_with_imu(sc: Scenario, keep_hz: float, unit: FittedUnit | None = None) 
     if unit is None:
         assert sc.imu_model is not None
         unit = fit_unit(scenario.load_imu(sc.imu_model), sc.compensation)
-    return run_units(sc, [unit], [sc.imu_seed], keep_hz)[0]
+    return run_units(sc, [unit], [sc.imu_seed], keep_hz, progress=progress)[0]
 
 
 def run_units(
@@ -254,6 +266,7 @@ def run_units(
     nav_seeds: Sequence[int],
     keep_hz: float = 10.0,
     sensor_errors: bool = True,
+    progress: Progress | None = None,
 ) -> list[ScenarioRun]:
     """Drive several fitted units through one scenario, sharing its trajectory.
 
@@ -262,13 +275,15 @@ def run_units(
     each result equals :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the
     last bit. Memory is bounded by the chunk and the thinned series, whatever the duration.
     ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which
-    a campaign does not keep: ~10 ns of a unit-sample's ~300).
+    a campaign does not keep: ~10 ns of a unit-sample's ~300). ``progress(samples_done, samples)`` is
+    called as the chunks are integrated.
     """
     if len(units) != len(nav_seeds):
         raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
     try:
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
+        total = int(scenario.sample_count(sc, motion))
         first = trajectory.start_state(motion)
         chunks = _prefetched(_shared(sc, trajectory.generate_chunks(motion, sc.rate_hz)))
         pending = _Pending()  # one for all the units: they take the same rows, mostly at the same time
@@ -281,6 +296,8 @@ def run_units(
             for d in driven:
                 d.push(ideal_c, cabin)
             pending.release(min(d.step.samples for d in driven))
+            if progress is not None:
+                progress(min(d.step.samples for d in driven), total)
         for d in driven:
             d.finish()
     except ValueError as exc:
@@ -577,11 +594,6 @@ def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
     return max(1, round(sc.rate_hz / keep_hz), math.ceil(samples / MAX_KEPT))
 
 
-def _cabin(sc: Scenario, t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The cabin temperature at ``t``, °C (default a constant 20)."""
-    return np.asarray(np.interp(t, *sc.temperature), dtype=float)
-
-
 @dataclass(frozen=True)
 class FittedUnit:
     """One unit's strategies, fitted on its rig session, ready to drive any number of scenarios.
@@ -609,10 +621,13 @@ class FittedUnit:
         return out
 
 
-def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> FittedUnit:
+def fit_unit(
+    spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None, progress: Progress | None = None
+) -> FittedUnit:
     """Simulate the unit's rig session (power-on ``comp.seed``) and fit every strategy of ``comp``.
 
-    Without ``comp``, only ``"none"``.
+    Without ``comp``, only ``"none"``. ``progress(strategies_done, strategies)`` is called as each is
+    fitted and judged.
     """
     from sins import compensation
     from sins.imu import calibration
@@ -635,6 +650,8 @@ def fit_unit(spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None) -> 
         channels = compensation.residual_rms(judged, held)
         residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
         biases[name] = {ch: v["mean_after"] for ch, v in channels.items()}
+        if progress is not None:
+            progress(len(residuals), len(comp.strategies))
     return FittedUnit(spec, comp, strategies, residuals, biases)
 
 
@@ -773,90 +790,17 @@ def integrate_recording(
     truth_path: str | os.PathLike[str] | None,
     vertical: VerticalMode = "free",
     vertical_tau_s: float = 10.0,
+    within_truth: bool = False,
     reading: Mapping[str, Any] | None = None,
 ) -> StrategyRun:
-    """Integrate a recorded IMU file from its truth's first state; errors against the truth.
+    """Integrate a recorded IMU from its truth's first state; errors against the truth.
 
-    Increment form: the first row's interval starts at the truth's first time.
-    Rate form: the samples are integrated to increments between rows, and the
-    run starts at the first row's time, which must lie within the truth.
-    ``imu_path`` is any recording :func:`sins.io.read_recording_any` reads (``reading`` are its
-    options); without ``truth_path`` the recording's own reference is the truth (a bag's poses).
+    :func:`load_recording` (any format sins reads, ``reading`` its options; without ``truth_path``
+    the recording's own reference; an IMU running past the truth refused unless ``within_truth``),
+    then :func:`navigate`.
     """
-    truth = io.read_truth(truth_path) if truth_path is not None else None
-    t_start = None if truth is None else float(truth.t[0])
-    rec = io.read_recording_any(imu_path, t_start=t_start, **(reading or {}))
-    if truth is None:
-        if rec.truth is None:
-            raise MissingInputError(f"{imu_path}: the recording has no reference trajectory", needs="truth")
-        truth = rec.truth
-    samples = rec.imu
-    imu: ImuIncrements
-    if isinstance(samples, ImuRates):
-        if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
-            raise SinsInputError(
-                f"{imu_path}: first sample at {samples.t[0]:g} s is outside the truth's "
-                f"{truth.t[0]:g}..{truth.t[-1]:g} s"
-            )
-        if len(samples) < 2:
-            raise SinsInputError(f"{imu_path}: need at least two rate samples")
-        imu = samples.to_increments()
-    else:
-        imu = samples
-        if not imu.t[0] >= truth.t[0]:
-            raise SinsInputError(
-                f"{imu_path}: the first interval starts at {imu.t[0]:g} s, before the truth's first "
-                f"time {truth.t[0]:g} s"
-            )
-    if imu.t[-1] > truth.t[-1] + 1e-9:
-        inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
-        if inside < 2:
-            raise SinsInputError(f"{imu_path}: no IMU interval ends within the truth's time span")
-        imu = ImuIncrements(
-            t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
-        )
-    return navigate(imu, truth, vertical, vertical_tau_s)
-
-
-def gap_data(
-    recording: str | os.PathLike[str], truth: str | os.PathLike[str] | None = None
-) -> tuple[CalibrationData, NavSeries | None]:
-    """Readings beside reference inputs for :func:`sins.gap.diagnose`, and the truth at their times.
-
-    Without ``truth``: a rig recording with ``ref_`` columns (the truth returned is None). With it:
-    an IMU recording in rate form whose reference inputs come from the truth trajectory through the
-    exact ideal-IMU path (splines through the truth, then the strapdown equations backwards).
-    """
-    from sins.nav import motion
-
-    if truth is None:
-        if not any(c.startswith("ref_") for c in io.read_columns(recording)):
-            raise MissingInputError(
-                f"{recording}: no ref_ columns (a rig recording has them); an IMU recording needs its "
-                "trajectory (a truth file)",
-                needs="truth",
-            )
-        return io.read_recording(recording), None
-    samples, table = io.read_imu(recording)
-    if not isinstance(samples, ImuRates):
-        raise SinsInputError(f"{recording}: the gap diagnosis needs the rate form (wx..wz, fx..fz columns)")
-    path = io.read_truth(truth)
-    if len(path.t) < 4:
-        raise SinsInputError(f"{truth}: a truth trajectory needs at least 4 rows")
-    inside = (samples.t >= path.t[0]) & (samples.t <= path.t[-1])
-    if inside.sum() < len(samples.t):
-        raise SinsInputError(
-            f"{recording}: rows from t={samples.t[~inside][0]:g} s lie outside the truth's "
-            f"{path.t[0]:g}..{path.t[-1]:g} s in {truth}"
-        )
-    at_samples = path.interpolate(samples.t)
-    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(path), at_samples)
-    temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
-    data = CalibrationData(
-        t=samples.t, gyro=samples.omega_ib_b, accel=samples.f_ib_b, ref_gyro=ideal.omega_ib_b,
-        ref_accel=ideal.f_ib_b, temp=temp, source=str(recording),
-    )  # fmt: skip
-    return data, at_samples
+    rec = load_recording(imu_path, truth_path, within_truth, reading)
+    return navigate(rec.imu, rec.truth, vertical, vertical_tau_s)
 
 
 def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -> dict[str, float]:

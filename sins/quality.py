@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -95,8 +96,10 @@ def load_suite(path: str | os.PathLike[str]) -> Suite:
     return Suite(source=path, cases=tuple(cases), tolerances=tolerances)
 
 
-def measure(suite: Suite) -> dict[str, dict[str, dict[str, float]]]:
-    """Run every case: ``{case: {strategy: {metric: value}}}``."""
+def measure(
+    suite: Suite, progress: Callable[[int, int], None] | None = None
+) -> dict[str, dict[str, dict[str, float]]]:
+    """Run every case: ``{case: {strategy: {metric: value}}}``; ``progress(cases_done, cases)`` after each."""
     from sins import pipeline, scenario
 
     out: dict[str, dict[str, dict[str, float]]] = {}
@@ -117,6 +120,8 @@ def measure(suite: Suite) -> dict[str, dict[str, dict[str, float]]]:
                 m[f"residual_rms.{channel}"] = value
             metrics[name] = m
         out[case.name] = metrics
+        if progress is not None:
+            progress(len(out), len(suite.cases))
     return out
 
 

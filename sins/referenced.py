@@ -24,7 +24,6 @@ from sins import compensation
 from sins.compensation import Strategy, intervals
 from sins.compensation.intervals import INTERVAL_S, IntervalFit
 from sins.compensation.regression import Regression
-from sins.compensation.residual import ResidualStrategy
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
@@ -83,7 +82,7 @@ def fit(
             assert isinstance(strategy, Regression)
             strategy.set_fit(fitted.seed)
         else:
-            if progress is not None and isinstance(strategy, ResidualStrategy):
+            if progress is not None and hasattr(strategy, "progress"):  # the learners, whose fits take long
                 strategy.progress = progress
             strategy.fit(intervals.interval_reference(rec, fitted))
     except ValueError as exc:

@@ -31,17 +31,20 @@ RANKS = {
     "sins.characterise": 5,
     "sins.inspection": 5,
     "sins.scenario": 6,
+    "sins.recordings": 6.5,  # above the scenario files it reads, below the runs that use it
     "sins.pipeline": 7,
     "sins.referenced": 7,
     "sins.campaign": 8,
     "sins.quality": 9,
     "sins.viz": 10,
+    "sins.plots": 10,
     "sins.cli": 11,
 }
 
 #: Third-party libraries confined to the modules that need them.
 CONFINED = {
     "rerun": {"sins.viz"},
+    "matplotlib": {"sins.plots"},
     "torch": {"sins.compensation.mlp"},
     "minisom": {"sins.compensation.kohonen"},
     "dask": {"sins.campaign.engine"},

@@ -10,6 +10,7 @@ deviation pools the cluster differences inside each segment (:mod:`sins.characte
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -252,12 +253,17 @@ def characterise_channel(rate: Array, dt: float, segments: tuple[tuple[int, int]
     return ChannelResult(channel, curve, fit)
 
 
-def characterise(res: Residual, channels: tuple[str, ...] = CHANNELS) -> Characterisation:
-    """Every channel's Allan curve with its confidence intervals and the IEEE noise terms fitted to it."""
+def characterise(
+    res: Residual, channels: tuple[str, ...] = CHANNELS, progress: Callable[[int, int], None] | None = None
+) -> Characterisation:
+    """Every channel's Allan curve with its confidence intervals and the IEEE noise terms fitted to it;
+    ``progress(channels_done, channels)`` after each channel."""
     out = {}
     for ch in channels:
         i = CHANNELS.index(ch)
         out[ch] = characterise_channel(res.values[:, i], res.dt, res.segments, ch)
+        if progress is not None:
+            progress(len(out), len(channels))
     return Characterisation(res.source, res.dt, res.rows, res.segments, out, res.input_mean)
 
 

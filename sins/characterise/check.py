@@ -13,6 +13,7 @@ that is the noise side of the sim-to-real gap, named by channel, cluster times a
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -133,7 +134,8 @@ class ClosingCheck:
 
 
 def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
-                  confidence: float = CHECK_CONFIDENCE) -> ClosingCheck:  # fmt: skip
+                  confidence: float = CHECK_CONFIDENCE,
+                  progress: Callable[[int, int], None] | None = None) -> ClosingCheck:  # fmt: skip
     """Simulate ``model`` as long as the recording, in segments as long as its, and compare the curves.
 
     Parameters
@@ -142,6 +144,7 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
     model : the unit to simulate (``scenario.load_imu(path).model()`` of the written file)
     seed : of the simulation
     confidence : two-sided, of the ``F`` test at each cluster time
+    progress : called as ``progress(channels_done, channels)`` after the simulation and each channel
 
     Returns
     -------
@@ -151,6 +154,8 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(int)
     spans = tuple((int(s), int(s + n)) for s, n in zip(starts, lengths, strict=True))
     sim = simulate_static(model, result.dt, int(sum(lengths)), seed, result.input_mean)
+    if progress is not None:
+        progress(0, len(result.channels))
     channels: dict[str, dict[str, list[Any]]] = {}
     partings: list[Parting] = []
     for ch, r in result.channels.items():
@@ -190,4 +195,6 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
             worst = float(run[np.argmax(np.abs(np.log(run)))])
             partings.append(Parting(ch, (float(real.tau_s[k]), float(real.tau_s[j])), worst, bool(in_fit[k])))
             k = j + 1
+        if progress is not None:
+            progress(len(channels), len(result.channels))
     return ClosingCheck(seed, confidence, channels, tuple(partings))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from sins.cli.common import Subparsers, count, progress_bar, row_progress
+from sins.cli.common import Subparsers, add_plot, check_plot, count, progress_bar, row_progress, save_plot
 from sins.errors import SinsInputError
 
 
@@ -22,6 +22,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)  # before the work, not after
+    check_plot(args)
     out = args.out or Path(f"{spec.name}-campaign")
     strategies = dict.fromkeys(["none", *spec.compensation.strategies])
     print(
@@ -29,8 +30,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         f"{len(strategies)} strategies -> {out}"
     )
     with progress_bar(f"campaign {spec.name}", "unit") as bar:
-        progress = row_progress(bar) or engine.log_progress()
-        done = engine.run(spec, out, args.workers, args.scheduler, args.resume, progress)
+        done = engine.run(spec, out, args.workers, args.scheduler, args.resume, row_progress(bar))
     resumed = f" ({done.units_resumed} already done)" if done.units_resumed else ""
     print(f"ran {done.units_run} units in {done.wall_s:.1f} s{resumed}")
     for line in results.table_lines(done.summary):
@@ -44,6 +44,14 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         viz.save_campaign(pq.read_table(out / "results.parquet").to_pydict(), args.rerun)
         written = f"{out / 'results.parquet'}, {out / 'summary.json'} and {args.rerun}"
     print(f"wrote {written}")
+    if args.plot:
+        import pyarrow.parquet as pq
+
+        from sins import plots
+
+        rows = pq.read_table(out / "results.parquet").to_pydict()
+        title = f"campaign {spec.name}: {spec.count} units"
+        save_plot(args.plot, lambda: plots.campaign_figure(rows, title), title)
     return 0
 
 
@@ -66,4 +74,5 @@ def add(sub: Subparsers) -> None:
         "--rerun", type=Path, metavar="OUT.rrd",
         help="log the spread: percentile bands of horizontal error over time, each unit's final error",
     )  # fmt: skip
+    add_plot(p, "each scenario's spread of final errors per strategy")
     p.set_defaults(func=_cmd_campaign)

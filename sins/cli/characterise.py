@@ -6,7 +6,18 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import Subparsers, add_dataset, add_recording_options, fixed_width, recording_options
+from sins.cli.common import (
+    Subparsers,
+    add_dataset,
+    add_plot,
+    add_recording_options,
+    check_plot,
+    fixed_width,
+    progress_bar,
+    recording_options,
+    row_progress,
+    save_plot,
+)
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
@@ -68,8 +79,11 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
-    res = _characterise_inputs(args)
-    result = characterise.characterise(res)
+    check_plot(args)
+    with progress_bar("reading", "channels") as bar:
+        res = _characterise_inputs(args)
+        bar.set_description("characterising")
+        result = characterise.characterise(res, progress=row_progress(bar))
     print(_format_characterisation(result))
     document = result.to_dict()
     model = None
@@ -79,7 +93,8 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
         print(f"\nwrote {args.out} (noise only; sins run and sins calibrate --imu read it)")
     else:
         model = model_file.imu_model(result)
-    closing = check.closing_check(result, model, seed=args.seed)
+    with progress_bar("closing check", "channels") as bar:
+        closing = check.closing_check(result, model, seed=args.seed, progress=row_progress(bar))
     print(_format_closing(closing))
     document["closing_check"] = closing.to_dict()
     if args.json:
@@ -87,6 +102,12 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
     if args.rerun:
         viz.save_characterisation(result, closing, args.rerun)
         print(f"wrote {args.rerun}")
+    if args.plot:
+        from sins import plots
+
+        save_plot(
+            args.plot, lambda: plots.characterise_figure(result, closing), f"sins characterise {res.source}"
+        )
     return 0
 
 
@@ -161,5 +182,6 @@ def add(sub: Subparsers) -> None:
     )
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
     p.add_argument("--seed", type=int, default=0, help="the closing simulation's seed (default 0)")
+    add_plot(p, "the real and simulated Allan curves")
     add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)

@@ -23,7 +23,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     if not args.update_baseline:
         baseline = quality.read_baseline(args.baseline)  # refuse early, before the runs
-    measured = quality.measure(suite)
+    with progress_bar(f"quality suite {path.name}", "cases") as bar:
+        measured = quality.measure(suite, row_progress(bar))
     if args.update_baseline:
         quality.write_baseline(args.baseline, measured, suite)
         count = sum(len(m) for s in measured.values() for m in s.values())

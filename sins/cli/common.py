@@ -7,6 +7,7 @@ import math
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sins.errors import SinsInputError
@@ -68,15 +69,95 @@ def display_unit(channel: str) -> tuple[float, str]:
     return display_unit(channel)
 
 
+#: A job's first progress line in a log comes after this long, s (shorter jobs write none) ...
+LOG_FIRST_S = 5.0
+#: ... and the next ones at most this often, s.
+LOG_EVERY_S = 10.0
+
+
+class LogProgress:
+    """Progress for a log (stderr not a terminal): plain lines, the first after :data:`LOG_FIRST_S`, then
+    one every :data:`LOG_EVERY_S` while the job runs (a heartbeat thread writes them, so a job whose
+    steps are long still shows it is alive), and a closing line if any was written. The part of tqdm's
+    interface the commands use (``n``, ``total``, ``update``, ``set_postfix_str``, ``set_description``).
+    """
+
+    def __init__(self, description: str, unit: str, stream: Any = None) -> None:
+        import threading
+        import time
+
+        self.description = description
+        self.unit = unit if not unit or unit.endswith("s") else f"{unit}s"  # "12 rows" in a line
+        self.stream = stream if stream is not None else sys.stderr
+        self.n: int = 0
+        self.total: int | None = None
+        self.postfix = ""
+        self.lines = 0
+        self._start = time.monotonic()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, name="sins-progress", daemon=True)
+        self._thread.start()
+
+    def _beat(self) -> None:
+        wait = LOG_FIRST_S
+        while not self._stop.wait(wait):
+            self._line(self._state())
+            wait = LOG_EVERY_S
+
+    def _state(self) -> str:
+        of = f"/{self.total}" if self.total else ""
+        done = f"{self.n}{of} {self.unit}" if self.n or self.total else "working"
+        return done + (f", {self.postfix}" if self.postfix else "")
+
+    def _line(self, text: str) -> None:
+        import time
+
+        elapsed = time.monotonic() - self._start
+        print(f"{self.description}: {text} ({elapsed:.0f} s)", file=self.stream, flush=True)
+        self.lines += 1
+
+    def update(self, count: int = 1) -> None:
+        """``count`` more done."""
+        self.n += count
+
+    def set_postfix_str(self, text: str) -> None:
+        """What is being done now (named in the next line)."""
+        self.postfix = text
+
+    def set_description(self, text: str) -> None:
+        """Another stage of the job."""
+        self.description = text
+
+    def stop(self) -> None:
+        """Stop the heartbeat."""
+        self._stop.set()
+        self._thread.join()
+
+    def close(self) -> None:
+        """Stop, and write a closing line if the job wrote any."""
+        self.stop()
+        if self.lines:
+            self._line("done" + (f", {self.n} {self.unit}" if self.n else ""))
+
+
 @contextmanager
 def progress_bar(description: str, unit: str) -> Iterator[Any]:
-    """A tqdm bar on a terminal (stderr), None otherwise: logs and CI get the plain result lines only."""
+    """Progress on stderr: a tqdm bar on a terminal; plain lines for a log or CI when the job runs past
+    :data:`LOG_FIRST_S` (:class:`LogProgress`), nothing for a shorter one."""
     if not sys.stderr.isatty():
-        yield None
+        log = LogProgress(description, unit)
+        try:
+            yield log
+        except BaseException:
+            log.stop()  # no closing line: the job's error is the last one
+            raise
+        log.close()
         return
     from tqdm import tqdm
 
-    with tqdm(desc=description, unit=f" {unit}", leave=False, file=sys.stderr) as bar:
+    # A job without a count (one stage) shows its name and the time it has taken, not a rate of nothing.
+    shape = {"unit": f" {unit}"} if unit else {"bar_format": "{desc}: {elapsed}"}
+    with tqdm(desc=description, leave=False, file=sys.stderr, **shape) as bar:
         yield bar
 
 
@@ -115,6 +196,17 @@ def count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
+    return value
+
+
+def seed(text: str) -> int:
+    """An argument type: a seed, a whole number in [0, 2⁶³ − 1] (what a TOML file's seeds take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if not 0 <= value <= 2**63 - 1:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1], got {text}")
     return value
 
 
@@ -234,3 +326,27 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
 
         while True:  # the servers live as long as this process
             time.sleep(3600)
+
+
+def add_plot(p: argparse.ArgumentParser, what: str) -> None:
+    """``--plot OUT.png|.html``: a picture of ``what`` without a display (:mod:`sins.plots`)."""
+    p.add_argument(
+        "--plot", type=Path, metavar="OUT.png|.html",
+        help=f"draw {what} as a PNG image, or an HTML page holding it (no display needed)",
+    )  # fmt: skip
+
+
+def check_plot(args: argparse.Namespace) -> None:
+    """Refuse a ``--plot`` path that cannot be written, before the work."""
+    if getattr(args, "plot", None):
+        from sins import plots
+
+        plots.check_plot_path(args.plot)
+
+
+def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
+    """Build the figure (``figure()``, a :mod:`sins.plots` call) and save it at ``path``."""
+    from sins import plots
+
+    plots.save(figure(), path, title)
+    print(f"wrote {path}")

@@ -11,12 +11,15 @@ from typing import TYPE_CHECKING, Any
 from sins.cli.common import (
     Subparsers,
     add_dataset,
+    add_plot,
     add_recording_options,
     check_finite,
+    check_plot,
     display_unit,
     fixed_width,
     fraction,
     recording_options,
+    save_plot,
 )
 from sins.errors import SinsInputError
 
@@ -29,6 +32,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins import compensation, io, referenced
     from sins.series import CalibrationData, ReferencedRecording
 
+    check_plot(args)
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(
@@ -79,6 +83,11 @@ def _evaluate_rig(
         ])  # fmt: skip
     print(fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows))
     print("beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)")
+    if args.plot:
+        from sins import plots
+
+        title = f"{args.model} ({strategy.label}) on {where}, {scope}"
+        save_plot(args.plot, lambda: plots.evaluate_figure(channels, title), title)
     return {"channels": channels}
 
 
@@ -130,6 +139,11 @@ def _evaluate_referenced(
         )
         viz.save_open_loop(runs, args.rerun, summary=summary)
         print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
+    if args.plot:
+        from sins import plots
+
+        title = f"{args.model} ({strategy.label}) on {where}: open-loop attitude error"
+        save_plot(args.plot, lambda: plots.open_loop_figure(runs, title), title)
     return document
 
 
@@ -181,5 +195,6 @@ def add(sub: Subparsers) -> None:
         "--rerun", type=Path, metavar="OUT.rrd",
         help="against a trajectory: log the open-loop attitude errors over time for the Rerun viewer",
     )  # fmt: skip
+    add_plot(p, "the RMS error per channel before and after (against a trajectory: the open-loop attitude)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_evaluate)

@@ -72,6 +72,7 @@ def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tup
     """A rig recording (per-sample reference inputs): the strategy's own fit on its rows."""
     from sins import compensation
     from sins.compensation import coefficients
+    from sins.compensation.mlp import MLP
     from sins.compensation.residual import ResidualStrategy
     from sins.imu import calibration
 
@@ -82,8 +83,9 @@ def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tup
     try:
         strategy = compensation.make(args.strategy, **({"guard": False} if args.no_guard else {}))
         part = data.split(args.validation)[0] if args.validation else data
-        with progress_bar(f"fitting {args.strategy}", "training") as bar:
-            if isinstance(strategy, ResidualStrategy) and bar is not None:
+        unit = "epochs" if isinstance(strategy, MLP) else "trainings"
+        with progress_bar(f"fitting {args.strategy}", unit) as bar:
+            if isinstance(strategy, ResidualStrategy | MLP):  # the strategies whose fits take long
                 strategy.progress = row_progress(bar)
             strategy.fit(part)
     except ValueError as exc:

@@ -1,8 +1,9 @@
-"""``sins integrate``: a recorded IMU file integrated against its truth."""
+"""``sins integrate``: a recorded IMU integrated against its truth; the solution written if asked."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from sins.cli.common import (
@@ -20,18 +21,31 @@ from sins.nav.vertical import VERTICAL_MODES
 
 def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins import io, pipeline
+    from sins.io import solution
 
+    if args.out:
+        solution.check_solution_path(args.out)  # before the work, not after
     with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
         reading = {**recording_options(args), "progress": row_progress(bar)}
-        run = pipeline.integrate_recording(args.imu, args.truth, args.vertical, args.vertical_tau_s, reading)
+        rec = pipeline.load_recording(args.imu, args.truth, args.within_truth, reading)
+    run = pipeline.navigate(rec.imu, rec.truth, args.vertical, args.vertical_tau_s)
     summary = run.summary.to_dict()
     against = args.truth or "its own reference"
     check_finite(summary, f"{args.imu}: against {against}")
-    print(f"{args.imu}: {len(run.solution.t) - 1} intervals against {against}; errors are estimate - truth")
+    if len(rec.imu) < rec.intervals:
+        print(
+            f"sins: note: {args.imu}: integrating the first {len(rec.imu)} of {rec.intervals} intervals, "
+            f"to {rec.imu.t[-1]:g} s where {against} ends (--within-truth)",
+            file=sys.stderr,
+        )
+    print(f"{args.imu}: {len(rec.imu)} intervals against {against}; errors are estimate - truth")
     print(format_table({"none": summary}))
     if args.json:
         truth = None if args.truth is None else str(args.truth)
         io.write_json(args.json, {"imu": str(args.imu), "truth": truth, **summary})
+    if args.out:
+        solution.write_solution(args.out, run.solution, comment=f"solution of {args.imu} from {against}")
+        print(f"wrote {args.out} ({len(run.solution.t)} rows)")
     return 0
 
 
@@ -43,6 +57,16 @@ def add(sub: Subparsers) -> None:
         "--truth", type=Path, metavar="TRUTH.csv", help="the truth (default: the recording's own reference)"
     )
     p.add_argument("--json", type=Path, metavar="OUT.json")
+    p.add_argument(
+        "--out", type=Path, metavar="SOLUTION.csv|.parquet",
+        help="write the solution, one row per IMU time: t, lat, lon, alt, vn, ve, vd, roll, pitch, yaw "
+        "(s, °, °, m, m/s NED, ° ZYX), the columns of a truth file",
+    )  # fmt: skip
+    p.add_argument(
+        "--within-truth", action="store_true",
+        help="integrate only the IMU intervals inside the truth's span (without it, an IMU that runs past "
+        "the truth's end is refused)",
+    )  # fmt: skip
     p.add_argument(
         "--vertical",
         choices=VERTICAL_MODES,

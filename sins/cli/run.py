@@ -8,11 +8,17 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
+    add_plot,
     check_finite,
+    check_plot,
     check_viewer_args,
     display_unit,
     fixed_width,
     format_table,
+    progress_bar,
+    row_progress,
+    save_plot,
+    seed,
     show,
 )
 from sins.errors import SinsInputError
@@ -24,14 +30,20 @@ if TYPE_CHECKING:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from sins import io, pipeline, scenario
+    from sins import io, pipeline, plots, scenario
 
     check_viewer_args(args)
+    check_plot(args)
     path = pipeline.resolve_scenario(args.scenario)
-    sc = scenario.load(path)
+    sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)
     check_scenario_size(sc, path, "running")
     try:
-        result = pipeline.run_scenario(sc)
+        unit = None
+        if sc.imu_model is not None:
+            with progress_bar("fitting the strategies on the rig", "strategies") as bar:
+                unit = pipeline.fit_unit(scenario.load_imu(sc.imu_model), sc.compensation, row_progress(bar))
+        with progress_bar(f"running {sc.name}", "samples") as bar:
+            result = pipeline.run_scenario(sc, unit=unit, progress=row_progress(bar))
     except ValueError as exc:  # a rig session that cannot be fitted, say
         if isinstance(exc, SinsInputError):
             raise
@@ -65,6 +77,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if aided:
             document |= {"aided": aided, "outages": outages}
         io.write_json(args.json, document)
+    if args.plot:
+        save_plot(args.plot, lambda: plots.run_figure(result), f"sins run {sc.name}")
     show(args, result, "\n".join(report))
     return 0
 
@@ -180,6 +194,14 @@ def add(sub: Subparsers) -> None:
     """Add ``sins run`` to ``sub``."""
     p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
+    p.add_argument(
+        "--imu", metavar="GRADE|IMU.toml",
+        help="the unit to drive: an IMU preset (consumer, industrial, tactical, navigation, ...) or an IMU "
+        "file, instead of the scenario's [imu] model",
+    )  # fmt: skip
+    p.add_argument(
+        "--seed", type=seed, metavar="N", help="the navigation run's power-on, instead of [imu] seed"
+    )
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the summary as JSON")
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="save the run as a Rerun recording")
     p.add_argument("--spawn", action="store_true", help="show the run in the native Rerun viewer")
@@ -188,4 +210,5 @@ def add(sub: Subparsers) -> None:
         help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
     )  # fmt: skip
     p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
+    add_plot(p, "the errors against time, per strategy")
     p.set_defaults(func=_cmd_run)

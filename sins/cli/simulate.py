@@ -1,4 +1,4 @@
-"""``sins simulate``: a scenario's IMU readings and truth written as CSV."""
+"""``sins simulate``: a scenario's IMU readings (its unit's, or the ideal ones) and truth written as CSV."""
 
 from __future__ import annotations
 
@@ -6,35 +6,54 @@ import argparse
 from pathlib import Path
 
 from sins import __version__
-from sins.cli.common import Subparsers, progress_bar, row_progress
+from sins.cli.common import Subparsers, progress_bar, row_progress, seed
+from sins.errors import SinsInputError
 from sins.scenario.budget import check_scenario_size
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from sins import io, pipeline, scenario
-    from sins.nav import trajectory
 
+    if args.ideal and (args.model or args.seed is not None):
+        raise SinsInputError("--ideal: the ideal IMU has no unit to draw; leave out --model and --seed")
     path = pipeline.resolve_scenario(args.scenario)
-    sc = scenario.load(path)
-    columns = len(io.RATE_COLUMNS if args.form == "rate" else io.INCREMENT_COLUMNS)
+    sc = pipeline.with_unit(scenario.load(path), args.model, args.seed)
+    columns = len(io.RATE_COLUMNS if args.form == "rate" else io.INCREMENT_COLUMNS) + 1
     check_scenario_size(sc, path, "simulating", {args.imu: columns, args.truth: len(io.TRUTH_COLUMNS)})
-    truth, imu = pipeline.simulate(sc)
-    scenario.check_latitude(sc, truth)
-    note = f"sins {__version__}: ideal IMU of scenario {sc.name} ({path})"
-    samples = trajectory.ideal_rates(scenario.build_motion(sc), truth) if args.form == "rate" else imu
+    with progress_bar(f"simulating {sc.name}", ""):
+        sim = pipeline.simulate_readings(sc, args.form, ideal=args.ideal)
+    scenario.check_latitude(sc, sim.truth)
+    unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
+    model = "" if sim.model is None else f", IMU file {sim.model}"
+    note = f"sins {__version__}: {unit} of scenario {sc.name} ({path}{model})"
+    extra = None if sim.temp is None else {"temp": sim.temp}
     with progress_bar(f"writing {args.imu}", "row") as bar:
-        io.write_imu(args.imu, samples, comment=note, progress=row_progress(bar))
+        io.write_imu(args.imu, sim.readings, extra, comment=note, progress=row_progress(bar))
     with progress_bar(f"writing {args.truth}", "row") as bar:
-        io.write_truth(args.truth, truth, comment=note, progress=row_progress(bar))
-    print(f"wrote {args.imu} ({args.form} form, {len(samples)} rows) and {args.truth} ({len(truth)} rows)")
+        io.write_truth(args.truth, sim.truth, comment=note, progress=row_progress(bar))
+    print(
+        f"wrote {args.imu} ({args.form} form, {len(sim.readings)} rows, {unit}) and {args.truth} "
+        f"({len(sim.truth)} rows)"
+    )
     return 0
 
 
 def add(sub: Subparsers) -> None:
     """Add ``sins simulate`` to ``sub``."""
-    p = sub.add_parser("simulate", help="write a scenario's ideal IMU and truth as CSV")
+    p = sub.add_parser(
+        "simulate", help="write the readings of a scenario's IMU (its [imu] model, or ideal) and the truth"
+    )
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
-    p.add_argument("--imu", type=Path, required=True, metavar="IMU.csv")
-    p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv")
+    p.add_argument("--imu", type=Path, required=True, metavar="IMU.csv", help="the readings to write")
+    p.add_argument("--truth", type=Path, required=True, metavar="TRUTH.csv", help="the truth to write")
     p.add_argument("--form", choices=("increment", "rate"), default="increment")
+    p.add_argument(
+        "--model", metavar="GRADE|IMU.toml",
+        help="the unit that reads: an IMU preset (consumer, industrial, tactical, navigation, ...) or file, "
+        "instead of the scenario's [imu] model",
+    )  # fmt: skip
+    p.add_argument("--seed", type=seed, metavar="N", help="the unit's power-on, instead of [imu] seed")
+    p.add_argument(
+        "--ideal", action="store_true", help="write the exact ideal readings, not the scenario unit's"
+    )
     p.set_defaults(func=_cmd_simulate)

@@ -40,6 +40,11 @@ from sins.series import CalibrationData
 Array = NDArray[np.float64]
 
 
+#: Rows per block of the (rows, nodes) distance matrices: 8192 × 400 nodes is 26 MB a matrix, where a
+#: 51,000-row rig whole took 160 MB each, three at a time (each row's nearest nodes are its own).
+_ROWS = 8192
+
+
 class Kohonen(Strategy):
     """The seed paper's self-organising map from readings to errors, ``kohonen_pure`` (module docstring).
 
@@ -96,7 +101,9 @@ class Kohonen(Strategy):
         som.pca_weights_init(xs)
         som.train_random(xs, self.iterations)
         codebook = som.get_weights().reshape(-1, xs.shape[1])
-        winners = self._nearest(xs, codebook, 1)[:, 0]
+        winners = np.concatenate(
+            [self._nearest(xs[a : a + _ROWS], codebook, 1)[:, 0] for a in range(0, len(xs), _ROWS)]
+        )
         sums = np.zeros((len(codebook), 6))
         np.add.at(sums, winners, y)
         counts = np.bincount(winners, minlength=len(codebook))
@@ -120,8 +127,8 @@ class Kohonen(Strategy):
         xs = (np.hstack([gyro, accel]) - self.x_mean_) / self.x_scale_
         k = min(self.neighbours, len(self.codebook_))
         err = np.empty((len(xs), 6))
-        for start in range(0, len(xs), 65536):  # bounded memory for the distance matrix
-            part = xs[start : start + 65536]
+        for start in range(0, len(xs), _ROWS):  # bounded memory for the distance matrix
+            part = xs[start : start + _ROWS]
             idx = self._nearest(part, self.codebook_, k)
             d = np.sqrt(((part[:, None, :] - self.codebook_[idx]) ** 2).sum(axis=2))
             w = 1.0 / np.maximum(d, 1e-9)

@@ -29,7 +29,7 @@ Two training modes:
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -89,6 +89,8 @@ class MLP(Strategy):
         self.patience = patience
         self.validation = validation
         self.seed = seed
+        #: Called as ``progress(epochs_done, max_epochs)`` after each epoch (a progress bar's); not saved.
+        self.progress: Callable[[int, int], None] | None = None
 
     def params(self) -> dict[str, Any]:
         """Constructor parameters: topology, ``mode`` and the training settings."""
@@ -182,6 +184,8 @@ class MLP(Strategy):
                 optimiser.step()
                 total += float(e.detach())
             epsilon = total / len(xs)
+            if self.progress is not None:
+                self.progress(epochs, self.max_epochs)
             if epsilon < self.residual:
                 break
         return epochs, epsilon
@@ -205,6 +209,8 @@ class MLP(Strategy):
                 loss = ((net(train_x[batch]) - train_y[batch]) ** 2).mean()
                 loss.backward()
                 optimiser.step()
+            if self.progress is not None:
+                self.progress(epochs, self.max_epochs)
             with torch.no_grad():
                 val = float(((net(val_x) - val_y) ** 2).mean())
             if val < best * (1.0 - 1e-4):

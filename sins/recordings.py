@@ -1,0 +1,273 @@
+"""Readings as files hold them: a scenario's truth and its unit's readings, a recorded IMU file beside
+its truth, and a recording's reference inputs for the sim-to-real diagnosis.
+
+The library calls behind ``sins simulate``, ``sins integrate``'s reading of its files and ``sins gap`` /
+``sins characterise --truth``; :mod:`sins.pipeline` runs what they read (and re-exports these names).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins import io, scenario
+from sins.errors import MissingInputError, SinsInputError
+from sins.nav import trajectory
+from sins.scenario import Scenario, resolve_preset
+from sins.scenario.toml import MAX_SEED
+from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
+
+
+def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
+    """Truth and exact ideal IMU of a scenario."""
+    try:
+        return trajectory.generate(scenario.build_motion(sc), sc.rate_hz)
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
+
+
+def with_unit(sc: Scenario, imu: str | os.PathLike[str] | None = None, seed: int | None = None) -> Scenario:
+    """The scenario with another IMU (``imu``: a grade or IMU preset such as ``tactical``, or an IMU
+    file) and/or another navigation power-on (``seed``, the ``[imu] seed``); ``None`` keeps the
+    scenario's.
+
+    Raises
+    ------
+    SinsInputError
+        ``imu`` is neither a preset nor a file; or a ``seed`` is given for a scenario without an IMU
+        model (the ideal IMU has nothing to draw).
+    """
+    model = sc.imu_model if imu is None else resolve_preset(imu, "imu")
+    if seed is not None and model is None:
+        raise SinsInputError(
+            f"{sc.source or sc.name}: --seed needs an IMU model: the scenario runs the ideal IMU, "
+            "which draws nothing"
+        )
+    if seed is not None and not 0 <= seed <= MAX_SEED:
+        raise SinsInputError(f"--seed: must be in [0, {MAX_SEED}], got {seed}")
+    return dataclasses.replace(sc, imu_model=model, imu_seed=sc.imu_seed if seed is None else seed)
+
+
+@dataclass(frozen=True)
+class SimulatedReadings:
+    """A scenario's truth and the readings of its unit (:func:`simulate_readings`).
+
+    ``readings`` are in increment form (``truth.t`` is their interval edges) or rate form (at the
+    truth's times); ``temp`` the cabin temperature at the rows' times, °C (None for the ideal IMU);
+    ``model`` the IMU file the unit came from (None: ideal) and ``seed`` its power-on.
+    """
+
+    truth: NavSeries
+    readings: ImuIncrements | ImuRates
+    temp: NDArray[np.float64] | None
+    model: Path | None
+    seed: int
+
+
+def simulate_readings(sc: Scenario, form: str = "increment", ideal: bool = False) -> SimulatedReadings:
+    """The truth and what the scenario's unit (``[imu] model``, power-on ``[imu] seed``) reads along it.
+
+    Increment form: the readings ``sins run`` integrates as its ``none`` strategy, to the last bit
+    (the whole-array corruption equals the streamed one). Rate form: the same unit and power-on
+    sampled instantaneously at the truth's times (:meth:`sins.imu.ImuModel.corrupt_rates`); its noise
+    draws are its own. ``ideal`` (or a scenario without a model): the exact ideal IMU.
+    """
+    if form not in ("increment", "rate"):
+        raise ValueError(f"form must be 'increment' or 'rate', got {form!r}")
+    truth, increments = simulate(sc)
+    readings: ImuIncrements | ImuRates = increments
+    if form == "rate":
+        readings = trajectory.ideal_rates(scenario.build_motion(sc), truth)
+    if ideal or sc.imu_model is None:
+        return SimulatedReadings(truth, readings, None, None, sc.imu_seed)
+    model = scenario.load_imu(sc.imu_model).model(run_seed=sc.imu_seed)
+    temp = cabin_temperature(sc, truth.t)
+    try:
+        if isinstance(readings, ImuRates):
+            readings = model.corrupt_rates(readings, temp, seed=sc.imu_seed)
+        else:
+            readings = model.corrupt_increments(readings, temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
+    except ValueError as exc:
+        raise SinsInputError(f"{sc.imu_model}: {exc}") from None
+    row_temp = temp if form == "rate" else temp[1:]  # increment rows are stamped at their interval's end
+    return SimulatedReadings(truth, readings, row_temp, sc.imu_model, sc.imu_seed)
+
+
+def cabin_temperature(sc: Scenario, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cabin temperature at ``t``, °C (default a constant 20)."""
+    return np.asarray(np.interp(t, *sc.temperature), dtype=float)
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A recorded IMU file as increments beside its truth (:func:`load_recording`).
+
+    ``intervals`` is how many the file holds; ``imu`` may hold fewer (``within_truth``: those inside
+    the truth's span).
+    """
+
+    imu: ImuIncrements
+    truth: NavSeries
+    intervals: int
+
+
+def load_recording(
+    imu_path: str | os.PathLike[str],
+    truth_path: str | os.PathLike[str] | None = None,
+    within_truth: bool = False,
+    reading: Mapping[str, Any] | None = None,
+) -> Recording:
+    """A recorded IMU (any recording :func:`sins.io.read_recording_any` reads, with ``reading`` its
+    options; either form) as increments, and its truth (``truth_path``, or the recording's own reference:
+    a bag's poses, a EuRoC ground truth).
+
+    Increment form: the first row's interval starts at the truth's first time. Rate form: the
+    samples are integrated to increments between rows, and the run starts at the first row's time,
+    which must lie within the truth.
+
+    Raises
+    ------
+    SinsInputError
+        as the readers; a rate-form file starting outside the truth; an IMU running past the truth's
+        end, unless ``within_truth`` (then the intervals inside it are kept, and ``intervals`` says how
+        many the file held): nothing is cut without being asked for.
+    MissingInputError
+        without ``truth_path`` when the recording has no reference of its own.
+    """
+    truth = io.read_truth(truth_path) if truth_path is not None else None
+    t_start = None if truth is None else float(truth.t[0])
+    rec = io.read_recording_any(imu_path, t_start=t_start, **(reading or {}))
+    if truth is None:
+        if rec.truth is None:
+            raise MissingInputError(f"{imu_path}: the recording has no reference trajectory", needs="truth")
+        truth = rec.truth
+    truth_name = truth_path if truth_path is not None else "its own reference"
+    samples = rec.imu
+    imu: ImuIncrements
+    if isinstance(samples, ImuRates):
+        if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
+            raise SinsInputError(
+                f"{imu_path}: first sample at {samples.t[0]:g} s is outside the truth's "
+                f"{truth.t[0]:g}..{truth.t[-1]:g} s"
+            )
+        if len(samples) < 2:
+            raise SinsInputError(f"{imu_path}: need at least two rate samples")
+        imu = samples.to_increments()
+    else:
+        imu = samples
+        if not imu.t[0] >= truth.t[0]:
+            raise SinsInputError(
+                f"{imu_path}: the first interval starts at {imu.t[0]:g} s, before the truth's first "
+                f"time {truth.t[0]:g} s"
+            )
+    intervals = len(imu)
+    if imu.t[-1] > truth.t[-1] + 1e-9:
+        inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
+        if not within_truth:
+            raise SinsInputError(
+                f"{imu_path}: the IMU runs to {imu.t[-1]:g} s but the truth ({truth_name}) ends at "
+                f"{truth.t[-1]:g} s ({inside - 1} of {intervals} intervals inside it); give the whole "
+                "truth, or --within-truth to integrate only those intervals"
+            )
+        if inside < 2:
+            raise SinsInputError(f"{imu_path}: no IMU interval ends within the truth's time span")
+        imu = ImuIncrements(
+            t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
+        )
+    return Recording(imu, truth, intervals)
+
+
+def gap_data(
+    recording: str | os.PathLike[str], truth: str | os.PathLike[str] | None = None
+) -> tuple[CalibrationData, NavSeries | None]:
+    """Readings beside reference inputs for :func:`sins.gap.diagnose`, and the truth at their times.
+
+    Without ``truth``: a rig recording with ``ref_`` columns (the truth returned is None). With it:
+    an IMU recording in either form whose reference inputs come from the truth trajectory through the
+    exact ideal-IMU path (splines through the truth, then the strapdown equations backwards). Rate
+    form: the readings at their times beside the ideal rates there. Increment form (the first row's
+    interval starts at the truth's first time): each interval's mean rate (increment / its length) at
+    its mid-time beside the ideal rate's mean over the same interval (Simpson's rule on the splines),
+    so that every error linear in the input (bias, scale, misalignment, g-sensitivity) compares
+    exactly; one quadratic in it (``k2·u²``) differs from its value at the mean input by ``k2`` times
+    the input's variance over the interval (``(dt·u̇)²/12`` for a steady change), and white noise keeps
+    its density.
+
+    Raises
+    ------
+    MissingInputError
+        no ``truth`` and no ``ref_`` columns.
+    SinsInputError
+        as the readers; a truth of fewer than 4 rows; rows outside the truth's span.
+    """
+    if truth is None:
+        if not any(c.startswith("ref_") for c in io.read_columns(recording)):
+            raise MissingInputError(
+                f"{recording}: no ref_ columns (a rig recording has them); an IMU recording needs its "
+                "trajectory (a truth file)",
+                needs="truth",
+            )
+        return io.read_recording(recording), None
+    samples, table = io.read_imu(recording)
+    path = io.read_truth(truth)
+    if len(path.t) < 4:
+        raise SinsInputError(f"{truth}: a truth trajectory needs at least 4 rows")
+    row_t = samples.t if isinstance(samples, ImuRates) else samples.t[1:]
+    inside = (row_t >= path.t[0]) & (row_t <= path.t[-1])
+    if inside.sum() < len(row_t):
+        raise SinsInputError(
+            f"{recording}: rows from t={row_t[~inside][0]:g} s lie outside the truth's "
+            f"{path.t[0]:g}..{path.t[-1]:g} s in {truth}"
+        )
+    temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
+    if isinstance(samples, ImuRates):
+        at_samples = path.interpolate(samples.t)
+        reference = _ideal_rates_at(path, at_samples)
+        readings = samples
+    else:
+        increments = io.increments_from_table(table, float(path.t[0]))
+        readings, reference, at_samples = _interval_means(increments, path)
+        if temp is not None:
+            temp = np.interp(readings.t, increments.t[1:], temp)
+    data = CalibrationData(
+        t=readings.t, gyro=readings.omega_ib_b, accel=readings.f_ib_b, ref_gyro=reference.omega_ib_b,
+        ref_accel=reference.f_ib_b, temp=temp, source=str(recording),
+    )  # fmt: skip
+    return data, at_samples
+
+
+def _ideal_rates_at(path: NavSeries, at: NavSeries) -> ImuRates:
+    """The exact ideal IMU at ``at``'s times of the motion through the recorded truth ``path``."""
+    from sins.nav import motion
+
+    return trajectory.ideal_rates(motion.RecordedMotion.from_series(path), at)
+
+
+def _interval_means(increments: ImuIncrements, path: NavSeries) -> tuple[ImuRates, ImuRates, NavSeries]:
+    """Increments as mean rates at their intervals' mid-times; the ideal rate's mean over each interval
+    (Simpson's rule through the truth ``path``'s splines); the truth at the mid-times."""
+    t = increments.t
+    dt = np.diff(t)[:, None]
+    mid = 0.5 * (t[:-1] + t[1:])
+    at_mid = path.interpolate(mid)
+    edges, centres = _ideal_rates_at(path, path.interpolate(t)), _ideal_rates_at(path, at_mid)
+
+    def simpson(x_edges: NDArray[np.float64], x_mid: NDArray[np.float64]) -> NDArray[np.float64]:
+        return (x_edges[:-1] + 4.0 * x_mid + x_edges[1:]) / 6.0
+
+    readings = ImuRates(t=mid, omega_ib_b=increments.dtheta_b / dt, f_ib_b=increments.dv_b / dt)
+    reference = ImuRates(
+        t=mid,
+        omega_ib_b=simpson(edges.omega_ib_b, centres.omega_ib_b),
+        f_ib_b=simpson(edges.f_ib_b, centres.f_ib_b),
+    )
+    return readings, reference, at_mid
