@@ -94,7 +94,8 @@ class Parting:
         if not math.isfinite(self.ratio):
             what = "the model has no noise where the real unit has"
         else:
-            what = f"the real unit {self.ratio:.3g}x the model's deviation ({side})"
+            digits = 3 if abs(math.log(self.ratio)) >= 0.01 else 4  # not "1x" for 0.9996
+            what = f"the real unit {self.ratio:.{digits}g}x the model's deviation ({side})"
         return f"{self.channel}: {what} at τ = {span}{where}"
 
 

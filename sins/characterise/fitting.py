@@ -206,7 +206,7 @@ def fit_subset(points: LogPoints, subset: frozenset[int], start: SubsetFit | Non
         seed = best[1]
         found = optimize.minimize_scalar(
             lambda lt: solve(points, points.columns(math.exp(lt))[:, cols], start=seed)[1],
-            bounds=(lo, hi), method="bounded", options={"xatol": 2e-3},
+            bounds=(lo, hi), method="bounded", options={"xatol": 1e-2},
         )  # fmt: skip
         tc = math.exp(float(found.x))
         c, chi2 = solve(points, points.columns(tc)[:, cols], start=seed)
@@ -243,13 +243,14 @@ def covariance(points: LogPoints, fit: SubsetFit, subset: frozenset[int]) -> Arr
 def upper_bound(points: LogPoints, fit: SubsetFit, subset: frozenset[int], k: int, rise: float) -> float:
     """The largest squared coefficient of term ``k`` the data allow beside the rest of ``subset``: where
     χ², the others refitted with term ``k`` held, exceeds its least (``fit``) by ``rise`` (a profile
-    likelihood bound). A Gauss–Markov correlation time is refitted too, within an octave of the fit's
-    (a bias that may shorten leaves room for a rate random walk at its longest cluster times)."""
+    likelihood bound, to 3 % of it). A Gauss–Markov correlation time is refitted too, within half an
+    octave of the fit's (a bias that may shorten leaves room for a rate random walk at its longest
+    cluster times)."""
     others = sorted(subset - {k})
     times: list[float | None] = [fit.tau_c_s]
     if fit.tau_c_s is not None and GM in others:
         grid = points.grid()
-        times = [t for t in fit.tau_c_s * 2.0 ** (np.arange(-3, 4) / 3.0) if grid[0] <= t <= grid[-1]]
+        times = [t for t in fit.tau_c_s * 2.0 ** np.array([-0.5, 0.0, 0.5]) if grid[0] <= t <= grid[-1]]
         times = times or [fit.tau_c_s]
     columns = [points.columns(t) for t in times]
     least = fit.chi2 + rise
@@ -266,7 +267,7 @@ def upper_bound(points: LogPoints, fit: SubsetFit, subset: frozenset[int], k: in
     while chi2_at(hi) < least and hi < 1e6 * level:
         lo, hi = hi, 4.0 * hi
     for _ in range(60):
-        if hi <= 1.01 * lo:
+        if hi <= 1.03 * lo:
             break
         mid = math.sqrt(lo * hi) if lo > 0.0 else 0.5 * hi
         if chi2_at(mid) < least:
