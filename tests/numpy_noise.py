@@ -14,6 +14,9 @@ Processes (SI: rad, rad/√s, rad/s, rad/s/√s, rad/s² for a gyro; m/s-based f
   runs over twice the length and the first half is dropped (its start from rest);
 * a rate random walk ``K``: the running sum of independent steps of standard deviation ``K √dt``;
 * a rate ramp ``R``: ``R·t``.
+
+:func:`exact_avar` writes out the exact discrete Allan variance of the classical processes (flicker has
+no closed form: its test compares it with the library's sampled form over seeds).
 """
 
 from __future__ import annotations
@@ -97,3 +100,24 @@ def truths(case: str) -> dict[str, float]:
     """Each term's true value in a case (0 for a term the case lacks)."""
     process = CASES[case]
     return {name: float(process.get(key, 0.0)) for key, name in KEYS.items()}
+
+
+def exact_avar(m: np.ndarray, dt: float, *, q: float = 0.0, arw: float = 0.0, sigma_b: float = 0.0,
+               tau_c: float = 1.0, k: float = 0.0, r: float = 0.0) -> np.ndarray:  # fmt: skip
+    """The exact Allan variance of the generator's series at cluster sizes ``m`` (discrete forms)."""
+    m = np.asarray(m, dtype=float)
+    tau = m * dt
+    out = (
+        3.0 * q * q / tau**2
+        + arw * arw / tau
+        + k * k * dt * (2.0 * m * m + 1.0) / (6.0 * m)
+        + r * r * tau**2 / 2
+    )
+    if sigma_b:
+        phi = math.exp(-dt / tau_c)
+
+        def v(mm: np.ndarray) -> np.ndarray:  # the variance of a sum of mm samples of the AR(1)
+            return sigma_b**2 * (mm * (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**mm) / (1 - phi) ** 2)
+
+        out = out + (2.0 * v(m) - v(2.0 * m) / 2.0) / (m * m)
+    return out

@@ -3,10 +3,10 @@ taken away, the model file, the closing check and the refusals.
 
 The test recordings come from ``tests/numpy_noise.py``, numpy alone (not sins's IMU model): white rate
 noise, a first-order Gauss–Markov bias, flicker (Kasdin and Walter's fractional difference), a random walk
-of the rate, quantization of the angle and a ramp. The exact discrete Allan variances of the classical
-processes are written out here, independently of :mod:`sins.characterise.terms`. The 20-seed statistical
-sweep of issue 32 is ``tools/characterise_recovery.py`` (figures in the guide); the tests run two seeds of
-each of its cases.
+of the rate, quantization of the angle and a ramp; the exact discrete Allan variances of the classical
+processes are written out beside them, independently of :mod:`sins.characterise.terms`. The 20-seed
+statistical sweep of issue 32 is ``tools/characterise_recovery.py`` (figures in the guide); the tests
+run two seeds of each of its cases.
 """
 
 from __future__ import annotations
@@ -25,31 +25,10 @@ from sins.characterise.allan import allan, edf_overlapping
 from sins.errors import SinsInputError
 from sins.series import ImuRates
 from tests.conftest import dataset_folder, refusal
-from tests.numpy_noise import CASES, DT, KEYS, case_series, generate, truths
+from tests.numpy_noise import CASES, DT, KEYS, case_series, exact_avar, generate, truths
 
 SEEDS = range(20)
 _DEG = math.pi / 180.0
-
-
-def exact_avar(m: np.ndarray, dt: float, *, q: float = 0.0, arw: float = 0.0, sigma_b: float = 0.0,
-               tau_c: float = 1.0, k: float = 0.0, r: float = 0.0) -> np.ndarray:  # fmt: skip
-    """The exact Allan variance of the generator's series at cluster sizes ``m`` (discrete forms)."""
-    m = np.asarray(m, dtype=float)
-    tau = m * dt
-    out = (
-        3.0 * q * q / tau**2
-        + arw * arw / tau
-        + k * k * dt * (2.0 * m * m + 1.0) / (6.0 * m)
-        + r * r * tau**2 / 2
-    )
-    if sigma_b:
-        phi = math.exp(-dt / tau_c)
-
-        def v(mm: np.ndarray) -> np.ndarray:  # the variance of a sum of mm samples of the AR(1)
-            return sigma_b**2 * (mm * (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**mm) / (1 - phi) ** 2)
-
-        out = out + (2.0 * v(m) - v(2.0 * m) / 2.0) / (m * m)
-    return out
 
 
 def _coefficients(process: dict[str, float]) -> np.ndarray:
