@@ -1,9 +1,12 @@
-"""`sins characterise`: the Allan analysis, the IEEE terms, the model file and the closing check.
+"""`sins characterise`: the Allan analysis, the IEEE terms and their selection, the ramp, the reference
+taken away, the model file, the closing check and the refusals.
 
-The test recordings come from the generators below, numpy alone (not sins's IMU model): white rate noise,
-a first-order Gauss–Markov bias (an AR(1) of the samples), a random walk of the rate, quantization of the
-angle (independent uniform angle errors, differenced) and a ramp. Their exact discrete Allan variances
-are written out here, independently of :mod:`sins.characterise.terms`.
+The test recordings come from ``tests/numpy_noise.py``, numpy alone (not sins's IMU model): white rate
+noise, a first-order Gauss–Markov bias, flicker (Kasdin and Walter's fractional difference), a random walk
+of the rate, quantization of the angle and a ramp; the exact discrete Allan variances of the classical
+processes are written out beside them, independently of :mod:`sins.characterise.terms`. The 20-seed
+statistical sweep of issue 32 is ``tools/characterise_recovery.py`` (figures in the guide); the tests
+run two seeds of each of its cases.
 """
 
 from __future__ import annotations
@@ -14,72 +17,23 @@ import math
 import allantools
 import numpy as np
 import pytest
-from scipy.signal import lfilter
+import scipy.io
 
 from sins import cli, io, scenario
-from sins.characterise import analysis, check, model_file, terms
+from sins.characterise import analysis, check, model_file, reference, selection, still, terms, trend
 from sins.characterise.allan import allan, edf_overlapping
 from sins.errors import SinsInputError
 from sins.series import ImuRates
 from tests.conftest import dataset_folder, refusal
+from tests.numpy_noise import CASES, DT, KEYS, case_series, exact_avar, generate, truths
 
-DT = 0.1
-N_ROWS = 1 << 17  # 3.6 h at 10 Hz
 SEEDS = range(20)
+_DEG = math.pi / 180.0
 
 
-# --------------------------------------------------------------------------- independent generators
-
-
-def generate(
-    rng: np.random.Generator,
-    n: int,
-    dt: float,
-    *,
-    q: float = 0.0,
-    arw: float = 0.0,
-    sigma_b: float = 0.0,
-    tau_c: float = 1.0,
-    k: float = 0.0,
-    r: float = 0.0,
-) -> np.ndarray:
-    """A rate series of ``n`` samples at ``dt``: quantization ``q`` (angle), white noise ``arw`` (per √s),
-    a Gauss–Markov bias (``sigma_b``, ``tau_c``), a rate random walk ``k`` and a ramp ``r``."""
-    x = np.zeros(n)
-    if arw:
-        x += arw / math.sqrt(dt) * rng.standard_normal(n)
-    if k:
-        x += np.cumsum(k * math.sqrt(dt) * rng.standard_normal(n))
-    if sigma_b:
-        phi = math.exp(-dt / tau_c)
-        drive = sigma_b * math.sqrt(1.0 - phi * phi) * rng.standard_normal(n)
-        x += lfilter([1.0], [1.0, -phi], drive, zi=[phi * sigma_b * rng.standard_normal()])[0]
-    if q:
-        x += np.diff(q * math.sqrt(12.0) * rng.uniform(-0.5, 0.5, n + 1)) / dt
-    if r:
-        x += r * dt * np.arange(n)
-    return x
-
-
-def exact_avar(m: np.ndarray, dt: float, *, q: float = 0.0, arw: float = 0.0, sigma_b: float = 0.0,
-               tau_c: float = 1.0, k: float = 0.0, r: float = 0.0) -> np.ndarray:  # fmt: skip
-    """The exact Allan variance of :func:`generate`'s series at cluster sizes ``m`` (discrete forms)."""
-    m = np.asarray(m, dtype=float)
-    tau = m * dt
-    out = (
-        3.0 * q * q / tau**2
-        + arw * arw / tau
-        + k * k * dt * (2.0 * m * m + 1.0) / (6.0 * m)
-        + r * r * tau**2 / 2
-    )
-    if sigma_b:
-        phi = math.exp(-dt / tau_c)
-
-        def v(mm: np.ndarray) -> np.ndarray:  # the variance of a sum of mm samples of the AR(1)
-            return sigma_b**2 * (mm * (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**mm) / (1 - phi) ** 2)
-
-        out = out + (2.0 * v(m) - v(2.0 * m) / 2.0) / (m * m)
-    return out
+def _coefficients(process: dict[str, float]) -> np.ndarray:
+    """The library's squared coefficients (6,) of a generator's process."""
+    return np.array([process.get(key, 0.0) for key in KEYS]) ** 2
 
 
 # --------------------------------------------------------------------------- the Allan deviation
@@ -87,175 +41,228 @@ def exact_avar(m: np.ndarray, dt: float, *, q: float = 0.0, arw: float = 0.0, si
 
 def test_allan_deviation_matches_allantools():
     """Our overlapping deviation is allantools' ``oadev`` of the same rates to 1e-9, at every octave."""
-    x = generate(np.random.default_rng(1), 40_000, DT, arw=1e-3, sigma_b=2e-4, tau_c=20.0, k=1e-6)
-    curve = allan(x, DT)
-    taus, adev, _, _ = allantools.oadev(x, rate=1.0 / DT, data_type="freq", taus=curve.tau_s)
+    x = generate(np.random.default_rng(1), 40_000, 0.1, arw=1e-3, sigma_b=2e-4, tau_c=20.0, k=1e-6)
+    curve = allan(x, 0.1)
+    taus, adev, _, _ = allantools.oadev(x, rate=10.0, data_type="freq", taus=curve.tau_s)
     np.testing.assert_allclose(taus, curve.tau_s)
     np.testing.assert_allclose(curve.adev, adev, rtol=1e-9)
 
 
 def test_segments_pool_only_their_own_differences():
     """Two segments give the pooled mean of squared differences, none across the gap."""
-    x = generate(np.random.default_rng(2), 4000, DT, arw=1e-3)
-    both = allan(x, DT, [(0, 2000), (2000, 4000)])
-    a, b = allan(x[:2000], DT), allan(x[2000:], DT)
+    x = generate(np.random.default_rng(2), 4000, 0.1, arw=1e-3)
+    both = allan(x, 0.1, [(0, 2000), (2000, 4000)])
+    a, b = allan(x[:2000], 0.1), allan(x[2000:], 0.1)
     k = len(a.avar)
     pooled = (a.avar * a.terms + b.avar * b.terms) / (a.terms + b.terms)
     np.testing.assert_allclose(both.avar[:k], pooled, rtol=1e-12)
 
 
+def test_detrended_curve_is_the_curve_of_the_detrended_rate():
+    """A curve less a ramp, from its sums alone, is the curve of the rate less that ramp (to rounding),
+    over segments with their own offsets; and a pure ramp's curve is ``R²τ²/2`` exactly."""
+    rng = np.random.default_rng(3)
+    n, dt, ramp = 50_000, 0.1, 2.7e-5
+    x = rng.standard_normal(n) + np.cumsum(rng.standard_normal(n)) * 0.01 + 3e-5 * np.arange(n) * dt
+    spans = [(0, 20_000), (20_000, 50_000)]
+    direct = allan(x - ramp * dt * np.arange(n), dt, spans)
+    np.testing.assert_allclose(allan(x, dt, spans).detrended(ramp).avar, direct.avar, rtol=1e-10)
+    line = allan(ramp * dt * np.arange(n), dt)
+    np.testing.assert_allclose(line.avar, ramp**2 * line.tau_s**2 / 2.0, rtol=1e-9)
+    np.testing.assert_allclose(line.detrended(ramp).avar, 0.0, atol=1e-12 * float(line.avar.max()))
+
+
 def test_edf_agrees_with_nist_and_greenhall():
     """The spectral EDF of each noise type agrees with NIST SP 1065's closed forms to 12 % at every octave,
     and with allantools' Greenhall EDF to 12 % from ``m = 8`` (below, Greenhall's is up to 17 % higher
-    than the closed forms; ours is exactly ``2n/3`` at ``m = 1`` for white noise, as NIST's)."""
+    than the closed forms; ours is exactly ``2n/3`` at ``m = 1`` for white noise, as NIST's); flicker's
+    EDF is Greenhall's to 15 % from ``m = 8`` (NIST's closed form for it is a coarse approximation)."""
     n = 1 << 15
     curve = allan(np.random.default_rng(3).standard_normal(n), 1.0)
-    for coefficients, slope, alpha in (
-        ([0, 1, 0, 0, 0], -1.0, 0),
-        ([0, 0, 0, 1, 0], 1.0, -2),
-        ([1, 0, 0, 0, 0], -2.0, 2),
+    for column, slope, alpha in (
+        (terms.N, -1.0, 0),
+        (terms.K, 1.0, -2),
+        (terms.Q, -2.0, 2),
+        (terms.B, 0.0, -1),
     ):
-        edf, corr = terms.spectral(curve, np.array(coefficients, float), None)
+        coefficients = np.zeros(6)
+        coefficients[column] = 1.0
+        edf, corr = terms.spectral(curve, coefficients, None)
+        green = [allantools.edf_greenhall(alpha, 2, int(m), n + 1, overlapping=True) for m in curve.clusters]
+        assert np.allclose(np.diag(corr), 1.0)
+        if column == terms.B:
+            np.testing.assert_allclose(edf[3:-1], np.array(green)[3:-1], rtol=0.15)
+            continue
         nist = edf_overlapping(n + 1, curve.clusters, np.full(len(curve.clusters), slope))
         np.testing.assert_allclose(edf, nist, rtol=0.12)
-        green = [allantools.edf_greenhall(alpha, 2, int(m), n + 1, overlapping=True) for m in curve.clusters]
         np.testing.assert_allclose(edf[3:-1], np.array(green)[3:-1], rtol=0.12)
-        assert np.allclose(np.diag(corr), 1.0)
 
 
 @pytest.mark.parametrize(
     "process",
-    [dict(arw=1e-3), dict(q=2e-4), dict(sigma_b=1e-3, tau_c=5.0), dict(k=1e-5), dict(r=1e-7)],
-    ids=["white", "quantization", "gauss_markov", "rate_random_walk", "ramp"],
+    [
+        dict(arw=1e-3),
+        dict(q=2e-4),
+        dict(sigma_b=1e-3, tau_c=5.0),
+        dict(k=1e-5),
+        dict(r=1e-7),
+        dict(flicker=1e-3),
+    ],
+    ids=["white", "quantization", "gauss_markov", "rate_random_walk", "ramp", "flicker"],
 )
 def test_each_process_has_its_analytic_allan_variance(process):
     """Over 20 seeds, the mean Allan variance of each generated process is its exact discrete one within
-    4 standard errors (from the spread across seeds), and the library's continuous IEEE form is within 4 %
-    of it at cluster sizes of 4 and more (the random walk's extra ``K² dt / 6m`` and the sampled
-    Gauss–Markov bias's ``O(dt/T)`` vanish there)."""
-    n = 1 << 14
-    runs = np.array([allan(generate(np.random.default_rng(s), n, DT, **process), DT).avar for s in SEEDS])
-    m = allan(np.zeros(n), DT).clusters
-    exact = exact_avar(m, DT, **process)
+    4 standard errors (from the spread across seeds), and the library's IEEE form is within 4 % of it at
+    cluster sizes of 4 and more (the random walk's extra ``K² dt / 6m`` and the sampled Gauss–Markov
+    bias's ``O(dt/T)`` vanish there). Flicker has no closed form to write out: its mean is the library's
+    sampled form (:func:`~sins.characterise.terms.flicker_shape`, ``2B²/π`` at one sample) within 4
+    standard errors at every octave."""
+    n, dt = 1 << 14, 0.1
+    runs = np.array([allan(generate(np.random.default_rng(s), n, dt, **process), dt).avar for s in SEEDS])
+    m = allan(np.zeros(n), dt).clusters
+    library = terms.model_avar(m * dt, _coefficients(process), process.get("tau_c"), m)
     mean, sem = runs.mean(axis=0), runs.std(axis=0, ddof=1) / math.sqrt(len(runs))
+    if "flicker" in process:
+        assert library[0] == pytest.approx(2.0 * process["flicker"] ** 2 / math.pi, rel=1e-6)
+        assert np.all(np.abs(mean - library) <= 4.0 * sem)
+        return
+    exact = exact_avar(m, dt, **process)
     assert np.all(np.abs(mean - exact) <= 4.0 * sem + 1e-12 * exact)
-    coefficients = np.array([process.get("q", 0.0), process.get("arw", 0.0), process.get("sigma_b", 0.0),
-                             process.get("k", 0.0), process.get("r", 0.0)]) ** 2  # fmt: skip
-    library = terms.model_avar(m * DT, coefficients, process.get("tau_c"))
     np.testing.assert_allclose(library[m >= 4], exact[m >= 4], rtol=0.04)
 
 
 def test_confidence_intervals_cover_the_true_deviation():
     """Over 20 seeds of white noise with a Gauss–Markov bias, the 95 % intervals (EDF from the fitted
-    noise) hold the exact Allan deviation at 90-99 % of the points (measured: see the guide)."""
+    noise) hold the exact Allan deviation at 90-99 % of the points."""
     process = dict(arw=1e-3, sigma_b=3e-4, tau_c=20.0)
     held = total = 0
     for seed in SEEDS:
-        curve = analysis.characterise_channel(
-            generate(np.random.default_rng([seed, 11]), 1 << 15, DT, **process), DT
-        ).curve
+        x = generate(np.random.default_rng([seed, 11]), 1 << 15, 0.1, **process)
+        raw = allan(x, 0.1)
+        curve = raw.with_edf(selection.weigh(raw).edf)  # the EDF characterise_channel gives its curve
         low, high = curve.interval()
-        truth = np.sqrt(exact_avar(curve.clusters, DT, **process))
+        truth = np.sqrt(exact_avar(curve.clusters, 0.1, **process))
         held += int(np.sum((low <= truth) & (truth <= high)))
         total += len(truth)
     assert 0.90 <= held / total <= 0.99, held / total
 
 
-# --------------------------------------------------------------------------- recovery over 20 seeds
-
-#: Cases: the four grades' gyros (their ARW, bias instability and correlation time; a consumer unit's
-#: quantization and an industrial unit's rate random walk), and each process alone beside white noise.
-#: SI: rad, rad/√s, rad/s, s, rad/s/√s.
-_DEG = math.pi / 180.0
-CASES = {
-    "white": dict(arw=1e-3),
-    "white_quantization": dict(arw=1e-4, q=3e-4),
-    "white_gauss_markov": dict(arw=1e-3, sigma_b=3e-4, tau_c=30.0),
-    "white_random_walk": dict(arw=1e-3, k=1e-5),
-    "consumer": dict(q=2e-5, arw=1.0 * _DEG / 60, sigma_b=30 * _DEG / 3600, tau_c=100.0),
-    "industrial": dict(arw=0.3 * _DEG / 60, sigma_b=5 * _DEG / 3600, tau_c=200.0, k=0.5 * _DEG / 3600 / 60),
-    "tactical": dict(arw=0.1 * _DEG / 60, sigma_b=0.5 * _DEG / 3600, tau_c=300.0),
-    "navigation": dict(arw=0.002 * _DEG / 60, sigma_b=0.003 * _DEG / 3600, tau_c=600.0),
-}
-_KEYS = {
-    "q": "quantization",
-    "arw": "white",
-    "sigma_b": "bias_instability",
-    "k": "rate_random_walk",
-    "r": "rate_ramp",
-}
+# --------------------------------------------------------------------------- the ramp
 
 
-def _correct(term: terms.Term, truth: float) -> bool:
-    """A resolved term within 2σ of the truth, or an unresolved one whose upper bound holds the truth."""
-    if term.resolved:
-        assert term.value is not None and term.sigma is not None
-        return abs(term.value - truth) <= 2.0 * term.sigma
-    return term.upper is not None and truth <= term.upper
+@pytest.mark.parametrize(
+    "process",
+    [dict(arw=1e-3), dict(k=1e-6), dict(sigma_b=1e-3, tau_c=100.0), dict(flicker=1e-3), dict(q=1e-3)],
+    ids=["white", "rate_random_walk", "gauss_markov", "flicker", "quantization"],
+)
+def test_ramp_sigma_is_the_spread_of_noise_slopes(process):
+    """The least-squares slope's σ under each noise type (:func:`trend.slope_variance`, the noise's
+    spectrum through the slope's window) is the spread of the slopes of 400 generated series within
+    15 % (the spread's own standard error is 3.5 %); white noise's is ``√(12 N²/(dt³ n³))`` exactly."""
+    n, dt = 1 << 13, 0.1
+    slopes = [trend.slope(generate(np.random.default_rng([s, 17]), n, dt, **process), dt, [(0, n)])
+              for s in range(400)]  # fmt: skip
+    predicted = math.sqrt(trend.slope_variance(n, dt, _coefficients(process), process.get("tau_c")))
+    assert float(np.std(slopes)) == pytest.approx(predicted, rel=0.15)
+    if "arw" in process:
+        assert predicted == pytest.approx(math.sqrt(12.0 * 1e-6 / (dt**3 * (n**3 - n))), rel=1e-4)
+
+
+# --------------------------------------------------------------------------- issue 32's cases, two seeds
 
 
 @pytest.fixture(scope="module")
-def recovery() -> dict[str, dict[str, list[bool]]]:
-    """Per case and term, whether each seed's statement about it was right (absent terms: truth 0)."""
-    out: dict[str, dict[str, list[bool]]] = {}
-    for case, process in CASES.items():
-        right: dict[str, list[bool]] = {name: [] for name in terms.TERMS}
-        for seed in SEEDS:
-            x = generate(np.random.default_rng([seed, 23]), N_ROWS, DT, **process)
-            fit = analysis.characterise_channel(x, DT).fit
-            for key, name in _KEYS.items():
-                right[name].append(_correct(fit.terms[name], process.get(key, 0.0)))
-        out[case] = right
+def cases() -> dict[str, list[tuple[analysis.ChannelResult, analysis.ChannelResult]]]:
+    """Two seeds of each of issue 32's cases (4 h at 100 Hz): each result and one more refit of it."""
+    out = {}
+    for case in CASES:
+        pairs = []
+        for seed in (0, 1):
+            x = case_series(case, seed)
+            result = analysis.characterise_channel(x, DT)
+            pairs.append((result, analysis.refit_channel(x, DT, None, result)))
+        out[case] = pairs
     return out
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_terms_recovered_within_their_stated_uncertainty(recovery, case):
-    """Over 20 seeds, each term's statement (value ± 2σ, or "not resolved, below U") holds the truth in at
-    least 16 of 20 (nominally 95 %: 15 or fewer would happen with probability 0.3 %). The measured counts
-    are in docs/guide/characterise.md: 18-20 of 20 for most, 16 where a rate random walk competes with a
-    Gauss–Markov bias or a ramp for the same longest cluster times."""
-    for name, right in recovery[case].items():
-        assert sum(right) >= 16, (case, name, sum(right))
+def test_terms_of_issue_32s_cases(cases, case):
+    """Two seeds of each case (the 20-seed sweep is ``tools/characterise_recovery.py``): every term of the
+    truth resolved (each dominates the curve over an octave and a half or more, the ramp the series) but
+    the rate random walk, which a seed in ten leaves bounded; the resolved terms within 3σ of their truth,
+    but one statement a case at most (the sweep asks 90 %: on ``accel_n_gm_k``'s seed 1 the Gauss–Markov
+    bias takes the rate random walk's rise and lands 3.7σ high, the one miss of its 20 seeds); no term
+    absent from the truth beyond 3σ; every unresolved term's bound at or above its truth; and one more
+    refit changes no resolved term."""
+    truth = truths(case)
+    missed = []
+    for result, again in cases[case]:
+        assert again.fit.resolved == result.fit.resolved, (result.fit.resolved, again.fit.resolved)
+        for name, true in truth.items():
+            term = result.fit.terms[name]
+            if not term.resolved:
+                assert term.upper is not None and term.upper >= true, (name, term, true)
+                assert true == 0.0 or name == "rate_random_walk", (name, term, true)
+                continue
+            assert term.value is not None and term.sigma is not None
+            if abs(term.value - true) > 3.0 * term.sigma:
+                assert true > 0.0, (name, term)
+                missed.append((name, term.value, term.sigma, true))
+    assert len(missed) <= 1, missed
 
 
-def test_gauss_markov_correlation_time_recovered():
-    """The correlation time's range (χ² within 4 of its least) holds the truth in at least 16 of 20 seeds
-    where the bias is resolved, and is resolved in all 20."""
-    process = CASES["white_gauss_markov"]
+def test_flicker_and_gauss_markov_told_apart(cases):
+    """The flicker case takes B, not a Gauss–Markov bias; the Gauss–Markov cases take GM, not B, and the
+    correlation time's range holds the truth in three of their four fits at least."""
+    for result, _ in cases["flicker_white"]:
+        assert result.fit.terms["flicker"].resolved and not result.fit.terms["gauss_markov"].resolved
     held = 0
-    for seed in SEEDS:
-        fit = analysis.characterise_channel(
-            generate(np.random.default_rng([seed, 5]), N_ROWS, DT, **process), DT
-        ).fit
-        assert fit.terms["bias_instability"].resolved and fit.tau_c_range_s is not None
-        held += fit.tau_c_range_s[0] <= process["tau_c"] <= fit.tau_c_range_s[1]
-    assert held >= 16
+    for case in ("gyro_q_n_gm_k", "accel_n_gm_k"):
+        for result, _ in cases[case]:
+            assert result.fit.terms["gauss_markov"].resolved and not result.fit.terms["flicker"].resolved
+            low, high = result.fit.tau_c_range_s or (0.0, 0.0)
+            held += low <= CASES[case]["tau_c"] <= high
+    assert held >= 3  # a 95 % range; over the sweep's 40 fits, see the guide
 
 
-def test_short_recording_leaves_slow_terms_unresolved_with_the_length_they_need():
-    """A 10-minute recording of white noise and a rate random walk that shows only after hours: the rate
-    random walk, bias instability and ramp are not resolved, with no value and a length beyond the
-    recording's; a long recording of the same unit resolves the rate random walk."""
-    process = dict(arw=1e-3, k=3e-6)
-    short = analysis.characterise_channel(generate(np.random.default_rng(7), 6000, DT, **process), DT).fit
-    for name in ("bias_instability", "rate_random_walk", "rate_ramp"):
-        t = short.terms[name]
-        assert not t.resolved and t.value is None and t.sigma is None
-        assert t.needs_length_s is not None and t.needs_length_s > 600.0
-    assert short.terms["white"].resolved
-    long = analysis.characterise_channel(generate(np.random.default_rng(7), 1 << 19, DT, **process), DT).fit
-    assert long.terms["rate_random_walk"].resolved
+def test_ramp_is_a_trend_taken_out_before_the_allan_analysis(cases):
+    """The ramp case: the ramp resolved with its sign and σ, taken out of the curve analysed (its Allan
+    variance ``R²τ²/2`` gone: the longest cluster time's point within 3σ of white noise's), no rate
+    random walk in its place; the other cases: no ramp."""
+    for result, _ in cases["white_ramp"]:
+        fit = result.fit
+        assert fit.ramp_removed and fit.terms["rate_ramp"].resolved and fit.terms["rate_ramp"].value > 0.0
+        assert not fit.terms["rate_random_walk"].resolved
+        n2 = CASES["white_ramp"]["arw"] ** 2 / result.curve.tau_s[-1]
+        assert result.curve.avar[-1] <= n2 * (1.0 + 3.0 * math.sqrt(2.0 / result.curve.edf[-1]))
+    for case in ("gyro_q_n_gm_k", "flicker_white", "accel_n_gm_k"):
+        for result, _ in cases[case]:
+            assert not result.fit.terms["rate_ramp"].resolved and not result.fit.ramp_removed
+
+
+def test_slow_noise_does_not_pass_for_a_ramp():
+    """A Gauss–Markov bias of 300 s over 17 minutes makes trends of its own, which its Allan curve (up
+    to 82 s) cannot show: 20 seeds of it give no ramp beyond 3σ (the σ allows for the slow noise the
+    curve does not exclude; from the full model alone, the rig recording of issue 32 gave 4σ)."""
+    n, dt = int(1046.4 * 100), 0.01
+    for seed in range(20):
+        x = generate(np.random.default_rng([seed, 41]), n, dt, arw=1e-3, sigma_b=2e-4, tau_c=300.0)
+        spans = ((0, n),)
+        weights = selection.weigh(allan(x, dt, spans).detrended(trend.slope(x, dt, spans)))
+        ramp = trend.fit_ramp(x, dt, spans, weights.slow_models(), weights.tau_c_s)
+        assert not ramp.resolved, (seed, ramp)
 
 
 # --------------------------------------------------------------------------- model file and closing check
 
 
-def _residual(process: dict[str, float], seed: int = 0, n: int = 1 << 15) -> analysis.Residual:
+def _residual(
+    process: dict[str, float], seed: int = 0, n: int = 1 << 15, scale: float = 100.0
+) -> analysis.Residual:
     rng = np.random.default_rng(seed)
-    x = np.column_stack([generate(rng, n, DT, **process) for _ in range(6)])
-    x[:, 3:] *= 100.0  # accelerometers: m/s² scale noise
-    return analysis.residual(np.arange(n) * DT, x, None, "synthetic")
+    x = np.column_stack([generate(rng, n, 0.1, **process) for _ in range(6)])
+    x[:, 3:] *= scale  # accelerometers: m/s² scale noise
+    return analysis.residual(np.arange(n) * 0.1, x, None, "synthetic")
 
 
 def test_model_file_is_read_by_sins_and_simulates_the_fitted_noise(tmp_path):
@@ -279,14 +286,38 @@ def test_model_file_is_read_by_sins_and_simulates_the_fitted_noise(tmp_path):
     assert not list(tmp_path.glob(".*tmp"))
 
 
+def test_flicker_is_written_as_the_gauss_markov_bias_of_its_peak(tmp_path):
+    """sins has no flicker effect: a resolved B is written as the Gauss–Markov bias of the same Allan peak
+    (``0.617 σ_b = 0.664 B``) at the middle of the floor's cluster times, with a comment saying so."""
+    process = dict(arw=3e-4, flicker=1e-4)
+    result = analysis.characterise(_residual(process, n=1 << 16))
+    path = model_file.write_model(tmp_path / "unit.toml", result)
+    text = path.read_text()
+    assert "simulated as the Gauss-Markov bias of the same Allan peak" in text
+    gm = scenario.load_imu(path).model().get("gyro.bias_instability")
+    assert gm is not None
+    b = result.channels["gyro.x"].fit.terms["flicker"].value
+    assert b is not None
+    assert gm.sigma[0] * terms.GM_PEAK == pytest.approx(b * terms.FLICKER_FACTOR, rel=1e-5)
+
+
+def test_model_file_beyond_what_sins_reads_is_refused(tmp_path):
+    """A recording whose accelerometer noise would be 1e9 µg/√Hz (readings in other units) is refused in
+    one line naming the effect, before anything is written (issue 35)."""
+    result = analysis.characterise(_residual(dict(arw=1e-3), n=1 << 12, scale=1e7))
+    refusal(lambda: model_file.write_model(tmp_path / "unit.toml", result), "synthetic", "accel.noise",
+            "vrw_ug_per_rt_hz")  # fmt: skip
+    assert not list(tmp_path.iterdir())
+
+
 # --------------------------------------------------------------------------- command line
 
 
-def _write_static(path, n: int = 1 << 14, seed: int = 0) -> None:
+def _write_static(path, n: int = 1 << 14, seed: int = 0, dt: float = 0.1, t0: float = 0.0) -> None:
     rng = np.random.default_rng(seed)
-    t = np.arange(n) * DT
-    gyro = np.column_stack([generate(rng, n, DT, arw=1e-4) for _ in range(3)]) + 7e-5
-    accel = np.column_stack([generate(rng, n, DT, arw=1e-3) for _ in range(3)]) + np.r_[0.0, 0.0, -9.8]
+    t = t0 + np.arange(n) * dt
+    gyro = np.column_stack([generate(rng, n, dt, arw=1e-4) for _ in range(3)]) + 7e-5
+    accel = np.column_stack([generate(rng, n, dt, arw=1e-3) for _ in range(3)]) + np.r_[0.0, 0.0, -9.8]
     io.write_imu(path, ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel))
 
 
@@ -299,172 +330,120 @@ def test_cli_round_trip(tmp_path, capsys):
     args = ["characterise", str(rec), "--static", "--out", str(out), "--json", str(doc), "--rerun", str(rrd)]
     assert cli.main(args) == 0
     text = capsys.readouterr().out
-    assert "°/√h" in text and "closing check" in text and "µg/√Hz" in text
+    assert "°/√h" in text and "closing check" in text and "µg/√Hz" in text and "IEEE B" in text
     data = json.loads(doc.read_text())
     white = data["channels"]["gyro.x"]["terms"]["white"]
     assert white["unit"] == "rad/√s" and white["resolved"]
     assert abs(white["value"] - 1e-4) < 3 * white["sigma"] + 0.02e-4
     assert white["support_tau_s"]
     assert data["channels"]["gyro.x"]["terms"]["rate_ramp"]["simulated"] is False
+    assert data["channels"]["gyro.x"]["terms"]["flicker"]["symbol"] == "B"
     assert "closing_check" in data and rrd.stat().st_size > 0
     assert scenario.load_imu(out).model().get("accel.noise") is not None
 
 
 def test_cli_refusals(tmp_path, capsys):
-    """One line and exit 2: no RECORDING and no --dataset, both, an IMU recording without --static or
-    --truth, --static beside --truth; and nothing written."""
+    """One line and exit 2, and nothing written: no RECORDING and no --dataset, both, an IMU recording
+    without --static or --truth, --static beside --truth, an output into a missing folder (refused before
+    the work), 16 rows ("infx" once), constant readings ("< -" once); a negative seed is argparse's usage
+    error (exit 2), before anything is read or written (issue 35: it failed after writing --out)."""
     rec = tmp_path / "static.csv"
     _write_static(rec, n=256)
+    short = tmp_path / "short.csv"
+    _write_static(short, n=16)
+    flat = tmp_path / "flat.csv"
+    t = np.arange(512) * 0.1
+    io.write_imu(
+        flat, ImuRates(t=t, omega_ib_b=np.full((512, 3), 7e-5), f_ib_b=np.tile([0, 0, -9.8], (512, 1)))
+    )
     out = tmp_path / "unit.toml"
     for argv, fragment in (
         (["characterise"], "give a RECORDING.csv or --dataset NAME"),
         (["characterise", str(rec), "--dataset", "ferraris"], "one of them"),
         (["characterise", str(rec), "--out", str(out)], "--static"),
         (["characterise", str(rec), "--static", "--truth", str(rec)], "exclude each other"),
+        (["characterise", str(rec), "--static", "--out", str(tmp_path / "no" / "u.toml")], "no such folder"),
+        (["characterise", str(short), "--static", "--out", str(out)], "needs at least 128"),
+        (["characterise", str(flat), "--static", "--out", str(out)], "gyro.x is constant"),
     ):
         assert cli.main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert err.count("\n") == 0 and fragment in err, err
+    with pytest.raises(SystemExit) as info:
+        cli.main(["characterise", str(rec), "--static", "--out", str(out), "--seed", "-1"])
+    assert info.value.code == 2 and "--seed: must be 0 or more" in capsys.readouterr().err
     assert not out.exists()
 
 
-def test_residual_refusals():
-    """Uneven sampling, time that does not increase and too few rows are refused in one line naming the
-    source and the row."""
-    t = np.arange(100) * 0.1
-    x = np.zeros((100, 6))
-    refusal(lambda: analysis.residual(t[:10], x[:10], None, "rec.csv"), "rec.csv", "at least")
-    uneven = t.copy()
-    uneven[50:] += 0.05
-    refusal(lambda: analysis.residual(uneven, x, None, "rec.csv"), "rec.csv", "row 51", "uniform sampling")
-    back = t.copy()
-    back[30] = back[29]
-    refusal(lambda: analysis.residual(back, x, None, "rec.csv"), "rec.csv", "does not increase")
-    with pytest.raises(SinsInputError):
-        analysis.residual(t, np.full((100, 6), np.nan), None, "rec.csv")
+def test_time_in_milliseconds_is_a_stated_warning(tmp_path, capsys):
+    """A 100 Hz recording whose time column is in milliseconds reads as 0.1 Hz: characterised, with a
+    one-line warning that says so on stderr and in the JSON."""
+    rec = tmp_path / "ms.csv"
+    _write_static(rec, n=4096, dt=10.0)
+    doc = tmp_path / "ms.json"
+    assert cli.main(["characterise", str(rec), "--static", "--json", str(doc)]) == 0
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("sins: warning:") and err.count("\n") == 0 and "milliseconds" in err, err
+    assert "milliseconds" in json.loads(doc.read_text())["warnings"][0]
 
 
-# --------------------------------------------------------------------------- real recordings
-
-
-def _real(name: str, folder: str) -> tuple[analysis.Characterisation, check.ClosingCheck, check.ClosingCheck]:
-    from sins.io import datasets
-
-    if not dataset_folder(folder).is_dir():
-        pytest.skip(f"dataset {folder} not found under the data root")
-    data = datasets.load(name)
-    res = analysis.residual(
-        data.t, np.hstack([data.gyro, data.accel]), np.hstack([data.ref_gyro, data.ref_accel]), name
+def test_static_on_a_moving_recording_is_refused(tmp_path, capsys):
+    """`--static` on `sins simulate`'s drive (turns and starts) is refused in one line naming the channel,
+    its departure and when, and what to give instead; a static recording with slow drift passes the
+    same check."""
+    scen, imu_csv, truth = tmp_path / "drive.toml", tmp_path / "imu.csv", tmp_path / "truth.csv"
+    scen.write_text(_DRIVE)
+    assert (
+        cli.main(["simulate", str(scen), "--imu", str(imu_csv), "--truth", str(truth), "--form", "rate"]) == 0
     )
-    result = analysis.characterise(res)
-    model = model_file.imu_model(result)
-    return result, check.closing_check(result, model, seed=1), check.closing_check(result, model, seed=2)
+    capsys.readouterr()
+    assert cli.main(["characterise", str(imu_csv), "--static"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--static, but the unit moves" in err and "--truth" in err, err
+    rng = np.random.default_rng(4)
+    n = 36_000
+    t = np.arange(n) * 0.1
+    readings = np.column_stack([generate(rng, n, 0.1, arw=1e-4, k=1e-6) for _ in range(6)])
+    assert still.motion(t, readings + np.r_[7e-5, 0, 0, 0, 0, -9.8]) is None
 
 
-def _within_model(
-    closing: check.ClosingCheck, result: analysis.Characterisation, fast_gm: bool = True
-) -> float:
-    """The share of points where the simulated curve lies within the band about the fitted model's.
-
-    ``fast_gm=False`` leaves out the cluster times of at most four samples on channels whose Gauss–Markov
-    bias has a correlation time under 20 samples: there the simulated bias (sampled, and integrated by the
-    trapezoid rule) has less Allan variance than the continuous form the fit uses, by ``O(dt/T)`` (15 %
-    of the deviation at one sample for ``T`` of ten).
-    """
-    from scipy import stats
-
-    inside = total = 0
-    for ch, c in closing.channels.items():
-        edf = result.channels[ch].curve.edf
-        ratio = np.asarray(c["sim_adev"]) ** 2 / np.asarray(c["model_adev"]) ** 2
-        lo, hi = stats.chi2.ppf(0.005, edf) / edf, stats.chi2.ppf(0.995, edf) / edf
-        keep = np.ones(len(ratio), dtype=bool)
-        tau_c = result.channels[ch].fit.tau_c_s
-        if not fast_gm and tau_c is not None and tau_c < 20.0 * result.dt:
-            keep = np.asarray(c["tau_s"]) > 4.5 * result.dt
-        inside += int(np.sum(((ratio >= lo) & (ratio <= hi))[keep]))
-        total += int(keep.sum())
-    return inside / total
+# --------------------------------------------------------------------------- references
 
 
-def test_ferraris_round_trip(capsys):
-    """The Ferraris holds (six of 4-7 s at 102.4 Hz): white noise resolved on every channel, the slow terms
-    not resolved with the length they need; the model file's simulation follows the fitted model at 99 %
-    of points; the real curves part from the simulated ones only at the shortest cluster times (the
-    unit's output filter), with two seeds."""
-    result, one, two = _real("ferraris", "imucal_ferraris")
-    assert cli.main(["characterise", "--dataset", "ferraris"]) == 0
-    for r in result.channels.values():
-        assert r.fit.terms["white"].resolved
-        for name in ("bias_instability", "rate_random_walk"):
-            assert not r.fit.terms[name].resolved and r.fit.terms[name].needs_length_s
-    assert _within_model(one, result) >= 0.95
-    for closing in (one, two):
-        for p in closing.partings:
-            assert p.tau_s[1] <= 2.5 * result.dt or abs(math.log(p.ratio)) < 0.25, p.what()
+def test_rig_recording_of_a_tactical_unit(tmp_path, capsys):
+    """`sins characterise rig.csv` on `sins calibrate 24pos_ratetable --imu tactical`: the seed model
+    fitted against the rig's reference and taken away first, the white noise within 10 % of the unit's
+    (0.1 °/√h, 100 µg/√Hz) and no rate random walk or ramp resolved (issue 32: N 0, K 768-1264 °/h/√h)."""
+    rig = tmp_path / "rig.csv"
+    assert cli.main(["calibrate", "24pos_ratetable", "--imu", "tactical", "--out", str(rig)]) == 0
+    doc = tmp_path / "rig.json"
+    assert cli.main(["characterise", str(rig), "--json", str(doc)]) == 0
+    assert "seed model" in capsys.readouterr().out
+    data = json.loads(doc.read_text())
+    for ch, r in data["channels"].items():
+        unit = 0.1 * _DEG / 60 if ch.startswith("gyro") else 100 * 9.80665e-6
+        white = r["terms"]["white"]
+        assert white["resolved"] and abs(white["value"] / unit - 1.0) <= 0.10, (ch, white)
+        assert not r["terms"]["rate_random_walk"]["resolved"] and not r["terms"]["rate_ramp"]["resolved"], ch
 
 
-def _rocking_hz(name: str, folder: str) -> tuple[float, float]:
-    """The frequency (1-4 Hz) where the ring-laser unit's x gyro and y accelerometer are most coherent, and
-    that coherence: the base rocking about the x axis turns the gyro and tilts gravity into the y axis."""
-    from scipy import signal
-
-    from sins.io import datasets
-
-    data = datasets.load(name)
-    f, c = signal.coherence(data.gyro[:, 0], data.accel[:, 1], fs=1.0 / float(np.median(np.diff(data.t))),
-                            nperseg=4096)  # fmt: skip
-    band = (f > 1.0) & (f < 4.0)
-    k = int(np.argmax(c[band]))
-    return float(f[band][k]), float(c[band][k])
-
-
-def test_psins_lasergyro_round_trip():
-    """The static ring-laser INS (31 min at 100 Hz): its quantization is coarse against its noise, so the
-    file simulates the IEEE Q term as white noise of the integrated output (``quantization_noise``), not as
-    rounding (a sawtooth on a nearly constant input); the simulation then follows the fitted model at
-    95 % of points or more, and at the points the fit kept the curves part only where the real unit's
-    curve is not its noise:
-
-    * the base rocks near 2 Hz about its horizontal axes (the x gyro and y accelerometer coherent above
-      0.9 there): a line whose Allan hump lies at ``0.371/f``, which the fit can only follow with a
-      Gauss–Markov bias whose hump is broader; those channels part within a factor 5 of the hump;
-    * at the longest cluster times, above the model but below it plus a rate random walk at the bound the
-      fit gave it (a slow term the 31 min do not resolve);
-    * elsewhere at most one point a seed, by chance (about 40 points at 99 %: 0.4 expected).
-
-    Before ``quantization_noise`` the z gyro parted at τ = 0.16-0.64 s and the x accelerometer at
-    0.01-0.08 s, where the term dominates (15 of 55 points in all)."""
-    result, one, two = _real("psins_lasergyro", "psins_lasergyro_static")
-    names = {name for name, _ in model_file.effect_tables(result)}
-    assert {"gyro.quantization_noise", "accel.quantization_noise"} <= names
-    assert not names & {"gyro.quantization", "accel.quantization"}
-    for ch, r in result.channels.items():
-        if r.fit.terms["quantization"].resolved:
-            assert not model_file.rounding_is_dithered(result, ch)
-    for closing in (one, two):  # 99 % bands: 0.99 expected
-        assert _within_model(closing, result, fast_gm=False) >= 0.97
-    f_hz, coherence = _rocking_hz("psins_lasergyro", "psins_lasergyro_static")
-    assert coherence > 0.9
-    hump_s = 0.371 / f_hz
-    for closing in (one, two):
-        chance = 0
-        for p in closing.partings:
-            if not p.fitted:
-                continue
-            if p.channel in ("gyro.x", "gyro.y", "accel.x", "accel.y"):
-                assert hump_s / 5.0 <= p.tau_s[0] and p.tau_s[1] <= hump_s * 5.0, p.what()
-                continue
-            c, r = closing.channels[p.channel], result.channels[p.channel]
-            tau = np.asarray(c["tau_s"])
-            at = (tau >= p.tau_s[0]) & (tau <= p.tau_s[1])
-            k_upper = r.fit.terms["rate_random_walk"].upper or 0.0
-            slow = np.asarray(c["model_adev"])[at] ** 2 + k_upper**2 * tau[at] / 3.0
-            if p.ratio > 1.0 and p.tau_s[0] >= tau[-1] / 4.0:
-                assert np.all(np.asarray(c["real_adev"])[at] ** 2 <= slow), p.what()
-            else:
-                chance += int(at.sum())
-        assert chance <= 1, [p.what() for p in closing.partings]
+def test_rig_session_of_the_written_unit(tmp_path, capsys):
+    """The round trip through sins: a unit characterised, its file given to `sins calibrate`, the rig
+    recording characterised (its ref_ columns removed): the white noise comes back within 3σ."""
+    result = analysis.characterise(_residual(dict(arw=2e-4), n=1 << 14))
+    unit = model_file.write_model(tmp_path / "unit.toml", result)
+    rig = tmp_path / "rig.csv"
+    assert (
+        cli.main(["calibrate", "24pos_ratetable", "--imu", str(unit), "--out", str(rig), "--seed", "2"]) == 0
+    )
+    doc = tmp_path / "rig.json"
+    assert cli.main(["characterise", str(rig), "--json", str(doc)]) == 0
+    capsys.readouterr()
+    channels = json.loads(doc.read_text())["channels"]
+    for ch in ("gyro.x", "accel.z"):
+        white = channels[ch]["terms"]["white"]
+        wrote = result.channels[ch].fit.terms["white"].value
+        assert white["resolved"] and abs(white["value"] - wrote) <= 3.0 * white["sigma"], (ch, white, wrote)
 
 
 _DRIVE = """
@@ -497,8 +476,7 @@ duration_s = 50
 
 def test_moving_unit_with_its_truth(tmp_path, capsys):
     """A moving unit (`sins simulate` of a short drive, numpy white noise added to its rates): with
-    `--truth` its motion is removed and the noise read back within 3σ on every channel; the motion itself
-    would otherwise dominate the curves."""
+    `--truth` its motion is removed and the noise read back within 3σ on every channel."""
     scen, imu_csv, truth = tmp_path / "drive.toml", tmp_path / "imu.csv", tmp_path / "truth.csv"
     scen.write_text(_DRIVE)
     assert (
@@ -523,20 +501,189 @@ def test_moving_unit_with_its_truth(tmp_path, capsys):
         assert white["resolved"] and abs(white["value"] - density[i]) <= 3.0 * white["sigma"], (ch, white)
 
 
-def test_rig_session_of_the_written_unit(tmp_path, capsys):
-    """The round trip through sins: a unit characterised, its file given to `sins calibrate`, the rig
-    recording characterised (its ref_ columns removed): the white noise comes back within 3σ."""
-    result = analysis.characterise(_residual(dict(arw=2e-4), n=1 << 14))
-    unit = model_file.write_model(tmp_path / "unit.toml", result)
-    rig = tmp_path / "rig.csv"
-    assert (
-        cli.main(["calibrate", "24pos_ratetable", "--imu", str(unit), "--out", str(rig), "--seed", "2"]) == 0
-    )
-    doc = tmp_path / "rig.json"
-    assert cli.main(["characterise", str(rig), "--json", str(doc)]) == 0
+# --------------------------------------------------------------------------- real recordings
+
+
+def _real(name: str, folder: str) -> tuple[analysis.Characterisation, check.ClosingCheck, check.ClosingCheck]:
+    from sins.io import datasets
+
+    if not dataset_folder(folder).is_dir():
+        pytest.skip(f"dataset {folder} not found under the data root")
+    result = analysis.characterise(reference.reference_residual(datasets.load(name), name))
+    model = model_file.imu_model(result)
+    return result, check.closing_check(result, model, seed=1), check.closing_check(result, model, seed=2)
+
+
+def _within_model(
+    closing: check.ClosingCheck, result: analysis.Characterisation, fast_gm: bool = True
+) -> float:
+    """The share of points where the simulated curve lies within the band about the fitted model's.
+
+    ``fast_gm=False`` leaves out the cluster times of at most four samples on channels whose Gauss–Markov
+    bias has a correlation time under 20 samples: there the simulated bias (sampled, and integrated by the
+    trapezoid rule) has less Allan variance than the continuous form the fit uses, by ``O(dt/T)``.
+    """
+    from scipy import stats
+
+    inside = total = 0
+    for ch, c in closing.channels.items():
+        edf = result.channels[ch].curve.edf
+        ratio = np.asarray(c["sim_adev"]) ** 2 / np.asarray(c["model_adev"]) ** 2
+        lo, hi = stats.chi2.ppf(0.005, edf) / edf, stats.chi2.ppf(0.995, edf) / edf
+        keep = np.ones(len(ratio), dtype=bool)
+        tau_c = result.channels[ch].fit.tau_c_s
+        if not fast_gm and tau_c is not None and tau_c < 20.0 * result.dt:
+            keep = np.asarray(c["tau_s"]) > 4.5 * result.dt
+        inside += int(np.sum(((ratio >= lo) & (ratio <= hi))[keep]))
+        total += int(keep.sum())
+    return inside / total
+
+
+def test_ferraris_round_trip(capsys):
+    """The Ferraris holds (six of 4-7 s at 102.4 Hz): white noise resolved on every channel, the slow terms
+    not resolved with the length they need; the model file's simulation follows the fitted model at 95 %
+    of points; the real curves part from the simulated ones only at the shortest cluster times (the
+    unit's output filter), with two seeds."""
+    result, one, two = _real("ferraris", "imucal_ferraris")
+    assert cli.main(["characterise", "--dataset", "ferraris"]) == 0
     capsys.readouterr()
-    channels = json.loads(doc.read_text())["channels"]
-    for ch in ("gyro.x", "accel.z"):
-        white = channels[ch]["terms"]["white"]
-        wrote = result.channels[ch].fit.terms["white"].value
-        assert white["resolved"] and abs(white["value"] - wrote) <= 3.0 * white["sigma"], (ch, white, wrote)
+    for r in result.channels.values():
+        assert r.fit.terms["white"].resolved
+        for name in ("flicker", "gauss_markov", "rate_random_walk"):
+            assert not r.fit.terms[name].resolved and r.fit.terms[name].needs_length_s
+    assert _within_model(one, result) >= 0.95
+    for closing in (one, two):
+        for p in closing.partings:
+            assert p.tau_s[1] <= 2.5 * result.dt or abs(math.log(p.ratio)) < 0.25, p.what()
+
+
+def _broad_rest(name: str, trial: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """BROAD's own rest phases (its ``movement`` flags, read here with scipy): rows of the reader's trial
+    (True at rest), the gyro readings and the sample step."""
+    from sins.io import datasets
+
+    mat = scipy.io.loadmat(str(dataset_folder("broad_mocap") / f"{trial}.mat"), squeeze_me=True)
+    data = datasets.load(name)
+    dt = 7.0 / 2000.0
+    rest = ~np.asarray(mat["movement"]).astype(bool)[np.round(data.t / dt).astype(int)]
+    return rest, data.gyro, np.array(dt)
+
+
+@pytest.mark.parametrize(
+    "name, trial",
+    [
+        ("broad_05", "05_undisturbed_slow_rotation_with_breaks_B"),
+        ("broad_18", "18_undisturbed_fast_translation_with_breaks_B"),
+    ],
+)
+def test_broad_reference_noisier_than_the_sensor(name, trial):
+    """BROAD's reference is differentiated motion capture: the report says it limits the moving parts,
+    the sensor is characterised where it stood still (every still row is a rest by BROAD's own flags, and
+    they cover 85 % of its rests or more), and the gyro white noise is within 20 % of the rest phases' own
+    Allan figure (allantools' ``oadev`` of the readings over BROAD's rests, each trimmed by a second:
+    ``σ(τ)·√τ`` at the octave of least slope error, 0.1-0.5 s)."""
+    if not dataset_folder("broad_mocap").is_dir():
+        pytest.skip("dataset broad_mocap not found under the data root")
+    from sins.io import datasets
+
+    data = datasets.load(name)
+    res = reference.reference_residual(data, name)
+    assert any("limited by the reference" in note for note in res.notes), res.notes
+    rest, gyro, dt = _broad_rest(name, trial)
+    kept = np.zeros(len(data), dtype=bool)
+    for a, b in res.segments:
+        kept[a:b] = True
+    assert kept[~rest].sum() == 0 and kept[rest].mean() >= 0.85
+    result = analysis.characterise(res, ("gyro.x", "gyro.y", "gyro.z"))
+    edges = np.diff(np.r_[0, rest.astype(np.int8), 0])
+    trim = int(1.0 / dt)
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    spans = [(a + trim, b - trim) for a, b in zip(starts, stops, strict=True) if b - a > 4 * trim]
+    for i, ch in enumerate(("gyro.x", "gyro.y", "gyro.z")):
+        n_own = _white_figure([gyro[a:b, i] for a, b in spans], float(dt))
+        white = result.channels[ch].fit.terms["white"]
+        assert white.resolved and white.value is not None
+        assert abs(white.value / n_own - 1.0) <= 0.20, (ch, white.value, n_own)
+
+
+def _white_figure(pieces: list[np.ndarray], dt: float) -> float:
+    """White rate noise from allantools' overlapping deviation of each rest piece, pooled by counts: the
+    median of ``σ(τ)√τ`` at τ = 0.1-0.5 s (white noise's −½ slope holds there on BROAD's gyro)."""
+    taus = np.array([0.1, 0.2, 0.4])
+    values = []
+    for piece in pieces:
+        t, adev, _, _ = allantools.oadev(piece, rate=1.0 / dt, data_type="freq", taus=taus)
+        values.append(adev * np.sqrt(t))
+    return float(np.median(np.concatenate(values)))
+
+
+def _rocking_hz(name: str) -> tuple[float, float]:
+    """The frequency (1-4 Hz) where the ring-laser unit's x gyro and y accelerometer are most coherent, and
+    that coherence: the base rocking about the x axis turns the gyro and tilts gravity into the y axis."""
+    from scipy import signal
+
+    from sins.io import datasets
+
+    data = datasets.load(name)
+    fs = 1.0 / float(np.median(np.diff(data.t)))
+    f, c = signal.coherence(data.gyro[:, 0], data.accel[:, 1], fs=fs, nperseg=4096)
+    band = (f > 1.0) & (f < 4.0)
+    k = int(np.argmax(c[band]))
+    return float(f[band][k]), float(c[band][k])
+
+
+def test_psins_lasergyro_round_trip():
+    """The static ring-laser INS (31 min at 100 Hz): its quantization is coarse against its noise, so the
+    file simulates the IEEE Q term as white noise of the integrated output (``quantization_noise``), not as
+    rounding; the simulation follows the fitted model at 95 % of points or more; and at the points the
+    fit kept the curves part only where the real unit's curve is not its noise:
+
+    * the vertical channels (gyro.z, accel.z): at most one parting a seed (about 30 points at 99 %);
+    * the horizontal ones, about which the base rocks near 2 Hz (the x gyro and the y accelerometer
+      coherent above 0.9 there): from a fifth of the line's Allan hump (``0.371/f``) on, where its lobes
+      run on beyond the hump and no IEEE term has them, by a factor 1.5 at most; or at the two longest
+      cluster times, where the base's slow tilt moves gravity into the horizontal accelerometers (the x
+      accelerometer's curve rises there with a slope of about +1/3, between flicker and a rate random
+      walk; the fit takes a rate random walk, which the real unit lies below by a factor 3 at 82-164 s).
+    """
+    result, one, two = _real("psins_lasergyro", "psins_lasergyro_static")
+    names = {name for name, _ in model_file.effect_tables(result)}
+    assert {"gyro.quantization_noise", "accel.quantization_noise"} <= names
+    assert not names & {"gyro.quantization", "accel.quantization"}
+    for ch, r in result.channels.items():
+        if r.fit.terms["quantization"].resolved:
+            assert not model_file.rounding_is_dithered(result, ch)
+    f_hz, coherence = _rocking_hz("psins_lasergyro")
+    assert coherence > 0.9
+    hump_s = 0.371 / f_hz
+    for closing in (one, two):
+        assert _within_model(closing, result, fast_gm=False) >= 0.95
+        kept = [p for p in closing.partings if p.fitted]
+        vertical = [p for p in kept if p.channel in ("gyro.z", "accel.z")]
+        assert sum(_points(closing, p) for p in vertical) <= 1, [p.what() for p in kept]
+        for p in kept:
+            if p in vertical:
+                continue
+            slow = p.tau_s[0] >= closing.channels[p.channel]["tau_s"][-2]
+            assert slow or (p.tau_s[0] >= hump_s / 5.0 and 1.0 / 1.5 <= p.ratio <= 1.5), p.what()
+
+
+def _points(closing: check.ClosingCheck, parting: check.Parting) -> int:
+    tau = np.asarray(closing.channels[parting.channel]["tau_s"])
+    return int(np.count_nonzero((tau >= parting.tau_s[0]) & (tau <= parting.tau_s[1])))
+
+
+def test_residual_refusals():
+    """Uneven sampling, time that does not increase and too few rows are refused in one line naming the
+    source and the row."""
+    t = np.arange(300) * 0.1
+    x = np.random.default_rng(0).standard_normal((300, 6))
+    refusal(lambda: analysis.residual(t[:16], x[:16], None, "rec.csv"), "rec.csv", "16 rows", "at least 128")
+    uneven = t.copy()
+    uneven[150:] += 0.03  # one step of 0.13 s: not a gap (0.15 s), not the sampling step either
+    refusal(lambda: analysis.residual(uneven, x, None, "rec.csv"), "rec.csv", "row 151", "uniform sampling")
+    back = t.copy()
+    back[30] = back[29]
+    refusal(lambda: analysis.residual(back, x, None, "rec.csv"), "rec.csv", "does not increase")
+    with pytest.raises(SinsInputError):
+        analysis.residual(t, np.full((300, 6), np.nan), None, "rec.csv")

@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
@@ -49,6 +50,8 @@ class AllanCurve:
     terms : (k,) how many cluster differences each point averages (all segments)
     lengths : the segments' lengths, samples (for the EDF at another slope)
     confidence : the two-sided confidence of :meth:`interval`
+    dsum : (k,) the sum of the cluster differences themselves (all segments), for :meth:`detrended`;
+        None when not kept
     """
 
     tau_s: Array
@@ -58,6 +61,7 @@ class AllanCurve:
     terms: NDArray[np.int64]
     lengths: tuple[int, ...]
     confidence: float = CONFIDENCE
+    dsum: Array | None = None
 
     @property
     def adev(self) -> Array:
@@ -74,7 +78,32 @@ class AllanCurve:
     def with_edf(self, edf: Array) -> AllanCurve:
         """The same curve with other equivalent degrees of freedom (k,)."""
         return AllanCurve(
-            self.tau_s, self.clusters, self.avar, edf, self.terms, self.lengths, self.confidence
+            self.tau_s, self.clusters, self.avar, edf, self.terms, self.lengths, self.confidence, self.dsum
+        )
+
+    def detrended(self, slope: float) -> AllanCurve:
+        """The curve of the same rate less a ramp of ``slope`` (the rate's unit per s), with no new pass.
+
+        A ramp ``s·k`` of the rate (``s`` per sample) adds ``s·m²`` to every cluster difference at
+        cluster size ``m`` (the second difference of its running sum), so the squared differences of
+        the rate less the ramp sum to ``Σd² − 2 s m² Σd + s² m⁴ n``: the ramp's Allan variance
+        ``R²τ²/2`` is taken out exactly, whatever the segments' offsets.
+
+        Raises
+        ------
+        ValueError
+            when the curve was made without its differences' sums (``dsum`` None).
+        """
+        if self.dsum is None:
+            raise ValueError("this Allan curve keeps no sums of its differences: it cannot be detrended")
+        m2 = self.clusters.astype(float) ** 2
+        s = slope * float(self.tau_s[0] / self.clusters[0])  # per sample
+        n = np.maximum(self.terms, 1).astype(float)
+        squares = self.avar * 2.0 * m2 * n - 2.0 * s * m2 * self.dsum + s * s * m2 * m2 * self.terms
+        avar = np.maximum(squares, 0.0) / (2.0 * m2 * n)
+        dsum = self.dsum - s * m2 * self.terms
+        return AllanCurve(
+            self.tau_s, self.clusters, avar, self.edf, self.terms, self.lengths, self.confidence, dsum
         )
 
 
@@ -93,8 +122,9 @@ def octave_clusters(longest: int) -> NDArray[np.int64]:
     return 2 ** np.arange(int(np.log2(top)) + 1, dtype=np.int64)
 
 
-def segment_sums(rate: Array, clusters: NDArray[np.int64]) -> tuple[Array, NDArray[np.int64]]:
-    """For one segment, the sum of squared second differences of the running sum, and their count.
+def segment_sums(rate: Array, clusters: NDArray[np.int64]) -> tuple[Array, NDArray[np.int64], Array]:
+    """For one segment, the sum of squared second differences of the running sum, their count and the
+    sum of the differences themselves.
 
     The segment's mean is taken out first (an Allan deviation ignores a constant, and the running sum of
     a 9.8 m/s² reading would otherwise lose the noise's digits).
@@ -103,15 +133,27 @@ def segment_sums(rate: Array, clusters: NDArray[np.int64]) -> tuple[Array, NDArr
     theta[0] = 0.0
     np.cumsum(rate - rate.mean(), out=theta[1:])
     sums = np.zeros(len(clusters))
+    first = np.zeros(len(clusters))
     counts = np.zeros(len(clusters), dtype=np.int64)
     for j, m in enumerate(clusters):
         if len(theta) <= 2 * m:
             continue
-        d = theta[2 * m :] - 2.0 * theta[m:-m]
-        d += theta[: -2 * m]
-        sums[j] = float(np.dot(d, d))
-        counts[j] = len(d)
-    return sums, counts
+        sums[j], first[j] = _difference_sums(theta, int(m))
+        counts[j] = len(theta) - 2 * m
+    return sums, counts, first
+
+
+@numba.njit(cache=True, nogil=True)
+def _difference_sums(theta: Array, m: int) -> tuple[float, float]:
+    """``Σ d²`` and ``Σ d`` of ``d = θ[k+2m] − 2θ[k+m] + θ[k]``, in one pass without temporaries (numpy's
+    three array passes took 0.4 s a channel of 1.44 million samples; this, 0.04 s)."""
+    s2 = 0.0
+    s1 = 0.0
+    for k in range(len(theta) - 2 * m):
+        d = theta[k + 2 * m] - 2.0 * theta[k + m] + theta[k]
+        s2 += d * d
+        s1 += d
+    return s2, s1
 
 
 def allan(
@@ -140,17 +182,19 @@ def allan(
     spans = [(0, len(rate))] if segments is None else list(segments)
     clusters = octave_clusters(max((b - a for a, b in spans), default=0))
     sums = np.zeros(len(clusters))
+    first = np.zeros(len(clusters))
     counts = np.zeros(len(clusters), dtype=np.int64)
     for a, b in spans:
-        s, c = segment_sums(np.asarray(rate[a:b], dtype=float), clusters)
+        s, c, d = segment_sums(np.asarray(rate[a:b], dtype=float), clusters)
         sums += s
         counts += c
+        first += d
     avar = sums / (2.0 * clusters.astype(float) ** 2 * np.maximum(counts, 1))
     lengths = np.array([b - a for a, b in spans])
     mu = np.full(len(clusters), -1.0) if slope is None else np.asarray(slope, dtype=float)
     edf = pooled_edf(lengths, clusters, mu)
     tau = clusters.astype(np.float64) * dt
-    return AllanCurve(tau, clusters, avar, edf, counts, tuple(int(n) for n in lengths), confidence)
+    return AllanCurve(tau, clusters, avar, edf, counts, tuple(int(n) for n in lengths), confidence, first)
 
 
 def pooled_edf(lengths: NDArray[np.integer], clusters: NDArray[np.int64], slope: Array) -> Array:

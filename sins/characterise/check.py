@@ -13,6 +13,7 @@ that is the noise side of the sim-to-real gap, named by channel, cluster times a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -91,7 +92,11 @@ class Parting:
         a, b = self.tau_s
         span = f"{a:.3g} s" if a == b else f"{a:.3g}-{b:.3g} s"
         where = "" if self.fitted else " (left out of the fit)"
-        what = f"the real unit {self.ratio:.3g}x the model's deviation ({side})"
+        if not math.isfinite(self.ratio):
+            what = "the model has no noise where the real unit has"
+        else:
+            digits = 3 if abs(math.log(self.ratio)) >= 0.01 else 4  # not "1x" for 0.9996
+            what = f"the real unit {self.ratio:.{digits}g}x the model's deviation ({side})"
         return f"{self.channel}: {what} at τ = {span}{where}"
 
 
@@ -165,15 +170,18 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
         slack = 1.0 + 2.0 * r.fit.tolerance  # the model error the fit allowed, on both curves
         lo = stats.f.ppf(0.5 - confidence / 2.0, edf, edf) / slack
         hi = stats.f.ppf(0.5 + confidence / 2.0, edf, edf) * slack
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = real.avar / simulated.avar
+        # A simulated curve of zero (a channel the model has no noise on) against a real one: apart.
+        has = simulated.avar > 0.0
+        ratio = np.where(
+            has, real.avar / np.where(has, simulated.avar, 1.0), np.where(real.avar > 0.0, np.inf, 1.0)
+        )
         parted = (ratio < lo) | (ratio > hi)
         in_fit = ~np.isin(real.tau_s, np.asarray(r.fit.excluded_tau_s, dtype=float))
         channels[ch] = {
             "tau_s": real.tau_s.tolist(),
             "real_adev": real.adev.tolist(),
             "sim_adev": simulated.adev.tolist(),
-            "model_adev": np.sqrt(r.fit.resolved_avar(real.tau_s)).tolist(),
+            "model_adev": np.sqrt(r.fit.resolved_avar(real.tau_s, real.clusters)).tolist(),
             "band_low": np.sqrt(real.avar / hi).tolist(),
             "band_high": np.sqrt(real.avar / lo).tolist(),
             "parted": [bool(p) for p in parted],

@@ -5,7 +5,13 @@ The file has no grade: it is made of ``[[effect]]`` tables only, in the familiar
 read it as it is. Each term maps to one effect, per sensor and axis:
 
 * ``N`` → ``noise`` (``arw_deg_per_rt_h``, ``vrw_ug_per_rt_hz``);
-* the bias instability → ``bias_instability`` (``σ_b`` as ``sigma_dph`` / ``sigma_ug``, ``tau_s``);
+* the Gauss–Markov bias → ``bias_instability`` (``σ_b`` as ``sigma_dph`` / ``sigma_ug``, ``tau_s``);
+* the IEEE bias instability ``B`` (flicker): sins has no flicker effect, so where no Gauss–Markov bias
+  is resolved beside it the file has the Gauss–Markov bias of the same peak (``σ_b = 0.664 B / 0.617``)
+  placed at the middle (geometric) of the cluster times the flicker floor holds (``T`` = that ``τ`` /
+  1.89), with a comment: within 15 % of the floor's Allan variance an octave either side, 30 % at one and a
+  half, 44 % at two, below it further out, where the closing check then shows the curves part; beside a
+  resolved Gauss–Markov bias, a comment only;
 * ``K`` → ``rate_random_walk`` (``rrw_dph_per_rt_h``, ``rrw_ug_per_rt_s``);
 * ``Q`` → ``quantization_noise`` (``q_arcsec``, ``q_ug_s``: ``q = Q``) where the white noise per sample
   is below half a step of the quantizer that ``Q`` would mean (``N √dt < √12 Q / 2``, no white noise
@@ -24,8 +30,11 @@ read it as it is. Each term maps to one effect, per sensor and axis:
 * ``R`` has no effect in sins: the file names it in a comment, not simulated.
 
 A term the recording does not resolve is written as zero, with its upper bound in a comment. The file
-has no deterministic errors (bias, scale factor, misalignment): an Allan analysis cannot see them. It is
-written under a temporary name and renamed, so a failure leaves no half-written file.
+has no deterministic errors (bias, scale factor, misalignment): an Allan analysis cannot see them. Every
+value is checked against the ranges the IMU file's readers accept (:data:`sins.imu.spec.PARAMETERS`)
+before anything is written, and a file sins could not read back is refused in one line (a "unit" with
+1e9 µg/√Hz of noise is a recording in other units, not an IMU). It is written under a temporary name and
+renamed, so a failure leaves no half-written file.
 """
 
 from __future__ import annotations
@@ -36,6 +45,8 @@ import tempfile
 from pathlib import Path
 
 from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
+from sins.characterise.terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
+from sins.errors import SinsInputError
 from sins.imu import spec
 from sins.imu.model import CHANNELS, DEG, MG, UG, ImuModel
 
@@ -43,14 +54,14 @@ from sins.imu.model import CHANNELS, DEG, MG, UG, ImuModel
 EFFECTS = {
     "gyro": (
         ("white", "gyro.noise", "arw_deg_per_rt_h"),
-        ("bias_instability", "gyro.bias_instability", "sigma_dph"),
+        ("gauss_markov", "gyro.bias_instability", "sigma_dph"),
         ("rate_random_walk", "gyro.rate_random_walk", "rrw_dph_per_rt_h"),
         ("quantization", "gyro.quantization", "step_dps"),
         ("quantization_noise", "gyro.quantization_noise", "q_arcsec"),
     ),
     "accel": (
         ("white", "accel.noise", "vrw_ug_per_rt_hz"),
-        ("bias_instability", "accel.bias_instability", "sigma_ug"),
+        ("gauss_markov", "accel.bias_instability", "sigma_ug"),
         ("rate_random_walk", "accel.rate_random_walk", "rrw_ug_per_rt_s"),
         ("quantization", "accel.quantization", "step_mg"),
         ("quantization_noise", "accel.quantization_noise", "q_ug_s"),
@@ -69,6 +80,26 @@ def rounding_is_dithered(result: Characterisation, channel: str) -> bool:
     return q is None or n * math.sqrt(result.dt) >= math.sqrt(12.0) * q / 2.0
 
 
+def flicker_as_gauss_markov(result: Characterisation, channel: str) -> tuple[float, float] | None:
+    """``(σ_b, T)`` of the Gauss–Markov bias the file simulates for a channel's resolved flicker ``B``
+    (see the module's text), SI; None when the channel has no flicker or has its own Gauss–Markov bias."""
+    r = result.channels[channel]
+    flicker = r.fit.terms["flicker"]
+    if flicker.value is None or r.fit.terms["gauss_markov"].resolved:
+        return None
+    taus = flicker.support_tau_s or tuple(float(t) for t in r.curve.tau_s)
+    centre = math.sqrt(min(taus) * max(taus))
+    return flicker.value * FLICKER_FACTOR / GM_PEAK, centre / GM_PEAK_X
+
+
+def _gauss_markov(result: Characterisation, channel: str) -> tuple[float | None, float | None]:
+    """The channel's simulated Gauss–Markov bias ``(σ_b, T)``: its own, or its flicker's (SI)."""
+    r = result.channels[channel]
+    if r.fit.terms["gauss_markov"].resolved:
+        return r.fit.terms["gauss_markov"].value, r.fit.tau_c_s
+    return flicker_as_gauss_markov(result, channel) or (None, None)
+
+
 def _file_value(result: Characterisation, channel: str, term: str) -> float:
     """The term of one channel in the file's unit (zero when not resolved, or when the channel's ``Q``
     goes to the other of ``quantization`` and ``quantization_noise``)."""
@@ -77,7 +108,7 @@ def _file_value(result: Characterisation, channel: str, term: str) -> float:
     if term == "quantization_noise":
         value = None if dithered else r.fit.terms["quantization"].value
         return 0.0 if value is None else value / DISPLAY[r.sensor]["quantization"][0]
-    value = r.fit.terms[term].value
+    value = _gauss_markov(result, channel)[0] if term == "gauss_markov" else r.fit.terms[term].value
     if value is None or (term == "quantization" and not dithered):
         return 0.0
     if term == "quantization":
@@ -110,15 +141,31 @@ def effect_tables(result: Characterisation) -> list[tuple[str, dict[str, list[fl
             if term != "white" and not any(values):
                 continue
             params = {key: values}
-            if term == "bias_instability":
-                params["tau_s"] = [result.channels[ch].fit.tau_c_s or DEFAULT_TAU_S for ch in channels]
+            if term == "gauss_markov":
+                params["tau_s"] = [_gauss_markov(result, ch)[1] or DEFAULT_TAU_S for ch in channels]
             tables.append((name, params))
     return tables
 
 
 def imu_model(result: Characterisation) -> ImuModel:
-    """The model the file describes, built from the same tables (as ``sins.scenario.load_imu`` reads it)."""
-    return ImuModel(tuple(spec.effect_from_params(name, params) for name, params in effect_tables(result)))
+    """The model the file describes, built from the same tables (as ``sins.scenario.load_imu`` reads it).
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the recording, the effect and the value, when a term lies outside what an IMU
+        file holds (:data:`sins.imu.spec.PARAMETERS`' ranges): the file would not be read back.
+    """
+    effects = []
+    for name, params in effect_tables(result):
+        try:
+            effects.append(spec.effect_from_params(name, params))
+        except ValueError as exc:
+            raise SinsInputError(
+                f"{result.source or 'recording'}: {exc}: no IMU has such noise, and sins would not read the "
+                "file back (are the readings in rad/s and m/s², and the time in seconds?)"
+            ) from None
+    return ImuModel(tuple(effects))
 
 
 def model_toml(result: Characterisation) -> str:
@@ -141,13 +188,14 @@ def model_toml(result: Characterisation) -> str:
                 f"# {ch}: rate ramp R = {display(r.sensor, 'rate_ramp', ramp.value)} ± {sigma} {unit}, "
                 "not simulated (sins has no rate-ramp effect)"
             )
+        lines += _flicker_comment(result, ch)
         if not rounding_is_dithered(result, ch):
             lines.append(
                 f"# {ch}: Q as white noise of the integrated output (quantization_noise): its white noise"
                 " per sample is below half the step Q means, and rounding a nearly constant input would"
                 " make a sawtooth, not the IEEE term's independent errors"
             )
-        for term in ("quantization", "white", "bias_instability", "rate_random_walk"):
+        for term in ("quantization", "white", "flicker", "gauss_markov", "rate_random_walk"):
             t = r.fit.terms[term]
             if not t.resolved and t.upper is not None:
                 size, symbol = DISPLAY[r.sensor][term]
@@ -158,10 +206,32 @@ def model_toml(result: Characterisation) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _flicker_comment(result: Characterisation, channel: str) -> list[str]:
+    """The comment on a channel's flicker term: how the file simulates it, or that it does not."""
+    r = result.channels[channel]
+    flicker = r.fit.terms["flicker"]
+    if flicker.value is None:
+        return []
+    b = f"{display(r.sensor, 'flicker', flicker.value)} {DISPLAY[r.sensor]['flicker'][1]}"
+    approx = flicker_as_gauss_markov(result, channel)
+    if approx is None:
+        return [f"# {channel}: flicker B = {b}, not simulated (sins has no flicker effect, and the channel "
+                "has its own Gauss-Markov bias)"]  # fmt: skip
+    return [f"# {channel}: flicker B = {b}, simulated as the Gauss-Markov bias of the same Allan peak at "
+            f"tau = {GM_PEAK_X * approx[1]:.4g} s (sins has no flicker effect)"]  # fmt: skip
+
+
 def write_model(path: str | os.PathLike[str], result: Characterisation) -> Path:
     """Write the IMU file for ``result`` at ``path`` atomically (a temporary name in the same folder, then
-    renamed); returns the path."""
+    renamed); returns the path.
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`imu_model`, before anything is written.
+    """
     path = Path(path)
+    imu_model(result)
     text = model_toml(result)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or Path("."))
     try:

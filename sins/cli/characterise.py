@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -21,16 +23,18 @@ from sins.cli.common import (
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
-    from sins.characterise.analysis import Characterisation, Residual
+    from sins.characterise.analysis import ChannelResult, Characterisation, Residual
     from sins.characterise.check import ClosingCheck
 
 
 def _characterise_inputs(args: argparse.Namespace) -> Residual:
-    """``sins characterise``'s residual: a dataset, a rig recording less its reference, an IMU recording
-    less its trajectory's ideal readings, or a static unit's readings as they are."""
+    """``sins characterise``'s residual: a dataset or a recording with a reference (the reference and the
+    deterministic errors fitted against it taken away, or the still stretches alone where the reference
+    is the noisier), or a static unit's readings as they are (refused if they move)."""
     import numpy as np
 
     from sins import characterise, io, pipeline
+    from sins.characterise import reference, still
 
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
@@ -44,21 +48,25 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
                 "characterise: --truth and --static go with a RECORDING.csv, not with --dataset"
             )
         data, _ = datasets.load_with_truth(args.dataset)
-        source = args.dataset
-    elif args.truth is not None or _rig_recording(args):
+        return reference.reference_residual(data, args.dataset)
+    if args.truth is not None or _rig_recording(args):
         data, _ = pipeline.gap_data(args.recording, args.truth)
-        source = str(args.recording)
-    elif args.static:
-        t, omega, force = io.read_recording_any(args.recording, **recording_options(args)).mean_rates()
-        return characterise.residual(t, np.hstack([omega, force]), None, str(args.recording))
-    else:
+        return reference.reference_residual(data, str(args.recording))
+    if not args.static:
         raise MissingInputError(
             f"{args.recording}: no ref_ columns; a moving unit needs its trajectory, a static one --static",
             needs="truth",
         )
-    readings = np.hstack([data.gyro, data.accel])
-    reference = np.hstack([data.ref_gyro, data.ref_accel])
-    return characterise.residual(data.t, readings, reference, source)
+    t, omega, force = io.read_recording_any(args.recording, **recording_options(args)).mean_rates()
+    readings = np.hstack([omega, force])
+    del omega, force
+    moved = still.motion(t, readings)
+    if moved is not None:
+        raise SinsInputError(
+            f"{args.recording}: --static, but the unit moves: {moved}; give its trajectory (--truth) or "
+            "a recording with ref_ columns"
+        )
+    return characterise.residual(t, readings, None, str(args.recording))
 
 
 def _rig_recording(args: argparse.Namespace) -> bool:
@@ -71,32 +79,47 @@ def _rig_recording(args: argparse.Namespace) -> bool:
     return any(c.startswith("ref_") for c in io.read_columns(args.recording))
 
 
+def _check_destination(path: Path | None, flag: str) -> None:
+    """Refuse, before any work, an output that could not be written."""
+    if path is None:
+        return
+    folder = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise SinsInputError(f"{flag} {path}: a folder, not a file name")
+    if not folder.is_dir():
+        raise SinsInputError(f"{flag} {path}: no such folder {folder}")
+    if not os.access(folder, os.W_OK):
+        raise SinsInputError(f"{flag} {path}: the folder {folder} is not writable")
+
+
 def _cmd_characterise(args: argparse.Namespace) -> int:
-    from sins import characterise, io, scenario
+    from sins import characterise, io
     from sins.characterise import check, model_file
 
+    _check_destination(args.out, "--out")
+    _check_destination(args.json, "--json")
     if args.rerun:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
+        _check_destination(args.rerun, "--rerun")
     check_plot(args)
     with progress_bar("reading", "channels") as bar:
         res = _characterise_inputs(args)
+        for line in res.warnings:
+            print(f"sins: warning: {line}", file=sys.stderr)
         bar.set_description("characterising")
         result = characterise.characterise(res, progress=row_progress(bar))
-    print(_format_characterisation(result))
-    document = result.to_dict()
-    model = None
-    if args.out:
-        model_file.write_model(args.out, result)
-        model = scenario.load_imu(args.out).model()
-        print(f"\nwrote {args.out} (noise only; sins run and sins calibrate --imu read it)")
-    else:
-        model = model_file.imu_model(result)
+    model = model_file.imu_model(result)  # refuses what the readers would refuse, before any output
     with progress_bar("closing check", "channels") as bar:
         closing = check.closing_check(result, model, seed=args.seed, progress=row_progress(bar))
+    print(_format_characterisation(result))
     print(_format_closing(closing))
+    document = result.to_dict()
     document["closing_check"] = closing.to_dict()
+    if args.out:
+        model_file.write_model(args.out, result)
+        print(f"\nwrote {args.out} (noise only; sins run and sins calibrate --imu read it)")
     if args.json:
         io.write_json(args.json, document)
     if args.rerun:
@@ -115,42 +138,49 @@ def _format_characterisation(result: Characterisation) -> str:
     """``sins characterise``'s table: each channel's IEEE terms in familiar units, ± 1σ, or what an
     unresolved term would need."""
     from sins.characterise import TERMS
-    from sins.characterise.analysis import DISPLAY, display, duration
+    from sins.characterise.analysis import duration
     from sins.characterise.terms import SYMBOLS
 
     head = [
         f"{result.source}: {result.rows} rows at {1.0 / result.dt:.6g} Hz in {len(result.segments)} "
         f"segment(s), the longest {duration(result.length_s)}",
-        "IEEE Std 952/1293 terms fitted jointly to the overlapping Allan deviation (± 1σ); "
-        "B is the Gauss–Markov bias's σ, T its correlation time",
+        *(f"  {note}" for note in result.notes),
+        "IEEE Std 952/1293 terms fitted jointly to the overlapping Allan deviation (± 1σ): B the bias "
+        "instability (flicker, IEEE B), GM a Gauss–Markov bias (σ, correlation time T), R the rate ramp "
+        "fitted to the rate itself",
     ]
     rows = []
     for ch, r in result.channels.items():
-        for name in TERMS:
-            t = r.fit.terms[name]
-            unit = DISPLAY[r.sensor][name][1]
-            if t.resolved:
-                text = f"{display(r.sensor, name, t.value)} ± {display(r.sensor, name, t.sigma)}"
-                support = f"τ {t.support_tau_s[0]:.3g}-{t.support_tau_s[-1]:.3g} s" if t.support_tau_s else ""
-                if name == "bias_instability" and r.fit.tau_c_range_s:
-                    lo, hi = r.fit.tau_c_range_s
-                    support = f"T {r.fit.tau_c_s:.3g} s ({lo:.3g}-{hi:.3g}); " + support
-                if name == "rate_ramp":
-                    support += " (not simulated)"
-            else:
-                text = f"not resolved (< {display(r.sensor, name, t.upper)})"
-                support = ""
-                if t.needs_length_s:
-                    support = f"needs ≥ {duration(t.needs_length_s)} of recording"
-                elif t.needs_rate_hz:
-                    support = f"needs sampling at ≥ {t.needs_rate_hz:.3g} Hz"
-            rows.append([ch, SYMBOLS[name], text, unit, support])
+        rows += [[ch, SYMBOLS[name], *_cells(r, name)] for name in TERMS]
         if r.fit.excluded_tau_s:
             taus = r.fit.excluded_tau_s
             rows.append(
                 [ch, "", "model does not hold", "", f"τ {', '.join(f'{x:.3g}' for x in taus)} s left out"]
             )
     return "\n".join(head) + "\n" + fixed_width(["channel", "term", "value", "unit", "support"], rows)
+
+
+def _cells(r: ChannelResult, name: str) -> list[str]:
+    """One term's value, unit and support (or what it would need) in the table."""
+    from sins.characterise.analysis import DISPLAY, display, duration
+
+    t = r.fit.terms[name]
+    unit = DISPLAY[r.sensor][name][1]
+    if not t.resolved:
+        support = ""
+        if t.needs_length_s:
+            support = f"needs ≥ {duration(t.needs_length_s)} of recording"
+        elif t.needs_rate_hz:
+            support = f"needs sampling at ≥ {t.needs_rate_hz:.3g} Hz"
+        return [f"not resolved (< {display(r.sensor, name, t.upper)})", unit, support]
+    text = f"{display(r.sensor, name, t.value)} ± {display(r.sensor, name, t.sigma)}"
+    support = f"τ {t.support_tau_s[0]:.3g}-{t.support_tau_s[-1]:.3g} s" if t.support_tau_s else ""
+    if name == "gauss_markov" and r.fit.tau_c_range_s:
+        lo, hi = r.fit.tau_c_range_s
+        support = f"T {r.fit.tau_c_s:.3g} s ({lo:.3g}-{hi:.3g}); " + support
+    if name == "rate_ramp":
+        support = "taken out before the Allan analysis; not simulated"
+    return [text, unit, support]
 
 
 def _format_closing(closing: ClosingCheck) -> str:
@@ -165,12 +195,23 @@ def _format_closing(closing: ClosingCheck) -> str:
     return "\n".join(lines)
 
 
+def _seed(text: str) -> int:
+    """An argument type: a seed, a whole number of at least 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+    return value
+
+
 def add(sub: Subparsers) -> None:
     """Add ``sins characterise`` to ``sub``."""
     p = sub.add_parser(
         "characterise", help="Allan analysis of a recording: IEEE noise terms, an IMU file, the closing check"
     )
-    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
     add_dataset(p)
     p.add_argument("--static", action="store_true", help="the unit stood still: its readings as they are")
     p.add_argument(
@@ -181,7 +222,7 @@ def add(sub: Subparsers) -> None:
         "--json", type=Path, metavar="OUT.json", help="write the curves, terms and check (SI units)"
     )
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
-    p.add_argument("--seed", type=int, default=0, help="the closing simulation's seed (default 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="the closing simulation's seed (default 0)")
     add_plot(p, "the real and simulated Allan curves")
     add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)
