@@ -139,7 +139,9 @@ def load_recording(
     SinsInputError
         as the readers; a rate-form file starting outside the truth; an IMU running past the truth's
         end, unless ``within_truth`` (then the intervals inside it are kept, and ``intervals`` says how
-        many the file held): nothing is cut without being asked for.
+        many the file held): nothing is cut without being asked for, except against the recording's
+        own reference, whose last pose commonly comes a few samples before the last reading (the
+        caller says so: ``intervals`` against ``len(imu)``).
     MissingInputError
         without ``truth_path`` when the recording has no reference of its own.
     """
@@ -172,7 +174,7 @@ def load_recording(
     intervals = len(imu)
     if imu.t[-1] > truth.t[-1] + 1e-9:
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
-        if not within_truth:
+        if not within_truth and truth_path is not None:
             raise SinsInputError(
                 f"{imu_path}: the IMU runs to {imu.t[-1]:g} s but the truth ({truth_name}) ends at "
                 f"{truth.t[-1]:g} s ({inside - 1} of {intervals} intervals inside it); give the whole "

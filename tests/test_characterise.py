@@ -382,8 +382,10 @@ def test_time_in_milliseconds_is_a_stated_warning(tmp_path, capsys):
     _write_static(rec, n=4096, dt=10.0)
     doc = tmp_path / "ms.json"
     assert cli.main(["characterise", str(rec), "--static", "--json", str(doc)]) == 0
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("sins: warning:") and err.count("\n") == 0 and "milliseconds" in err, err
+    # On a loaded machine the work may pass 5 s and log progress lines too: the warning is the one line
+    # of its own.
+    said = [line for line in capsys.readouterr().err.splitlines() if line.startswith("sins:")]
+    assert len(said) == 1 and said[0].startswith("sins: warning:") and "milliseconds" in said[0], said
     assert "milliseconds" in json.loads(doc.read_text())["warnings"][0]
 
 
