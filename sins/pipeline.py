@@ -1,7 +1,13 @@
 """Runs: a scenario from file to drift summary, and a recorded IMU file against its truth.
 
-These are the library calls behind the CLI; each returns plain results that
-the CLI prints and writes.
+These are the library calls behind the CLI; each returns plain results that the CLI prints and writes.
+
+One engine runs every scenario (:func:`run_units`; :func:`run_scenario` is that of one unit): the
+trajectory is generated chunk by chunk on a second thread, and each unit's stream (its corruption, or
+the ideal IMU as it is) is corrected by each strategy and integrated chunk by chunk; only the errors'
+statistics and thinned series are kept. A scenario with ``[gnss]`` keeps the generated truth and ideal
+IMU whole, and after the stream each unit's readings go through the GNSS/INS filter
+(:func:`aided_runs`), started as :mod:`sins.aiding.policy` says.
 """
 
 from __future__ import annotations
@@ -19,7 +25,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import scenario
-from sins.errors import SinsInputError
+
+# OutageError is re-exported: it lived here before it moved down to sins.aiding.
+from sins.aiding.outages import OutageError as OutageError
+from sins.aiding.outages import outage_errors
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
     BlockMeans,
@@ -40,6 +49,7 @@ from sins.recordings import Recording as Recording
 from sins.recordings import SimulatedReadings as SimulatedReadings
 from sins.recordings import cabin_temperature as _cabin
 from sins.recordings import gap_data as gap_data
+from sins.recordings import input_errors
 from sins.recordings import load_recording as load_recording
 from sins.recordings import simulate as simulate
 from sins.recordings import simulate_readings as simulate_readings
@@ -52,8 +62,6 @@ from sins.scenario import presets as presets
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 if TYPE_CHECKING:
-    from sins.aiding.ekf import AidedResult, FilterConfig
-    from sins.aiding.gnss import GnssFixes
     from sins.compensation import Strategy
     from sins.gap import GapReport
     from sins.imu import ImuModel
@@ -88,20 +96,6 @@ class StrategyRun:
     summary: DriftSummary
     residual_rms: dict[str, float] | None = None
     sensor_error: NDArray[np.float64] | None = None
-
-
-@dataclass(frozen=True)
-class OutageError:
-    """The horizontal position error of an aided run over one outage window, m.
-
-    ``final_m`` is at the last IMU sample before the window's end (or the run's end), before any fix
-    corrects it; ``max_m`` the largest within the window.
-    """
-
-    start_s: float
-    end_s: float
-    final_m: float
-    max_m: float
 
 
 @dataclass(frozen=True)
@@ -189,98 +183,58 @@ def navigate(
 def run_scenario(
     sc: Scenario, keep_hz: float = 10.0, unit: FittedUnit | None = None, progress: Progress | None = None
 ) -> ScenarioRun:
-    """Simulate a scenario and integrate its IMU stream.
+    """Simulate a scenario and integrate its IMU stream once per compensation strategy: :func:`run_units`
+    of one unit, with the navigation power-on ``sc.imu_seed``.
 
-    Without an IMU model the one run is ``"none"``: the ideal IMU, streamed
-    chunk by chunk, so memory stays bounded whatever the duration. With one
-    (``[imu] model``), see :func:`_run_with_imu`. ``unit`` (from :func:`fit_unit`) replaces the
-    scenario's IMU file and compensation: a campaign fits a unit once and drives it through
-    every scenario; the navigation run's power-on is still ``sc.imu_seed``. ``progress(samples_done,
-    samples)`` is called as chunks are integrated (a scenario with an IMU and no ``unit`` fits its
-    strategies first, silently: :func:`fit_unit` takes its own ``progress``).
+    The unit is ``unit`` (from :func:`fit_unit`: a campaign fits a unit once and drives it through every
+    scenario), else the scenario's ``[imu] model`` with its ``[compensation]`` strategies fitted first
+    (silently: :func:`fit_unit` takes its own ``progress``), else the ideal IMU, whose one run is
+    ``"none"``. ``progress(samples_done, samples)`` is called as chunks are integrated.
+
+    The rig session and the navigation run are two power-ons of the same unit (seeds ``[compensation]
+    seed`` and ``[imu] seed``): strategies fitted on the rig meet the navigation run's own turn-on bias.
+    ``oracle`` knows the navigation run's true deterministic model; it is every table's reference.
+
+    Raises
+    ------
+    SinsInputError
+        a scenario the trajectory or the unit cannot follow (naming the scenario), or a refused alignment.
     """
-    if sc.imu_model is not None or unit is not None:
-        return _run_with_imu(sc, keep_hz, unit, progress)
-    try:
-        motion = scenario.build_motion(sc)
-        first = trajectory.start_state(motion)
-        chunks = _prefetched(trajectory.generate_chunks(motion, sc.rate_hz))
-        keep_every = _keep_every(sc, motion, keep_hz)
-        total = int(scenario.sample_count(sc, motion))
-        state = strapdown.start(strapdown.InitialState.from_series(first))
-        acc = DriftAccumulator(keep_every)
-        acc.add(nav_errors(first, first))
-        truth_kept, solution_kept = [first], [first]
-        samples = 0
-        h_prev = float(first.h[0])
-        for truth_c, imu_c in chunks:
-            h_ref = np.concatenate([[h_prev], truth_c.h]) if sc.vertical != "free" else None
-            solution_c, state = strapdown.advance(
-                state, imu_c, vertical=sc.vertical, h_ref=h_ref, vertical_tau_s=sc.vertical_tau_s
-            )
-            acc.add(nav_errors(solution_c, truth_c))
-            keep = kept_indices(samples + 1, len(truth_c.t), keep_every)
-            truth_kept.append(truth_c.at(keep))
-            solution_kept.append(solution_c.at(keep))
-            samples += len(truth_c.t)
-            if progress is not None:
-                progress(samples, total)
-            h_prev = float(truth_c.h[-1])
-    except ValueError as exc:
-        if isinstance(exc, SinsInputError):
-            raise
-        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
-    if samples % keep_every:
-        truth_kept.append(truth_c.at(-1))
-        solution_kept.append(solution_c.at(-1))
-    run = StrategyRun(solution=_join(solution_kept), errors=acc.kept(), summary=acc.summary())
-    aided = aided_runs(sc, {"none": None}, keep_every=keep_every) if sc.aiding is not None else {}
-    return ScenarioRun(scenario=sc, samples=samples, truth=_join(truth_kept), runs={"none": run}, aided=aided)
-
-
-def _run_with_imu(
-    sc: Scenario, keep_hz: float, unit: FittedUnit | None = None, progress: Progress | None = None
-) -> ScenarioRun:
-    """The scenario with a corrupted IMU, once per compensation strategy on the same stream.
-
-    The rig session and the navigation run are two power-ons of the same unit
-    (seeds ``[compensation] seed`` and ``[imu] seed``): strategies fitted on the
-    rig meet the navigation run's own turn-on bias. ``oracle`` knows the
-    navigation run's true deterministic model; it is every table's reference.
-
-    Streamed: the ideal IMU is generated, corrupted (:class:`sins.imu.stream.IncrementStream`,
-    the unit's state carried between chunks), corrected by each strategy and integrated chunk by
-    chunk, and only the errors' statistics and thinned series are kept, so memory stays bounded
-    whatever the duration. The readings equal the whole array's corruption to the last bit, and so
-    do the integrated solutions (:func:`sins.nav.strapdown.advance` continues exactly).
-    """
-    if unit is None:
-        assert sc.imu_model is not None
+    if unit is None and sc.imu_model is not None:
         unit = fit_unit(scenario.load_imu(sc.imu_model), sc.compensation)
     return run_units(sc, [unit], [sc.imu_seed], keep_hz, progress=progress)[0]
 
 
 def run_units(
     sc: Scenario,
-    units: Sequence[FittedUnit],
+    units: Sequence[FittedUnit | None],
     nav_seeds: Sequence[int],
     keep_hz: float = 10.0,
     sensor_errors: bool = True,
     progress: Progress | None = None,
 ) -> list[ScenarioRun]:
-    """Drive several fitted units through one scenario, sharing its trajectory.
+    """Drive several units through one scenario, sharing its trajectory: the one streaming engine.
 
     The truth and ideal IMU are generated once, chunk by chunk, and each unit corrupts (power-on
-    ``nav_seeds[i]``), corrects and integrates every chunk in turn, exactly as it would alone:
-    each result equals :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the
-    last bit. Memory is bounded by the chunk and the thinned series, whatever the duration.
-    ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which
-    a campaign does not keep: ~10 ns of a unit-sample's ~300). ``progress(samples_done, samples)`` is
-    called as the chunks are integrated.
+    ``nav_seeds[i]``; ``None`` is the ideal IMU, whose stream gives the ideal increments as they are),
+    corrects and integrates every chunk in turn, exactly as it would alone: each result equals
+    :func:`run_scenario` of that unit with ``sc.imu_seed = nav_seeds[i]`` to the last bit, and the
+    readings equal the whole array's corruption (:class:`sins.imu.stream.IncrementStream`), and so do the
+    integrated solutions (:func:`sins.nav.strapdown.advance` continues exactly). Memory is bounded by the
+    chunk and the thinned series, whatever the duration; a scenario with ``[gnss]`` also keeps its truth
+    and ideal IMU whole for the aided runs (:func:`aided_runs`), which follow the stream.
+    ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which a
+    campaign does not keep: ~10 ns of a unit-sample's ~300; the ideal IMU has none).
+    ``progress(samples_done, samples)`` is called as the chunks are integrated.
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`run_scenario`.
     """
     if len(units) != len(nav_seeds):
         raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
-    try:
+    with input_errors(sc.source or sc.name):
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)
         total = int(scenario.sample_count(sc, motion))
@@ -291,39 +245,86 @@ def run_units(
             _DrivenUnit(sc, unit, seed, first, keep_every, pending, sensor_errors)
             for unit, seed in zip(units, nav_seeds, strict=True)
         ]
-        for frame, ideal6, ideal_c, cabin in chunks:
+        whole = _Simulated(first, total) if sc.aiding is not None else None  # for the aided runs
+        for truth, frame, ideal6, ideal, cabin in chunks:
             pending.add(frame, ideal6)
+            if whole is not None:
+                whole.add(truth, ideal)
             for d in driven:
-                d.push(ideal_c, cabin)
-            pending.release(min(d.step.samples for d in driven))
+                d.push(ideal, cabin)
+            done = min(d.step.samples for d in driven)
+            pending.release(done)
             if progress is not None:
-                progress(min(d.step.samples for d in driven), total)
+                progress(done, total)
         for d in driven:
             d.finish()
-    except ValueError as exc:
-        if isinstance(exc, SinsInputError):
-            raise
-        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
-    return [d.result(seed) for d, seed in zip(driven, nav_seeds, strict=True)]
+        simulated = None if whole is None else whole.arrays()
+        return [d.result(seed, simulated) for d, seed in zip(driven, nav_seeds, strict=True)]
 
 
 def _shared(
     sc: Scenario, chunks: Iterator[tuple[NavSeries, ImuIncrements]]
-) -> Iterator[tuple[TruthFrame, NDArray[np.float64], ImuIncrements, NDArray[np.float64]]]:
-    """What every unit needs of each generated chunk, made once (on the prefetching thread): the
-    truth's frame (:class:`sins.nav.metrics.TruthFrame`), the ideal increments as (n, 6) and as they
-    are, and the cabin temperature at their times."""
+) -> Iterator[tuple[NavSeries, TruthFrame, NDArray[np.float64], ImuIncrements, NDArray[np.float64]]]:
+    """What every unit needs of each generated chunk, made once (on the prefetching thread): the truth
+    as it is and as a frame (:class:`sins.nav.metrics.TruthFrame`), the ideal increments as (n, 6) and
+    as they are, and the cabin temperature at their times."""
     for truth, ideal in chunks:
-        yield TruthFrame.of(truth), np.hstack([ideal.dtheta_b, ideal.dv_b]), ideal, _cabin(sc, ideal.t)
+        yield truth, TruthFrame.of(truth), np.hstack([ideal.dtheta_b, ideal.dv_b]), ideal, _cabin(sc, ideal.t)
+
+
+class _Simulated:
+    """The generated truth and ideal IMU kept whole for the aided runs, written chunk by chunk into arrays
+    made once (no chunk is held, no array copied when the stream ends): :func:`sins.nav.trajectory.generate`'s
+    arrays, to the bit."""
+
+    def __init__(self, first: NavSeries, intervals: int) -> None:
+        n = intervals + 1
+        self.t, self.lat, self.lon, self.h = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        self.v_n, self.q_nb = np.empty((n, 3)), np.empty((n, 4))
+        self.dtheta_b, self.dv_b = np.empty((intervals, 3)), np.empty((intervals, 3))
+        self.rows = 0
+        self._put(first)
+
+    def _put(self, truth: NavSeries) -> None:
+        rows = slice(self.rows, self.rows + len(truth.t))
+        self.t[rows], self.lat[rows], self.lon[rows], self.h[rows] = truth.t, truth.lat, truth.lon, truth.h
+        self.v_n[rows], self.q_nb[rows] = truth.v_n, truth.q_nb
+        self.rows = rows.stop
+
+    def add(self, truth: NavSeries, ideal: ImuIncrements) -> None:
+        """A generated chunk: the truth at ``ideal.t[1:]`` and the increments over its intervals."""
+        self.dtheta_b[self.rows - 1 : self.rows - 1 + len(ideal)] = ideal.dtheta_b
+        self.dv_b[self.rows - 1 : self.rows - 1 + len(ideal)] = ideal.dv_b
+        self._put(truth)
+
+    def arrays(self) -> tuple[NavSeries, ImuIncrements]:
+        """The truth at every sample time and the ideal increments between them."""
+        if self.rows != len(self.t):  # the sample count and the generated chunks disagree: a bug
+            raise RuntimeError(f"{self.rows} of {len(self.t)} samples generated")
+        truth = NavSeries(t=self.t, lat=self.lat, lon=self.lon, h=self.h, v_n=self.v_n, q_nb=self.q_nb)
+        return truth, ImuIncrements(t=self.t, dtheta_b=self.dtheta_b, dv_b=self.dv_b)
+
+
+class _IdealStream:
+    """The ideal IMU as a unit's stream: each chunk's readings are its ideal increments, as they are."""
+
+    def push(self, ideal: ImuIncrements, cabin: NDArray[np.float64]) -> ImuIncrements:
+        """The chunk's readings: the ideal increments."""
+        return ideal
+
+    def finish(self) -> ImuIncrements:
+        """Nothing held back."""
+        return ImuIncrements(t=np.zeros(0), dtheta_b=np.zeros((0, 3)), dv_b=np.zeros((0, 3)))
 
 
 class _DrivenUnit:
-    """One unit's navigation power-on through a scenario: its stream, its strategies' runs."""
+    """One unit's navigation power-on through a scenario (``unit`` None: the ideal IMU, the one strategy
+    ``"none"`` taking its readings as they are): its stream, its strategies' runs."""
 
     def __init__(
         self,
         sc: Scenario,
-        unit: FittedUnit,
+        unit: FittedUnit | None,
         nav_seed: int,
         first: NavSeries,
         keep_every: int,
@@ -333,9 +334,13 @@ class _DrivenUnit:
         from sins.imu.stream import IncrementStream
 
         self.sc, self.unit, self.keep_every = sc, unit, keep_every
-        self.nav_model = nav_model = unit.spec.model(run_seed=nav_seed)
-        self.strategies = unit.for_run(nav_model)
-        self.stream = IncrementStream(nav_model, nav_seed, 1.0 / sc.rate_hz)
+        self.nav_model: ImuModel | None = None
+        self.strategies: dict[str, Strategy | None] = {"none": None}
+        self.stream: IncrementStream | _IdealStream = _IdealStream()
+        if unit is not None:
+            self.nav_model = nav_model = unit.spec.model(run_seed=nav_seed)
+            self.strategies = dict(unit.for_run(nav_model))
+            self.stream = IncrementStream(nav_model, nav_seed, 1.0 / sc.rate_hz)
         self.runs = {name: _StreamedRun(first, keep_every) for name in self.strategies}
         self.truth_kept = [first]
         self.step = _ChunkStep(
@@ -346,7 +351,7 @@ class _DrivenUnit:
             self.truth_kept,
             keep_every,
             float(first.h[0]),
-            sensor_errors,
+            sensor_errors and unit is not None,
         )
 
     def push(self, ideal: ImuIncrements, cabin: NDArray[np.float64]) -> None:
@@ -358,13 +363,14 @@ class _DrivenUnit:
         """The stream's last intervals."""
         self.step(self.stream.finish())
 
-    def result(self, nav_seed: int) -> ScenarioRun:
-        """The unit's runs, as :func:`run_scenario` gives them."""
+    def result(self, nav_seed: int, simulated: tuple[NavSeries, ImuIncrements] | None) -> ScenarioRun:
+        """The unit's runs, as :func:`run_scenario` gives them; ``simulated`` the scenario's whole truth
+        and ideal IMU for its aided runs (None: the scenario has none)."""
         samples, keep_every = self.step.samples, self.keep_every
         last_truth = self.step.last_truth
         if samples % keep_every and last_truth is not None:
             self.truth_kept.append(last_truth)
-        residuals = self.unit.residuals
+        residuals = self.unit.residuals if self.unit is not None else {}
         out = {
             name: run.result(residuals.get(name), samples, keep_every, self.step.sensor_errors)
             for name, run in self.runs.items()
@@ -372,9 +378,9 @@ class _DrivenUnit:
         sensor_t = self.step.mid_t.means()[:, 0] if self.step.sensor_errors else None
         sc = dataclasses.replace(self.sc, imu_seed=nav_seed)
         aided = {}
-        if sc.aiding is not None:
-            strategies: dict[str, Strategy | None] = dict(self.strategies)
-            aided = aided_runs(sc, strategies, self.nav_model, self.unit.spec.grade, keep_every=keep_every)
+        if simulated is not None:
+            grade = self.unit.spec.grade if self.unit is not None else None
+            aided = aided_runs(sc, self.strategies, *simulated, self.nav_model, grade, keep_every=keep_every)
         return ScenarioRun(
             scenario=sc,
             samples=samples,
@@ -388,31 +394,33 @@ class _DrivenUnit:
 def aided_runs(
     sc: Scenario,
     strategies: dict[str, Strategy | None],
+    truth: NavSeries,
+    ideal: ImuIncrements,
     nav_model: ImuModel | None = None,
     grade: str | None = None,
     keep_every: int = 1,
 ) -> dict[str, AidedRun]:
     """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
 
-    Whole arrays, not streamed: the truth and the readings are made again (the same, to the last
-    bit, as the streamed run's), the receiver rides the truth, and the filter starts from an alignment
-    (``[alignment]``, :func:`_alignment_plan`: still, in motion from the GNSS velocity, or the truth's
-    first state where the scenario says ``method = "truth"``). The filter is tuned to
-    ``[gnss] filter_grade``, else to the IMU model's grade, else to the navigation grade.
+    Whole arrays, not streamed: the unit reads ``ideal`` (its corruption of the whole array, equal to the
+    streamed run's to the last bit), the receiver rides ``truth``, and the filter starts as
+    ``[alignment]`` says (:func:`sins.aiding.policy.plan_alignment`: still, in motion from the GNSS
+    velocity, or the truth's first state where the scenario says ``method = "truth"``). The filter is
+    tuned to ``[gnss] filter_grade``, else to the IMU model's grade, else to the navigation grade.
 
     Parameters
     ----------
     sc : the scenario (``sc.aiding`` set)
     strategies : name -> the strategy that corrects the readings (None: take them as they are)
+    truth, ideal : the scenario's truth and ideal IMU (:func:`simulate`'s)
     nav_model : the unit's error model for this run (None: the ideal IMU)
     grade : the IMU file's grade, if any
     keep_every : the display series keep every ``keep_every``-th sample (and the last)
     """
-    from sins.aiding import ekf, gnss
+    from sins.aiding import ekf, gnss, policy  # the filter's imports (filterpy) only for aided runs
 
     a = sc.aiding
     assert a is not None
-    truth, ideal = simulate(sc)
     temp = _cabin(sc, ideal.t)
     readings = ideal
     if nav_model is not None:
@@ -426,16 +434,16 @@ def aided_runs(
     fixes = gnss.simulate(truth, receiver, seed=a.seed)
     filter_grade = a.filter_grade or grade or "navigation"
     config = ekf.FilterConfig.for_grade(filter_grade)
-    plan = _alignment_plan(sc, truth, config)
+    plan = policy.plan_alignment(a, truth, config, str(sc.source or sc.name))
     true_bias = _true_bias(nav_model)
     keep = None
     out = {}
     for name, strategy in strategies.items():
         corrected = readings if strategy is None else strategy.correct_increments(readings, temp)
-        result, k, heading_sigma = _aligned_run(plan, corrected, fixes, config, truth)
+        result, k, heading_sigma = policy.run_aligned(plan, corrected, fixes, config, truth)
         ran = truth if k == 0 else truth.at(np.arange(k, len(truth.t)))
         errors = nav_errors(result.nav, ran)
-        windows = _outage_errors(a.outages, ran.t, errors.horizontal_m)
+        windows = outage_errors(a.outages, ran.t, errors.horizontal_m)
         if keep is None:
             keep = thinned_indices(len(ran.t), keep_every)
             records = thinned_indices(len(result.t_cov), math.ceil(len(result.t_cov) / MAX_KEPT))
@@ -451,112 +459,6 @@ def aided_runs(
     return out
 
 
-#: The shortest stop at the start an automatic alignment aligns still on, s.
-AUTO_MIN_STOP_S = 30.0
-#: The longest still window an automatic alignment uses (the fine alignment gains little after), s.
-AUTO_MAX_STATIC_S = 300.0
-
-
-@dataclass(frozen=True)
-class _AlignmentPlan:
-    """How every strategy's aided run starts (``[alignment]`` resolved against the trajectory)."""
-
-    method: str  # "static", "gnss_velocity" or "truth"
-    static_s: float = 0.0
-    coarse_s: float = 0.0
-    heading: tuple[float, float] | None = None  # a static alignment's heading from elsewhere, rad
-    min_speed_mps: float = 5.0
-    sideslip_sigma_rad: float = 0.0
-    where: str = ""  # the scenario, for the in-motion alignment's refusal
-
-
-def _alignment_plan(sc: Scenario, truth: NavSeries, config: FilterConfig) -> _AlignmentPlan:
-    """``[alignment]`` resolved: ``auto`` aligns still on a stop at the start of ``static_s`` (default any
-    of :data:`AUTO_MIN_STOP_S` or more, up to :data:`AUTO_MAX_STATIC_S` used) where gyrocompassing
-    finds north within :data:`sins.aiding.alignment.GYROCOMPASS_MAX_SIGMA_RAD` (or the heading comes
-    from elsewhere), and in motion from the GNSS velocity otherwise."""
-    from sins.aiding import alignment
-
-    a = sc.aiding
-    assert a is not None
-    method, static_s = a.alignment, a.static_s
-    if method == "auto":
-        stop = _initial_stop_s(truth)
-        static_s = static_s if static_s is not None else min(stop, AUTO_MAX_STATIC_S)
-        coarse = min(a.coarse_s, static_s)
-        north = a.heading_sigma_rad is not None or (
-            coarse > 0
-            and np.sqrt(alignment.coarse_covariance(config, float(truth.lat[0]), coarse, 1.0)[8, 8])
-            <= alignment.GYROCOMPASS_MAX_SIGMA_RAD
-        )
-        enough = stop >= max(static_s, AUTO_MIN_STOP_S) - 1e-9
-        method = "static" if enough and north else "gnss_velocity"
-    if method == "static":
-        assert static_s is not None
-        plan = _AlignmentPlan("static", static_s, min(a.coarse_s, static_s))
-        return dataclasses.replace(plan, heading=_alignment_heading(sc, truth, static_s))
-    return _AlignmentPlan(
-        method, min_speed_mps=a.min_speed_mps, sideslip_sigma_rad=a.sideslip_sigma_rad,
-        where=str(sc.source or sc.name),
-    )  # fmt: skip
-
-
-def _initial_stop_s(truth: NavSeries) -> float:
-    """How long the vehicle stands still (no speed, no turn) from the first sample, s."""
-    yaw = np.unwrap(truth.euler()[2])
-    moving = (np.linalg.norm(truth.v_n, axis=1) > 1e-6) | (np.abs(yaw - yaw[0]) > 1e-9)
-    if not moving.any():
-        return float(truth.t[-1] - truth.t[0])
-    return float(truth.t[max(int(np.argmax(moving)) - 1, 0)] - truth.t[0])
-
-
-def _aligned_run(
-    plan: _AlignmentPlan, imu: ImuIncrements, fixes: GnssFixes, config: FilterConfig, truth: NavSeries
-) -> tuple[AidedResult, int, float | None]:
-    """One strategy's aided run as ``plan`` starts it: the result, the sample it starts at, and the
-    in-motion alignment's heading σ (rad; None for the others)."""
-    from sins.aiding import alignment, ekf
-
-    if plan.method == "static":
-        setup = alignment.AlignmentConfig(static_s=plan.static_s, coarse_s=plan.coarse_s)
-        return alignment.aligned_run(imu, fixes, config, setup, heading=plan.heading), 0, None
-    if plan.method == "gnss_velocity":
-        motion = alignment.MotionConfig(
-            min_speed_mps=plan.min_speed_mps, sideslip_sigma_rad=plan.sideslip_sigma_rad
-        )
-        try:
-            start, result = alignment.in_motion_run(imu, fixes, config, motion)
-        except SinsInputError as exc:
-            raise SinsInputError(f"{plan.where}: {exc}") from None
-        return result, start.index, start.heading_sigma_rad
-    return ekf.run(imu, fixes, config, strapdown.InitialState.from_series(truth)), 0, None
-
-
-def _alignment_heading(sc: Scenario, truth: NavSeries, static_s: float) -> tuple[float, float] | None:
-    """The heading given to a static alignment (``[alignment] heading_sigma_deg``: the truth's, off by a
-    draw of that σ), or None to gyrocompass; refuses a vehicle that moves within ``static_s``."""
-    a = sc.aiding
-    assert a is not None
-    where = sc.source or sc.name
-    still = truth.t <= truth.t[0] + static_s + 1e-9
-    if truth.t[-1] < truth.t[0] + static_s - 1e-9:
-        raise SinsInputError(
-            f"{where}: alignment.static_s: {static_s:g} s is longer than the run's "
-            f"{truth.t[-1] - truth.t[0]:g} s"
-        )
-    speed = float(np.max(np.linalg.norm(truth.v_n[still], axis=1)))
-    turn = np.abs(np.diff(np.unwrap(truth.euler()[2][still])))
-    if speed > 1e-6 or float(np.sum(turn)) > 1e-9:
-        raise SinsInputError(
-            f"{where}: alignment.static_s: the vehicle moves within the first {static_s:g} s "
-            f"(speed up to {speed:.3g} m/s); an alignment needs it still"
-        )
-    if a.heading_sigma_rad is None:
-        return None
-    draw = np.random.default_rng([a.seed, 3]).standard_normal()
-    return float(truth.euler()[2][0] + a.heading_sigma_rad * draw), a.heading_sigma_rad
-
-
 def _true_bias(nav_model: ImuModel | None) -> NDArray[np.float64] | None:
     """The unit's constant gyro and accelerometer biases (6,), to set beside the filter's estimates."""
     if nav_model is None:
@@ -565,26 +467,6 @@ def _true_bias(nav_model: ImuModel | None) -> NDArray[np.float64] | None:
 
     gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
     return np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
-
-
-def _outage_errors(
-    outages: Sequence[tuple[float, float]], t: NDArray[np.float64], horizontal: NDArray[np.float64]
-) -> list[OutageError]:
-    """Each outage's horizontal error at its end (the sample before the fix that ends it) and its max."""
-    windows = []
-    for start, end in outages:
-        if start >= t[-1]:
-            continue
-        # Samples within 1 µs of an edge (a fix's, up to rounding) are the fix's, not the window's.
-        inside = np.flatnonzero((t > start + 1e-6) & (t < min(end, t[-1]) + 1e-9))
-        if end < t[-1]:  # the sample before the fix at the window's end
-            inside = inside[t[inside] < end - 1e-6]
-        if inside.size == 0:
-            continue
-        windows.append(
-            OutageError(start, end, float(horizontal[inside[-1]]), float(horizontal[inside].max()))
-        )
-    return windows
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
@@ -715,10 +597,11 @@ class _StreamedRun:
 
 @dataclass
 class _ChunkStep:
-    """Correct and integrate each chunk of corrupted readings with every strategy, in turn."""
+    """Correct and integrate each chunk of a unit's readings with every strategy, in turn: the engine's
+    one step."""
 
     sc: Scenario
-    strategies: dict[str, Strategy]
+    strategies: dict[str, Strategy | None]  # None: the readings as they are (the ideal IMU's)
     runs: dict[str, _StreamedRun]
     pending: _Pending
     truth_kept: list[NavSeries]
@@ -745,7 +628,7 @@ class _ChunkStep:
         h_ref = np.concatenate([[self.h_prev], frame.h]) if sc.vertical != "free" else None
         for name, strategy in self.strategies.items():
             run = self.runs[name]
-            corrected = strategy.correct_increments(corrupted, temp)
+            corrected = corrupted if strategy is None else strategy.correct_increments(corrupted, temp)
             solution, run.state = strapdown.advance(
                 run.state, corrected, vertical=sc.vertical, h_ref=h_ref, vertical_tau_s=sc.vertical_tau_s
             )
@@ -826,90 +709,3 @@ def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -
         out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
         out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
     return out
-
-
-@dataclass(frozen=True)
-class RecordingOutages:
-    """A real recording's IMU aided by its reference position as fixes, with outages opened in them.
-
-    ``outages`` are each window's horizontal error at its end and its maximum (:class:`OutageError`),
-    ``predicted_m`` the filter's horizontal 1σ at each window's end, ``free_m`` the error of the raw
-    readings (no bias correction) integrated over each window from the aided state at its start: what
-    the filter's estimate of the biases is worth. ``gyro_bias`` and
-    ``accel_bias`` are the final estimates (rad/s, m/s²); ``rms_m`` the horizontal RMS over the run.
-    """
-
-    outages: tuple[OutageError, ...]
-    predicted_m: tuple[float, ...]
-    free_m: tuple[float, ...]
-    gyro_bias: NDArray[np.float64]
-    accel_bias: NDArray[np.float64]
-    rms_m: float
-    fixes: int
-    rejected: int
-
-
-def psins_vehicle_outages(
-    outages: tuple[tuple[float, float], ...] = ((30.0, 45.0), (60.0, 80.0), (85.0, 95.0)),
-    *,
-    rate_hz: float = 1.0,
-    sigma_m: float = 0.5,
-    grade: str = "consumer",
-    root: str | os.PathLike[str] | None = None,
-) -> RecordingOutages:
-    """The PSINS vehicle recording's MEMS aided by the FOG-INS position as fixes, through outages.
-
-    The MEMS increments are integrated from the FOG-INS state (moved to the MEMS's place) at their
-    first time inside the reference; fixes are the FOG-INS position at ``rate_hz`` (its place, so the
-    lever arm is the reader's estimate of it, in MEMS axes) with ``sigma_m`` told to the filter; the
-    filter is tuned to ``grade`` (the file's MEMS has ≈ 0.06 °/s gyro and 5 mg accelerometer biases:
-    consumer grade). Errors are against the FOG-INS solution moved to the MEMS's place.
-    """
-    from sins.aiding import ekf, gnss
-    from sins.io.datasets.psins_vehicle import psins_alignment, read_psins_vehicle
-    from sins.nav import rotation
-
-    data, fog = read_psins_vehicle(root)
-    assert fog is not None
-    arm = psins_alignment(root).lever_arm_m  # the MEMS from the FOG-INS, MEMS axes
-    dt = 0.01  # the MEMS's increments: row k covers the 10 ms before t + 5 ms
-    t_end = data.t + 0.5 * dt
-    lat, lon, h = gnss.offset_position(fog.lat, fog.lon, fog.h, rotation.dcm_from_quat(fog.q_nb) @ arm)
-    truth = NavSeries(t=fog.t, lat=lat, lon=lon, h=h, v_n=fog.v_n, q_nb=fog.q_nb)
-    t = np.r_[t_end[0] - dt, t_end]
-    rows = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
-    k0, k1 = int(rows[0]), int(rows[-1])
-    imu = ImuIncrements(t=t[k0 : k1 + 1], dtheta_b=data.gyro[k0:k1] * dt, dv_b=data.accel[k0:k1] * dt)
-    start = strapdown.InitialState.from_series(truth.interpolate(imu.t[:1]))
-    fix_t = np.arange(np.ceil(imu.t[0] * rate_hz), imu.t[-1] * rate_hz) / rate_hz
-    at = fog.interpolate(fix_t)
-    fixes = gnss.GnssFixes(
-        t=fix_t, lat=at.lat, lon=at.lon, h=at.h, v_n=np.full((len(fix_t), 3), np.nan),
-        sigma_pos_m=np.full(3, sigma_m), lever_arm_b=-arm,
-    ).without([gnss.Outage(a, b) for a, b in outages])  # fmt: skip
-    config = ekf.FilterConfig.for_grade(
-        grade, position_sigma_m=sigma_m, velocity_sigma_mps=0.1, tilt_sigma_rad=np.radians(0.5),
-        heading_sigma_rad=np.radians(1.0),
-    )  # fmt: skip
-    result = ekf.run(imu, fixes, config, start)
-    reference = truth.interpolate(imu.t)
-    horizontal = nav_errors(result.nav, reference).horizontal_m
-    windows, predicted, free = [], [], []
-    for a, b in outages:
-        inside = np.flatnonzero((imu.t > a + 1e-6) & (imu.t < b - 1e-6))  # the fixes' samples are not in it
-        windows.append(OutageError(a, b, float(horizontal[inside[-1]]), float(horizontal[inside].max())))
-        row = int(np.flatnonzero((result.t_cov <= b + 1e-9) & ~result.after_update)[-1])
-        predicted.append(float(np.hypot(*result.sigma()[row, :2])))
-        # The raw readings from the aided state at the window's start (after its last fix).
-        k = int(inside[0]) - 1
-        steps = slice(k, int(inside[-1]))
-        seg = ImuIncrements(
-            t=imu.t[k : int(inside[-1]) + 1], dtheta_b=imu.dtheta_b[steps], dv_b=imu.dv_b[steps]
-        )
-        alone = strapdown.integrate(seg, strapdown.InitialState.from_series(result.nav, k))
-        free.append(float(nav_errors(alone.at(-1), reference.at(int(inside[-1]))).horizontal_m[0]))
-    return RecordingOutages(
-        outages=tuple(windows), predicted_m=tuple(predicted), free_m=tuple(free),
-        gyro_bias=result.gyro_bias[-1], accel_bias=result.accel_bias[-1],
-        rms_m=float(np.sqrt(np.mean(horizontal**2))), fixes=len(fixes), rejected=result.rejected,
-    )  # fmt: skip

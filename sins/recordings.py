@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,14 +26,29 @@ from sins.scenario.toml import MAX_SEED
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 
-def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
-    """Truth and exact ideal IMU of a scenario."""
+@contextmanager
+def input_errors(where: object) -> Iterator[None]:
+    """Raise a ``ValueError`` from within (one not already a :class:`~sins.errors.SinsInputError`) as a
+    ``SinsInputError`` naming ``where``: the numerical layers refuse bad values with ``ValueError``,
+    without knowing the scenario or file they came from."""
     try:
-        return trajectory.generate(scenario.build_motion(sc), sc.rate_hz)
+        yield
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
-        raise SinsInputError(f"{sc.source or sc.name}: {exc}") from None
+        raise SinsInputError(f"{where}: {exc}") from None
+
+
+def simulate(sc: Scenario) -> tuple[NavSeries, ImuIncrements]:
+    """Truth and exact ideal IMU of a scenario.
+
+    Raises
+    ------
+    SinsInputError
+        a trajectory that cannot be generated, naming the scenario.
+    """
+    with input_errors(sc.source or sc.name):
+        return trajectory.generate(scenario.build_motion(sc), sc.rate_hz)
 
 
 def with_unit(sc: Scenario, imu: str | os.PathLike[str] | None = None, seed: int | None = None) -> Scenario:
@@ -91,13 +107,11 @@ def simulate_readings(sc: Scenario, form: str = "increment", ideal: bool = False
         return SimulatedReadings(truth, readings, None, None, sc.imu_seed)
     model = scenario.load_imu(sc.imu_model).model(run_seed=sc.imu_seed)
     temp = cabin_temperature(sc, truth.t)
-    try:
+    with input_errors(sc.imu_model):
         if isinstance(readings, ImuRates):
             readings = model.corrupt_rates(readings, temp, seed=sc.imu_seed)
         else:
             readings = model.corrupt_increments(readings, temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
-    except ValueError as exc:
-        raise SinsInputError(f"{sc.imu_model}: {exc}") from None
     row_temp = temp if form == "rate" else temp[1:]  # increment rows are stamped at their interval's end
     return SimulatedReadings(truth, readings, row_temp, sc.imu_model, sc.imu_seed)
 

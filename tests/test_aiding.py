@@ -239,3 +239,22 @@ def test_a_diverged_filter_starts_again_from_the_fixes_instead_of_refusing_them_
     assert horizontal(again) < 5.0
     clean = ekf.run(ideal, fixes, config, start)
     assert len(clean.reinit_t) == 0 and clean.rejected == 0
+
+
+def test_outage_windows_hold_the_samples_between_their_fixes():
+    """Samples at 100 Hz with the rounding a long sum or a file leaves (±5e-12 s): a window holds the
+    samples strictly between the fixes on its edges (the sample at an edge takes that fix), found here
+    by integer arithmetic on the sample index; one that outlasts the run holds every sample to its end;
+    one that starts after the last sample, or holds none, gives no row."""
+    from sins.aiding.outages import outage_errors, window_rows
+
+    k = np.arange(301)
+    t = k / 100.0 + np.random.default_rng(11).uniform(-5e-12, 5e-12, k.size)  # 0 .. 3 s
+    horizontal = np.sqrt(k + 1.0)  # any error that grows: the last sample is the largest
+    assert np.array_equal(window_rows(t, 1.0, 1.5), np.arange(101, 150))
+    assert np.array_equal(window_rows(t, 2.0, 10.0), np.arange(201, 301))
+    assert window_rows(t, 1.0, 1.01).size == 0  # two fixes one sample apart: nothing between them
+    windows = outage_errors([(1.0, 1.5), (2.0, 10.0), (1.0, 1.01), (3.0, 4.0)], t, horizontal)
+    assert [(w.start_s, w.end_s) for w in windows] == [(1.0, 1.5), (2.0, 10.0)]
+    assert windows[0].final_m == windows[0].max_m == np.sqrt(150.0)  # sample 149, before the fix at 1.5 s
+    assert windows[1].final_m == np.sqrt(301.0)  # the run's last sample, 3 s

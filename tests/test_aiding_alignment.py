@@ -10,14 +10,18 @@ first order is the textbook ``ε_E / (Ω cos φ)``: a tactical unit's 5 °/h mak
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
+from conftest import refusal
+from scipy import stats
 
 from sins import imu
-from sins.aiding import alignment, ekf, gnss
+from sins.aiding import alignment, ekf, gnss, policy
 from sins.imu import spec
 from sins.nav import earth, rotation, trajectory
-from sins.nav.motion import Hold, SegmentMotion, Start
+from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start
 from sins.series import NavSeries
 
 D = np.radians
@@ -101,8 +105,6 @@ def test_alignment_refuses_a_short_recording_or_no_position():
     _, ideal = trajectory.generate(still(10.0), 100.0)
     config = ekf.FilterConfig.for_grade("tactical")
     none = gnss.GnssFixes.empty()
-    from conftest import refusal
-
     refusal(lambda: alignment.aligned_run(ideal, none, config, alignment.AlignmentConfig(60.0, 30.0)),
             "needs 60.0 s of still readings")  # fmt: skip
     refusal(
@@ -110,3 +112,50 @@ def test_alignment_refuses_a_short_recording_or_no_position():
         "start position",
     )
     refusal(lambda: alignment.AlignmentConfig(60.0, 90.0), "coarse_s")
+
+
+@dataclass(frozen=True)
+class _Table:
+    """An ``[alignment]`` table without a scenario: what :mod:`sins.aiding.policy` reads."""
+
+    alignment: str = "auto"
+    static_s: float | None = None
+    coarse_s: float = 60.0
+    heading_sigma_rad: float | None = None
+    min_speed_mps: float = 5.0
+    sideslip_sigma_rad: float = D(1.0)
+    seed: int = 0
+
+
+def test_the_alignment_policy_aligns_still_only_where_the_gyros_find_north():
+    """``auto`` on a drive that stands 40 s before it moves: a navigation-grade gyro (0.01 °/h) finds
+    north to well under 2° and aligns still over the whole stop; a tactical one (5 °/h, against the
+    Earth rate's 10.6 °/h horizontal part at 45°) cannot, and aligns in motion unless the heading comes
+    from elsewhere; a drive that moves from its start aligns in motion; a still window longer than the
+    stop is refused, naming the scenario."""
+    start = Start(lat=LAT, lon=D(7.6), h=250.0, yaw=D(30.0))
+    stop_then_go = SegmentMotion.from_segments(start, [Hold(40.0), Accelerate(10, 12.0, 2.0)])
+    truth, _ = trajectory.generate(stop_then_go, 50.0)
+    moving, _ = trajectory.generate(SegmentMotion.from_segments(start, [Accelerate(10, 12.0, 2.0)]), 50.0)
+    navigation, tactical = ekf.FilterConfig.for_grade("navigation"), ekf.FilterConfig.for_grade("tactical")
+    # The stop ends within a sample of 40 s (the smooth ramp reaches 0.07 µm/s at 40.02 s, 1.2 at 40.04).
+    assert 40.0 <= policy.initial_stop_s(truth) <= 40.02 + 1e-9
+    plan = policy.plan_alignment(_Table(), truth, navigation)
+    assert plan.method == "static" and plan.heading is None
+    assert plan.static_s == plan.coarse_s == policy.initial_stop_s(truth)
+    assert policy.plan_alignment(_Table(), truth, tactical).method == "gnss_velocity"
+    told = policy.plan_alignment(_Table(heading_sigma_rad=D(1.0)), truth, tactical)
+    assert told.method == "static" and told.heading is not None and told.heading[1] == D(1.0)
+    assert policy.plan_alignment(_Table(), moving, navigation).method == "gnss_velocity"
+    late = _Table(alignment="static", static_s=50.0)
+    refusal(
+        lambda: policy.plan_alignment(late, truth, navigation, "drive.toml"), "drive.toml", "vehicle moves"
+    )
+    # The heading from elsewhere is the truth's off by a draw of the told σ: over 200 seeds the mean
+    # square of the normalised errors lies within χ²₂₀₀/200's 99 % band (0.77-1.26).
+    z = [
+        (policy.static_heading(_Table(heading_sigma_rad=D(1.0), seed=s), truth, 40.0) or (0.0,))[0] - D(30.0)
+        for s in range(200)
+    ]
+    low, high = stats.chi2.ppf([0.005, 0.995], 200) / 200
+    assert low < np.mean((np.array(z) / D(1.0)) ** 2) < high

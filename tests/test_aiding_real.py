@@ -13,7 +13,7 @@ import pytest
 import scipy.io
 from conftest import dataset_folder
 
-from sins import pipeline
+from sins import referenced_aiding
 from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FILE, PSINS_VEHICLE_FOLDER
 from sins.io.datasets.root import ENV_VAR
 
@@ -23,10 +23,10 @@ OUTAGES = ((30.0, 45.0), (60.0, 80.0), (85.0, 95.0))
 
 
 @pytest.fixture(scope="module")
-def aided() -> pipeline.RecordingOutages:
+def aided() -> referenced_aiding.RecordingOutages:
     if not PATH.is_file():
         pytest.skip(f"PSINS vehicle data not found at {PATH}; set {ENV_VAR} to the folder holding it")
-    return pipeline.psins_vehicle_outages(OUTAGES)
+    return referenced_aiding.psins_vehicle_outages(OUTAGES)
 
 
 def test_the_filter_finds_the_files_own_biases(aided):

@@ -103,6 +103,35 @@ def test_the_outage_error_is_the_solutions_error_at_that_sample():
     assert result.aided["none"].fixes == len(fixes)
 
 
+@pytest.mark.parametrize("unit", ["tactical", "ideal"])
+def test_the_aided_runs_reuse_the_streamed_scenario_to_the_last_bit(unit: str):
+    """The aided runs take the truth and ideal IMU the stream generated (8,600 samples: two chunks
+    joined) instead of simulating the scenario again: every figure and series equals the aided run of
+    the whole arrays :func:`pipeline.simulate` makes, bit for bit, with a unit and with the ideal IMU."""
+    import dataclasses
+
+    from sins import compensation
+    from sins.scenario import load_imu
+
+    sc = from_dict(DRIVE)
+    if unit == "ideal":
+        sc = dataclasses.replace(sc, imu_model=None)
+    result = pipeline.run_scenario(sc, keep_hz=5.0)
+    nav_model, grade, strategies = None, None, {"none": None}
+    if sc.imu_model is not None:
+        spec = load_imu(sc.imu_model)
+        nav_model, grade = spec.model(run_seed=sc.imu_seed), spec.grade
+        strategies = {"none": compensation.make("none")}
+    again = pipeline.aided_runs(sc, strategies, *pipeline.simulate(sc), nav_model, grade, keep_every=10)
+    got, want = result.aided["none"], again["none"]
+    assert result.samples == 8600 and got.summary == want.summary and got.outages == want.outages
+    for field in ("t_cov", "sigma", "bias", "fix_t"):
+        np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+    assert got.errors is not None and want.errors is not None
+    np.testing.assert_array_equal(got.errors.pos_ned_m, want.errors.pos_ned_m)
+    assert (got.true_bias is None) == (unit == "ideal")
+
+
 def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
     refusal(
         lambda: from_dict(_with(outage=[{"start_s": 50.0, "end_s": 40.0}])),

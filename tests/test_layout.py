@@ -34,6 +34,7 @@ RANKS = {
     "sins.recordings": 6.5,  # above the scenario files it reads, below the runs that use it
     "sins.pipeline": 7,
     "sins.referenced": 7,
+    "sins.referenced_aiding": 7,
     "sins.campaign": 8,
     "sins.quality": 9,
     "sins.viz": 10,

@@ -134,6 +134,36 @@ def test_units_of_different_margins_driven_together_read_as_each_alone():
     assert together[0].runs["none"].summary != together[1].runs["none"].summary
 
 
+def test_the_ideal_imu_is_an_identity_unit_of_the_one_engine():
+    """Without an IMU model the engine's one unit gives the ideal increments as they are: over four
+    chunks its run is the whole-array integration of the exact ideal IMU (final and largest errors
+    exactly, the RMS to the rounding of a sum taken in chunks, the kept states bit for bit), and driven
+    beside a unit whose stream holds intervals back it is the same as alone."""
+    sc = scenario.load(pipeline.resolve_scenario("car_drive_5min"))  # 30,000 samples, vertical damped
+    assert sc.imu_model is None
+    run = pipeline.run_scenario(sc, keep_hz=1.0)
+    assert run.samples > 3 * trajectory.CHUNK and list(run.runs) == ["none"] and run.sensor_t is None
+    truth, ideal = pipeline.simulate(sc)
+    whole = pipeline.navigate(ideal, truth, sc.vertical, sc.vertical_tau_s)
+    streamed = run.runs["none"]
+    for field in dataclasses.fields(whole.summary):
+        a, b = getattr(streamed.summary, field.name), getattr(whole.summary, field.name)
+        if field.name.startswith("rms"):
+            assert a == pytest.approx(b, rel=1e-12), field.name
+        else:
+            assert a == b, (field.name, a, b)
+    kept = np.searchsorted(truth.t, streamed.solution.t)
+    np.testing.assert_array_equal(streamed.solution.t, truth.t[kept])
+    for name in ("lat", "lon", "h", "v_n", "q_nb"):
+        np.testing.assert_array_equal(getattr(streamed.solution, name), getattr(whole.solution, name)[kept])
+        np.testing.assert_array_equal(getattr(run.truth, name), getattr(truth, name)[kept])
+    delayed = scenario.ImuSpec("tactical", 4, (TimeOffset("gyro", np.array([0.013, 0.0, -0.002])),), ())
+    beside = pipeline.run_units(sc, [pipeline.fit_unit(delayed, None), None], [6, sc.imu_seed], keep_hz=1.0)
+    assert beside[1].runs["none"].summary == streamed.summary and beside[1].sensor_t is None
+    np.testing.assert_array_equal(beside[1].runs["none"].errors.pos_ned_m, streamed.errors.pos_ned_m)
+    assert beside[0].runs["none"].summary.final_horizontal_m > 10.0  # the tactical unit drifts
+
+
 def test_a_stream_refuses_chunks_that_do_not_follow_each_other():
     imu, temp = _drive()
     stream = IncrementStream(_model(), 1, 0.01)

@@ -17,9 +17,9 @@ import argparse
 import numpy as np
 import scipy.io
 
-from sins import pipeline
 from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FILE, PSINS_VEHICLE_FOLDER
 from sins.io.datasets.root import dataset_file
+from sins.referenced_aiding import psins_vehicle_outages
 
 #: PSINS right-forward-up into forward-right-down (the reader's turn).
 _RFU_TO_FRD = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -34,7 +34,7 @@ def main() -> None:
     windows = (
         tuple((a, b) for a, b in args.outage) if args.outage else ((30.0, 45.0), (60.0, 80.0), (85.0, 95.0))
     )
-    result = pipeline.psins_vehicle_outages(windows, rate_hz=args.rate_hz, grade=args.grade)
+    result = psins_vehicle_outages(windows, rate_hz=args.rate_hz, grade=args.grade)
     print(
         f"psins_fog_mems_vehicle: MEMS aided by the FOG-INS position at {args.rate_hz:g} Hz "
         f"({result.fixes} fixes, {result.rejected} rejected), filter tuned to {args.grade}; "
