@@ -61,9 +61,7 @@ def _check_args(args: argparse.Namespace) -> None:
 
     if args.strategy not in VARIANTS and args.strategy != referenced.BIAS_ONLY:
         known = ", ".join(n for n in VARIANTS if n != "oracle")
-        raise SinsInputError(
-            f"unknown strategy {args.strategy!r} (known: {known}, {referenced.BIAS_ONLY})"
-        )
+        raise SinsInputError(f"unknown strategy {args.strategy!r} (known: {known}, {referenced.BIAS_ONLY})")
     if args.no_guard and args.strategy not in ("mlp", "kohonen"):
         raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
 
