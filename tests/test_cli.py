@@ -495,3 +495,22 @@ def test_the_dataset_option_names_every_dataset_the_library_reads() -> None:
         assert option.help is not None
         named = option.help.split(": ", 1)[1].split(" (")[0].split(", ")
         assert sorted(named) == sorted(datasets.NAMES), (command, named)
+
+
+def test_the_run_table_says_where_the_guard_kept_regression() -> None:
+    """A learned strategy whose guard kept regression everywhere prints regression's row; the report
+    says so rather than leave it to look like a learner that learnt nothing (issue 33)."""
+    from types import SimpleNamespace
+
+    from sins.cli.run import guard_notes
+
+    kept = SimpleNamespace(
+        guard_={"gyro.x": {"earns_its_place": False}, "accel.x": {"earns_its_place": False}}
+    )
+    mixed = SimpleNamespace(
+        guard_={"gyro.x": {"earns_its_place": True}, "accel.x": {"earns_its_place": False}}
+    )
+    notes = guard_notes({"regression": object(), "mlp": kept, "kohonen": mixed})
+    assert len(notes) == 2
+    assert notes[0].startswith("mlp: the guard kept regression") and "every channel" in notes[0]
+    assert notes[1] == "kohonen: learned on gyro.x; the guard kept regression on the others"

@@ -64,6 +64,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if residuals:
         report.append("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
         report.append(format_residuals(residuals))
+        report += guard_notes(unit.strategies if unit is not None else {})
     aided, outages = _aided_json(result, path)
     if aided:
         grade = next(iter(result.aided.values())).filter_grade
@@ -81,6 +82,25 @@ def _cmd_run(args: argparse.Namespace) -> int:
         save_plot(args.plot, lambda: plots.run_figure(result), f"sins run {sc.name}")
     show(args, result, "\n".join(report))
     return 0
+
+
+def guard_notes(strategies: dict[str, Any]) -> list[str]:
+    """A line for each learned strategy saying where its guard kept regression (and the physics terms):
+    a row equal to regression's is then the guard's verdict, not a learner that learnt nothing."""
+    lines = []
+    for name, strategy in strategies.items():
+        guard = getattr(strategy, "guard_", None)
+        if not isinstance(guard, dict):
+            continue
+        learned = [ch for ch, g in guard.items() if g.get("earns_its_place")]
+        if not learned:
+            lines.append(
+                f"{name}: the guard kept regression and its term groups on every channel (the learner did "
+                "not beat them on held-back rig blocks)"
+            )
+        elif len(learned) < len(guard):
+            lines.append(f"{name}: learned on {', '.join(learned)}; the guard kept regression on the others")
+    return lines
 
 
 def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
