@@ -1,7 +1,7 @@
 """Compensation of a real unit against its reference trajectory: fitted on intervals, judged open loop.
 
 :func:`fit` fits any strategy on a :class:`~sins.series.ReferencedRecording`: the seed model and the
-sensors' time offsets on the intervals between reference epochs (:mod:`sins.compensation.intervals`),
+sensors' time offsets on the intervals between reference epochs (:mod:`sins.compensation.interval_fit`),
 then, for strategies that learn more than the seed model, on the per-sample references the intervals
 give. :func:`open_loop_attitude` judges a strategy the way an orientation benchmark does: the corrected
 gyro integrated alone from the reference's first attitude, scored against the reference on the judged
@@ -21,8 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import compensation
-from sins.compensation import Strategy, intervals
-from sins.compensation.intervals import INTERVAL_S, IntervalFit
+from sins.compensation import Strategy, interval_fit
+from sins.compensation.interval_fit import IntervalFit
+from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
@@ -61,7 +62,7 @@ def fit(
     are fitted on intervals of ``interval_s``; ``regression`` (``regression_robust``: Huber-weighted
     intervals) is that fit; :data:`BIAS_ONLY` the biases alone (the model of the PSINS demo's filter);
     every other strategy is fitted by its own ``fit`` on the per-sample references the intervals give
-    (:func:`~sins.compensation.intervals.interval_reference`) and reads the readings at the fitted time
+    (:func:`~sins.compensation.interval_fit.interval_reference`) and reads the readings at the fitted time
     offsets. ``none`` learns nothing and shifts nothing. ``progress(done, total)`` is handed to the
     learned strategies' training.
 
@@ -74,7 +75,7 @@ def fit(
     try:
         if name == BIAS_ONLY:
             return _bias_only(rec, interval_s)
-        fitted = intervals.fit_intervals(rec, interval_s=interval_s, robust=name == "regression_robust")
+        fitted = interval_fit.fit_intervals(rec, interval_s=interval_s, robust=name == "regression_robust")
         strategy = compensation.make(name, **(params or {}))
         if name == "none":
             return Fitted(strategy, fitted)
@@ -84,7 +85,7 @@ def fit(
         else:
             if progress is not None and hasattr(strategy, "progress"):  # the learners, whose fits take long
                 strategy.progress = progress
-            strategy.fit(intervals.interval_reference(rec, fitted))
+            strategy.fit(interval_fit.interval_reference(rec, fitted))
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
@@ -102,7 +103,7 @@ def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
 
 def _bias_only(rec: ReferencedRecording, interval_s: float) -> Fitted:
     """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
-    fitted = intervals.fit_biases(rec, interval_s=interval_s)
+    fitted = interval_fit.fit_biases(rec, interval_s=interval_s)
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
     strategy.fitted_on_ = fitted_on(rec)
     return Fitted(strategy, fitted)

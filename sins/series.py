@@ -351,7 +351,7 @@ class ReferencedRecording:
     The reference knows where the unit was and how it was turned (an optical motion capture, a
     better INS), not what the sensors should have read: rates and specific forces follow from it
     only by differentiation, which raises its noise, so compensation on such a recording is fitted
-    on the angle and velocity changes between reference epochs (:mod:`sins.compensation.intervals`).
+    on the angle and velocity changes between reference epochs (:mod:`sins.compensation.interval_fit`).
 
     Attributes
     ----------

@@ -1,4 +1,4 @@
-"""Compensation fitted against a reference trajectory on intervals (sins.compensation.intervals,
+"""Compensation fitted against a reference trajectory on intervals (sins.compensation.interval_fit,
 sins.referenced, ``sins fit/evaluate/correct`` with a reference), judged on data sins did not make: a
 unit of known errors written with numpy whose reference is ten times noisier than the sensor
 (tests/numpy_referenced.py), BROAD's motion capture and the PSINS drive (skipped without the data)."""
@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import compensation, referenced
 from sins.cli import main
-from sins.compensation import coefficients, intervals
+from sins.compensation import coefficients, interval_fit
 from sins.imu.calibration import SeedModelFit
 from sins.io.datasets.root import data_root
 from sins.nav import earth
@@ -64,7 +64,7 @@ def test_a_known_unit_is_recovered_within_its_standard_errors_with_a_reference_t
     honest: the RMS of the z-scores between 0.4 and 2 (a z-score RMS far below 1 would mean the stated
     errors are inflated, far above that they are too small; 3 × 27 coefficients scatter by ~0.14)."""
     rec, unit = _recording(seed)
-    fit = intervals.fit_intervals(rec, g_sensitivity=False)
+    fit = interval_fit.fit_intervals(rec, g_sensitivity=False)
     s = fit.seed
     truth = np.concatenate(
         [unit.B0, unit.B.ravel(), unit.A0, unit.A.ravel(), [unit.gyro_delay_s, unit.accel_delay_s]]
@@ -85,7 +85,7 @@ def test_fast_turning_within_an_interval_costs_nothing() -> None:
     composed rotation keeps the scale factors within their standard errors, where summing the rates
     would not."""
     rec, unit = _recording(4)
-    fit = intervals.fit_intervals(rec, interval_s=5.0, g_sensitivity=False)
+    fit = interval_fit.fit_intervals(rec, interval_s=5.0, g_sensitivity=False)
     z = (fit.seed.B - unit.B) / fit.seed.B_se
     assert np.all(np.abs(z) < 4.0), z.round(2)
 
@@ -94,8 +94,8 @@ def test_the_learners_see_what_the_seed_model_leaves() -> None:
     """The per-sample references reproduce the seed model: regression fitted on them lands on the
     interval fit's coefficients within its standard errors."""
     rec, _ = _recording(5)
-    fit = intervals.fit_intervals(rec, g_sensitivity=False)
-    data = intervals.interval_reference(rec, fit)
+    fit = interval_fit.fit_intervals(rec, g_sensitivity=False)
+    data = interval_fit.interval_reference(rec, fit)
     again = compensation.make("regression", g_sensitivity=False).fit(data)
     assert np.all(np.abs(again.B_ - fit.seed.B) < 2.0 * fit.seed.B_se)
     assert np.all(np.abs(again.B0_ - fit.seed.B0) < 2.0 * fit.seed.B0_se)

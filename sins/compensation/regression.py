@@ -40,7 +40,7 @@ class Regression(Strategy):
 
     def set_fit(self, fit: calibration.SeedModelFit) -> Regression:
         """Take the coefficients of a seed-model fit made elsewhere (on a real unit's intervals,
-        :mod:`sins.compensation.intervals`) as this strategy's; returns self."""
+        :mod:`sins.compensation.interval_fit`) as this strategy's; returns self."""
         self.B0_, self.B_, self.K_, self.A0_, self.A_ = fit.B0, fit.B, fit.K, fit.A0, fit.A
         return self
 

@@ -3,7 +3,7 @@ motion capture's orientation and position at every sample where the markers were
 
 Unlike :func:`~sins.io.datasets.broad.read_broad`, nothing is differentiated: the optical data are the
 reference as they are (their orientation and the velocity of their position), so compensation is fitted
-on the angle and velocity changes between optical epochs (:mod:`sins.compensation.intervals`), where the
+on the angle and velocity changes between optical epochs (:mod:`sins.compensation.interval_fit`), where the
 optical noise does not grow with the sample rate. The judged rows are BROAD's own ``movement`` phases, on
 which the benchmark scores orientation filters.
 """
