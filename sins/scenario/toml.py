@@ -8,11 +8,11 @@ read through it.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
 
 from sins.errors import SinsInputError
+from sins.io import documents
 
 _MISSING: Any = object()
 
@@ -231,7 +231,8 @@ def _kind(value: Any) -> str:
 
 
 def read_toml(path: Path, what: str) -> dict[str, Any]:
-    """A TOML file parsed; one-line errors name the file and ``what`` kind of file it is.
+    """A TOML file parsed; one-line errors name the file and ``what`` kind of file it is
+    (:func:`sins.io.documents.read_toml`, the one reader of every TOML file).
 
     Parameters
     ----------
@@ -241,18 +242,7 @@ def read_toml(path: Path, what: str) -> dict[str, Any]:
     Raises
     ------
     SinsInputError
-        the file is missing, unreadable, not UTF-8 or not valid TOML.
+        the file is missing, unreadable, not UTF-8 or not valid TOML, nested too deep, or holds an
+        integer beyond 64 bits or a NUL byte.
     """
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such {what} file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SinsInputError(f"{path}: invalid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except IsADirectoryError:
-        raise SinsInputError(f"{path}: is a directory, expected a {what} file") from None
-    except OSError as exc:
-        raise SinsInputError(f"{path}: cannot read: {exc}") from None
+    return documents.read_toml(path, what)
