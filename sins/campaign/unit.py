@@ -6,6 +6,7 @@ so any worker, in any order, on any machine, computes the same rows.
 
 from __future__ import annotations
 
+import logging
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -101,6 +102,9 @@ def task(spec: CampaignSpec, units: list[int]) -> tuple[list[int], list[dict[str
     engine's Parquet writer, pyarrow, holds ~40 MB of every worker's memory).
     """
     _heap_for_chunks()
+    # A failing task reaches the user as its error's one line in the main process; the worker's own
+    # "Compute Failed" warning (6-10 lines on the terminal the worker shares) says it again.
+    logging.getLogger("distributed").setLevel(logging.ERROR)
     return units, run_units(spec, units)
 
 
