@@ -83,26 +83,35 @@ def test_every_strategy_saved_loads_and_corrects_as_it_did(models: dict[str, Pat
 def _edited(models: dict[str, Path], tmp_path: Path, name: str, edit: Any) -> Path:
     doc = json.loads(models[name].read_text())
     edit(doc)
+    tmp_path.mkdir(parents=True, exist_ok=True)
     path = tmp_path / f"{name}_edited.json"
     path.write_text(json.dumps(doc))
     return path
 
 
-@pytest.mark.parametrize("hidden", [[200000000, 32], [1e12, 32], [32] * 5, [0, 32], [True, 3], "32"])
 def test_a_network_larger_than_fit_can_make_is_refused_before_torch_is_imported(
-    models: dict[str, Path], tmp_path: Path, hidden: Any
+    models: dict[str, Path], tmp_path: Path
 ) -> None:
-    """In a fresh interpreter: refused in one line, and torch never imported, so no tensor was made
-    (today: 6.6 GB and 43 s, or a request for 24 TB)."""
-    path = _edited(models, tmp_path, "mlp_pure", lambda d: d["params"].__setitem__("hidden", hidden))
+    """In a fresh interpreter: each refused in one line, and torch never imported, so no tensor was made
+    (today ``[200000000, 32]`` took 6.6 GB and 43 s, ``[1e12, 32]`` asked for 24 TB)."""
+    hidden: list[Any] = [[200000000, 32], [1e12, 32], [32] * 5, [0, 32], [True, 3], "32"]
+    paths = [
+        _edited(models, tmp_path / str(i), "mlp_pure", lambda d, h=h: d["params"].__setitem__("hidden", h))
+        for i, h in enumerate(hidden)
+    ]
     code = (
         "import sys; from sins import compensation; from sins.errors import SinsInputError\n"
-        "try:\n    compensation.load(sys.argv[1])\nexcept SinsInputError as exc:\n    print(exc)\n"
+        "for path in sys.argv[1:]:\n"
+        "    try:\n        compensation.load(path)\n    except SinsInputError as exc:\n        print(exc)\n"
         "print('torch' in sys.modules)"
     )
-    out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True)
-    message, torch_imported = out.stdout.strip().splitlines()
-    assert str(path) in message and "hidden must be 1 to 4 layer sizes" in message, message
+    out = subprocess.run(
+        [sys.executable, "-c", code, *map(str, paths)], capture_output=True, text=True, check=True
+    )
+    *messages, torch_imported = out.stdout.strip().splitlines()
+    assert len(messages) == len(paths)
+    for path, message in zip(paths, messages, strict=True):
+        assert str(path) in message and "hidden must be 1 to 4 layer sizes" in message, message
     assert torch_imported == "False"
 
 

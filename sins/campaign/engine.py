@@ -164,10 +164,10 @@ def _compute(
             raise SinsInputError(
                 f"--workers {n}: the cluster's workers did not start in {WORKERS_WAIT_S:g} s"
             ) from None
-        except KilledWorker as exc:
+        except KilledWorker:
             raise SinsInputError(
-                f"a campaign task's workers died {exc.args[1] if len(exc.args) > 1 else ''} times running it "
-                "(out of memory, say): lower --workers, or give them more memory"
+                "a campaign task killed every worker that ran it, as often as dask retries one (out of "
+                "memory, say): lower --workers, or give the workers more memory; --resume keeps what ran"
             ) from None
         finally:
             if client is not None:

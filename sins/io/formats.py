@@ -876,7 +876,8 @@ def _phases_from_column(table: Table, directives: dict[int, _Directive]) -> tupl
             raise SinsInputError(
                 f"{path}:{directive.line}: '# phase {value}' describes a phase with no rows in column 'phase'"
             )
-    ref_rate = np.linalg.norm(table.data[:, [table.columns.index(c) for c in REF_COLUMNS[:3]]], axis=1)
+    with np.errstate(over="ignore"):  # a reading beyond every range (1e300) is refused later, in one line
+        ref_rate = np.linalg.norm(table.data[:, [table.columns.index(c) for c in REF_COLUMNS[:3]]], axis=1)
     phases = []
     for value, (start, stop) in sorted(runs.items(), key=lambda item: item[1]):
         if value < 0:
