@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from sins.errors import SinsInputError
-from sins.io.documents import printable
+from sins.io.documents import printable, short
 
 #: Absolute floors below which a change is not judged (metres, SI residual units).
 FLOORS = {"horizontal": 0.5, "residual": 1e-9}
@@ -194,7 +194,7 @@ def read_baseline(
         if names is not None and case not in names:
             raise SinsInputError(f"{where}: the suite {suite.source if suite else ''} has no such case")
         if not isinstance(strategies, dict) or not strategies:
-            raise SinsInputError(f"{where}: expected a table of strategies, got {_short(strategies)}")
+            raise SinsInputError(f"{where}: expected a table of strategies, got {short(strategies)}")
         cases[case] = {s: _metrics(f"{where}.{printable(s)}", m) for s, m in strategies.items()}
     return cases
 
@@ -202,7 +202,7 @@ def read_baseline(
 def _metrics(where: str, metrics: Any) -> dict[str, float]:
     """One strategy's metrics of a baseline, checked (see :func:`read_baseline`)."""
     if not isinstance(metrics, dict) or not metrics:
-        raise SinsInputError(f"{where}: expected a table of metrics, got {_short(metrics)}")
+        raise SinsInputError(f"{where}: expected a table of metrics, got {short(metrics)}")
     for metric in ("final_horizontal_m", "max_horizontal_m"):
         if metric not in metrics:
             raise SinsInputError(f"{where}: has no {metric} (a baseline holds every metric it gates)")
@@ -210,14 +210,8 @@ def _metrics(where: str, metrics: Any) -> dict[str, float]:
         if metric not in _METRICS:
             raise SinsInputError(f"{where}.{printable(metric)}: not a metric the suite measures")
         if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-            raise SinsInputError(f"{where}.{metric}: expected a finite number, got {_short(value)}")
+            raise SinsInputError(f"{where}.{metric}: expected a finite number, got {short(value)}")
     return {metric: float(value) for metric, value in metrics.items()}
-
-
-def _short(value: Any) -> str:
-    """A value from a file, for a one-line message: its repr, escaped and cut."""
-    text = printable(repr(value))
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 #: The metrics a suite measures per strategy (the channels are :data:`sins.imu.CHANNELS`).

@@ -16,6 +16,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -427,10 +428,23 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_work(
 
     monkeypatch.setattr(engine, "run", no_work)
     (tmp_path / "file").write_text("")
-    rrd = str(tmp_path / "no" / "s.rrd")
+    # A folder that refuses new files, as a read-only one does (root is not refused by permissions).
+    locked = tmp_path / "read-only"
+    locked.mkdir()
+    make = tempfile.TemporaryFile
+
+    def refusing(*args: Any, **kwargs: Any) -> Any:
+        if Path(kwargs.get("dir") or ".") == locked:
+            raise PermissionError(13, "Permission denied")
+        return make(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile, "TemporaryFile", refusing)
+    rrd = str(locked / "s.rrd")
     cases = [
-        (["campaign", str(path), "--out", str(tmp_path / "o"), "--rerun", rrd], "s.rrd"),
+        (["campaign", str(path), "--out", str(tmp_path / "o"), "--rerun", rrd], rrd),
+        (["campaign", str(path), "--out", str(locked / "o")], str(locked / "o")),
         (["campaign", str(path), "--out", str(tmp_path / "file" / "o")], str(tmp_path / "file" / "o")),
+        (["check", str(path), "--baseline", str(locked / "b.json"), "--update-baseline"], "b.json"),
         (["check", str(path), "--baseline", str(tmp_path / "no" / "b.json"), "--update-baseline"], "b.json"),
     ]  # fmt: skip
     for argv, named in cases:
@@ -444,8 +458,6 @@ def test_a_write_that_fails_names_the_target_not_the_temporary_file(
 ) -> None:
     """A folder that refuses new files (as a non-root user sees a read-only one), a disk that fills:
     today the error named ``.run.json.XXXX.tmp``, which the user never asked for."""
-    import tempfile
-
     from sins import io
 
     def refused(*args: Any, **kwargs: Any) -> Any:
@@ -465,3 +477,17 @@ def test_a_write_that_fails_names_the_target_not_the_temporary_file(
     with pytest.raises(OSError, match="No space left") as info:
         io.write_json(target, {"a": 1})
     assert info.value.filename == str(target) and list(tmp_path.iterdir()) == []
+
+
+def test_a_unit_its_rig_cannot_fit_is_one_line_from_the_cluster(tmp_path: Path) -> None:
+    """A rig of one table rate and no positions cannot determine the seed model: the task's
+    ``ValueError`` came back as a traceback, after the worker's 6-10 lines of "Compute Failed". Now
+    one line naming the campaign file and the unit, and nothing from the worker."""
+    path = _campaign(tmp_path, count=1)
+    (tmp_path / "rig.toml").write_text(RIG.replace("count = 6", "count = 0"))
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+    sins = str(Path(sys.executable).parent / "sins")
+    run = subprocess.run([sins, "campaign", str(path), "--out", str(tmp_path / "out"), "--workers", "1"],
+                         capture_output=True, text=True, env=env, timeout=600)  # fmt: skip
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and f"{path}: unit 0: simulated rig" in run.stderr, run.stderr

@@ -29,7 +29,7 @@ from sins.campaign.folder import AIDED_COLUMN
 from sins.campaign.results import SUMMARISED
 from sins.campaign.spec import CampaignSpec
 from sins.errors import SinsInputError
-from sins.io.documents import printable
+from sins.io.documents import printable, short
 
 #: The campaign-wide false-alarm rate: the chance an unchanged strategy fails the gate.
 FALSE_ALARM = 0.01
@@ -145,15 +145,15 @@ def _check_figure(where: str, figure: str, figures: Any, units: int) -> None:
         raise SinsInputError(f"{where}: expected {units} numbers, one per unit_seed, got {size}")
     for i, x in enumerate(figures):
         if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
-            raise SinsInputError(f"{where}[{i}]: expected a finite number, got {x!r}")
+            raise SinsInputError(f"{where}[{i}]: expected a finite number, got {short(x)}")
 
 
 def _check_group(where: str, name: str, spec: CampaignSpec) -> None:
     scenario, _, strategy = name.partition("/")
     if scenario not in {s.name for s in spec.scenarios}:
-        raise SinsInputError(f"{where}: the campaign has no scenario {printable(scenario)!r}")
+        raise SinsInputError(f"{where}: the campaign has no scenario {short(scenario)}")
     if strategy not in ("none", *spec.compensation.strategies):
-        raise SinsInputError(f"{where}: the campaign runs no strategy {printable(strategy)!r}")
+        raise SinsInputError(f"{where}: the campaign runs no strategy {short(strategy)}")
 
 
 def _aided_figures(spec: CampaignSpec, group: str) -> set[str]:

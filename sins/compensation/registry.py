@@ -18,7 +18,7 @@ import numpy as np
 from sins import __version__, io
 from sins.compensation.base import Strategy
 from sins.errors import SinsInputError
-from sins.io.documents import printable
+from sins.io.documents import printable, short
 
 #: Version of the model file format; bump it when the saved state changes meaning.
 FORMAT_VERSION = 3
@@ -101,13 +101,14 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     path = Path(path)
     doc = io.read_json_document(path, "model file", FORMAT_NAME)
     if doc.get("version") != FORMAT_VERSION:
+        version, writer = short(doc.get("version")), short(doc.get("sins"))
         raise SinsInputError(
-            f"{path}: model file format version {doc.get('version')!r} (written by sins {doc.get('sins')}); "
+            f"{path}: model file format version {version} (written by sins {writer}); "
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
     if name not in SAVED_STRATEGIES:
-        raise SinsInputError(f"{path}: unknown strategy {name!r} (known: {', '.join(SAVED_STRATEGIES)})")
+        raise SinsInputError(f"{path}: unknown strategy {short(name)} (known: {', '.join(SAVED_STRATEGIES)})")
     params, state = doc.get("params", {}), doc.get("state", {})
     for key, value in (("params", params), ("state", state)):
         if not isinstance(value, dict):
@@ -160,6 +161,6 @@ def _check_values(path: Path, name: str, value: Any, where: str) -> None:
             _check_values(path, name, v, f"{where}[{i}]")
     elif isinstance(value, int | float) and not isinstance(value, bool) and not abs(value) <= MAX_MODEL_VALUE:
         raise SinsInputError(
-            f"{path}: malformed {name} model ({where} is {value!r}; numbers must be finite and at most "
+            f"{path}: malformed {name} model ({where} is {short(value)}; numbers must be finite and at most "
             f"{MAX_MODEL_VALUE:g} in magnitude)"
         )

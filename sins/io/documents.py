@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import reprlib
 import stat
 import tomllib
 from pathlib import Path
@@ -139,6 +140,17 @@ def _bad(value: Any) -> str:
     if isinstance(value, int) and not isinstance(value, bool) and not INT_RANGE[0] <= value <= INT_RANGE[1]:
         return "the integer is beyond 64 bits"
     return ""
+
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxdict, _SHORT.maxstring, _SHORT.maxother = 2, 6, 4, 40, 40
+
+
+def short(value: Any, limit: int = 80) -> str:
+    """A value from a file, for a one-line message: its ``repr`` bounded as it is made (a huge array
+    costs no more than a number), escaped, and cut to ``limit`` characters."""
+    text = printable(_SHORT.repr(value))
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def printable(text: str) -> str:
