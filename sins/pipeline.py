@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import scenario
+from sins.errors import SinsInputError
 
 # OutageError is re-exported: it lived here before it moved down to sins.aiding.
 from sins.aiding.outages import OutageError as OutageError
@@ -62,10 +63,12 @@ from sins.scenario import presets as presets
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 if TYPE_CHECKING:
+    from sins.aiding.gnss import GnssConfig
     from sins.compensation import Strategy
     from sins.gap import GapReport
     from sins.imu import ImuModel
     from sins.nav.motion import Motion
+    from sins.scenario import AidingSpec
 
 T = TypeVar("T")
 
@@ -425,13 +428,7 @@ def aided_runs(
     readings = ideal
     if nav_model is not None:
         readings = nav_model.corrupt_increments(ideal, temp, seed=sc.imu_seed, dt_nominal=1.0 / sc.rate_hz)
-    receiver = gnss.GnssConfig(
-        rate_hz=a.rate_hz, sigma_pos_m=np.array(a.sigma_m), markov_sigma_m=np.array(a.markov_sigma_m),
-        markov_tau_s=a.markov_tau_s, sigma_vel_mps=a.sigma_vel_mps, lever_arm_b=np.array(a.lever_arm_m),
-        latency_s=a.latency_s, compensate_latency=a.compensate_latency,
-        outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
-    )  # fmt: skip
-    fixes = gnss.simulate(truth, receiver, seed=a.seed)
+    fixes = gnss.simulate(truth, _receiver(a), seed=a.seed)
     filter_grade = a.filter_grade or grade or "navigation"
     config = ekf.FilterConfig.for_grade(filter_grade)
     plan = policy.plan_alignment(a, truth, config, str(sc.source or sc.name))
@@ -457,6 +454,55 @@ def aided_runs(
             velocity_rejected=result.velocity_rejected,
         )  # fmt: skip
     return out
+
+
+def _receiver(a: AidingSpec) -> GnssConfig:
+    """The simulated receiver a scenario's ``[gnss]`` and ``[[outage]]`` describe."""
+    from sins.aiding import gnss
+
+    return gnss.GnssConfig(
+        rate_hz=a.rate_hz, sigma_pos_m=np.array(a.sigma_m), markov_sigma_m=np.array(a.markov_sigma_m),
+        markov_tau_s=a.markov_tau_s, sigma_vel_mps=a.sigma_vel_mps, lever_arm_b=np.array(a.lever_arm_m),
+        latency_s=a.latency_s, compensate_latency=a.compensate_latency,
+        outages=tuple(gnss.Outage(s, e) for s, e in a.outages),
+    )  # fmt: skip
+
+
+def check_runnable(sc: Scenario, grade: str | None = None) -> None:
+    """Refuse now what driving ``sc`` would refuse later, without driving it: a motion shorter than
+    one sample and, with ``[gnss]``, an alignment the trajectory cannot give (a still window longer than
+    the run, or while the vehicle moves; a speed the GNSS never shows). A campaign checks each scenario
+    so before its cluster starts and its units are fitted. ``grade``: the IMU file's, which tunes the
+    filter as in :func:`aided_runs`.
+
+    Raises
+    ------
+    SinsInputError
+        naming the scenario and the key, as :func:`run_scenario` would.
+    """
+    from sins.aiding import alignment, ekf, gnss, policy
+
+    where = str(sc.source or sc.name)
+    motion = scenario.build_motion(sc)
+    if scenario.sample_count(sc, motion) < 1:
+        raise SinsInputError(
+            f"{where}: the motion lasts {motion.t_end - motion.t_start:g} s, shorter than one sample"
+        )
+    a = sc.aiding
+    if a is None:
+        return
+    truth, ideal = simulate(sc)
+    config = ekf.FilterConfig.for_grade(a.filter_grade or grade or "navigation")
+    plan = policy.plan_alignment(a, truth, config, where)
+    if plan.method == "gnss_velocity":
+        fixes = gnss.simulate(truth, _receiver(a), seed=a.seed)
+        motion_config = alignment.MotionConfig(
+            min_speed_mps=a.min_speed_mps, sideslip_sigma_rad=a.sideslip_sigma_rad
+        )
+        try:
+            alignment.in_motion_start(ideal, fixes, config, motion_config)
+        except SinsInputError as exc:
+            raise SinsInputError(f"{where}: {exc}") from None
 
 
 def _true_bias(nav_model: ImuModel | None) -> NDArray[np.float64] | None:

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from sins.errors import SinsInputError
+from sins.io.documents import printable, short
 
 #: Absolute floors below which a change is not judged (metres, SI residual units).
 FLOORS = {"horizontal": 0.5, "residual": 1e-9}
@@ -84,6 +85,10 @@ def load_suite(path: str | os.PathLike[str]) -> Suite:
         if not scenario.exists():
             raise table.error(f"no such scenario file: {scenario}", "scenario")
         table.done()
+        try:
+            _check_case(scenario)
+        except SinsInputError as exc:
+            raise table.error(f"{exc}", "scenario") from None
         cases.append(Case(name, scenario))
     if not cases:
         raise top.error("needs at least one [[case]]", "case")
@@ -94,6 +99,19 @@ def load_suite(path: str | os.PathLike[str]) -> Suite:
     tol.done()
     top.done()
     return Suite(source=path, cases=tuple(cases), tolerances=tolerances)
+
+
+def _check_case(path: Path) -> None:
+    """Refuse, before any case runs, a case's scenario that would not run as a case: one that does not
+    validate, has no IMU model and compensation, or that ``sins run`` would refuse before its work."""
+    from sins import pipeline, scenario
+    from sins.scenario.budget import check_scenario_size
+
+    sc = scenario.load(path)
+    if sc.compensation is None or sc.imu_model is None:
+        raise SinsInputError(f"{path}: a suite case needs an [imu] model and a [compensation] table")
+    check_scenario_size(sc, path, "running")
+    pipeline.check_runnable(sc, scenario.load_imu(sc.imu_model).grade)
 
 
 def measure(
@@ -154,8 +172,14 @@ def compare(
     return changes
 
 
-def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str, float]]]:
+def read_baseline(
+    path: str | os.PathLike[str], suite: Suite | None = None
+) -> dict[str, dict[str, dict[str, float]]]:
     """A baseline file's ``cases``: ``{case: {strategy: {metric: value}}}``, every value a finite number.
+
+    Refused, so that a gate never tests less than it says: no cases; a case or strategy with nothing
+    in it; a strategy without ``final_horizontal_m`` and ``max_horizontal_m``; a metric that is not one
+    the suite measures; with ``suite``, a case the suite does not have.
 
     Raises
     ------
@@ -166,25 +190,38 @@ def read_baseline(path: str | os.PathLike[str]) -> dict[str, dict[str, dict[str,
 
     path = Path(path)
     doc = io.read_json_document(path, "quality baseline", BASELINE_FORMAT)
-    if not isinstance(doc.get("cases"), dict):
-        raise SinsInputError(f'{path}: a quality baseline needs a "cases" table')
+    if not isinstance(doc.get("cases"), dict) or not doc["cases"]:
+        raise SinsInputError(f'{path}: a quality baseline needs a "cases" table with at least one case')
+    names = None if suite is None else {c.name for c in suite.cases}
     cases: dict[str, dict[str, dict[str, float]]] = {}
     for case, strategies in doc["cases"].items():
-        if not isinstance(strategies, dict):
-            raise SinsInputError(f"{path}: cases.{case}: expected a table of strategies, got {strategies!r}")
-        cases[case] = {}
-        for strategy, metrics in strategies.items():
-            if not isinstance(metrics, dict):
-                raise SinsInputError(
-                    f"{path}: cases.{case}.{strategy}: expected a table of metrics, got {metrics!r}"
-                )
-            for metric, value in metrics.items():
-                if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-                    raise SinsInputError(
-                        f"{path}: cases.{case}.{strategy}.{metric}: expected a finite number, got {value!r}"
-                    )
-            cases[case][strategy] = {metric: float(value) for metric, value in metrics.items()}
+        where = f"{path}: cases.{printable(case)}"
+        if names is not None and case not in names:
+            raise SinsInputError(f"{where}: the suite {suite.source if suite else ''} has no such case")
+        if not isinstance(strategies, dict) or not strategies:
+            raise SinsInputError(f"{where}: expected a table of strategies, got {short(strategies)}")
+        cases[case] = {s: _metrics(f"{where}.{printable(s)}", m) for s, m in strategies.items()}
     return cases
+
+
+def _metrics(where: str, metrics: Any) -> dict[str, float]:
+    """One strategy's metrics of a baseline, checked (see :func:`read_baseline`)."""
+    if not isinstance(metrics, dict) or not metrics:
+        raise SinsInputError(f"{where}: expected a table of metrics, got {short(metrics)}")
+    for metric in ("final_horizontal_m", "max_horizontal_m"):
+        if metric not in metrics:
+            raise SinsInputError(f"{where}: has no {metric} (a baseline holds every metric it gates)")
+    for metric, value in metrics.items():
+        if metric not in _METRICS:
+            raise SinsInputError(f"{where}.{printable(metric)}: not a metric the suite measures")
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            raise SinsInputError(f"{where}.{metric}: expected a finite number, got {short(value)}")
+    return {metric: float(value) for metric, value in metrics.items()}
+
+
+#: The metrics a suite measures per strategy (the channels are :data:`sins.imu.CHANNELS`).
+_CHANNELS = ("gyro.x", "gyro.y", "gyro.z", "accel.x", "accel.y", "accel.z")
+_METRICS = ("final_horizontal_m", "max_horizontal_m", *(f"residual_rms.{c}" for c in _CHANNELS))
 
 
 def write_baseline(path: str | os.PathLike[str], measured: dict[str, Any], suite: Suite) -> None:

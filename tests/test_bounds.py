@@ -384,7 +384,11 @@ def test_unit_seed(tmp_path: Path) -> None:
 
 
 def test_quality_tolerances(tmp_path: Path) -> None:
-    (tmp_path / "case.toml").write_text("", encoding="utf-8")
+    (tmp_path / "case.toml").write_text(  # a case the suite can run: its cases are checked when read
+        'name = "a"\n[imu]\nrate_hz = 10\nmodel = "tactical"\n[compensation]\nrig = "24pos_ratetable"\n'
+        '[initial]\nlat_deg = 45\n[[segment]]\ntype = "hold"\nduration_s = 5\n',
+        encoding="utf-8",
+    )
     for value, ok in ((0.0, True), (quality.MAX_TOLERANCE, True), (-1e-9, False), (100.5, False)):
         path = tmp_path / "suite.toml"
         path.write_text(

@@ -19,7 +19,7 @@ import pytest
 from conftest import refusal
 
 from sins import campaign, scenario
-from sins.campaign import engine, gate, results
+from sins.campaign import engine, folder, gate, results
 from sins.cli import main
 
 BIN = Path(sys.executable).parent
@@ -132,7 +132,7 @@ def test_an_interrupted_campaign_leaves_complete_rows_only(tmp_path: Path) -> No
         engine.run(spec, tmp_path / "cut", workers=1, progress=interrupt)
     parts = tmp_path / "cut" / "parts"
     assert [p.name for p in parts.iterdir() if not p.name.startswith("units-")] == []
-    held = results.done_units(parts)
+    held = folder.check_parts(tmp_path / "cut", spec).done
     assert 1 <= len(held) < 4
     for part in parts.glob("units-*.parquet"):
         table = pq.read_table(part).to_pydict()
@@ -320,7 +320,7 @@ def test_an_unreachable_scheduler_is_refused_before_anything_is_written_and_a_ba
     spec = campaign.load(_campaign(tmp_path, count=1))
     refusal(lambda: engine.run(spec, tmp_path / "none", scheduler="tcp://127.0.0.1:1"), "cannot reach")
     assert not (tmp_path / "none").exists()
-    results.prepare(tmp_path / "bare", spec, resume=False)  # a description, no parts
+    folder.prepare(tmp_path / "bare", spec, resume=False)  # a description, no parts
     assert engine.run(spec, tmp_path / "bare", workers=1).units_run == 1
 
 

@@ -4,12 +4,14 @@ degraded one (2 °/h left on one gyro), paired or reseeded."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pytest
+from conftest import refusal
 
 from sins import campaign, compensation, scenario
 from sins.campaign import gate, results
@@ -151,3 +153,92 @@ def test_the_shipped_campaign_holds_on_its_baseline_and_fails_on_a_tightened_one
     out = capsys.readouterr().out
     assert "car_drive_5min/regression residual_gyro_x: regressed" in out
     assert "1 of 42 figures regressed" in out
+
+
+# --------------------------------------------------------------------------- a baseline checked whole, first
+
+
+def _drop(doc: dict[str, Any], *path: str) -> None:
+    for key in path[:-1]:
+        doc = doc[key]
+    del doc[path[-1]]
+
+
+def _set(doc: dict[str, Any], value: Any, *path: Any) -> None:
+    for key in path[:-1]:
+        doc = doc[key]
+    doc[path[-1]] = value
+
+
+def _rename(doc: dict[str, Any], group: str) -> None:
+    doc["groups"][group] = doc["groups"].pop("car_drive_5min/none")
+
+
+REG = ("groups", "car_drive_5min/regression")
+VALUES = (*REG, "values")
+
+
+@pytest.mark.parametrize(
+    ("edit", "fragment"),
+    [
+        (lambda d: _set(d, {}, "groups"), "at least one scenario/strategy group"),
+        (lambda d: _drop(d, "groups"), "at least one scenario/strategy group"),
+        (lambda d: _set(d, [1, 2], "groups"), "at least one scenario/strategy group"),
+        (lambda d: _set(d, "x", *REG), "values: expected a table"),
+        (lambda d: _drop(d, *VALUES), "values: expected a table"),
+        (lambda d: _drop(d, *VALUES, "unit_seed"), "unit_seed: expected a non-empty list"),
+        (lambda d: _set(d, "1, 2", *VALUES, "unit_seed"), "unit_seed: expected a non-empty list"),
+        (lambda d: _set(d, [], *VALUES, "unit_seed"), "unit_seed: expected a non-empty list"),
+        (lambda d: _set(d, [1] * 40, *VALUES, "unit_seed"), "appears twice"),
+        (lambda d: _set(d, None, *VALUES, "final_horizontal_m"), "expected 40 numbers, one per unit_seed"),
+        (lambda d: _set(d, [], *VALUES, "final_horizontal_m"), "got 0 values"),
+        (lambda d: _set(d, None, *VALUES, "final_horizontal_m", 3), "horizontal_m[3]: expected a finite"),
+        (lambda d: _set(d, math.nan, *VALUES, "residual_gyro_x", 0), "residual_gyro_x[0]: expected a finite"),
+        (lambda d: _set(d, "1.0", *VALUES, "residual_gyro_x", 0), "residual_gyro_x[0]: expected a finite"),
+        (lambda d: _drop(d, *VALUES, "bias_left_gyro_z"), "has no bias_left_gyro_z"),
+        (lambda d: _set(d, [1.0] * 40, *VALUES, "colour"), "colour: not a figure"),
+        (lambda d: _rename(d, "car_drive/none"), "no scenario"),
+        (lambda d: _rename(d, "car_drive_5min/mlp"), "no strategy"),
+    ],
+    ids=["groups-empty", "groups-missing", "groups-mistyped", "group-mistyped", "values-missing",
+         "unit_seed-missing", "unit_seed-mistyped", "unit_seed-empty", "unit_seed-twice", "figure-null",
+         "figure-empty", "value-null", "value-nan", "value-text", "figure-dropped", "figure-unknown",
+         "scenario-unknown", "strategy-unknown"],
+)  # fmt: skip
+def test_a_baseline_that_would_test_less_than_it_says_is_refused_before_the_campaign(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    edit: Any,
+    fragment: str,
+) -> None:
+    """Item 4 and the damaged baselines: today ``"groups": {}`` passed ("all 0 figures hold"), a null,
+    NaN or empty figure list dropped out of the gate (27 figures tested of 28), and a missing or
+    mistyped key raised KeyError, TypeError, ValueError or IndexError after the whole campaign ran."""
+    from sins.campaign import engine
+
+    doc = json.loads((SHIPPED / "tactical_drives_baseline.json").read_text())
+    edit(doc)
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(doc))
+
+    def no_work(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("the campaign ran before its baseline was checked")
+
+    monkeypatch.setattr(engine, "run", no_work)
+    assert main(["check", "tactical_drives", "--baseline", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(path) in err and fragment in err, err
+
+
+def test_the_gate_refuses_to_test_nothing_and_fails_a_figure_gone_nan() -> None:
+    refusal(lambda: gate.compare({"groups": {}}, {"groups": {}}), "at least one scenario/strategy group")
+    rng = np.random.default_rng(13)
+    values = _draw(rng, 20)
+    base = _summary(values, list(range(20)))
+    now_values = {g: {f: v.copy() for f, v in figs.items()} for g, figs in values.items()}
+    now_values["a/x"]["max_horizontal_m"][4] = np.nan
+    checks = {(c.group, c.figure): c for c in gate.compare(base, _summary(now_values, list(range(20))))}
+    assert len(checks) == 3 * len(gate.GATED)  # every figure tested, none dropped
+    assert checks[("a/x", "max_horizontal_m")].verdict == "regressed"
+    assert [k for k, c in checks.items() if c.verdict != "holds"] == [("a/x", "max_horizontal_m")]

@@ -100,11 +100,11 @@ def wall_clock(seconds: float) -> Iterator[None]:
         signal.signal(signal.SIGALRM, previous)
 
 
-def run_cli(argv: list[str]) -> tuple[int, str, str]:
+def run_cli(argv: list[str], hang_s: float = HANG_S) -> tuple[int, str, str]:
     """``sins.cli.main(argv)`` in this process: exit status, stdout, stderr. Any exception escapes."""
     out, err = _io.StringIO(), _io.StringIO()
     LAST_ARGV[0] = argv
-    with wall_clock(HANG_S), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+    with wall_clock(hang_s), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         rc = main(argv)
     return rc, out.getvalue(), err.getvalue()
 
@@ -124,18 +124,24 @@ def _finite_json(value: Any, where: str) -> None:
 
 
 def check_cli(
-    argv: list[str], inputs: list[Path], outputs: list[Path], folder: Path, ok: tuple[int, ...] = (0,)
+    argv: list[str],
+    inputs: list[Path],
+    outputs: list[Path],
+    folder: Path,
+    ok: tuple[int, ...] = (0,),
+    hang_s: float = HANG_S,
 ) -> tuple[int, str, str]:
     """Run ``argv`` and assert the fuzzing property (see the module docstring).
 
     ``inputs`` are the files the command reads (a refusal names one of them), ``outputs`` those it
-    is asked to write (none exist before), ``folder`` where they go (no temporary file may stay).
-    ``ok`` are the exit statuses of a sound result (``sins check`` also ends 1 on a regression).
+    is asked to write (none exist before), ``folder`` where they go (no temporary file may stay, at any
+    depth). ``ok`` are the exit statuses of a sound result (``sins check`` also ends 1 on a
+    regression); ``hang_s`` the wall-clock bound (a campaign starts a cluster).
     """
     for path in outputs:
         assert not path.exists()
-    rc, out, err = run_cli(argv)
-    leftovers = [p.name for p in folder.iterdir() if p.name.endswith(".tmp")]
+    rc, out, err = run_cli(argv, hang_s)
+    leftovers = [p.name for p in folder.rglob("*.tmp")]
     assert not leftovers, f"temporary files left behind: {leftovers}"
     if rc in ok:
         assert not NON_FINITE.search(out), f"non-finite number in the output of {argv}:\n{out}"

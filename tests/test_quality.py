@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 from pathlib import Path
 
@@ -96,3 +97,63 @@ def test_comparison_rules():
         {"c": {"s": {"max_horizontal_m": 0.001}}}, {"c": {"s": {"max_horizontal_m": 0.002}}}, tol
     )
     assert tiny[0].verdict == "held" and np.isclose(tiny[0].relative, 1.0)
+
+
+def _no_runs(*args: object, **kwargs: object) -> None:
+    raise AssertionError("a case ran before the inputs were checked")
+
+
+@pytest.mark.parametrize(
+    ("cases", "fragment"),
+    [
+        ({}, 'a "cases" table with at least one case'),
+        ({"linear": {}}, "cases.linear: expected a table of strategies"),
+        ({"linear": {"regression": {}}}, "cases.linear.regression: expected a table of metrics"),
+        ({"linear": {"regression": {"max_horizontal_m": 1.0}}}, "has no final_horizontal_m"),
+        ({"linear": {"regression": {"final_horizontal_m": None, "max_horizontal_m": 1.0}}}, "got None"),
+        ({"linear": {"regression": {"final_horizontal_m": 1.0, "max_horizontal_m": 1.0, "colour": 1.0}}},
+         "colour: not a metric"),
+        ({"other": {"regression": {"final_horizontal_m": 1.0, "max_horizontal_m": 1.0}}}, "no such case"),
+        ({"linear\nx": {"r": {"final_horizontal_m": 1.0, "max_horizontal_m": 1.0}}}, "cases.linear\\nx"),
+    ],
+    ids=["no-cases", "no-strategies", "no-metrics", "dropped-metric", "null", "unknown-metric",
+         "unknown-case", "line-break-in-a-name"],
+)  # fmt: skip
+def test_a_baseline_that_tests_nothing_or_drops_a_metric_is_refused_before_the_runs(
+    small_suite: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    cases: dict[str, object],
+    fragment: str,
+) -> None:
+    """Today ``"cases": {}`` passed with "all 0 metrics hold"; now every way a baseline would test less
+    than it says is one line, before any case runs."""
+    baseline = small_suite.parent / "baseline.json"
+    baseline.write_text(json.dumps({"format": quality.BASELINE_FORMAT, "cases": cases}))
+    monkeypatch.setattr(quality, "measure", _no_runs)
+    assert main(["check", str(small_suite), "--baseline", str(baseline)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(baseline) in err and fragment in err, err
+
+
+def test_a_case_that_cannot_run_and_an_unwritable_baseline_are_refused_before_the_runs(
+    small_suite: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A second case without compensation failed only after the first had run; ``--update-baseline``
+    into a missing folder only after all of them."""
+    monkeypatch.setattr(quality, "measure", _no_runs)
+    bare = small_suite.parent / "bare.toml"
+    bare.write_text('name = "bare"\n[imu]\nrate_hz = 10\n[initial]\nlat_deg = 45\n'
+                    '[[segment]]\ntype = "hold"\nduration_s = 5\n')  # fmt: skip
+    suite = small_suite.parent / "two.toml"
+    suite.write_text(small_suite.read_text() + '[[case]]\nname = "bare"\nscenario = "bare.toml"\n')
+    assert (
+        main(["check", str(suite), "--baseline", str(small_suite.parent / "b.json"), "--update-baseline"])
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "case[2].scenario" in err and "[compensation]" in err, err
+    missing = small_suite.parent / "no" / "b.json"
+    assert main(["check", str(small_suite), "--baseline", str(missing), "--update-baseline"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(missing) in err, err

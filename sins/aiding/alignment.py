@@ -317,6 +317,12 @@ def in_motion_start(
     n = len(imu.dtheta_b)
     valid = np.asarray(fixes.t, dtype=float) - fixes.latency_s
     k = int(np.clip(np.argmin(np.abs(imu.t - valid[j])), 1, n))
+    if k >= n:  # the first fix fast enough is the run's last: the filter would have nothing to navigate
+        raise SinsInputError(
+            f"alignment.min_speed_mps: the GNSS speed first reaches {motion.min_speed_mps:g} m/s at the "
+            f"run's end ({valid[j]:g} s), leaving nothing to navigate; lower it, or align still or from "
+            "the truth"
+        )
     known = _gnss_acceleration(fixes, v_all, sigma_all, j)
     window = known[2] if known is not None else motion.level_s
     k0 = min(int(np.searchsorted(imu.t, imu.t[k] - window + 1e-9)), k - 1)

@@ -2,18 +2,21 @@
 
 Layout of ``--out DIR``::
 
-    DIR/campaign.json              what the campaign runs (a resumed campaign must match it)
+    DIR/campaign.json              what the campaign runs and its identity (sins.campaign.folder)
+    DIR/campaign.lock              while a campaign runs: who holds the folder
     DIR/parts/units-A-B.parquet    the rows of units A..B, written whole (temporary name, then rename)
+    DIR/rejected/                  parts that failed their check (their units were run again)
     DIR/results.parquet            every row, sorted by unit, then scenario and strategy in the file's order
     DIR/summary.json               per scenario × strategy: statistics with bootstrap 95 % intervals
 
 A part is renamed into place only once all its rows are written, so an interrupted campaign leaves
-complete rows only, and ``--resume`` skips the units the parts already hold.
+complete rows only, and ``--resume`` skips the units the parts already hold
+(:func:`sins.campaign.folder.check_parts`). A table's columns are the union of its rows' keys: a
+free-inertial scenario's rows have no ``aided_*`` or ``outage*`` figures, and are null there.
 """
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -23,13 +26,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from sins import io
+from sins.campaign.folder import AIDED_COLUMN, IDENTITY_KEY
 from sins.campaign.spec import CampaignSpec, describe
 from sins.campaign.unit import BIAS_FIELDS, RESIDUAL_FIELDS
-from sins.errors import SinsInputError
 
-FORMAT = "sins-campaign"
 SUMMARY_FORMAT = "sins-campaign-summary"
-_PART = re.compile(r"units-(\d+)-(\d+)\.parquet")
 #: Bootstrap resamples per statistic, and the generator's seed (fixed: a summary is reproducible).
 BOOTSTRAP_RESAMPLES = 2000
 BOOTSTRAP_SEED = 20081101
@@ -39,58 +40,31 @@ STATISTICS = {"mean": None, "median": 50.0, "p90": 90.0, "p95": 95.0}
 SUMMARISED = ("final_horizontal_m", "max_horizontal_m", *RESIDUAL_FIELDS, *BIAS_FIELDS)
 
 
-def prepare(out: Path, spec: CampaignSpec, resume: bool) -> set[int]:
-    """Create ``out`` (or check it on ``resume``); the units already done. A folder whose campaign never
-    finished a unit (its cluster could not be reached, say) is started afresh.
-
-    Raises
-    ------
-    SinsInputError
-        ``out`` holds another campaign, or holds results and ``resume`` is not given.
-    """
-    meta = {"format": FORMAT, **describe(spec)}
-    parts = out / "parts"
-    if out.exists() and not out.is_dir():
-        raise SinsInputError(f"{out}: is a file, expected a folder for the campaign's results")
-    existing = out / "campaign.json"
-    if existing.exists() and (resume or done_units(parts)):
-        if not resume:
-            raise SinsInputError(f"{out}: already holds a campaign's results; give --resume to continue it")
-        held = io.read_json_document(existing, "campaign results folder", FORMAT)
-        if held != meta:
-            changed = sorted(k for k in meta if held.get(k) != meta[k])
-            raise SinsInputError(
-                f"{existing}: holds another campaign (differs in {', '.join(changed)}); use another --out"
-            )
-    parts.mkdir(parents=True, exist_ok=True)
-    io.write_json(existing, meta)
-    return done_units(parts)
+def rows_table(rows: list[dict[str, Any]]) -> pa.Table:
+    """Rows as a table whose columns are the union of the rows' keys, in the order they first appear
+    (``pa.Table.from_pylist`` takes the first row's alone: a free-inertial first scenario would drop
+    every aided scenario's figures); a row without a key is null there."""
+    columns = dict.fromkeys(key for row in rows for key in row)
+    return pa.table({c: [row.get(c) for row in rows] for c in columns})
 
 
-def done_units(parts: Path) -> set[int]:
-    """The units whose rows the parts under ``parts`` hold (temporary names, unfinished, are ignored)."""
-    done: set[int] = set()
-    for path in parts.glob("units-*.parquet"):
-        m = _PART.fullmatch(path.name)
-        if m:
-            done.update(range(int(m.group(1)), int(m.group(2)) + 1))
-    return done
-
-
-def write_part(parts: Path, units: list[int], rows: list[dict[str, Any]]) -> Path:
-    """The rows of ``units`` as one Parquet part, renamed into place once whole."""
+def write_part(parts: Path, units: list[int], rows: list[dict[str, Any]], identity: str) -> Path:
+    """The rows of ``units`` as one Parquet part carrying the campaign's ``identity`` and a checksum of
+    each page, renamed into place once whole."""
     path = parts / f"units-{min(units):07d}-{max(units):07d}.parquet"
+    table = rows_table(rows)
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), IDENTITY_KEY: identity.encode()})
     with io.atomic_path(path) as tmp:
-        pq.write_table(pa.Table.from_pylist(rows), tmp)
+        pq.write_table(table, tmp, write_page_checksum=True)  # a damaged page is found when read
     return path
 
 
-def join(out: Path, spec: CampaignSpec) -> pa.Table:
-    """Every part's rows in one table, sorted by unit, then scenario and strategy in the file's order;
+def join(out: Path, spec: CampaignSpec, tables: list[pa.Table]) -> pa.Table:
+    """The parts' ``tables`` in one, sorted by unit, then scenario and strategy in the file's order;
     written to ``out/results.parquet`` (atomically)."""
-    tables = [pq.read_table(p) for p in sorted((out / "parts").glob("units-*.parquet"))]
-    table = pa.concat_tables(tables) if tables else pa.table({})
+    table = pa.concat_tables(tables, promote_options="default") if tables else pa.table({})
     if tables:
+        table = table.replace_schema_metadata(None)
         scen = {s.name: i for i, s in enumerate(spec.scenarios)}
         strat = {s: i for i, s in enumerate(["none", *spec.compensation.strategies])}
         units = table.column("unit").to_numpy()
@@ -110,16 +84,15 @@ def summarise(table: pa.Table, spec: CampaignSpec) -> dict[str, Any]:
     if table.num_rows:
         scenario = np.array(table.column("scenario").to_pylist())
         strategy = np.array(table.column("strategy").to_pylist())
-        # An aided scenario's rows add its aided run's and each outage's errors.
-        extra = [c for c in table.column_names if c.startswith(("aided_", "outage"))]
+        # An aided scenario's rows add its aided run's and each outage's errors; the other scenarios'
+        # rows are null there, and their groups do not have these figures.
+        extra = [c for c in table.column_names if AIDED_COLUMN.fullmatch(c)]
         for sc in spec.scenarios:
             for st in dict.fromkeys(["none", *spec.compensation.strategies]):
                 rows = (scenario == sc.name) & (strategy == st)
                 if rows.any():
-                    figures = {
-                        f: np.asarray(table.column(f).to_numpy(zero_copy_only=False), dtype=float)[rows]
-                        for f in (*SUMMARISED, *extra)
-                    }
+                    figures = {f: _column(table, f)[rows] for f in SUMMARISED}
+                    figures |= {f: v for f in extra if np.isfinite(v := _column(table, f)[rows]).any()}
                     groups[f"{sc.name}/{st}"] = {
                         "scenario": sc.name,
                         "strategy": st,
@@ -133,6 +106,11 @@ def summarise(table: pa.Table, spec: CampaignSpec) -> dict[str, Any]:
                         },
                     }
     return {"format": SUMMARY_FORMAT, **describe(spec), "groups": groups}
+
+
+def _column(table: pa.Table, name: str) -> np.ndarray:
+    """A figure's column as floats (null: NaN)."""
+    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
 
 
 def _statistics(values: np.ndarray) -> dict[str, Any]:
@@ -160,7 +138,9 @@ def write_summary(out: Path, summary: dict[str, Any]) -> Path:
 
 def table_lines(summary: dict[str, Any]) -> Iterable[str]:
     """The printed table: per scenario × strategy, the final horizontal error's median and 95th
-    percentile with their intervals, and the max's median."""
+    percentile with their intervals, and the max's median; then, for each aided scenario, the aided
+    run's final and maximum horizontal error and each outage's at its end and its maximum (medians with
+    their intervals)."""
     yield (
         f"{'scenario':<18} {'strategy':<20} {'units':>5}  {'final horiz. median [95% CI]':>30}  "
         f"{'p95 [95% CI]':>28}  {'max median':>10}"
@@ -174,6 +154,37 @@ def table_lines(summary: dict[str, Any]) -> Iterable[str]:
             f"{_ci(f['median'], f['median_ci95']):>30}  {_ci(f['p95'], f['p95_ci95']):>28}  "
             f"{m['median']:>9.4g}m"
         )
+    yield from _aided_lines(summary)
+
+
+def _aided_lines(summary: dict[str, Any]) -> Iterable[str]:
+    """Per aided scenario, a table of its groups' aided and outage figures (median [95% CI])."""
+    by_scenario: dict[str, list[dict[str, Any]]] = {}
+    for g in summary["groups"].values():
+        if any(AIDED_COLUMN.fullmatch(k) and g[k] for k in g):
+            by_scenario.setdefault(g["scenario"], []).append(g)
+    for name, groups in by_scenario.items():
+        figures = list(dict.fromkeys(k for g in groups for k in g if AIDED_COLUMN.fullmatch(k) and g[k]))
+        head = ["strategy", "units", *(_label(f) for f in figures)]
+        rows = [
+            [g["strategy"], str(g["units"]), *(_ci(g[f]["median"], g[f]["median_ci95"]) if g.get(f) else "-"
+                                               for f in figures)]
+            for g in groups
+        ]  # fmt: skip
+        widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
+        yield ""
+        yield f"aided navigation (GNSS/INS) in {name}: horizontal error, median [95% CI]"
+        for r in [head, *rows]:
+            cells = zip(r, widths, strict=True)
+            yield "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(cells))
+
+
+def _label(figure: str) -> str:
+    """``outage2_end_m`` -> ``outage 2 end``, ``aided_final_horizontal_m`` -> ``aided final``."""
+    if figure.startswith("aided_"):
+        return "aided " + figure.split("_")[1]
+    number, end = figure.removeprefix("outage").split("_")[:2]
+    return f"outage {number} {end}"
 
 
 def _ci(value: float, ci: list[float]) -> str:

@@ -27,13 +27,16 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from sins import scenario
 from sins.errors import SinsInputError
+from sins.io.documents import printable
 from sins.scenario import CompensationSpec, ImuSpec, Scenario
+from sins.scenario.budget import check_rig_size, check_scenario_size
 from sins.scenario.toml import Bound, TomlKeys, read_toml
 
 #: The most units a campaign may draw (a million unit-runs is a cluster's week, not a typo's).
@@ -41,6 +44,9 @@ MAX_UNITS = 1_000_000
 #: The most scenarios one campaign drives each unit through.
 MAX_SCENARIOS = 100
 _SERIES_HZ = Bound(0.0, 10.0, "Hz", "the thinned error series kept per row")
+#: The slowest series kept, Hz, but for 0 (none): below it a sample's spacing overflows the counts
+#: that thin a run (``1e-300`` failed in a worker with an ``IndexError``).
+MIN_SERIES_HZ = 1e-6
 _VALIDATION = Bound(0.0, 0.9, "", "a fraction of each rig phase", low_open=True)
 #: Every strategy a campaign runs unless it says otherwise.
 DEFAULT_STRATEGIES = ("none", "regression")
@@ -83,22 +89,24 @@ class CampaignSpec:
 
 
 def load(path: str | os.PathLike[str]) -> CampaignSpec:
-    """Read and validate a campaign file; every referenced file is read now, before any work.
+    """Read and validate a campaign file; every file it uses is read, and every scenario checked as
+    ``sins run`` checks it before any work, now, before any cluster starts (:func:`check`).
 
     Raises
     ------
     SinsInputError
-        one line naming the file and the key: an unknown key, zero units, an unknown strategy, a
-        scenario or IMU or rig file that does not exist or does not validate.
+        one line naming the campaign file and the key: an unknown key, zero units, an unknown strategy,
+        a scenario, IMU or rig file that does not exist or does not validate (its own message within),
+        a scenario its units could not drive.
     """
     from sins.compensation import VARIANTS
 
     path = Path(path)
     top = TomlKeys(str(path), "", read_toml(path, "campaign"))
     base = path.parent
-    name = top.string("name", default=path.stem)
+    name = _name(top, path)
     units = top.sub("units")
-    imu = scenario.load_imu(scenario.preset_or_path(units, "imu", "imu", base))
+    imu = _read(units, "imu", scenario.load_imu, scenario.preset_or_path(units, "imu", "imu", base))
     count = units.integer("count", 0, low=1, high=MAX_UNITS)
     if not units.has("count"):
         raise units.error("is required: how many units to draw", "count")
@@ -106,13 +114,56 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
     units.done()
     comp = top.sub("compensation")
     strategies = comp.strings("strategies", list(DEFAULT_STRATEGIES), tuple(VARIANTS))
+    rig = scenario.preset_or_path(comp, "rig", "rig", base)
+    procedure = _read(comp, "rig", scenario.load_rig, rig)  # a bad rig file now, not in every task
     compensation = CompensationSpec(
-        rig=scenario.preset_or_path(comp, "rig", "rig", base),
+        rig=rig,
         validation=comp.bounded("validation", _VALIDATION, 0.3),
         seed=0,  # each unit's own (rig_seed)
         strategies=tuple(dict.fromkeys(["oracle", *strategies])),
     )
     comp.done()
+    scenarios = _scenarios(top, base)
+    series_hz = _series_hz(top)
+    top.done()
+    spec = CampaignSpec(name, path, imu, count, first_seed, compensation, scenarios, series_hz)
+    check_rig_size(procedure, rig)
+    for i, sc in enumerate(scenarios, start=1):
+        _read(TomlKeys(str(path), f"scenario[{i}]", {}), "file", lambda s: check(s, imu.grade), sc)
+    return spec
+
+
+def check(sc: Scenario, grade: str | None) -> None:
+    """What ``sins run`` refuses of a scenario before any work, for a unit of ``grade``: its memory
+    (aided runs hold their arrays whole), a motion shorter than a sample, an alignment the trajectory
+    cannot give (:func:`sins.pipeline.check_runnable`)."""
+    from sins import pipeline
+
+    assert sc.source is not None
+    check_scenario_size(sc, sc.source, "a unit driving")
+    pipeline.check_runnable(sc, grade)
+
+
+def _read(table: TomlKeys, key: str, reader: Callable[[Any], Any], value: Any) -> Any:
+    """``reader(value)``, its one-line refusal prefixed with the campaign file and ``key``."""
+    try:
+        return reader(value)
+    except SinsInputError as exc:
+        raise table.error(f"{exc}", key) from None
+
+
+def _name(top: TomlKeys, path: Path) -> str:
+    """The campaign's name (default: the file's stem), which names its default results folder."""
+    name = top.string("name", default=path.stem)
+    if not name or not name.isprintable() or any(c in name for c in "/\\") or name in (".", ".."):
+        raise top.error(
+            f"{printable(name)!r} cannot name a folder ({printable(name) or 'empty'}-campaign, the default "
+            "results folder): no slashes, no control characters", "name"
+        )  # fmt: skip
+    return name
+
+
+def _scenarios(top: TomlKeys, base: Path) -> tuple[Scenario, ...]:
     scenarios = tuple(_scenario(table, base) for table in top.tables("scenario"))
     if not scenarios:
         raise top.error("needs at least one [[scenario]] table", "scenario")
@@ -123,13 +174,23 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
         raise top.error(
             f"two scenarios share a name ({', '.join(names)}): rows would be ambiguous", "scenario"
         )
-    keep = top.sub("keep") if top.has("keep") else None
-    series_hz = keep.bounded("series_hz", _SERIES_HZ, 0.2) if keep else 0.2
-    if keep:
-        keep.done()
-    top.done()
-    scenario.load_rig(compensation.rig)  # refuse a bad rig file now, not in every task
-    return CampaignSpec(name, path, imu, count, first_seed, compensation, scenarios, series_hz)
+    return scenarios
+
+
+def _series_hz(top: TomlKeys) -> float:
+    """``[keep] series_hz``: 0 (no series) or from :data:`MIN_SERIES_HZ` up."""
+    if not top.has("keep"):
+        return 0.2
+    keep = top.sub("keep")
+    series_hz = keep.bounded("series_hz", _SERIES_HZ, 0.2)
+    if 0.0 < series_hz < MIN_SERIES_HZ:
+        days = 1 / MIN_SERIES_HZ / 86400
+        raise keep.error(
+            f"must be 0 (no series) or at least {MIN_SERIES_HZ:g} Hz (a sample in {days:.3g} days), "
+            f"got {series_hz:g}", "series_hz"
+        )  # fmt: skip
+    keep.done()
+    return series_hz
 
 
 def is_campaign(path: str | os.PathLike[str]) -> bool:

@@ -6,6 +6,7 @@ so any worker, in any order, on any machine, computes the same rows.
 
 from __future__ import annotations
 
+import logging
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -14,6 +15,7 @@ import numpy as np
 
 from sins import pipeline
 from sins.campaign.spec import CampaignSpec, nav_seed, rig_seed
+from sins.errors import SinsInputError
 from sins.imu import CHANNELS
 
 #: The figures of a row, in the order of its columns (a :class:`sins.nav.metrics.DriftSummary`'s,
@@ -101,7 +103,17 @@ def task(spec: CampaignSpec, units: list[int]) -> tuple[list[int], list[dict[str
     engine's Parquet writer, pyarrow, holds ~40 MB of every worker's memory).
     """
     _heap_for_chunks()
-    return units, run_units(spec, units)
+    # A failing task reaches the user as its error's one line in the main process; the worker's own
+    # "Compute Failed" report (6-10 lines on the terminal the worker shares) would say it again.
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    try:
+        return units, run_units(spec, units)
+    except ValueError as exc:  # what the campaign's files make of a unit: a rig that cannot fit it, say
+        if isinstance(exc, SinsInputError):
+            raise
+        first, last = units[0], units[-1]
+        which = f"unit {first}" if first == last else f"units {first}-{last}"
+        raise SinsInputError(f"{spec.source}: {which}: {exc}") from None
 
 
 #: The size below which glibc's ``malloc`` serves a block from its heap, not from a fresh ``mmap``:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from sins.cli.common import Subparsers, add_plot, check_plot, count, progress_bar, row_progress, save_plot
@@ -12,18 +13,20 @@ from sins.errors import SinsInputError
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from sins import campaign
     from sins.campaign import engine, results
+    from sins.io.limits import check_writable
 
     if args.workers is not None and args.scheduler:
         raise SinsInputError("--workers: the scheduler's cluster has its own workers; give one of the two")
     from sins import scenario
 
     spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
+    out = args.out or Path(f"{spec.name}-campaign")
+    check_writable(out, folder=True)  # the outputs' places, before the work, not after it
     if args.rerun:
         from sins import viz
 
-        viz.check_rrd_path(args.rerun)  # before the work, not after
+        check_writable(viz.check_rrd_path(args.rerun))
     check_plot(args)
-    out = args.out or Path(f"{spec.name}-campaign")
     strategies = dict.fromkeys(["none", *spec.compensation.strategies])
     print(
         f"campaign {spec.name}: {spec.count} units x {len(spec.scenarios)} scenarios x "
@@ -31,6 +34,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     )
     with progress_bar(f"campaign {spec.name}", "unit") as bar:
         done = engine.run(spec, out, args.workers, args.scheduler, args.resume, row_progress(bar))
+    for line in done.rejected:
+        print(f"campaign: part {line}", file=sys.stderr)
     resumed = f" ({done.units_resumed} already done)" if done.units_resumed else ""
     print(f"ran {done.units_run} units in {done.wall_s:.1f} s{resumed}")
     for line in results.table_lines(done.summary):

@@ -12,6 +12,7 @@ from sins.errors import SinsInputError
 def _cmd_check(args: argparse.Namespace) -> int:
     from sins import quality, scenario
     from sins.campaign.spec import is_campaign
+    from sins.io.limits import check_writable
 
     path = Path(args.suite)
     if not path.exists() and scenario.find_preset(args.suite, "campaign") is not None:
@@ -19,10 +20,12 @@ def _cmd_check(args: argparse.Namespace) -> int:
     if is_campaign(path):
         return _check_campaign(args, path)
     suite = quality.load_suite(path)
-    if not args.update_baseline and not Path(args.baseline).exists():
+    if args.update_baseline:
+        check_writable(args.baseline)  # before the runs, not after them
+    elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
-    if not args.update_baseline:
-        baseline = quality.read_baseline(args.baseline)  # refuse early, before the runs
+    else:
+        baseline = quality.read_baseline(args.baseline, suite)  # refuse early, before the runs
     with progress_bar(f"quality suite {path.name}", "cases") as bar:
         measured = quality.measure(suite, row_progress(bar))
     if args.update_baseline:
@@ -55,15 +58,26 @@ def _check_campaign(args: argparse.Namespace, path: Path) -> int:
 
     from sins import campaign, io
     from sins.campaign import engine, gate, results
+    from sins.io.limits import check_writable
 
     spec = campaign.load(path)
-    if not args.update_baseline and not Path(args.baseline).exists():
+    baseline = None
+    if args.update_baseline:
+        check_writable(args.baseline)  # before the campaign, not after it
+    elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such campaign baseline; create it with --update-baseline")
-    baseline = None if args.update_baseline else results.read_summary(args.baseline)  # refuse early
+    else:  # the whole baseline checked before any work: one that tests nothing or drops a figure is refused
+        baseline = results.read_summary(args.baseline)
+        gate.check_baseline(baseline, args.baseline, spec)
     with tempfile.TemporaryDirectory() as tmp, progress_bar(f"campaign {spec.name}", "unit") as bar:
         done = engine.run(spec, Path(tmp) / "out", progress=row_progress(bar))
     if baseline is None:
-        io.write_json(args.baseline, gate.baseline_of(done.summary))
+        new = gate.baseline_of(done.summary)
+        try:
+            gate.check_baseline(new, args.baseline, spec)
+        except SinsInputError as exc:
+            raise SinsInputError(f"the campaign's figures cannot be a baseline: {exc}") from None
+        io.write_json(args.baseline, new)
         print(f"wrote {args.baseline}: {len(done.summary['groups'])} groups of {spec.count} units")
         return 0
     checks = gate.compare(baseline, done.summary)

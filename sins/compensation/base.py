@@ -116,6 +116,15 @@ class Strategy(ABC):
         """What :func:`save` writes: the fitted attributes, as plain lists and numbers."""
         return {k: _plain(v) for k, v in vars(self).items() if k.endswith("_")}
 
+    def check_state(self, state: dict[str, Any]) -> None:
+        """Refuse a saved state this strategy (as constructed) cannot hold, before any array, network or
+        map of it is made: ``ValueError`` naming the key and what it must be.
+        :func:`~sins.compensation.load` calls it before :meth:`set_state`. Here: every key a fitted
+        attribute (ending in ``_``); strategies add their own shapes and sizes."""
+        odd = [k for k in state if not k.endswith("_")]
+        if odd:
+            raise ValueError(f"state.{odd[0]} is not a fitted attribute")
+
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`get_state` gave (lists become float arrays)."""
         for k, v in state.items():
@@ -124,6 +133,38 @@ class Strategy(ABC):
     def params(self) -> dict[str, Any]:
         """Constructor parameters (saved beside the state)."""
         return {}
+
+
+def state_array(
+    state: dict[str, Any], key: str, shape: tuple[int | None, ...], where: str = "state"
+) -> Array:
+    """``state[key]`` as :func:`checked_array` makes it (``where.key`` in its message), or ValueError
+    when it is missing."""
+    if key not in state:
+        raise ValueError(f"{where}.{key} is missing")
+    return checked_array(state[key], shape, f"{where}.{key}")
+
+
+def checked_array(value: Any, shape: tuple[int | None, ...], where: str) -> Array:
+    """``value`` as a float array of ``shape`` (``None``: any size on that axis), every value finite;
+    else ``ValueError`` naming ``where``. Made of a file's own numbers, so no larger than the file."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{where} is not an array of numbers") from None
+    if array.ndim != len(shape) or any(
+        n is not None and n != m for n, m in zip(shape, array.shape, strict=True)
+    ):
+        wanted = (
+            "("
+            + ", ".join("n" if n is None else str(n) for n in shape)
+            + ("," if len(shape) == 1 else "")
+            + ")"
+        )
+        raise ValueError(f"{where} has shape {array.shape}, expected {wanted}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{where} holds a number that is not finite")
+    return array
 
 
 def _plain(value: Any) -> Any:

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import Strategy
+from sins.compensation.base import Strategy, state_array
 from sins.compensation.residual import Points, ResidualStrategy
 from sins.series import CalibrationData
 
@@ -70,7 +70,7 @@ class Kohonen(Strategy):
         neighbours: int = 4,
         seed: int = 0,
     ) -> None:
-        self.rows, self.cols = rows, cols
+        self.rows, self.cols = check_map(rows, "rows"), check_map(cols, "cols")
         self.sigma = sigma
         self.learning_rate = learning_rate
         self.iterations = iterations
@@ -122,6 +122,25 @@ class Kohonen(Strategy):
         d2 = (x * x).sum(axis=1)[:, None] - 2.0 * x @ codebook.T + (codebook * codebook).sum(axis=1)[None, :]
         return np.argsort(d2, axis=1)[:, :k] if k > 1 else np.argmin(d2, axis=1)[:, None]
 
+    def check_state(self, state: dict[str, Any]) -> None:
+        """A map of ``rows`` × ``cols`` nodes (:func:`check_map`): ``codebook_`` and ``node_error_``
+        (nodes, 6), ``node_count_`` (nodes,), the inputs' scales (6, none zero); ``neighbours`` from 1 to
+        :data:`MAX_NEIGHBOURS`."""
+        super().check_state(state)
+        nodes = check_map(self.rows, "params.rows") * check_map(self.cols, "params.cols")
+        neighbours = self.neighbours
+        if (
+            isinstance(neighbours, bool)
+            or not isinstance(neighbours, int)
+            or not 1 <= neighbours <= MAX_NEIGHBOURS
+        ):
+            raise ValueError(f"params.neighbours must be a whole number from 1 to {MAX_NEIGHBOURS}")
+        for key, shape in (("codebook_", (nodes, 6)), ("node_error_", (nodes, 6)), ("node_count_", (nodes,)),
+                           ("x_mean_", (6,)), ("x_scale_", (6,))):  # fmt: skip
+            state_array(state, key, shape)
+        if not (state_array(state, "x_scale_", (6,)) != 0).all():
+            raise ValueError("state.x_scale_ holds a zero (the inputs are divided by it)")
+
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Subtract the ``neighbours`` nearest nodes' errors, inverse-distance weighted (``temp`` unused)."""
         xs = (np.hstack([gyro, accel]) - self.x_mean_) / self.x_scale_
@@ -169,7 +188,7 @@ class LocalLinearMap(ResidualStrategy):
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
-        self.sizes = tuple(int(n) for n in sizes)
+        self.sizes = tuple(check_map(n, "sizes") for n in sizes)
         self.sigmas = tuple(float(s) for s in sigmas)
         self.smoothing = smoothing
         self.slope_ridge = slope_ridge
@@ -278,6 +297,32 @@ class LocalLinearMap(ResidualStrategy):
             ],
         }  # fmt: skip
 
+    def _check_learner(self, learner: Any, n_inputs: int, where: str) -> None:
+        """Fitted maps: ``sigma`` (3,), and at most one map per group of :meth:`_groups`, each of the
+        nodes one of :attr:`sizes` gives (``n`` for a temperature chain, ``n²`` otherwise: what
+        :meth:`fit` chooses among) over columns of the ``n_inputs``: ``codebook`` (k, winner columns),
+        ``blend`` (k, k), ``planes`` (k, plane columns + 1, 3)."""
+        super()._check_learner(learner, n_inputs, where)
+        state_array(learner, "sigma", (3,), where)
+        maps = learner.get("maps")
+        if not isinstance(maps, list) or not 1 <= len(maps) <= len(self._groups(n_inputs)):
+            raise ValueError(f"{where}.maps must be 1 to {len(self._groups(n_inputs))} maps")
+        allowed = {n for size in self.sizes for n in (size, size * size)}
+        for i, m in enumerate(maps):
+            at = f"{where}.maps[{i}]"
+            if not isinstance(m, dict):
+                raise ValueError(f"{at} must be an object")
+            columns = [
+                _columns_in(m.get(k), n_inputs, f"{at}.{k}") for k in ("winner_columns", "plane_columns")
+            ]
+            codebook = m.get("codebook")
+            nodes = len(codebook) if isinstance(codebook, list) else 0
+            if nodes not in allowed:
+                raise ValueError(f"{at}.codebook has {nodes} nodes; params.sizes make {sorted(allowed)}")
+            state_array(m, "codebook", (nodes, len(columns[0])), at)
+            state_array(m, "blend", (nodes, nodes), at)
+            state_array(m, "planes", (nodes, len(columns[1]) + 1, 3), at)
+
     def _learner_from_state(self, state: Any) -> Any:
         maps = [
             _Map([int(c) for c in m["winner_columns"]], [int(c) for c in m["plane_columns"]],
@@ -285,6 +330,31 @@ class LocalLinearMap(ResidualStrategy):
             for m in state["maps"]
         ]  # fmt: skip
         return _MapLearner(maps, np.asarray(state["sigma"], dtype=float))
+
+
+def _columns_in(value: Any, n_inputs: int, where: str) -> list[int]:
+    """A map's input columns: distinct whole numbers below ``n_inputs``, at least one."""
+    ok = isinstance(value, list) and 1 <= len(value) <= n_inputs and len(set(map(str, value))) == len(value)
+    if not ok or not all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c < n_inputs for c in value):
+        raise ValueError(f"{where} must be distinct input columns, 0 to {n_inputs - 1}")
+    return list(value)
+
+
+#: The largest map a model may hold: nodes a side (the registry's fits use 20 for ``kohonen_pure``, at
+#: most 12 for ``kohonen``). A correction compares every reading with every node, a block of 65,536 rows
+#: at a time: a 32 × 32 map holds that at 0.5 GB.
+MAX_SIDE = 32
+#: The most nodes a ``kohonen_pure`` prediction blends.
+MAX_NEIGHBOURS = 64
+
+
+def check_map(size: Any, where: str) -> int:
+    """``size``, a map's nodes a side, a whole number from 1 to :data:`MAX_SIDE`; else ``ValueError``."""
+    if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= MAX_SIDE:
+        raise ValueError(
+            f"{where} must be a whole number of nodes from 1 to {MAX_SIDE}, got {str(size)[:40]}"
+        )
+    return size
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ Two training modes:
 
 from __future__ import annotations
 
+import operator
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -36,11 +37,47 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import Strategy
+from sins.compensation.base import Strategy, checked_array, state_array
 from sins.compensation.residual import Points, ResidualStrategy
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
+
+
+#: The largest network a model may hold: layers, and neurons a layer. Eight times the widest the
+#: registry's variants fit (32), and twice as deep; a network is evaluated on a recording's rows at once,
+#: so its width sets the memory a correction takes (an hour at 100 Hz: 0.7 GB a layer of 256).
+MAX_LAYERS, MAX_WIDTH = 4, 256
+
+
+def check_hidden(hidden: Any, where: str) -> tuple[int, ...]:
+    """``hidden`` as layer sizes, 1 to :data:`MAX_LAYERS` layers of 1 to :data:`MAX_WIDTH` neurons;
+    else ``ValueError`` naming ``where``. What a model file may give, and what :meth:`MLP.fit` takes."""
+    sizes = [_whole(h) for h in hidden] if isinstance(hidden, list | tuple) else []
+    if not 1 <= len(sizes) <= MAX_LAYERS or not all(h is not None and 1 <= h <= MAX_WIDTH for h in sizes):
+        raise ValueError(
+            f"{where} must be 1 to {MAX_LAYERS} layer sizes, each a whole number from 1 to {MAX_WIDTH}; "
+            f"got {str(hidden)[:60]}"
+        )
+    return tuple(h for h in sizes if h is not None)
+
+
+def _whole(value: Any) -> int | None:
+    """``value`` as an int if it is of a whole number type (numpy's too), else None; a boolean is not."""
+    if isinstance(value, bool):
+        return None
+    try:
+        return operator.index(value)
+    except TypeError:
+        return None
+
+
+def _check_weights(weights: Any, shapes: list[tuple[int, ...]], where: str) -> None:
+    """``weights``: one nested list of each of ``shapes``, in order (a network's parameters)."""
+    if not isinstance(weights, list) or len(weights) != len(shapes):
+        raise ValueError(f"{where} must be {len(shapes)} arrays, one per parameter of the network")
+    for i, shape in enumerate(shapes):
+        checked_array(weights[i], shape, f"{where}[{i}]")
 
 
 def _features(gyro: Array, accel: Array, temp: Array | None) -> Array:
@@ -79,7 +116,7 @@ class MLP(Strategy):
     ) -> None:
         if mode not in ("modern", "seed"):
             raise ValueError(f"mlp mode must be 'modern' or 'seed', got {mode!r}")
-        self.hidden = tuple(int(h) for h in hidden)
+        self.hidden = check_hidden(tuple(hidden), "hidden")
         self.mode = mode
         self.alpha = alpha
         self.gain = gain
@@ -256,6 +293,28 @@ class MLP(Strategy):
         state["weights_"] = [np.asarray(w).tolist() for w in self.weights_]
         return state
 
+    def check_state(self, state: dict[str, Any]) -> None:
+        """The topology within :func:`check_hidden`'s bounds, and every array of the state the shape the
+        network of ``hidden`` has: scales of its inputs (6, with the temperature 7) and outputs (6), and
+        ``weights_`` layer by layer as :meth:`_network` orders its parameters. Nothing is built."""
+        super().check_state(state)
+        check_hidden(self.hidden, "params.hidden")
+        uses_temp = state.get("uses_temp_", False)
+        if not isinstance(uses_temp, bool):
+            raise ValueError("state.uses_temp_ must be true or false")
+        n_in = 6 + uses_temp
+        for key, size in (("x_mean_", n_in), ("x_scale_", n_in), ("y_mean_", 6), ("y_scale_", 6)):
+            state_array(state, key, (size,))
+        if not (np.abs(state_array(state, "x_scale_", (n_in,))) > 0).all():
+            raise ValueError("state.x_scale_ holds a zero (the inputs are divided by it)")
+        shapes: list[tuple[int, ...]] = []
+        width = n_in
+        for h in self.hidden:
+            shapes += [(h, width), (h,)]  # a layer's weights (no bias), its sigmoids' centres
+            width = h
+        shapes += [(6, width), (6,)]  # the output layer's weights; its bias ("modern") or centres ("seed")
+        _check_weights(state.get("weights_"), shapes, "state.weights_")
+
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore the state and weights; the network is rebuilt on first use."""
         weights = state.get("weights_", [])
@@ -295,7 +354,7 @@ class ResidualMLP(ResidualStrategy):
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
-        self.hidden_sizes = tuple(tuple(int(h) for h in hs) for hs in hidden_sizes)
+        self.hidden_sizes = tuple(check_hidden(tuple(hs), "hidden_sizes") for hs in hidden_sizes)
         self.decays = tuple(float(d) for d in decays)
 
     def params(self) -> dict[str, Any]:
@@ -362,6 +421,21 @@ class ResidualMLP(ResidualStrategy):
             "sigma": list(learner.sigma),
             "weights": [np.asarray(w).tolist() for w in learner.weights],
         }
+
+    def _check_learner(self, learner: Any, n_inputs: int, where: str) -> None:
+        """A residual network: ``hidden`` one of :attr:`hidden_sizes` (what :meth:`fit` chooses among),
+        ``sigma`` (3,), and ``weights`` of the shapes :func:`_tanh_network` gives them."""
+        super()._check_learner(learner, n_inputs, where)
+        hidden = check_hidden(learner.get("hidden"), f"{where}.hidden")
+        if hidden not in self.hidden_sizes:
+            raise ValueError(f"{where}.hidden {list(hidden)} is none of the candidates, params.hidden_sizes")
+        state_array(learner, "sigma", (3,), where)
+        shapes: list[tuple[int, ...]] = []
+        width = n_inputs
+        for h in hidden:
+            shapes += [(h, width), (h,)]
+            width = h
+        _check_weights(learner.get("weights"), [*shapes, (3, width), (3,)], f"{where}.weights")
 
     def _learner_from_state(self, state: Any) -> Any:
         return _NetLearner(

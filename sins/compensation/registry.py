@@ -18,6 +18,7 @@ import numpy as np
 from sins import __version__, io
 from sins.compensation.base import Strategy
 from sins.errors import SinsInputError
+from sins.io.documents import printable, short
 
 #: Version of the model file format; bump it when the saved state changes meaning.
 FORMAT_VERSION = 3
@@ -108,39 +109,42 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     """Read a strategy written by :func:`save`; refuse other formats and versions in one line.
 
     The parameters and state are checked (objects; every number finite and at most
-    :data:`MAX_MODEL_VALUE` in magnitude; state keys the fitted attributes ending in ``_``), and the
-    model corrects a few probe readings, so a damaged file is refused here, naming the file, rather
-    than failing or printing NaN later.
+    :data:`MAX_MODEL_VALUE` in magnitude), the parameters against the strategy's bounds (its
+    constructor: a network's layers and widths, a map's nodes), the state's shapes and sizes against
+    the parameters before any array, network or map is made (:meth:`Strategy.check_state`: a file of
+    70 kB cannot ask for a 6 GB network), and the model corrects a few probe readings; so a damaged file
+    is refused here, in one line naming the file, rather than failing or printing NaN later.
     """
     path = Path(path)
     doc = io.read_json_document(path, "model file", FORMAT_NAME)
     if doc.get("version") != FORMAT_VERSION:
+        version, writer = short(doc.get("version")), short(doc.get("sins"))
         raise SinsInputError(
-            f"{path}: model file format version {doc.get('version')!r} (written by sins {doc.get('sins')}); "
+            f"{path}: model file format version {version} (written by sins {writer}); "
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
     if name not in SAVED_STRATEGIES:
-        raise SinsInputError(f"{path}: unknown strategy {name!r} (known: {', '.join(SAVED_STRATEGIES)})")
+        raise SinsInputError(f"{path}: unknown strategy {short(name)} (known: {', '.join(SAVED_STRATEGIES)})")
     params, state = doc.get("params", {}), doc.get("state", {})
     for key, value in (("params", params), ("state", state)):
         if not isinstance(value, dict):
             raise SinsInputError(f'{path}: malformed {name} model ("{key}" is not an object)')
         _check_values(path, name, value, key)
-    odd = [k for k in state if not k.endswith("_")]
-    if odd:
-        raise SinsInputError(f"{path}: malformed {name} model (state.{odd[0]} is not a fitted attribute)")
     try:
-        strategy = strategy_class(name)(**params)
+        strategy = strategy_class(name)(**params)  # its parameters' own bounds (a network's size, a map's)
+        # The state's shapes and sizes against the strategy's, before any array, network or map is made.
+        strategy.check_state(state)
         strategy.set_state(state)
         variant = doc.get("variant", name)
         strategy.variant = variant if isinstance(variant, str) and variant in VARIANTS else name
-        # A probe: a state of the wrong shape or kind fails here, not in the middle of a run.
+        # A probe: what the checks above do not see fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))
         corrected = np.hstack([np.asarray(gyro_c, dtype=float), np.asarray(accel_c, dtype=float)])
-    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as exc:
-        raise SinsInputError(f"{path}: malformed {name} model ({type(exc).__name__}: {exc})") from None
+    except _MALFORMED as exc:
+        why = printable(" ".join(str(exc).split()))[:300]
+        raise SinsInputError(f"{path}: malformed {name} model ({type(exc).__name__}: {why})") from None
     if corrected.shape != (len(gyro), 6) or not np.isfinite(corrected).all():
         raise SinsInputError(
             f"{path}: malformed {name} model (its correction of a probe reading is not finite, or of shape "
@@ -148,6 +152,11 @@ def load(path: str | os.PathLike[str]) -> Strategy:
         )
     return strategy
 
+
+#: What building a strategy from a damaged file may raise (torch's shape errors are RuntimeErrors;
+#: numpy's singular matrices ValueErrors; a number too large for a float an OverflowError).
+_MALFORMED = (TypeError, ValueError, KeyError, AttributeError, IndexError, RuntimeError, OverflowError,
+              ZeroDivisionError, FloatingPointError)  # fmt: skip
 
 #: Readings a model file is tried on when loaded: at rest, turning at 1 rad/s and at 100 °/s under
 #: 2 g, in rad/s and m/s² (a fitted model corrects each to finite values).
@@ -171,6 +180,6 @@ def _check_values(path: Path, name: str, value: Any, where: str) -> None:
             _check_values(path, name, v, f"{where}[{i}]")
     elif isinstance(value, int | float) and not isinstance(value, bool) and not abs(value) <= MAX_MODEL_VALUE:
         raise SinsInputError(
-            f"{path}: malformed {name} model ({where} is {value!r}; numbers must be finite and at most "
+            f"{path}: malformed {name} model ({where} is {short(value)}; numbers must be finite and at most "
             f"{MAX_MODEL_VALUE:g} in magnitude)"
         )

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from sins.compensation.base import Array, Strategy
+from sins.compensation.base import Array, Strategy, state_array
 from sins.imu import calibration
 from sins.series import CalibrationData, ImuIncrements
 
@@ -48,6 +48,14 @@ class Regression(Strategy):
         """Invert the fitted seed model exactly (``temp`` unused)."""
         return calibration.invert_seed_model(self.B0_, self.B_, self.K_, self.A0_, self.A_, gyro, accel)
 
+    def check_state(self, state: dict[str, Any]) -> None:
+        """The seed model's five coefficient arrays: ``B0_``, ``A0_`` (3,), ``B_``, ``K_``, ``A_`` (3, 3)."""
+        super().check_state(state)
+        for key in ("B0_", "A0_"):
+            state_array(state, key, (3,))
+        for key in ("B_", "K_", "A_"):
+            state_array(state, key, (3, 3))
+
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """Invert the seed model on the increments themselves: it is affine, so the mean rate's
         correction times the step is the increment's, with no division by the step and product back."""
@@ -79,6 +87,11 @@ def _huber_weights(data: CalibrationData, k: float, g_sensitivity: bool, passes:
     return weights
 
 
+#: The most fixed-point passes an extended regression's inversion makes (6 by default; each pass gains
+#: the error's relative size, below 1e-2 for every grade).
+MAX_ITERATIONS = 100
+
+
 class ExtendedRegression(Strategy):
     """Least squares with extra regressors a user switches on: squares of the inputs, temperature.
 
@@ -108,6 +121,18 @@ class ExtendedRegression(Strategy):
             "t0": self.t0,
             "iterations": self.iterations,
         }
+
+    def check_state(self, state: dict[str, Any]) -> None:
+        """``uses_temp_`` a boolean; ``coef_`` (6, p) with the columns of the fitted regressors; at most
+        :data:`MAX_ITERATIONS` passes of the inversion."""
+        super().check_state(state)
+        if not isinstance(self.iterations, int) or not 1 <= self.iterations <= MAX_ITERATIONS:
+            raise ValueError(f"params.iterations must be a whole number in [1, {MAX_ITERATIONS}]")
+        uses_temp = state.get("uses_temp_", False)
+        if not isinstance(uses_temp, bool):
+            raise ValueError("state.uses_temp_ must be true or false")
+        columns = 7 + 6 * bool(self.squares) + 3 * uses_temp
+        state_array(state, "coef_", (6, columns))
 
     def _shared(self, omega_ib_b: Array, f_ib_b: Array) -> Array:
         """The columns every channel's regressors share (n, k): ``[1, ω, f]`` and, with ``squares``,

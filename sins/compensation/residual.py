@@ -56,7 +56,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation import terms
-from sins.compensation.base import Strategy
+from sins.compensation.base import Strategy, state_array
 from sins.compensation.regression import Regression
 from sins.imu import CHANNELS
 from sins.nav import earth
@@ -506,6 +506,48 @@ class ResidualStrategy(Strategy):
         state["learners_"] = {s: self._learner_state(self._learner(s)) for s in self.learners_}
         return state
 
+    def check_state(self, state: dict[str, Any]) -> None:
+        """What correcting reads of the state, before anything is built of it: regression's state
+        (:meth:`Regression.check_state`), ``sigma_`` (6, positive), ``used_`` (6 booleans), the scales
+        and boxes of the inputs, each channel's terms (known groups, one coefficient per column), and each
+        sensor's learner (:meth:`_check_learner`, one for every sensor whose channels use it)."""
+        super().check_state(state)
+        base = state.get("base_")
+        if not isinstance(base, dict):
+            raise ValueError("state.base_ must be regression's state (an object)")
+        Regression().check_state(base)
+        if not (state_array(state, "sigma_", (6,)) > 0).all():
+            raise ValueError("state.sigma_ must be positive")
+        used = state.get("used_")
+        if not isinstance(used, list) or len(used) != 6 or not all(isinstance(u, bool) for u in used):
+            raise ValueError("state.used_ must be 6 booleans")
+        uses_temp = state.get("uses_temp_", False)
+        if not isinstance(uses_temp, bool):
+            raise ValueError("state.uses_temp_ must be true or false")
+        scaling = state.get("scaling_")
+        if not isinstance(scaling, dict) or any(not _positive(scaling.get(k)) for k in _SCALES):
+            raise ValueError(f"state.scaling_ must give {', '.join(_SCALES)}, positive numbers")
+        if not _finite(scaling.get("temp_centre")):
+            raise ValueError("state.scaling_.temp_centre must be a finite number")
+        n_inputs = {"gyro": 6 + uses_temp, "accel": 3 + uses_temp}
+        box, learners = state.get("box_"), state.get("learners_")
+        if not isinstance(box, dict) or not isinstance(learners, dict):
+            raise ValueError("state.box_ and state.learners_ must be objects by sensor")
+        for sensor in SENSORS:
+            state_array(box, sensor, (2, n_inputs[sensor]), "state.box_")
+            if sensor in learners:
+                self._check_learner(learners[sensor], n_inputs[sensor], f"state.learners_.{sensor}")
+            elif any(used[3 * SENSORS.index(sensor) : 3 * SENSORS.index(sensor) + 3]):
+                raise ValueError(f"state.learners_ has no {sensor} learner, which used_ says corrects")
+        _check_terms(state.get("terms_", {}), uses_temp)
+
+    def _check_learner(self, learner: Any, n_inputs: int, where: str) -> None:
+        """Refuse a learner's state that :meth:`_learner_from_state` cannot make a learner of, on inputs
+        of ``n_inputs`` columns, or that is larger than :meth:`fit` could have chosen (ValueError naming
+        ``where``). The subclasses know their learners; here, only that it is an object."""
+        if not isinstance(learner, dict):
+            raise ValueError(f"{where} must be an object")
+
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore the state; the learners are rebuilt from it on first use."""
         plain = {k: v for k, v in state.items() if k not in ("learners_", "used_")}
@@ -516,6 +558,36 @@ class ResidualStrategy(Strategy):
         self.learners_ = dict(state["learners_"])
         self.__dict__.pop("_restored", None)
         self.__dict__.pop("_base", None)
+
+
+#: The scales a saved state must give, each a positive number.
+_SCALES = ("rate", "accel", "temp_half")
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+def _positive(value: Any) -> bool:
+    return _finite(value) and value > 0
+
+
+def _check_terms(chosen: Any, uses_temp: bool) -> None:
+    """Each channel's terms in a saved state: known groups, and as many coefficients as their columns."""
+    if not isinstance(chosen, dict):
+        raise ValueError("state.terms_ must be an object by channel")
+    one = terms.Inputs(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1) if uses_temp else None)
+    for ch, entry in chosen.items():
+        where = f"state.terms_.{ch}"
+        if ch not in CHANNELS or not isinstance(entry, dict) or not isinstance(entry.get("groups"), list):
+            raise ValueError(f"{where} must be a channel's terms (groups and coef)")
+        groups = entry["groups"]
+        if not all(g in terms.GROUPS for g in groups) or ("temperature" in groups and not uses_temp):
+            raise ValueError(
+                f"{where}.groups must be among {', '.join(terms.GROUPS)} (temperature if fitted with it)"
+            )
+        columns = terms.design(groups, CHANNELS.index(ch), one).shape[1]
+        state_array(entry, "coef", (columns,), where)
 
 
 def _key(config: dict[str, Any]) -> str:

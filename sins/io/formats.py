@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
+from sins.io import documents
 from sins.nav import rotation
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, RigPhase
 
@@ -506,14 +507,7 @@ def read_json_document(
     ``missing_hint`` is added when the file does not exist.
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SinsInputError(
-            f"{path}: no such {what}{f' ({missing_hint})' if missing_hint else ''}"
-        ) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SinsInputError(f"{path}: not a sins {what} ({exc})") from None
+    doc = documents.read_json(path, what, missing_hint)  # the one reader: one line whatever the bytes
     if not isinstance(doc, dict) or doc.get("format") != format_name:
         raise SinsInputError(f'{path}: not a sins {what} (no "format": "{format_name}")')
     return doc
@@ -530,7 +524,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     error and removed otherwise: a reader never sees half a file, and an interrupted run leaves none.
 
     The file gets the permissions a plain ``open`` would give it (``0o666`` less the umask), not the
-    owner-only mode of a temporary file.
+    owner-only mode of a temporary file. An ``OSError`` while writing (a full disk, a folder not
+    writable) is raised again with ``path`` as its file name, not the temporary one.
     """
     path = Path(path)
     directory = path.parent
@@ -538,15 +533,20 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise SinsInputError(f"{path}: directory {directory} does not exist")
     if path.is_dir():
         raise SinsInputError(f"{path}: is a directory, expected a file name to write")
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
     os.close(fd)
     tmp = Path(name)
     try:
         yield tmp
         os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):  # a full disk, say: the target named, not the temporary file
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
         raise
 
 
@@ -877,7 +877,8 @@ def _phases_from_column(table: Table, directives: dict[int, _Directive]) -> tupl
             raise SinsInputError(
                 f"{path}:{directive.line}: '# phase {value}' describes a phase with no rows in column 'phase'"
             )
-    ref_rate = np.linalg.norm(table.data[:, [table.columns.index(c) for c in REF_COLUMNS[:3]]], axis=1)
+    with np.errstate(over="ignore"):  # a reading beyond every range (1e300) is refused later, in one line
+        ref_rate = np.linalg.norm(table.data[:, [table.columns.index(c) for c in REF_COLUMNS[:3]]], axis=1)
     phases = []
     for value, (start, stop) in sorted(runs.items(), key=lambda item: item[1]):
         if value < 0:

@@ -8,11 +8,12 @@ read through it.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
 
 from sins.errors import SinsInputError
+from sins.io import documents
+from sins.io.documents import short
 
 _MISSING: Any = object()
 
@@ -91,13 +92,13 @@ class TomlKeys:
             return float(self._default(key, default))
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.error(f"expected a number, got {_kind(value)} {value!r}", key)
+            raise self.error(f"expected a number, got {_kind(value)} {short(value)}", key)
         try:
             value = float(value)
         except OverflowError:
             raise self.error("number too large", key) from None
         if not math.isfinite(value):
-            raise self.error(f"must be finite, got {value!r}", key)
+            raise self.error(f"must be finite, got {short(value)}", key)
         value += 0.0  # -0.0 becomes 0.0: numpy's samplers refuse a "negative" zero spread
         if low is not None and (value < low or (low_open and value == low)):
             raise self.error(f"must be {'>' if low_open else '>='} {low:g}, got {value:g}", key)
@@ -140,9 +141,9 @@ class TomlKeys:
             return default
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.error(f"expected a whole number, got {_kind(value)} {value!r}", key)
+            raise self.error(f"expected a whole number, got {_kind(value)} {short(value)}", key)
         if isinstance(value, float) and not (math.isfinite(value) and value == math.floor(value)):
-            raise self.error(f"expected a whole number, got {value!r}", key)
+            raise self.error(f"expected a whole number, got {short(value)}", key)
         if not low <= value <= high:
             raise self.error(f"must be in [{low}, {high}], got {value:g}", key)
         return int(value)
@@ -153,9 +154,9 @@ class TomlKeys:
             return str(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, str):
-            raise self.error(f"expected a string, got {_kind(value)} {value!r}", key)
+            raise self.error(f"expected a string, got {_kind(value)} {short(value)}", key)
         if choices and value not in choices:
-            raise self.error(f"must be one of {', '.join(choices)}; got {value!r}", key)
+            raise self.error(f"must be one of {', '.join(choices)}; got {short(value)}", key)
         return value
 
     def choice(self, key: str, choices: tuple[_S, ...], default: Any = _MISSING) -> _S:
@@ -177,7 +178,7 @@ class TomlKeys:
         out = []
         for i, item in enumerate(value):
             if isinstance(item, bool) or not isinstance(item, int | float) or not math.isfinite(float(item)):
-                raise self.error(f"item {i + 1}: expected a finite number, got {item!r}", key)
+                raise self.error(f"item {i + 1}: expected a finite number, got {short(item)}", key)
             out.append(float(item))
         return out
 
@@ -191,7 +192,7 @@ class TomlKeys:
         for i, item in enumerate(value):
             if not isinstance(item, str) or (choices and item not in choices):
                 allowed = f" (one of {', '.join(choices)})" if choices else ""
-                raise self.error(f"item {i + 1}: expected a string{allowed}, got {item!r}", key)
+                raise self.error(f"item {i + 1}: expected a string{allowed}, got {short(item)}", key)
         return list(value)
 
     def boolean(self, key: str, default: bool) -> bool:
@@ -200,7 +201,7 @@ class TomlKeys:
             return default
         value = self.get(key)
         if not isinstance(value, bool):
-            raise self.error(f"expected true or false, got {_kind(value)} {value!r}", key)
+            raise self.error(f"expected true or false, got {_kind(value)} {short(value)}", key)
         return value
 
     def tables(self, key: str) -> list[TomlKeys]:
@@ -231,7 +232,8 @@ def _kind(value: Any) -> str:
 
 
 def read_toml(path: Path, what: str) -> dict[str, Any]:
-    """A TOML file parsed; one-line errors name the file and ``what`` kind of file it is.
+    """A TOML file parsed; one-line errors name the file and ``what`` kind of file it is
+    (:func:`sins.io.documents.read_toml`, the one reader of every TOML file).
 
     Parameters
     ----------
@@ -241,18 +243,7 @@ def read_toml(path: Path, what: str) -> dict[str, Any]:
     Raises
     ------
     SinsInputError
-        the file is missing, unreadable, not UTF-8 or not valid TOML.
+        the file is missing, unreadable, not UTF-8 or not valid TOML, nested too deep, or holds an
+        integer beyond 64 bits or a NUL byte.
     """
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise SinsInputError(f"{path}: no such {what} file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SinsInputError(f"{path}: invalid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise SinsInputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except IsADirectoryError:
-        raise SinsInputError(f"{path}: is a directory, expected a {what} file") from None
-    except OSError as exc:
-        raise SinsInputError(f"{path}: cannot read: {exc}") from None
+    return documents.read_toml(path, what)

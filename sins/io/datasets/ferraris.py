@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from sins import io
 from sins.errors import SinsInputError
 from sins.io.datasets.root import dataset_file
+from sins.io.documents import read_json
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
 from sins.nav import earth
 from sins.series import CalibrationData, RigPhase
@@ -270,12 +271,7 @@ def _annotated_sections(
 
 def _ferraris_sections(path: Path, n_rows: int) -> dict[str, tuple[int, int]]:
     """``{section: (start, stop)}`` rows from imucal's section list, validated against ``n_rows``."""
-    try:
-        raw = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise SinsInputError(f"{path}:{exc.lineno}: not JSON: {exc.msg} (column {exc.colno})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SinsInputError(f"{path}: cannot read: {exc}") from None
+    raw = read_json(path, "JSON section list", sins=False)
     if not isinstance(raw, dict):
         raise SinsInputError(f"{path}: expected an object of sections, found {type(raw).__name__}")
     extra = sorted(set(raw) - set(FERRARIS_SECTIONS))
