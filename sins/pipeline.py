@@ -25,11 +25,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import scenario
-from sins.errors import SinsInputError
 
 # OutageError is re-exported: it lived here before it moved down to sins.aiding.
 from sins.aiding.outages import OutageError as OutageError
 from sins.aiding.outages import outage_errors
+from sins.errors import SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
     BlockMeans,
