@@ -264,10 +264,9 @@ class CalibrationData:
         n = len(self.t)
         if n < 2:
             return [(0, n)]
-        ref = np.hstack([self.ref_gyro, self.ref_accel])
-        step = np.abs(np.diff(ref, axis=0))
-        rate_step = np.linalg.norm(step[:, :3], axis=1)
-        force_step = np.linalg.norm(step[:, 3:], axis=1)
+        # A sensor at a time: no (n, 6) copies of a long recording's references.
+        rate_step = np.linalg.norm(np.diff(self.ref_gyro, axis=0), axis=1)
+        force_step = np.linalg.norm(np.diff(self.ref_accel, axis=0), axis=1)
         # Relative slack as well: a fast table's rate printed to ten digits moves in its last one.
         rate_tol = STEADY_RATE + 1e-6 * np.linalg.norm(self.ref_gyro[1:], axis=1)
         force_tol = STEADY_FORCE + 1e-6 * np.linalg.norm(self.ref_accel[1:], axis=1)
@@ -291,10 +290,10 @@ class CalibrationData:
                 runs[-1] = (runs[-1][0], stop)
                 continue
             if runs and kind[start] == kind[level_row] == 0:
-                moved = np.abs(ref[start] - ref[level_row])
                 if (
-                    np.linalg.norm(moved[:3]) <= rate_tol[start - 1]
-                    and np.linalg.norm(moved[3:]) <= force_tol[start - 1]
+                    np.linalg.norm(self.ref_gyro[start] - self.ref_gyro[level_row]) <= rate_tol[start - 1]
+                    and np.linalg.norm(self.ref_accel[start] - self.ref_accel[level_row])
+                    <= force_tol[start - 1]
                 ):
                     runs[-1], level_row = (runs[-1][0], stop), stop - 1
                     continue
