@@ -12,7 +12,7 @@ import numpy as np
 import numpy_gap as ng
 import pytest
 
-from sins.gap import candidates, diagnose, disturbance, lattice, randombias
+from sins.gap import candidates, channel, diagnose, disturbance, lattice, randombias
 from sins.gap.design import Design, Projection
 from sins.imu.model import hermite_slopes
 from sins.series import CalibrationData
@@ -195,3 +195,17 @@ def test_the_print_habit_probes_the_values_a_concatenation_would():
     np.testing.assert_array_equal(lattice._probe(columns), values[:: len(values) // lattice._HABIT_PROBE])
     assert lattice.print_habit(*columns) == lattice.Printed(None, None)
     assert lattice.print_habit(columns[0]) == lattice.Printed(5, 4)  # four decimals of values up to ±5
+
+
+def test_the_baseline_block_of_a_chunk_is_the_baseline_columns():
+    """The baseline's columns as a chunk's design builds them (filled a sensor at a time) are
+    :func:`candidates.baseline_columns`' of the same rows, to the bit."""
+    rng = np.random.default_rng(5)
+    t = np.arange(500) / 100.0
+    w, f = rng.standard_normal((500, 3)), rng.standard_normal((500, 3))
+    x = candidates.reference_inputs(CalibrationData(t=t, gyro=w, accel=f, ref_gyro=w, ref_accel=f))
+    for sensor in ("gyro", "accel"):
+        part = x.rows(123, 456)
+        np.testing.assert_array_equal(
+            channel._baseline_block(sensor, part), candidates.baseline_columns(sensor, w[123:456], f[123:456])
+        )

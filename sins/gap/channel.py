@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from sins.gap import lattice, randombias
-from sins.gap.candidates import Candidate, ReferenceInputs, baseline_columns
+from sins.gap.candidates import Candidate, ReferenceInputs
 from sins.gap.design import Design, Maker, Projection
 from sins.gap.floor import TINY, noise_floor
 from sins.gap.lattice import Printed
@@ -277,8 +277,15 @@ class ChannelModel:
 
 
 def _baseline_block(sensor: str, x: ReferenceInputs) -> Array:
-    """The baseline's columns of a chunk of rows (:func:`~sins.gap.candidates.baseline_columns`)."""
-    return baseline_columns(sensor, x.omega_ib_b, x.f_ib_b)
+    """The baseline's columns of a chunk of rows: :func:`~sins.gap.candidates.baseline_columns`'s,
+    filled a sensor's three columns at a time (every pass over the rows builds them)."""
+    u = x.of(sensor)
+    out = np.empty((len(u), 7 if sensor == "gyro" else 4))
+    out[:, 0] = 1.0
+    out[:, 1:4] = u
+    if sensor == "gyro":
+        out[:, 4:7] = x.f_ib_b
+    return out
 
 
 def _axis_block(columns: Callable[[ReferenceInputs, int], Array], axis: int, x: ReferenceInputs) -> Array:

@@ -138,19 +138,21 @@ class Design:
         (``rows`` if None), the scale the factor's solutions are for (:class:`Factor`); and, with
         ``gram_rows``, the columns' Gram matrix on those rows, unscaled."""
         assert self.scale is None, "factor the unscaled columns"
-        k = self.width
-        r, top, gram = np.zeros((0, k + (target is not None))), np.zeros(k), np.zeros((k, k))
+        k, extra = self.width, target is not None
+        r, top, gram = np.zeros((0, k + extra)), np.zeros(k), np.zeros((k, k))
         for lo, hi in spans(self.n):
             a = self.block(lo, hi)
-            own = a[rows[lo:hi]]
-            scaled_by = own if scale_rows is None else a[scale_rows[lo:hi]]
+            mine = rows[lo:hi]
+            own = np.empty((int(mine.sum()), k + extra))  # the rows' columns and target, side by side
+            np.compress(mine, a, axis=0, out=own[:, :k])
+            if target is not None:
+                np.compress(mine, target[lo:hi], out=own[:, k])
+            scaled_by = own[:, :k] if scale_rows is None else a[scale_rows[lo:hi]]
             if len(scaled_by):
-                top = np.maximum(top, np.abs(scaled_by).max(axis=0))
+                top = np.maximum(top, np.maximum(scaled_by.max(axis=0), -scaled_by.min(axis=0)))
             if gram_rows is not None:
                 other = a[gram_rows[lo:hi]]
                 gram += other.T @ other
-            if target is not None:
-                own = np.column_stack([own, target[lo:hi][rows[lo:hi]]])
             r = _stacked(r, own)
         return Factor(r, k, int(rows.sum()), np.maximum(top, 1e-300), gram)
 
@@ -223,6 +225,12 @@ class Factor:
     m: int
     scale: Array
     gram: Array | None = None
+
+    def scaled_gram(self) -> Array:
+        """:attr:`gram` of the scaled columns (a column all zero there stays zero: divided one scale
+        at a time, never by a product of two that underflows)."""
+        assert self.gram is not None, "ask the factor for a Gram matrix"
+        return np.asarray(self.gram / self.scale / self.scale[:, None])
 
     def leading(self, k: int) -> Factor:
         """The factor of the first ``k`` columns alone (the leading block of a QR factor is theirs)."""

@@ -42,10 +42,9 @@ def best_step(
     n = len(e)
     unscaled = _design(columns)
     factor = unscaled.factor(rows, gram_rows=rows)  # the columns' scale and Gram matrix in one pass
-    assert factor.gram is not None
     design = unscaled.scaled_by(factor.scale)
     suffix_e = np.cumsum(e[::-1])[::-1][1:]  # the step starts at fit row k = 1 … n − 1
-    inverse = np.linalg.pinv(factor.gram / np.outer(factor.scale, factor.scale))
+    inverse = np.linalg.pinv(factor.scaled_gram())
     quad = np.empty(max(n - 1, 0))  # (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs) for a step after each fit row
     carry, end = np.zeros(len(inverse)), n
     for lo, hi in reversed(spans(design.n)):

@@ -101,10 +101,9 @@ def refit_allowance(models: list[ChannelModel], withheld: NDArray[np.bool_]) -> 
         # The eigenvalues of (A_fᵀA_f)⁻¹A_wᵀA_w, from A_f's singular values and A_w's Gram matrix,
         # both accumulated a chunk of rows at a time.
         factor = m.design().factor(m.fit, gram_rows=withheld)
-        assert factor.gram is not None
         s, vt, keep = factor.singular()
-        basis = vt[keep].T / s[keep] / factor.scale[:, None]  # the scaled columns' withheld Gram
-        lam = np.clip(np.linalg.eigvalsh(basis.T @ factor.gram @ basis), 0.0, None)
+        basis = vt[keep].T / s[keep]
+        lam = np.clip(np.linalg.eigvalsh(basis.T @ factor.scaled_gram() @ basis), 0.0, None)
         lam_max = max(lam_max, float(lam.max(initial=0.0)))
         degrees += int(np.sum(lam > 1e-9 * lam.max(initial=0.0)))
     if degrees == 0:
