@@ -47,9 +47,11 @@ def _recording(args: argparse.Namespace, folder: Path) -> Path:
     return path
 
 
-def _run(path: Path, report: Path) -> tuple[float, float, str]:
-    """``sins gap`` on ``path`` in a fresh process: wall seconds, peak RSS in MB, and its output."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+def _run(path: Path, report: Path) -> tuple[float, float, float, str]:
+    """``sins gap`` on ``path`` in a fresh process: wall seconds, CPU seconds (user and system), peak
+    RSS in MB, and its output."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    before, cpu = usage.ru_maxrss, usage.ru_utime + usage.ru_stime
     started = time.perf_counter()
     done = subprocess.run(
         [sys.executable, "-m", "sins.cli", "gap", str(path), "--json", str(report)],
@@ -58,10 +60,10 @@ def _run(path: Path, report: Path) -> tuple[float, float, str]:
     seconds = time.perf_counter() - started
     if done.returncode != 0:
         raise SystemExit(f"sins gap failed ({done.returncode}):\n{done.stderr}")
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    if peak <= before:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if usage.ru_maxrss <= before:
         print("(the peak is no higher than an earlier child's: run one repeat per process to read it)")
-    return seconds, peak / 1024.0, done.stdout
+    return seconds, usage.ru_utime + usage.ru_stime - cpu, usage.ru_maxrss / 1024.0, done.stdout
 
 
 def main() -> None:
@@ -80,10 +82,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         path = _recording(args, Path(folder))
         for repeat in range(args.repeats):
-            seconds, peak_mb, _ = _run(path, Path(folder) / "gap.json")
+            seconds, cpu_s, peak_mb, _ = _run(path, Path(folder) / "gap.json")
             doc = json.loads((Path(folder) / "gap.json").read_text(encoding="utf-8"))
-            print(f"run {repeat + 1}: sins gap in {seconds:.1f} s, peak RSS {peak_mb:.0f} MB; "
-                  f"diagnosis {doc['diagnosis']}, unexplained {doc['unexplained']}")  # fmt: skip
+            took = f"{seconds:.1f} s ({cpu_s:.1f} s of CPU), peak RSS {peak_mb:.0f} MB"
+            found = f"diagnosis {doc['diagnosis']}, unexplained {doc['unexplained']}"
+            print(f"run {repeat + 1}: sins gap in {took}; {found}")
             for ch, v in doc["channels"].items():
                 before, after = v["rms_before"] / v["noise_floor"], v["rms_after"] / v["noise_floor"]
                 print(f"  {ch}: before {before:.3f}, after {after:.3f} x the floor")

@@ -15,7 +15,7 @@ from scipy import fft
 from scipy.optimize import minimize_scalar
 
 from sins.gap.candidates import spans
-from sins.gap.design import Design, Projection
+from sins.gap.design import Design, Factor, Projection
 
 Array = NDArray[np.float64]
 
@@ -28,7 +28,7 @@ def _design(columns: Design | Array) -> Design:
 
 
 def best_step(
-    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array
+    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array, factor: Factor | None = None
 ) -> tuple[float, float]:
     """The single bias step that best fits the fit rows' residual, the model's regressors refitted beside it.
 
@@ -36,14 +36,17 @@ def best_step(
     ``(sᵀ M e)² / sᵀ M s`` of the residual ``e = M y``'s sum of squares; ``sᵀ M e`` is a suffix sum
     of ``e`` and ``sᵀ M s = (n − k) − (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs)``, with ``Aᵀs`` a suffix sum of ``A``'s
     rows, so every ``k`` costs one pass (from the last chunk of rows to the first, :mod:`sins.gap.design`).
+    ``factor``: the columns' factor on ``rows`` with their Gram matrix there, if the caller has it.
     Returns the step's time (halfway between the rows either side) and its size.
     """
-    e, tf = residual[rows], t[rows]
+    e = residual[rows]
     n = len(e)
     unscaled = _design(columns)
-    factor = unscaled.factor(rows, gram_rows=rows)  # the columns' scale and Gram matrix in one pass
+    if factor is None:
+        factor = unscaled.factor(rows, gram_rows=rows)  # the columns' scale and Gram matrix in one pass
     design = unscaled.scaled_by(factor.scale)
     suffix_e = np.cumsum(e[::-1])[::-1][1:]  # the step starts at fit row k = 1 … n − 1
+    del e
     inverse = np.linalg.pinv(factor.scaled_gram())
     quad = np.empty(max(n - 1, 0))  # (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs) for a step after each fit row
     carry, end = np.zeros(len(inverse)), n
@@ -57,12 +60,15 @@ def best_step(
         ok = after >= 0
         quad[after[ok]] = np.einsum("ki,ij,kj->k", within[ok], inverse, within[ok])
         end = start
-    denominator = np.arange(n - 1, 0, -1) - quad
-    explained = np.where(denominator > 1e-9 * n, suffix_e**2 / np.maximum(denominator, 1e-300), -1.0)
+    denominator = np.subtract(np.arange(n - 1, 0, -1), quad, out=quad)  # sᵀ M s, in place
+    explained = np.square(suffix_e)
+    np.divide(explained, np.maximum(denominator, 1e-300), out=explained)
+    explained[denominator <= 1e-9 * n] = -1.0
     margin = max(1, int(STEP_MARGIN * n))
     explained[: margin - 1] = explained[n - 1 - margin :] = -1.0
     j = int(np.argmax(explained))
-    return 0.5 * float(tf[j] + tf[j + 1]), float(suffix_e[j] / denominator[j])
+    tf = t[rows][j : j + 2]
+    return 0.5 * float(tf[0] + tf[1]), float(suffix_e[j] / denominator[j])
 
 
 def _periodogram_peak(x: Array, step: float, lowest_hz: float) -> float:
@@ -76,27 +82,36 @@ def _periodogram_peak(x: Array, step: float, lowest_hz: float) -> float:
     index = np.arange(n)
     best, peak = -1.0, 0.0
     for r in range(5):
-        if r == 0:
-            z = fft.fft(x)
-        else:
-            angle = (-2.0 * np.pi * r / padded) * index
-            z = fft.fft(x * np.cos(angle) + 1j * (x * np.sin(angle)), overwrite_x=True)
-            del angle
-        power = z.real**2 + z.imag**2
-        del z
-        for bins in (8 * index + r, padded - (8 * index + r)):  # b and its mirror 8n − b
-            keep = (bins <= padded // 2) & (bins / (padded * step) >= lowest_hz) & (bins < padded)
-            if keep.any():
-                m = int(np.argmax(np.where(keep, power, -1.0)))
-                if power[m] > best and keep[m]:
+        power = _turned_power(x, r, padded)
+        for bins in (8 * index + r, padded - (8 * index + r))[: 2 if r in (1, 2, 3) else 1]:
+            # b and its mirror 8n − b (r = 0 and 4 mirror onto their own turn)
+            allowed = (bins <= padded // 2) & (bins / (padded * step) >= lowest_hz)
+            if allowed.any():
+                m = int(np.argmax(np.where(allowed, power, -1.0)))
+                if power[m] > best:
                     best, peak = float(power[m]), float(bins[m] / (padded * step))
-            if r in (0, 4):
-                break  # their mirrors are bins of their own turn
     return peak
 
 
+def _turned_power(x: Array, r: int, padded: int) -> Array:
+    """``|FFT(x e^(−2πi r j / padded))|²``, the turn built a chunk at a time into the transform's own
+    array (no n-long angle, cosine or sine)."""
+    if r == 0:
+        z = fft.fft(x)
+    else:
+        z = np.empty(len(x), dtype=np.complex128)
+        for lo, hi in spans(len(x)):
+            angle = (-2.0 * np.pi * r / padded) * np.arange(lo, hi)
+            z.real[lo:hi] = x[lo:hi] * np.cos(angle)
+            z.imag[lo:hi] = x[lo:hi] * np.sin(angle)
+        z = fft.fft(z, overwrite_x=True)
+    power = np.square(z.real)
+    power += np.square(z.imag)
+    return np.asarray(power)
+
+
 def best_oscillation(
-    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array
+    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array, factor: Factor | None = None
 ) -> tuple[float, float]:
     """The period and amplitude of the strongest oscillation in the fit rows' residual.
 
@@ -105,12 +120,13 @@ def best_oscillation(
     regressors, leave the least; periods longer than a third of the recording are left to the drifts.
     The sine and cosine are fitted on what the regressors leave of them and of the residual (their
     projections off the regressors, :class:`~sins.gap.design.Projection`), the same least squares.
+    ``factor``: the columns' factor on ``rows``, if the caller has it.
     """
     step = float(np.median(np.diff(t)))
     x = np.where(rows, residual - residual[rows].mean(), 0.0)
     peak = _periodogram_peak(x, step, 3.0 / (t[-1] - t[0]))
     del x
-    projection = Projection.of(_design(columns), rows)
+    projection = Projection.of(_design(columns), rows, factor)
     tf, y = t[rows], residual[rows]
     on_y = projection.coordinates(y[:, None])
     left_y = float(y @ y - np.sum(on_y**2))

@@ -156,8 +156,9 @@ def _disturbance(
     """The better of a bias step and an oscillation on one channel, where it does as well as the
     effect tried there (``row``; see :func:`outside_library`), else None."""
     t, residual, design = model.x.t, model.residual, model.design()
-    t_step, size = disturbance.best_step(residual, design, model.fit, t)
-    period, amplitude = disturbance.best_oscillation(residual, design, model.fit, t)
+    factor = design.factor(model.fit, gram_rows=model.fit)  # one pass serves the step and the hum
+    t_step, size = disturbance.best_step(residual, design, model.fit, t, factor)
+    period, amplitude = disturbance.best_oscillation(residual, design, model.fit, t, factor)
     channel = CHANNELS[row.channel]
     tries = [
         (Outside(channel, "bias step", size, 0.0, t_s=t_step), partial(_step, t_step), 2, 1),
