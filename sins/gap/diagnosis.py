@@ -399,7 +399,7 @@ def _report(
     for i, m in enumerate(state.models):
         assert m.predicted is not None
         after[:, i] = m.predicted
-    state.models.clear()  # their predictions are in ``after`` now
+        state.models[i] = dataclasses.replace(m, predicted=after[:, i])  # its own copy let go
     # An effect that moves the reading by jumps (a clip reached, a delay across a step) lifts the
     # differences of the residual before it as well: where the accepted effects leave the
     # differences smaller, theirs are the white noise's (a heavy clip: 0.02-0.4 of the floor before).

@@ -60,9 +60,13 @@ def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
     """
     theta = np.concatenate([[0.0], np.cumsum(rate)])
     out = np.empty(len(clusters))
+    buffer = np.empty(len(theta))  # one for every cluster size: a long recording's rows are many
     for j, m in enumerate(clusters):
-        d = theta[2 * m :] - 2.0 * theta[m:-m] + theta[: -2 * m]
-        out[j] = np.sqrt(np.mean(d * d) / (2.0 * m * m))
+        d = buffer[: len(theta) - 2 * m]
+        np.multiply(theta[m:-m], -2.0, out=d)
+        d += theta[2 * m :]
+        d += theta[: -2 * m]
+        out[j] = np.sqrt(np.mean(np.square(d, out=d)) / (2.0 * m * m))
     return out
 
 
