@@ -11,8 +11,9 @@ import pytest
 
 from sins import compensation, imu, io
 from sins.cli import main
+from sins.compensation import residual
 from sins.compensation.kohonen import LocalLinearMap
-from sins.compensation.residual import Points, aggregate, segment
+from sins.compensation.residual import Points, aggregate, repeats, segment
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 
@@ -49,6 +50,55 @@ def test_averaged_points_keep_the_least_squares_sums():
     by_row = p[np.argsort(pts.block)][block]  # each row gets its hold's point's prediction
     direct = (y**2 - (y - by_row) ** 2).sum(axis=0)
     np.testing.assert_allclose((pts.n[:, None] * (pts.y**2 - (pts.y - p) ** 2)).sum(axis=0), direct)
+
+
+def _runs(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Residuals (n, 3) whose error is one draw held over each run of ``m`` rows (a reference held over
+    an interval), with a white trace of 1 % of it."""
+    held = np.repeat(rng.normal(0.0, 1.0, (n // m + 1, 3)), m, axis=0)[:n]
+    return held + 0.01 * rng.normal(0.0, 1.0, (n, 3))
+
+
+def test_rows_that_repeat_one_draw_are_counted_from_the_residual_itself():
+    """``repeats``: white noise repeats nothing; a draw held over m rows is m rows (within the blocks'
+    own spread: a block of 2,000 rows holds 40 draws of 50, and its variance is 39/40 of theirs, so
+    0.95-1.0 m); a drift (a random walk) repeats many; a smooth residual without noise (a curve along a
+    ramp) is not a repeated draw, whatever its slow change."""
+    rng = np.random.default_rng(3)
+    n = 40_000
+    block = np.arange(n) // 2000  # 20 s blocks at 100 Hz
+    assert repeats(rng.normal(0.0, 1.0, (n, 3)), block) == 1
+    for m in (10, 50, 200):
+        assert 0.9 * m <= repeats(_runs(m, n, rng), block) <= m, m
+    walk = np.cumsum(rng.normal(0.0, 1.0, (n, 3)), axis=0) + rng.normal(0.0, 1.0, (n, 3))
+    assert repeats(walk, block) >= residual.MIN_REPEATS
+    ramp = np.linspace(-1.0, 1.0, 2000)
+    curve = np.tile(np.column_stack([ramp**2, np.sin(3 * ramp), ramp**3]), (n // 2000, 1))
+    assert repeats(curve, block) == 1
+    # Twice a white draw's spread in the row-to-row change is no repeat either (a drift beside white noise,
+    # as sins's rigs' gyros have: 1.6-2.6 rows).
+    assert repeats(0.5 * walk / np.sqrt(n) + rng.normal(0.0, 1.0, (n, 3)), block) == 1
+
+
+def test_a_run_of_rows_joins_one_point_and_the_sums_stay_the_rows():
+    """With ``run``, each run's rows are averaged into one point even where the inputs move through a
+    new cell every row (a turning unit against a held reference); counts, Σ y and Σ y² are the rows'."""
+    rng = np.random.default_rng(4)
+    n, m = 6000, 50
+    t = np.arange(n) / 100.0
+    x = np.column_stack([np.sin(t), np.cos(0.7 * t), 0.01 * t])  # a new fine cell nearly every row
+    y = _runs(m, n, rng)
+    block = segment(x, t)
+    assert len(aggregate(x, y, block).n) > 0.3 * n  # the cells alone hardly average
+    pts = aggregate(x, y, block, m)
+    runs_per_block = np.ceil(np.bincount(block) / m).sum()
+    assert len(pts.n) <= runs_per_block and pts.n.sum() == n
+    np.testing.assert_allclose((pts.n[:, None] * pts.y).sum(axis=0), y.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(pts.sq.sum(axis=0), (y * y).sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose((pts.n[:, None] * pts.x).sum(axis=0), x.sum(axis=0), rtol=1e-12)
+    # A run of one row is the cells' points exactly.
+    single = aggregate(x, y, block, 1)
+    np.testing.assert_array_equal(single.x, aggregate(x, y, block).x)
 
 
 def test_the_local_linear_map_interpolates_where_node_means_make_a_staircase():
@@ -267,3 +317,39 @@ def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Pa
     assert piped.stderr == b""
     lines = lambda out: [ln for ln in out.decode().splitlines() if not ln.startswith("wrote")]  # noqa: E731
     assert lines(on_tty.stdout) == lines(piped.stdout)
+
+
+def test_the_seed_papers_training_takes_the_steps_autograd_takes():
+    """``mlp_seed`` trains pattern by pattern with compiled steps; the same network, patterns and order
+    trained by torch's autograd and SGD (written here) ends at the same weights, to rounding (two
+    epochs of 300 patterns: measured 1e-15 relative)."""
+    import torch
+
+    from sins.compensation.mlp import MLP
+
+    rng = np.random.default_rng(5)
+    x = torch.from_numpy(rng.normal(0.0, 1.0, (300, 7)))
+    y = torch.from_numpy(rng.uniform(0.1, 0.9, (300, 6)))
+    strategy = MLP(hidden=(16, 8), mode="seed", alpha=0.05, gain=1.3, max_epochs=2, residual=0.0)
+    torch.manual_seed(0)
+    net = strategy._network(7)
+    reference = strategy._network(7)
+    reference.load_state_dict(net.state_dict())
+    initial = [p.detach().numpy().copy() for p in net.parameters()]
+    epochs, epsilon = strategy._train_seed(net, x, y)
+    optimiser = torch.optim.SGD(reference.parameters(), lr=0.05)
+    gen = torch.Generator().manual_seed(strategy.seed)
+    totals = []
+    for _ in range(2):
+        total = 0.0
+        for i in torch.randperm(300, generator=gen).tolist():
+            optimiser.zero_grad()
+            e = 0.5 * ((reference(x[i : i + 1]) - y[i : i + 1]) ** 2).sum()
+            e.backward()
+            optimiser.step()
+            total += float(e.detach())
+        totals.append(total / 300)
+    assert epochs == 2 and epsilon == pytest.approx(totals[-1], rel=1e-12)
+    for mine, theirs, before in zip(net.parameters(), reference.parameters(), initial, strict=True):
+        np.testing.assert_allclose(mine.detach().numpy(), theirs.detach().numpy(), rtol=1e-10, atol=1e-13)
+        assert np.abs(theirs.detach().numpy() - before).max() > 1e-4  # every layer was trained
