@@ -353,3 +353,34 @@ def test_the_seed_papers_training_takes_the_steps_autograd_takes():
     for mine, theirs, before in zip(net.parameters(), reference.parameters(), initial, strict=True):
         np.testing.assert_allclose(mine.detach().numpy(), theirs.detach().numpy(), rtol=1e-10, atol=1e-13)
         assert np.abs(theirs.detach().numpy() - before).max() > 1e-4  # every layer was trained
+
+
+def test_a_candidate_stops_training_where_its_held_back_loss_stops_falling(seed_model_fits, monkeypatch):
+    """The cross-validation trains a candidate on every fold side by side, one training length at a
+    time, and stops once ``PATIENCE`` lengths in a row have not lowered its held-back loss summed over
+    the folds. Every length it reaches scores exactly as in the search that trains every candidate to
+    the end, and it stops exactly where that search's scores say."""
+    from sins.compensation import mlp
+
+    fit = seed_model_fits["fit"]
+    small = fit.rows(slice(0, len(fit), 4))
+    options = {"hidden_sizes": ((8, 8), (16, 16)), "guard": False, "n_jobs": 1}
+    stopped = compensation.make("mlp", **options).fit(small)
+    patience = residual.PATIENCE
+    monkeypatch.setattr(residual, "PATIENCE", len(mlp.CHECKPOINTS))
+    whole = compensation.make("mlp", **options).fit(small)
+    reached = 0
+    for sensor, scores in whole.cv_scores_.items():
+        for config in stopped._candidates(sensor, 0):
+            keys = [residual._key({**config, "iterations": n}) for n in mlp.CHECKPOINTS]
+            expect, best, stale = [], np.inf, 0
+            for key in keys:  # the rule, replayed on the whole search's scores
+                expect.append(key)
+                best, stale = (scores[key], 0) if scores[key] < best else (best, stale + 1)
+                if stale >= patience:
+                    break
+            got = [k for k in keys if k in stopped.cv_scores_[sensor]]
+            assert got == expect, (sensor, config)
+            assert all(stopped.cv_scores_[sensor][k] == scores[k] for k in got)
+            reached += len(got)
+    assert reached < 2 * 4 * len(mlp.CHECKPOINTS)  # some candidate did stop early on this unit
