@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import dataset_folder
 
 from sins import compensation, imu, io
 from sins.cli import main
@@ -16,6 +17,7 @@ from sins.compensation.kohonen import LocalLinearMap
 from sins.compensation.residual import Points, aggregate, repeats, segment
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
+from sins.io.datasets.broad import BROAD_FOLDER, BROAD_TRIALS
 
 FAST = calibration.RigProcedure(
     positions=18,
@@ -99,6 +101,28 @@ def test_a_run_of_rows_joins_one_point_and_the_sums_stay_the_rows():
     # A run of one row is the cells' points exactly.
     single = aggregate(x, y, block, 1)
     np.testing.assert_array_equal(single.x, aggregate(x, y, block).x)
+
+
+BROAD_05 = dataset_folder(BROAD_FOLDER) / f"{BROAD_TRIALS[0]}.mat"
+
+
+@pytest.mark.skipif(not BROAD_05.exists(), reason=f"BROAD trial 05 not in the data root ({BROAD_05})")
+def test_on_broad_the_rows_of_an_interval_are_counted_as_the_draws_they_repeat():
+    """A real unit against motion capture (BROAD trial 05, 285.7 Hz): the per-sample references the
+    intervals give hold one draw of the reference's error over each interval, and the learners average
+    runs of the rows that repeat one (``repeats_``), at most an interval's rows and more for longer
+    intervals (measured: 69 and 71 rows for 1 s, 286 rows; about 40 for 0.2 s, 57 rows)."""
+    from sins import referenced
+    from sins.io.datasets import broad_reference
+
+    rec = broad_reference.read_broad_reference("05")
+    runs = {}
+    for interval_s in (1.0, 0.2):
+        fitted = referenced.fit("kohonen", rec, interval_s=interval_s, params={"sizes": (5,), "folds": 2})
+        runs[interval_s] = fitted.strategy.repeats_
+        for sensor, rows in runs[interval_s].items():
+            assert residual.MIN_REPEATS <= rows <= interval_s * rec.rate_hz, (interval_s, sensor, rows)
+    assert all(runs[1.0][s] > runs[0.2][s] for s in residual.SENSORS), runs
 
 
 def test_the_local_linear_map_interpolates_where_node_means_make_a_staircase():

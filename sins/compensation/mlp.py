@@ -327,8 +327,10 @@ class ResidualMLP(ResidualStrategy):
     """``mlp``: regression, then a tanh network of its residual (see the module docstring).
 
     Candidates: hidden layers ``hidden_sizes`` × weight decay ``decays``, each trained
-    by full-batch L-BFGS on the averaged points and scored after every length of
-    :data:`CHECKPOINTS`; the best on the held-back blocks is retrained on all data.
+    by full-batch L-BFGS on the averaged points and scored after each length of
+    :data:`CHECKPOINTS` until two lengths in a row have not lowered its held-back
+    loss (:data:`~sins.compensation.residual.PATIENCE`); the best on the held-back
+    blocks is retrained on all data.
     The output layer starts at zero, so an untrained network is regression.
     """
 

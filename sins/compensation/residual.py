@@ -44,7 +44,12 @@ reason for the design:
   most 20 s long), dealt at random (``seed``) into ``folds`` folds. For each
   fold the regression is refitted on the others, every candidate learner
   trained on their residuals and scored on the fold's: the held-back blocks
-  are orientations, rates and temperatures the learner did not see.
+  are orientations, rates and temperatures the learner did not see. An
+  iterative learner is trained on all folds side by side and scored after
+  each training length; it stops once ``PATIENCE`` lengths in a row have not
+  lowered its held-back loss summed over the folds (longer training then fits
+  the training folds' noise closer: the lengths it would have gone on to are
+  not chosen unless the held-back loss turns down again after rising twice).
 * **An honest guard.** Per channel, the chosen learner's held-back gain over
   regression and the terms (sum of squared residuals) is compared with its
   sampling error over the held-back blocks; a channel whose gain is not above
