@@ -134,7 +134,7 @@ def run_units(
     chunk and the thinned series, whatever the duration; a scenario with ``[gnss]`` also keeps its truth
     and ideal IMU whole for the aided runs (:func:`aided_runs`), which follow the stream.
     ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which a
-    campaign does not keep: ~10 ns of a unit-sample's ~300; the ideal IMU has none).
+    campaign does not keep; the ideal IMU has none).
     ``progress(samples_done, samples)`` is called as the chunks are integrated.
 
     Raises
