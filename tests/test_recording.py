@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sins import io
-from sins.io import formats
+from sins.io import tables
 from sins.series import CalibrationData, RigPhase
 
 SEED = 20240917
@@ -130,7 +130,7 @@ def test_written_recording_takes_the_fast_path(tmp_path: Path, monkeypatch: pyte
     def no_slow(*args: object) -> None:
         raise AssertionError("fell back to the slow parser")
 
-    monkeypatch.setattr(formats, "_read_slow", no_slow)
+    monkeypatch.setattr(tables, "_read_slow", no_slow)
     _assert_same(io.read_recording(path), data)
 
 
