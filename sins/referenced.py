@@ -61,9 +61,11 @@ def fit(
     The seed model, the gyro's and the accelerometer's time offsets and the accelerometer's lever arm
     are fitted on intervals of ``interval_s``; ``regression`` (``regression_robust``: Huber-weighted
     intervals) is that fit; :data:`BIAS_ONLY` the biases alone (the model of the PSINS demo's filter);
-    every other strategy is fitted by its own ``fit`` on the per-sample references the intervals give
-    (:func:`~sins.compensation.interval_fit.interval_reference`) and reads the readings at the fitted time
-    offsets. ``none`` learns nothing and shifts nothing. ``progress(done, total)`` is handed to the
+    ``regression_rest`` and ``regression_window`` take that seed model and fit what they add
+    (``fit_beyond``) on the per-sample references the intervals give
+    (:func:`~sins.compensation.interval_fit.interval_reference`); every other strategy is fitted by its
+    own ``fit`` on those references. All read the readings at the fitted time offsets. ``none`` learns
+    nothing and shifts nothing. ``progress(done, total)`` is handed to the
     learned strategies' training.
 
     Raises
@@ -82,6 +84,9 @@ def fit(
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fitted.seed)
+        elif isinstance(strategy, Regression) and type(strategy).fit_beyond is not Regression.fit_beyond:
+            # The seed model from the intervals, what the strategy adds from the per-sample references.
+            strategy.set_fit(fitted.seed).fit_beyond(interval_fit.interval_reference(rec, fitted))
         else:
             if progress is not None and hasattr(strategy, "progress"):  # the learners, whose fits take long
                 strategy.progress = progress

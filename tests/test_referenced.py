@@ -21,7 +21,7 @@ from sins.compensation import coefficients, interval_fit
 from sins.imu.calibration import SeedModelFit
 from sins.io.datasets.root import data_root
 from sins.nav import earth
-from sins.series import ImuRates, NavSeries
+from sins.series import ImuIncrements, ImuRates, NavSeries
 
 DATA = data_root()
 BROAD = DATA / "broad_mocap" / "05_undisturbed_slow_rotation_with_breaks_B.mat"
@@ -332,3 +332,37 @@ def test_a_model_is_refused_on_another_unit(tmp_path: Path, capsys: pytest.Captu
     assert main(["evaluate", str(model), "--dataset", "broad_05"]) == 2
     err = capsys.readouterr().err
     assert "fitted on PSINS vehicle MEMS" in err and "BROAD" in err and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize("name", ["regression", "regression_rest", "ferraris"])
+def test_seed_models_read_the_sensors_at_their_fitted_time_offsets(name: str) -> None:
+    """The seed-model strategies invert the model on increments directly (no division by the step); they
+    must read each sensor ``time_offset_s_`` later first, as the base class's rate path does: the two
+    paths agree to rounding, and differ from the unshifted correction by far more."""
+    from sins.compensation.base import Strategy
+
+    rng = np.random.default_rng(11)
+    s = session(rng, typical_unit(rng), duration_s=30.0)
+    dt = np.diff(s.t)[:, None]
+    imu = ImuIncrements(
+        t=s.t, dtheta_b=0.5 * (s.gyro[1:] + s.gyro[:-1]) * dt, dv_b=0.5 * (s.accel[1:] + s.accel[:-1]) * dt
+    )
+    strategy = compensation.make(name)
+    strategy.B0_, strategy.B_, strategy.A0_ = (
+        rng.normal(0, 1e-3, 3),
+        rng.normal(0, 1e-3, (3, 3)),
+        rng.normal(0, 1e-2, 3),
+    )
+    strategy.K_, strategy.A_ = np.zeros((3, 3)), rng.normal(0, 1e-3, (3, 3))
+    if name == "regression_rest":
+        strategy.rest_rms_, strategy.motion_offset_ = 0.0, np.zeros(3)  # no rest found: the seed model alone
+    plain = strategy.correct_increments(imu)
+    strategy.time_offset_s_ = np.array([0.004, 0.0025])
+    direct = strategy.correct_increments(imu)
+    through_rates = Strategy.correct_increments(strategy, imu)
+    np.testing.assert_allclose(direct.dtheta_b, through_rates.dtheta_b, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(direct.dv_b, through_rates.dv_b, rtol=0, atol=1e-14)
+    assert (
+        np.abs(direct.dtheta_b - plain.dtheta_b).max()
+        > 100 * np.abs(direct.dtheta_b - through_rates.dtheta_b).max()
+    )

@@ -192,7 +192,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--strategy", required=True,
-        help="none, regression, regression_robust, regression_extended, regression_rest, mlp, kohonen, "
+        help="none, regression, regression_robust, regression_extended, regression_rest, regression_window, "
+        "mlp, kohonen, "
         "bias_only (or the seed paper's mlp_pure, mlp_seed, kohonen_pure)",
     )  # fmt: skip
     p.add_argument(

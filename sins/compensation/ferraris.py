@@ -157,6 +157,7 @@ class Ferraris(Strategy):
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """Invert the seed model on the increments themselves (it is affine; see ``Regression``)."""
+        imu = self.aligned_increments(imu)  # a time offset fitted against a reference, read first
         dtheta_b, dv_b = calibration.invert_seed_model(
             self.B0_, self.B_, self.K_, self.A0_, self.A_, imu.dtheta_b, imu.dv_b, dt=np.diff(imu.t)
         )

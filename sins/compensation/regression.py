@@ -32,11 +32,16 @@ class Regression(Strategy):
         return {"robust": self.robust, "huber_k": self.huber_k, "g_sensitivity": self.g_sensitivity}
 
     def fit(self, data: CalibrationData) -> Regression:
-        """Fit the seed model by least squares (Huber-weighted if ``robust``); returns self."""
+        """Fit the seed model by least squares (Huber-weighted if ``robust``), then :meth:`fit_beyond`;
+        returns self."""
         weights = _huber_weights(data, self.huber_k, self.g_sensitivity) if self.robust else None
-        return self.set_fit(
-            calibration.fit_seed_model(data, g_sensitivity=self.g_sensitivity, weights=weights)
-        )
+        self.set_fit(calibration.fit_seed_model(data, g_sensitivity=self.g_sensitivity, weights=weights))
+        return self.fit_beyond(data)
+
+    def fit_beyond(self, data: CalibrationData) -> Regression:
+        """Fit what a subclass adds to the seed model already set (:meth:`set_fit`) on ``data``; returns
+        self. ``Regression`` adds nothing; :meth:`fit` is the seed model's fit, then this."""
+        return self
 
     def set_fit(self, fit: calibration.SeedModelFit) -> Regression:
         """Take the coefficients of a seed-model fit made elsewhere (on a real unit's intervals,
@@ -57,8 +62,10 @@ class Regression(Strategy):
             state_array(state, key, (3, 3))
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
-        """Invert the seed model on the increments themselves: it is affine, so the mean rate's
-        correction times the step is the increment's, with no division by the step and product back."""
+        """Invert the seed model on the increments themselves (each sensor read ``time_offset_s_`` later
+        first, where the strategy has one): it is affine, so the mean rate's correction times the step is
+        the increment's, with no division by the step and product back."""
+        imu = self.aligned_increments(imu)  # a time offset fitted against a reference, read first
         dtheta_b, dv_b = calibration.invert_seed_model(
             self.B0_, self.B_, self.K_, self.A0_, self.A_, imu.dtheta_b, imu.dv_b, dt=np.diff(imu.t)
         )

@@ -50,15 +50,14 @@ class RestAware(Regression):
         """Constructor parameters (those of :class:`Regression`)."""
         return super().params()
 
-    def fit(self, data: CalibrationData) -> RestAware:
-        """Fit the seed model, then the rest detector's threshold and the motion offset; returns self.
+    def fit_beyond(self, data: CalibrationData) -> RestAware:
+        """The rest detector's threshold and the motion offset, after the seed model; returns self.
 
         Raises
         ------
         ValueError
             when the calibration data have no rest of :data:`MIN_REST_S` (by the reference) or no motion.
         """
-        super().fit(data)
         ok = data.has_reference
         omega, _ = self.correct(data.gyro, data.accel)
         dt = float(np.median(np.diff(data.t)))

@@ -158,7 +158,7 @@ def choose(
                 coef, *_ = np.linalg.lstsq(gram[np.ix_(cols, cols)], moment[cols], rcond=None)
                 e = y - x_held[:, cols] @ coef
                 # Summed row by row in order, as np.add.at does, and many times faster.
-                gains[s].append(np.bincount(index, weights=y * y - e * e, minlength=n_blocks))
+                gains[s].append(np.bincount(index, weights=y * y - e * e, minlength=n_blocks).astype(float))
         chosen.append(
             _forward(options, {s: np.concatenate(g) if g else np.zeros(0) for s, g in gains.items()}, z)
         )
