@@ -38,8 +38,8 @@ from sins.io import datasets
 from sins.io.formats import write_json
 
 STRATEGIES = (
-    "none", "bias_only", "regression", "regression_robust", "regression_extended", "regression_rest", "regression_window",
-    "mlp", "kohonen", "mlp_pure", "mlp_seed", "kohonen_pure",
+    "none", "bias_only", "regression", "regression_robust", "regression_extended", "regression_rest",
+    "regression_window", "mlp", "kohonen", "mlp_pure", "mlp_seed", "kohonen_pure",
 )  # fmt: skip
 
 
