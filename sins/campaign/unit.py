@@ -141,3 +141,14 @@ def _heap_for_chunks() -> None:
         libc.mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
     except (OSError, AttributeError):  # not glibc (musl has no mallopt)
         return
+
+
+__all__ = [
+    "BIAS_FIELDS",
+    "MMAP_THRESHOLD",
+    "RESIDUAL_FIELDS",
+    "SUMMARY_FIELDS",
+    "run_unit",
+    "run_units",
+    "task",
+]

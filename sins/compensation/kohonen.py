@@ -530,3 +530,15 @@ class _MapLearner:
             part = x[start : start + 65536]
             out[start : start + len(part)] = sum(m.predict(part) for m in self.maps)
         return out * self.sigma
+
+
+__all__ = [
+    "MAX_NEIGHBOURS",
+    "MAX_SIDE",
+    "Kohonen",
+    "LocalLinearMap",
+    "batch_map",
+    "check_map",
+    "lattice",
+    "neighbourhood_weights",
+]

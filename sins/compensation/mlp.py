@@ -509,3 +509,13 @@ class _NetLearner:
         with torch.no_grad(), _one_thread():
             out: Array = self._net(torch.from_numpy(np.ascontiguousarray(x))).numpy()
         return out * self.sigma
+
+
+__all__ = [
+    "CHECKPOINTS",
+    "MAX_LAYERS",
+    "MAX_WIDTH",
+    "MLP",
+    "ResidualMLP",
+    "check_hidden",
+]

@@ -592,3 +592,14 @@ def _check_terms(chosen: Any, uses_temp: bool) -> None:
 
 def _key(config: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v}" for k, v in sorted(config.items()))
+
+
+__all__ = [
+    "EDGE_STEP",
+    "SENSORS",
+    "Points",
+    "ResidualStrategy",
+    "aggregate",
+    "input_columns",
+    "segment",
+]

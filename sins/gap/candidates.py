@@ -213,3 +213,17 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
         raise ValueError(f"{name!r} needs a temperature column, and {where} has none")
     x = reference_inputs(data)
     return [cand.columns(x, i) for i in range(3)]
+
+
+__all__ = [
+    "CANDIDATES",
+    "NOT_CANDIDATES",
+    "OUTPUTS",
+    "PROCESSES",
+    "Candidate",
+    "ReferenceInputs",
+    "baseline_columns",
+    "kinked_hermite",
+    "reference_inputs",
+    "regressors_of",
+]

@@ -415,3 +415,8 @@ def _report(
 def _rms(residual: Array, withheld: NDArray[np.bool_]) -> Array:
     """Each channel's RMS over the withheld rows."""
     return np.asarray(np.sqrt(np.mean(residual[withheld] ** 2, axis=0)))
+
+
+__all__ = [
+    "diagnose",
+]

@@ -140,3 +140,16 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
         part = rows & (quarter == k)
         gain += max(log_likelihood(nu[part]) for nu in trials) - log_likelihood(common[part])
     return 2.0 * gain > 16.3  # χ² with 3 degrees of freedom at p = 0.001
+
+
+__all__ = [
+    "DRIVE_RATIOS",
+    "FINE_DRIVE",
+    "TAUS_S",
+    "RandomBiasFit",
+    "falsified",
+    "fit",
+    "innovations",
+    "log_likelihood",
+    "steady_gain",
+]

@@ -469,3 +469,12 @@ def _estimate_alignment(mems: _Mems, ref: _Reference, path: Path) -> PsinsAlignm
         lever_arm_m=np.asarray(solution[12:15], dtype=float),
         correlation=_correlation(np.linalg.norm(omega_mems, axis=1), magnitude),
     )
+
+
+__all__ = [
+    "PSINS_VEHICLE_FILE",
+    "PSINS_VEHICLE_FOLDER",
+    "PsinsAlignment",
+    "psins_alignment",
+    "read_psins_vehicle",
+]
