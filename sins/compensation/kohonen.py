@@ -34,7 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import Strategy, state_array
-from sins.compensation.residual import Points, ResidualStrategy
+from sins.compensation.points import Points
+from sins.compensation.residual import ResidualStrategy
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
