@@ -210,8 +210,8 @@ class MLP(Strategy):
     def _train_seed(self, net: Any, xs: Any, ys: Any) -> tuple[int, float]:
         """Back-propagation pattern by pattern (plain SGD at ``alpha`` on each pattern's ``ε``), in the
         patterns' order torch's generator deals each epoch. The steps are compiled (:func:`_seed_epoch`):
-        torch's autograd spends ~0.3 ms a pattern on a network this small, 10 min for 30 epochs of a
-        57,000-row recording."""
+        autograd's cost per pattern outweighs a network this small (``docs/speed.md``, "Fitting
+        compensation")."""
         import torch
 
         params = list(net.parameters())
