@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -122,19 +123,11 @@ def test_the_coefficients_in_an_engineers_units() -> None:
     assert table["gyro", "bias", "x"].to_dict()["se"] is None
 
 
-def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Path) -> None:
-    """The CLI as a user runs it: a rate CSV and a truth CSV written with numpy; the model file keeps the
-    time offsets; evaluate reports the open-loop attitude; correct writes readings that equal the
-    strategy's own correction of them."""
-    rng = np.random.default_rng(7)
-    s = session(rng, typical_unit(rng), duration_s=120.0)
-    imu = tmp_path / "imu.csv"
-    truth = tmp_path / "truth.csv"
-    rows = np.column_stack([s.t, s.gyro, s.accel])
-    np.savetxt(imu, rows, delimiter=",", header="t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="")
+def _write_truth(path: Path, s: Any) -> None:
+    """The session's reference as a truth CSV (sins's columns, angles in degrees)."""
     ypr = Rotation.from_quat(s.q_nb).as_euler("ZYX", degrees=True)
     m = len(s.t_ref)
-    t_rows = np.column_stack(
+    rows = np.column_stack(
         [
             s.t_ref,
             np.full(m, LAT_DEG),
@@ -146,7 +139,20 @@ def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Pat
             ypr[:, 0],
         ]
     )
-    np.savetxt(truth, t_rows, delimiter=",", header="t,lat,lon,alt,vn,ve,vd,roll,pitch,yaw", comments="")
+    np.savetxt(path, rows, delimiter=",", header="t,lat,lon,alt,vn,ve,vd,roll,pitch,yaw", comments="")
+
+
+def test_fit_evaluate_and_correct_a_users_recording_with_its_truth(tmp_path: Path) -> None:
+    """The CLI as a user runs it: a rate CSV and a truth CSV written with numpy; the model file keeps the
+    time offsets; evaluate reports the open-loop attitude; correct writes readings that equal the
+    strategy's own correction of them."""
+    rng = np.random.default_rng(7)
+    s = session(rng, typical_unit(rng), duration_s=120.0)
+    imu = tmp_path / "imu.csv"
+    truth = tmp_path / "truth.csv"
+    rows = np.column_stack([s.t, s.gyro, s.accel])
+    np.savetxt(imu, rows, delimiter=",", header="t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="")
+    _write_truth(truth, s)
     model, report = tmp_path / "m.json", tmp_path / "e.json"
     assert (
         main(["fit", str(imu), "--truth", str(truth), "--strategy", "regression", "--out", str(model)]) == 0
@@ -285,3 +291,44 @@ def test_psins_drive_fitted_on_70_s_and_judged_on_the_last_30() -> None:
     raw = referenced.drive_errors(None, rec, 70.0, 100.0)
     fixed = referenced.drive_errors(fitted.strategy, rec, 70.0, 100.0)
     assert fixed.horizontal_final_m < 0.1 * raw.horizontal_final_m
+
+
+def test_a_model_is_refused_on_readings_at_another_rate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A model that reads the sensors at fitted time offsets holds them in the fitted rate's terms: on
+    readings at half the rate, `sins correct` and `sins evaluate` refuse it in one line naming both rates
+    (exit 2), and nothing is written."""
+    rng = np.random.default_rng(9)
+    s = session(rng, typical_unit(rng), duration_s=60.0)
+    header = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    imu, half = tmp_path / "imu.csv", tmp_path / "half.csv"
+    rows = np.column_stack([s.t, s.gyro, s.accel])
+    np.savetxt(imu, rows, delimiter=",", header=header, comments="")
+    np.savetxt(half, rows[::2], delimiter=",", header=header, comments="")
+    truth = tmp_path / "truth.csv"
+    _write_truth(truth, s)
+    model = tmp_path / "m.json"
+    assert (
+        main(["fit", str(imu), "--truth", str(truth), "--strategy", "regression", "--out", str(model)]) == 0
+    )
+    capsys.readouterr()
+    out = tmp_path / "corrected.csv"
+    for argv in (["correct", str(model), str(half), "--out", str(out)],
+                 ["evaluate", str(model), str(half), "--truth", str(truth)]):  # fmt: skip
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert "Hz" in err and "fitted on readings at" in err and err.count("\n") == 1, err
+    assert not out.exists()
+
+
+@needs_broad
+@needs_psins
+def test_a_model_is_refused_on_another_unit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A model fitted on the PSINS drive's MEMS, judged on BROAD's unit B: one line naming both units."""
+    model = tmp_path / "m.json"
+    assert main(["fit", "--dataset", "psins_vehicle", "--strategy", "bias_only", "--out", str(model)]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(model), "--dataset", "broad_05"]) == 2
+    err = capsys.readouterr().err
+    assert "fitted on PSINS vehicle MEMS" in err and "BROAD" in err and err.count("\n") == 1, err
