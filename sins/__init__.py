@@ -1,5 +1,11 @@
 """sins: a strapdown inertial navigation simulator with learned IMU error correction.
 
+``import sins`` gives the main entry points (:data:`ENTRY_POINTS`: the data, ``generate``,
+``draw_unit``, ``simulate_rig``, ``integrate``, ``run_scenario`` …) and the subpackages
+(:data:`SUBMODULES`: ``sins.compensation``, ``sins.referenced``, ``sins.characterise`` …), each imported
+the first time it is used, so that ``import sins`` itself is quick. The library guide
+(``docs/guide/library.md``) walks through them: simulate, corrupt, compensate, integrate, plot.
+
 Conventions (stated once, here; every module follows them)
 ----------------------------------------------------------
 Frames
@@ -40,8 +46,131 @@ IMU samples
     ``t[k]``.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:  # what the lazy names below are, for type checkers and editors
+    from sins import aiding as aiding
+    from sins import campaign as campaign
+    from sins import characterise as characterise
+    from sins import compensation as compensation
+    from sins import gap as gap
+    from sins import imu as imu
+    from sins import io as io
+    from sins import nav as nav
+    from sins import pipeline as pipeline
+    from sins import plots as plots
+    from sins import referenced as referenced
+    from sins import scenario as scenario
+    from sins import viz as viz
+    from sins.imu import ImuModel
+    from sins.imu.calibration import RigProcedure, simulate_rig
+    from sins.imu.spec import GRADES, Grade, draw_unit
+    from sins.nav.metrics import nav_errors, summarize
+    from sins.nav.strapdown import InitialState, integrate
+    from sins.nav.trajectory import generate
+    from sins.pipeline import resolve_scenario, run_scenario
+    from sins.replay import navigate
+    from sins.run_results import ScenarioRun
+    from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
+    from sins.unit_fit import fit_unit
 
 __version__ = "0.1.0"
 
-__all__ = ["SinsInputError", "__version__"]
+#: The main entry points, each imported from its module the first time it is asked for: ``import sins``
+#: loads none of them (nor numpy, numba, torch, rerun, dask or matplotlib).
+ENTRY_POINTS = {
+    # the data: time-major arrays in SI units (sins.series)
+    "NavSeries": "sins.series",
+    "ImuIncrements": "sins.series",
+    "ImuRates": "sins.series",
+    "CalibrationData": "sins.series",
+    "ReferencedRecording": "sins.series",
+    # simulate: the truth and the exact ideal IMU along a motion (sins.nav.motion builds one)
+    "generate": "sins.nav.trajectory",
+    # corrupt: an IMU's error model, a unit of a grade, a rig session
+    "ImuModel": "sins.imu",
+    "Grade": "sins.imu.spec",
+    "GRADES": "sins.imu.spec",
+    "draw_unit": "sins.imu.spec",
+    "RigProcedure": "sins.imu.calibration",
+    "simulate_rig": "sins.imu.calibration",
+    # integrate and judge
+    "InitialState": "sins.nav.strapdown",
+    "integrate": "sins.nav.strapdown",
+    "nav_errors": "sins.nav.metrics",
+    "summarize": "sins.nav.metrics",
+    # runs: a scenario in one call, a unit fitted once, a recorded IMU against its truth
+    "resolve_scenario": "sins.pipeline",
+    "run_scenario": "sins.pipeline",
+    "ScenarioRun": "sins.run_results",
+    "fit_unit": "sins.unit_fit",
+    "navigate": "sins.replay",
+}
+
+#: The subpackages and modules a notebook reaches from here (``sins.compensation.make("mlp")``), imported
+#: when first used; not in ``__all__``, so that ``from sins import *`` does not import rerun or torch.
+SUBMODULES = (
+    "aiding",
+    "campaign",
+    "characterise",
+    "compensation",
+    "gap",
+    "imu",
+    "io",
+    "nav",
+    "pipeline",
+    "plots",
+    "referenced",
+    "scenario",
+    "viz",
+)
+
+
+def __getattr__(name: str) -> Any:
+    """An entry point or a submodule, imported on first use (PEP 562)."""
+    if name in SUBMODULES:
+        return importlib.import_module(f"sins.{name}")
+    if name not in ENTRY_POINTS:
+        raise AttributeError(f"module 'sins' has no attribute {name!r}")
+    value = getattr(importlib.import_module(ENTRY_POINTS[name]), name)
+    globals()[name] = value  # the next use is a plain attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    """The names above, for completion in a notebook."""
+    return sorted({*globals(), *ENTRY_POINTS, *SUBMODULES})
+
+
+__all__ = [
+    "ENTRY_POINTS",
+    "GRADES",
+    "SUBMODULES",
+    "CalibrationData",
+    "Grade",
+    "ImuIncrements",
+    "ImuModel",
+    "ImuRates",
+    "InitialState",
+    "NavSeries",
+    "ReferencedRecording",
+    "RigProcedure",
+    "ScenarioRun",
+    "SinsInputError",
+    "__version__",
+    "draw_unit",
+    "fit_unit",
+    "generate",
+    "integrate",
+    "nav_errors",
+    "navigate",
+    "resolve_scenario",
+    "run_scenario",
+    "simulate_rig",
+    "summarize",
+]

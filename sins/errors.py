@@ -16,3 +16,9 @@ class MissingInputError(SinsInputError):
     def __init__(self, message: str, needs: str) -> None:
         super().__init__(message)
         self.needs = needs
+
+
+__all__ = [
+    "MissingInputError",
+    "SinsInputError",
+]

@@ -595,3 +595,21 @@ def _clip_finding(c: Clipping) -> Finding:
         advice="the unit saturated: its readings there are not the motion; use a wider range or leave "
         "those stretches out",
     )
+
+
+__all__ = [
+    "FULL_SCALES",
+    "GRAVITY",
+    "GRAVITY_TOL",
+    "JITTER_TOL",
+    "MAX_GYRO_RADPS",
+    "PLAUSIBLE_HZ",
+    "RATE_TOL",
+    "UNIT_TOL",
+    "Clipping",
+    "Finding",
+    "Gap",
+    "Inspection",
+    "Rest",
+    "inspect",
+]

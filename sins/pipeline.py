@@ -558,3 +558,15 @@ def _join(parts: list[NavSeries]) -> NavSeries:
         v_n=np.concatenate([p.v_n for p in parts]),
         q_nb=np.concatenate([p.q_nb for p in parts]),
     )
+
+
+__all__ = [
+    "DEFAULT_SCENARIO",
+    "MAX_KEPT",
+    "Progress",
+    "aided_runs",
+    "check_runnable",
+    "resolve_scenario",
+    "run_scenario",
+    "run_units",
+]

@@ -210,3 +210,19 @@ def characterise_figure(result: Characterisation, closing: ClosingCheck) -> Figu
         ax.legend(fontsize="small")
     axes[-1].set_xlabel("cluster time τ, s")
     return fig
+
+
+__all__ = [
+    "CHANNELS",
+    "DPI",
+    "PANEL_HEIGHT_IN",
+    "SUFFIXES",
+    "WIDTH_IN",
+    "campaign_figure",
+    "characterise_figure",
+    "check_plot_path",
+    "evaluate_figure",
+    "open_loop_figure",
+    "run_figure",
+    "save",
+]

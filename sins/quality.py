@@ -230,3 +230,19 @@ def write_baseline(path: str | os.PathLike[str], measured: dict[str, Any], suite
 
     io.write_json(path, {"format": BASELINE_FORMAT, "sins": __version__, "suite": str(suite.source.name),
                          "cases": measured})  # fmt: skip
+
+
+__all__ = [
+    "BASELINE_FORMAT",
+    "DEFAULT_TOLERANCES",
+    "FLOORS",
+    "MAX_TOLERANCE",
+    "Case",
+    "Change",
+    "Suite",
+    "compare",
+    "load_suite",
+    "measure",
+    "read_baseline",
+    "write_baseline",
+]

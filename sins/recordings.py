@@ -287,3 +287,16 @@ def _interval_means(increments: ImuIncrements, path: NavSeries) -> tuple[ImuRate
         f_ib_b=simpson(edges.f_ib_b, centres.f_ib_b),
     )
     return readings, reference, at_mid
+
+
+__all__ = [
+    "Recording",
+    "SimulatedReadings",
+    "cabin_temperature",
+    "gap_data",
+    "input_errors",
+    "load_recording",
+    "simulate",
+    "simulate_readings",
+    "with_unit",
+]

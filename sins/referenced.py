@@ -409,3 +409,24 @@ def check_fitted_on(
             f"{where}: the model was fitted on readings at {rate:.6g} Hz, its time offsets in those terms; "
             f"this recording is at {here:.6g} Hz"
         )
+
+
+__all__ = [
+    "BIAS_ONLY",
+    "MIN_OPENING_REST_S",
+    "DriveErrors",
+    "Fitted",
+    "OpenLoop",
+    "between",
+    "check_fitted_on",
+    "corrected",
+    "drive_errors",
+    "fit",
+    "fitted_on",
+    "frame_turn",
+    "from_recording",
+    "open_loop",
+    "open_loop_attitude",
+    "opening_rest",
+    "read_inputs",
+]

@@ -126,3 +126,10 @@ def psins_vehicle_outages(
         heading_sigma_rad=np.radians(1.0),
     )  # fmt: skip
     return aided_through_outages(imu, reference, fixes, config, outages)
+
+
+__all__ = [
+    "RecordingOutages",
+    "aided_through_outages",
+    "psins_vehicle_outages",
+]

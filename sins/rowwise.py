@@ -179,3 +179,15 @@ def _outer_of(c: Array, v: Array, divide: bool, column_first: bool) -> Array:
     out = np.empty((c.shape[0], v.shape[0]))
     _outer(c, v, out, divide, column_first)
     return out
+
+
+__all__ = [
+    "add_row",
+    "col_over_row",
+    "diff_over_col",
+    "mul_col",
+    "mul_row",
+    "outer",
+    "row_over_col",
+    "sub_row",
+]

@@ -386,3 +386,17 @@ class ReferencedRecording:
     def rate_hz(self) -> float:
         """The readings' median sample rate, Hz."""
         return float(1.0 / np.median(np.diff(self.imu.t)))
+
+
+__all__ = [
+    "STEADY_FORCE",
+    "STEADY_RATE",
+    "STRETCH_LONGEST_S",
+    "STRETCH_SHORTEST_S",
+    "CalibrationData",
+    "ImuIncrements",
+    "ImuRates",
+    "NavSeries",
+    "ReferencedRecording",
+    "RigPhase",
+]

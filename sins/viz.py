@@ -627,3 +627,37 @@ def save_characterisation(
         )
     )
     return _write(path, rec, bp, lambda: log_characterisation(rec, result, closing))
+
+
+__all__ = [
+    "AIDED_PANELS",
+    "ALLAN_TIMELINE",
+    "APPLICATION_ID",
+    "BLUE",
+    "CAMPAIGN_PERCENTILES",
+    "ERROR_PANELS",
+    "GREEN",
+    "GREY",
+    "NO_DISPLAY",
+    "RED",
+    "TIMELINE",
+    "blueprint",
+    "check_rrd_path",
+    "colour",
+    "error_series",
+    "has_display",
+    "imu_entity",
+    "log_aided",
+    "log_characterisation",
+    "log_gap",
+    "log_path",
+    "log_run",
+    "log_scenario_run",
+    "save",
+    "save_campaign",
+    "save_characterisation",
+    "save_gap",
+    "save_open_loop",
+    "serve",
+    "spawn",
+]

@@ -30,6 +30,28 @@ def test_the_library_example_drifts_as_half_b_t_squared():
     assert 0.8 * bound <= error_m <= 1.0 * bound, (error_m, bound)
 
 
+def test_the_library_walkthrough_compensates_and_plots(tmp_path):
+    """simulate → corrupt → compensate → integrate → plot, through ``import sins`` alone."""
+    picture = tmp_path / "drift.png"
+    out = _run(sys.executable, str(EXAMPLES / "library_walkthrough.py"), str(picture))
+    rows = {line.split()[0]: np.array(line.split()[1:], dtype=float) for line in out.splitlines()[1:3]}
+    assert set(rows) == {"raw", "regression"}, out
+    t_s = 180.0  # the drive's length
+    for name, row in rows.items():
+        gyro_radps, accel_mps2 = np.radians(row[:3] / 3600.0), row[3:6] * 1e-3 * G0
+        # A level vehicle: the horizontal sensors' biases drift the position by at most ½ b t² (the
+        # accelerometers) and g ε t³ / 6 (a tilt that grows from the gyros); turns rotate the biases and
+        # Schuler bends the growth, both only shortening it, within 180 s. The margin 1.1 holds the
+        # scale-factor and misalignment errors over the accelerations and turns, a few metres at most.
+        bound_m = 0.5 * np.hypot(*accel_mps2[:2]) * t_s**2 + G0 * np.hypot(*gyro_radps[:2]) * t_s**3 / 6
+        assert 0.0 < row[6] <= 1.1 * bound_m, (name, row[6], bound_m)
+    # The fitted seed model removes the unit's fixed errors; what it leaves is the navigation power-on's
+    # own turn-on bias, a fraction of them, and the drift falls with it.
+    assert (np.abs(rows["regression"][:6]) < np.abs(rows["raw"][:6])).all(), rows
+    assert rows["regression"][6] < 0.1 * rows["raw"][6], rows
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_the_compensation_study_learns_the_nonlinearity_regression_cannot():
     out = _run(sys.executable, str(EXAMPLES / "compensation_study.py"))
     rows = {line.split()[0]: np.array(line.split()[1:], dtype=float) for line in out.splitlines()[1:]}

@@ -118,7 +118,12 @@ def _violations(module: str, path: Path) -> list[str]:
     return wrong
 
 
-@pytest.mark.parametrize("module", sorted(MODULES))
+#: The package's front door, ``sins/__init__.py``, names entry points of every layer, but imports them
+#: lazily or for type checkers only (``tests/test_api.py`` holds that): it is not a layer.
+FACADE = "sins"
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if m != FACADE))
 def test_imports_point_down_the_layers(module: str):
     assert _violations(module, MODULES[module]) == []
 

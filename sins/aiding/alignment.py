@@ -379,3 +379,17 @@ def in_motion_run(
     rows = np.arange(len(fixes))
     later = fixes.select((rows > start.fix_row) & (fixes.t >= rest.t[0]))
     return start, ekf.run(rest, later, config, start.initial, P0=start.P0)
+
+
+__all__ = [
+    "GYROCOMPASS_MAX_SIGMA_RAD",
+    "AlignmentConfig",
+    "MotionConfig",
+    "MotionStart",
+    "aligned_run",
+    "coarse_attitude",
+    "coarse_covariance",
+    "in_motion_run",
+    "in_motion_start",
+    "static_limits",
+]

@@ -536,3 +536,20 @@ class _ClosedLoop:
             zupt_t=np.array(self.zupt_t), reinit_t=np.array(self.reinit_t),
             velocity_tried=self.vel_tried, velocity_accepted=self.vel_accepted,
         )  # fmt: skip
+
+
+__all__ = [
+    "ATT",
+    "BA",
+    "BG",
+    "GATE_NIS",
+    "N_STATES",
+    "POS",
+    "VEL",
+    "AidedResult",
+    "FilterConfig",
+    "discretize",
+    "error_dynamics",
+    "nav_error_state",
+    "run",
+]

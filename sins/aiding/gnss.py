@@ -267,3 +267,15 @@ def check_fixes(fixes: GnssFixes, imu_t: Array, source: str = "gnss") -> None:
         raise SinsInputError(
             f"{source}: row {k + 1}, column t: {fixes.t[k]} s is outside the IMU's span {lo}..{hi} s"
         )
+
+
+__all__ = [
+    "GnssConfig",
+    "GnssFixes",
+    "Outage",
+    "check_fixes",
+    "check_outages",
+    "gauss_markov",
+    "offset_position",
+    "simulate",
+]

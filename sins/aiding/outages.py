@@ -67,3 +67,11 @@ def outage_errors(
             error = horizontal_m[inside]
             windows.append(OutageError(start, end, float(error[-1]), float(error.max())))
     return windows
+
+
+__all__ = [
+    "EDGE_S",
+    "OutageError",
+    "outage_errors",
+    "window_rows",
+]

@@ -178,3 +178,15 @@ def run_aligned(
             raise SinsInputError(f"{plan.where}: {exc}") from None
         return result, start.index, start.heading_sigma_rad
     return ekf.run(imu, fixes, config, strapdown.InitialState.from_series(truth)), 0, None
+
+
+__all__ = [
+    "AUTO_MAX_STATIC_S",
+    "AUTO_MIN_STOP_S",
+    "AlignmentPlan",
+    "AlignmentTable",
+    "initial_stop_s",
+    "plan_alignment",
+    "run_aligned",
+    "static_heading",
+]

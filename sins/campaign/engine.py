@@ -309,3 +309,17 @@ def _quiet_dask() -> Iterator[None]:
             yield
     finally:
         logger.setLevel(level)
+
+
+__all__ = [
+    "MAX_UNITS_PER_TASK",
+    "POLL_S",
+    "RUNS",
+    "SPAWN_WAIT_S",
+    "TASKS_PER_WORKER",
+    "WORKERS_WAIT_S",
+    "CampaignRun",
+    "log_progress",
+    "run",
+    "units_per_task",
+]

@@ -348,3 +348,22 @@ def _reject(out: Path, path: Path) -> Path:
         target = folder / f"{path.name}.{n}"
     os.replace(path, target)
     return target
+
+
+__all__ = [
+    "AIDED_COLUMN",
+    "FIGURE_COLUMNS",
+    "FORMAT",
+    "IDENTITY_KEY",
+    "INTEGER_COLUMNS",
+    "LOCK_NAME",
+    "PART",
+    "SERIES_COLUMNS",
+    "TEXT_COLUMNS",
+    "Parts",
+    "check_parts",
+    "identity",
+    "locked",
+    "part_files",
+    "prepare",
+]

@@ -162,3 +162,14 @@ def _aided_figures(spec: CampaignSpec, group: str) -> set[str]:
     if scenario is None or scenario.aiding is None:
         return set()
     return {"aided_final_horizontal_m", "aided_max_horizontal_m"}
+
+
+__all__ = [
+    "FALSE_ALARM",
+    "GATED",
+    "Check",
+    "Verdict",
+    "baseline_of",
+    "check_baseline",
+    "compare",
+]

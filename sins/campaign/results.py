@@ -194,3 +194,19 @@ def _ci(value: float, ci: list[float]) -> str:
 def read_summary(path: Path) -> dict[str, Any]:
     """A ``summary.json`` written by :func:`write_summary`; one-line errors otherwise."""
     return io.read_json_document(path, "campaign summary", SUMMARY_FORMAT)
+
+
+__all__ = [
+    "BOOTSTRAP_RESAMPLES",
+    "BOOTSTRAP_SEED",
+    "STATISTICS",
+    "SUMMARISED",
+    "SUMMARY_FORMAT",
+    "join",
+    "read_summary",
+    "rows_table",
+    "summarise",
+    "table_lines",
+    "write_part",
+    "write_summary",
+]

@@ -228,3 +228,18 @@ def describe(spec: CampaignSpec) -> dict[str, Any]:
         "scenarios": [s.name for s in spec.scenarios],
         "series_hz": spec.series_hz,
     }
+
+
+__all__ = [
+    "DEFAULT_STRATEGIES",
+    "MAX_SCENARIOS",
+    "MAX_UNITS",
+    "MIN_SERIES_HZ",
+    "CampaignSpec",
+    "check",
+    "describe",
+    "is_campaign",
+    "load",
+    "nav_seed",
+    "rig_seed",
+]

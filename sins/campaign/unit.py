@@ -126,10 +126,10 @@ def _heap_for_chunks() -> None:
 
     A dask nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536`` (to return memory to the
     system); setting it freezes glibc's ``mmap`` threshold at 128 KiB, so every array of a chunk
-    (8192 × 3 doubles: 192 KiB) is mapped and unmapped again, page faults and all: the numpy stages
-    of a unit then cost 2.5 times their CPU time in a plain process. Raising the threshold (here, on
-    the worker, so it holds for a cluster started by hand too) keeps them in the heap: a worker's
-    peak memory grows by ~15 MB. Elsewhere than glibc, nothing to do.
+    (8192 × 3 doubles: 192 KiB) is mapped and unmapped again, page faults and all. Raising the
+    threshold (here, on the worker, so it holds for a cluster started by hand too) keeps them in the
+    heap, for a little more peak memory (the figures are in ``docs/speed.md``). Elsewhere than glibc,
+    nothing to do.
     """
     import ctypes
     import ctypes.util
@@ -141,3 +141,14 @@ def _heap_for_chunks() -> None:
         libc.mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
     except (OSError, AttributeError):  # not glibc (musl has no mallopt)
         return
+
+
+__all__ = [
+    "BIAS_FIELDS",
+    "MMAP_THRESHOLD",
+    "RESIDUAL_FIELDS",
+    "SUMMARY_FIELDS",
+    "run_unit",
+    "run_units",
+    "task",
+]

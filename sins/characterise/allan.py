@@ -244,3 +244,16 @@ def edf_overlapping(n_phase: int, clusters: NDArray[np.int64], slope: Array) -> 
             )
         out[j] = max(edf, 0.0)
     return out
+
+
+__all__ = [
+    "CONFIDENCE",
+    "MIN_CLUSTERS",
+    "AllanCurve",
+    "allan",
+    "chi2_interval",
+    "edf_overlapping",
+    "octave_clusters",
+    "pooled_edf",
+    "segment_sums",
+]

@@ -422,3 +422,24 @@ def duration(seconds: float) -> str:
     if seconds < 3.0 * 86400.0:
         return f"{seconds / 3600.0:.3g} h"
     return f"{seconds / 86400.0:.3g} days"
+
+
+__all__ = [
+    "ADEV_DISPLAY",
+    "DISPLAY",
+    "GAP_STEPS",
+    "MIN_POINTS",
+    "MIN_ROWS",
+    "SI_UNITS",
+    "SLOW_STEP_S",
+    "STEP_TOLERANCE",
+    "ChannelResult",
+    "Characterisation",
+    "Residual",
+    "characterise",
+    "characterise_channel",
+    "display",
+    "duration",
+    "refit_channel",
+    "residual",
+]

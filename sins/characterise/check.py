@@ -208,3 +208,13 @@ def closing_check(result: Characterisation, model: ImuModel, seed: int = 0,
         if progress is not None:
             progress(len(channels), len(result.channels))
     return ClosingCheck(seed, confidence, channels, tuple(partings))
+
+
+__all__ = [
+    "CHECK_CONFIDENCE",
+    "CHUNK_ROWS",
+    "ClosingCheck",
+    "Parting",
+    "closing_check",
+    "simulate_static",
+]

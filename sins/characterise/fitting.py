@@ -275,3 +275,16 @@ def upper_bound(points: LogPoints, fit: SubsetFit, subset: frozenset[int], k: in
         else:
             hi = mid
     return hi
+
+
+__all__ = [
+    "GRID_PER_OCTAVE",
+    "PEAK_FROM_SHORTEST",
+    "PEAK_TO_LONGEST",
+    "LogPoints",
+    "SubsetFit",
+    "covariance",
+    "fit_subset",
+    "solve",
+    "upper_bound",
+]

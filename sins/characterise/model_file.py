@@ -242,3 +242,15 @@ def write_model(path: str | os.PathLike[str], result: Characterisation) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+__all__ = [
+    "DEFAULT_TAU_S",
+    "EFFECTS",
+    "effect_tables",
+    "flicker_as_gauss_markov",
+    "imu_model",
+    "model_toml",
+    "rounding_is_dithered",
+    "write_model",
+]

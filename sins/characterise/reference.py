@@ -149,3 +149,11 @@ def reference_residual(data: CalibrationData, source: str = "") -> Residual:
         f"so the sensor is characterised on its {len(res.segments)} still stretches ({duration(still_s)}), "
         "readings as they are; the moving parts are limited by the reference and left out",
     ))  # fmt: skip
+
+
+__all__ = [
+    "REFERENCE_LIMIT",
+    "reference_excess",
+    "reference_residual",
+    "seed_model_errors",
+]

@@ -338,4 +338,23 @@ def _term(points: LogPoints, fits: dict[frozenset[int], SubsetFit], chosen: froz
     return Term(name, False, None, None, upper, (), need_len, need_rate)
 
 
-__all__ = ["ALL", "TERMS", "Weights", "admissible", "fit_all", "fit_terms", "weigh"]
+__all__ = [
+    "ALL",
+    "EDF_RTOL",
+    "LEANING_CHI2",
+    "MAX_PASSES",
+    "MIN_POINTS",
+    "MODEL_HOLDS_P",
+    "MODEL_TOLERANCE",
+    "RESOLVED_CHI2",
+    "SLOW_CHI2",
+    "TAU_C_CHI2",
+    "TAU_C_PER_OCTAVE",
+    "TERMS",
+    "UPPER_CHI2",
+    "Weights",
+    "admissible",
+    "fit_all",
+    "fit_terms",
+    "weigh",
+]

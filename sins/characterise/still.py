@@ -109,3 +109,18 @@ def motion(t: Array, readings: Array) -> str | None:
         f"{CHANNELS[channel]}'s {MOTION_WINDOW_S:g}-s mean departs from its median by {text} at t = "
         f"{start:.6g} s (a unit at rest stays within {bound})"
     )
+
+
+__all__ = [
+    "ACCEL_MOTION",
+    "GYRO_MEAN_TOL",
+    "GYRO_MOTION",
+    "MEAN_SIGMAS",
+    "MIN_WINDOW_ROWS",
+    "MOTION_WINDOW_S",
+    "QUIET_FACTOR",
+    "QUIET_PERCENTILE",
+    "WINDOW_S",
+    "motion",
+    "still_rows",
+]

@@ -271,3 +271,28 @@ def needs(
     if window[-1] < dt:
         return None, float(2.0 / window[-1])
     return None, None
+
+
+__all__ = [
+    "FLICKER_FACTOR",
+    "GM",
+    "GM_PEAK",
+    "GM_PEAK_X",
+    "NOISE_TERMS",
+    "SYMBOLS",
+    "TERMS",
+    "B",
+    "K",
+    "N",
+    "NoiseFit",
+    "Q",
+    "R",
+    "Term",
+    "basis",
+    "flicker_shape",
+    "gauss_markov_shape",
+    "model_avar",
+    "needs",
+    "spectral",
+    "spectrum",
+]

@@ -142,3 +142,14 @@ def needs_length(size: float, dt: float, coefficients: Array, tau_c_s: float | N
         ):
             return float(n * dt)
     return None
+
+
+__all__ = [
+    "RESOLVED_SIGMA",
+    "UPPER_SIGMA",
+    "Ramp",
+    "fit_ramp",
+    "needs_length",
+    "slope",
+    "slope_variance",
+]

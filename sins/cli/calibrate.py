@@ -40,3 +40,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="RECORDING.csv")
     p.add_argument("--seed", type=int, default=0, help="seeds the rig's errors and the IMU's run (default 0)")
     p.set_defaults(func=_cmd_calibrate)
+
+
+__all__ = [
+    "add",
+]

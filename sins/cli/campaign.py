@@ -81,3 +81,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     add_plot(p, "each scenario's spread of final errors per strategy")
     p.set_defaults(func=_cmd_campaign)
+
+
+__all__ = [
+    "add",
+]

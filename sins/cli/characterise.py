@@ -226,3 +226,8 @@ def add(sub: Subparsers) -> None:
     add_plot(p, "the real and simulated Allan curves")
     add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)
+
+
+__all__ = [
+    "add",
+]

@@ -112,3 +112,8 @@ def add(sub: Subparsers) -> None:
         "--update-baseline", action="store_true", help="write the measured metrics as the baseline"
     )
     p.set_defaults(func=_cmd_check)
+
+
+__all__ = [
+    "add",
+]

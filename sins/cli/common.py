@@ -350,3 +350,31 @@ def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
 
     plots.save(figure(), path, title)
     print(f"wrote {path}")
+
+
+__all__ = [
+    "LOG_EVERY_S",
+    "LOG_FIRST_S",
+    "LogProgress",
+    "Subparsers",
+    "add_dataset",
+    "add_plot",
+    "add_recording_options",
+    "advance",
+    "check_finite",
+    "check_plot",
+    "check_viewer_args",
+    "count",
+    "display_unit",
+    "fixed_width",
+    "format_table",
+    "fraction",
+    "positive",
+    "progress_bar",
+    "recording_options",
+    "row_progress",
+    "save_plot",
+    "seed",
+    "settings",
+    "show",
+]

@@ -66,3 +66,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     add_recording_options(p)
     p.set_defaults(func=_cmd_correct)
+
+
+__all__ = [
+    "add",
+]

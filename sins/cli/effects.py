@@ -76,3 +76,11 @@ def add(sub: Subparsers) -> None:
         help="list each IMU grade's values instead: the spreads units are drawn from, noise, instability",
     )  # fmt: skip
     p.set_defaults(func=_cmd_effects)
+
+
+__all__ = [
+    "GRADE_LABELS",
+    "GRADE_UNITS",
+    "add",
+    "grade_table",
+]

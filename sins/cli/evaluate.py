@@ -198,3 +198,8 @@ def add(sub: Subparsers) -> None:
     add_plot(p, "the RMS error per channel before and after (against a trajectory: the open-loop attitude)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_evaluate)
+
+
+__all__ = [
+    "add",
+]

@@ -215,3 +215,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
     add_recording_options(p)
     p.set_defaults(func=_cmd_fit)
+
+
+__all__ = [
+    "add",
+]

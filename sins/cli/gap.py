@@ -152,3 +152,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
     p.set_defaults(func=_cmd_gap)
+
+
+__all__ = [
+    "add",
+]

@@ -75,3 +75,10 @@ def add(sub: Subparsers) -> None:
     p.add_argument("--json", type=Path, metavar="OUT.json", help="write the figures and findings (SI units)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_inspect)
+
+
+__all__ = [
+    "FLAGS",
+    "add",
+    "format_inspection",
+]

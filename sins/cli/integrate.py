@@ -78,3 +78,8 @@ def add(sub: Subparsers) -> None:
     )
     add_recording_options(p)
     p.set_defaults(func=_cmd_integrate)
+
+
+__all__ = [
+    "add",
+]

@@ -232,3 +232,10 @@ def add(sub: Subparsers) -> None:
     p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
     add_plot(p, "the errors against time, per strategy")
     p.set_defaults(func=_cmd_run)
+
+
+__all__ = [
+    "add",
+    "format_residuals",
+    "guard_notes",
+]

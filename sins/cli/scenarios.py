@@ -26,3 +26,8 @@ def add(sub: Subparsers) -> None:
     """Add ``sins scenarios`` to ``sub``."""
     p = sub.add_parser("scenarios", help="list the preset scenarios shipped with sins")
     p.set_defaults(func=_cmd_scenarios)
+
+
+__all__ = [
+    "add",
+]

@@ -57,3 +57,8 @@ def add(sub: Subparsers) -> None:
         "--ideal", action="store_true", help="write the exact ideal readings, not the scenario unit's"
     )
     p.set_defaults(func=_cmd_simulate)
+
+
+__all__ = [
+    "add",
+]

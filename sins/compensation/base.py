@@ -260,3 +260,13 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
         }
         for i, ch in enumerate(CHANNELS)
     }
+
+
+__all__ = [
+    "NoCompensation",
+    "Oracle",
+    "Strategy",
+    "checked_array",
+    "residual_rms",
+    "state_array",
+]

@@ -505,3 +505,19 @@ def check_session(strategy: Strategy, data: CalibrationData) -> SessionCheck:
 def _angle_between(u: Array, v: Array) -> float:
     """The angle between two vectors, rad (atan2 of the cross and dot products: exact near 0 and π)."""
     return math.atan2(float(np.linalg.norm(np.cross(u, v))), float(np.dot(u, v)))
+
+
+__all__ = [
+    "HOLDS",
+    "TURNS",
+    "ComparisonRow",
+    "Ferraris",
+    "HoldCheck",
+    "ImucalCalibration",
+    "SessionCheck",
+    "TransitionCheck",
+    "TurnCheck",
+    "check_session",
+    "compare_with_imucal",
+    "to_imucal",
+]

@@ -527,3 +527,12 @@ def _quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) 
         moving_deg=float(np.degrees(rms(g_resid[moving]))),
         moving_mps=rms(a_resid[moving]),
     )
+
+
+__all__ = [
+    "IntervalFit",
+    "ReferenceQuality",
+    "fit_biases",
+    "fit_intervals",
+    "interval_reference",
+]

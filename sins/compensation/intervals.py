@@ -200,3 +200,17 @@ def lever(iv: Intervals, imu: ImuIncrements, seed: SeedModelFit, dt: Array) -> A
 def dcm(q: Array) -> Array:
     """Direction cosine matrices (k, 3, 3) of scalar-last quaternions (k, 4)."""
     return np.asarray(rotation.dcm_from_quat(q), dtype=float)
+
+
+__all__ = [
+    "INTERVAL_S",
+    "Intervals",
+    "choose_intervals",
+    "correct_increments",
+    "dcm",
+    "expected_dv",
+    "lever",
+    "shift_derivative",
+    "shift_increments",
+    "shifted",
+]

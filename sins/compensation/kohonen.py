@@ -34,7 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import Strategy, state_array
-from sins.compensation.residual import Points, ResidualStrategy
+from sins.compensation.points import Points
+from sins.compensation.residual import ResidualStrategy
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
@@ -530,3 +531,15 @@ class _MapLearner:
             part = x[start : start + 65536]
             out[start : start + len(part)] = sum(m.predict(part) for m in self.maps)
         return out * self.sigma
+
+
+__all__ = [
+    "MAX_NEIGHBOURS",
+    "MAX_SIDE",
+    "Kohonen",
+    "LocalLinearMap",
+    "batch_map",
+    "check_map",
+    "lattice",
+    "neighbourhood_weights",
+]

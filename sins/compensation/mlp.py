@@ -39,7 +39,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import Strategy, checked_array, state_array
-from sins.compensation.residual import Points, ResidualStrategy
+from sins.compensation.points import Points
+from sins.compensation.residual import ResidualStrategy
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
@@ -209,8 +210,8 @@ class MLP(Strategy):
     def _train_seed(self, net: Any, xs: Any, ys: Any) -> tuple[int, float]:
         """Back-propagation pattern by pattern (plain SGD at ``alpha`` on each pattern's ``ε``), in the
         patterns' order torch's generator deals each epoch. The steps are compiled (:func:`_seed_epoch`):
-        torch's autograd spends ~0.3 ms a pattern on a network this small, 10 min for 30 epochs of a
-        57,000-row recording."""
+        autograd's cost per pattern outweighs a network this small (``docs/speed.md``, "Fitting
+        compensation")."""
         import torch
 
         params = list(net.parameters())
@@ -580,3 +581,13 @@ class _NetLearner:
         with torch.no_grad(), _one_thread():
             out: Array = self._net(torch.from_numpy(np.ascontiguousarray(x))).numpy()
         return out * self.sigma
+
+
+__all__ = [
+    "CHECKPOINTS",
+    "MAX_LAYERS",
+    "MAX_WIDTH",
+    "MLP",
+    "ResidualMLP",
+    "check_hidden",
+]

@@ -186,3 +186,17 @@ def _check_values(path: Path, name: str, value: Any, where: str) -> None:
             f"{path}: malformed {name} model ({where} is {short(value)}; numbers must be finite and at most "
             f"{MAX_MODEL_VALUE:g} in magnitude)"
         )
+
+
+__all__ = [
+    "CLASSES",
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "MAX_MODEL_VALUE",
+    "SAVED_STRATEGIES",
+    "VARIANTS",
+    "load",
+    "make",
+    "save",
+    "strategy_class",
+]

@@ -210,3 +210,10 @@ class ExtendedRegression(Strategy):
             u = np.hstack([omega_ib_b, f_ib_b])
             err += d * self.coef_[:, k] + d * d * self.coef_[:, k + 1] + d * u * self.coef_[:, k + 2]
         return err
+
+
+__all__ = [
+    "MAX_ITERATIONS",
+    "ExtendedRegression",
+    "Regression",
+]

@@ -144,4 +144,11 @@ def _long_runs(mask: NDArray[np.bool_], shortest: int) -> NDArray[np.bool_]:
     return out
 
 
-__all__ = ["MIN_REST_S", "WINDOW_S", "RestAware"]
+__all__ = [
+    "MIN_REST_S",
+    "REST_MARGIN",
+    "STILL_FORCE",
+    "STILL_RATE",
+    "WINDOW_S",
+    "RestAware",
+]

@@ -213,3 +213,17 @@ def predict(groups: list[tuple[str, ...]], coef: list[Array], x: Inputs, channel
         if groups[c]:
             out[:, i] = design(groups[c], c, x) @ coef[c]
     return out
+
+
+__all__ = [
+    "ACCEL_GROUPS",
+    "GROUPS",
+    "GYRO_GROUPS",
+    "SHOWN",
+    "Inputs",
+    "choose",
+    "design",
+    "fit",
+    "predict",
+    "subsets",
+]

@@ -335,3 +335,21 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
         raise ValueError(f"{name!r} needs a temperature column, and {where} has none")
     x = reference_inputs(data)
     return [cand.columns(x, i) for i in range(3)]
+
+
+__all__ = [
+    "CANDIDATES",
+    "CHUNK_ROWS",
+    "NOT_CANDIDATES",
+    "OUTPUTS",
+    "PROCESSES",
+    "Candidate",
+    "Kinks",
+    "ReferenceInputs",
+    "baseline_columns",
+    "central_differences",
+    "kinked_hermite",
+    "reference_inputs",
+    "regressors_of",
+    "spans",
+]

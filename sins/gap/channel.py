@@ -329,3 +329,8 @@ def _fit_delay(
         left, bounds=(first - span, first + span), method="bounded", options={"xatol": 1e-3 * x.step_s}
     )
     return float(found.x) if found.fun < left(first) else first
+
+
+__all__ = [
+    "ChannelModel",
+]

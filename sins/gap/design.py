@@ -2,10 +2,10 @@
 
 Every column of a channel's model is a function of the reference inputs row by row: the baseline's
 bias, rates and forces, a candidate's products of them, a bias step's or a hum's function of time. Held
-whole, the columns of six channels outgrow memory on a long recording (3.57 M rows of 13 columns are
-370 MB a channel, and a fit took three copies of them). A :class:`Design` keeps how to build them
-(:data:`Maker`) and builds :data:`~sins.gap.candidates.CHUNK_ROWS` rows at a time, reducing each chunk
-as it comes:
+whole, the columns of six channels outgrow memory on a long recording (the figures are in
+``docs/speed.md``, "Figures behind the code's constants and choices"). A :class:`Design` keeps how to
+build them (:data:`Maker`) and builds :data:`~sins.gap.candidates.CHUNK_ROWS` rows at a time, reducing
+each chunk as it comes:
 
 - least squares (:meth:`Design.lstsq`) from the QR factor of the chosen rows, each chunk stacked under
   the factor so far and factored again (``R`` of ``[R; chunk]``, a tall-skinny QR): the factor of the
@@ -288,3 +288,10 @@ class Projection:
         taken = y[self.rows]
         on = self.basis.T @ self.design.masked_products(self.rows, y[:, None])
         return float(taken @ taken - np.sum(on**2))
+
+
+__all__ = [
+    "Design",
+    "Factor",
+    "Projection",
+]

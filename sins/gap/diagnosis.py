@@ -447,3 +447,8 @@ def _report(
 def _rms(s: _Session, predicted: Array) -> Array:
     """Each channel's RMS over the withheld rows, under the ``predicted`` errors (n, 6)."""
     return np.array([np.sqrt(np.mean(r[s.withheld] ** 2)) for r in s.residuals(predicted)])
+
+
+__all__ = [
+    "diagnose",
+]

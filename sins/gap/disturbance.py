@@ -145,3 +145,10 @@ def best_oscillation(
     )
     f_hz = float(best.x)
     return 1.0 / f_hz, float(np.hypot(*fitted(f_hz)[1]))
+
+
+__all__ = [
+    "STEP_MARGIN",
+    "best_oscillation",
+    "best_step",
+]

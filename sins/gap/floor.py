@@ -149,3 +149,16 @@ def concentrates(shares: dict[str, list[float]], allan: dict[str, list[float]]) 
         tau = f"τ = {allan['tau_s'][k]:.3g} s"
         out.append(f"frequency: Allan deviation at {tau} is {ratio[k]:.1f}× the model's white noise")
     return out
+
+
+__all__ = [
+    "FLOOR_DROP",
+    "SIGNIFICANT_RATIO",
+    "TINY",
+    "allan_curves",
+    "allan_deviation",
+    "concentrates",
+    "input_features",
+    "noise_floor",
+    "quartile_shares",
+]

@@ -207,3 +207,13 @@ def available(cand: Candidate, x: ReferenceInputs, readings: Array, fit: NDArray
                 return True
         return False
     return True
+
+
+__all__ = [
+    "Choice",
+    "available",
+    "exclusive",
+    "nested_choice",
+    "outside_library",
+    "process_or_regressors",
+]

@@ -369,3 +369,18 @@ def binned(residual: Array, step: float, sigma: float) -> Array:
     (reading − prediction) ``N(0, σ²)``, coarsened to the bin ``± step/2`` about the reading."""
     p = ndtr((residual + 0.5 * step) / sigma) - ndtr((residual - 0.5 * step) / sigma)
     return np.log(np.maximum(p, _FLOOR))
+
+
+__all__ = [
+    "CELLS",
+    "Lattice",
+    "Printed",
+    "binned",
+    "carried",
+    "expected_rounding",
+    "find",
+    "fit_rounded",
+    "print_habit",
+    "rounded",
+    "rounded_loglik",
+]

@@ -205,3 +205,16 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
     counts = np.bincount(quarter[rows], minlength=4)[:4].astype(np.float64)
     lls = _loglik(sums[:, :4], counts)
     return 2.0 * float(np.sum(lls.max(axis=0) - lls[process.chosen])) > 16.3  # χ² with 3 degrees, p = 0.001
+
+
+__all__ = [
+    "DRIVE_RATIOS",
+    "FINE_DRIVE",
+    "TAUS_S",
+    "RandomBiasFit",
+    "falsified",
+    "fit",
+    "innovations",
+    "log_likelihood",
+    "steady_gain",
+]

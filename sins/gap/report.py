@@ -119,3 +119,10 @@ class GapReport:
             "unfitted": self.unfitted,
             "allan": self.allan,
         }
+
+
+__all__ = [
+    "EffectScore",
+    "GapReport",
+    "Outside",
+]

@@ -152,3 +152,13 @@ class Trial:
     def score(self) -> float:
         """The gain beyond what it needs to be significant: accepted above 0."""
         return self.gain - SIGNIFICANT_NATS - self.allowance
+
+
+__all__ = [
+    "SIGNIFICANT_NATS",
+    "TIE_NATS",
+    "ChannelTrial",
+    "Trial",
+    "refit_allowance",
+    "trial_gain",
+]

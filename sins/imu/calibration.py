@@ -551,3 +551,19 @@ def _lstsq(x: Array, y: Array, sensor: str, source: str) -> tuple[Array, Array, 
     se = np.sqrt(np.outer(np.diag(cov_unit), sigma2))
     rms: Array = np.sqrt((resid * resid).mean(axis=0))
     return np.asarray(coef, dtype=float), np.asarray(se, dtype=float), rms
+
+
+__all__ = [
+    "POSITION_COUNTS",
+    "RateProfile",
+    "RateTable",
+    "RigMotion",
+    "RigProcedure",
+    "SeedModelFit",
+    "TemperatureProfile",
+    "fit_seed_model",
+    "invert_seed_model",
+    "rig_motion",
+    "simulate_rig",
+    "static_orientations",
+]

@@ -397,3 +397,17 @@ def typical_effect(name: str, rng: np.random.Generator, scale: float = 1.0) -> i
     if name not in table:
         raise ValueError(f"no typical size for {name!r} (sensor {sensor}, effect {kind})")
     return table[name]
+
+
+__all__ = [
+    "DEG",
+    "DEG_PER_H",
+    "GRADES",
+    "PARAMETERS",
+    "EffectSpec",
+    "Grade",
+    "Param",
+    "draw_unit",
+    "effect_from_params",
+    "typical_effect",
+]

@@ -520,3 +520,8 @@ def _reconstruct_own_kernel(mean: Array, dt: Array, s: float, value: Array, rate
             curve = 0.0 if end else 0.5 * (mn - 2.0 * m + mp)
             value[k, i] = m + slope * s + curve * q
             rate[k, i] = (slope + 2.0 * curve * s) / dt[k]
+
+
+__all__ = [
+    "IncrementStream",
+]

@@ -1,8 +1,10 @@
-"""Files: sins's CSV formats and JSON documents (:mod:`~sins.io.formats`), recordings in other formats
-(:func:`~sins.io.recording.read_recording_any`: ROS bags, MCAP, EuRoC/TUM-VI, CSVs with their own columns),
-and readers of real recordings (:mod:`~sins.io.datasets`).
+"""Files: sins's CSV formats (:mod:`~sins.io.formats`: IMU and truth files; :mod:`~sins.io.rig`: rig
+recordings; :mod:`~sins.io.tables`: the numeric tables under them), its JSON files
+(:mod:`~sins.io.json_files`), writes that never leave half a file (:mod:`~sins.io.atomic`), recordings in
+other formats (:func:`~sins.io.recording.read_recording_any`: ROS bags, MCAP, EuRoC/TUM-VI, CSVs with their
+own columns), and readers of real recordings (:mod:`~sins.io.datasets`).
 
-The formats' public names are importable from here (``from sins import io; io.read_imu(path)``).
+Those modules' main names are importable from here (``from sins import io; io.read_imu(path)``).
 """
 
 from sins.io.atomic import atomic_path

@@ -99,3 +99,15 @@ def to_frd(values: Array, m: Array) -> Array:
         j = int(np.flatnonzero(m[i])[0])
         out[:, i] = values[:, j] if m[i, j] > 0 else -values[:, j]
     return out
+
+
+__all__ = [
+    "DIRECTIONS",
+    "ENU_TO_NED",
+    "FLU",
+    "FRD",
+    "frame_letters",
+    "frame_matrix",
+    "right_handed_frames",
+    "to_frd",
+]

@@ -375,3 +375,14 @@ def _origin(
 def _where(origin: Iterable[float]) -> str:
     lat, lon, h = origin
     return f"{np.degrees(lat):.7f}°, {np.degrees(lon):.7f}°, {h:.2f} m"
+
+
+__all__ = [
+    "FIX_TYPE",
+    "IMU_TYPE",
+    "POSE_TYPES",
+    "BagRead",
+    "GeodeticFixes",
+    "bag_kind",
+    "read_bag",
+]

@@ -217,3 +217,11 @@ def _samples(table: formats.Table, full: dict[str, str], t: Array, form: str) ->
     dtheta = np.column_stack([col[f"dtheta_{a}"] for a in "xyz"])
     dv = np.column_stack([col[f"dv_{a}"] for a in "xyz"])
     return ImuIncrements(t=np.concatenate([[start], t]), dtheta_b=dtheta, dv_b=dv)
+
+
+__all__ = [
+    "KNOWN",
+    "ColumnsRead",
+    "parse_columns",
+    "read_columns_csv",
+]

@@ -195,3 +195,15 @@ def _why(exc: ValueError) -> str:
 
 def _one_line(text: str) -> str:
     return " ".join(printable(part) for part in text.split())
+
+
+__all__ = [
+    "INT_RANGE",
+    "MAX_BYTES",
+    "MAX_DEPTH",
+    "check_document",
+    "printable",
+    "read_json",
+    "read_toml",
+    "short",
+]

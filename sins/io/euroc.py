@@ -217,3 +217,12 @@ def _rate(path: Path) -> float | None:
     except ValueError:
         return None
     return rate if rate is not None and np.isfinite(rate) and rate > 0 else None
+
+
+__all__ = [
+    "REFERENCES",
+    "EurocRead",
+    "locate",
+    "read_asl_csv",
+    "read_euroc",
+]

@@ -128,3 +128,14 @@ def check_writable(path: str | os.PathLike[str], folder: bool = False) -> None:
             pass
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot write in {probe}: {exc.strerror or exc}") from None
+
+
+__all__ = [
+    "CSV_BYTES_PER_VALUE",
+    "available_memory",
+    "check_disk",
+    "check_memory",
+    "check_writable",
+    "csv_bytes",
+    "format_size",
+]

@@ -99,3 +99,10 @@ def enu_track(
     m = np.eye(3) if body_to_frd is None else np.asarray(body_to_frd, dtype=float)
     c_nb = turn @ (ENU_TO_NED @ c_enu_body) @ m.T
     return NavSeries(t=t, lat=lat, lon=lon, h=h, v_n=v_n, q_nb=rotation.quat_from_dcm(c_nb))
+
+
+__all__ = [
+    "ecef_to_lla",
+    "enu_track",
+    "ned_to_ecef_matrix",
+]

@@ -277,3 +277,11 @@ def _rescaled(rec: Recording, chosen: dict[str, str]) -> Recording:
 
 def _with(rec: Recording, **changes: object) -> Recording:
     return dataclasses.replace(rec, **changes)  # type: ignore[arg-type]
+
+
+__all__ = [
+    "KINDS",
+    "Recording",
+    "read_recording_any",
+    "recording_kind",
+]

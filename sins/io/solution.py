@@ -81,3 +81,12 @@ def write_solution(path: str | os.PathLike[str], solution: NavSeries, comment: s
         table = table.replace_schema_metadata({"comment": comment})
     with atomic_path(path) as tmp:
         pq.write_table(table, tmp)
+
+
+__all__ = [
+    "SOLUTION_UNITS",
+    "SUFFIXES",
+    "check_solution_path",
+    "solution_columns",
+    "write_solution",
+]

@@ -122,3 +122,19 @@ def parse_pairs(spec: str, option: str) -> list[tuple[str, str]]:
     if not pairs:
         raise SinsInputError(f"{option}: empty; expected key=value pairs separated by commas")
     return pairs
+
+
+__all__ = [
+    "ALIASES",
+    "FORM_KEYS",
+    "KEY_OF",
+    "SI",
+    "TEMP_OFFSET",
+    "UNITS",
+    "canonical",
+    "check_form",
+    "factor",
+    "parse_pairs",
+    "parse_units",
+    "spec_text",
+]

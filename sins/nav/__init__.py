@@ -1,2 +1,107 @@
 """Navigation: rotations and the Earth, vehicle motion and its trajectory, the strapdown integrator, and
-error metrics. Pure functions over arrays; nothing here knows about IMU errors."""
+error metrics. Pure functions over arrays; nothing here knows about IMU errors.
+
+The names a user needs are importable from here (``from sins.nav import SegmentMotion, generate,
+integrate``), each from its module the first time it is used: :mod:`~sins.nav.rotation` and
+:mod:`~sins.nav.earth` sit below the data containers that the rest of the package builds on, so this
+package imports nothing when one of them is imported.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from sins.nav import earth as earth
+    from sins.nav import rotation as rotation
+    from sins.nav.metrics import DriftSummary, NavErrors, nav_errors, summarize
+    from sins.nav.motion import (
+        Accelerate,
+        Climb,
+        Hold,
+        Kinematics,
+        Motion,
+        Oscillation,
+        RecordedMotion,
+        Rotate,
+        SegmentMotion,
+        Start,
+        Turn,
+        WaypointMotion,
+    )
+    from sins.nav.strapdown import InitialState, advance, integrate, integrate_batch, start
+    from sins.nav.trajectory import generate, generate_chunks, ideal_rates
+    from sins.nav.vertical import VERTICAL_MODES, VerticalMode
+
+#: Each name importable from here, and the module that defines it.
+NAMES = {
+    **dict.fromkeys(
+        (
+            "Accelerate",
+            "Climb",
+            "Hold",
+            "Kinematics",
+            "Motion",
+            "Oscillation",
+            "RecordedMotion",
+            "Rotate",
+            "SegmentMotion",
+            "Start",
+            "Turn",
+            "WaypointMotion",
+        ),
+        "sins.nav.motion",
+    ),
+    **dict.fromkeys(("generate", "generate_chunks", "ideal_rates"), "sins.nav.trajectory"),
+    **dict.fromkeys(
+        ("InitialState", "advance", "integrate", "integrate_batch", "start"), "sins.nav.strapdown"
+    ),
+    **dict.fromkeys(("DriftSummary", "NavErrors", "nav_errors", "summarize"), "sins.nav.metrics"),
+    **dict.fromkeys(("VERTICAL_MODES", "VerticalMode"), "sins.nav.vertical"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A name of :data:`NAMES`, imported from its module on first use (PEP 562)."""
+    if name not in NAMES:
+        raise AttributeError(f"module 'sins.nav' has no attribute {name!r}")
+    value = getattr(importlib.import_module(NAMES[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The names above, for completion in a notebook."""
+    return sorted({*globals(), *NAMES})
+
+
+__all__ = [
+    "NAMES",
+    "VERTICAL_MODES",
+    "Accelerate",
+    "Climb",
+    "DriftSummary",
+    "Hold",
+    "InitialState",
+    "Kinematics",
+    "Motion",
+    "NavErrors",
+    "Oscillation",
+    "RecordedMotion",
+    "Rotate",
+    "SegmentMotion",
+    "Start",
+    "Turn",
+    "VerticalMode",
+    "WaypointMotion",
+    "advance",
+    "generate",
+    "generate_chunks",
+    "ideal_rates",
+    "integrate",
+    "integrate_batch",
+    "nav_errors",
+    "start",
+    "summarize",
+]

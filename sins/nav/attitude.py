@@ -176,3 +176,12 @@ def attitude_rmse(q_est_nb: Array, q_ref_nb: Array, judged: NDArray[np.bool_] | 
         raise ValueError("no rows to judge the attitude on (no finite reference where judged)")
     rms = lambda e: float(np.degrees(np.sqrt(np.mean(e[ok] ** 2))))  # noqa: E731
     return AttitudeRmse(rms(total), rms(heading), rms(inclination), int(ok.sum()))
+
+
+__all__ = [
+    "AttitudeRmse",
+    "attitude_errors",
+    "attitude_rmse",
+    "propagate",
+    "propagate_increments",
+]

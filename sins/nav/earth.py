@@ -127,3 +127,26 @@ def schuler_period(lat: Floats, h: Floats = 0.0) -> Floats:
     """Schuler period ``2π sqrt(R/g)`` in seconds, with ``R`` the mean radius ``sqrt(R_M R_N)``."""
     r_m, r_n = radii(lat)
     return 2.0 * np.pi * np.sqrt(np.sqrt(r_m * r_n) / normal_gravity(lat, h))
+
+
+__all__ = [
+    "E2",
+    "G0",
+    "GAMMA_E",
+    "GAMMA_P",
+    "GM",
+    "OMEGA_IE",
+    "A",
+    "B",
+    "F",
+    "earth_rate_n",
+    "lla_to_ecef",
+    "local_ned",
+    "ned_offset",
+    "normal_gravity",
+    "position_rates",
+    "radii",
+    "radii_and_gravity_from_sin2",
+    "schuler_period",
+    "transport_rate_n",
+]

@@ -442,3 +442,20 @@ def summarize(errors: NavErrors) -> DriftSummary:
     acc = DriftAccumulator(keep_every=0)
     acc.add(errors)
     return acc.summary()
+
+
+__all__ = [
+    "NAUTICAL_MILE_M",
+    "BlockMeans",
+    "DriftAccumulator",
+    "DriftSummary",
+    "NavErrors",
+    "TruthFrame",
+    "block_means",
+    "errors_against",
+    "euler_errors",
+    "kept_indices",
+    "nav_errors",
+    "summarize",
+    "thinned_indices",
+]

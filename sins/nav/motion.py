@@ -610,3 +610,23 @@ class RecordedMotion:
             )
             object.__setattr__(self, "_cached_splines", cached)
         return cached
+
+
+__all__ = [
+    "MIN_RAMP_S",
+    "OSCILLATION_CHANNELS",
+    "Accelerate",
+    "Climb",
+    "Hold",
+    "Kinematics",
+    "Motion",
+    "Oscillation",
+    "OscillationChannel",
+    "RecordedMotion",
+    "Rotate",
+    "Segment",
+    "SegmentMotion",
+    "Start",
+    "Turn",
+    "WaypointMotion",
+]

@@ -289,3 +289,23 @@ def euler_rates_to_body_rate(
     sr, cr = np.sin(roll), np.cos(roll)
     sp, cp = np.sin(pitch), np.cos(pitch)
     return np.stack([dr - dy * sp, dp * cr + dy * sr * cp, -dp * sr + dy * cr * cp], axis=-1)
+
+
+__all__ = [
+    "cross",
+    "dcm_from_euler",
+    "dcm_from_quat",
+    "euler_from_dcm",
+    "euler_from_quat",
+    "euler_rates_to_body_rate",
+    "quat_conjugate",
+    "quat_from_dcm",
+    "quat_from_euler",
+    "quat_from_rotvec",
+    "quat_multiply",
+    "quat_normalize",
+    "rotate",
+    "rotvec_from_quat",
+    "skew",
+    "wrap_angle",
+]

@@ -498,3 +498,15 @@ def integrate_batch(
 
 def _alloc(m: int) -> tuple[Array, Array, Array, Array, Array]:
     return np.empty(m), np.empty(m), np.empty(m), np.empty((m, 3)), np.empty((m, 4))
+
+
+__all__ = [
+    "STATE_SIZE",
+    "InitialState",
+    "advance",
+    "current",
+    "integrate",
+    "integrate_batch",
+    "moved",
+    "start",
+]

@@ -234,3 +234,14 @@ def _chunk(
     truth = NavSeries(t=ts[1:], lat=lat_e[at], lon=lon_e[at], h=h_e[at], v_n=kin.v_n[at], q_nb=kin.q_nb[at])
     assert len(truth.t) == m
     return truth, ImuIncrements(t=ts, dtheta_b=simpson_sums(omega), dv_b=simpson_sums(f))
+
+
+__all__ = [
+    "CHUNK",
+    "generate",
+    "generate_chunks",
+    "ideal_rates",
+    "sample_times",
+    "specific_force_and_rate",
+    "start_state",
+]

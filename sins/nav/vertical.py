@@ -15,3 +15,9 @@ VerticalMode = Literal["free", "hold", "damp"]
 
 #: The modes in the order the messages list them.
 VERTICAL_MODES: Final[tuple[VerticalMode, ...]] = get_args(VerticalMode)
+
+
+__all__ = [
+    "VERTICAL_MODES",
+    "VerticalMode",
+]

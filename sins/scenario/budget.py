@@ -48,3 +48,13 @@ def check_rig_size(rig: RigProcedure, path: Path, outputs: dict[Path, int] | Non
     if outputs:
         limits.check_disk({p: limits.csv_bytes(rows, columns) for p, columns in outputs.items()}, path)
     limits.check_memory(rows * RIG_BYTES, f"a rig session of {rows:.4g} rows at {rig.rate_hz:g} Hz", path)
+
+
+__all__ = [
+    "AIDED_BYTES",
+    "RIG_BYTES",
+    "RUN_BYTES",
+    "SIMULATE_BYTES",
+    "check_rig_size",
+    "check_scenario_size",
+]

@@ -84,3 +84,11 @@ def check_latitude(scenario: Scenario, truth: NavSeries) -> None:
             f"{math.degrees(float(truth.lat[k])):.4g}° at t = {float(truth.t[k]):g} s; the "
             f"latitude/longitude mechanisation cannot pass a pole (keep within ±{MAX_LAT_DEG:g}°)"
         )
+
+
+__all__ = [
+    "MAX_LAT_DEG",
+    "build_motion",
+    "check_latitude",
+    "sample_count",
+]

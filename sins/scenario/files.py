@@ -152,3 +152,12 @@ def rig_rows(rig: calibration.RigProcedure) -> int:
         duration = sum(steps) / rt.accel_dps2 + rt.dwell_s * len(rates)
         rows += len(rt.axes) * len(rt.orientations) * round(duration * rig.rate_hz)
     return rows
+
+
+__all__ = [
+    "MIN_DWELL_SAMPLES",
+    "RIG_BOUNDS",
+    "load_imu",
+    "load_rig",
+    "rig_rows",
+]

@@ -79,3 +79,13 @@ def preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Pa
     if path is None:
         raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
     return path
+
+
+__all__ = [
+    "PresetKind",
+    "find_preset",
+    "preset_dir",
+    "preset_or_path",
+    "presets",
+    "resolve_preset",
+]

@@ -122,3 +122,14 @@ class ImuSpec:
 
         base = imu_spec.draw_unit(self.grade, self.unit_seed, run_seed) if self.grade else imu.ImuModel()
         return base.with_effects(*self.effects).without(*self.withhold)
+
+
+__all__ = [
+    "AidingSpec",
+    "CompensationSpec",
+    "ImuSpec",
+    "Scenario",
+    "SegmentsSpec",
+    "TruthFileSpec",
+    "WaypointsSpec",
+]

@@ -247,3 +247,11 @@ def read_toml(path: Path, what: str) -> dict[str, Any]:
         integer beyond 64 bits or a NUL byte.
     """
     return documents.read_toml(path, what)
+
+
+__all__ = [
+    "MAX_SEED",
+    "Bound",
+    "TomlKeys",
+    "read_toml",
+]

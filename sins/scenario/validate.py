@@ -479,3 +479,20 @@ def _waypoints(top: TomlKeys) -> WaypointsSpec:
         i = int(np.argmax(gaps < 1e-3)) + 2
         raise top.error(f"waypoint {i} is at the same place as waypoint {i - 1}", "waypoint")
     return WaypointsSpec(lat=lat, lon=lon, h=alt, points_ned=tuple(points), speeds=tuple(speeds))
+
+
+__all__ = [
+    "ALIGNMENT_METHODS",
+    "DEFAULT_RAMP_S",
+    "FILTER_GRADES",
+    "MAX_DURATION_S",
+    "MAX_SPEED_MPS",
+    "MIN_PERIOD_SAMPLES",
+    "MIN_RAMP_S",
+    "MIN_TAU_SAMPLES",
+    "MIN_WAYPOINT_SPEED_MPS",
+    "SCENARIO_BOUNDS",
+    "SEGMENT_TYPES",
+    "from_dict",
+    "load",
+]

@@ -317,3 +317,16 @@ def _delay(path: str, gyro: Array, omega: Array) -> float:
     den = c[i - 1] - 2.0 * c[i] + c[i + 1]
     frac = 0.5 * (c[i - 1] - c[i + 1]) / den if den < 0.0 else 0.0
     return float((lags[i] + frac) / BROAD_RATE_HZ)
+
+
+__all__ = [
+    "BROAD_FOLDER",
+    "BROAD_GRAVITY",
+    "BROAD_HEIGHT_M",
+    "BROAD_LAT_DEG",
+    "BROAD_RATE_HZ",
+    "BROAD_TRIALS",
+    "read_broad",
+    "sensor_of",
+    "trials",
+]

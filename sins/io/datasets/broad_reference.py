@@ -128,3 +128,9 @@ def _velocity(pos: Array, valid: NDArray[np.bool_]) -> tuple[NDArray[np.intp], A
             savgol_filter(pos[a:b], n_window, _VELOCITY_POLYORDER, deriv=1, delta=1.0 / BROAD_RATE_HZ, axis=0)
         )
     return np.concatenate(keep), np.vstack(velocity)
+
+
+__all__ = [
+    "BROAD_LON_DEG",
+    "read_broad_reference",
+]

@@ -307,3 +307,18 @@ def _ferraris_sections(path: Path, n_rows: int) -> dict[str, tuple[int, int]]:
         if b_start < a_end:
             raise SinsInputError(f"{path}: sections {a!r} and {b!r} overlap")
     return out
+
+
+__all__ = [
+    "ANNOTATED_ACCEL_MPS2_PER_COUNT",
+    "ANNOTATED_GYRO_DPS_PER_COUNT",
+    "ANNOTATED_RATE_HZ",
+    "ANNOTATED_TURN_DEG",
+    "FERRARIS_FOLDER",
+    "FERRARIS_HEIGHT_M",
+    "FERRARIS_LAT_DEG",
+    "FERRARIS_RATE_HZ",
+    "FERRARIS_SECTIONS",
+    "read_ferraris",
+    "read_ferraris_annotated",
+]

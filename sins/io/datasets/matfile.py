@@ -125,3 +125,10 @@ def _inflate(path: str | Path, chunk: bytes, at: int) -> bytes:
     if inflater.unconsumed_tail:
         raise _fail(path, at, f"a compressed element inflating beyond {MAX_INFLATED} bytes")
     return out
+
+
+__all__ = [
+    "MAX_ELEMENTS",
+    "MAX_INFLATED",
+    "check_mat_v5",
+]

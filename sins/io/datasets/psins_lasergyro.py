@@ -210,3 +210,12 @@ def _is_int(field: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+__all__ = [
+    "MAX_GRAVITY_MISMATCH",
+    "PSINS_LASERGYRO_FILE",
+    "PSINS_LASERGYRO_FOLDER",
+    "PSINS_TO_FRD",
+    "read_psins_lasergyro",
+]

@@ -87,3 +87,9 @@ def psins_file_biases(root: str | os.PathLike[str] | None = None) -> tuple[Array
             raise SinsInputError(f"{path}: variable {name!r}: expected three finite numbers")
         out.append(_PSINS_TO_SINS @ value)
     return out[0], out[1]
+
+
+__all__ = [
+    "psins_file_biases",
+    "read_psins_vehicle_reference",
+]

@@ -404,8 +404,8 @@ def _estimate_alignment(mems: _Mems, ref: _Reference, path: Path) -> PsinsAlignm
     """Time offset, mounting rotation and lever arm, in that order, each fitted on 0.1 s means.
 
     On means over the FOG-INS's intervals both sides carry the same motion; at 100 Hz the MEMS's
-    vibration above 5 Hz, which the reference lacks, flattens the correlation peak (0.984 against
-    0.9998) and pulls it 2.5 ms early.
+    vibration above 5 Hz, which the reference lacks, would flatten the correlation peak and bias it
+    (the figures are in ``docs/guide/datasets.md``).
     """
     t_fog = ref.nav.t
     _, omega_ref, f_ref = ref.interval_means()
@@ -469,3 +469,12 @@ def _estimate_alignment(mems: _Mems, ref: _Reference, path: Path) -> PsinsAlignm
         lever_arm_m=np.asarray(solution[12:15], dtype=float),
         correlation=_correlation(np.linalg.norm(omega_mems, axis=1), magnitude),
     )
+
+
+__all__ = [
+    "PSINS_VEHICLE_FILE",
+    "PSINS_VEHICLE_FOLDER",
+    "PsinsAlignment",
+    "psins_alignment",
+    "read_psins_vehicle",
+]

@@ -80,3 +80,11 @@ def check_magnitude(
             f"{path}: {variable}: row {r + 1}, column {c + 1}: {a[r, c]:g} {unit} is beyond "
             f"±{limit:g} {unit}, outside any physical range (a damaged file?)"
         )
+
+
+__all__ = [
+    "ENV_VAR",
+    "check_magnitude",
+    "data_root",
+    "dataset_file",
+]
