@@ -174,4 +174,14 @@ def _choose(z: Array, y: Array, fold: Array) -> tuple[float, float, float]:
     return ridge, float(gains.sum()), float(np.sqrt(FOLDS) * gains.std(ddof=1))
 
 
-__all__ = ["BLOCKS", "FEATURES", "WINDOW_S", "WindowRegression", "window_features"]
+__all__ = [
+    "BLOCKS",
+    "FEATURES",
+    "FOLDS",
+    "GUARD_SE",
+    "PER_BLOCK",
+    "RIDGE",
+    "WINDOW_S",
+    "WindowRegression",
+    "window_features",
+]
