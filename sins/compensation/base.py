@@ -87,7 +87,8 @@ class Strategy(ABC):
 
     def aligned_rates(self, rates: ImuRates) -> ImuRates:
         """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends
-        held), or as they are without a time offset."""
+        held, so a stream corrected a chunk at a time holds each chunk's last reading over the offset),
+        or as they are without a time offset."""
         offsets = getattr(self, "time_offset_s_", None)
         if offsets is None or not np.any(offsets):
             return rates

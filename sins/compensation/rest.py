@@ -13,7 +13,8 @@ the fit measures how far the bias in motion sits from the bias at rest on the ca
 Rest is told from the corrected gyro alone (no accelerometer, no reference): the RMS of its rate over a
 trailing window of :data:`WINDOW_S` below ``rest_rms_`` (from the fit's own rests) for at least
 :data:`MIN_REST_S`. ``correct`` (sample by sample) applies the seed model only; ``correct_rates`` and
-``correct_increments``, which see the stream, apply the rest updates.
+``correct_increments``, which see the stream, apply the rest updates. They see what they are given: a run
+that corrects its stream a chunk at a time (``sins run``) starts each chunk without the rests before it.
 """
 
 from __future__ import annotations
