@@ -1,6 +1,7 @@
-"""Runs: a scenario from file to drift summary, and a recorded IMU file against its truth.
+"""Runs of a scenario: from its file to each strategy's drift, the one streaming engine.
 
-These are the library calls behind the CLI; each returns plain results that the CLI prints and writes.
+These are the library calls behind ``sins run`` and campaigns; each returns plain results
+(:mod:`sins.run_results`) that the command line prints and writes.
 
 One engine runs every scenario (:func:`run_units`; :func:`run_scenario` is that of one unit): the
 trajectory is generated chunk by chunk on a second thread, and each unit's stream (its corruption, or
@@ -15,18 +16,19 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+# The names imported ``as`` themselves lived here before they moved to the modules named (the aided run's
+# outage error, readings as files hold them, the presets, what runs give back, a unit's fit and the
+# replay of a recorded IMU): they stay importable from here.
 from sins import scenario
-
-# OutageError is re-exported: it lived here before it moved down to sins.aiding.
 from sins.aiding.outages import OutageError as OutageError
 from sins.aiding.outages import outage_errors
 from sins.errors import SinsInputError
@@ -34,8 +36,6 @@ from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
     BlockMeans,
     DriftAccumulator,
-    DriftSummary,
-    NavErrors,
     TruthFrame,
     errors_against,
     kept_indices,
@@ -43,9 +43,6 @@ from sins.nav.metrics import (
     summarize,
     thinned_indices,
 )
-from sins.nav.vertical import VerticalMode
-
-# Readings as files hold them live in sins.recordings; these names were (and are) importable from here.
 from sins.recordings import Recording as Recording
 from sins.recordings import SimulatedReadings as SimulatedReadings
 from sins.recordings import cabin_temperature as _cabin
@@ -55,22 +52,25 @@ from sins.recordings import load_recording as load_recording
 from sins.recordings import simulate as simulate
 from sins.recordings import simulate_readings as simulate_readings
 from sins.recordings import with_unit as with_unit
+from sins.replay import gap_navigation as gap_navigation
+from sins.replay import integrate_recording as integrate_recording
+from sins.replay import navigate as navigate
+from sins.run_results import AidedRun, ScenarioRun, StrategyRun
 from sins.scenario import PresetKind, Scenario, resolve_preset
-
-# Re-exported: the presets lived here before they moved down to sins.scenario.
 from sins.scenario import preset_dir as preset_dir
 from sins.scenario import presets as presets
-from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
+from sins.series import ImuIncrements, NavSeries
+from sins.unit_fit import FittedUnit as FittedUnit
+from sins.unit_fit import fit_unit
 
 if TYPE_CHECKING:
     from sins.aiding.gnss import GnssConfig
     from sins.compensation import Strategy
-    from sins.gap import GapReport
     from sins.imu import ImuModel
     from sins.nav.motion import Motion
     from sins.scenario import AidingSpec
 
-T = TypeVar("T")
+_T = TypeVar("_T")
 
 #: A progress callback: ``progress(done, total)``.
 Progress = Callable[[int, int], None]
@@ -82,105 +82,12 @@ MAX_KEPT = 36_000
 DEFAULT_SCENARIO = "car_drive"
 
 
-@dataclass(frozen=True)
-class StrategyRun:
-    """One integrated IMU stream and its errors against the truth.
-
-    ``residual_rms`` (compensated scenarios): per channel, the RMS of the
-    corrected reading's error on the rig data held back from the fit, SI units.
-    ``sensor_error`` (scenarios with an IMU model): the error of the stream
-    this run integrated (corrected reading − ideal), (m, 6) in rad/s and m/s²
-    in the order of :data:`sins.imu.CHANNELS`, as block means at the
-    scenario's ``sensor_t``.
-    """
-
-    solution: NavSeries
-    errors: NavErrors
-    summary: DriftSummary
-    residual_rms: dict[str, float] | None = None
-    sensor_error: NDArray[np.float64] | None = None
-
-
-@dataclass(frozen=True)
-class AidedRun:
-    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`).
-
-    The summary covers every sample; for display, ``errors`` are thinned as the scenario's plain
-    runs', and the filter's records (``t_cov``: each propagation step's end and each update) to at
-    most :data:`MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position NED m, velocity
-    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the estimated gyro
-    and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for the ideal IMU);
-    ``fix_t`` the fixes' times; ``restarts`` when the filter started again from a fix after a run of
-    refused ones (:class:`sins.aiding.ekf.FilterConfig` ``reinit_after``). An in-motion alignment
-    starts the filter at ``start_s``: the summary and ``errors`` cover the run from there.
-    """
-
-    summary: DriftSummary
-    fixes: int
-    rejected: int
-    outages: tuple[OutageError, ...]
-    filter_grade: str = "navigation"
-    errors: NavErrors | None = None
-    t_cov: NDArray[np.float64] | None = None
-    sigma: NDArray[np.float64] | None = None
-    bias: NDArray[np.float64] | None = None
-    true_bias: NDArray[np.float64] | None = None
-    fix_t: NDArray[np.float64] | None = None
-    restarts: tuple[float, ...] = ()  # times the filter started again after a run of refused fixes, s
-    alignment: str = "truth"  # how the filter started: "static", "gnss_velocity" or "truth"
-    start_s: float = 0.0  # when it started (an in-motion alignment's fix), s
-    static_s: float = 0.0  # a static alignment's still window, s
-    heading_sigma_deg: float | None = None  # the in-motion alignment's heading 1σ told to the filter, °
-    velocity_rejected: int = 0  # GNSS velocities the gate refused (with velocity fixes)
-
-
-@dataclass(frozen=True)
-class ScenarioRun:
-    """A scenario's truth and one run per compensation strategy.
-
-    Summaries use every sample; ``truth`` and each run's ``solution`` and
-    ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
-    sample, plus the last), and to at most :data:`MAX_KEPT` samples for longer
-    runs, so that memory stays bounded whatever the duration, and the
-    runs' ``sensor_error`` are means over blocks of as many intervals, centred
-    at ``sensor_t``: a mean keeps the systematic error a plot can show and
-    averages down the noise it cannot.
-    """
-
-    scenario: Scenario
-    samples: int
-    truth: NavSeries
-    runs: dict[str, StrategyRun]
-    sensor_t: NDArray[np.float64] | None = None
-    aided: dict[str, AidedRun] = field(default_factory=dict)
-
-
 def resolve_scenario(name_or_path: str | os.PathLike[str] | None, kind: PresetKind = "") -> Path:
     """A file path from a path, a preset name of ``kind``, or ``None`` (the default scenario).
 
     :func:`sins.scenario.resolve_preset` with :data:`DEFAULT_SCENARIO` for ``None``.
     """
     return resolve_preset(DEFAULT_SCENARIO if name_or_path is None else name_or_path, kind)
-
-
-def navigate(
-    imu: ImuIncrements, truth: NavSeries, vertical: VerticalMode = "free", vertical_tau_s: float = 10.0
-) -> StrategyRun:
-    """Integrate ``imu`` from the truth's state at ``imu.t[0]`` and compare with the truth.
-
-    For ``vertical`` "hold" or "damp" the reference height is the truth's.
-    """
-    start = truth if truth.t[0] == imu.t[0] else truth.interpolate(np.array([imu.t[0]]))
-    h_ref = None
-    if vertical != "free":
-        same = len(truth.t) == len(imu.t) and np.array_equal(truth.t, imu.t)
-        h_ref = truth.h if same else truth.interpolate(imu.t).h
-    solution = strapdown.integrate(
-        imu, strapdown.InitialState.from_series(start), vertical=vertical, h_ref=h_ref,
-        vertical_tau_s=vertical_tau_s,
-    )  # fmt: skip
-    errors = nav_errors(solution, truth)
-    return StrategyRun(solution=solution, errors=errors, summary=summarize(errors))
 
 
 def run_scenario(
@@ -227,7 +134,7 @@ def run_units(
     chunk and the thinned series, whatever the duration; a scenario with ``[gnss]`` also keeps its truth
     and ideal IMU whole for the aided runs (:func:`aided_runs`), which follow the stream.
     ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which a
-    campaign does not keep: ~10 ns of a unit-sample's ~300; the ideal IMU has none).
+    campaign does not keep; the ideal IMU has none).
     ``progress(samples_done, samples)`` is called as the chunks are integrated.
 
     Raises
@@ -522,67 +429,6 @@ def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:
     return max(1, round(sc.rate_hz / keep_hz), math.ceil(samples / MAX_KEPT))
 
 
-@dataclass(frozen=True)
-class FittedUnit:
-    """One unit's strategies, fitted on its rig session, ready to drive any number of scenarios.
-
-    ``strategies`` holds every strategy but the oracle, whose model is each navigation run's own
-    (:meth:`for_run`); ``residuals`` the RMS of each one's corrected readings on the held-back rig
-    rows, per channel, SI units (the oracle's knowing the rig session's unit), and ``biases`` their
-    mean (the bias each strategy leaves).
-    """
-
-    spec: scenario.ImuSpec
-    compensation: scenario.CompensationSpec | None
-    strategies: dict[str, Strategy]
-    residuals: dict[str, dict[str, float]]
-    biases: dict[str, dict[str, float]] = field(default_factory=dict)
-
-    def for_run(self, nav_model: ImuModel) -> dict[str, Strategy]:
-        """The strategies in the scenario's order, the oracle knowing ``nav_model``."""
-        from sins import compensation
-
-        names = ["none", *(self.compensation.strategies if self.compensation else ())]
-        out: dict[str, Strategy] = {}
-        for name in names:
-            out[name] = compensation.Oracle(nav_model) if name == "oracle" else self.strategies[name]
-        return out
-
-
-def fit_unit(
-    spec: scenario.ImuSpec, comp: scenario.CompensationSpec | None, progress: Progress | None = None
-) -> FittedUnit:
-    """Simulate the unit's rig session (power-on ``comp.seed``) and fit every strategy of ``comp``.
-
-    Without ``comp``, only ``"none"``. ``progress(strategies_done, strategies)`` is called as each is
-    fitted and judged.
-    """
-    from sins import compensation
-    from sins.imu import calibration
-
-    strategies: dict[str, Strategy] = {"none": compensation.make("none")}
-    residuals: dict[str, dict[str, float]] = {}
-    biases: dict[str, dict[str, float]] = {}
-    if comp is None:
-        return FittedUnit(spec, comp, strategies, residuals, biases)
-    rig = scenario.load_rig(comp.rig)
-    rig_model = spec.model(run_seed=comp.seed)
-    data = calibration.simulate_rig(rig, rig_model, seed=comp.seed)
-    fit, held = data.split(comp.validation)
-    for name in comp.strategies:
-        if name == "oracle":
-            # On the rig it knows the rig session's unit; in navigation, the navigation run's.
-            judged: Strategy = compensation.Oracle(rig_model)
-        else:
-            judged = strategies[name] = compensation.make(name).fit(fit)
-        channels = compensation.residual_rms(judged, held)
-        residuals[name] = {ch: v["rms_after"] for ch, v in channels.items()}
-        biases[name] = {ch: v["mean_after"] for ch, v in channels.items()}
-        if progress is not None:
-            progress(len(residuals), len(comp.strategies))
-    return FittedUnit(spec, comp, strategies, residuals, biases)
-
-
 class _Pending:
     """Truth states and ideal increments generated but not yet integrated by every unit: a unit's
     corruption writes an interval only once the intervals after it have come. The units driven
@@ -690,7 +536,7 @@ class _ChunkStep:
         self.h_prev = float(frame.h[-1])
 
 
-def _prefetched(items: Iterator[T]) -> Iterator[T]:
+def _prefetched(items: Iterator[_T]) -> Iterator[_T]:
     """Yield from ``items``, producing the next one in a worker thread meanwhile.
 
     The compiled kernels release the GIL, so generating chunk k+1 overlaps
@@ -712,46 +558,3 @@ def _join(parts: list[NavSeries]) -> NavSeries:
         v_n=np.concatenate([p.v_n for p in parts]),
         q_nb=np.concatenate([p.q_nb for p in parts]),
     )
-
-
-def integrate_recording(
-    imu_path: str | os.PathLike[str],
-    truth_path: str | os.PathLike[str] | None,
-    vertical: VerticalMode = "free",
-    vertical_tau_s: float = 10.0,
-    within_truth: bool = False,
-    reading: Mapping[str, Any] | None = None,
-) -> StrategyRun:
-    """Integrate a recorded IMU from its truth's first state; errors against the truth.
-
-    :func:`load_recording` (any format sins reads, ``reading`` its options; without ``truth_path``
-    the recording's own reference; an IMU running past the truth refused unless ``within_truth``),
-    then :func:`navigate`.
-    """
-    rec = load_recording(imu_path, truth_path, within_truth, reading)
-    return navigate(rec.imu, rec.truth, vertical, vertical_tau_s)
-
-
-def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -> dict[str, float]:
-    """Navigation drift of the real unit and of the simulated one (the model before and after the
-    accepted effects), integrated over the recording from the truth, vertical channel held to it.
-
-    The simulated unit's readings are the reference plus the model's predicted error (no noise: the
-    drift of what the model explains). Returns final horizontal errors against the truth and the
-    horizontal distance between the simulated and the real unit's solutions at the end, m.
-
-    ``truth`` is at the recording's times, as :func:`gap_data` returns it.
-    """
-    start = strapdown.InitialState.from_series(truth.at(0))
-
-    def solve(gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> NavSeries:
-        increments = ImuRates(t=data.t, omega_ib_b=gyro, f_ib_b=accel).to_increments()
-        return strapdown.integrate(increments, start, vertical="hold", h_ref=truth.h)
-
-    real = solve(data.gyro, data.accel)
-    out = {"real_m": summarize(nav_errors(real, truth)).final_horizontal_m}
-    for label, predicted in (("before", report.predicted_before), ("after", report.predicted_after)):
-        sim = solve(data.ref_gyro + predicted[:, :3], data.ref_accel + predicted[:, 3:])
-        out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
-        out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
-    return out

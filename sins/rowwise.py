@@ -1,14 +1,13 @@
 """Row-wise arithmetic on (n, k) arrays of samples, compiled: one vector for every row, or one number
 for each row.
 
-Why: numpy's broadcasting over a short inner axis runs its inner loop once per row. On 8,192 rows of
-3 (numpy 2.4, this project's 2-core machine) ``a * v`` with ``v`` (3,) takes 82 µs and ``a * c[:, None]``
-27 µs, against 6 µs for ``a * b`` with ``b`` (n, 3); a streamed hour pays that in every chunk of the
-corruption, the corrections and the reduction. Each kernel does one IEEE operation per element, the one
-numpy does, so the results are numpy's to the last bit (``tests/test_rowwise.py``); they never fuse two
-operations (no multiply-add), so no rounding moves; a division by zero gives numpy's ±inf or NaN
-(numba's ``error_model="numpy"``), not an exception. Arrays of other shapes or types go to numpy's own
-expression, so they broadcast, or fail, as numpy would.
+Why: numpy's broadcasting over a short inner axis runs its inner loop once per row, several times slower
+than the same operation between two (n, 3) arrays, and a streamed hour pays that in every chunk of the
+corruption, the corrections and the reduction (the figures: ``docs/speed.md``). Each kernel does one IEEE
+operation per element, the one numpy does, so the results are numpy's to the last bit
+(``tests/test_rowwise.py``); they never fuse two operations (no multiply-add), so no rounding moves; a
+division by zero gives numpy's ±inf or NaN (numba's ``error_model="numpy"``), not an exception. Arrays of
+other shapes or types go to numpy's own expression, so they broadcast, or fail, as numpy would.
 """
 
 from __future__ import annotations

@@ -258,19 +258,19 @@ class CalibrationData:
         than :data:`STEADY_RATE` and :data:`STEADY_FORCE` (static holds, constant table rates) and
         *moving* otherwise (transitions, tumbling, a drive); rows without a reference are a third
         kind. A stretch is a run of one kind, shorter runs than :data:`STRETCH_SHORTEST_S` aside: a
-        short steady run inside motion is part of the motion; a short moving run joins the stretch
-        before it, and ends it if the reference then holds another level (a rate stepped without a
-        ramp), not if it returns to the same one (a reference flickering about the threshold). A
-        stretch longer than ``longest_s`` is cut into equal parts no longer, so that continuous
-        motion is withheld in interleaved blocks rather than at its end.
+        short steady run inside motion is part of the motion; a short moving run that takes the
+        reference to another level (a fast turn, a rate stepped without a ramp) is a stretch of its
+        own, as it would be a phase of its own, and one that returns to the same level (a reference
+        flickering about the threshold) joins the stretch before it. A stretch longer than
+        ``longest_s`` is cut into equal parts no longer, so that continuous motion is withheld in
+        interleaved blocks rather than at its end.
         """
         n = len(self.t)
         if n < 2:
             return [(0, n)]
-        ref = np.hstack([self.ref_gyro, self.ref_accel])
-        step = np.abs(np.diff(ref, axis=0))
-        rate_step = np.linalg.norm(step[:, :3], axis=1)
-        force_step = np.linalg.norm(step[:, 3:], axis=1)
+        # A sensor at a time: no (n, 6) copies of a long recording's references.
+        rate_step = np.linalg.norm(np.diff(self.ref_gyro, axis=0), axis=1)
+        force_step = np.linalg.norm(np.diff(self.ref_accel, axis=0), axis=1)
         # Relative slack as well: a fast table's rate printed to ten digits moves in its last one.
         rate_tol = STEADY_RATE + 1e-6 * np.linalg.norm(self.ref_gyro[1:], axis=1)
         force_tol = STEADY_FORCE + 1e-6 * np.linalg.norm(self.ref_accel[1:], axis=1)
@@ -280,8 +280,11 @@ class CalibrationData:
         dt = float(np.median(np.diff(self.t)))
         shortest = max(2, round(STRETCH_SHORTEST_S / dt))
         # A steady run too short to be a stretch is a pause in motion: it takes the moving kind. A short
-        # moving run joins the stretch before it: a jump between steady levels (a rate stepped without
-        # a ramp) ends that stretch, a flicker of a still reference (back to its level) does not.
+        # moving run between steady levels is a transition of its own (a fast turn, a rate stepped
+        # without a ramp): joined to the level before, its rows would all lie in that stretch's
+        # withheld end, and nothing fitted would see the input change (an accelerometer's delay
+        # shows only while the force turns). A flicker of a still reference (back to its level) joins
+        # the level.
         edges = np.concatenate([[0], np.flatnonzero(np.diff(kind)) + 1, [n]])
         for start, stop in itertools.pairwise(edges):
             if stop - start < shortest and kind[start] == 0:
@@ -294,13 +297,16 @@ class CalibrationData:
                 runs[-1] = (runs[-1][0], stop)
                 continue
             if runs and kind[start] == kind[level_row] == 0:
-                moved = np.abs(ref[start] - ref[level_row])
                 if (
-                    np.linalg.norm(moved[:3]) <= rate_tol[start - 1]
-                    and np.linalg.norm(moved[3:]) <= force_tol[start - 1]
+                    np.linalg.norm(self.ref_gyro[start] - self.ref_gyro[level_row]) <= rate_tol[start - 1]
+                    and np.linalg.norm(self.ref_accel[start] - self.ref_accel[level_row])
+                    <= force_tol[start - 1]
                 ):
                     runs[-1], level_row = (runs[-1][0], stop), stop - 1
                     continue
+            if runs and kind[level_row] == 0 and level_row + 1 < start:  # a transition joined the level
+                runs[-1] = (runs[-1][0], level_row + 1)
+                runs.append((level_row + 1, start))
             runs.append((start, stop))
             level_row = stop - 1
         out = []

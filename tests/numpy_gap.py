@@ -66,8 +66,9 @@ EFFECTS = (
 #: The baseline alone, and two disturbances outside the library on gyro x.
 CONTROLS = ("control", "sinusoid (outside)", "bias step (outside)")
 #: The two cases issue 19 names: a gyro clipped only in the recording's last minutes, and a gyro
-#: quantised to 0.06 °/s under 0.01 °/s of noise (100 Hz), printed at 10 significant digits.
-ISSUE_CASES = ("gyro.saturation (tail)", "gyro.quantization (0.06 °/s)")
+#: quantised to 0.06 °/s under 0.01 °/s of noise (100 Hz), printed at 10 significant digits; and issue
+#: 32's: an accelerometer delay on a rig that turns between its holds in 0.3 s.
+ISSUE_CASES = ("gyro.saturation (tail)", "gyro.quantization (0.06 °/s)", "accel.time_offset (fast turns)")
 
 
 # ----------------------------------------------------------------------------- closed-form motion
@@ -668,6 +669,8 @@ def draw_case(name: str, seed: int) -> Case:
         return clipped_tail_case(seed)
     if name == ISSUE_CASES[1]:
         return quantized_case(seed)
+    if name == ISSUE_CASES[2]:
+        return fast_turns_case(seed)
     if name not in EFFECTS and name not in CONTROLS:
         raise ValueError(f"unknown case {name!r}")
     rng = np.random.default_rng([seed, zlib.crc32(name.encode())])
@@ -695,6 +698,14 @@ def quantized_case(seed: int = 0, rate_hz: float = 100.0, minutes: float = 10.0)
     """Issue 19's case (b): gyros quantised to 0.06 °/s (1.2 × the typical step) under 0.01 °/s of
     noise (100 Hz), rates from Earth's to 250 °/s."""
     return Case(ISSUE_CASES[1], seed, "tumble_and_table", rate_hz, minutes, "cycle", 1.2)
+
+
+def fast_turns_case(seed: int = 0, rate_hz: float = 100.0, minutes: float = 4.0) -> Case:
+    """Issue 32's case: an accelerometer delay at its typical size (1 ms) on random orientations held
+    8 s and a table in four mounts, every turn between them taking 0.3 s (a half turn peaks at
+    1,200 °/s): the force changes only during the turns, each shorter than a stretch of like input
+    may be (0.5 s)."""
+    return Case(ISSUE_CASES[2], seed, "tumble_and_table (fast turns)", rate_hz, minutes, "cycle")
 
 
 @dataclass(frozen=True)
@@ -726,6 +737,8 @@ def procedure_of(case: Case) -> Procedure:
     if case.procedure == "tumble_and_table (top rate last)":
         motion = tumble_and_table(case.seed, case.minutes, case.temp, mounts=4, top_mounts=1)
         return sampled(motion, case.rate_hz)
+    if case.procedure == "tumble_and_table (fast turns)":
+        return sampled(tumble_and_table(case.seed, case.minutes, case.temp, move_s=0.3), case.rate_hz)
     return PROCEDURES[case.procedure](case.rate_hz, case.seed, case.minutes, case.temp)
 
 

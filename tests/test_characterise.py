@@ -689,3 +689,13 @@ def test_residual_refusals():
     refusal(lambda: analysis.residual(back, x, None, "rec.csv"), "rec.csv", "does not increase")
     with pytest.raises(SinsInputError):
         analysis.residual(t, np.full((300, 6), np.nan), None, "rec.csv")
+
+
+def test_a_parting_without_a_ratio_is_written_as_json_can_say():
+    """A model with no noise where the real unit has some parts at an infinite ratio: the JSON says null
+    (JSON has no infinity; the fuzzing of issue 35 found `Infinity` written) and the words say why."""
+    parting = check.Parting("gyro.x", (0.01, 0.04), math.inf)
+    doc = check.ClosingCheck(seed=0, confidence=0.99, partings=(parting,)).to_dict()
+    text = json.dumps(doc, allow_nan=False)
+    assert json.loads(text)["partings"][0]["ratio"] is None
+    assert "no noise" in doc["partings"][0]["what"]

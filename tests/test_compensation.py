@@ -16,7 +16,7 @@ from sins.imu import calibration
 from sins.imu import spec as imu_spec
 from sins.nav import trajectory
 from sins.nav.motion import Hold, SegmentMotion, Start, Turn
-from sins.series import ImuRates
+from sins.series import CalibrationData, ImuRates
 
 FAST = calibration.RigProcedure(position_dwell_s=8.0, rate_table=calibration.RateTable(dwell_s=4.0))
 
@@ -483,3 +483,27 @@ def test_extended_regression_captures_squares_and_temperature(tmp_path: Path):
     )
     with pytest.raises(ValueError, match="temperature"):
         extended.correct(val.gyro, val.accel)
+
+
+def test_extended_regression_gives_no_coefficient_to_what_the_rig_cannot_tell(tmp_path: Path):
+    """A table turning about the vertical only: the reference's f_z is −g on every row but for a wobble in
+    its 11th digit (a reference printed to that many), so its square is the bias column again to 1e-11.
+    Least squares with numpy's default cut gave the pair cancelling coefficients of ~1e16, which the
+    model-file reader then refuses (sins would write a file it cannot read); the minimum-norm solution
+    keeps every coefficient of the size of the errors."""
+    rng = np.random.default_rng(3)
+    n = 4000
+    t = np.arange(n) / 100.0
+    w = np.zeros((n, 3))
+    w[:, 2] = np.radians(40.0) * np.sin(2 * np.pi * 0.05 * t)
+    f = np.zeros((n, 3))
+    f[:, 2] = -9.80665 * (1.0 + 1e-11 * np.sin(2 * np.pi * 0.3 * t))
+    f[:, 0] = 1e-10 * np.cos(t)
+    gyro = w + 1e-4 + rng.normal(0, 1e-4, (n, 3))
+    accel = f + 1e-2 + rng.normal(0, 1e-3, (n, 3))
+    data = CalibrationData(t=t, gyro=gyro, accel=accel, ref_gyro=w, ref_accel=f)
+    model = compensation.make("regression_extended", temperature=False).fit(data)
+    assert np.abs(model.coef_).max() < 10.0
+    compensation.save(model, tmp_path / "m.json")
+    back = compensation.load(tmp_path / "m.json")
+    np.testing.assert_array_equal(back.coef_, model.coef_)

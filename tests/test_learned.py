@@ -9,13 +9,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import dataset_folder
 
 from sins import compensation, imu, io
 from sins.cli import main
+from sins.compensation import residual
 from sins.compensation.kohonen import LocalLinearMap
-from sins.compensation.residual import Points, aggregate, segment
+from sins.compensation.residual import Points, aggregate, repeats, segment
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
+from sins.io.datasets.broad import BROAD_FOLDER, BROAD_TRIALS
 
 FAST = calibration.RigProcedure(
     positions=18,
@@ -50,6 +53,77 @@ def test_averaged_points_keep_the_least_squares_sums():
     by_row = p[np.argsort(pts.block)][block]  # each row gets its hold's point's prediction
     direct = (y**2 - (y - by_row) ** 2).sum(axis=0)
     np.testing.assert_allclose((pts.n[:, None] * (pts.y**2 - (pts.y - p) ** 2)).sum(axis=0), direct)
+
+
+def _runs(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Residuals (n, 3) whose error is one draw held over each run of ``m`` rows (a reference held over
+    an interval), with a white trace of 1 % of it."""
+    held = np.repeat(rng.normal(0.0, 1.0, (n // m + 1, 3)), m, axis=0)[:n]
+    return held + 0.01 * rng.normal(0.0, 1.0, (n, 3))
+
+
+def test_rows_that_repeat_one_draw_are_counted_from_the_residual_itself():
+    """``repeats``: white noise repeats nothing; a draw held over m rows is m rows (within the blocks'
+    own spread: a block of 2,000 rows holds 40 draws of 50, and its variance is 39/40 of theirs, so
+    0.95-1.0 m); a drift (a random walk) repeats many; a smooth residual without noise (a curve along a
+    ramp) is not a repeated draw, whatever its slow change."""
+    rng = np.random.default_rng(3)
+    n = 40_000
+    block = np.arange(n) // 2000  # 20 s blocks at 100 Hz
+    assert repeats(rng.normal(0.0, 1.0, (n, 3)), block) == 1
+    for m in (10, 50, 200):
+        assert 0.9 * m <= repeats(_runs(m, n, rng), block) <= m, m
+    walk = np.cumsum(rng.normal(0.0, 1.0, (n, 3)), axis=0) + rng.normal(0.0, 1.0, (n, 3))
+    assert repeats(walk, block) >= residual.MIN_REPEATS
+    ramp = np.linspace(-1.0, 1.0, 2000)
+    curve = np.tile(np.column_stack([ramp**2, np.sin(3 * ramp), ramp**3]), (n // 2000, 1))
+    assert repeats(curve, block) == 1
+    # Twice a white draw's spread in the row-to-row change is no repeat either (a drift beside white noise,
+    # as sins's rigs' gyros have: 1.6-2.6 rows).
+    assert repeats(0.5 * walk / np.sqrt(n) + rng.normal(0.0, 1.0, (n, 3)), block) == 1
+
+
+def test_a_run_of_rows_joins_one_point_and_the_sums_stay_the_rows():
+    """With ``run``, each run's rows are averaged into one point even where the inputs move through a
+    new cell every row (a turning unit against a held reference); counts, Σ y and Σ y² are the rows'."""
+    rng = np.random.default_rng(4)
+    n, m = 6000, 50
+    t = np.arange(n) / 100.0
+    x = np.column_stack([np.sin(t), np.cos(0.7 * t), 0.01 * t])  # a new fine cell nearly every row
+    y = _runs(m, n, rng)
+    block = segment(x, t)
+    assert len(aggregate(x, y, block).n) > 0.3 * n  # the cells alone hardly average
+    pts = aggregate(x, y, block, m)
+    runs_per_block = np.ceil(np.bincount(block) / m).sum()
+    assert len(pts.n) <= runs_per_block and pts.n.sum() == n
+    np.testing.assert_allclose((pts.n[:, None] * pts.y).sum(axis=0), y.sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(pts.sq.sum(axis=0), (y * y).sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose((pts.n[:, None] * pts.x).sum(axis=0), x.sum(axis=0), rtol=1e-12)
+    # A run of one row is the cells' points exactly.
+    single = aggregate(x, y, block, 1)
+    np.testing.assert_array_equal(single.x, aggregate(x, y, block).x)
+
+
+BROAD_05 = dataset_folder(BROAD_FOLDER) / f"{BROAD_TRIALS[0]}.mat"
+
+
+@pytest.mark.skipif(not BROAD_05.exists(), reason=f"BROAD trial 05 not in the data root ({BROAD_05})")
+def test_on_broad_the_rows_of_an_interval_are_counted_as_the_draws_they_repeat():
+    """A real unit against motion capture (BROAD trial 05, 285.7 Hz): the per-sample references the
+    intervals give hold one draw of the reference's error over each interval, and the learners average
+    runs of the rows that repeat one (``repeats_``), at most an interval's rows and more for longer
+    intervals (measured: 69 and 71 rows for 1 s, 286 rows; about 40 for 0.2 s, 57 rows)."""
+    from sins import referenced
+    from sins.io.datasets import broad_reference
+
+    rec = broad_reference.read_broad_reference("05")
+    runs = {}
+    for interval_s in (1.0, 0.2):
+        fitted = referenced.fit("kohonen", rec, interval_s=interval_s, params={"sizes": (5,), "folds": 2})
+        runs[interval_s] = fitted.strategy.repeats_
+        for sensor, rows in runs[interval_s].items():
+            assert residual.MIN_REPEATS <= rows <= interval_s * rec.rate_hz, (interval_s, sensor, rows)
+    assert all(runs[1.0][s] > runs[0.2][s] for s in residual.SENSORS), runs
 
 
 def test_the_local_linear_map_interpolates_where_node_means_make_a_staircase():
@@ -270,3 +344,70 @@ def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Pa
     assert all(re.fullmatch(r"fitting kohonen: .*\(\d+ s\)", line) for line in logged), logged
     lines = lambda out: [ln for ln in out.decode().splitlines() if not ln.startswith("wrote")]  # noqa: E731
     assert lines(on_tty.stdout) == lines(piped.stdout)
+
+
+def test_the_seed_papers_training_takes_the_steps_autograd_takes():
+    """``mlp_seed`` trains pattern by pattern with compiled steps; the same network, patterns and order
+    trained by torch's autograd and SGD (written here) ends at the same weights, to rounding (two
+    epochs of 300 patterns: measured 1e-15 relative)."""
+    import torch
+
+    from sins.compensation.mlp import MLP
+
+    rng = np.random.default_rng(5)
+    x = torch.from_numpy(rng.normal(0.0, 1.0, (300, 7)))
+    y = torch.from_numpy(rng.uniform(0.1, 0.9, (300, 6)))
+    strategy = MLP(hidden=(16, 8), mode="seed", alpha=0.05, gain=1.3, max_epochs=2, residual=0.0)
+    torch.manual_seed(0)
+    net = strategy._network(7)
+    reference = strategy._network(7)
+    reference.load_state_dict(net.state_dict())
+    initial = [p.detach().numpy().copy() for p in net.parameters()]
+    epochs, epsilon = strategy._train_seed(net, x, y)
+    optimiser = torch.optim.SGD(reference.parameters(), lr=0.05)
+    gen = torch.Generator().manual_seed(strategy.seed)
+    totals = []
+    for _ in range(2):
+        total = 0.0
+        for i in torch.randperm(300, generator=gen).tolist():
+            optimiser.zero_grad()
+            e = 0.5 * ((reference(x[i : i + 1]) - y[i : i + 1]) ** 2).sum()
+            e.backward()
+            optimiser.step()
+            total += float(e.detach())
+        totals.append(total / 300)
+    assert epochs == 2 and epsilon == pytest.approx(totals[-1], rel=1e-12)
+    for mine, theirs, before in zip(net.parameters(), reference.parameters(), initial, strict=True):
+        np.testing.assert_allclose(mine.detach().numpy(), theirs.detach().numpy(), rtol=1e-10, atol=1e-13)
+        assert np.abs(theirs.detach().numpy() - before).max() > 1e-4  # every layer was trained
+
+
+def test_a_candidate_stops_training_where_its_held_back_loss_stops_falling(seed_model_fits, monkeypatch):
+    """The cross-validation trains a candidate on every fold side by side, one training length at a
+    time, and stops once ``PATIENCE`` lengths in a row have not lowered its held-back loss summed over
+    the folds. Every length it reaches scores exactly as in the search that trains every candidate to
+    the end, and it stops exactly where that search's scores say."""
+    from sins.compensation import mlp
+
+    fit = seed_model_fits["fit"]
+    small = fit.rows(slice(0, len(fit), 4))
+    options = {"hidden_sizes": ((8, 8), (16, 16)), "guard": False, "n_jobs": 1}
+    stopped = compensation.make("mlp", **options).fit(small)
+    patience = residual.PATIENCE
+    monkeypatch.setattr(residual, "PATIENCE", len(mlp.CHECKPOINTS))
+    whole = compensation.make("mlp", **options).fit(small)
+    reached = 0
+    for sensor, scores in whole.cv_scores_.items():
+        for config in stopped._candidates(sensor, 0):
+            keys = [residual._key({**config, "iterations": n}) for n in mlp.CHECKPOINTS]
+            expect, best, stale = [], np.inf, 0
+            for key in keys:  # the rule, replayed on the whole search's scores
+                expect.append(key)
+                best, stale = (scores[key], 0) if scores[key] < best else (best, stale + 1)
+                if stale >= patience:
+                    break
+            got = [k for k in keys if k in stopped.cv_scores_[sensor]]
+            assert got == expect, (sensor, config)
+            assert all(stopped.cv_scores_[sensor][k] == scores[k] for k in got)
+            reached += len(got)
+    assert reached < 2 * 4 * len(mlp.CHECKPOINTS)  # some candidate did stop early on this unit

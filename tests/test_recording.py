@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sins import io
-from sins.io import formats
+from sins.io import tables
 from sins.series import CalibrationData, RigPhase
 
 SEED = 20240917
@@ -130,7 +130,7 @@ def test_written_recording_takes_the_fast_path(tmp_path: Path, monkeypatch: pyte
     def no_slow(*args: object) -> None:
         raise AssertionError("fell back to the slow parser")
 
-    monkeypatch.setattr(formats, "_read_slow", no_slow)
+    monkeypatch.setattr(tables, "_read_slow", no_slow)
     _assert_same(io.read_recording(path), data)
 
 
@@ -348,7 +348,9 @@ def _phase_less(pieces: list[tuple[float, np.ndarray, np.ndarray]], rate_hz: flo
 def test_a_recording_without_phases_is_withheld_in_stretches_of_like_input() -> None:
     """Holds, constant table rates and turns between them are each a stretch; the end of each is withheld,
     so a table rate met once, late in the recording (issue 19's clipped gyro), is fitted as well as
-    judged. Transitions are their own stretches, ramps too short to be one join the stretch before."""
+    judged. Transitions are their own stretches, a rate stepped within a row too (a row that starts the
+    new level and is fitted, as the first row of a phase is): joined to the level before, it would lie
+    in that stretch's withheld end, and no fitted row would see the input change."""
     rate_hz, up = 100.0, np.array([0.0, 0.0, -9.80665])
     ramp = np.linspace(0.0, 1.0, 200)[:, None]
     turn = ramp * np.array([0.0, 9.80665, 0.0]) + up * (1.0 - 0.1 * ramp)  # the force turning, 2 s
@@ -356,9 +358,11 @@ def test_a_recording_without_phases_is_withheld_in_stretches_of_like_input() -> 
     pieces += [(10.0, np.array([0.0, 0.0, r]), up) for r in (0.5, 1.0, 2.0, 4.4)]
     data = _phase_less(pieces, rate_hz)
     stretches = data.stretches()
-    # Each stretch ends with the row where the reference leaves it (the first of the next piece).
+    # The turn ends with the row where the reference leaves it (the first of the next piece, moving
+    # too); each step between table rates is a stretch of one row.
     seconds = [(b - a) / rate_hz for a, b in stretches]
-    assert seconds == pytest.approx([30.0, 2.0, 10.0, 10.0, 10.0, 10.0], abs=0.011), seconds
+    expected = [30.0, 2.0, 10.0, 0.01, 10.0, 0.01, 10.0, 0.01, 10.0]
+    assert seconds == pytest.approx(expected, abs=0.011), seconds
     held = data.held_back(0.3, like_input=True)
     top = np.abs(data.ref_gyro[:, 2] - 4.4) < 1e-12
     assert held[top].mean() == pytest.approx(0.3, abs=0.002) and (~held[top]).any()

@@ -31,10 +31,9 @@ from sins.errors import SinsInputError
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
 #: end, few enough that each task's start-up (a worker's first import of torch, say) is paid rarely.
 TASKS_PER_WORKER = 4
-#: The most units in one task: a task's units share each scenario's generated trajectory (its cost
-#: split among them: ~70 ns a unit-sample of a tactical unit's ~410 with 8 units, ~18 with 32), and a
-#: task is what a lost worker costs and how often results come back (32 one-hour units of
-#: ``regression`` alone: ~2 min of a core).
+#: The most units in one task: a task's units share each scenario's generated trajectory (its cost split
+#: among them, small beside a unit's own from 8 units up), and a task is what a lost worker costs and how
+#: often results come back (the figures: ``docs/speed.md``).
 MAX_UNITS_PER_TASK = 32
 
 

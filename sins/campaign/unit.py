@@ -99,8 +99,8 @@ def _rows(
 def task(spec: CampaignSpec, units: list[int]) -> tuple[list[int], list[dict[str, Any]]]:
     """A cluster's task: ``units`` and their rows (:func:`run_units`), wherever it runs.
 
-    Here, not beside the engine, so that a worker unpickling it imports no more than it needs (the
-    engine's Parquet writer, pyarrow, holds ~40 MB of every worker's memory).
+    Here, not beside the engine, so that a worker unpickling it imports no more than it needs (not the
+    engine's Parquet writer, pyarrow, which would hold memory in every worker: ``docs/speed.md``).
     """
     _heap_for_chunks()
     # A failing task reaches the user as its error's one line in the main process; the worker's own

@@ -13,9 +13,8 @@ Each channel (:func:`characterise_channel`): the rate's ramp is fitted to the ra
 walk take the ramp's rise and hide it. Resolved, the ramp stays out of the curve analysed; not resolved,
 the rate is analysed as it is. The noise terms are then decided on that curve
 (:mod:`sins.characterise.selection`). Taking a fitted line out of noise also takes its own apparent
-trend: the expected Allan variance of a rate random walk is then 20 % lower at the longest cluster time
-(8 % and 2.5 % at the two before; flicker 5 %, a Gauss–Markov bias 2 %, over 300 series), which reads a
-rate random walk beside a resolved ramp a little low.
+trend, which reads a rate random walk beside a resolved ramp a little low (by how much:
+``docs/guide/characterise.md``).
 """
 
 from __future__ import annotations

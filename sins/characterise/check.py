@@ -129,7 +129,9 @@ class ClosingCheck:
                 {
                     "channel": p.channel,
                     "tau_s": list(p.tau_s),
-                    "ratio": p.ratio,
+                    # JSON has no infinity: a deviation the model puts at zero parts without a ratio
+                    # (``what`` says so).
+                    "ratio": p.ratio if math.isfinite(p.ratio) else None,
                     "fitted": p.fitted,
                     "what": p.what(),
                 }

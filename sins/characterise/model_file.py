@@ -24,8 +24,8 @@ read it as it is. Each term maps to one effect, per sensor and axis:
   independent from sample to sample, as the term needs, only when the input moves by about half a step
   or more between samples (its white noise of ``N √dt`` per sample, at a standard deviation of half a
   step, leaves the remainder's law uniform to 1 %: ``exp(−π²/2)``). Below that, a unit at rest rounds
-  to a deterministic sawtooth, whose Allan curve is not the term's (the PSINS ring-laser unit parted
-  from it at 15 of 55 points so), and the file has the noise instead; above it, the rounding is the
+  to a deterministic sawtooth, whose Allan curve is not the term's, and the file has the noise
+  instead; above it, the rounding is the
   unit's own (its readings on a lattice, as the gap diagnosis sees them);
 * ``R`` has no effect in sins: the file names it in a comment, not simulated.
 

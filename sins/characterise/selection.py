@@ -5,9 +5,8 @@ the noise type at each cluster time (:func:`~sins.characterise.terms.spectral`).
 *full* model, all five noise terms fitted together (:func:`weigh`), and iterated with it to a fixed point
 (the EDF changes by less than 0.1 %): a continuous iteration, which converges in two to four passes. On
 the log scale the weights do not depend on the fitted level (:mod:`sins.characterise.fitting`), so no
-candidate model is weighted by a curve that lacks its own term (the previous design's fault: a model
-without a slow term gave the longest cluster times a variance of 3 % where the EDF implies 48 %, the term
-was then "resolved" with a tiny σ, and the next refit dropped it again).
+candidate model is weighted by a curve that lacks its own term (which would under-weight the longest
+cluster times and resolve a slow term one refit and drop it the next: ``docs/guide/characterise.md``).
 
 **A decision that is a function of those weights.** Every subset of the five terms is fitted under the
 same weights. A subset is *admissible* when each of its terms is resolved in it: leaving the term out

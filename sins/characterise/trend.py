@@ -22,9 +22,8 @@ resolve may still be. So the ramp is judged with the largest ``σ`` of the full 
 term, as fitted) and of it with the flicker or the rate random walk at its upper bound
 (:meth:`sins.characterise.selection.Weights.slow_models`): a ramp is resolved only when no noise the
 curve allows would have made it. The ``σ`` reported beside a resolved ramp is the full model's, its
-standard error; the one it was judged with is reported too. On a tactical unit's 17-minute rig
-recording, the full model alone (its rate random walk fitted at zero) gave an accelerometer ramp of 4σ
-where the unit has a Gauss–Markov bias of 300 s and no ramp; with the bound, 0.6σ.
+standard error; the one it was judged with is reported too (what the bound changes on a rig
+recording: ``docs/guide/characterise.md``).
 
 The ramp is *resolved* when ``|R̂| ≥ 3σ`` (the judging ``σ``); the Allan analysis then works on the
 rate less it (:meth:`sins.characterise.allan.AllanCurve.detrended`). Unresolved, it is bounded by

@@ -30,10 +30,11 @@ from __future__ import annotations
 
 import operator
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -199,32 +200,40 @@ class MLP(Strategy):
             else:
                 held[int(len(data) * (1 - self.validation)) :] = True
             val_mask = torch.from_numpy(held[rows])
-            self.epochs_, self.final_error_ = self._train_modern(net, xs, ys, val_mask)
+            with _one_thread():  # see _one_thread; 2 threads took 25x the CPU time on a busy machine
+                self.epochs_, self.final_error_ = self._train_modern(net, xs, ys, val_mask)
         self.weights_ = [p.detach().numpy().copy() for p in net.parameters()]
         self._net = net
         return self
 
     def _train_seed(self, net: Any, xs: Any, ys: Any) -> tuple[int, float]:
+        """Back-propagation pattern by pattern (plain SGD at ``alpha`` on each pattern's ``ε``), in the
+        patterns' order torch's generator deals each epoch. The steps are compiled (:func:`_seed_epoch`):
+        torch's autograd spends ~0.3 ms a pattern on a network this small, 10 min for 30 epochs of a
+        57,000-row recording."""
         import torch
 
-        optimiser = torch.optim.SGD(net.parameters(), lr=self.alpha)
+        params = list(net.parameters())
+        flat = np.concatenate([p.detach().numpy().ravel() for p in params])
+        weights = params[0::2]  # each layer's weights, then its sigmoids' centres
+        shapes = np.array([w.shape for w in weights], dtype=np.int64)
+        x, t = np.ascontiguousarray(xs.numpy()), np.ascontiguousarray(ys.numpy())
         gen = torch.Generator().manual_seed(self.seed)
         epsilon = float("inf")
         epochs = 0
         while epochs < self.max_epochs:
             epochs += 1
-            total = 0.0
-            for i in torch.randperm(len(xs), generator=gen).tolist():
-                optimiser.zero_grad()
-                e = 0.5 * ((net(xs[i : i + 1]) - ys[i : i + 1]) ** 2).sum()
-                e.backward()
-                optimiser.step()
-                total += float(e.detach())
-            epsilon = total / len(xs)
+            order = torch.randperm(len(xs), generator=gen).numpy().astype(np.int64)
+            epsilon = _seed_epoch(flat, shapes, x, t, order, float(self.gain), float(self.alpha)) / len(xs)
             if self.progress is not None:
                 self.progress(epochs, self.max_epochs)
             if epsilon < self.residual:
                 break
+        with torch.no_grad():
+            at = 0
+            for p in params:
+                p.copy_(torch.from_numpy(flat[at : at + p.numel()].reshape(p.shape)))
+                at += p.numel()
         return epochs, epsilon
 
     def _train_modern(self, net: Any, xs: Any, ys: Any, val_mask: Any) -> tuple[int, float]:
@@ -324,6 +333,54 @@ class MLP(Strategy):
         self._net = None
 
 
+@numba.njit(cache=True)
+def _seed_epoch(
+    flat: Array, shapes: NDArray[np.int64], x: Array, t: Array, order: NDArray[np.int64], gain: float,
+    alpha: float,
+) -> float:  # fmt: skip
+    """One epoch of ``mlp_seed``'s training, in place on the parameters ``flat`` (each layer's weights
+    (out, in) row-major, then its sigmoids' centres (out)); layer ``l`` is ``a = σ(gain (W a_prev − c))``.
+    For each pattern of ``order``: forward, ``ε = ½ Σ (a − t)²``, its gradient back through the layers
+    (each layer's input gradient taken before its weights move, as autograd does), and ``p -= alpha ∂ε/∂p``.
+    Returns Σ ε over the patterns (each before its own step)."""
+    layers = shapes.shape[0]
+    width = max(int(shapes[:, 0].max()), x.shape[1])
+    offsets = np.zeros(layers, dtype=np.int64)
+    for k in range(1, layers):
+        offsets[k] = offsets[k - 1] + shapes[k - 1, 0] * shapes[k - 1, 1] + shapes[k - 1, 0]
+    act = np.zeros((layers + 1, width))
+    grad, below = np.zeros(width), np.zeros(width)
+    total = 0.0
+    for i in order:
+        act[0, : x.shape[1]] = x[i]
+        for k in range(layers):
+            n_out, n_in, at = shapes[k, 0], shapes[k, 1], offsets[k]
+            for r in range(n_out):
+                z = 0.0
+                for j in range(n_in):
+                    z += flat[at + r * n_in + j] * act[k, j]
+                act[k + 1, r] = 1.0 / (1.0 + np.exp(-gain * (z - flat[at + n_out * n_in + r])))
+        for r in range(t.shape[1]):
+            d = act[layers, r] - t[i, r]
+            total += 0.5 * d * d
+            grad[r] = d
+        for k in range(layers - 1, -1, -1):
+            n_out, n_in, at = shapes[k, 0], shapes[k, 1], offsets[k]
+            for r in range(n_out):
+                a = act[k + 1, r]
+                grad[r] *= gain * a * (1.0 - a)  # ∂ε/∂z of this layer's sums
+            for j in range(n_in):
+                below[j] = 0.0
+                for r in range(n_out):
+                    below[j] += flat[at + r * n_in + j] * grad[r]
+            for r in range(n_out):
+                for j in range(n_in):
+                    flat[at + r * n_in + j] -= alpha * grad[r] * act[k, j]
+                flat[at + n_out * n_in + r] += alpha * grad[r]  # ∂ε/∂c = −∂ε/∂z
+            grad[:n_in] = below[:n_in]
+    return total
+
+
 # --------------------------------------------------------------------------- physics first
 
 
@@ -335,8 +392,10 @@ class ResidualMLP(ResidualStrategy):
     """``mlp``: regression, then a tanh network of its residual (see the module docstring).
 
     Candidates: hidden layers ``hidden_sizes`` × weight decay ``decays``, each trained
-    by full-batch L-BFGS on the averaged points and scored after every length of
-    :data:`CHECKPOINTS`; the best on the held-back blocks is retrained on all data.
+    by full-batch L-BFGS on the averaged points and scored after each length of
+    :data:`CHECKPOINTS` until two lengths in a row have not lowered its held-back
+    loss (:data:`~sins.compensation.residual.PATIENCE`); the best on the held-back
+    blocks is retrained on all data.
     The output layer starts at zero, so an untrained network is regression.
     """
 
@@ -369,41 +428,53 @@ class ResidualMLP(ResidualStrategy):
         return [{"hidden": list(h), "decay": d} for h in self.hidden_sizes for d in self.decays]
 
     def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
-        with _one_thread():
-            return self._train_on_one_thread(config, points, sigma, seed)
+        snapshots = dict(self._lbfgs(config, points, sigma, seed))
+        return {"hidden": list(config["hidden"]), "sigma": sigma.tolist(), "snapshots": snapshots}
 
-    def _train_on_one_thread(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
+    def _stages(
+        self, config: dict[str, Any], points: Points, sigma: Array, seed: int
+    ) -> Generator[list[tuple[dict[str, Any], Any]], None, None]:
+        """One stage per training length of :data:`CHECKPOINTS`: the network as it stands there."""
+        base = {k: v for k, v in config.items() if k != "iterations"}
+        for length, weights in self._lbfgs(config, points, sigma, seed):
+            yield [({**base, "iterations": length}, _NetLearner(config["hidden"], sigma.tolist(), weights))]
+
+    def _lbfgs(
+        self, config: dict[str, Any], points: Points, sigma: Array, seed: int
+    ) -> Generator[tuple[int, list[Array]], None, None]:
+        """Full-batch L-BFGS on ``points`` on one torch thread, yielding the weights at each training
+        length (``config``'s ``iterations`` alone where it has them, else every one of
+        :data:`CHECKPOINTS`); training goes on from where the last length left it."""
         import torch
 
-        with _INIT_LOCK:  # torch's generator is global: seed and draw the weights as one step
-            torch.manual_seed(seed)
-            net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
-        x = torch.from_numpy(points.x)
-        y = torch.from_numpy(points.y / sigma)
-        w = torch.from_numpy(points.n / points.n.sum())[:, None]
-        weights = [p for name, p in net.named_parameters() if name.endswith("weight")]
-        decay = config["decay"]
-        optimiser = torch.optim.LBFGS(
-            net.parameters(), lr=1.0, max_iter=CHECKPOINTS[0], history_size=20,
-            tolerance_grad=1e-12, tolerance_change=1e-15, line_search_fn="strong_wolfe",
-        )  # fmt: skip
+        with _one_thread():
+            with _INIT_LOCK:  # torch's generator is global: seed and draw the weights as one step
+                torch.manual_seed(seed)
+                net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
+            x = torch.from_numpy(points.x)
+            y = torch.from_numpy(points.y / sigma)
+            w = torch.from_numpy(points.n / points.n.sum())[:, None]
+            weights = [p for name, p in net.named_parameters() if name.endswith("weight")]
+            decay = config["decay"]
+            optimiser = torch.optim.LBFGS(
+                net.parameters(), lr=1.0, max_iter=CHECKPOINTS[0], history_size=20,
+                tolerance_grad=1e-12, tolerance_change=1e-15, line_search_fn="strong_wolfe",
+            )  # fmt: skip
 
-        def closure() -> Any:
-            optimiser.zero_grad()
-            loss = (w * (net(x) - y) ** 2).sum() + decay * sum((p * p).sum() for p in weights)
-            loss.backward()
-            return loss
+            def closure() -> Any:
+                optimiser.zero_grad()
+                loss = (w * (net(x) - y) ** 2).sum() + decay * sum((p * p).sum() for p in weights)
+                loss.backward()
+                return loss
 
-        lengths = [config["iterations"]] if "iterations" in config else list(CHECKPOINTS)
-        snapshots: dict[int, list[Array]] = {}
-        done = 0
-        for length in lengths:
-            optimiser.param_groups[0]["max_iter"] = length - done
-            optimiser.param_groups[0]["max_eval"] = int(1.25 * (length - done))
-            optimiser.step(closure)
-            done = length
-            snapshots[length] = [p.detach().numpy().copy() for p in net.parameters()]
-        return {"hidden": list(config["hidden"]), "sigma": sigma.tolist(), "snapshots": snapshots}
+            lengths = [config["iterations"]] if "iterations" in config else list(CHECKPOINTS)
+            done = 0
+            for length in lengths:
+                optimiser.param_groups[0]["max_iter"] = length - done
+                optimiser.param_groups[0]["max_eval"] = int(1.25 * (length - done))
+                optimiser.step(closure)
+                done = length
+                yield length, [p.detach().numpy().copy() for p in net.parameters()]
 
     def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
         base = {k: v for k, v in config.items() if k != "iterations"}

@@ -169,9 +169,15 @@ class ExtendedRegression(Strategy):
         coef = []
         for i, x in enumerate(designs):
             scale = np.sqrt(np.mean(x * x, axis=0))
-            scale = np.where(scale > 0, scale, 1.0)
-            c, *_ = np.linalg.lstsq(x / scale, errors[:, i], rcond=None)
-            coef.append(c / scale)
+            # What the rig does not show takes no coefficient: a column whose RMS is below 1e-9 of the
+            # largest (an input that is rounding on this rig, scaled up to unit RMS, took coefficients of
+            # 1e15-1e16 that the model-file reader then refuses), and a combination of columns the rig
+            # does not tell apart (the minimum-norm solution, singular values below 1e-9 of the largest
+            # dropped). The same rule as the term groups' (sins.compensation.terms).
+            shown = scale > 1e-9 * scale.max()
+            c = np.zeros(x.shape[1])
+            c[shown] = np.linalg.lstsq(x[:, shown] / scale[shown], errors[:, i], rcond=1e-9)[0] / scale[shown]
+            coef.append(c)
         self.coef_ = np.array(coef)
         return self
 

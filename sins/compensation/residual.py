@@ -28,12 +28,28 @@ reason for the design:
   half the residual's curvature times the cell's variance otherwise (for
   ``k2 ω²``, ``k2 δ²/12``: 1e-4 of the error at 300 °/s); it makes a
   100,000-row session a few thousand points.
+* **Rows that repeat one draw are one observation.** Where consecutive rows'
+  residuals share their error (a reference held over an interval, as the
+  per-sample references of :func:`sins.compensation.intervals.interval_reference`
+  are; a slow drift), a fine cell holds one row of moving inputs, and the
+  points would be as many as the rows though the draws are far fewer. The
+  number of rows a draw spans is read off the residual itself
+  (:func:`repeats`: the within-block variogram), and where it is 4 or more,
+  runs of that many rows are averaged first (their mean input and residual)
+  and the cells then group the runs: the loss of a run's mean is that of an
+  interval's integral, to second order. White noise (sins's rigs, a real unit
+  against an exact reference) repeats nothing, and the points are the cells'.
 * **Capacity chosen by data.** The session is cut into blocks of like input
   (a new block where the coarse reference input changes, at least 1 s and at
   most 20 s long), dealt at random (``seed``) into ``folds`` folds. For each
   fold the regression is refitted on the others, every candidate learner
   trained on their residuals and scored on the fold's: the held-back blocks
-  are orientations, rates and temperatures the learner did not see.
+  are orientations, rates and temperatures the learner did not see. An
+  iterative learner is trained on all folds side by side and scored after
+  each training length; it stops once ``PATIENCE`` lengths in a row have not
+  lowered its held-back loss summed over the folds (longer training then fits
+  the training folds' noise closer: the lengths it would have gone on to are
+  not chosen unless the held-back loss turns down again after rising twice).
 * **An honest guard.** Per channel, the chosen learner's held-back gain over
   regression and the terms (sum of squared residuals) is compared with its
   sampling error over the held-back blocks; a channel whose gain is not above
@@ -47,7 +63,7 @@ from __future__ import annotations
 
 import time
 from abc import abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -76,6 +92,13 @@ _MIN_TEMP_SPAN = 2.0
 EDGE_STEP = 1e-3
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
+#: Rows a draw must span before runs of them are averaged into one observation (see ``repeats``):
+#: below it the cells already hold most of the saving, and sins's rigs, whose gyros drift (bias
+#: instability) beside their white noise, repeat 1.6-2.6 rows.
+MIN_REPEATS = 4
+#: A candidate's cross-validation stops after this many stages of training in a row that did not lower
+#: its held-back loss (see ``_cross_validate``).
+PATIENCE = 2
 
 
 @dataclass(frozen=True)
@@ -125,11 +148,45 @@ def segment(scaled: Array, t: Array) -> NDArray[np.intp]:
     return np.cumsum(block)
 
 
-def aggregate(x: Array, y: Array, block: NDArray[np.intp]) -> Points:
-    """Average rows sharing a fine input cell and a block (see the module docstring)."""
-    keys = np.column_stack([np.floor(x / _CELL).astype(np.int64), block])
-    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
+def repeats(y: Array, block: NDArray[np.intp]) -> int:
+    """How many consecutive rows of residuals ``y`` (n, k) repeat one draw of their error: the run the
+    points average over (:func:`aggregate`), 1 where it is below :data:`MIN_REPEATS`.
+
+    Per channel, within the blocks (``block`` sorted, each a stretch of like input): the semivariogram
+    ``D(L) = ½ mean (y[i+L] − y[i])²`` at lags 1 and 2 against the within-block variance ``V``. White
+    noise has ``D(1) = V``; rows that share a draw over ``m`` rows (a held reference, a drift) change
+    from row to row by ``V / m``, and ``D`` grows linearly with the lag (``D(2) ≈ 2 D(1)``). A channel
+    repeats ``V / D(1)`` rows where ``D`` grows linearly (``D(2) < 3 D(1)``); a smooth residual without
+    noise grows quadratically (``D(2) ≈ 4 D(1)``: a ramp's curve, not a repeated draw), and counts as
+    rows of their own. The sensor repeats what its most independent channel does.
+    """
+    n = len(y)
+    starts = np.r_[0, np.flatnonzero(np.diff(block)) + 1]
+    counts = np.diff(np.r_[starts, n])
+    if n - len(starts) < 3:
+        return 1
+    means = np.add.reduceat(y, starts, axis=0) / counts[:, None]
+    within = ((y - np.repeat(means, counts, axis=0)) ** 2).sum(axis=0) / (n - len(starts))
+    lag: list[Array] = []
+    for step in (1, 2):
+        same = block[step:] == block[:-step]
+        lag.append(0.5 * np.mean((y[step:] - y[:-step])[same] ** 2, axis=0))
+    spans = [
+        float(v / d1) if d2 < 3.0 * d1 else 1.0
+        for v, d1, d2 in zip(within, *lag, strict=True)
+        if v > 0 and d1 > 0
+    ]
+    run = int(min(spans)) if spans else 1
+    return run if run >= MIN_REPEATS else 1
+
+
+def aggregate(x: Array, y: Array, block: NDArray[np.intp], run: int = 1) -> Points:
+    """Average rows sharing a fine input cell and a block (see the module docstring); with ``run`` > 1
+    each row takes the cell of its run's mean input (runs of ``run`` rows from each block's start,
+    ``block`` sorted), so that a run's rows join one point."""
+    cells = x if run <= 1 else _run_means(x, block, run)
+    keys = np.column_stack([np.floor(cells / _CELL).astype(np.int64), block])
+    inverse, counts = _group(keys)
     m = len(counts)
     sums_x = np.zeros((m, x.shape[1]))
     sums_y = np.zeros((m, y.shape[1]))
@@ -141,6 +198,39 @@ def aggregate(x: Array, y: Array, block: NDArray[np.intp]) -> Points:
     np.minimum.at(first, inverse, np.arange(len(block)))
     n = counts.astype(float)
     return Points(sums_x / n[:, None], sums_y / n[:, None], n, block[first], sq)
+
+
+def _run_means(x: Array, block: NDArray[np.intp], run: int) -> Array:
+    """Each row's run's mean of ``x``: runs of ``run`` rows from the start of each block."""
+    n = len(x)
+    new_block = np.r_[True, block[1:] != block[:-1]]
+    starts = np.flatnonzero(new_block)
+    position = np.arange(n) - np.repeat(starts, np.diff(np.r_[starts, n]))
+    run_id = np.cumsum(new_block | (position % run == 0)) - 1
+    counts = np.bincount(run_id)
+    means = np.stack([np.bincount(run_id, x[:, c]) for c in range(x.shape[1])], axis=1) / counts[:, None]
+    out: Array = means[run_id]
+    return out
+
+
+def _group(keys: NDArray[np.int64]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.unique(keys, axis=0)``'s inverse and counts: the groups of equal rows, numbered in the
+    rows' lexicographic order. The columns are packed into one integer (each less its minimum, in a
+    radix of its range) where they fit in 63 bits, whose order is the lexicographic one, so the groups
+    and their numbering are the same; sorting one integer column is several times faster than
+    sorting rows (``axis=0`` sorts a structured view)."""
+    if len(keys) == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    lo = keys.min(axis=0)
+    spans = keys.max(axis=0) - lo + 1
+    if float(np.prod(spans.astype(float))) >= 2.0**62:
+        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+        return inverse.ravel(), counts
+    packed = np.zeros(len(keys), dtype=np.int64)
+    for c in range(keys.shape[1]):
+        packed = packed * spans[c] + (keys[:, c] - lo[c])
+    _, inverse, counts = np.unique(packed, return_inverse=True, return_counts=True)
+    return inverse.ravel(), counts
 
 
 def _block_gains(points: Points, pred: Array) -> tuple[Array, Array]:
@@ -155,6 +245,26 @@ def _block_gains(points: Points, pred: Array) -> tuple[Array, Array]:
     return out, base
 
 
+def _loss(held: Points, pred: Array, sigma: Array) -> float:
+    """The weighted held-back loss of predictions ``pred`` at ``held``'s points, in units of ``sigma``."""
+    return float((held.n[:, None] * ((held.y - pred) / sigma) ** 2).sum())
+
+
+@dataclass(frozen=True)
+class _Job:
+    """A candidate setting of one sensor to cross-validate: per fold its training and held-back points
+    and its seed; ``sigma`` the sensor's residual scale."""
+
+    sensor: str
+    config: dict[str, Any]
+    folds: list[tuple[Points, Points, int]]
+    sigma: Array
+
+    def loss(self, preds: list[Array]) -> float:
+        """The held-back loss of one prediction per fold, summed over the folds."""
+        return sum(_loss(held, p, self.sigma) for (_, held, _), p in zip(self.folds, preds, strict=True))
+
+
 class _Trial:
     """A candidate setting's held-back record: its weighted loss, and per held-back block and channel
     the gain over regression and regression's own sum of squares."""
@@ -166,7 +276,7 @@ class _Trial:
         self.base: list[Array] = []
 
     def add(self, held: Points, pred: Array, sigma: Array) -> None:
-        self.score += float((held.n[:, None] * ((held.y - pred) / sigma) ** 2).sum())
+        self.score += _loss(held, pred, sigma)
         gain, base = _block_gains(held, pred)
         self.gains.append(gain)
         self.base.append(base)
@@ -248,6 +358,14 @@ class ResidualStrategy(Strategy):
         """Settings derived from one training run (training lengths, say) with their learners."""
         return [(config, learner)]
 
+    def _stages(
+        self, config: dict[str, Any], points: Points, sigma: Array, seed: int
+    ) -> Generator[list[tuple[dict[str, Any], Any]], None, None]:
+        """Training under ``config`` in stages (an iterative learner's training lengths), yielding after
+        each the variants it reached in that stage with their learners; the cross-validation may stop
+        between stages. By default one stage: :meth:`_train`'s :meth:`_variants`."""
+        yield self._variants(config, self._train(config, points, sigma, seed))
+
     @abstractmethod
     def _learner_state(self, learner: Any) -> Any:
         """The fitted learner as plain lists and numbers."""
@@ -296,6 +414,7 @@ class ResidualStrategy(Strategy):
             if g
         }
         targets = targets - self._terms(x_terms, range(6))
+        self.repeats_ = {s: repeats(targets[:, 3 * i : 3 * i + 3], block) for i, s in enumerate(SENSORS)}
         sigma = np.sqrt(np.mean(targets**2, axis=0))
         self.sigma_ = np.where(sigma > 0, sigma, 1.0)
         # The learners learn what regression and the terms leave, both refitted without the fold.
@@ -317,8 +436,8 @@ class ResidualStrategy(Strategy):
             for c, verdict in enumerate(best.verdicts(self.guard_z)):
                 self.guard_[CHANNELS[3 * si + c]] = verdict
                 used[3 * si + c] = verdict["earns_its_place"] or not self.guard
-            learner = self._train(best.config, aggregate(scaled[sensor], targets[:, cols], block),
-                                  self.sigma_[cols], self.seed)  # fmt: skip
+            points = aggregate(scaled[sensor], targets[:, cols], block, self.repeats_[sensor])
+            learner = self._train(best.config, points, self.sigma_[cols], self.seed)
             self.learners_[sensor] = self._final(best.config, learner)
         self.used_ = used
         self.fit_seconds_ = time.perf_counter() - started
@@ -343,34 +462,60 @@ class ResidualStrategy(Strategy):
     ) -> dict[str, dict[str, _Trial]]:
         """Per sensor and candidate setting, its held-back record over the folds: for each fold ``k``,
         every candidate trained on the residuals its training rows leave (regression and the chosen
-        terms, refitted without the fold) and scored on the fold's."""
-        jobs: list[tuple[str, dict[str, Any], Points, Points, slice, int]] = []
-        for k, train, fold_targets in folds:
-            held = ~train
-            for si, sensor in enumerate(SENSORS):
-                cols = slice(3 * si, 3 * si + 3)
-                pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train])
-                pts_held = aggregate(scaled[sensor][held], fold_targets[held, cols], block[held])
-                for config in self._candidates(sensor, scaled[sensor].shape[1]):
-                    jobs.append((sensor, config, pts_train, pts_held, cols, self.seed + k))
+        terms, refitted without the fold) and scored on the fold's.
 
-        def run(job: tuple[str, dict[str, Any], Points, Points, slice, int]) -> Any:
-            _, config, pts_train, _, cols, seed = job
-            return self._train(config, pts_train, self.sigma_[cols], seed)
-
-        learners: list[Any] = []
+        A candidate is trained on every fold side by side, stage by stage (:meth:`_stages`), and its
+        training stops once :data:`PATIENCE` stages in a row have not lowered its held-back loss summed
+        over the folds: longer training then only fits the training folds' noise closer."""
+        jobs: list[_Job] = []
+        for si, sensor in enumerate(SENSORS):
+            cols = slice(3 * si, 3 * si + 3)
+            fold_points = []
+            for k, train, fold_targets in folds:
+                held = ~train
+                run = self.repeats_[sensor]
+                pts_train = aggregate(scaled[sensor][train], fold_targets[train, cols], block[train], run)
+                pts_held = aggregate(scaled[sensor][held], fold_targets[held, cols], block[held], run)
+                fold_points.append((pts_train, pts_held, self.seed + k))
+            for config in self._candidates(sensor, scaled[sensor].shape[1]):
+                jobs.append(_Job(sensor, config, fold_points, self.sigma_[cols]))
+        results: list[list[tuple[dict[str, Any], list[Array]]]] = []
         with ThreadPoolExecutor(self.n_jobs) as pool:
-            for learner in pool.map(run, jobs):
-                learners.append(learner)
+            for result in pool.map(self._run_job, jobs):
+                results.append(result)
                 if self.progress is not None:
-                    self.progress(len(learners), len(jobs))
+                    self.progress(len(results), len(jobs))
         # Scored in the jobs' order, whatever order they finished in: the trials' sums come out the same.
         trials: dict[str, dict[str, _Trial]] = {s: {} for s in SENSORS}
-        for (sensor, config, _, pts_held, cols, _), learner in zip(jobs, learners, strict=True):
-            for variant, fitted in self._variants(config, learner):
-                trial = trials[sensor].setdefault(_key(variant), _Trial(variant))
-                trial.add(pts_held, self._predict(fitted, pts_held.x), self.sigma_[cols])
+        for job, variants in zip(jobs, results, strict=True):
+            for variant, preds in variants:
+                trial = trials[job.sensor].setdefault(_key(variant), _Trial(variant))
+                for (_, pts_held, _), pred in zip(job.folds, preds, strict=True):
+                    trial.add(pts_held, pred, job.sigma)
         return trials
+
+    def _run_job(self, job: _Job) -> list[tuple[dict[str, Any], list[Array]]]:
+        """One candidate trained on every fold in stages: each variant it passed through, with its
+        predictions on each fold's held-back points (see :meth:`_cross_validate`)."""
+        stages = [self._stages(job.config, train, job.sigma, seed) for train, _, seed in job.folds]
+        out: list[tuple[dict[str, Any], list[Array]]] = []
+        best, stale = np.inf, 0
+        try:
+            for per_fold in zip(*stages, strict=True):
+                found: dict[str, tuple[dict[str, Any], list[Array]]] = {}
+                for (_, held, _), variants in zip(job.folds, per_fold, strict=True):
+                    for variant, fitted in variants:
+                        preds = found.setdefault(_key(variant), (variant, []))[1]
+                        preds.append(self._predict(fitted, held.x))
+                out.extend(found.values())
+                loss = min(job.loss(preds) for _, preds in found.values())
+                best, stale = (loss, 0) if loss < best else (best, stale + 1)
+                if stale >= PATIENCE:
+                    break
+        finally:
+            for stage in stages:
+                stage.close()
+        return out
 
     def _final(self, config: dict[str, Any], learner: Any) -> Any:
         """The learner to keep from a final training run under ``config`` (its variant's, say)."""

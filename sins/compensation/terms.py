@@ -136,14 +136,17 @@ def choose(
     columns scaled to unit RMS on the training rows), so a fold costs one pass over the rows a channel.
     """
     chosen: list[tuple[str, ...]] = []
+    held_blocks = []  # per fold: how many held-back blocks, and each held-back row's
+    for train, _ in fold_targets:
+        blocks, index = np.unique(block[~train], return_inverse=True)
+        held_blocks.append((len(blocks), index.ravel()))
     for c in range(6):
         options = subsets(x.t is not None, c)
         full = design(options[-1], c, x)
         columns = {s: _columns_of(s, options[-1], c, x.rows(np.arange(1))) for s in options}
         gains: dict[tuple[str, ...], list[Array]] = {s: [] for s in options}
-        for train, targets in fold_targets:
+        for (train, targets), (n_blocks, index) in zip(fold_targets, held_blocks, strict=True):
             held = ~train
-            blocks, index = np.unique(block[held], return_inverse=True)
             x_train, y_train = full[train], targets[train, c]
             scale = _shown(np.sqrt(np.mean(x_train * x_train, axis=0)))
             shown = scale > 0
@@ -154,9 +157,8 @@ def choose(
                 cols = every[shown[every]]  # a column the fold's rows do not show takes no part
                 coef, *_ = np.linalg.lstsq(gram[np.ix_(cols, cols)], moment[cols], rcond=None)
                 e = y - x_held[:, cols] @ coef
-                out = np.zeros(len(blocks))
-                np.add.at(out, index.ravel(), y * y - e * e)
-                gains[s].append(out)
+                # Summed row by row in order, as np.add.at does, and many times faster.
+                gains[s].append(np.bincount(index, weights=y * y - e * e, minlength=n_blocks))
         chosen.append(
             _forward(options, {s: np.concatenate(g) if g else np.zeros(0) for s, g in gains.items()}, z)
         )

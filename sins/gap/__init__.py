@@ -3,7 +3,9 @@
 :mod:`~sins.gap.diagnosis` runs the greedy search over the effect library: its candidates
 (:mod:`~sins.gap.candidates`), each channel's model (:mod:`~sins.gap.channel`), their scores
 (:mod:`~sins.gap.scoring`), the guards and rules of choice (:mod:`~sins.gap.guards`), the noise floor
-and where the gap lies (:mod:`~sins.gap.floor`) and the report (:mod:`~sins.gap.report`).
+and where the gap lies (:mod:`~sins.gap.floor`) and the report (:mod:`~sins.gap.report`); the
+columns are built a chunk of rows at a time (:mod:`~sins.gap.design`), so a long recording's are never
+held whole.
 :mod:`~sins.gap.lattice`, :mod:`~sins.gap.randombias` and :mod:`~sins.gap.disturbance` are its
 specialists for quantization lattices, random biases and out-of-library disturbances.
 """

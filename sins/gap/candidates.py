@@ -16,6 +16,7 @@ Every library effect not in the model is a candidate (:data:`CANDIDATES`), of on
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -46,6 +47,28 @@ class Candidate:
     columns: Callable[[ReferenceInputs, int], Array] | None = None  # (n, k) extra regressors of axis i
 
 
+#: Rows a long recording's row-by-row work takes at a time (a chunk of six float columns is 3 MB).
+CHUNK_ROWS = 1 << 16
+
+
+def spans(n: int, size: int | None = None) -> list[tuple[int, int]]:
+    """Rows ``0 … n`` in consecutive ``(start, stop)`` chunks of at most ``size`` rows
+    (:data:`CHUNK_ROWS`, read when called)."""
+    size = size or CHUNK_ROWS
+    return [(lo, min(lo + size, n)) for lo in range(0, n, size)]
+
+
+@dataclass(frozen=True)
+class Kinks:
+    """The rows of one reference axis where a cubic Hermite curve through the rows leaves and enters
+    with one-sided slopes (:func:`sins.imu.model.hermite_slopes`), and those slopes: everywhere else
+    both are the central ones. A rig's reference has a few, at the corners of its rate profile."""
+
+    rows: NDArray[np.int64]
+    right: Array  # the slope the curve leaves each row with
+    left: Array  # the slope the curve enters each row with
+
+
 @dataclass(frozen=True, eq=False)
 class ReferenceInputs:
     """The reference inputs of every row, and what the regressors and the delay are built from.
@@ -54,60 +77,168 @@ class ReferenceInputs:
     ----------
     t : (n,) s
     omega_ib_b, f_ib_b : (n, 3) the reference angular rate (rad/s) and specific force (m/s²)
-    omega_dot_b : (n, 3) the reference's angular acceleration, rad/s² (central differences)
-    u_rate : per sensor, (n, 3) the rate of change of its reference (central differences)
     temp : (n,) °C, or None
     step_s : the median sampling step, s
-    splines : per sensor and axis, the cubic Hermite curve of its reference through the rows (for
-        :meth:`lag`; see :func:`kinked_hermite`)
+    kinks : per sensor and axis, the rows where the cubic Hermite curve of its reference through
+        the rows takes one-sided slopes (for :meth:`lag`; see :func:`kinked_hermite`)
+    temp_mean : the mean temperature of the whole recording, °C (None without one): the
+        temperature columns' origin, the same in every chunk of rows (:meth:`rows`)
+    start, whole : for a chunk of rows (:meth:`rows`), its first row's index in the whole
+        recording and the whole recording's inputs (None: these are the whole recording's)
+
+    The rates of change (:meth:`rate`, :attr:`omega_dot_b`) are computed when asked for, from the
+    whole recording's rows: held, they would be six more columns as long as the recording.
     """
 
     t: Array
     omega_ib_b: Array
     f_ib_b: Array
-    omega_dot_b: Array
-    u_rate: dict[str, Array]
     temp: Array | None
     step_s: float
-    splines: dict[tuple[str, int], PPoly]
+    kinks: dict[tuple[str, int], Kinks]
+    temp_mean: float | None = None
+    start: int = 0
+    whole: ReferenceInputs | None = None
 
     def of(self, sensor: str) -> Array:
         """The reference ``sensor`` measures: ``omega`` for "gyro", ``f`` for "accel"."""
         return self.omega_ib_b if sensor == "gyro" else self.f_ib_b
 
-    def lag(self, sensor: str, axis: int, delay_s: float) -> Array:
-        """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows
-        (:func:`kinked_hermite`), held at the ends.
+    def rate(self, sensor: str, axis: int | None = None) -> Array:
+        """(n, 3) the rate of change of ``sensor``'s reference, or (n,) of one ``axis``
+        (:func:`central_differences` over the whole recording: a chunk's first and last rows take
+        their neighbours outside it)."""
+        whole = self.whole or self
+        lo, n = self.start, len(whole.t)
+        hi = lo + len(self.t)
+        a, b = max(lo - 1, 0), min(hi + 1, n)
+        u = whole.of(sensor)[a:b] if axis is None else whole.of(sensor)[a:b, axis : axis + 1]
+        if n < 3:
+            out = np.zeros_like(u[lo - a : hi - a])
+        else:
+            out = central_differences(u, whole.t[a:b])[lo - a : hi - a]
+        return out if axis is None else out[:, 0]
 
-        The curve is a scipy ``PPoly`` (:attr:`splines`), not :func:`sins.imu.model.cubic_hermite`,
-        which delays the simulated inputs: the two agree to the last few bits only where both take
-        the central slopes.
+    @property
+    def omega_dot_b(self) -> Array:
+        """(n, 3) the reference's angular acceleration, rad/s² (:meth:`rate` of the gyro's)."""
+        return self.rate("gyro")
+
+    def rows(self, start: int, stop: int) -> ReferenceInputs:
+        """Rows ``start … stop`` (views, no copies): what the regressors of a chunk are built from.
+        Its ``kinks`` are the whole recording's, and :meth:`lag` is for the whole recording only."""
+        part = slice(start, stop)
+        return dataclasses.replace(
+            self,
+            t=self.t[part],
+            omega_ib_b=self.omega_ib_b[part],
+            f_ib_b=self.f_ib_b[part],
+            temp=None if self.temp is None else self.temp[part],
+            start=self.start + start,
+            whole=self.whole or self,
+        )
+
+    def lag(self, sensor: str, axis: int, delay_s: float, central: Array | None = None) -> Array:
+        """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows
+        (:func:`kinked_hermite`), held at the ends. ``central``: the axis's :meth:`rate`, if the
+        caller has it (a search over τ asks for many lags).
+
+        Evaluated a chunk of rows at a time on that chunk's pieces of the curve (the same
+        coefficients as the whole curve's, so the same values to the last bit), never the whole
+        curve at once: its coefficients are four floats a row. A scipy ``PPoly``, not
+        :func:`sins.imu.model.cubic_hermite`, which delays the simulated inputs: the two agree to
+        the last few bits only where both take the central slopes.
         """
-        u = self.of(sensor)[:, axis]
-        when = np.clip(self.t - delay_s, self.t[0], self.t[-1])
-        return np.asarray(self.splines[sensor, axis](when)) - u
+        assert self.whole is None, "the lag of the whole recording's rows"
+        t, u, kinks = self.t, self.of(sensor)[:, axis], self.kinks[sensor, axis]
+        n, out = len(t), np.empty(len(t))
+        for lo, hi in spans(n):
+            when = np.clip(t[lo:hi] - delay_s, t[0], t[-1])
+            first = int(np.clip(np.searchsorted(t, when[0], side="right") - 1, 0, n - 2))
+            last = int(np.clip(np.searchsorted(t, when[-1], side="right") - 1, 0, n - 2))
+            # One breakpoint beyond the last interval used, so that a time on a breakpoint falls in
+            # the interval the whole curve would take (the one it starts).
+            piece = slice(first, min(last + 3, n))
+            if central is None:
+                slopes = self.rows(piece.start, piece.stop).rate(sensor, axis)
+            else:
+                slopes = central[piece]
+            right, left = slopes.copy(), slopes.copy()
+            at = slice(*np.searchsorted(kinks.rows, [piece.start, piece.stop]))
+            right[kinks.rows[at] - first], left[kinks.rows[at] - first] = kinks.right[at], kinks.left[at]
+            curve = PPoly(_hermite_coefficients(t[piece], u[piece], right, left), t[piece])
+            out[lo:hi] = np.asarray(curve(when)) - u[lo:hi]
+        return out
+
+
+def central_differences(a: Array, t: Array) -> Array:
+    """``d a / d t`` of an (n, k) series at unevenly spaced times ``t``: the second-order central
+    differences inside and one-sided ones at the ends, ``numpy.gradient``'s formulas for uneven
+    spacing written out (it takes others where ``t`` happens to be even, which would make a chunk's
+    values depend on its neighbours' spacing). Needs two rows at least."""
+    dx = np.diff(t)[:, None]
+    out = np.empty_like(a)
+    if len(t) > 2:
+        dx1, dx2 = dx[:-1], dx[1:]
+        first = -dx2 / (dx1 * (dx1 + dx2))
+        middle = (dx2 - dx1) / (dx1 * dx2)
+        last = dx1 / (dx2 * (dx1 + dx2))
+        out[1:-1] = first * a[:-2] + middle * a[1:-1] + last * a[2:]
+    out[0] = (a[1] - a[0]) / dx[0]
+    out[-1] = (a[-1] - a[-2]) / dx[-1]
+    return out
+
+
+def _kinks(x: ReferenceInputs, sensor: str) -> list[Kinks]:
+    """The kinks of each axis of ``sensor``'s reference: :func:`sins.imu.model.hermite_slopes` a
+    chunk at a time, each with three rows either side (its stencils reach two), so each row's
+    slopes are the whole recording's."""
+    found: list[list[tuple[NDArray[np.int64], Array, Array]]] = [[], [], []]
+    n = len(x.t)
+    for lo, hi in spans(n):
+        a, b = max(lo - 3, 0), min(hi + 3, n)
+        part = x.rows(a, b)
+        central = part.rate(sensor)
+        right, left = hermite_slopes(part.t, part.of(sensor), central)
+        own = slice(lo - a, hi - a)
+        right, left, base = right[own], left[own], central[own]
+        for j in range(3):
+            rows = np.flatnonzero((right[:, j] != base[:, j]) | (left[:, j] != base[:, j]))
+            found[j].append((rows + lo, right[rows, j], left[rows, j]))
+    return [Kinks(*(np.concatenate([part[k] for part in parts]) for k in range(3))) for parts in found]
 
 
 def reference_inputs(data: CalibrationData) -> ReferenceInputs:
-    """The reference inputs of every row of ``data``, their rates of change and their splines."""
+    """The reference inputs of every row of ``data``, and the kinks of their Hermite curves."""
     t = data.t
-    grad = (lambda a: np.gradient(a, t, axis=0)) if len(t) > 2 else np.zeros_like
-    u_rate = {"gyro": grad(data.ref_gyro), "accel": grad(data.ref_accel)}
-    reference = {"gyro": data.ref_gyro, "accel": data.ref_accel}
-    return ReferenceInputs(
+    x = ReferenceInputs(
         t=t,
         omega_ib_b=data.ref_gyro,
         f_ib_b=data.ref_accel,
-        omega_dot_b=grad(data.ref_gyro),
-        u_rate=u_rate,
         temp=data.temp,
         step_s=float(np.median(np.diff(t))),
-        splines={
-            (sensor, axis): kinked_hermite(t, reference[sensor][:, axis], u_rate[sensor][:, axis])
-            for sensor in ("gyro", "accel")
-            for axis in range(3)
-        },
+        kinks={},
+        temp_mean=None if data.temp is None else float(np.mean(data.temp)),
     )
+    for sensor in ("gyro", "accel"):
+        for axis, k in enumerate(_kinks(x, sensor)):
+            x.kinks[sensor, axis] = k
+    return x
+
+
+def _hermite_coefficients(t: Array, u: Array, right: Array, left: Array) -> Array:
+    """The power-form coefficients (4, n − 1) of the cubic Hermite curve through ``(t, u)`` that
+    leaves each row with slope ``right`` and enters it with ``left``, as scipy's
+    ``CubicHermiteSpline`` builds them with one slope a row."""
+    dx = np.diff(t)
+    slope = np.diff(u) / dx
+    tt = (right[:-1] + left[1:] - 2 * slope) / dx
+    c = np.empty((4, len(t) - 1))
+    c[0] = tt / dx
+    c[1] = (slope - right[:-1]) / dx - tt
+    c[2] = right[:-1]
+    c[3] = u[:-1]
+    return c
 
 
 def kinked_hermite(t: Array, u: Array, central: Array) -> PPoly:
@@ -116,19 +247,8 @@ def kinked_hermite(t: Array, u: Array, central: Array) -> PPoly:
     scipy ``PPoly``: the curve the simulator delays its rate samples along, so that a delay is
     diagnosed on the curve it was made on. Where no row is a kink it is scipy's
     ``CubicHermiteSpline`` with the central slopes, to the last bit (the same coefficients)."""
-    n = len(t)
     right, left = hermite_slopes(t, u[:, None], central[:, None])
-    right, left = right[:, 0], left[:, 0]
-    dx = np.diff(t)
-    slope = np.diff(u) / dx
-    # As scipy's CubicHermiteSpline builds its coefficients, with a slope of each side.
-    tt = (right[:-1] + left[1:] - 2 * slope) / dx
-    c = np.empty((4, n - 1))
-    c[0] = tt / dx
-    c[1] = (slope - right[:-1]) / dx - tt
-    c[2] = right[:-1]
-    c[3] = u[:-1]
-    return PPoly(c, t)
+    return PPoly(_hermite_coefficients(t, u, right[:, 0], left[:, 0]), t)
 
 
 def baseline_columns(sensor: str, omega: Array, f: Array) -> Array:
@@ -143,7 +263,8 @@ def baseline_columns(sensor: str, omega: Array, f: Array) -> Array:
 def _size_columns(x: ReferenceInputs, i: int) -> Array:
     """Accelerometer ``i``'s reading of a unit lever arm along each body axis: the size effect's
     three coefficients are its lever arm's components (:class:`sins.imu.SizeEffect`)."""
-    return np.stack([lever_arm_acceleration(x.omega_ib_b, x.omega_dot_b, r)[:, i] for r in np.eye(3)], axis=1)
+    omega_dot = x.omega_dot_b
+    return np.stack([lever_arm_acceleration(x.omega_ib_b, omega_dot, r)[:, i] for r in np.eye(3)], axis=1)
 
 
 def _g2_columns(x: ReferenceInputs, i: int) -> Array:
@@ -152,8 +273,9 @@ def _g2_columns(x: ReferenceInputs, i: int) -> Array:
 
 
 def _temp(x: ReferenceInputs) -> Array:
-    assert x.temp is not None
-    return x.temp - float(np.mean(x.temp))
+    # About the whole recording's mean, the same origin in every chunk of rows.
+    assert x.temp is not None and x.temp_mean is not None
+    return x.temp - x.temp_mean
 
 
 def _candidates(sensor: str) -> list[Candidate]:

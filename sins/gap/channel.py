@@ -23,13 +23,15 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from sins.gap import lattice, randombias
-from sins.gap.candidates import Candidate, ReferenceInputs, baseline_columns
+from sins.gap.candidates import Candidate, ReferenceInputs
+from sins.gap.design import Design, Maker, Projection
 from sins.gap.floor import TINY, noise_floor
 from sins.gap.lattice import Printed
 
@@ -63,11 +65,11 @@ class ChannelModel:
     ----------
     x : the reference inputs of every row
     sensor, axis : the channel ("gyro", 0 is ``gyro.x``)
-    error : (n,) reading − reference of every row, SI units
-    reading : (n,) the readings
+    reading : (n,) the readings, SI units (the reference is ``x``'s: :attr:`error` is the difference)
     fit : (n,) the fit rows
     lattice : the fit rows' readings' lattice, None where they lie on none
-    columns : the regressors, (n, k) blocks: the baseline's, then each accepted effect's
+    columns : the regressors, blocks of columns built a chunk of rows at a time (:mod:`sins.gap.design`):
+        the baseline's, then each accepted effect's
     delayed : whether the reading is the reference at ``t − τ``
     delay_s : ``τ``, once fitted
     process : "bias_instability" | "rate_random_walk" | None
@@ -83,11 +85,10 @@ class ChannelModel:
     x: ReferenceInputs
     sensor: str
     axis: int
-    error: Array
     reading: Array
     fit: NDArray[np.bool_]
     lattice: lattice.Lattice | None
-    columns: tuple[Array, ...]
+    columns: tuple[Maker, ...]
     delayed: bool = False
     delay_s: float | None = None
     process: str | None = None
@@ -104,30 +105,34 @@ class ChannelModel:
         x: ReferenceInputs,
         sensor: str,
         axis: int,
-        error: Array,
         reading: Array,
         fit: NDArray[np.bool_],
         printed: Printed = _FULL_PRECISION,
     ) -> ChannelModel:
         """The baseline's model of one channel (unfitted): its columns, and its readings' lattice
         (sought under the file's print, ``printed``)."""
-        columns = (baseline_columns(sensor, x.omega_ib_b, x.f_ib_b),)
-        return cls(x, sensor, axis, error, reading, fit, lattice.find(reading[fit], printed=printed), columns)
+        columns = (partial(_baseline_block, sensor),)
+        return cls(x, sensor, axis, reading, fit, lattice.find(reading[fit], printed=printed), columns)
 
     def with_candidate(self, cand: Candidate, on_trial: bool = True) -> ChannelModel:
         """This model with ``cand`` added (unfitted); ``on_trial``: see :attr:`process_on_trial`."""
         if cand.kind == "regressors":
             assert cand.columns is not None
-            return self.with_columns(cand.columns(self.x, self.axis))
+            return self.with_columns(partial(_axis_block, cand.columns, self.axis))
         if cand.kind == "delay":
             return dataclasses.replace(self, delayed=True, delay_s=None)
         if cand.kind == "process":
             return dataclasses.replace(self, process=cand.name.split(".")[1], process_on_trial=on_trial)
         return dataclasses.replace(self, output=cand.name.split(".")[1], quantizer=None, loglik_rows=None)
 
-    def with_columns(self, columns: Array) -> ChannelModel:
-        """This model with the regressors ``columns`` (n, k) added (unfitted)."""
+    def with_columns(self, columns: Maker) -> ChannelModel:
+        """This model with the regressors ``columns`` added (unfitted): a block of columns of any
+        rows, from their reference inputs."""
         return dataclasses.replace(self, columns=(*self.columns, columns))
+
+    def design(self) -> Design:
+        """The regressors' columns, unscaled."""
+        return Design(self.x, self.columns)
 
     def tried(self, cand: Candidate) -> ChannelModel:
         """This model with ``cand`` added, fitted."""
@@ -136,10 +141,21 @@ class ChannelModel:
     @property
     def n_params(self) -> int:
         """The number of fitted parameters: columns, the process's (two or one), the output map's, τ."""
-        k = sum(c.shape[1] for c in self.columns)
+        k = self.design().width
         if self.process is not None:
             k += 2 if self.process == "bias_instability" else 1
         return k + (self.output is not None) + self.delayed
+
+    @property
+    def reference(self) -> Array:
+        """(n,) the reference of the channel's own axis."""
+        return self.x.of(self.sensor)[:, self.axis]
+
+    @property
+    def error(self) -> Array:
+        """(n,) reading − reference of every row: computed when asked for (a long recording's six
+        channels' errors, held, would be as large as its readings)."""
+        return self.reading - self.reference
 
     @property
     def residual(self) -> Array:
@@ -161,36 +177,36 @@ class ChannelModel:
 
         A process that :func:`sins.gap.randombias.falsified` rules out predicts NaN everywhere.
         """
-        a = np.hstack(self.columns)
+        design = self.design()
         rows, rcond = self.fit, None
-        scale = np.maximum(np.abs(a[rows]).max(axis=0), 1e-300)
-        columns = a / scale
         if self.output == "saturation":
             # Clipped readings say nothing of the unclipped model; what the other rows hardly
             # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
-        delay_s = self.delay_s
-        lag = np.zeros_like(self.error)  # what a delay adds to the error: the reference at t − τ less at t
+        delay_s, error = self.delay_s, self.error
+        lag = np.zeros_like(error)  # what a delay adds to the error: the reference at t − τ less at t
         if self.delayed:
             if delay_s is None:
-                delay_s = _fit_delay(self.x, self.sensor, self.axis, self.error, columns, rows)
+                delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
             lag = self.x.lag(self.sensor, self.axis, delay_s)
-        error = self.error - lag
-        coef, *_ = np.linalg.lstsq(columns[rows], error[rows], rcond=rcond)
-        pred = columns @ coef
+            error = error - lag
+        # The columns scaled on the fit rows, whichever rows fit them.
+        coef, scale = design.lstsq(error, rows, rcond, scale_rows=self.fit)
+        design = design.scaled_by(scale)
+        pred = design.predict(coef)
         fit_loglik = self.fit_loglik
         if self.process is not None:
-            process = self._with_random_bias(error, pred, columns, rows, rcond)
+            process = self._with_random_bias(error, pred, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
                 return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(pred, np.nan))
             pred, fit_loglik = process
         pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
         if self.output == "quantization":
-            pred, quantizer, loglik_rows = self._quantized(pred, columns)
+            pred, quantizer, loglik_rows = self._quantized(pred, design)
         elif self.output == "saturation":
-            reference = self.reading - self.error
+            reference = self.reference
             top, bottom = float(self.reading[self.fit].max()), float(self.reading[self.fit].min())
             pred = np.clip(reference + pred, bottom, top) - reference
         return dataclasses.replace(
@@ -203,7 +219,7 @@ class ChannelModel:
         )
 
     def _with_random_bias(
-        self, error: Array, pred: Array, columns: Array, rows: NDArray[np.bool_], rcond: float | None
+        self, error: Array, pred: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
     ) -> tuple[Array, float] | None:
         """Given the least-squares prediction ``pred`` of ``error``, the regressors refitted beside the
         random bias and the bias's one-step prediction added: the predicted error of every row and the
@@ -214,11 +230,7 @@ class ChannelModel:
         regressors that whiten best are those fitted to the filtered error and columns.
         """
         process = self._fit_process(error - pred)
-        phi, gain = process.phi, process.gain
-        whitened = np.column_stack([randombias.innovations(c, phi, gain) for c in columns.T])
-        target = randombias.innovations(error, phi, gain)
-        coef, *_ = np.linalg.lstsq(whitened[rows], target[rows], rcond=rcond)
-        pred = columns @ coef
+        pred = design.predict(design.whitened_lstsq(error, rows, rcond, process.phi, process.gain))
         y = error - pred
         process = self._fit_process(y)
         if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
@@ -233,7 +245,7 @@ class ChannelModel:
         walk = self.process == "rate_random_walk"
         return randombias.fit(y, self.fit, self.x.step_s, r, walk)
 
-    def _quantized(self, pred: Array, columns: Array) -> tuple[Array, tuple[str, float], Array]:
+    def _quantized(self, pred: Array, design: Design) -> tuple[Array, tuple[str, float], Array]:
         """The expected reading of the quantizer the fit rows' likelihood prefers, as an error; the
         quantizer (kind and noise per step) and its ln P of every row's reading.
 
@@ -244,7 +256,7 @@ class ChannelModel:
         """
         grid = self.lattice
         assert grid is not None
-        reference = self.reading - self.error
+        reference = self.reference
         m = grid.index(self.reading)
         mu = grid.units(reference + pred)
         quantizer = self.quantizer
@@ -257,30 +269,60 @@ class ChannelModel:
             )
         kind, s = quantizer
         if kind == "rounded":
-            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], columns[self.fit], s)
-            mu, quantizer = mu + columns @ delta, ("rounded", s)
+            # The censored fit's columns on the fit rows, whole: only readings on a lattice come here.
+            delta, s = lattice.fit_rounded(m[self.fit], mu[self.fit], design.matrix(self.fit), s)
+            mu, quantizer = mu + design.predict(delta), ("rounded", s)
         loglik_rows, expected, _ = _QUANTIZERS[kind](m, mu, s)
         return expected * grid.step + grid.offset - reference, quantizer, loglik_rows
 
 
+def _baseline_block(sensor: str, x: ReferenceInputs) -> Array:
+    """The baseline's columns of a chunk of rows: :func:`~sins.gap.candidates.baseline_columns`'s,
+    filled a sensor's three columns at a time (every pass over the rows builds them)."""
+    u = x.of(sensor)
+    out = np.empty((len(u), 7 if sensor == "gyro" else 4))
+    out[:, 0] = 1.0
+    out[:, 1:4] = u
+    if sensor == "gyro":
+        out[:, 4:7] = x.f_ib_b
+    return out
+
+
+def _axis_block(columns: Callable[[ReferenceInputs, int], Array], axis: int, x: ReferenceInputs) -> Array:
+    """A regressor candidate's columns of one axis, for a chunk of rows."""
+    return columns(x, axis)
+
+
 def _fit_delay(
-    x: ReferenceInputs, sensor: str, axis: int, error: Array, columns: Array, rows: NDArray[np.bool_]
+    x: ReferenceInputs,
+    sensor: str,
+    axis: int,
+    error: Array,
+    design: Design,
+    rows: NDArray[np.bool_],
+    fit: NDArray[np.bool_],
 ) -> float:
-    """The delay τ whose lag, with the regressors fitted beside it, leaves the least on the fit rows.
+    """The delay τ whose lag, with the regressors (``design``, scaled on the ``fit`` rows) fitted
+    beside it, leaves the least on ``rows``.
 
     To first order the lag is ``−τ u̇``, a column whose coefficient is ``τ``; the search refines it
     within two rows either side, where the rest matters: a step in the reference (a rig turning
-    faster than a row) is smoothed differently from its slope.
+    faster than a row) is smoothed differently from its slope. One pass over the rows factors the
+    regressors, that column and the error together: the first order's fit, and the regressors'
+    own factor, whose projection each step of the search leaves its lag's error to.
     """
-    a = columns[rows]
-    slope = -x.u_rate[sensor][rows, axis : axis + 1]
-    coef, *_ = np.linalg.lstsq(np.hstack([a, slope]), error[rows], rcond=None)
-    first = float(coef[-1])
+
+    def slope(part: ReferenceInputs) -> Array:
+        return -part.rate(sensor, axis)[:, None]
+
+    k = design.width
+    both = design.with_makers(slope).factor(rows, error, scale_rows=fit)
+    first = float(dataclasses.replace(both, scale=np.append(both.scale[:k], 1.0)).solve()[-1])
+    projection = Projection.of(design, rows, both.leading(k))
+    central = x.rate(sensor, axis)
 
     def left(tau: float) -> float:
-        target = (error - x.lag(sensor, axis, tau))[rows]
-        c, *_ = np.linalg.lstsq(a, target, rcond=None)
-        return float(np.sum((target - a @ c) ** 2))
+        return projection.residual(error - x.lag(sensor, axis, tau, central))
 
     span = 2.0 * x.step_s
     found = minimize_scalar(

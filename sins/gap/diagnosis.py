@@ -24,7 +24,7 @@ report (:func:`_report`).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -41,6 +41,7 @@ from sins.gap.floor import (
     TINY,
     allan_curves,
     concentrates,
+    input_features,
     noise_floor,
     quartile_shares,
 )
@@ -62,21 +63,30 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True, eq=False)
 class _Session:
-    """What every stage reads: the referenced rows, their split, reference inputs, readings and errors."""
+    """What every stage reads: the referenced rows, their split, reference inputs and readings."""
 
     data: CalibrationData  # the rows with a per-sample reference
     all_rows: int  # before the unreferenced ones were left out
     x: ReferenceInputs
     fit: NDArray[np.bool_]
     withheld: NDArray[np.bool_]
-    readings: Array  # (n, 6), the channels' order
-    errors: Array  # (n, 6) reading − reference
     printed: lattice.Printed  # how the recording's numbers were printed
     withholding: str  # which rows were withheld, and why, in words
 
     @property
     def n_fit(self) -> int:
         return int(self.fit.sum())
+
+    def readings(self, sensor: str) -> Array:
+        """The readings of ``sensor``'s three channels, (n, 3)."""
+        return self.data.gyro if sensor == "gyro" else self.data.accel
+
+    def residuals(self, predicted: Array) -> Iterator[Array]:
+        """Each channel's residual, reading − reference − ``predicted`` (n, 6), one at a time: six
+        of them at once would be as large as the recording's readings."""
+        for i, ch in enumerate(CHANNELS):
+            sensor, axis = ch.split(".")[0], i % 3
+            yield self.readings(sensor)[:, axis] - self.x.of(sensor)[:, axis] - predicted[:, i]
 
 
 @dataclass
@@ -115,11 +125,11 @@ def diagnose(
     """
     _check(data, holdout, model)
     s = _session(data, holdout)
-    models = _starting_models(s, model)
-    before = np.stack([m.residual for m in models], axis=1)
-    floors = _floors(before, s)
+    models, before = _starting_models(s, model)
+    floors = _floors(s, before)
     taken = set().union(*(exclusive(n) for n in model))
     state = _search(s, models, [c for c in CANDIDATES.values() if c.name not in taken], progress)
+    del models
     outside = _leftover_disturbances(s, state)
     return _report(s, model, state, outside, before, floors)
 
@@ -149,7 +159,7 @@ def _check(data: CalibrationData, holdout: float, model: tuple[str, ...]) -> Non
 
 def _session(data: CalibrationData, holdout: float) -> _Session:
     """The referenced rows (a hand-turned rotation's, without a per-sample reference, say nothing),
-    split into fit and withheld rows, with their reference inputs, readings and errors.
+    split into fit and withheld rows, with their reference inputs and readings.
 
     The end of every phase is withheld; a recording without phases, the end of every stretch of like
     input (:meth:`~sins.series.CalibrationData.stretches`): its tail alone may hold the only minutes
@@ -165,27 +175,31 @@ def _session(data: CalibrationData, holdout: float) -> _Session:
             "(holds, steady rates, motion cut in blocks of at most "
             f"{STRETCH_LONGEST_S:g} s), as it has no phases"
         )
-    readings = np.hstack([referenced.gyro, referenced.accel])
-    references = (referenced.ref_gyro, referenced.ref_accel)
     return _Session(
         data=referenced,
         all_rows=len(data),
         x=reference_inputs(referenced),
         fit=~withheld,
         withheld=withheld,
-        readings=readings,
-        errors=readings - np.hstack(references),
-        printed=lattice.print_habit(readings, *references),
+        printed=lattice.print_habit(
+            referenced.gyro, referenced.accel, referenced.ref_gyro, referenced.ref_accel
+        ),
         withholding=withholding,
     )
 
 
-def _starting_models(s: _Session, model: tuple[str, ...]) -> list[ChannelModel]:
+def _starting_models(s: _Session, model: tuple[str, ...]) -> tuple[list[ChannelModel], Array]:
     """Every channel's model before any candidate, fitted: the baseline and the simulation's other
-    effects, whose random bias, if any, is taken as given (not held to the candidates' tests)."""
+    effects, whose random bias, if any, is taken as given (not held to the candidates' tests); and
+    their predicted errors (n, 6), which the models hold as views (one copy of them, not two)."""
     models = [
         ChannelModel.baseline(
-            s.x, ch.split(".")[0], i % 3, s.errors[:, i], s.readings[:, i], s.fit, s.printed
+            s.x,
+            ch.split(".")[0],
+            i % 3,
+            s.readings(ch.split(".")[0])[:, i % 3],
+            s.fit,
+            s.printed,
         )
         for i, ch in enumerate(CHANNELS)
     ]
@@ -195,16 +209,25 @@ def _starting_models(s: _Session, model: tuple[str, ...]) -> list[ChannelModel]:
             for i, ch in enumerate(CHANNELS):
                 if ch.startswith(cand.sensor):
                     models[i] = models[i].with_candidate(cand, on_trial=False)
-    return [m.fitted() for m in models]
+    predicted = np.empty((len(s.data), 6))
+    for i, m in enumerate(models):
+        m = m.fitted()
+        assert m.predicted is not None
+        predicted[:, i] = m.predicted
+        models[i] = dataclasses.replace(m, predicted=predicted[:, i])
+    return models, predicted
 
 
-def _floors(residual: Array, s: _Session) -> Array:
-    """Each channel's noise floor: the larger of the fit rows' and the withheld rows'.
+def _floors(s: _Session, predicted: Array) -> Array:
+    """Each channel's noise floor under the ``predicted`` errors (n, 6): the larger of the fit
+    rows' and the withheld rows'.
 
     Both portions measure the same white noise; where it is rounding's, its level depends on where
     each hold's mean sits in its lattice cell, and a portion may see no reading change.
     """
-    return np.array([max(noise_floor(r, s.fit), noise_floor(r, s.withheld), TINY) for r in residual.T])
+    return np.array(
+        [max(noise_floor(r, s.fit), noise_floor(r, s.withheld), TINY) for r in s.residuals(predicted)]
+    )
 
 
 def _search(
@@ -241,8 +264,8 @@ def _score_round(s: _Session, state: _Search, progress: Callable[[str], None] | 
         if progress:
             progress(cand.name)
         channels = [i for i, ch in enumerate(CHANNELS) if ch.startswith(cand.sensor)]
-        if not available(cand, s.x, s.readings[:, channels], s.fit):
-            if available(cand, s.x, s.readings[:, channels], np.ones_like(s.fit)):
+        if not available(cand, s.x, s.readings(cand.sensor), s.fit):
+            if available(cand, s.x, s.readings(cand.sensor), np.ones_like(s.fit)):
                 state.unfitted[cand.name] = "only the withheld rows excite it: the fit rows cannot fit it"
             continue
         trial = _trial(s, state, cand, channels)
@@ -331,21 +354,25 @@ def _where(
     s: _Session, before: Array, after: Array, floors: Array, outside: list[Outside]
 ) -> tuple[list[dict[str, Any]], list[str], dict[str, Any], dict[str, Any]]:
     """Where the gap lies: the ``where`` entries of the gapped channels, worst first, the channels
-    left unexplained, and each channel's input quartiles and Allan deviations.
+    left unexplained, and each channel's input quartiles and Allan deviations. ``before`` and
+    ``after`` are the errors (n, 6) predicted before and after the accepted effects.
 
     A channel has a gap where its withheld RMS before the accepted effects exceeds its floor by
     :data:`~sins.gap.floor.SIGNIFICANT_RATIO`, or a disturbance outside the library explains it;
     it is left unexplained where its RMS after them still does, or such a disturbance explains it.
     """
     withheld = s.withheld
-    rms_before, rms_after = _rms(before, withheld), _rms(after, withheld)
+    rms_before, rms_after = _rms(s, before), _rms(s, after)
     disturbed = {CHANNELS.index(o.channel) for o in outside}
     gapped = [i for i in range(6) if rms_before[i] > SIGNIFICANT_RATIO * floors[i] or i in disturbed]
     gapped.sort(key=lambda i: -rms_before[i] / floors[i])
-    quartiles = {ch: quartile_shares(before[:, i], floors[i], s.x, withheld) for i, ch in enumerate(CHANNELS)}
-    allan = {
-        ch: allan_curves(before[:, i], after[:, i], floors[i], s.x.step_s) for i, ch in enumerate(CHANNELS)
-    }
+    quartiles, allan = {}, {}
+    features = input_features(s.x, withheld)
+    for i, (ch, residual, left) in enumerate(
+        zip(CHANNELS, s.residuals(before), s.residuals(after), strict=True)
+    ):
+        quartiles[ch] = quartile_shares(residual, floors[i], features, withheld)
+        allan[ch] = allan_curves(residual, left, floors[i], s.x.step_s)
     where: list[dict[str, Any]] = [
         {
             "channel": CHANNELS[i],
@@ -366,15 +393,20 @@ def _report(
 ) -> GapReport:
     """The report: per channel the withheld RMS before and after against the floor, where the gap
     lies, the effects (accepted ones first, in the order they were accepted; then the rest, best
-    score first), and the residuals and predictions behind them."""
-    after = np.stack([m.residual for m in state.models], axis=1)
+    score first), and the residuals and predictions behind them. ``before``: the errors (n, 6)
+    predicted before the accepted effects."""
+    after = np.empty_like(before)
+    for i, m in enumerate(state.models):
+        assert m.predicted is not None
+        after[:, i] = m.predicted
+        state.models[i] = dataclasses.replace(m, predicted=after[:, i])  # its own copy let go
     # An effect that moves the reading by jumps (a clip reached, a delay across a step) lifts the
     # differences of the residual before it as well: where the accepted effects leave the
     # differences smaller, theirs are the white noise's (a heavy clip: 0.02-0.4 of the floor before).
     # Not below FLOOR_DROP of the floor before: what a near-exact model leaves is not noise.
-    floors = np.maximum(np.minimum(floors, _floors(after, s)), FLOOR_DROP * floors)
+    floors = np.maximum(np.minimum(floors, _floors(s, after)), FLOOR_DROP * floors)
     withheld = s.withheld
-    rms_before, rms_after = _rms(before, withheld), _rms(after, withheld)
+    rms_before, rms_after = _rms(s, before), _rms(s, after)
     channels = {
         ch: {
             "rms_before": float(rms_before[i]),
@@ -402,16 +434,16 @@ def _report(
         unfitted=state.unfitted,
         unreferenced=s.all_rows - len(s.data),
         model=tuple(dict.fromkeys((*BASELINE, *model))),
-        residual_before=before[withheld],
-        residual_after=after[withheld],
-        predicted_before=s.errors - before,
-        predicted_after=s.errors - after,
+        residual_before=np.column_stack([r[withheld] for r in s.residuals(before)]),
+        residual_after=np.column_stack([r[withheld] for r in s.residuals(after)]),
+        predicted_before=before,
+        predicted_after=after,
         t_withheld=s.data.t[withheld],
         allan=allan,
         quartiles=quartiles,
     )
 
 
-def _rms(residual: Array, withheld: NDArray[np.bool_]) -> Array:
-    """Each channel's RMS over the withheld rows."""
-    return np.asarray(np.sqrt(np.mean(residual[withheld] ** 2, axis=0)))
+def _rms(s: _Session, predicted: Array) -> Array:
+    """Each channel's RMS over the withheld rows, under the ``predicted`` errors (n, 6)."""
+    return np.array([np.sqrt(np.mean(r[s.withheld] ** 2)) for r in s.residuals(predicted)])

@@ -11,7 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import fft
 from scipy.optimize import minimize_scalar
+
+from sins.gap.candidates import spans
+from sins.gap.design import Design, Factor, Projection
 
 Array = NDArray[np.float64]
 
@@ -19,56 +23,125 @@ Array = NDArray[np.float64]
 STEP_MARGIN = 0.05
 
 
-def best_step(residual: Array, columns: Array, rows: NDArray[np.bool_], t: Array) -> tuple[float, float]:
+def _design(columns: Design | Array) -> Design:
+    return columns if isinstance(columns, Design) else Design.from_array(columns)
+
+
+def best_step(
+    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array, factor: Factor | None = None
+) -> tuple[float, float]:
     """The single bias step that best fits the fit rows' residual, the model's regressors refitted beside it.
 
     With ``M`` the projection off the regressors ``A``, a step ``s`` after fit row ``k`` explains
     ``(sᵀ M e)² / sᵀ M s`` of the residual ``e = M y``'s sum of squares; ``sᵀ M e`` is a suffix sum
     of ``e`` and ``sᵀ M s = (n − k) − (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs)``, with ``Aᵀs`` a suffix sum of ``A``'s
-    rows, so every ``k`` costs one pass. Returns the step's time (halfway between the rows either
-    side) and its size.
+    rows, so every ``k`` costs one pass (from the last chunk of rows to the first, :mod:`sins.gap.design`).
+    ``factor``: the columns' factor on ``rows`` with their Gram matrix there, if the caller has it.
+    Returns the step's time (halfway between the rows either side) and its size.
     """
-    e, a, tf = residual[rows], columns[rows], t[rows]
+    e = residual[rows]
     n = len(e)
-    a = a / np.maximum(np.abs(a).max(axis=0), 1e-300)
+    unscaled = _design(columns)
+    if factor is None:
+        factor = unscaled.factor(rows, gram_rows=rows)  # the columns' scale and Gram matrix in one pass
+    design = unscaled.scaled_by(factor.scale)
     suffix_e = np.cumsum(e[::-1])[::-1][1:]  # the step starts at fit row k = 1 … n − 1
-    suffix_a = np.cumsum(a[::-1], axis=0)[::-1][1:]
-    inverse = np.linalg.pinv(a.T @ a)
-    denominator = np.arange(n - 1, 0, -1) - np.einsum("ki,ij,kj->k", suffix_a, inverse, suffix_a)
-    explained = np.where(denominator > 1e-9 * n, suffix_e**2 / np.maximum(denominator, 1e-300), -1.0)
+    del e
+    inverse = np.linalg.pinv(factor.scaled_gram())
+    quad = np.empty(max(n - 1, 0))  # (Aᵀs)ᵀ (AᵀA)⁻¹ (Aᵀs) for a step after each fit row
+    carry, end = np.zeros(len(inverse)), n
+    for lo, hi in reversed(spans(design.n)):
+        a = design.block(lo, hi)[rows[lo:hi]]
+        if len(a) == 0:
+            continue
+        within = np.cumsum(a[::-1], axis=0)[::-1] + carry  # each fit row's sum to the last
+        carry, start = within[0], end - len(a)
+        after = np.arange(start, end) - 1  # the step after this fit row starts at each of these
+        ok = after >= 0
+        quad[after[ok]] = np.einsum("ki,ij,kj->k", within[ok], inverse, within[ok])
+        end = start
+    denominator = np.subtract(np.arange(n - 1, 0, -1), quad, out=quad)  # sᵀ M s, in place
+    explained = np.square(suffix_e)
+    np.divide(explained, np.maximum(denominator, 1e-300), out=explained)
+    explained[denominator <= 1e-9 * n] = -1.0
     margin = max(1, int(STEP_MARGIN * n))
     explained[: margin - 1] = explained[n - 1 - margin :] = -1.0
     j = int(np.argmax(explained))
-    return 0.5 * float(tf[j] + tf[j + 1]), float(suffix_e[j] / denominator[j])
+    tf = t[rows][j : j + 2]
+    return 0.5 * float(tf[0] + tf[1]), float(suffix_e[j] / denominator[j])
+
+
+def _periodogram_peak(x: Array, step: float, lowest_hz: float) -> float:
+    """The frequency of the largest power of ``x`` padded eightfold with zeros, at or above
+    ``lowest_hz``: bin ``8m + r`` of the padded transform is bin ``m`` of ``x`` turned by
+    ``e^(−2πi r j / 8n)``, so transforms of ``n`` points give it, never one of ``8n``; and as ``x`` is
+    real, bin ``8n − b`` is bin ``b``'s conjugate, so the turns ``r ≤ 4`` give every bin up to ``4n``
+    (bins ``8m + r`` beyond it as the mirrors of ``8m' + 8 − r`` below it)."""
+    n = len(x)
+    padded = 8 * n
+    index = np.arange(n)
+    best, peak = -1.0, 0.0
+    for r in range(5):
+        power = _turned_power(x, r, padded)
+        for bins in (8 * index + r, padded - (8 * index + r))[: 2 if r in (1, 2, 3) else 1]:
+            # b and its mirror 8n − b (r = 0 and 4 mirror onto their own turn)
+            allowed = (bins <= padded // 2) & (bins / (padded * step) >= lowest_hz)
+            if allowed.any():
+                m = int(np.argmax(np.where(allowed, power, -1.0)))
+                if power[m] > best:
+                    best, peak = float(power[m]), float(bins[m] / (padded * step))
+    return peak
+
+
+def _turned_power(x: Array, r: int, padded: int) -> Array:
+    """``|FFT(x e^(−2πi r j / padded))|²``, the turn built a chunk at a time into the transform's own
+    array (no n-long angle, cosine or sine)."""
+    if r == 0:
+        z = fft.fft(x)
+    else:
+        z = np.empty(len(x), dtype=np.complex128)
+        for lo, hi in spans(len(x)):
+            angle = (-2.0 * np.pi * r / padded) * np.arange(lo, hi)
+            z.real[lo:hi] = x[lo:hi] * np.cos(angle)
+            z.imag[lo:hi] = x[lo:hi] * np.sin(angle)
+        z = fft.fft(z, overwrite_x=True)
+    power = np.square(z.real)
+    power += np.square(z.imag)
+    return np.asarray(power)
 
 
 def best_oscillation(
-    residual: Array, columns: Array, rows: NDArray[np.bool_], t: Array
+    residual: Array, columns: Design | Array, rows: NDArray[np.bool_], t: Array, factor: Factor | None = None
 ) -> tuple[float, float]:
     """The period and amplitude of the strongest oscillation in the fit rows' residual.
 
     The peak of the periodogram of the residual with the withheld rows zeroed (they may not
     choose), padded eightfold, refined to the frequency whose sine and cosine, fitted beside the
     regressors, leave the least; periods longer than a third of the recording are left to the drifts.
+    The sine and cosine are fitted on what the regressors leave of them and of the residual (their
+    projections off the regressors, :class:`~sins.gap.design.Projection`), the same least squares.
+    ``factor``: the columns' factor on ``rows``, if the caller has it.
     """
     step = float(np.median(np.diff(t)))
     x = np.where(rows, residual - residual[rows].mean(), 0.0)
-    n = 8 * len(x)
-    power = np.abs(np.fft.rfft(x, n)) ** 2
-    freq = np.fft.rfftfreq(n, step)
-    power[freq < 3.0 / (t[-1] - t[0])] = 0.0
-    peak = float(freq[int(np.argmax(power))])
-    scale = np.maximum(np.abs(columns[rows]).max(axis=0), 1e-300)
-    a, tf, y = columns[rows] / scale, t[rows], residual[rows]
+    peak = _periodogram_peak(x, step, 3.0 / (t[-1] - t[0]))
+    del x
+    projection = Projection.of(_design(columns), rows, factor)
+    tf, y = t[rows], residual[rows]
+    on_y = projection.coordinates(y[:, None])
+    left_y = float(y @ y - np.sum(on_y**2))
 
     def fitted(f_hz: float) -> tuple[float, Array]:
-        w = np.column_stack([a, np.cos(2 * np.pi * f_hz * tf), np.sin(2 * np.pi * f_hz * tf)])
-        coef, *_ = np.linalg.lstsq(w, y, rcond=None)
-        return float(np.sum((y - w @ coef) ** 2)), coef
+        wave = np.column_stack([np.cos(2 * np.pi * f_hz * tf), np.sin(2 * np.pi * f_hz * tf)])
+        on_wave = projection.coordinates(wave)
+        gram = wave.T @ wave - on_wave.T @ on_wave
+        cross = wave.T @ y - on_wave.T @ on_y[:, 0]
+        coef, *_ = np.linalg.lstsq(gram, cross, rcond=None)
+        return left_y - float(cross @ coef), coef
 
-    half_bin = 0.5 / (n * step)
+    half_bin = 0.5 / (8 * len(t) * step)
     best = minimize_scalar(
         lambda f: fitted(f)[0], bounds=(peak - half_bin, peak + half_bin), method="bounded"
     )
     f_hz = float(best.x)
-    return 1.0 / f_hz, float(np.hypot(*fitted(f_hz)[1][-2:]))
+    return 1.0 / f_hz, float(np.hypot(*fitted(f_hz)[1]))

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.gap.candidates import ReferenceInputs
+from sins.gap.candidates import ReferenceInputs, spans
 
 Array = NDArray[np.float64]
 
@@ -60,9 +60,13 @@ def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
     """
     theta = np.concatenate([[0.0], np.cumsum(rate)])
     out = np.empty(len(clusters))
+    buffer = np.empty(len(theta))  # one for every cluster size: a long recording's rows are many
     for j, m in enumerate(clusters):
-        d = theta[2 * m :] - 2.0 * theta[m:-m] + theta[: -2 * m]
-        out[j] = np.sqrt(np.mean(d * d) / (2.0 * m * m))
+        d = buffer[: len(theta) - 2 * m]
+        np.multiply(theta[m:-m], -2.0, out=d)
+        d += theta[2 * m :]
+        d += theta[: -2 * m]
+        out[j] = np.sqrt(np.mean(np.square(d, out=d)) / (2.0 * m * m))
     return out
 
 
@@ -82,30 +86,47 @@ def allan_curves(before: Array, after: Array, floor: float, step_s: float) -> di
     }
 
 
-def quartile_shares(
-    residual: Array, floor: float, x: ReferenceInputs, withheld: NDArray[np.bool_]
-) -> dict[str, list[float]]:
-    """For each input, the share of a channel's withheld excess power in each of its quartiles.
+def input_features(x: ReferenceInputs, withheld: NDArray[np.bool_]) -> dict[str, Array]:
+    """The inputs whose quartiles :func:`quartile_shares` tells the excess by, on the withheld rows:
+    ``|ω|``, ``|f|``, temperature, rate of change (``|ω̇|``) and time, built a chunk of rows at a
+    time. Inputs that do not vary over the recording are left out (a static unit's rate of change:
+    1e-19 from uneven time stamps)."""
+    out = {}
+    for name in _FEATURES:
+        if name == "temperature" and x.temp is None:
+            continue
+        parts = [_feature(name, x.rows(lo, hi)) for lo, hi in spans(len(x.t))]
+        top = max(float(np.max(v)) for v in parts)
+        spread = top - min(float(np.min(v)) for v in parts)
+        if spread <= 1e-9 * max(1.0, top, -min(float(np.min(v)) for v in parts)):
+            continue
+        out[name] = np.concatenate(
+            [v[withheld[lo:hi]] for v, (lo, hi) in zip(parts, spans(len(x.t)), strict=True)]
+        )
+    return out
 
-    Inputs that do not vary (a static unit's rate of change: 1e-19 from uneven time stamps) and a
-    channel with no excess give nothing.
-    """
+
+def _feature(name: str, x: ReferenceInputs) -> Array:
+    """One input of :func:`input_features` on a chunk of rows."""
+    if name == "|ω|":
+        return np.asarray(np.linalg.norm(x.omega_ib_b, axis=1))
+    if name == "|f|":
+        return np.asarray(np.linalg.norm(x.f_ib_b, axis=1))
+    if name == "rate of change":
+        return np.asarray(np.linalg.norm(x.omega_dot_b, axis=1))
+    return x.temp if name == "temperature" and x.temp is not None else x.t
+
+
+def quartile_shares(
+    residual: Array, floor: float, features: dict[str, Array], withheld: NDArray[np.bool_]
+) -> dict[str, list[float]]:
+    """For each input (:func:`input_features`, on the withheld rows), the share of a channel's
+    withheld excess power in each of its quartiles. A channel with no excess gives nothing."""
     excess = residual[withheld] ** 2 - floor**2
     if float(np.sum(np.maximum(excess, 0.0))) <= 0.0:
         return {}
-    features = {
-        "|ω|": np.linalg.norm(x.omega_ib_b, axis=1),
-        "|f|": np.linalg.norm(x.f_ib_b, axis=1),
-        "temperature": x.temp,
-        "rate of change": np.linalg.norm(x.omega_dot_b, axis=1),
-        "time": x.t,
-    }
     out = {}
-    for name in _FEATURES:
-        v = features[name]
-        if v is None or float(np.ptp(v)) <= 1e-9 * max(1.0, float(np.abs(v).max())):
-            continue
-        v = v[withheld]
+    for name, v in features.items():
         bins = np.searchsorted(np.quantile(v, [0.25, 0.5, 0.75]), v, side="right")
         # A bin may sit below the floor: shares are of the bins above it.
         per_bin = np.maximum([np.sum(excess[bins == b]) for b in range(4)], 0.0)

@@ -22,6 +22,7 @@ is tried only where the data can say something of it (:func:`available`).
 from __future__ import annotations
 
 import dataclasses
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -154,21 +155,19 @@ def _disturbance(
 ) -> Outside | None:
     """The better of a bias step and an oscillation on one channel, where it does as well as the
     effect tried there (``row``; see :func:`outside_library`), else None."""
-    t, residual = model.x.t, model.residual
-    columns = np.hstack(model.columns)
-    t_step, size = disturbance.best_step(residual, columns, model.fit, t)
-    period, amplitude = disturbance.best_oscillation(residual, columns, model.fit, t)
-    wave = np.column_stack([np.cos(2 * np.pi * t / period), np.sin(2 * np.pi * t / period)])
-    step_column = (t > t_step)[:, None].astype(float)
+    t, residual, design = model.x.t, model.residual, model.design()
+    factor = design.factor(model.fit, gram_rows=model.fit)  # one pass serves the step and the hum
+    t_step, size = disturbance.best_step(residual, design, model.fit, t, factor)
+    period, amplitude = disturbance.best_oscillation(residual, design, model.fit, t, factor)
     channel = CHANNELS[row.channel]
     tries = [
-        (Outside(channel, "bias step", size, 0.0, t_s=t_step), step_column, 2),
-        (Outside(channel, "periodic", amplitude, 0.0, period_s=period), wave, 3),
+        (Outside(channel, "bias step", size, 0.0, t_s=t_step), partial(_step, t_step), 2, 1),
+        (Outside(channel, "periodic", amplitude, 0.0, period_s=period), partial(_wave, period), 3, 2),
     ]
     found = []
-    for candidate, column, k in tries:
+    for candidate, column, k, width in tries:
         m = model.with_columns(column).fitted()
-        outside_gain, penalty_k = trial_gain(model, m, withheld, n_fit, k - column.shape[1])
+        outside_gain, penalty_k = trial_gain(model, m, withheld, n_fit, k - width)
         if process:
             as_well = m.fit_rows_loglik() - penalty_k > row.fit_loglik - row.penalty - TIE_NATS
         else:  # gains compared, as for ties: no better than the disturbance is not what happened
@@ -176,6 +175,16 @@ def _disturbance(
         if outside_gain > SIGNIFICANT_NATS and as_well:
             found.append(dataclasses.replace(candidate, score=outside_gain - SIGNIFICANT_NATS))
     return max(found, key=lambda o: o.score) if found else None
+
+
+def _step(t_step: float, x: ReferenceInputs) -> Array:
+    """A bias step's column of a chunk of rows: 1 after ``t_step``."""
+    return (x.t > t_step)[:, None].astype(float)
+
+
+def _wave(period_s: float, x: ReferenceInputs) -> Array:
+    """An oscillation's columns of a chunk of rows: its cosine and sine."""
+    return np.column_stack([np.cos(2 * np.pi * x.t / period_s), np.sin(2 * np.pi * x.t / period_s)])
 
 
 def available(cand: Candidate, x: ReferenceInputs, readings: Array, fit: NDArray[np.bool_]) -> bool:

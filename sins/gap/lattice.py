@@ -105,16 +105,34 @@ def print_habit(*columns: Array) -> Printed:
     A column's values read back from ``d`` significant digits when each equals the float its ``%.{d-1}e``
     text reads as; ``_FULL_DIGITS`` or more, or more than 12 decimals, mean the print holds the float.
     """
-    values = np.concatenate([np.ravel(c) for c in columns]) if columns else np.zeros(0)
-    values = values[np.isfinite(values) & (values != 0.0)]
-    if len(values) == 0:
+    probe = _probe(columns)
+    if len(probe) == 0:
         return Printed()
-    probe = values[:: max(1, len(values) // _HABIT_PROBE)]
     digits = next(
         (d for d in range(1, _FULL_DIGITS) if all(float(f"{v:.{d - 1}e}") == v for v in probe)), None
     )
     decimals = next((n for n in range(13) if all(float(f"{v:.{n}f}") == v for v in probe)), None)
     return Printed(digits, decimals)
+
+
+def _probe(columns: tuple[Array, ...]) -> Array:
+    """Every ``k``-th finite nonzero value of the columns one after another, ``k`` the count over
+    :data:`_HABIT_PROBE`: the values picked from each column in place, never all of them in one
+    array (a long recording's twelve columns would be as large as its readings again)."""
+
+    def kept(column: Array) -> NDArray[np.bool_]:
+        values = np.ravel(column)
+        return np.isfinite(values) & (values != 0.0)
+
+    counts = [int(np.count_nonzero(kept(c))) for c in columns]
+    if sum(counts) == 0:
+        return np.zeros(0)
+    stride, offset, parts = max(1, sum(counts) // _HABIT_PROBE), 0, []
+    for column, count in zip(columns, counts, strict=True):
+        first = (-offset) % stride  # the first pick in this column, counted from its first value kept
+        parts.append(np.ravel(column)[np.flatnonzero(kept(column))[first::stride]])
+        offset += count
+    return np.concatenate(parts)
 
 
 def find(reading: Array, tolerance: float = 1e-6, printed: Printed = Printed()) -> Lattice | None:

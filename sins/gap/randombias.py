@@ -15,8 +15,10 @@ candidates.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import lfilter
@@ -56,31 +58,94 @@ def log_likelihood(nu: Array) -> float:
     return -0.5 * len(nu) * float(np.log(np.mean(nu * nu)))
 
 
-@dataclass(frozen=True)
-class RandomBiasFit:
-    """A random bias fitted to a residual: ``b' = φ b + w (q)`` under white noise of variance ``r``.
+#: Rows a running sum of squares takes before it is added to its total (keeps the sums' rounding at
+#: that of a blockwise sum, not of one long running sum).
+_BLOCK = 4096
 
-    ``trials`` are the one-step innovations of every row for the chosen ``φ`` and each drive of the
-    fine grid (:data:`FINE_DRIVE`); ``chosen`` indexes the one the fit rows prefer (what
-    :func:`falsified` holds against the others); ``fit_loglik`` is its likelihood on the fit rows.
+
+@numba.njit(cache=True, nogil=True)
+def _sums_of_squares(
+    y: Array,
+    rows: NDArray[np.bool_],
+    start: float,
+    b1: Array,
+    a1: Array,
+    group: NDArray[np.int64],
+    groups: int,
+) -> Array:  # pragma: no cover - compiled
+    """For each filter ``g``, ``ŷ' = b1[g] y − a1[g] ŷ`` from ``ŷ = start`` (scipy's ``lfilter`` with
+    ``b = [0, b1]``, ``a = [1, a1]``, the same arithmetic), the sum of squared innovations ``y − ŷ``
+    over ``rows``, per ``group`` of those rows: (filters, groups). Every filter in one pass."""
+    n_filters = len(b1)
+    predicted = np.full(n_filters, start)
+    total = np.zeros((n_filters, groups))
+    block = np.zeros((n_filters, groups))
+    for k in range(len(y)):
+        yk = y[k]
+        if rows[k]:
+            j = group[k]
+            for g in range(n_filters):
+                nu = yk - predicted[g]
+                block[g, j] += nu * nu
+                predicted[g] = b1[g] * yk - a1[g] * predicted[g]
+        else:
+            for g in range(n_filters):
+                predicted[g] = b1[g] * yk - a1[g] * predicted[g]
+        if (k + 1) % _BLOCK == 0:
+            total += block
+            block[:] = 0.0
+    return total + block
+
+
+def _grid_sums(
+    y: Array,
+    rows: NDArray[np.bool_],
+    filters: list[tuple[float, float]],
+    group: NDArray[np.int64] | None = None,
+) -> Array:
+    """:func:`_sums_of_squares` of the steady-state filters ``(φ, K)`` from the mean of the first 100
+    rows (:func:`innovations`' start): (filters, groups), one group without ``group``."""
+    phi, gain = (np.array(v, dtype=np.float64) for v in zip(*filters, strict=True))
+    groups = 1 if group is None else int(group.max(initial=0)) + 1
+    group = np.zeros(len(y), dtype=np.int64) if group is None else group
+    y = np.ascontiguousarray(y, dtype=np.float64)
+    return _sums_of_squares(
+        y, np.ascontiguousarray(rows), float(np.mean(y[:100])), phi * gain, -phi * (1.0 - gain), group, groups
+    )
+
+
+def _loglik(sum_of_squares: Array, count: int | Array) -> Array:
+    """:func:`log_likelihood` of innovations from their sum of squares and number."""
+    return -0.5 * count * np.log(sum_of_squares / count)
+
+
+@dataclass(frozen=True, eq=False)
+class RandomBiasFit:
+    """A random bias fitted to a residual ``y``: ``b' = φ b + w (q)`` under white noise of variance ``r``.
+
+    ``ratios`` are the drives ``q / r`` of the fine grid (:data:`FINE_DRIVE`) for the chosen ``φ``;
+    ``chosen`` indexes the one the fit rows prefer (what :func:`falsified` holds against the others);
+    ``innovations`` are its one-step innovations of every row, ``fit_loglik`` their likelihood on
+    the fit rows.
     """
 
     phi: float
     q: float
     r: float
-    trials: tuple[Array, ...] = ()
+    y: Array = field(default_factory=lambda: np.zeros(0))
+    ratios: Array = field(default_factory=lambda: np.zeros(0))
     chosen: int = 0
+    innovations: Array = field(default_factory=lambda: np.zeros(0))
     fit_loglik: float = -np.inf
-
-    @property
-    def innovations(self) -> Array:
-        """The chosen drive's one-step innovations of every row."""
-        return self.trials[self.chosen]
 
     @property
     def gain(self) -> float:
         """The steady-state Kalman gain."""
         return steady_gain(self.phi, self.q, self.r)[0]
+
+    def filters(self) -> list[tuple[float, float]]:
+        """``(φ, K)`` of each drive of the fine grid."""
+        return [(self.phi, steady_gain(self.phi, ratio * self.r, self.r)[0]) for ratio in self.ratios]
 
 
 def fit(y: Array, rows: NDArray[np.bool_], step_s: float, r: float, walk: bool) -> RandomBiasFit:
@@ -91,23 +156,24 @@ def fit(y: Array, rows: NDArray[np.bool_], step_s: float, r: float, walk: bool) 
     of ``r``), and the drive is then refined by :data:`FINE_DRIVE` about the best.
 
     The filter runs over every row in time order (so rows left out are predicted from what came
-    before them, as a filter in the field would), but only ``rows``' innovations choose.
+    before them, as a filter in the field would), but only ``rows``' innovations choose. Every
+    filter of a grid runs in one compiled pass over the rows (:func:`_sums_of_squares`), keeping
+    sums of squares, not innovations.
     """
-
-    def trial(phi: float, ratio: float) -> Array:
-        return innovations(y, phi, steady_gain(phi, ratio * r, r)[0])
-
+    count = int(np.sum(rows))
     phis = [1.0] if walk else list(np.exp(-step_s / TAUS_S))
-    _, phi, ratio = max(
-        (log_likelihood(trial(phi, ratio)[rows]), phi, ratio) for phi in phis for ratio in DRIVE_RATIOS
-    )
+    grid = [(phi, ratio) for phi in phis for ratio in DRIVE_RATIOS]
+    lls = _loglik(_grid_sums(y, rows, [(phi, steady_gain(phi, q * r, r)[0]) for phi, q in grid])[:, 0], count)
+    _, phi, ratio = max((float(ll), phi, ratio) for ll, (phi, ratio) in zip(lls, grid, strict=True))
     # The drive's likelihood is sharp on long records: between two coarse steps it can drop by more
     # than a per-quarter drive gains by chance, which would falsify real processes (falsified).
     ratios = ratio * FINE_DRIVE
-    trials = tuple(trial(phi, q) for q in ratios)
-    lls = [log_likelihood(nu[rows]) for nu in trials]
-    j = int(np.argmax(lls))
-    return RandomBiasFit(phi, float(ratios[j]) * r, r, trials, j, lls[j])
+    found = RandomBiasFit(phi, float(ratio) * r, r, y, ratios)
+    j = int(np.argmax(_loglik(_grid_sums(y, rows, found.filters())[:, 0], count)))
+    nu = innovations(y, phi, found.filters()[j][1])
+    return dataclasses.replace(
+        found, q=float(ratios[j]) * r, chosen=j, innovations=nu, fit_loglik=log_likelihood(nu[rows])
+    )
 
 
 def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool:
@@ -126,7 +192,7 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
     """
     if process.q <= 0.0:
         return True
-    phi, trials, common = process.phi, process.trials, process.innovations
+    phi, common = process.phi, process.innovations
     nu = common[rows]
     w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - process.gain))), 1, len(nu) // 4))
     c = np.concatenate([[0.0], np.cumsum(nu)])
@@ -134,9 +200,8 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
     if float(z.max()) > float(norm.isf(0.0005 / len(z))):
         return True
     edges = np.quantile(t[rows], [0.25, 0.5, 0.75])
-    quarter = np.searchsorted(edges, t, side="right")
-    gain = 0.0
-    for k in range(4):
-        part = rows & (quarter == k)
-        gain += max(log_likelihood(nu[part]) for nu in trials) - log_likelihood(common[part])
-    return 2.0 * gain > 16.3  # χ² with 3 degrees of freedom at p = 0.001
+    quarter = np.searchsorted(edges, t, side="right").astype(np.int64)
+    sums = _grid_sums(process.y, rows, process.filters(), quarter)  # (drives, quarters)
+    counts = np.bincount(quarter[rows], minlength=4)[:4].astype(np.float64)
+    lls = _loglik(sums[:, :4], counts)
+    return 2.0 * float(np.sum(lls.max(axis=0) - lls[process.chosen])) > 16.3  # χ² with 3 degrees, p = 0.001

@@ -98,12 +98,12 @@ def refit_allowance(models: list[ChannelModel], withheld: NDArray[np.bool_]) -> 
     """
     lam_max, degrees = 0.0, 0
     for m in models:
-        a = np.hstack(m.columns)
-        a_fit = a[m.fit]
-        scale = np.maximum(np.abs(a_fit).max(axis=0), 1e-300)
-        _, s, vt = np.linalg.svd(a_fit / scale, full_matrices=False)
-        keep = s > s[0] * max(a_fit.shape) * np.finfo(float).eps  # lstsq's cut-off
-        lam = np.linalg.svd((a[withheld] / scale) @ vt[keep].T / s[keep], compute_uv=False) ** 2
+        # The eigenvalues of (A_fᵀA_f)⁻¹A_wᵀA_w, from A_f's singular values and A_w's Gram matrix,
+        # both accumulated a chunk of rows at a time.
+        factor = m.design().factor(m.fit, gram_rows=withheld)
+        s, vt, keep = factor.singular()
+        basis = vt[keep].T / s[keep]
+        lam = np.clip(np.linalg.eigvalsh(basis.T @ factor.scaled_gram() @ basis), 0.0, None)
         lam_max = max(lam_max, float(lam.max(initial=0.0)))
         degrees += int(np.sum(lam > 1e-9 * lam.max(initial=0.0)))
     if degrees == 0:

@@ -1,7 +1,7 @@
 """What a run will hold: a scenario's or a rig session's memory and disk, refused up front when too big.
 
-The per-sample figures are what the commands hold whole, each about 1.2-1.4 times what was measured at
-1e6 samples (``tools/bench_run_memory.py``); the run itself streams in chunks.
+The per-sample figures are what the commands hold whole, with a margin over what was measured
+(``docs/speed.md``); the run itself streams in chunks.
 """
 
 from __future__ import annotations
@@ -14,11 +14,10 @@ from sins.scenario.build import sample_count
 from sins.scenario.files import load_rig, rig_rows
 from sins.scenario.schema import Scenario
 
-#: Bytes a sample: ``sins simulate``'s truth and increments (430 measured), ``sins run``'s sample times
-#: (8), a rig session's readings and references (510 measured).
+#: Bytes a sample: ``sins simulate``'s truth and increments, ``sins run``'s sample times, a rig
+#: session's readings and references.
 SIMULATE_BYTES, RUN_BYTES, RIG_BYTES = 600, 8, 600
-#: ... and an aided run's (``[gnss]``): truth, readings, the filter's solution and records held whole
-#: (830 measured: 496 MB against the plain run's 197 MB at 360,000 samples).
+#: ... and an aided run's (``[gnss]``): truth, readings, the filter's solution and records held whole.
 AIDED_BYTES = 1000
 
 

@@ -86,11 +86,8 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
     Rows: only the longest stretch of rows where the IMU readings and the optical orientation and
     position (NaN where the markers were not seen) are all finite, less 15 rows at each end (the
     half-window of the widest filter, so every reference comes from a centred fit), the rows kept
-    moved by the clock offset rounded to a sample. The gaps lie at the ends of the recording and after
-    its first few optical frames, so the longest stretch loses only a few valid rows: trial 05 keeps
-    rows 1206:58355 of 59212 (57149; 2009 rows lack the optical reference, 24 valid ones before a
-    7-row gap and 30 at the stretch's ends are dropped), trial 18 rows 390:51823 of 53124 (51433; 1644
-    lack it, 17 before a 4-row gap and 30 at the ends dropped).
+    moved by the clock offset rounded to a sample (the rows each trial keeps:
+    ``docs/guide/datasets.md``).
 
     Reference, body axes (the dataset's ``opt_quat`` is the IMU frame's orientation in an ENU frame,
     aligned to the IMU by the dataset's authors; ``q = [w, x, y, z]`` rotates IMU-frame vectors into
@@ -102,32 +99,18 @@ def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calibr
     * specific force ``f_b = R(q)ᵀ (p̈ + [0, 0, g])`` with ``p̈`` from a quintic Savitzky–Golay fit
       of the optical position over 31 samples (0.109 s) and ``g`` = :data:`BROAD_GRAVITY` (ENU's z is
       up: at rest the accelerometer reads +9.82 m/s² along the body direction ``R(q)ᵀ [0, 0, 1]``).
-      No lever arm is applied between the optical position and the accelerometer: one fitted as
-      ``ω̇×r + ω×(ω×r)`` comes out at (−0.1, −5.3, 6.7) mm in trial 05 and (9, −1.4, 8) mm in 18,
-      lowering the residual by 2 % and 11 %; it does not repeat between trials, and it is the very term
-      of the diagnosis's ``accel.size_effect``, which is left to find it.
+      No lever arm is applied between the optical position and the accelerometer: one fitted on the
+      trials does not repeat between them, and it is the very term of the diagnosis's
+      ``accel.size_effect``, which is left to find it.
     * both evaluated at ``t − τ`` (cubic spline): the IMU lags the optical data by ``τ``, found per
       trial at the peak of the cross-correlation of ``|ω|`` (gyro against optical, means removed,
-      parabolic sub-sample peak): 4.17 ms in trial 05, 4.20 ms in trial 18 (1.2 samples), peak
-      correlation ≥ 0.997. Before it is applied the gyro's RMS residual is 1.9–3.9 °/s (05) and
-      7.6–9.6 °/s (18), after it 1.5–3.4 and 2.6–5.3 °/s. The accelerometer lags less than the gyro:
-      after the shift its residual fits a further delay of −0.3 to −0.8 ms (05) and −1.5 ms (18), left
-      for the diagnosis to find.
+      parabolic sub-sample peak, searched within ±0.1 s; a peak correlation below 0.5 is refused).
+      The accelerometer's own further delay is left for the diagnosis to find.
 
-    How good the reference is (figures of the two trials; the gap diagnosis cannot see errors smaller
-    than these): at rest (|ω| of the gyro < 1.5 °/s for a second, 47 % of the rows) the reference rate
-    has an RMS of 0.7–2.3 °/s per axis where the gyro's spread is 0.1 °/s, and ``|f|`` averages
-    9.814–9.815 m/s² (``g`` 9.813, the noise adds ≈ σ²/g; the accelerometer reads 9.820) with a spread
-    of 0.12–0.19 m/s² where the accelerometer's is 0.05–0.07: at rest the residual is the optical
-    noise. Over the whole trial the RMS of gyro − reference after a constant bias is
-    3.4 / 2.5 / 1.5 °/s (05, x/y/z) and 5.3 / 3.3 / 2.6 °/s (18, where the rate reaches 720 °/s),
-    correlation ≥ 0.993 per axis; accelerometer − reference 0.23 / 0.24 / 0.32 m/s² (05) and
-    0.48 / 0.55 / 0.65 m/s² (18), correlation ≥ 0.994. The noise is smoothed, so it is correlated over
-    the filter windows and the diagnosis's noise floor (from first differences) counts only part of
-    it: expect excess over the floor on every channel, slow processes (bias instability) fitted to
-    it, a floor set by the reference rather than the IMU (0.4–1.6 °/s and 0.1–0.25 m/s² against the
-    IMU's 0.1 °/s and 0.06 m/s²), and scale/misalignment fits biased towards zero by
-    ≈ (noise / signal)² (about 1 %) from errors in the reference.
+    The reference is noisier than the IMU (optical noise, differentiated), and its noise is smoothed
+    over the filter windows: a gap diagnosis against it finds excess over the noise floor on every
+    channel and a floor set by the reference rather than the IMU. The offsets, lever arms and the
+    reference's quality measured on the two trials are in ``docs/guide/datasets.md``.
 
     Parameters
     ----------

@@ -6,36 +6,11 @@ NWPU Xi'an, from the PSINS toolbox's ``data/lasergyro.imu``)
     :class:`~sins.series.CalibrationData` with Earth rate and normal gravity as
     the reference.
 
-What the data show (measured through this reader; SOURCE.md's own script agrees):
-
-* Units: the rows are integers in LSB; 0.1 arcsec/LSB for the gyros and 125 µg·s/LSB for the
-  accelerometers, µg being 1e-6 × the header's g = 9.780327 m/s² (PSINS ``glv.g0``, the
-  equatorial value, *not* the local one: the toolbox's ``imufile.m`` scales by it). The z
-  accelerometer reads ≈ 80 LSB a row: 80 × 125e-6 × 9.780327 / 0.01 s ≈ 9.78 m/s², so LSB per
-  row over a 10 ms interval is the right reading of the header.
-* Rate: no time column; the header's interval is 10 ms (100 Hz), 184,718 rows, 1847.18 s.
-  Nothing in the file can contradict the interval directly, but a wrong one would scale both
-  sensors: the mean specific force over the record, |f| = 9.79548 m/s², is normal gravity at the
-  header's position (9.79553 m/s²) to -4 µg, i.e. the interval is right to about 1e-5 (the local
-  gravity anomaly, tens of µg, limits the check) if the accelerometer scale is; the gyros agree to
-  1 % over the record, 0.5 % over its quiet stretches.
-* Earth rate: |ω| = 14.85 °/h over the record, 14.97 °/h over the quiet 600–960 s, against
-  15.04 °/h (7.292e-5 rad/s); vertical 8.44 °/h against 8.46 °/h.
-* Axes: PSINS's body is x right, y forward, z up (the header says so, and the data agree: z
-  reads +g, y reads the horizontal Earth rate's small east part, x nearly all of its north part
-  with a minus sign, i.e. the unit faces east). :data:`PSINS_TO_FRD` takes it to the package's
-  FRD.
-* Attitude: see :func:`read_psins_lasergyro`; roll 0.358°, pitch 0.927° from the data, heading
-  90.6° (east) from the header.
-* The base is not quiet (SOURCE.md): 60 s gyro means swing by up to ±9 °/h about the horizontal
-  axes in the first 10 min, at 960–1020 s and after 1500 s, and the tilt drifts and steps by up
-  to 0.2° (3.5 mg of horizontal specific force) across the record.
-* The increments come in bursts: most rows are 0 and the counts arrive every few rows (x
-  accelerometer: 79 % of rows 0, the rest −1…−4 LSB; z gyro: 0 for about ten rows, then 9–10
-  LSB), with lines at 3 Hz (z gyro), 36 and 48 Hz (x, y gyros) and 13–46 Hz (accelerometers).
-  One LSB per 10 ms row is 10 °/h of rate and 12.5 mg of specific force, so the 10 ms rates are
-  dominated by this output's quantization and timing, which sums over many rows remove (the
-  counts carry over); a white-noise model will not fit them at the shortest time scales.
+The file's rows are integers in LSB (0.1 arcsec for the gyros, 125 µg·s for the accelerometers, µg
+being 1e-6 × the header's g = 9.780327 m/s², PSINS ``glv.g0``), one row per 10 ms interval, in PSINS's
+x-right, y-forward, z-up body axes. What the data show through this reader (units, rate, Earth rate,
+attitude, the base's motion, the bursty output) and what its reference can judge are in
+``docs/guide/datasets.md``.
 """
 
 from __future__ import annotations
@@ -91,38 +66,13 @@ def read_psins_lasergyro(root: str | os.PathLike[str] | None = None) -> Calibrat
     ``g(lat, h) = 9.79553 m/s²``. The attitude ``C_nb``:
 
     * roll and pitch from the record's mean specific force (a coarse
-      levelling): 0.358° and 0.927°. The header's pitch and roll are 0 ("maybe
-      inaccurate", it says), which the data contradict by 16 mg on the forward
-      accelerometer, far beyond any accelerometer bias of an INS with this
-      resolution; they are placeholders.
+      levelling), not the header's (zeros the data contradict: placeholders).
     * heading from the header, 90.6° (PSINS's yaw −90.6°, counter-clockwise
-      from north; the body faces east). It is not measured here, and its
-      origin is unknown (perhaps an alignment on these same data); but
-      gyrocompassing (yaw from the horizontal Earth rate, which the RLG
-      resolves) over the quiet stretches gives 90.8° (600–960 s) and 90.3°
-      (1020–1500 s), while over the whole record it gives 88.6°, pulled off
-      by the base's net rotations in the disturbed minutes. A 1° heading
-      error moves the east reference by 0.22 °/h. PSINS's heading (of the
-      y axis, 3-1-2 angles) and the ZYX yaw differ by roll × pitch, 0.006°.
+      from north; the body faces east). It is not measured here.
 
-    What this circularity means: biases along the alignment directions are
-    absorbed by an attitude estimated from the same data. The tilt comes from
-    the readings it is compared with, so the horizontal accelerometer means
-    equal the reference exactly (each horizontal accelerometer's constant
-    bias is taken for tilt, 1 mg ≙ 0.057°), and only the vertical one,
-    |f̄| − g, is left (−4 µg: bias, scale error and the local gravity anomaly
-    together). The gyro biases are not absorbed by the heading, as it is the
-    header's (unless the header's heading was itself aligned on these data,
-    which nothing rules out: then the east gyro's bias went into it). And one
-    static orientation cannot separate a constant bias from a scale or
-    misalignment error, nor from the base's slow rotation. So the sim-to-real
-    diagnosis can judge this unit's noise (white, quantization, the bursty
-    output) and its slow drifts, as far as the base's motion lets it (tilt
-    drifts and steps of up to 0.2°, which the constant reference books as up
-    to 3.5 mg of accelerometer error, and rate excursions of up to ±9 °/h in
-    60 s means); not its constant biases, scale factors or misalignments, and
-    not temperature effects (no temperature). The base's motion is a gap of
-    the data, not of the sensor.
+    The tilt so taken absorbs the horizontal accelerometers' constant biases, and one static
+    orientation cannot tell a bias from a scale or misalignment error: what this reference can and
+    cannot judge, with the heading checked by gyrocompassing, is in ``docs/guide/datasets.md``.
 
     Parameters
     ----------

@@ -35,11 +35,7 @@ PSINS_VEHICLE_FOLDER = "psins_fog_mems_vehicle"
 PSINS_VEHICLE_FILE = "transfer_align_fog_mems.mat"
 #: PSINS axes to the package's. PSINS bodies are X-right, Y-forward, Z-up and its navigation frame is
 #: East-North-Up; swapping the first two axes and negating the third turns RFU into FRD and ENU into
-#: NED alike (a proper rotation, det +1). The data agree: the MEMS z reads +9.47 m/s² on average (up,
-#: against gravity), FRD z then −9.47; the MEMS gyro so turned follows the rate of the FOG-INS
-#: attitude turned the same way with gain 0.995–0.999 on every axis (a wrong axis or sign gives ≈ 0
-#: or −1); and the mean MEMS gyro error, (+0.044, −0.060, −0.021) °/s, is the file's undocumented
-#: ``eb0`` (−0.059, +0.044, +0.023) °/s turned the same way, to 0.003 °/s.
+#: NED alike (a proper rotation, det +1); the data agree (``docs/guide/datasets.md``).
 _PSINS_TO_SINS = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 #: ``mimu`` columns: dθ x, y, z (rad), dv x, y, z (m/s), t (s) — the PSINS IMU-file layout.
 _MIMU_COLUMNS = 7
@@ -48,9 +44,8 @@ _AVP_COLUMNS = 10
 #: Fewest rows of either table: the alignment fits 15 parameters on 10 Hz means and the gap
 #: diagnosis needs 200 rows; 100 FOG-INS intervals (10 s) is the least that pins the fits down.
 _MIN_INTERVALS = 100
-#: Time offsets searched, s: ± one FOG-INS interval. The fit found +15.5 ms; the correlation of |ω|
-#: falls off smoothly and monotonically on both sides (0.9996 at +20 ms, 0.998 at 0 and +30 ms, 0.968
-#: at −100 ms), with no competing peak.
+#: Time offsets searched, s: ± one FOG-INS interval (the correlation of |ω| on this file has one peak
+#: in it, falling off smoothly on both sides: ``docs/guide/datasets.md``).
 _MAX_OFFSET_S = 0.1
 #: Step of the offset grid before the parabolic refinement, s: near its top the correlation falls by
 #: ≈ 2e-5 over 2 ms, smooth enough for a parabola through three 1 ms steps.
@@ -102,38 +97,25 @@ def read_psins_vehicle(
     (``f += ω̇ × r + ω × (ω × r)``), with three things estimated from the data
     (:class:`PsinsAlignment`, :func:`psins_alignment`):
 
-    * time offset: the FOG-INS stamps are +15.5 ms ahead of the MEMS's (peak of
-      the correlation of |ω| over 10 Hz interval means, 0.99977; the gyro
-      residual is least at +16 ms and twice as large 5 ms either side);
-    * mounting rotation MEMS ← FOG: 0.30°, rotation vector (−0.02, +0.07,
-      −0.29)° in FRD (Wahba/Kabsch fit of the mean-removed 10 Hz rate vectors;
-      the part about x, the roll axis, is the least certain). The file's
-      undocumented ``mu0``, turned into FRD, is (+0.04, −0.09, +0.29)°: the same
-      rotation in the opposite sense (PSINS's convention), within 0.02° per axis;
-    * lever arm: the MEMS sits (−0.11, −0.03, +0.15) m ± 0.01 m from the FOG-INS
-      (behind and below it), a least-squares fit of the accelerometer error
-      to ``ω̇ × r + ω × (ω × r)`` beside a bias and a 3×3 scale/misalignment;
-      without it the error has a 0.02 m/s² roll-synchronous part, and a gap
-      diagnosis names it ``accel.size_effect``.
+    * time offset: the FOG-INS clock against the MEMS's, at the peak of the
+      correlation of |ω| over 10 Hz interval means (parabolic refinement of a
+      1 ms grid over ± one FOG-INS interval);
+    * mounting rotation MEMS ← FOG: a Wahba/Kabsch fit of the mean-removed
+      10 Hz rate vectors;
+    * lever arm: a least-squares fit of the accelerometer error to
+      ``ω̇ × r + ω × (ω × r)`` beside a bias and a 3×3 scale/misalignment.
 
-    How good the reference is: it knows the motion only below 5 Hz (the
-    FOG-INS's Nyquist frequency). Over 0.1 s means, the MEMS and the reference
-    agree to 0.027, 0.027, 0.013 °/s and 0.016, 0.022, 0.031 m/s² RMS (x, y, z)
-    once a constant bias (the MEMS's, ≈ 0.06 °/s and 0.05 m/s²) is removed,
-    scale and misalignment errors (≤ 0.5 % gyro, ≤ 2.5 % accel x) included.
-    That bounds the reference's own error from above; a FOG's bias (0.01–1 °/h)
-    is negligible beside it, and the FOG-INS's accuracy is not stated. At
-    100 Hz the MEMS disagrees with it by 0.2–0.5 °/s and ≈ 0.45 m/s² RMS,
-    nearly all above 5 Hz: vibration the MEMS sees (up to its ≈ 30 Hz
-    roll-off) and the reference cannot, which a gap diagnosis at 100 Hz counts
-    against the MEMS (every channel comes out unexplained). ``rate="fog"``
-    gives the 10 Hz interval means instead, where that content averages out:
-    the better input for a diagnosis.
+    The reference knows the motion only below 5 Hz (the FOG-INS's Nyquist
+    frequency): at 100 Hz a gap diagnosis counts the vibration the MEMS sees and
+    the reference cannot against the MEMS, and ``rate="fog"`` gives the 10 Hz
+    interval means instead, where that content averages out (the better input
+    for a diagnosis). The estimates found on this file and how well the MEMS
+    and the reference agree are in ``docs/guide/datasets.md``.
 
     Navigation solution: ``fogavp`` in NED, radians and metres, with the
     attitude of the MEMS body (``C_n,mems = C_n,fog c_mems_fog^T``) and times on
     the MEMS clock (``t_fog − offset_s``); position and velocity are the
-    FOG-INS's, at its place (0.19 m from the MEMS).
+    FOG-INS's, at its place (the lever arm away from the MEMS).
 
     Parameters
     ----------
@@ -146,8 +128,8 @@ def read_psins_vehicle(
         ``t`` (n,) s, ``gyro`` (n, 3) rad/s, ``accel`` (n, 3) m/s², ``ref_gyro``
         (n, 3) rad/s, ``ref_accel`` (n, 3) m/s², no NaN, no phases, ``source`` the
         MAT path; rows whose reference would need extrapolation (the first
-        ≈ 0.1 s) are left out: 9990 rows at 100 Hz, 999 at 10 Hz. Then the
-        FOG-INS solution, 1000 states at 10 Hz (never None for this file).
+        ≈ 0.1 s) are left out. Then the FOG-INS solution at 10 Hz (never None
+        for this file).
 
     Raises
     ------

@@ -1,0 +1,50 @@
+"""sins's own JSON files: written atomically, read back only when their ``"format"`` says what they are.
+
+Model files, quality baselines, campaign summaries and folders are JSON objects with a ``"format"`` key
+naming the kind; :func:`read_json_document` refuses any other file in one line (through
+:func:`sins.io.documents.read_json`, the one reader of every JSON file), and :func:`write_json` writes
+through :func:`sins.io.atomic.atomic_text`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from sins.errors import SinsInputError
+from sins.io import documents
+from sins.io.atomic import atomic_text
+
+
+def write_json(path: str | os.PathLike[str], obj: Any) -> None:
+    """Write JSON (indented, keys in insertion order) to a temporary name then rename."""
+    with atomic_text(path) as fh:
+        json.dump(obj, fh, indent=2, allow_nan=True)
+        fh.write("\n")
+
+
+def read_json_document(
+    path: str | os.PathLike[str], what: str, format_name: str, missing_hint: str = ""
+) -> dict[str, Any]:
+    """A JSON object whose ``"format"`` is ``format_name``; one-line errors for anything else.
+
+    ``what`` names the kind of file in messages ("model file", "baseline");
+    ``missing_hint`` is added when the file does not exist.
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the file: missing or unreadable, not JSON (as
+        :func:`sins.io.documents.read_json` refuses it), or not an object whose ``"format"`` is
+        ``format_name``.
+    """
+    path = Path(path)
+    doc = documents.read_json(path, what, missing_hint)  # the one reader: one line whatever the bytes
+    if not isinstance(doc, dict) or doc.get("format") != format_name:
+        raise SinsInputError(f'{path}: not a sins {what} (no "format": "{format_name}")')
+    return doc
+
+
+__all__ = ["read_json_document", "write_json"]

@@ -1,0 +1,94 @@
+"""What a run gives back: one integrated stream's errors, one aided run's, and a scenario's runs.
+
+Plain frozen dataclasses of arrays, made by :mod:`sins.pipeline` (scenarios), :mod:`sins.replay`
+(recorded IMUs) and read by the command line, :mod:`sins.plots`, :mod:`sins.viz` and campaigns.
+Summaries cover every sample; the series are thinned for display (:data:`sins.pipeline.MAX_KEPT`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.aiding.outages import OutageError
+from sins.nav.metrics import DriftSummary, NavErrors
+from sins.scenario import Scenario
+from sins.series import NavSeries
+
+
+@dataclass(frozen=True)
+class StrategyRun:
+    """One integrated IMU stream and its errors against the truth.
+
+    ``residual_rms`` (compensated scenarios): per channel, the RMS of the
+    corrected reading's error on the rig data held back from the fit, SI units.
+    ``sensor_error`` (scenarios with an IMU model): the error of the stream
+    this run integrated (corrected reading − ideal), (m, 6) in rad/s and m/s²
+    in the order of :data:`sins.imu.CHANNELS`, as block means at the
+    scenario's ``sensor_t``.
+    """
+
+    solution: NavSeries
+    errors: NavErrors
+    summary: DriftSummary
+    residual_rms: dict[str, float] | None = None
+    sensor_error: NDArray[np.float64] | None = None
+
+
+@dataclass(frozen=True)
+class AidedRun:
+    """One strategy's stream integrated by the GNSS/INS filter (:mod:`sins.aiding.ekf`).
+
+    The summary covers every sample; for display, ``errors`` are thinned as the scenario's plain
+    runs', and the filter's records (``t_cov``: each propagation step's end and each update) to at
+    most :data:`~sins.pipeline.MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position
+    NED m, velocity m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the
+    estimated gyro and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for
+    the ideal IMU); ``fix_t`` the fixes' times; ``restarts`` when the filter started again from a fix
+    after a run of refused ones (:class:`sins.aiding.ekf.FilterConfig` ``reinit_after``). An in-motion
+    alignment starts the filter at ``start_s``: the summary and ``errors`` cover the run from there.
+    """
+
+    summary: DriftSummary
+    fixes: int
+    rejected: int
+    outages: tuple[OutageError, ...]
+    filter_grade: str = "navigation"
+    errors: NavErrors | None = None
+    t_cov: NDArray[np.float64] | None = None
+    sigma: NDArray[np.float64] | None = None
+    bias: NDArray[np.float64] | None = None
+    true_bias: NDArray[np.float64] | None = None
+    fix_t: NDArray[np.float64] | None = None
+    restarts: tuple[float, ...] = ()  # times the filter started again after a run of refused fixes, s
+    alignment: str = "truth"  # how the filter started: "static", "gnss_velocity" or "truth"
+    start_s: float = 0.0  # when it started (an in-motion alignment's fix), s
+    static_s: float = 0.0  # a static alignment's still window, s
+    heading_sigma_deg: float | None = None  # the in-motion alignment's heading 1σ told to the filter, °
+    velocity_rejected: int = 0  # GNSS velocities the gate refused (with velocity fixes)
+
+
+@dataclass(frozen=True)
+class ScenarioRun:
+    """A scenario's truth and one run per compensation strategy.
+
+    Summaries use every sample; ``truth`` and each run's ``solution`` and
+    ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
+    sample, plus the last), and to at most :data:`~sins.pipeline.MAX_KEPT` samples for longer
+    runs, so that memory stays bounded whatever the duration, and the
+    runs' ``sensor_error`` are means over blocks of as many intervals, centred
+    at ``sensor_t``: a mean keeps the systematic error a plot can show and
+    averages down the noise it cannot.
+    """
+
+    scenario: Scenario
+    samples: int
+    truth: NavSeries
+    runs: dict[str, StrategyRun]
+    sensor_t: NDArray[np.float64] | None = None
+    aided: dict[str, AidedRun] = field(default_factory=dict)
+
+
+__all__ = ["AidedRun", "ScenarioRun", "StrategyRun"]

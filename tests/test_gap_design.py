@@ -1,0 +1,211 @@
+"""The gap diagnosis a chunk of rows at a time (issue 32): what it computes per chunk equals what numpy
+and scipy compute on the whole arrays, and a diagnosis cut into small chunks is the diagnosis of one.
+
+Chunks are made small here (a few hundred rows) so that every reduction crosses many chunk boundaries
+on short series; the oracles are numpy's ``lstsq`` and SVD, scipy's ``lfilter``, ``PPoly`` and FFT on
+the whole arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy_gap as ng
+import pytest
+
+from sins.gap import candidates, channel, diagnose, disturbance, lattice, randombias
+from sins.gap.design import Design, Projection
+from sins.imu.model import hermite_slopes
+from sins.series import CalibrationData
+
+
+@pytest.fixture
+def small_chunks(monkeypatch: pytest.MonkeyPatch) -> int:
+    monkeypatch.setattr(candidates, "CHUNK_ROWS", 337)
+    return 337
+
+
+def _columns(n: int, rng: np.random.Generator) -> np.ndarray:
+    """A bias, two inputs of very different size, their product, and a column that is a combination of
+    two others to rounding (a rank numpy's cut-off drops)."""
+    t = np.linspace(0.0, 1.0, n)
+    u = np.column_stack([np.ones(n), 1e-4 * np.sin(7.0 * t), 30.0 * rng.standard_normal(n)])
+    return np.column_stack([u, u[:, 1] * u[:, 2], 2.0 * u[:, 0] - 3e4 * u[:, 1]])
+
+
+def test_chunked_least_squares_is_numpys_on_the_whole(small_chunks: int):
+    """Coefficients, predictions and residuals of the stacked QR factor against ``numpy.linalg.lstsq``
+    on the whole rows: the same to rounding (1e-9 of the coefficients' size, the rank-deficient
+    direction dropped alike), with numpy's default cut-off and with ``rcond=1e-3``."""
+    rng = np.random.default_rng(0)
+    n = 5_000
+    a = _columns(n, rng)
+    rows = rng.random(n) < 0.7
+    y = a[:, :4] @ np.array([1.0, 2e3, 0.01, 5.0]) + 0.1 * rng.standard_normal(n)
+    design = Design.from_array(a)
+    scale = np.abs(a[rows]).max(axis=0)
+    np.testing.assert_array_equal(design.scaled(rows).scale, scale)
+    for rcond in (None, 1e-3):
+        ours, found = design.lstsq(y, rows, rcond)
+        np.testing.assert_array_equal(found, scale)  # the same pass finds the scale
+        numpys, *_ = np.linalg.lstsq(a[rows] / scale, y[rows], rcond=rcond)
+        np.testing.assert_allclose(ours, numpys, rtol=0, atol=1e-9 * np.abs(numpys).max())
+        np.testing.assert_allclose(
+            design.scaled_by(found).predict(ours), (a / scale) @ numpys, rtol=1e-9, atol=1e-9
+        )
+    projection = Projection.of(design, rows)
+    left = y[rows] - (a[rows] / scale) @ np.linalg.lstsq(a[rows] / scale, y[rows], rcond=None)[0]
+    assert projection.residual(y) == pytest.approx(left @ left, rel=1e-8)
+    scaled = design.scaled_by(scale)
+    np.testing.assert_allclose(scaled.gram(~rows), (a[~rows] / scale).T @ (a[~rows] / scale), rtol=1e-12)
+    factor = design.factor(rows, gram_rows=~rows)
+    np.testing.assert_allclose(factor.gram, a[~rows].T @ a[~rows], rtol=1e-12)
+
+
+def test_whitened_least_squares_filters_every_column_over_every_row(small_chunks: int):
+    """Generalised least squares beside a random bias: each column and the target through
+    :func:`randombias.innovations` (scipy's ``lfilter`` over all rows, from the mean of the first 100),
+    then least squares on the chosen rows. The filter's state carried across chunks gives the
+    whole-array filter's values, so the coefficients are numpy's to rounding."""
+    rng = np.random.default_rng(1)
+    n = 4_000
+    a = _columns(n, rng)[:, :4]
+    rows = np.arange(n) % 100 < 70
+    y = (
+        np.cumsum(rng.standard_normal(n)) * 0.05
+        + a @ np.array([1.0, 3e3, 0.02, 1.0])
+        + rng.standard_normal(n)
+    )
+    phi, gain = 1.0, 0.05
+    design = Design.from_array(a).scaled(rows)
+    whitened = np.column_stack([randombias.innovations(c, phi, gain) for c in (a / design.scale).T])
+    numpys, *_ = np.linalg.lstsq(whitened[rows], randombias.innovations(y, phi, gain)[rows], rcond=None)
+    ours = design.whitened_lstsq(y, rows, None, phi, gain)
+    np.testing.assert_allclose(ours, numpys, rtol=0, atol=1e-9 * np.abs(numpys).max())
+
+
+def test_the_random_bias_grid_sums_are_lfilters():
+    """The compiled pass over every filter of a grid: each filter's sum of squared innovations on the
+    chosen rows, per group, is that of scipy's ``lfilter`` innovations to 1e-12."""
+    rng = np.random.default_rng(2)
+    n = 20_000
+    y = np.cumsum(rng.standard_normal(n)) * 0.01 + rng.standard_normal(n)
+    rows = rng.random(n) < 0.7
+    group = (np.arange(n) * 4) // n
+    filters = [(phi, randombias.steady_gain(phi, q, 1.0)[0]) for phi in (1.0, 0.99) for q in (1e-6, 1e-2)]
+    ours = randombias._grid_sums(y, rows, filters, group)
+    for g, (phi, gain) in enumerate(filters):
+        nu = randombias.innovations(y, phi, gain)
+        for k in range(4):
+            part = rows & (group == k)
+            assert ours[g, k] == pytest.approx(float(nu[part] @ nu[part]), rel=1e-12)
+
+
+def test_the_delayed_reference_is_the_whole_curve_to_the_last_bit(small_chunks: int):
+    """:meth:`ReferenceInputs.lag`, evaluated a chunk at a time on that chunk's pieces of the curve,
+    against the whole curve (:func:`candidates.kinked_hermite`) on a table's rate whose kinks fall on
+    rows, a few of them at chunk boundaries, for delays within a row, of several rows, on a
+    breakpoint and negative: equal, bit for bit. The kinks found a chunk at a time are those
+    :func:`sins.imu.model.hermite_slopes` finds on the whole."""
+    t = np.arange(4_000) / 50.0
+    knots = [0.0, 6.74, 13.48, 20.0, 33.7, 40.0, 67.4, 70.0, 79.98]  # 6.74 s = row 337: a boundary
+    u = np.interp(t, knots, [0.0, 0.0, 2.0, 2.0, -1.0, -1.0, 3.0, 0.0, 0.0])
+    ref = np.column_stack([u, 0.5 * u, np.sin(t)])
+    data = CalibrationData(t=t, gyro=ref, accel=ref, ref_gyro=ref, ref_accel=ref)
+    x = candidates.reference_inputs(data)
+    right, left = hermite_slopes(t, ref, np.gradient(ref, t, axis=0))
+    kinks = x.kinks["gyro", 0]
+    np.testing.assert_array_equal(right[kinks.rows, 0], kinks.right)
+    assert set(kinks.rows) == set(
+        np.flatnonzero((right[:, 0] != x.rate("gyro")[:, 0]) | (left[:, 0] != x.rate("gyro")[:, 0]))
+    )
+    assert {336, 337, 338} & set(kinks.rows)
+    for axis in range(3):
+        whole = candidates.kinked_hermite(t, ref[:, axis], x.rate("gyro")[:, axis])
+        for tau in (1e-3, 0.02, 0.0731, -0.013, 0.0):
+            expected = whole(np.clip(t - tau, t[0], t[-1])) - ref[:, axis]
+            np.testing.assert_array_equal(x.lag("gyro", axis, tau), expected)
+
+
+def test_a_step_and_a_hum_are_found_alike_in_chunks(small_chunks: int):
+    """A bias step's time and size and an oscillation's period and amplitude, from chunked suffix sums
+    and eight transforms of the unpadded series, against the same from whole arrays with one chunk:
+    the step's time exactly, its size and the hum's period and amplitude to 1e-9."""
+    rng = np.random.default_rng(3)
+    n = 6_000
+    t = np.arange(n) * 0.1
+    rows = np.arange(n) % 1000 < 700
+    a = np.column_stack([np.ones(n), np.sin(2 * np.pi * t / t[-1])])
+    y = 0.4 * (t > 222.2) + 0.3 * np.sin(2 * np.pi * t / 37.0) + rng.standard_normal(n)
+    y -= a @ np.linalg.lstsq(a[rows], y[rows], rcond=None)[0]
+    chunked = disturbance.best_step(y, a, rows, t), disturbance.best_oscillation(y, a, rows, t)
+    candidates.CHUNK_ROWS = 1 << 20  # the monkeypatch restores it
+    whole = disturbance.best_step(y, a, rows, t), disturbance.best_oscillation(y, a, rows, t)
+    assert chunked[0][0] == whole[0][0]
+    np.testing.assert_allclose(chunked[0][1], whole[0][1], rtol=1e-9)
+    np.testing.assert_allclose(chunked[1], whole[1], rtol=1e-9)
+    # The periodogram's peak against numpy's rfft of the series padded eightfold.
+    x = np.where(rows, y - y[rows].mean(), 0.0)
+    power = np.abs(np.fft.rfft(x, 8 * n)) ** 2
+    freq = np.fft.rfftfreq(8 * n, 0.1)
+    power[freq < 3.0 / t[-1]] = 0.0
+    assert disturbance._periodogram_peak(x, 0.1, 3.0 / t[-1]) == pytest.approx(
+        freq[np.argmax(power)], rel=1e-12
+    )
+
+
+def test_a_diagnosis_in_small_chunks_is_the_diagnosis_in_one(monkeypatch: pytest.MonkeyPatch):
+    """A five-minute numpy-written recording (a 3 ms accelerometer delay on a tumbling rig, 50 Hz,
+    15,000 rows) diagnosed in chunks of 337 rows and in one: the same verdicts and candidates, every
+    channel's figures to 1e-9 and every score to 1e-6 nats (rounding in the stacked factors and the
+    sums)."""
+    built = ng.build(ng.Case("accel.time_offset", 0, "continuous_tumble", 50.0, 5.0, "cycle", 3.0))
+    s = built.proc.session
+    data = CalibrationData(
+        t=s.t, gyro=built.gyro, accel=built.accel, ref_gyro=s.ref_gyro, ref_accel=s.ref_accel, temp=s.temp
+    )
+    one = diagnose(data, holdout=ng.HOLDOUT)
+    monkeypatch.setattr(candidates, "CHUNK_ROWS", 337)
+    many = diagnose(data, holdout=ng.HOLDOUT)
+    assert many.diagnosis == one.diagnosis == ["accel.time_offset"]
+    assert many.unexplained == one.unexplained and len(many.outside) == len(one.outside)
+    for ch, figures in one.channels.items():
+        for key, value in figures.items():
+            assert many.channels[ch][key] == pytest.approx(value, rel=1e-9), (ch, key)
+    assert [e.name for e in many.effects] == [e.name for e in one.effects]
+    for a, b in zip(many.effects, one.effects, strict=True):
+        assert a.score == pytest.approx(b.score, abs=1e-6), a.name
+    np.testing.assert_allclose(many.predicted_after, one.predicted_after, rtol=0, atol=1e-9)
+    assert many.rows == one.rows
+
+
+def test_the_print_habit_probes_the_values_a_concatenation_would():
+    """:func:`lattice.print_habit` reads every ``k``-th finite nonzero value of the file's columns one
+    after another; picked column by column in place, they are the same values as from the columns
+    concatenated (NaN, zeros and columns of nothing but zeros among them)."""
+    rng = np.random.default_rng(4)
+    columns = (
+        rng.standard_normal((5_000, 3)).round(4),
+        np.where(rng.random((7_001, 3)) < 0.1, 0.0, rng.standard_normal((7_001, 3))),
+        np.full((100, 3), np.nan),
+        np.zeros((10, 3)),
+        rng.standard_normal(3_333),
+    )
+    values = np.concatenate([np.ravel(c) for c in columns])
+    values = values[np.isfinite(values) & (values != 0.0)]
+    np.testing.assert_array_equal(lattice._probe(columns), values[:: len(values) // lattice._HABIT_PROBE])
+    assert lattice.print_habit(*columns) == lattice.Printed(None, None)
+    assert lattice.print_habit(columns[0]) == lattice.Printed(5, 4)  # four decimals of values up to ±5
+
+
+def test_the_baseline_block_of_a_chunk_is_the_baseline_columns():
+    """The baseline's columns as a chunk's design builds them (filled a sensor at a time) are
+    :func:`candidates.baseline_columns`' of the same rows, to the bit."""
+    rng = np.random.default_rng(5)
+    t = np.arange(500) / 100.0
+    w, f = rng.standard_normal((500, 3)), rng.standard_normal((500, 3))
+    x = candidates.reference_inputs(CalibrationData(t=t, gyro=w, accel=f, ref_gyro=w, ref_accel=f))
+    for sensor in ("gyro", "accel"):
+        part = x.rows(123, 456)
+        np.testing.assert_array_equal(
+            channel._baseline_block(sensor, part), candidates.baseline_columns(sensor, w[123:456], f[123:456])
+        )
