@@ -25,13 +25,14 @@ the baseline drew the same seeds: the logarithm of the growth past the allowance
 ``log(now / allowed)`` with ``allowed = baseline · (1 + tolerance) + floor``, is tested one-sided
 against zero (one-sample t test; on the log scale, because a strategy made worse moves every seed's
 figure by about the same factor, while the seeds' figures themselves spread over a factor of
-several); two-sample otherwise (Welch's t test of ``now`` against ``allowed``), at ``FALSE_ALARM /
-figures`` (Bonferroni over every figure of the baseline, :data:`sins.campaign.gate.FALSE_ALARM`), so
-that an unchanged strategy fails the gate at all with a chance of at most that rate. Figures equal
-to the baseline's hold without a test; a figure gone NaN regresses; one of the baseline missing now
-fails as "missing". The campaign gate ranks instead (Wilcoxon, Mann-Whitney), which a suite cannot:
-with ``n`` seeds the smallest one-sided p-value a signed-rank test can give is ``2**-n``, above the
-per-figure level of a hundred figures for fewer than 14 seeds, so such a gate could never fail.
+several); two-sample otherwise (Welch's t test of ``log(now)`` against ``log(allowed)``), at
+``FALSE_ALARM / figures`` (Bonferroni over every figure of the baseline,
+:data:`sins.campaign.gate.FALSE_ALARM`), so that an unchanged strategy fails the gate at all with a
+chance of at most that rate. Figures equal to the baseline's hold without a test; a figure gone NaN
+regresses; one of the baseline missing now fails as "missing". The campaign gate ranks instead
+(Wilcoxon, Mann-Whitney), which a suite cannot: with ``n`` seeds the smallest one-sided p-value a
+signed-rank test can give is ``2**-n``, above the per-figure level of a hundred figures for fewer
+than 14 seeds, so such a gate could never fail.
 """
 
 from __future__ import annotations
@@ -259,10 +260,12 @@ def _judge(
     if paired:
         if np.array_equal(n, b):
             return Check(group, metric, "identical", ratio, 1.0, "holds")
-        floor = FLOORS[_family(metric)]  # below the floor nothing is judged: log of no less than it
-        p, test = _p_paired(np.log(np.maximum(n, floor) / (b + slack))), "paired"
+    # On the log scale (a growth is a factor); below the floor nothing is judged: no less than it.
+    log_now, log_allowed = np.log(np.maximum(n, FLOORS[_family(metric)])), np.log(b + slack)
+    if paired:
+        p, test = _p_paired(log_now - log_allowed), "paired"
     else:
-        p, test = _p_welch(n, b + slack), "two-sample"
+        p, test = _p_welch(log_now, log_allowed), "two-sample"
     return Check(group, metric, test, ratio, p, "regressed" if p < level else "holds")
 
 
