@@ -59,6 +59,9 @@ def small_suite(tmp_path: Path) -> Path:
 def test_a_degraded_strategy_fails_the_gate_and_is_named(
     small_suite: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ):
+    """regression made worse on purpose (20 °/h left in every gyro) fails the gate on three seeds, the
+    fewest a suite takes: its drift (x96 in the median, p 4e-4 when this was written) and each gyro
+    residual (+22 %, p 2e-6 to 2e-4), against a per-figure level of 5.6e-4, and nothing else."""
     baseline = small_suite.parent / "baseline.json"
     assert main(["check", str(small_suite), "--baseline", str(baseline), "--update-baseline"]) == 0
     assert main(["check", str(small_suite), "--baseline", str(baseline)]) == 0
