@@ -20,12 +20,11 @@ run: $(STAMP)
 
 # Both cores: test files are dealt to two workers whole (a file's module fixtures are built once). One
 # BLAS/OpenMP thread per worker: a pool per worker beside torch's oversubscribed the two cores and made
-# the gap diagnosis four times slower (2.0 s -> 8.1 s a case). torch's and OpenBLAS's AVX2 kernels on
-# any x86-64 machine: their AVX-512 ones round differently, and the mlp that L-BFGS trains from the
-# rounded data is another network (the quality suite's mlp drifts 643 m on AVX2, 545 m on AVX-512); the
-# shipped baselines were measured on AVX2 kernels.
+# the gap diagnosis four times slower (2.0 s -> 8.1 s a case). No CPU kernels pinned: the quality gate
+# judges its figures over seeds, so a network that another machine's kernels train differently is a
+# draw within the seeds' spread, not a regression (docs/development.md, "CPU kernels").
 test: lint
-	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 ATEN_CPU_CAPABILITY=avx2 OPENBLAS_CORETYPE=Haswell \
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
 		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 lint: $(STAMP)

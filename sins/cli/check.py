@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from sins.cli.common import Subparsers, fixed_width, progress_bar, row_progress
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    from sins.campaign.gate import Check
+    from sins.quality import Figures, Suite
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -20,35 +26,49 @@ def _cmd_check(args: argparse.Namespace) -> int:
     if is_campaign(path):
         return _check_campaign(args, path)
     suite = quality.load_suite(path)
+    baseline = None
     if args.update_baseline:
         check_writable(args.baseline)  # before the runs, not after them
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     else:
         baseline = quality.read_baseline(args.baseline, suite)  # refuse early, before the runs
-    with progress_bar(f"quality suite {path.name}", "cases") as bar:
+    with progress_bar(f"quality suite {path.name}, {len(suite.seeds)} seeds", "runs") as bar:
         measured = quality.measure(suite, row_progress(bar))
-    if args.update_baseline:
+    if baseline is None:
         quality.write_baseline(args.baseline, measured, suite)
-        count = sum(len(m) for s in measured.values() for m in s.values())
-        print(f"wrote {args.baseline}: {count} metrics of {len(measured)} cases")
+        print(f"wrote {args.baseline}: {measured.count()} metrics of {len(measured.cases)} cases, "
+              f"{len(measured.seeds)} seeds each")  # fmt: skip
         return 0
-    changes = quality.compare(baseline, measured, suite.tolerances)
-    rows = []
-    for c in changes:
-        rel = "" if c.relative is None else f"{100 * c.relative:+.2f} %"
-        fmt = lambda x: "-" if x is None else f"{x:.6g}"  # noqa: E731
-        rows.append([f"{c.case}/{c.strategy}", c.metric, fmt(c.baseline), fmt(c.value), rel, c.verdict])
-    print(fixed_width(["case/strategy", "metric", "baseline", "now", "change", "verdict"], rows))
-    bad = [c for c in changes if c.verdict in ("regressed", "missing")]
+    return _report_suite(quality.compare(baseline, measured, suite.tolerances), baseline, measured, suite)
+
+
+def _report_suite(checks: list[Check], baseline: Figures, measured: Figures, suite: Suite) -> int:
+    """Print the suite's verdicts; 1 if a figure regressed or went missing."""
+    from sins import quality
+    from sins.campaign.gate import FALSE_ALARM
+
+    rows = [
+        [c.group, c.figure, c.test or "-", f"{c.median_ratio:.4g}", f"{c.p_value:.3g}", c.verdict]
+        for c in checks
+    ]
+    print(fixed_width(["case/strategy", "metric", "test", "median now/base", "p", "verdict"], rows))
+    for name in quality.unjudged(baseline, measured):
+        print(f"not in the baseline, not judged: {name}")
+    if not set(measured.seeds) <= set(baseline.seeds):
+        print("the baseline's seeds are not the suite's: two-sample tests, weaker than paired ones")
+    each = FALSE_ALARM / max(1, len(checks))
     tol = ", ".join(f"{k} {100 * v:g} %" for k, v in suite.tolerances.items())
+    level = (f"{len(measured.seeds)} seeds; growth beyond the tolerances ({tol}) tested at a false-alarm "
+             f"rate of {FALSE_ALARM:g} over the {len(checks)} figures, each at {each:.2g}")  # fmt: skip
+    bad = [c for c in checks if c.verdict != "holds"]
     if bad:
-        print(f"\n{len(bad)} of {len(changes)} metrics regressed or went missing (tolerances: {tol})")
+        print(f"\n{len(bad)} of {len(checks)} metrics regressed or went missing ({level})")
         for c in bad:
-            rel = "" if c.relative is None else f" by {100 * c.relative:+.2f} %"
-            print(f"  {c.case}/{c.strategy} {c.metric}: {c.verdict}{rel}")
+            growth = "" if math.isnan(c.median_ratio) else f", median {100 * (c.median_ratio - 1):+.2f} %"
+            print(f"  {c.group} {c.figure}: {c.verdict} (p = {c.p_value:.3g}{growth})")
         return 1
-    print(f"\nall {len(changes)} metrics hold (tolerances: {tol})")
+    print(f"\nall {len(checks)} metrics hold ({level})")
     return 0
 
 
