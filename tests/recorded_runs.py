@@ -3,8 +3,10 @@
 Used by ``tests/test_scenario.py`` (the runs equal these to the last bit) and ``tools/check_run_outputs.py
 golden`` (which records them again). The figures are the last bits of floating-point sums, so they hold
 only where the arithmetic is the same: numpy's, numba's and scipy's versions, the SIMD paths numpy takes
-on this CPU, and OpenBLAS's kernel (``make test`` pins ``OPENBLAS_CORETYPE``; unpinned on this machine,
-the aided preset's attitude errors move in their last bits). :func:`platform` is that fingerprint.
+on this CPU, and OpenBLAS's kernel (``OPENBLAS_CORETYPE``: ``make test`` pins none, and the aided
+preset's attitude errors move in their last bits between OpenBLAS's Haswell and SkylakeX kernels).
+:func:`platform` is that fingerprint. Recorded unpinned, after the run engine's refactoring had been
+checked equal to the code before it with the kernels pinned (commit 87c81cd's records).
 """
 
 from __future__ import annotations
