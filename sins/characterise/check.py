@@ -24,7 +24,7 @@ from scipy import stats
 
 from sins.characterise.allan import allan
 from sins.characterise.analysis import Characterisation
-from sins.imu.model import CHANNELS, ImuModel
+from sins.imu import CHANNELS, ImuModel
 from sins.imu.stream import IncrementStream
 from sins.series import ImuIncrements
 

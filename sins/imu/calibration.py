@@ -31,8 +31,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.imu import ImuModel
-from sins.nav import earth, rotation
 from sins.series import CalibrationData, ImuRates, RigPhase
 
 Array = NDArray[np.float64]

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
 from sins.errors import SinsInputError
 
 # These lived here before the tables, atomic writes and JSON files had modules of their own.
@@ -46,7 +47,6 @@ from sins.io.json_files import write_json as write_json
 from sins.io.tables import WRITE_BLOCK_ROWS as WRITE_BLOCK_ROWS
 from sins.io.tables import Table, format_number, line_of_row, read_header, read_table, write_table
 from sins.io.tables import read_columns as read_columns
-from sins.nav import rotation
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
 Array = NDArray[np.float64]

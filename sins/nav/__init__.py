@@ -1,2 +1,3 @@
-"""Navigation: rotations and the Earth, vehicle motion and its trajectory, the strapdown integrator, and
-error metrics. Pure functions over arrays; nothing here knows about IMU errors."""
+"""Navigation: vehicle motion and its trajectory, the strapdown integrator, and error metrics, on the
+rotations and the Earth of the base layer (:mod:`sins.rotation`, :mod:`sins.earth`). Pure functions over
+arrays; nothing here knows about IMU errors."""

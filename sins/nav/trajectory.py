@@ -21,7 +21,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import earth
+from sins import earth
 from sins.nav.motion import Kinematics, Motion
 from sins.series import ImuIncrements, ImuRates, NavSeries
 

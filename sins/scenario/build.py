@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 
-from sins import io
+from sins import earth, io
 from sins.errors import SinsInputError
-from sins.nav import earth, motion
+from sins.nav import motion
 from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
 from sins.scenario.validate import MAX_DURATION_S
 from sins.series import NavSeries

@@ -59,10 +59,10 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
     top = TomlKeys(str(path), "", read_toml(path, "IMU"))
     grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
     unit_seed = top.integer("unit_seed", 0, high=MAX_SEED)
-    withhold = tuple(top.strings("withhold", [], imu.EFFECT_NAMES))
+    withhold = tuple(top.strings("withhold", [], imu.effect_names()))
     effects = []
     for table in top.tables("effect"):
-        name = table.string("name", choices=imu.EFFECT_NAMES)
+        name = table.string("name", choices=imu.effect_names())
         params = {k: table.get(k) for k in table.table if k != "name"}
         try:
             effects.append(imu_spec.effect_from_params(name, params))
