@@ -16,7 +16,7 @@ Publication 1065 (Riley 2008, Table 12, after Howe, Allan and Barnes 1981), pick
 log-log slope ``μ`` of the Allan variance (``μ = −2`` quantization (white phase), ``−1`` white rate noise,
 ``0`` flicker (the bias-instability plateau), ``+1`` rate random walk; a rate ramp, ``+2``, takes the
 random-walk form). Segments are independent, so their EDFs add. The slope comes from the fitted noise
-model (:mod:`sins.characterise.terms`), or ``−1`` before a fit.
+model (:mod:`sins.characterise.noise_terms`), or ``−1`` before a fit.
 """
 
 from __future__ import annotations

@@ -45,7 +45,7 @@ import tempfile
 from pathlib import Path
 
 from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
-from sins.characterise.terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
+from sins.characterise.noise_terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG, MG, UG, ImuModel, spec
 

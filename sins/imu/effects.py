@@ -406,7 +406,7 @@ class QuantizationNoise(Effect):
     step ``dt``). Its Allan variance is ``3 q²/τ²`` at every cluster time ``τ = m·dt``, exactly (a
     cluster's mean is ``(e_end − e_start)/τ`` and three independent ``e`` enter each difference), and
     its two-sided spectrum per sample is ``4 sin²(π f dt) q²/dt²``: the term as the standards define
-    it and as :mod:`sins.characterise.terms` fits it.
+    it and as :mod:`sins.characterise.noise_terms` fits it.
 
     Why an effect of its own, not :class:`Quantization`: the term describes a quantizer whose error is
     independent from sample to sample. A rounding quantizer's is only when the input moves by more
