@@ -19,6 +19,7 @@ RANKS = {
     "sins": 0,
     "sins.errors": 0,
     "sins.rowwise": 0,
+    "sins.allan": 0,
     "sins.rotation": 0,
     "sins.earth": 0,
     "sins.series": 1,
