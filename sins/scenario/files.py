@@ -87,6 +87,7 @@ def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
                              ("orientation_error_deg", 0.0), ("rate_error_ppm", 0.0))
     }  # fmt: skip
     rig.done()
+    kwargs["h_m"] = kwargs.pop("alt_m")  # the file's key; the package's name of a height (glossary)
     rate_hz = kwargs["rate_hz"]
     positions = top.sub("positions")
     count = positions.number("count", 0)
