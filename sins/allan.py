@@ -60,3 +60,9 @@ def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
     sums, counts, _ = segment_sums(np.asarray(rate, dtype=float), clusters)
     m = np.asarray(clusters, dtype=float)
     return np.asarray(np.sqrt(sums / (2.0 * m * m * np.maximum(counts, 1))), dtype=float)
+
+
+__all__ = [
+    "allan_deviation",
+    "segment_sums",
+]

@@ -251,3 +251,17 @@ def predict(groups: list[tuple[str, ...]], coef: list[Array], x: TermInputs, cha
         if groups[c]:
             out[:, i] = design(groups[c], c, x) @ coef[c]
     return out
+
+
+__all__ = [
+    "SHOWN",
+    "Inputs",
+    "TermInputs",
+    "choose",
+    "design",
+    "fit",
+    "groups",
+    "groups_of",
+    "predict",
+    "subsets",
+]

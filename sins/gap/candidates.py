@@ -320,3 +320,20 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
         raise ValueError(f"{name!r} needs a temperature column, and {where} has none")
     x = reference_inputs(data)
     return [cand.columns(x, i) for i in range(3)]
+
+
+__all__ = [
+    "CANDIDATES",
+    "CHUNK_ROWS",
+    "Candidate",
+    "Kinks",
+    "ReferenceInputs",
+    "baseline_columns",
+    "central_differences",
+    "kinked_hermite",
+    "outputs",
+    "processes",
+    "reference_inputs",
+    "regressors_of",
+    "spans",
+]

@@ -126,3 +126,10 @@ def shift_samples(inputs: TrueInputs, t: Array, delay: float) -> TrueInputs:
         omega_dot_b=at(inputs.omega_dot_b),
         temp=temp,
     )
+
+
+__all__ = [
+    "EffectSet",
+    "check_temp",
+    "shift_samples",
+]

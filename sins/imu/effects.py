@@ -564,3 +564,25 @@ for _cls in (Bias, ScaleMisalignment, GSensitivity, Noise, BiasInstability, Rate
 #: The seed paper's model plus white noise.
 BASELINE = ("gyro.bias", "accel.bias", "gyro.scale_misalignment", "accel.scale_misalignment",
             "gyro.g_sensitivity", "gyro.noise", "accel.noise")  # fmt: skip
+
+
+__all__ = [
+    "BASELINE",
+    "Bias",
+    "BiasInstability",
+    "G2Sensitivity",
+    "GSensitivity",
+    "Noise",
+    "Quantization",
+    "QuantizationNoise",
+    "RateRandomWalk",
+    "Saturation",
+    "ScaleAsymmetry",
+    "ScaleMisalignment",
+    "ScaleNonlinearity",
+    "SizeEffect",
+    "TemperatureBias",
+    "TemperatureScale",
+    "TimeOffset",
+    "lever_arm_acceleration",
+]

@@ -138,3 +138,8 @@ class ImuModel(EffectSet):
             dtheta_b=np.vstack([head.dtheta_b, tail.dtheta_b]),
             dv_b=np.vstack([head.dv_b, tail.dv_b]),
         )
+
+
+__all__ = [
+    "ImuModel",
+]

@@ -128,3 +128,14 @@ def cubic_hermite(t: Array, y: Array, dy: Array, when: Array, dy_in: Array | Non
         (1 + 2 * s) * (1 - s) ** 2 * y[k] + s * (1 - s) ** 2 * h * dy[k]
         + s * s * (3 - 2 * s) * y[k + 1] + s * s * (s - 1) * h * dy_in[k + 1]
     )  # fmt: skip
+
+
+__all__ = [
+    "KINK_RATIO",
+    "apply_matrix",
+    "ar1",
+    "cubic_hermite",
+    "hermite_slopes",
+    "random_stream",
+    "uniform_steps",
+]

@@ -214,3 +214,16 @@ def typical_effect(name: str, rng: np.random.Generator, scale: float = 1.0) -> i
         sensor, _, kind = name.partition(".")
         raise ValueError(f"no typical size for {name!r} (sensor {sensor}, effect {kind})")
     return drawn[name]
+
+
+__all__ = [
+    "DEG",
+    "DEG_PER_H",
+    "GRADES",
+    "EffectSpec",
+    "Grade",
+    "draw_unit",
+    "effect_from_params",
+    "parameters",
+    "typical_effect",
+]

@@ -216,10 +216,10 @@ class Effect:
 
 
 _REGISTRY: dict[str, type[Effect]] = {}
-E = TypeVar("E", bound=type[Effect])
+_E = TypeVar("_E", bound=type[Effect])
 
 
-def register(cls: E) -> E:
+def register(cls: _E) -> _E:
     """Add the effect class ``cls`` to the vocabulary (a class decorator; returns ``cls``).
 
     Raises ``ValueError`` if its kind is taken by another class or it lacks a sensor's parameters.
@@ -266,3 +266,29 @@ def check_names(names: tuple[str, ...] | list[str]) -> None:
 def effects_where(test: Callable[[type[Effect]], bool]) -> list[tuple[str, type[Effect]]]:
     """``(name, class)`` of every registered effect whose class passes ``test``, in registry order."""
     return [(f"{s}.{t.kind}", t) for t in _REGISTRY.values() if test(t) for s in t.sensors]
+
+
+__all__ = [
+    "CHANNELS",
+    "DEG",
+    "DEG_PER_H",
+    "MG",
+    "PPM",
+    "SENSORS",
+    "UG",
+    "Effect",
+    "Param",
+    "RegressorInputs",
+    "Term",
+    "TrueInputs",
+    "check_names",
+    "display_unit",
+    "effect_class",
+    "effect_names",
+    "effect_types",
+    "effects_where",
+    "parameter_field",
+    "register",
+    "unregister",
+    "vector_param",
+]
