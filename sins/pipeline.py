@@ -413,13 +413,19 @@ def check_runnable(sc: Scenario, grade: str | None = None) -> None:
 
 
 def _true_bias(nav_model: ImuModel | None) -> NDArray[np.float64] | None:
-    """The unit's constant gyro and accelerometer biases (6,), to set beside the filter's estimates."""
+    """The unit's constant gyro and accelerometer biases (6,), to set beside the filter's estimates: the
+    constant parts ``b`` of its affine effects (:meth:`sins.imu.Effect.affine_terms`)."""
     if nav_model is None:
         return None
-    from sins.imu import Bias
+    return np.concatenate([_constant_bias(nav_model, sensor) for sensor in ("gyro", "accel")])
 
-    gyro, accel = nav_model.effect_of("gyro", Bias), nav_model.effect_of("accel", Bias)
-    return np.concatenate([np.zeros(3) if b is None else b.value for b in (gyro, accel)])
+
+def _constant_bias(model: ImuModel, sensor: str) -> NDArray[np.float64]:
+    out = np.zeros(3)
+    for e in model.effects_of(sensor):
+        if e.affine:
+            out = out + e.affine_terms()[0]
+    return out
 
 
 def _keep_every(sc: Scenario, motion: Motion, keep_hz: float) -> int:

@@ -223,7 +223,7 @@ def frame_turn(rec: ReferencedRecording) -> Array:
     """The navigation frame's turn in inertial space over each step, rad (n, 3) in its axes: Earth's rate
     at the reference's mean latitude (its vertical part only where ``heading_known`` is False; the
     transport rate of a room or a slow vehicle is left out)."""
-    from sins.nav import earth
+    from sins import earth
 
     lat = float(np.mean(rec.reference.lat))
     w_ie = np.array(np.broadcast_arrays(*earth.earth_rate_n(lat)), dtype=float).reshape(3)

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
 from sins.aiding import ekf, gnss
 from sins.aiding.outages import EDGE_S, OutageError, outage_errors, window_rows
-from sins.nav import rotation, strapdown
+from sins.nav import strapdown
 from sins.nav.metrics import nav_errors
 from sins.series import ImuIncrements, NavSeries
 

@@ -39,12 +39,12 @@ import rerun as rr
 import rerun.blueprint as rrb
 from numpy.typing import NDArray
 
+from sins import earth
 from sins.characterise import Characterisation
 from sins.characterise.check import ClosingCheck
 from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
-from sins.nav import earth
 from sins.pipeline import AidedRun, ScenarioRun, StrategyRun
 from sins.referenced import OpenLoop
 from sins.series import NavSeries

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from conftest import refusal
 
+from sins import earth, rotation
 from sins.aiding import ekf, gnss
-from sins.nav import earth, rotation, strapdown, trajectory
+from sins.nav import strapdown, trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start, Turn
 from sins.series import ImuIncrements, NavSeries
 

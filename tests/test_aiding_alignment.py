@@ -17,10 +17,10 @@ import pytest
 from conftest import refusal
 from scipy import stats
 
-from sins import imu
+from sins import earth, imu, rotation
 from sins.aiding import alignment, ekf, gnss, policy
 from sins.imu import spec
-from sins.nav import earth, rotation, trajectory
+from sins.nav import trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start
 from sins.series import NavSeries
 

@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from sins import imu
+from sins import earth, imu, rotation
 from sins.aiding import ekf, gnss
-from sins.nav import earth, rotation, strapdown, trajectory
+from sins.nav import strapdown, trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start, Turn
 from sins.series import ImuIncrements, NavSeries
 

@@ -79,8 +79,9 @@ def test_the_outage_error_is_the_solutions_error_at_that_sample():
     result = pipeline.run_scenario(sc)
     (window,) = result.aided["none"].outages
     # The same aided run from the library's pieces: the error at the last sample before 130 s.
+    from sins import earth
     from sins.aiding import ekf, gnss
-    from sins.nav import earth, strapdown
+    from sins.nav import strapdown
     from sins.scenario import load_imu
 
     truth, ideal = pipeline.simulate(sc)

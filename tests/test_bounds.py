@@ -3,7 +3,7 @@
 Just inside a bound the command runs and its result is sound (finite numbers), or, where the value
 makes the run enormous (a 1e9 s segment), it is refused up front for its size; just outside, it is
 refused in one line naming the file and the key. The bounds come from the code's own tables
-(``SCENARIO_BOUNDS``, ``RIG_BOUNDS``, the parameters of ``sins.imu.spec.PARAMETERS``), so a field added
+(``SCENARIO_BOUNDS``, ``RIG_BOUNDS``, the parameters of ``sins.imu.spec.parameters()``), so a field added
 there is walked here; the fields whose bound depends on another field are walked beside them. The
 guide's tables (``docs/guide/scenarios.md``) list the same bounds: :func:`test_the_guide_lists_every_bound`.
 """
@@ -24,6 +24,7 @@ from test_fuzz import IMU_MODEL, NON_FINITE, RIG, SCENARIO, WAYPOINTS, assert_on
 
 from sins import quality
 from sins.imu import spec as imu_spec
+from sins.imu.vocabulary import Param
 from sins.scenario import validate
 from sins.scenario.files import MIN_DWELL_SAMPLES, RIG_BOUNDS
 from sins.scenario.toml import MAX_SEED, Bound
@@ -348,14 +349,14 @@ def test_rig_dwell_is_two_samples_and_counts_are_known(tmp_path: Path) -> None:
 
 # --------------------------------------------------------------------------- IMU files
 
-EFFECT_PARAMS = [(name, p) for name, e in imu_spec.PARAMETERS.items() for p in e.params]
+EFFECT_PARAMS = [(name, p) for name, e in imu_spec.parameters().items() for p in e.params]
 #: A scenario with an IMU model (the file ``imu.toml`` beside it): the model's errors are navigated.
 MODEL_RUN = {**HOLD, "imu": {"rate_hz": 20, "model": "imu.toml"},
              "segment": [{"type": "turn", "duration_s": 2.0, "rate_dps": 30.0}]}  # fmt: skip
 
 
 @pytest.mark.parametrize(("name", "param"), EFFECT_PARAMS, ids=[f"{n}.{p.key}" for n, p in EFFECT_PARAMS])
-def test_effect_parameter_at_its_bounds(name: str, param: imu_spec.Param, tmp_path: Path) -> None:
+def test_effect_parameter_at_its_bounds(name: str, param: Param, tmp_path: Path) -> None:
     bound = Bound(param.low, param.high, param.unit, low_open=param.low_open)
 
     def imu(value: float) -> dict[str, Any]:

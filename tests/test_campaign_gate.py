@@ -17,7 +17,7 @@ from sins import campaign, compensation, scenario
 from sins.campaign import gate, results
 from sins.cli import main
 from sins.compensation.base import Strategy
-from sins.imu.model import DEG_PER_H
+from sins.imu import DEG_PER_H
 
 SHIPPED = scenario.preset_dir() / "campaign"
 

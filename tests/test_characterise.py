@@ -4,7 +4,7 @@ taken away, the model file, the closing check and the refusals.
 The test recordings come from ``tests/numpy_noise.py``, numpy alone (not sins's IMU model): white rate
 noise, a first-order Gauss–Markov bias, flicker (Kasdin and Walter's fractional difference), a random walk
 of the rate, quantization of the angle and a ramp; the exact discrete Allan variances of the classical
-processes are written out beside them, independently of :mod:`sins.characterise.terms`. The 20-seed
+processes are written out beside them, independently of :mod:`sins.characterise.noise_terms`. The 20-seed
 statistical sweep of issue 32 is ``tools/characterise_recovery.py`` (figures in the guide); the tests
 run two seeds of each of its cases.
 """
@@ -20,7 +20,8 @@ import pytest
 import scipy.io
 
 from sins import cli, io, scenario
-from sins.characterise import analysis, check, model_file, reference, selection, still, terms, trend
+from sins.characterise import analysis, check, model_file, reference, selection, still, trend
+from sins.characterise import noise_terms as terms
 from sins.characterise.allan import allan, edf_overlapping
 from sins.errors import SinsInputError
 from sins.series import ImuRates
@@ -115,7 +116,7 @@ def test_each_process_has_its_analytic_allan_variance(process):
     4 standard errors (from the spread across seeds), and the library's IEEE form is within 4 % of it at
     cluster sizes of 4 and more (the random walk's extra ``K² dt / 6m`` and the sampled Gauss–Markov
     bias's ``O(dt/T)`` vanish there). Flicker has no closed form to write out: its mean is the library's
-    sampled form (:func:`~sins.characterise.terms.flicker_shape`, ``2B²/π`` at one sample) within 4
+    sampled form (:func:`~sins.characterise.noise_terms.flicker_shape`, ``2B²/π`` at one sample) within 4
     standard errors at every octave."""
     n, dt = 1 << 14, 0.1
     runs = np.array([allan(generate(np.random.default_rng(s), n, dt, **process), dt).avar for s in SEEDS])

@@ -410,7 +410,7 @@ def test_effects_lists_every_effect_with_units(capsys: pytest.CaptureFixture[str
 
     assert main(["effects"]) == 0
     out = capsys.readouterr().out
-    for name in imu.EFFECT_NAMES:
+    for name in imu.effect_names():
         assert name in out
     for unit in ("°/h", "mg", "ppm", "°/√h", "µg/√Hz", "°/h/g"):
         assert unit in out

@@ -12,9 +12,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from sins import io
+from sins import earth, io
 from sins.cli import main
-from sins.nav import earth
 
 # 20 s still, then 10 s speeding up: a tactical unit, its power-on seed 3.
 SCENARIO = """\
@@ -177,20 +176,20 @@ def test_integrate_writes_the_solution(folder: Path, capsys) -> None:
     assert csv.columns == io.TRUTH_COLUMNS and len(csv.data) == 3001
     table = pq.read_table("sol.parquet")
     assert table.column_names == list(io.TRUTH_COLUMNS)
-    assert table.schema.field("lat").metadata == {b"unit": b"deg"}
+    assert table.schema.field("lat_deg").metadata == {b"unit": b"deg"}
     for name in io.TRUTH_COLUMNS:
         assert np.array_equal(table.column(name).to_numpy(), csv.column(name)), name
     truth = io.read_table("truth.csv", required=io.TRUTH_COLUMNS)
     assert np.array_equal(csv.column("t"), truth.column("t"))  # one row per IMU time
     summary = _summary("s.json")
-    lat, h = np.radians(truth.column("lat")[-1]), truth.column("alt")[-1]
+    lat, h = np.radians(truth.column("lat_deg")[-1]), truth.column("h_m")[-1]
     r_m, r_n = earth.radii(lat)
-    north = np.radians(csv.column("lat")[-1] - truth.column("lat")[-1]) * (r_m + h)
-    east = np.radians(csv.column("lon")[-1] - truth.column("lon")[-1]) * (r_n + h) * np.cos(lat)
+    north = np.radians(csv.column("lat_deg")[-1] - truth.column("lat_deg")[-1]) * (r_m + h)
+    east = np.radians(csv.column("lon_deg")[-1] - truth.column("lon_deg")[-1]) * (r_n + h) * np.cos(lat)
     # A 30 s drift of metres; metres per degree differ between the radii at the two heights by 1e-7.
     assert north == pytest.approx(summary["final_north_m"], rel=1e-6, abs=1e-9)
     assert east == pytest.approx(summary["final_east_m"], rel=1e-6, abs=1e-9)
-    assert csv.column("yaw")[-1] - truth.column("yaw")[-1] == pytest.approx(
+    assert csv.column("yaw_deg")[-1] - truth.column("yaw_deg")[-1] == pytest.approx(
         summary["final_yaw_deg"], abs=1e-9
     )
     assert main([*args, "--out", "sol.txt"]) == 2

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from conftest import dataset_folder, refusal
 
+from sins import earth
 from sins.io.datasets.psins_lasergyro import (
     PSINS_LASERGYRO_FILE,
     PSINS_LASERGYRO_FOLDER,
     read_psins_lasergyro,
 )
-from sins.nav import earth
 from sins.series import CalibrationData
 
 FOLDER = dataset_folder(PSINS_LASERGYRO_FOLDER)

@@ -19,6 +19,7 @@ import pytest
 import scipy.io
 from conftest import dataset_folder, refusal
 
+from sins import earth, rotation
 from sins.io.datasets.psins_vehicle import (
     PSINS_VEHICLE_FILE,
     PSINS_VEHICLE_FOLDER,
@@ -27,7 +28,6 @@ from sins.io.datasets.psins_vehicle import (
     read_psins_vehicle,
 )
 from sins.io.datasets.root import ENV_VAR
-from sins.nav import earth, rotation
 from sins.series import CalibrationData, NavSeries
 
 FOLDER = dataset_folder(PSINS_VEHICLE_FOLDER)

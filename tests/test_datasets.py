@@ -15,9 +15,8 @@ import pytest
 from conftest import dataset_folder, refusal
 
 import sins
-from sins import io
+from sins import earth, io
 from sins.io import datasets
-from sins.nav import earth
 from sins.series import CalibrationData
 
 FOLDER = dataset_folder(datasets.FERRARIS_FOLDER)

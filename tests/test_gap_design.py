@@ -14,7 +14,7 @@ import pytest
 
 from sins.gap import candidates, channel, diagnose, disturbance, lattice, randombias
 from sins.gap.design import Design, Projection
-from sins.imu.model import hermite_slopes
+from sins.imu.numerics import hermite_slopes
 from sins.series import CalibrationData
 
 
@@ -105,7 +105,7 @@ def test_the_delayed_reference_is_the_whole_curve_to_the_last_bit(small_chunks: 
     against the whole curve (:func:`candidates.kinked_hermite`) on a table's rate whose kinks fall on
     rows, a few of them at chunk boundaries, for delays within a row, of several rows, on a
     breakpoint and negative: equal, bit for bit. The kinks found a chunk at a time are those
-    :func:`sins.imu.model.hermite_slopes` finds on the whole."""
+    :func:`sins.imu.numerics.hermite_slopes` finds on the whole."""
     t = np.arange(4_000) / 50.0
     knots = [0.0, 6.74, 13.48, 20.0, 33.7, 40.0, 67.4, 70.0, 79.98]  # 6.74 s = row 337: a boundary
     u = np.interp(t, knots, [0.0, 0.0, 2.0, 2.0, -1.0, -1.0, 3.0, 0.0, 0.0])

@@ -66,8 +66,9 @@ def test_truth_round_trip(tmp_path: Path) -> None:
     assert np.array_equal(back.v_n, truth.v_n)
     # The file holds degrees, and these are exactly np.degrees(lat) ...
     table = io.read_table(path)
-    assert np.array_equal(table.column("lat"), np.degrees(truth.lat))
-    assert np.array_equal(table.column("lon"), np.degrees(truth.lon))
+    assert table.columns == io.TRUTH_COLUMNS  # the names carry their units (issue 34)
+    assert np.array_equal(table.column("lat_deg"), np.degrees(truth.lat))
+    assert np.array_equal(table.column("lon_deg"), np.degrees(truth.lon))
     # ... but radians(degrees(x)) is x only to within one rounding of the conversion: 1 ulp.
     assert np.all(np.abs(back.lat - truth.lat) <= np.spacing(np.abs(truth.lat)))
     assert np.all(np.abs(back.lon - truth.lon) <= np.spacing(np.abs(truth.lon)))
@@ -162,6 +163,26 @@ def test_missing_required_column(tmp_path: Path) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + header + "\n" + "\n".join(_rows(3, 6)) + "\n")
     refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:3:", "'gyro_y'")
     refusal(lambda: io.read_imu(path), f"{path}:3:", "'gyro_y'")
+
+
+def test_truth_read_with_the_names_before_and_after_they_carried_units(tmp_path: Path) -> None:
+    """The same rows under ``lat, lon, alt, roll, pitch, yaw`` and under ``lat_deg, lon_deg, h_m,
+    roll_deg, pitch_deg, yaw_deg`` give the same trajectory, bit for bit; a column missing under both
+    names is refused by its new name, and an old name's range error names the old column."""
+    rows = "\n".join(["0,45,7,100,1,2,3,10,-5,170", "1,45.001,7.002,101,1,2,3,11,-4,-175"]) + "\n"
+    old = io.read_truth(
+        _write(tmp_path / "old.csv", ",".join(io.formats.TRUTH_COLUMNS_UNSUFFIXED) + "\n" + rows)
+    )
+    new = io.read_truth(_write(tmp_path / "new.csv", ",".join(io.TRUTH_COLUMNS) + "\n" + rows))
+    for field in ("t", "lat", "lon", "h", "v_n", "q_nb"):
+        assert np.array_equal(getattr(old, field), getattr(new, field)), field
+    assert new.h[0] == 100.0 and new.lat[0] == np.radians(45.0)
+    mixed = "t,lat,lon_deg,alt,vn,ve,vd,roll_deg,pitch,yaw_deg\n" + rows
+    assert np.array_equal(io.read_truth(_write(tmp_path / "mixed.csv", mixed)).q_nb, new.q_nb)
+    header = ",".join(io.TRUTH_COLUMNS).replace(",pitch_deg", "")
+    refusal(lambda: io.read_truth(_write(tmp_path / "none.csv", header + "\n" + rows)), "'pitch_deg'")
+    bad = ",".join(io.formats.TRUTH_COLUMNS_UNSUFFIXED) + "\n" + rows.replace(",170", ",1e9")
+    refusal(lambda: io.read_truth(_write(tmp_path / "bad.csv", bad)), "'yaw'")
 
 
 def test_truth_missing_column(tmp_path: Path) -> None:
@@ -266,14 +287,14 @@ def test_not_utf8(tmp_path: Path) -> None:
 def test_truth_latitude_out_of_range(tmp_path: Path) -> None:
     rows = ["0,45,7,0,0,0,0,0,0,0", "1,95,7,0,0,0,0,0,0,0"]
     path = _write(tmp_path / "truth.csv", COMMENTS + TRUTH_HEADER + "\n" + "\n".join(rows) + "\n")
-    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'", "95")
+    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat_deg'", "95")
 
 
 def test_truth_latitude_line_number_after_a_blank_line(tmp_path: Path) -> None:
     text = TRUTH_HEADER + "\n0,45,7,0,0,0,0,0,0,0\n\n# pause\n1,95,7,0,0,0,0,0,0,0\n"
     path = _write(tmp_path / "truth.csv", text)
     # Other checks (non-numeric, non-finite, time) do count those lines; the latitude check says line 3.
-    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat'")
+    refusal(lambda: io.read_truth(path), f"{path}:5:", "'lat_deg'")
 
 
 def test_line_numbers_skip_blank_and_comment_rows_in_the_body(tmp_path: Path) -> None:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sins.nav import earth, rotation
+from sins import earth, rotation
 from sins.nav.metrics import DriftAccumulator, NavErrors, euler_errors, nav_errors, summarize
 from sins.series import NavSeries
 

@@ -14,9 +14,9 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.cli import main
+from sins.earth import local_ned
 from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes
-from sins.nav.earth import local_ned
 
 SEED = 33
 T0_NS = 1_700_000_000_123_456_789  # a Unix-time stamp: seconds alone would lose the nanoseconds

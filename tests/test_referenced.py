@@ -15,12 +15,11 @@ import pytest
 from numpy_referenced import GRAVITY, HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.spatial.transform import Rotation
 
-from sins import compensation, referenced
+from sins import compensation, earth, referenced
 from sins.cli import main
 from sins.compensation import coefficients, interval_fit
 from sins.imu.calibration import SeedModelFit
 from sins.io.datasets.root import data_root
-from sins.nav import earth
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
 DATA = data_root()

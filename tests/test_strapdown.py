@@ -12,7 +12,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sins.nav import earth, strapdown, trajectory
+from sins import earth
+from sins.nav import strapdown, trajectory
 from sins.nav.metrics import DriftAccumulator, nav_errors, summarize
 from sins.nav.motion import Accelerate, Climb, Hold, Rotate, SegmentMotion, Start, Turn
 

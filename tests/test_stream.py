@@ -319,12 +319,12 @@ def test_an_affine_effect_integrated_on_the_increments_is_its_gauss_node_integra
     # Forcing the affine effects through the nodes must give the same readings but for rounding: the
     # increments are up to ~5e-3 rad and ~0.1 m/s, a rounding of them ~1e-18 and ~1.4e-17 (measured
     # 8.7e-19 and 1.4e-17 apart; the errors integrated are up to 1.3e-5 rad and 4.7e-4 m/s).
-    from sins.imu import model as imu_model
+    from sins.imu import effects as imu_effects
 
     imu, temp = _drive()
     unit = spec.draw_unit("tactical", 5)  # bias, scale/misalignment, g-sensitivity, noise, bias instability
     exact = unit.corrupt_increments(imu, temp, seed=3)
-    for kind in (imu_model.Bias, imu_model.ScaleMisalignment, imu_model.GSensitivity):
+    for kind in (imu_effects.Bias, imu_effects.ScaleMisalignment, imu_effects.GSensitivity):
         monkeypatch.setattr(kind, "affine", False)
     at_nodes = unit.corrupt_increments(imu, temp, seed=3)
     np.testing.assert_allclose(exact.dtheta_b, at_nodes.dtheta_b, rtol=0, atol=1e-17)

@@ -12,7 +12,7 @@ from sins.compensation import terms
 ROWS, BLOCK_ROWS, FOLDS = 30_000, 300, 3
 
 
-def _inputs(rng: np.random.Generator) -> tuple[terms.Inputs, np.ndarray, np.ndarray]:
+def _inputs(rng: np.random.Generator) -> tuple[terms.TermInputs, np.ndarray, np.ndarray]:
     """Scaled inputs held in blocks (a rig's positions and rates), a temperature ramp across them, and
     each row's block and fold."""
     blocks = ROWS // BLOCK_ROWS
@@ -22,7 +22,7 @@ def _inputs(rng: np.random.Generator) -> tuple[terms.Inputs, np.ndarray, np.ndar
     t = np.linspace(-1.0, 1.0, ROWS)
     block = np.repeat(np.arange(blocks), BLOCK_ROWS)
     fold = (rng.permutation(blocks) % FOLDS)[block]
-    return terms.Inputs(w, f, t), block, fold
+    return terms.TermInputs(w, f, t), block, fold
 
 
 def _folds(r: np.ndarray, fold: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -35,8 +35,10 @@ def test_a_channel_takes_the_group_its_residual_holds_and_no_other():
     x, block, fold = _inputs(rng)
     noise = rng.normal(size=(ROWS, 6))
     r = noise.copy()
-    r[:, 1] += 0.3 * x.t * x.w[:, 1]  # a temperature scale on gyro y, 0.3 of the noise at full range
-    r[:, 3] += 0.2 * (x.t**2 - np.mean(x.t**2))  # a curved temperature bias on accel x
+    r[:, 1] += (
+        0.3 * x.temp_offset * x.omega_ib_b[:, 1]
+    )  # a temperature scale on gyro y, 0.3 of the noise at full range
+    r[:, 3] += 0.2 * (x.temp_offset**2 - np.mean(x.temp_offset**2))  # a curved temperature bias on accel x
     chosen = terms.choose(x, _folds(r, fold), block, z=2.0)
     assert chosen[1] == chosen[3] == ("temperature",)
     assert [chosen[c] for c in (0, 2, 4, 5)] == [(), (), (), ()]
@@ -72,10 +74,10 @@ def test_each_vocabulary_effect_is_told_from_the_others():
     rng = np.random.default_rng(12)
     x, block, fold = _inputs(rng)
     r = rng.normal(size=(ROWS, 6))
-    r[:, 0] += 0.3 * x.w[:, 0] ** 2
-    r[:, 1] += 0.3 * x.f[:, 0] * x.f[:, 2]
-    r[:, 2] += 0.3 * np.abs(x.w[:, 2])
-    r[:, 4] += 0.3 * np.abs(x.f[:, 1])
+    r[:, 0] += 0.3 * x.omega_ib_b[:, 0] ** 2
+    r[:, 1] += 0.3 * x.f_ib_b[:, 0] * x.f_ib_b[:, 2]
+    r[:, 2] += 0.3 * np.abs(x.omega_ib_b[:, 2])
+    r[:, 4] += 0.3 * np.abs(x.f_ib_b[:, 1])
     chosen = terms.choose(x, _folds(r, fold), block, z=2.0)
     assert chosen == [("squares",), ("g2",), ("asymmetry",), (), ("asymmetry",), ()]
     # g2's columns: f², then f_x f_y, f_x f_z, f_y f_z (the 11th of 1, ω, f, f², f_x f_y, f_x f_z).
@@ -88,7 +90,7 @@ def test_a_channel_tries_the_groups_its_sensor_may_take():
     ]  # fmt: skip
     assert ("g2",) in terms.subsets(with_temperature=False, channel=0)
     assert len(terms.subsets(with_temperature=True, channel=0)) == 15
-    x = terms.Inputs(np.zeros((4, 3)), np.zeros((4, 3)), None)
+    x = terms.TermInputs(np.zeros((4, 3)), np.zeros((4, 3)), None)
     with pytest.raises(ValueError, match="temperature"):
         terms.design(("temperature",), 0, x)
 
@@ -100,15 +102,19 @@ def test_the_group_is_fitted_with_the_seed_columns_as_one_least_squares():
     # alone does not.
     rng = np.random.default_rng(3)
     x, _, _ = _inputs(rng)
-    w = x.w.copy()
-    w[:, 1] = 0.5 * (x.t + 1.0) + 0.2 * w[:, 1]  # each block's rate, plus a rise with the temperature
-    x = terms.Inputs(w, x.f, x.t)
-    e = 0.3 * x.t * x.w[:, 1]
-    seed = np.hstack([np.ones((ROWS, 1)), x.w, x.f])
+    w = x.omega_ib_b.copy()
+    w[:, 1] = (
+        0.5 * (x.temp_offset + 1.0) + 0.2 * w[:, 1]
+    )  # each block's rate, plus a rise with the temperature
+    x = terms.TermInputs(w, x.f_ib_b, x.temp_offset)
+    e = 0.3 * x.temp_offset * x.omega_ib_b[:, 1]
+    seed = np.hstack([np.ones((ROWS, 1)), x.omega_ib_b, x.f_ib_b])
     r = e - seed @ np.linalg.lstsq(seed, e, rcond=None)[0]
     joint = terms.fit(terms.design(("temperature",), 1, x), r)
     assert joint[-1] == pytest.approx(0.3, rel=1e-9)
-    alone = np.column_stack([np.ones(ROWS), x.t, x.t**2, x.t * x.w[:, 1]])
+    alone = np.column_stack(
+        [np.ones(ROWS), x.temp_offset, x.temp_offset**2, x.temp_offset * x.omega_ib_b[:, 1]]
+    )
     assert abs(np.linalg.lstsq(alone, r, rcond=None)[0][-1] - 0.3) > 0.03  # measured 0.242: 19 % off
 
 
@@ -119,12 +125,12 @@ def test_a_form_the_rig_does_not_show_takes_no_coefficient():
     rng = np.random.default_rng(4)
     faces = np.repeat(np.vstack([np.eye(3), -np.eye(3)]), 500, axis=0)
     f = faces + 1e-17 * rng.normal(size=faces.shape)
-    x = terms.Inputs(rng.uniform(-1.0, 1.0, (len(f), 3)), f, None)
+    x = terms.TermInputs(rng.uniform(-1.0, 1.0, (len(f), 3)), f, None)
     r = 0.3 * f[:, 0] ** 2 + 0.01 * rng.normal(size=len(f))
     coef = terms.fit(terms.design(("g2",), 0, x), r)
     assert np.all(coef[10:] == 0.0)  # f_x f_y, f_x f_z, f_y f_z: not shown
     assert np.abs(coef).max() < 1.0
-    tilted = terms.Inputs(x.w[:1], np.full((1, 3), 3**-0.5), None)
+    tilted = terms.TermInputs(x.omega_ib_b[:1], np.full((1, 3), 3**-0.5), None)
     assert (
         abs(float(terms.predict([("g2",)] + [()] * 5, [coef] + [np.zeros(0)] * 5, tilted, range(1))[0, 0]))
         < 1.0

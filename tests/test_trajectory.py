@@ -16,8 +16,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from sins import io
-from sins.nav import earth, rotation, strapdown, trajectory
+from sins import earth, io, rotation
+from sins.nav import strapdown, trajectory
 from sins.nav.metrics import nav_errors
 from sins.nav.motion import (
     Accelerate,

@@ -11,10 +11,14 @@ from conftest import refusal
 
 rr = pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
 
-from sins import pipeline, scenario, viz  # noqa: E402
+from sins import (  # noqa: E402
+    earth,
+    pipeline,
+    scenario,
+    viz,
+)
 from sins.cli import main  # noqa: E402
 from sins.imu import CHANNELS, DEG_PER_H, MG  # noqa: E402
-from sins.nav import earth  # noqa: E402
 
 IMU = """\
 [[effect]]

@@ -24,10 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.aiding import ekf, gnss
 from sins.aiding.gnss import GnssFixes
 from sins.errors import SinsInputError
-from sins.nav import earth, rotation, strapdown
+from sins.nav import strapdown
 from sins.series import ImuIncrements
 
 Array = NDArray[np.float64]

@@ -37,10 +37,11 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
+from sins import earth, rotation
 from sins.aiding.gnss import GnssFixes, check_fixes
 from sins.errors import SinsInputError
 from sins.imu import spec
-from sins.nav import earth, rotation, strapdown
+from sins.nav import strapdown
 from sins.series import ImuIncrements, NavSeries
 
 Array = NDArray[np.float64]

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
-from sins.nav import earth, rotation
 from sins.series import NavSeries
 
 Array = NDArray[np.float64]

@@ -1,7 +1,7 @@
 """Characterise a real IMU: Allan analysis of a recording, the IEEE noise terms, a model file sins simulates.
 
 :mod:`~sins.characterise.allan` computes the overlapping Allan deviation with its confidence intervals;
-:mod:`~sins.characterise.terms` holds the IEEE Std 952 / 1293 terms' Allan variances and spectra;
+:mod:`~sins.characterise.noise_terms` holds the IEEE Std 952 / 1293 terms' Allan variances and spectra;
 :mod:`~sins.characterise.fitting` fits them on the log scale and :mod:`~sins.characterise.selection`
 decides which the data resolve; :mod:`~sins.characterise.trend` fits a rate ramp to the rate itself;
 :mod:`~sins.characterise.still` finds where a unit stood still; :mod:`~sins.characterise.analysis` does it
@@ -21,8 +21,8 @@ from sins.characterise.analysis import (
     refit_channel,
     residual,
 )
+from sins.characterise.noise_terms import TERMS, NoiseFit, Term
 from sins.characterise.selection import fit_terms
-from sins.characterise.terms import TERMS, NoiseFit, Term
 
 __all__ = [
     "TERMS",

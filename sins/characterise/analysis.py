@@ -29,11 +29,11 @@ from numpy.typing import NDArray
 
 from sins.characterise import trend
 from sins.characterise.allan import MIN_CLUSTERS, AllanCurve, allan
+from sins.characterise.noise_terms import TERMS, NoiseFit, R, Term
 from sins.characterise.selection import Weights, fit_terms, weigh
-from sins.characterise.terms import TERMS, NoiseFit, R, Term
 from sins.characterise.trend import Ramp
 from sins.errors import SinsInputError
-from sins.imu.model import CHANNELS, DEG, DEG_PER_H, UG
+from sins.imu import CHANNELS, DEG, DEG_PER_H, UG
 
 Array = NDArray[np.float64]
 

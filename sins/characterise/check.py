@@ -7,8 +7,8 @@ does), over segments as long as the recording's; the simulated readings' Allan c
 ones were. At
 each cluster time the ratio of the two Allan variances is, if the model holds, ``F``-distributed with the
 points' EDFs; where it lies outside the ``F`` interval of :data:`CHECK_CONFIDENCE` (widened by the model
-error the fit allowed each curve, :attr:`~sins.characterise.terms.NoiseFit.tolerance`), the curves *part*:
-that is the noise side of the sim-to-real gap, named by channel, cluster times and the factor.
+error the fit allowed each curve, :attr:`~sins.characterise.noise_terms.NoiseFit.tolerance`), the
+curves *part*: that is the noise side of the sim-to-real gap, named by channel, cluster times and the factor.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from scipy import stats
 
 from sins.characterise.allan import allan
 from sins.characterise.analysis import Characterisation
-from sins.imu.model import CHANNELS, ImuModel
+from sins.imu import CHANNELS, ImuModel
 from sins.imu.stream import IncrementStream
 from sins.series import ImuIncrements
 

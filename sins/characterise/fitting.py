@@ -14,7 +14,7 @@ logarithm keeps to first order), plus an allowed model error ``ε`` per point (i
 depend on the noise *type* at each point (through ``ν`` and ``C``), never on the fitted level, so no
 model that lacks a term can give the points where that term lives a too small variance.
 
-``A`` holds the terms' columns (:func:`sins.characterise.terms.basis`), ``c`` their squared
+``A`` holds the terms' columns (:func:`sins.characterise.noise_terms.basis`), ``c`` their squared
 coefficients. The minimum over ``c ≥ 0`` is found by Gauss–Newton steps, each a non-negative least
 squares of the linearised problem (``log(Ac) ≈ log μ₀ + A(c − c₀)/μ₀``), halved until χ² falls; the
 Gauss–Markov correlation time ``T`` is profiled over a grid and refined by a bounded scalar search.
@@ -34,7 +34,7 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import nnls
 
 from sins.characterise.allan import AllanCurve
-from sins.characterise.terms import GM, GM_PEAK_X, basis
+from sins.characterise.noise_terms import GM, GM_PEAK_X, basis
 
 Array = NDArray[np.float64]
 
@@ -183,7 +183,7 @@ class SubsetFit:
 
 
 def fit_subset(points: LogPoints, subset: frozenset[int], start: SubsetFit | None = None) -> SubsetFit:
-    """Fit the noise columns ``subset`` (indices of :data:`~sins.characterise.terms.NOISE_TERMS`); with
+    """Fit the noise columns ``subset`` (indices of :data:`~sins.characterise.noise_terms.NOISE_TERMS`); with
     the Gauss–Markov column, its correlation time profiled over :meth:`LogPoints.grid` and refined."""
     cols = sorted(subset)
     if GM not in subset:

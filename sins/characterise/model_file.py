@@ -1,7 +1,7 @@
 """The noise terms written as an IMU file sins can simulate (``scenarios/imu/*.toml``).
 
 The file has no grade: it is made of ``[[effect]]`` tables only, in the familiar units of
-:data:`sins.imu.spec.PARAMETERS`, so ``sins run`` (a scenario's ``[imu] model``) and ``sins calibrate --imu``
+:func:`sins.imu.spec.parameters`, so ``sins run`` (a scenario's ``[imu] model``) and ``sins calibrate --imu``
 read it as it is. Each term maps to one effect, per sensor and axis:
 
 * ``N`` → ``noise`` (``arw_deg_per_rt_h``, ``vrw_ug_per_rt_hz``);
@@ -31,7 +31,7 @@ read it as it is. Each term maps to one effect, per sensor and axis:
 
 A term the recording does not resolve is written as zero, with its upper bound in a comment. The file
 has no deterministic errors (bias, scale factor, misalignment): an Allan analysis cannot see them. Every
-value is checked against the ranges the IMU file's readers accept (:data:`sins.imu.spec.PARAMETERS`)
+value is checked against the ranges the IMU file's readers accept (:func:`sins.imu.spec.parameters`)
 before anything is written, and a file sins could not read back is refused in one line (a "unit" with
 1e9 µg/√Hz of noise is a recording in other units, not an IMU). It is written under a temporary name and
 renamed, so a failure leaves no half-written file.
@@ -45,10 +45,9 @@ import tempfile
 from pathlib import Path
 
 from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
-from sins.characterise.terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
+from sins.characterise.noise_terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
 from sins.errors import SinsInputError
-from sins.imu import spec
-from sins.imu.model import CHANNELS, DEG, MG, UG, ImuModel
+from sins.imu import CHANNELS, DEG, MG, UG, ImuModel, spec
 
 #: Per sensor, the effects written: (term, effect, parameter), the parameter in the file's unit.
 EFFECTS = {
@@ -154,7 +153,7 @@ def imu_model(result: Characterisation) -> ImuModel:
     ------
     SinsInputError
         one line naming the recording, the effect and the value, when a term lies outside what an IMU
-        file holds (:data:`sins.imu.spec.PARAMETERS`' ranges): the file would not be read back.
+        file holds (:func:`sins.imu.spec.parameters`' ranges): the file would not be read back.
     """
     effects = []
     for name, params in effect_tables(result):

@@ -31,8 +31,8 @@ from sins.characterise.allan import allan
 from sins.characterise.analysis import MIN_ROWS, Residual, duration, residual
 from sins.characterise.still import still_rows
 from sins.errors import SinsInputError
+from sins.imu import CHANNELS
 from sins.imu.calibration import fit_seed_model
-from sins.imu.model import CHANNELS
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]

@@ -1,7 +1,7 @@
 """Which noise terms an Allan curve resolves, decided so that one more refit cannot change it.
 
 **Weights from a model with every candidate.** The points' degrees of freedom and correlation depend on
-the noise type at each cluster time (:func:`~sins.characterise.terms.spectral`). They are taken from the
+the noise type at each cluster time (:func:`~sins.characterise.noise_terms.spectral`). They are taken from the
 *full* model, all five noise terms fitted together (:func:`weigh`), and iterated with it to a fixed point
 (the EDF changes by less than 0.1 %): a continuous iteration, which converges in two to four passes. On
 the log scale the weights do not depend on the fitted level (:mod:`sins.characterise.fitting`), so no
@@ -43,7 +43,7 @@ from scipy import stats
 
 from sins.characterise.allan import MIN_CLUSTERS, AllanCurve
 from sins.characterise.fitting import LogPoints, SubsetFit, covariance, fit_subset, solve, upper_bound
-from sins.characterise.terms import GM, NOISE_TERMS, TERMS, B, K, NoiseFit, Term, basis, needs, spectral
+from sins.characterise.noise_terms import GM, NOISE_TERMS, TERMS, B, K, NoiseFit, Term, basis, needs, spectral
 
 Array = NDArray[np.float64]
 

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.imu.model import CHANNELS, DEG
+from sins.imu import CHANNELS, DEG
 
 Array = NDArray[np.float64]
 

@@ -10,7 +10,7 @@ Gauss–Markov bias) make trends of their own. For one segment, the slope ``Σ w
 noise of two-sided spectrum ``S(f)`` per sample has variance ``∫ |W(f)|² S(f) df`` over
 ``−½ < f ≤ ½``, with ``W(f) = Σ wₖ e^(−2πifk)``; centred, ``|W(f)| = |Dₙ'(ω)| / D`` where
 ``Dₙ(ω) = sin(nω/2) / sin(ω/2)`` and ``ω = 2πf``. ``S`` is the noise terms' spectrum
-(:func:`sins.characterise.terms.spectrum`). The integral runs on a fine linear grid of ``f`` below
+(:func:`sins.characterise.noise_terms.spectrum`). The integral runs on a fine linear grid of ``f`` below
 ``40/n`` (the window's main lobes) and a logarithmic one above, where the grid's scattered phases
 average the oscillation (checked against 400 simulated series of each noise type in the tests). The
 segments are taken as independent (exact for white noise and a rate random walk, whose slopes in
@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.characterise.allan import MIN_CLUSTERS
-from sins.characterise.terms import spectrum
+from sins.characterise.noise_terms import spectrum
 
 Array = NDArray[np.float64]
 

@@ -139,7 +139,7 @@ def _format_characterisation(result: Characterisation) -> str:
     unresolved term would need."""
     from sins.characterise import TERMS
     from sins.characterise.analysis import duration
-    from sins.characterise.terms import SYMBOLS
+    from sins.characterise.noise_terms import SYMBOLS
 
     head = [
         f"{result.source}: {result.rows} rows at {1.0 / result.dt:.6g} Hz in {len(result.segments)} "

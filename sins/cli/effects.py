@@ -59,7 +59,7 @@ def _cmd_effects(args: argparse.Namespace) -> int:
     if args.grades:
         print(grade_table())
         return 0
-    for name, spec in imu_spec.PARAMETERS.items():
+    for name, spec in imu_spec.parameters().items():
         params = ", ".join(f"{p.key} [{p.unit}]" for p in spec.params)
         marker = "  (baseline)" if name in imu.BASELINE else ""
         print(f"{name:<26} {spec.description}{marker}\n{'':<26} {params}")

@@ -59,7 +59,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.add_argument(
         "--out", type=Path, metavar="SOLUTION.csv|.parquet",
-        help="write the solution, one row per IMU time: t, lat, lon, alt, vn, ve, vd, roll, pitch, yaw "
+        help="write the solution, one row per IMU time: t, lat_deg, lon_deg, h_m, vn, ve, vd, roll_deg, "
+        "pitch_deg, yaw_deg "
         "(s, °, °, m, m/s NED, ° ZYX), the columns of a truth file",
     )  # fmt: skip
     p.add_argument(

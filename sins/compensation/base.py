@@ -210,14 +210,14 @@ class Oracle(Strategy):
 
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """Invert the unit's deterministic errors by fixed-point iteration (angular acceleration 0)."""
-        from sins.imu import Inputs
+        from sins.imu import TrueInputs
 
         if self.model is None:
             raise ValueError("the oracle needs the simulated unit's model: Oracle(model)")
         omega_ib_b, f_ib_b = gyro.copy(), accel.copy()
         zero = np.zeros_like(omega_ib_b)
         for _ in range(self.iterations):
-            inputs = Inputs(omega_ib_b=omega_ib_b, f_ib_b=f_ib_b, omega_dot_b=zero, temp=temp)
+            inputs = TrueInputs(omega_ib_b=omega_ib_b, f_ib_b=f_ib_b, omega_dot_b=zero, temp=temp)
             omega_ib_b = gyro - self.model.deterministic_error("gyro", inputs)
             f_ib_b = accel - self.model.deterministic_error("accel", inputs)
         return omega_ib_b, f_ib_b

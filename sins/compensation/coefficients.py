@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+from sins.earth import G0
 from sins.imu.calibration import SeedModelFit
-from sins.nav.earth import G0
 
 _AXES = "xyz"
 _DPH = math.degrees(1.0) * 3600.0  # rad/s → °/h

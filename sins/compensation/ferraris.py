@@ -24,10 +24,11 @@ from typing import Any
 
 import numpy as np
 
+from sins import rotation
 from sins.compensation.base import Array, Strategy
 from sins.errors import SinsInputError
 from sins.imu import calibration
-from sins.nav import attitude, rotation
+from sins.nav import attitude
 from sins.series import CalibrationData, ImuIncrements, RigPhase
 
 #: The static holds, in pairs (axis up, axis down) for x, y and z.

@@ -36,6 +36,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
 from sins.compensation.intervals import (
     INTERVAL_S,
     Intervals,
@@ -49,7 +50,7 @@ from sins.compensation.intervals import (
     shifted,
 )
 from sins.imu.calibration import SeedModelFit
-from sins.nav import attitude, rotation
+from sins.nav import attitude
 from sins.series import CalibrationData, ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.imu import calibration
 from sins.imu.calibration import SeedModelFit
-from sins.nav import earth, rotation
 from sins.series import ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]

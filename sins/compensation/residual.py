@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth
 from sins.compensation import terms
 from sins.compensation.base import Strategy, state_array
 from sins.compensation.points import (
@@ -69,7 +70,6 @@ from sins.compensation.points import (
 )
 from sins.compensation.regression import Regression
 from sins.imu import CHANNELS
-from sins.nav import earth
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]

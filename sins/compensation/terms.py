@@ -36,69 +36,105 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from itertools import combinations
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.imu import vocabulary
+
 Array = NDArray[np.float64]
 
-#: The term groups tried, in the order their columns come: the effect vocabulary's deterministic
-#: errors beyond the seed model (``docs/guide/imu.md``), each channel's in its stated form.
-GROUPS = ("temperature", "squares", "asymmetry", "g2")
-#: The groups a gyro channel may take; an accelerometer's take no ``g2`` (the vocabulary's
-#: anisoelasticity is the gyros').
-GYRO_GROUPS, ACCEL_GROUPS = GROUPS, ("temperature", "squares", "asymmetry")
+
+def groups() -> tuple[str, ...]:
+    """The term groups tried, in the order their columns come: the group of every effect of the
+    vocabulary that declares one (:attr:`sins.imu.Effect.term`), by rank (strategy files keep the
+    coefficients in this order). Read from the vocabulary when called."""
+    terms = {t.term for t in vocabulary.effect_types() if t.term is not None}
+    return tuple(t.group for t in sorted(terms, key=lambda t: t.rank))
+
+
+def groups_of(channel: int) -> tuple[str, ...]:
+    """The groups channel ``channel`` (0–5: gyro x, y, z, accel x, y, z) may take: those with an
+    effect on its sensor (an accelerometer takes no ``g2``: the anisoelasticity is the gyros')."""
+    sensor = "gyro" if channel < 3 else "accel"
+    return tuple(g for g in groups() if any(sensor in cls.sensors for cls in _members(g)))
+
+
+def _members(group: str) -> list[type[vocabulary.Effect]]:
+    """The effect classes of ``group``, in the vocabulary's order (their columns' order)."""
+    return [t for t in vocabulary.effect_types() if t.term is not None and t.term.group == group]
+
+
+def _needs_temp(group: str) -> bool:
+    return any(cls.needs_temp for cls in _members(group))
+
+
+def __getattr__(name: str) -> Any:
+    # ``GROUPS`` is read from the vocabulary when asked, so an effect registered later is among them.
+    if name == "GROUPS":
+        return groups()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
-class Inputs:
-    """The terms' inputs in physical scales: rate ``w`` and force ``f`` (n, 3), temperature ``t`` (n,) or
-    None."""
+class TermInputs:
+    """The terms' inputs in the learners' scales: the rate ``omega_ib_b`` and force ``f_ib_b`` (n, 3),
+    and the temperature ``temp_offset`` (n,) from the learners' origin, or None."""
 
-    w: Array
-    f: Array
-    t: Array | None
+    omega_ib_b: Array
+    f_ib_b: Array
+    temp_offset: Array | None
 
-    def rows(self, index: NDArray[np.intp] | NDArray[np.bool_]) -> Inputs:
+    def of(self, sensor: str) -> Array:
+        """``omega_ib_b`` for "gyro", ``f_ib_b`` for "accel"."""
+        return self.omega_ib_b if sensor == "gyro" else self.f_ib_b
+
+    @property
+    def omega_dot_b(self) -> Array:
+        """Not held: no term group needs the angular acceleration (the size effect is left to the learner)."""
+        raise ValueError("the physics terms hold no angular acceleration")
+
+    # The names :mod:`sins.compensation.residual` reads until it takes the ones above.
+    w = property(lambda self: self.omega_ib_b)
+    f = property(lambda self: self.f_ib_b)
+    t = property(lambda self: self.temp_offset)
+
+    def rows(self, index: NDArray[np.intp] | NDArray[np.bool_]) -> TermInputs:
         """The inputs at ``index``."""
-        return Inputs(self.w[index], self.f[index], None if self.t is None else self.t[index])
+        temp = None if self.temp_offset is None else self.temp_offset[index]
+        return TermInputs(self.omega_ib_b[index], self.f_ib_b[index], temp)
 
 
-def design(groups: tuple[str, ...] | list[str], channel: int, x: Inputs) -> Array:
+#: The old name, which :mod:`sins.compensation.residual` still uses.
+Inputs = TermInputs
+
+
+def design(groups: tuple[str, ...] | list[str], channel: int, x: TermInputs) -> Array:
     """The columns of channel ``channel`` (0–5: gyro x, y, z, accel x, y, z) with ``groups`` (n, k): the
-    seed model's ``[1, ω, f]``, then each group's.
+    seed model's ``[1, ω, f]``, then each group's (its effects' :meth:`sins.imu.Effect.columns`, in
+    the order of :func:`groups`).
 
     The seed model's columns come with the groups because regression's residual is what is left after
     fitting them alone: a group correlated with them on the rig (a temperature that rose while the
     table turned) leaves a residual that the group by itself fits with a biased coefficient. Fitted
     together, the groups' coefficients are those of the joint least squares (Frisch–Waugh), and the seed
     columns' say how regression's coefficients move with them."""
-    cols = [np.ones((len(x.w), 1)), x.w, x.f]
-    u = (x.w if channel < 3 else x.f)[:, channel % 3 : channel % 3 + 1]
-    for group in GROUPS:
+    cols = [np.ones((len(x.omega_ib_b), 1)), x.omega_ib_b, x.f_ib_b]
+    sensor, axis = ("gyro", channel) if channel < 3 else ("accel", channel - 3)
+    for group in groups_of(channel):
         if group not in groups:
             continue
-        if group == "temperature":
-            if x.t is None:
-                raise ValueError("these terms were fitted with temperature: give the temperature series")
-            t = x.t[:, None]
-            cols += [t, t * t, t * u]
-        elif group == "squares":  # scale nonlinearity, k2 u²
-            cols.append(u * u)
-        elif group == "asymmetry":  # scale asymmetry, ka |u|
-            cols.append(np.abs(u))
-        elif group == "g2" and channel < 3:  # anisoelasticity, Σ G2_jk f_j f_k
-            f = x.f
-            cols += [f * f, f[:, [0, 0, 1]] * f[:, [1, 2, 2]]]
+        if _needs_temp(group) and x.temp_offset is None:
+            raise ValueError("these terms were fitted with temperature: give the temperature series")
+        cols += [cls.columns(x, sensor, axis) for cls in _members(group) if sensor in cls.sensors]
     return np.hstack(cols)
 
 
 def subsets(with_temperature: bool, channel: int = 0) -> list[tuple[str, ...]]:
     """Every non-empty subset of the groups channel ``channel`` may take that the data support."""
-    groups = tuple(
-        g for g in (GYRO_GROUPS if channel < 3 else ACCEL_GROUPS) if with_temperature or g != "temperature"
-    )
-    return [s for r in range(1, len(groups) + 1) for s in combinations(groups, r)]
+    allowed = tuple(g for g in groups_of(channel) if with_temperature or not _needs_temp(g))
+    return [s for r in range(1, len(allowed) + 1) for s in combinations(allowed, r)]
 
 
 def fit(x: Array, r: Array) -> Array:
@@ -123,7 +159,7 @@ def _shown(scale: Array) -> Array:
 
 
 def choose(
-    x: Inputs,
+    x: TermInputs,
     fold_targets: list[tuple[NDArray[np.bool_], Array]],
     block: NDArray[np.intp],
     z: float,
@@ -141,7 +177,7 @@ def choose(
         blocks, index = np.unique(block[~train], return_inverse=True)
         held_blocks.append((len(blocks), index.ravel()))
     for c in range(6):
-        options = subsets(x.t is not None, c)
+        options = subsets(x.temp_offset is not None, c)
         full = design(options[-1], c, x)
         columns = {s: _columns_of(s, options[-1], c, x.rows(np.arange(1))) for s in options}
         gains: dict[tuple[str, ...], list[Array]] = {s: [] for s in options}
@@ -158,7 +194,9 @@ def choose(
                 coef, *_ = np.linalg.lstsq(gram[np.ix_(cols, cols)], moment[cols], rcond=None)
                 e = y - x_held[:, cols] @ coef
                 # Summed row by row in order, as np.add.at does, and many times faster.
-                gains[s].append(np.bincount(index, weights=y * y - e * e, minlength=n_blocks).astype(float))
+                gains[s].append(
+                    np.asarray(np.bincount(index, weights=y * y - e * e, minlength=n_blocks), float)
+                )
         chosen.append(
             _forward(options, {s: np.concatenate(g) if g else np.zeros(0) for s, g in gains.items()}, z)
         )
@@ -190,13 +228,13 @@ def _forward(
 
 
 def _columns_of(
-    groups: tuple[str, ...], every: tuple[str, ...], channel: int, row: Inputs
+    groups: tuple[str, ...], every: tuple[str, ...], channel: int, row: TermInputs
 ) -> NDArray[np.intp]:
     """The columns of :func:`design` with ``groups`` within its design with the groups ``every``, each
     group's width read off :func:`design` of one ``row``."""
     seed = design((), channel, row).shape[1]
     cols, at = list(range(seed)), seed
-    for group in GROUPS:
+    for group in groups_of(channel):
         if group not in every:
             continue
         width = design((group,), channel, row).shape[1] - seed
@@ -206,9 +244,9 @@ def _columns_of(
     return np.array(cols, dtype=np.intp)
 
 
-def predict(groups: list[tuple[str, ...]], coef: list[Array], x: Inputs, channels: range) -> Array:
+def predict(groups: list[tuple[str, ...]], coef: list[Array], x: TermInputs, channels: range) -> Array:
     """The terms' residual on ``channels`` (n, len(channels)); a channel without terms predicts 0."""
-    out = np.zeros((len(x.w), len(channels)))
+    out = np.zeros((len(x.omega_ib_b), len(channels)))
     for i, c in enumerate(channels):
         if groups[c]:
             out[:, i] = design(groups[c], c, x) @ coef[c]
@@ -216,14 +254,14 @@ def predict(groups: list[tuple[str, ...]], coef: list[Array], x: Inputs, channel
 
 
 __all__ = [
-    "ACCEL_GROUPS",
-    "GROUPS",
-    "GYRO_GROUPS",
     "SHOWN",
     "Inputs",
+    "TermInputs",
     "choose",
     "design",
     "fit",
+    "groups",
+    "groups_of",
     "predict",
     "subsets",
 ]

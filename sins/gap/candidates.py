@@ -1,40 +1,47 @@
-"""The gap diagnosis's candidates: every library effect beyond the baseline, and what they are built from.
+"""The gap diagnosis's candidates: every effect of the vocabulary beyond the baseline, and their columns.
 
 The model of a channel's reading error ``e = reading − reference`` starts as the baseline (the seed
 model's bias, scale/misalignment and g-sensitivity rows, :func:`baseline_columns`, plus white noise).
-Every library effect not in the model is a candidate (:data:`CANDIDATES`), of one of four kinds
-(how the channel model holds and fits each: :mod:`sins.gap.channel`):
+Every effect not in the model whose class declares a candidate kind (:attr:`sins.imu.Effect.candidate`)
+is a candidate (:data:`CANDIDATES`, read from the vocabulary when asked, so an effect registered later
+is offered too), of one of four kinds (how the channel model holds and fits each:
+:mod:`sins.gap.channel`):
 
-- *regressors* (scale nonlinearity and asymmetry, g² sensitivity, temperature bias and scale, size
-  effect): columns added to the channel's least-squares fit, built from the reference inputs of every
-  row (:class:`ReferenceInputs`; :func:`regressors_of` gives them);
-- *delay* (time offset): the reading is the reference at ``t − τ`` (:meth:`ReferenceInputs.lag`);
-- *processes* (bias instability, rate random walk): a random bias under the white noise; a sensor's
-  model holds one at most (:data:`PROCESSES`);
-- *output maps* (quantization, saturation): a map of the reading; one at most (:data:`OUTPUTS`).
+- *regressors*: columns added to the channel's least-squares fit, the effect's own
+  (:meth:`sins.imu.Effect.columns`), built from the reference inputs of every row
+  (:class:`ReferenceInputs`; :func:`regressors_of` gives them);
+- *delay*: the reading is the reference at ``t − τ`` (:meth:`ReferenceInputs.lag`);
+- *process*: a random bias under the white noise; a sensor's model holds one at most
+  (:func:`processes`);
+- *output* maps: a map of the reading; one at most (:func:`outputs`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PPoly
 
-from sins.imu import BASELINE, EFFECT_NAMES
-from sins.imu.model import hermite_slopes, lever_arm_acceleration
-from sins.nav.earth import G0
+from sins.imu import vocabulary
+from sins.imu.numerics import hermite_slopes
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 
-#: The random-bias candidates' kinds: a sensor's model has at most one.
-PROCESSES = ("bias_instability", "rate_random_walk")
-#: The output-map candidates' kinds: a sensor's model has at most one.
-OUTPUTS = ("quantization", "saturation")
+
+def processes() -> tuple[str, ...]:
+    """The random-bias candidates' kinds (``process``): a sensor's model has at most one."""
+    return tuple(t.kind for t in vocabulary.effect_types() if t.candidate == "process")
+
+
+def outputs() -> tuple[str, ...]:
+    """The output-map candidates' kinds (``output``): a sensor's model has at most one."""
+    return tuple(t.kind for t in vocabulary.effect_types() if t.candidate == "output")
 
 
 @dataclass(frozen=True)
@@ -61,7 +68,7 @@ def spans(n: int, size: int | None = None) -> list[tuple[int, int]]:
 @dataclass(frozen=True)
 class Kinks:
     """The rows of one reference axis where a cubic Hermite curve through the rows leaves and enters
-    with one-sided slopes (:func:`sins.imu.model.hermite_slopes`), and those slopes: everywhere else
+    with one-sided slopes (:func:`sins.imu.numerics.hermite_slopes`), and those slopes: everywhere else
     both are the central ones. A rig's reference has a few, at the corners of its rate profile."""
 
     rows: NDArray[np.int64]
@@ -120,6 +127,12 @@ class ReferenceInputs:
         return out if axis is None else out[:, 0]
 
     @property
+    def temp_offset(self) -> Array | None:
+        """(n,) the temperature about the whole recording's mean, °C (None without one): the
+        temperature columns' origin, the same in every chunk of rows."""
+        return None if self.temp is None or self.temp_mean is None else self.temp - self.temp_mean
+
+    @property
     def omega_dot_b(self) -> Array:
         """(n, 3) the reference's angular acceleration, rad/s² (:meth:`rate` of the gyro's)."""
         return self.rate("gyro")
@@ -146,7 +159,7 @@ class ReferenceInputs:
         Evaluated a chunk of rows at a time on that chunk's pieces of the curve (the same
         coefficients as the whole curve's, so the same values to the last bit), never the whole
         curve at once: its coefficients are four floats a row. A scipy ``PPoly``, not
-        :func:`sins.imu.model.cubic_hermite`, which delays the simulated inputs: the two agree to
+        :func:`sins.imu.numerics.cubic_hermite`, which delays the simulated inputs: the two agree to
         the last few bits only where both take the central slopes.
         """
         assert self.whole is None, "the lag of the whole recording's rows"
@@ -190,7 +203,7 @@ def central_differences(a: Array, t: Array) -> Array:
 
 
 def _kinks(x: ReferenceInputs, sensor: str) -> list[Kinks]:
-    """The kinks of each axis of ``sensor``'s reference: :func:`sins.imu.model.hermite_slopes` a
+    """The kinks of each axis of ``sensor``'s reference: :func:`sins.imu.numerics.hermite_slopes` a
     chunk at a time, each with three rows either side (its stencils reach two), so each row's
     slopes are the whole recording's."""
     found: list[list[tuple[NDArray[np.int64], Array, Array]]] = [[], [], []]
@@ -243,7 +256,7 @@ def _hermite_coefficients(t: Array, u: Array, right: Array, left: Array) -> Arra
 
 def kinked_hermite(t: Array, u: Array, central: Array) -> PPoly:
     """The cubic Hermite curve through ``(t, u)`` with the slopes of
-    :func:`sins.imu.model.hermite_slopes` (central, but one-sided on each side of a kink), as a
+    :func:`sins.imu.numerics.hermite_slopes` (central, but one-sided on each side of a kink), as a
     scipy ``PPoly``: the curve the simulator delays its rate samples along, so that a delay is
     diagnosed on the curve it was made on. Where no row is a kink it is scipy's
     ``CubicHermiteSpline`` with the central slopes, to the last bit (the same coefficients)."""
@@ -260,65 +273,37 @@ def baseline_columns(sensor: str, omega: Array, f: Array) -> Array:
     return np.stack(base, axis=1)
 
 
-def _size_columns(x: ReferenceInputs, i: int) -> Array:
-    """Accelerometer ``i``'s reading of a unit lever arm along each body axis: the size effect's
-    three coefficients are its lever arm's components (:class:`sins.imu.SizeEffect`)."""
-    omega_dot = x.omega_dot_b
-    return np.stack([lever_arm_acceleration(x.omega_ib_b, omega_dot, r)[:, i] for r in np.eye(3)], axis=1)
+def _effect_columns(cls: type[vocabulary.Effect], sensor: str, x: ReferenceInputs, axis: int) -> Array:
+    return cls.columns(x, sensor, axis)
 
 
-def _g2_columns(x: ReferenceInputs, i: int) -> Array:
-    f = x.f_ib_b / G0  # in g: keeps the columns near the others' size
-    return np.stack([f[:, j] * f[:, k] for j in range(3) for k in range(j, 3)], axis=1)
-
-
-def _temp(x: ReferenceInputs) -> Array:
-    # About the whole recording's mean, the same origin in every chunk of rows.
-    assert x.temp is not None and x.temp_mean is not None
-    return x.temp - x.temp_mean
-
-
-def _candidates(sensor: str) -> list[Candidate]:
-    def own(fn: Callable[[Array], Array]) -> Callable[[ReferenceInputs, int], Array]:
-        return lambda x, i: fn(x.of(sensor)[:, i])[:, None]
-
-    out = [
-        Candidate(f"{sensor}.scale_nonlinearity", sensor, "regressors", own(np.square)),
-        Candidate(f"{sensor}.scale_asymmetry", sensor, "regressors", own(np.abs)),
-        Candidate(
-            f"{sensor}.temperature_bias",
-            sensor,
-            "regressors",
-            lambda x, i: np.stack([_temp(x), _temp(x) ** 2], axis=1),
-        ),
-        Candidate(
-            f"{sensor}.temperature_scale",
-            sensor,
-            "regressors",
-            lambda x, i: (_temp(x) * x.of(sensor)[:, i])[:, None],
-        ),
-        Candidate(f"{sensor}.time_offset", sensor, "delay"),
-        Candidate(f"{sensor}.bias_instability", sensor, "process"),
-        Candidate(f"{sensor}.rate_random_walk", sensor, "process"),
-        Candidate(f"{sensor}.quantization", sensor, "output"),
-        Candidate(f"{sensor}.saturation", sensor, "output"),
-    ]
-    if sensor == "gyro":
-        out.append(Candidate("gyro.g2_sensitivity", "gyro", "regressors", _g2_columns))
-    else:
-        out.append(Candidate("accel.size_effect", "accel", "regressors", _size_columns))
+def _candidates() -> dict[str, Candidate]:
+    """Every effect of the vocabulary whose class declares a candidate kind, in the vocabulary's order."""
+    out = {}
+    for name, cls in vocabulary.effects_where(lambda t: t.candidate is not None):
+        sensor = name.split(".")[0]
+        assert cls.candidate is not None
+        columns = partial(_effect_columns, cls, sensor) if cls.candidate == "regressors" else None
+        out[name] = Candidate(name, sensor, cls.candidate, columns)
     return out
 
 
-#: Library effects the diagnosis does not test: the IEEE quantization term's white noise of the integrated
-#: output is noise beside the baseline's white noise, which the channel model takes as it comes
-#: (``sins characterise`` measures it from the Allan curve); a model that holds it is diagnosed as without.
-NOT_CANDIDATES = ("gyro.quantization_noise", "accel.quantization_noise")
-#: Every candidate the diagnosis knows, by effect name (every library effect beyond the baseline).
-CANDIDATES: dict[str, Candidate] = {c.name: c for s in ("gyro", "accel") for c in _candidates(s)}
-assert set(CANDIDATES) == set(EFFECT_NAMES) - set(BASELINE) - {"gyro.bias", "accel.bias"} - set(
-    NOT_CANDIDATES
-)
+class _Live(Mapping[str, Candidate]):
+    """The candidates as the vocabulary has them when asked (an effect registered later included)."""
+
+    def __getitem__(self, name: str) -> Candidate:
+        return _candidates()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_candidates())
+
+    def __len__(self) -> int:
+        return len(_candidates())
+
+
+#: Every candidate the diagnosis knows, by effect name (every effect beyond the baseline whose class
+#: declares a candidate kind; the IEEE quantization term's white noise declares none).
+CANDIDATES: Mapping[str, Candidate] = _Live()
 
 
 def regressors_of(name: str, data: CalibrationData) -> list[Array]:
@@ -330,7 +315,7 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
     cand = CANDIDATES.get(name)
     if cand is None or cand.columns is None:
         raise ValueError(f"{name!r} is not a regressor candidate")
-    if "temperature" in name and data.temp is None:
+    if vocabulary.effect_class(name).needs_temp and data.temp is None:
         where = data.source or "the recording"
         raise ValueError(f"{name!r} needs a temperature column, and {where} has none")
     x = reference_inputs(data)
@@ -340,15 +325,14 @@ def regressors_of(name: str, data: CalibrationData) -> list[Array]:
 __all__ = [
     "CANDIDATES",
     "CHUNK_ROWS",
-    "NOT_CANDIDATES",
-    "OUTPUTS",
-    "PROCESSES",
     "Candidate",
     "Kinks",
     "ReferenceInputs",
     "baseline_columns",
     "central_differences",
     "kinked_hermite",
+    "outputs",
+    "processes",
     "reference_inputs",
     "regressors_of",
     "spans",

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
 from sins.gap import lattice
-from sins.gap.candidates import CANDIDATES, PROCESSES, Candidate, ReferenceInputs, reference_inputs
+from sins.gap.candidates import CANDIDATES, Candidate, ReferenceInputs, processes, reference_inputs
 from sins.gap.channel import ChannelModel
 from sins.gap.floor import (
     FLOOR_DROP,
@@ -55,7 +55,7 @@ from sins.gap.guards import (
 )
 from sins.gap.report import EffectScore, GapReport, Outside
 from sins.gap.scoring import TIE_NATS, ChannelTrial, Trial, refit_allowance, trial_gain
-from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES
+from sins.imu import BASELINE, CHANNELS, effect_names
 from sins.series import STRETCH_LONGEST_S, CalibrationData
 
 Array = NDArray[np.float64]
@@ -152,7 +152,7 @@ def _check(data: CalibrationData, holdout: float, model: tuple[str, ...]) -> Non
     if n < 200:
         with_ref = " with a per-sample reference" if n < len(data) else ""
         raise SinsInputError(f"{where}: too short to split ({n} rows{with_ref}; at least 200 are needed)")
-    unknown = [n for n in model if n not in EFFECT_NAMES]
+    unknown = [n for n in model if n not in effect_names()]
     if unknown:
         raise SinsInputError(f"model: unknown effect {unknown[0]!r} (see `sins effects`)")
 
@@ -326,7 +326,7 @@ def _accept(state: _Search, choice: Choice, trials: dict[str, Trial]) -> None:
     for name in ties:
         state.why_not[name] = f"this data cannot tell it from {best}, which was taken"
     for name in exclusive(best) - {best}:
-        what = "random bias" if name.split(".")[1] in PROCESSES else "output map"
+        what = "random bias" if name.split(".")[1] in processes() else "output map"
         state.why_not.setdefault(name, f"a sensor takes one {what}, and {best} was taken")
     for i in trials[best].channels:
         state.models[i] = state.models[i].tried(CANDIDATES[best])

@@ -15,11 +15,10 @@ deviation against that white noise (:func:`allan_deviation`, :func:`allan_curves
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.allan import allan_deviation as allan_deviation
 from sins.gap.candidates import ReferenceInputs, spans
 
 Array = NDArray[np.float64]
@@ -49,25 +48,6 @@ def noise_floor(residual: Array, rows: NDArray[np.bool_] | None = None) -> float
     if rows is not None:
         d = d[rows[1:] & rows[:-1]]
     return float(np.std(d) / np.sqrt(2.0)) if len(d) else 0.0
-
-
-def allan_deviation(rate: Array, clusters: NDArray[np.integer[Any]]) -> Array:
-    """Overlapping Allan deviation of a uniformly sampled rate series, for each cluster size (rows).
-
-    With ``θ`` the running sum of the rate, ``σ²(m) = ⟨(θₖ₊₂ₘ − 2θₖ₊ₘ + θₖ)²⟩ / (2 m²)`` over every
-    ``k``: white noise of standard deviation ``σ`` gives ``σ / √m``. The cluster time is ``m`` times
-    the sampling step; the deviation is in the rate's units.
-    """
-    theta = np.concatenate([[0.0], np.cumsum(rate)])
-    out = np.empty(len(clusters))
-    buffer = np.empty(len(theta))  # one for every cluster size: a long recording's rows are many
-    for j, m in enumerate(clusters):
-        d = buffer[: len(theta) - 2 * m]
-        np.multiply(theta[m:-m], -2.0, out=d)
-        d += theta[2 * m :]
-        d += theta[: -2 * m]
-        out[j] = np.sqrt(np.mean(np.square(d, out=d)) / (2.0 * m * m))
-    return out
 
 
 def allan_curves(before: Array, after: Array, floor: float, step_s: float) -> dict[str, list[float]]:

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from sins.gap import disturbance
-from sins.gap.candidates import CANDIDATES, OUTPUTS, PROCESSES, Candidate, ReferenceInputs
+from sins.gap.candidates import CANDIDATES, Candidate, ReferenceInputs, outputs, processes
 from sins.gap.channel import ChannelModel
 from sins.gap.report import Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS, ChannelTrial, Trial, trial_gain
@@ -46,7 +46,7 @@ def exclusive(name: str) -> set[str]:
     map the sensor's others of that kind. One random bias per sensor: the other is an alternative to
     it, not an addition. Likewise one output map (quantizing a clipped reading is not modelled)."""
     sensor, kind = name.split(".")
-    for group in (PROCESSES, OUTPUTS):
+    for group in (processes(), outputs()):
         if kind in group:
             return {f"{sensor}.{k}" for k in group}
     return {name}
@@ -66,7 +66,7 @@ def nested_choice(best: str, trials: dict[str, Trial]) -> Choice:
     Returns the choice, the candidates told apart from it and those that could not be.
     """
     sensor, kind = best.split(".")
-    if kind not in PROCESSES:
+    if kind not in processes():
         return best, (), ()
     bi, rw = trials.get(f"{sensor}.bias_instability"), trials.get(f"{sensor}.rate_random_walk")
     if bi is None or rw is None or not (bi.score > 0.0 and rw.score > 0.0) or bi.names != rw.names:
@@ -93,7 +93,7 @@ def process_or_regressors(choice: Choice, trials: dict[str, Trial]) -> Choice:
     it and those that could not be.
     """
     best, told_apart, alike = choice
-    if best.split(".")[1] not in PROCESSES:
+    if best.split(".")[1] not in processes():
         return choice
 
     def fit_score(name: str) -> float:
@@ -113,7 +113,7 @@ def process_or_regressors(choice: Choice, trials: dict[str, Trial]) -> Choice:
     if margin > TIE_NATS:
         return (
             rival,
-            tuple(n for n in trials if n.split(".")[1] in PROCESSES and n.startswith(rival.split(".")[0])),
+            tuple(n for n in trials if n.split(".")[1] in processes() and n.startswith(rival.split(".")[0])),
             (),
         )
     if margin > -TIE_NATS:

@@ -1,27 +1,17 @@
-"""The IMU: its error effects and models (:mod:`~sins.imu.model`), specifications in engineers' units and
-grades (:mod:`~sins.imu.spec`), and calibration rigs with the seed model's fit (:mod:`~sins.imu.calibration`).
+"""The IMU: the effect vocabulary (:mod:`~sins.imu.vocabulary`, the library's effects in
+:mod:`~sins.imu.effects`), models that compose them and corrupt readings (:mod:`~sins.imu.model`, chunk
+by chunk in :mod:`~sins.imu.stream`), specifications in engineers' units and grades
+(:mod:`~sins.imu.spec`), and calibration rigs with the seed model's fit (:mod:`~sins.imu.calibration`).
 
 The model's public names are importable from here (``from sins.imu import ImuModel``).
 """
 
-from sins.imu.model import (
+from sins.imu.effects import (
     BASELINE,
-    CHANNELS,
-    DEG,
-    DEG_PER_H,
-    EFFECT_NAMES,
-    EFFECT_TYPES,
-    MG,
-    PPM,
-    SENSORS,
-    UG,
     Bias,
     BiasInstability,
-    Effect,
     G2Sensitivity,
     GSensitivity,
-    ImuModel,
-    Inputs,
     Noise,
     Quantization,
     QuantizationNoise,
@@ -34,7 +24,23 @@ from sins.imu.model import (
     TemperatureBias,
     TemperatureScale,
     TimeOffset,
+)
+from sins.imu.model import ImuModel
+from sins.imu.vocabulary import (
+    CHANNELS,
+    DEG,
+    DEG_PER_H,
+    MG,
+    PPM,
+    SENSORS,
+    UG,
+    Effect,
+    TrueInputs,
     display_unit,
+    effect_class,
+    effect_names,
+    effect_types,
+    register,
 )
 
 __all__ = [
@@ -42,8 +48,6 @@ __all__ = [
     "CHANNELS",
     "DEG",
     "DEG_PER_H",
-    "EFFECT_NAMES",
-    "EFFECT_TYPES",
     "MG",
     "PPM",
     "SENSORS",
@@ -54,7 +58,6 @@ __all__ = [
     "G2Sensitivity",
     "GSensitivity",
     "ImuModel",
-    "Inputs",
     "Noise",
     "Quantization",
     "QuantizationNoise",
@@ -67,5 +70,10 @@ __all__ = [
     "TemperatureBias",
     "TemperatureScale",
     "TimeOffset",
+    "TrueInputs",
     "display_unit",
+    "effect_class",
+    "effect_names",
+    "effect_types",
+    "register",
 ]

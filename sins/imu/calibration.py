@@ -31,8 +31,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.imu import ImuModel
-from sins.nav import earth, rotation
 from sins.series import CalibrationData, ImuRates, RigPhase
 
 Array = NDArray[np.float64]
@@ -84,7 +84,7 @@ class RigProcedure:
 
     lat_deg: float = 45.0
     lon_deg: float = 0.0
-    alt_m: float = 100.0
+    h_m: float = 100.0  # height above the ellipsoid (the rig file's ``alt_m``)
     rate_hz: float = 100.0
     positions: int = 24
     position_dwell_s: float = 20.0
@@ -321,7 +321,7 @@ def _rig_motion(procedure: RigProcedure, seed: int | None) -> RigMotion:
     sigma = np.radians(procedure.orientation_error_deg)
     lat = np.radians(procedure.lat_deg)
     line = _Timeline(procedure.rate_hz)
-    line.setup(lat, procedure.alt_m)
+    line.setup(lat, procedure.h_m)
     if procedure.positions:
         for name, c in static_orientations(procedure.positions):
             true_c = _small_rotation(rng, sigma) @ c

@@ -33,23 +33,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import rowwise
-from sins.imu.model import (
-    SENSORS,
+from sins.imu.effect_set import EffectSet
+from sins.imu.effects import (
     BiasInstability,
-    Effect,
-    ImuModel,
-    Inputs,
     Noise,
     Quantization,
     QuantizationNoise,
     RateRandomWalk,
     Saturation,
-    TemperatureBias,
-    TemperatureScale,
-    cubic_hermite,
-    random_stream,
-    uniform_steps,
 )
+from sins.imu.numerics import cubic_hermite, random_stream, uniform_steps
+from sins.imu.vocabulary import SENSORS, Effect, TrueInputs
 from sins.series import ImuIncrements
 
 Array = NDArray[np.float64]
@@ -83,7 +77,7 @@ class _Sensor:
     quant_out: Array = field(default_factory=lambda: np.zeros(3))  # its last rounded value
     affine: list[Effect] = field(default_factory=list)  # deterministic effects integrated exactly
     curved: list[Effect] = field(default_factory=list)  # the others, at the Gauss nodes
-    #: The affine effects' ``b``, ``M``, ``K`` summed (:meth:`sins.imu.model.Effect.affine_terms`).
+    #: The affine effects' ``b``, ``M``, ``K`` summed (:meth:`sins.imu.vocabulary.Effect.affine_terms`).
     terms: tuple[Array, Array, Array] = field(default_factory=lambda: (np.zeros(3), np.zeros((3, 3)),
                                                                        np.zeros((3, 3))))  # fmt: skip
     #: Nothing but affine effects, random biases and white noise: one compiled pass writes the readings.
@@ -100,11 +94,11 @@ class _NodeInputs:
         self.dt = np.diff(t)
         self._means: dict[str, Array] = {}
         self._nodes: list[Array] = []
-        self._cache: dict[tuple[int, float], Inputs] = {}
+        self._cache: dict[tuple[int, float], TrueInputs] = {}
         self._uniform: dict[tuple[int, int], bool] = {}
 
     def uniform(self, lo: int, hi: int) -> bool:
-        """Whether the samples ``lo .. hi`` are regular (:func:`~sins.imu.model.uniform_steps`), asked
+        """Whether the samples ``lo .. hi`` are regular (:func:`~sins.imu.numerics.uniform_steps`), asked
         once for both sensors."""
         if (lo, hi) not in self._uniform:
             self._uniform[lo, hi] = uniform_steps(self.t[lo : hi + 1])
@@ -125,7 +119,7 @@ class _NodeInputs:
             self._nodes = [0.5 * (t[:-1] + t[1:]) + s * self.dt for s in _NODES]
         return self._nodes
 
-    def __call__(self, j: int, d: float) -> Inputs:
+    def __call__(self, j: int, d: float) -> TrueInputs:
         """The inputs at Gauss node ``j`` of every buffered interval, delayed by ``d`` s."""
         if (j, d) not in self._cache:
             t, when, means = self.t, self.nodes[j], self.means
@@ -136,7 +130,7 @@ class _NodeInputs:
                 omega, omega_dot = _reconstruct(means["gyro"], t, when - d)
                 f, _ = _reconstruct(means["accel"], t, when - d)
             temp = None if self.temp is None else np.interp(when - d, t, self.temp)
-            self._cache[j, d] = Inputs(omega_ib_b=omega, f_ib_b=f, omega_dot_b=omega_dot, temp=temp)
+            self._cache[j, d] = TrueInputs(omega_ib_b=omega, f_ib_b=f, omega_dot_b=omega_dot, temp=temp)
         return self._cache[j, d]
 
 
@@ -155,7 +149,7 @@ class IncrementStream:
         and the bias instability's recursion uses it on regular samples (one value for every chunk)
     """
 
-    def __init__(self, model: ImuModel, seed: int | None, dt_nominal: float) -> None:
+    def __init__(self, model: EffectSet, seed: int | None, dt_nominal: float) -> None:
         if not (math.isfinite(dt_nominal) and dt_nominal > 0.0):
             raise ValueError(f"dt_nominal must be a positive number of seconds, got {dt_nominal}")
         self.model = model
@@ -165,7 +159,7 @@ class IncrementStream:
         self._margin = self._context()
         # The temperature at the nodes only where an effect reads it: interpolating it at both nodes
         # is a few per cent of a tactical unit's corruption, for nothing.
-        self._needs_temp = any(isinstance(e, TemperatureBias | TemperatureScale) for e in model.effects)
+        self._needs_temp = any(e.needs_temp for e in model.effects)
         self._delayed = any(model.delay_of(s).any() for s in SENSORS)
         self._t: Array | None = None  # buffered sample times (window start .. latest)
         self._inc: dict[str, Array] = {}  # buffered ideal increments per sensor
@@ -343,7 +337,7 @@ class IncrementStream:
 
         The quadratic through the neighbours' means keeps each interval's mean, and the two-point Gauss
         rule is exact for it: an affine effect's integral is therefore the effect applied to the ideal
-        increments, ``b Δt + M Δu + K Δv`` (:meth:`sins.imu.model.Effect.affine_terms`), with no
+        increments, ``b Δt + M Δu + K Δv`` (:meth:`sins.imu.vocabulary.Effect.affine_terms`), with no
         reconstruction. Delayed inputs and the other effects take the two Gauss nodes of the
         reconstructed rate.
         """
@@ -424,7 +418,7 @@ def _gauss_markov_kernel(phi: Array, sigma: Array, xi: Array, a: Array, out: Arr
 
     With one coefficient per channel ``a`` (3,) (regular samples) ``φ = a`` throughout and ``phi`` is not
     read; else (``a`` empty) each interval's ``phi`` (n - 1, 3). The arithmetic of the linear filter
-    (``scipy.signal.lfilter``) of :meth:`sins.imu.model.BiasInstability.process`, to the last bit
+    (``scipy.signal.lfilter``) of :meth:`sins.imu.effects.BiasInstability.process`, to the last bit
     (``tests/test_stream.py``).
     """
     if a.shape[0] > 0:

@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
 from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes, formats, local
-from sins.nav import rotation
 from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]

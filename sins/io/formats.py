@@ -8,8 +8,9 @@ lines allowed at the top):
 * IMU, increment form: ``t, dtheta_x, dtheta_y, dtheta_z, dv_x, dv_y, dv_z``
   (s, rad, m/s), each row the integral over ``(t_prev, t]``; the first row's
   interval starts at the truth's first time;
-* truth: ``t, lat, lon, alt, vn, ve, vd, roll, pitch, yaw`` (s, deg, deg, m,
-  m/s NED, deg ZYX);
+* truth: ``t, lat_deg, lon_deg, h_m, vn, ve, vd, roll_deg, pitch_deg, yaw_deg``
+  (s, deg, deg, m above the WGS84 ellipsoid, m/s NED, deg ZYX); files with the
+  names before (``lat, lon, alt, roll, pitch, yaw``) are read as well;
 * rig recording (calibration data): the rate form plus ``ref_gyro_x`` …
   ``ref_accel_z`` (the rig's reference, NaN where it has none), optional
   ``temp`` and ``phase`` columns, ``# phase N:`` lines naming the phases; see
@@ -37,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
 from sins.errors import SinsInputError
 
 # These lived here before the tables, atomic writes and JSON files had modules of their own.
@@ -46,14 +48,16 @@ from sins.io.json_files import write_json as write_json
 from sins.io.tables import WRITE_BLOCK_ROWS as WRITE_BLOCK_ROWS
 from sins.io.tables import Table, format_number, line_of_row, read_header, read_table, write_table
 from sins.io.tables import read_columns as read_columns
-from sins.nav import rotation
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 
 RATE_COLUMNS = ("t", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 INCREMENT_COLUMNS = ("t", "dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z")
-TRUTH_COLUMNS = ("t", "lat", "lon", "alt", "vn", "ve", "vd", "roll", "pitch", "yaw")
+TRUTH_COLUMNS = ("t", "lat_deg", "lon_deg", "h_m", "vn", "ve", "vd", "roll_deg", "pitch_deg", "yaw_deg")
+#: The truth columns' names before they carried their units (issue 34), still read: each column is read
+#: by its name in :data:`TRUTH_COLUMNS` or, where the header lacks it, by its name here.
+TRUTH_COLUMNS_UNSUFFIXED = ("t", "lat", "lon", "alt", "vn", "ve", "vd", "roll", "pitch", "yaw")
 
 
 # --------------------------------------------------------------------------- IMU files
@@ -234,22 +238,27 @@ def read_truth(path: str | os.PathLike[str]) -> NavSeries:
         :data:`MAX_TIME_S`, a height outside :data:`TRUTH_ALT_M`, a velocity component beyond
         :data:`MAX_TRUTH_SPEED_MPS` or an angle beyond :data:`MAX_ANGLE_DEG` (naming line and column).
     """
-    table = read_table(path, required=TRUTH_COLUMNS)
+    _, header = read_header(Path(path))
+    names = tuple(
+        old if new not in header and old in header else new
+        for new, old in zip(TRUTH_COLUMNS, TRUTH_COLUMNS_UNSUFFIXED, strict=True)
+    )
+    table = read_table(path, required=names)
     _check_time(table)
-    check_range(table, "alt", table.column("alt"), *TRUTH_ALT_M, "height", "m")
-    for name in ("vn", "ve", "vd"):
+    check_range(table, names[3], table.column(names[3]), *TRUTH_ALT_M, "height", "m")
+    for name in names[4:7]:
         check_range(
             table, name, table.column(name), -MAX_TRUTH_SPEED_MPS, MAX_TRUTH_SPEED_MPS, "velocity", "m/s"
         )
-    for name in ("lon", "roll", "pitch", "yaw"):
+    for name in (names[2], *names[7:]):
         check_range(table, name, table.column(name), -MAX_ANGLE_DEG, MAX_ANGLE_DEG, "angle", "°")
-    d = table.data[:, [table.columns.index(c) for c in TRUTH_COLUMNS]]
+    d = table.data[:, [table.columns.index(c) for c in names]]
     lat = np.radians(d[:, 1])
     if (np.abs(lat) > np.pi / 2).any():
         r = int(np.argmax(np.abs(lat) > np.pi / 2))
         line = line_of_row(table.path, table.first_data_line - 1, r)
         raise SinsInputError(
-            f"{table.path}:{line}: column 'lat': {format_number(d[r, 1])} is outside [-90, 90] degrees"
+            f"{table.path}:{line}: column {names[1]!r}: {format_number(d[r, 1])} is outside [-90, 90] degrees"
         )
     q = rotation.quat_from_euler(np.radians(d[:, 7]), np.radians(d[:, 8]), np.radians(d[:, 9]))
     return NavSeries(
@@ -283,6 +292,7 @@ __all__ = [
     "TEMP_DEGC",
     "TRUTH_ALT_M",
     "TRUTH_COLUMNS",
+    "TRUTH_COLUMNS_UNSUFFIXED",
     "check_range",
     "check_readings",
     "imu_form",

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import rotation
+from sins.earth import E2, lla_to_ecef, radii
 from sins.errors import SinsInputError
 from sins.io.axes import ENU_TO_NED
-from sins.nav import rotation
-from sins.nav.earth import E2, lla_to_ecef, radii
 from sins.series import NavSeries
 
 Array = NDArray[np.float64]

@@ -6,11 +6,11 @@ with :func:`~sins.io.formats.read_truth` and compares with any other tool's traj
 | column | what | unit |
 |---|---|---|
 | t | time | s |
-| lat | geodetic latitude (WGS84) | ° |
-| lon | longitude | ° |
-| alt | ellipsoidal height | m |
+| lat_deg | geodetic latitude (WGS84) | ° |
+| lon_deg | longitude | ° |
+| h_m | ellipsoidal height | m |
 | vn, ve, vd | velocity north, east, down | m/s |
-| roll, pitch, yaw | ZYX Euler angles of the body (FRD) from NED; yaw clockwise from north | ° |
+| roll_deg, pitch_deg, yaw_deg | ZYX Euler angles of the body (FRD) from NED; yaw clockwise from north | ° |
 
 A Parquet file holds the same columns as float64, each field's unit in its metadata (``unit``).
 """

@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+from sins.earth import G0
 from sins.errors import SinsInputError
-from sins.nav.earth import G0
 
 #: Per key, each unit's factor into sins's unit (a value in the unit times the factor is SI).
 UNITS: dict[str, dict[str, float]] = {

@@ -1,10 +1,9 @@
-"""Navigation: rotations and the Earth, vehicle motion and its trajectory, the strapdown integrator, and
+"""Navigation: vehicle motion and its trajectory, the strapdown integrator, the vertical channel, and
 error metrics. Pure functions over arrays; nothing here knows about IMU errors.
 
 The names a user needs are importable from here (``from sins.nav import SegmentMotion, generate,
-integrate``), each from its module the first time it is used: :mod:`~sins.nav.rotation` and
-:mod:`~sins.nav.earth` sit below the data containers that the rest of the package builds on, so this
-package imports nothing when one of them is imported.
+integrate``), each from its module the first time it is used. Rotations and the Earth are at the base
+layer (:mod:`sins.rotation`, :mod:`sins.earth`), below the data containers the rest builds on.
 """
 
 from __future__ import annotations
@@ -13,8 +12,6 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from sins.nav import earth as earth
-    from sins.nav import rotation as rotation
     from sins.nav.metrics import DriftSummary, NavErrors, nav_errors, summarize
     from sins.nav.motion import (
         Accelerate,

@@ -28,8 +28,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import rotation
-from sins.nav.earth import E2, G0, radii
+from sins import rotation
+from sins.earth import E2, G0, radii
 from sins.nav.pulses import Channel
 
 if TYPE_CHECKING:

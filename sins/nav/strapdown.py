@@ -30,7 +30,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import earth
+from sins import earth
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 from sins.series import ImuIncrements, NavSeries
 

@@ -15,13 +15,14 @@ velocity on the ellipsoid with the same rule, in one compiled pass.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import earth
+from sins import earth
 from sins.nav.motion import Kinematics, Motion
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
@@ -127,11 +128,19 @@ def specific_force_and_rate(kin: Kinematics, lat: Array, h: Array) -> tuple[Arra
     )
 
 
+def interval_count(duration_s: float, rate_hz: float) -> int:
+    """How many sampling intervals of ``1 / rate_hz`` fit in ``duration_s``: a run of that length has
+    one sample more. A nanosecond's worth of rounding in ``duration_s · rate_hz`` (a 0.1 s step that
+    does not add up to 1 s) counts as a whole interval. The one count of a run's samples: the
+    trajectory's times and the scenario's size (:func:`sins.scenario.sample_count`) both take it."""
+    return math.floor(duration_s * rate_hz + 1e-9)
+
+
 def sample_times(motion: Motion, rate_hz: float) -> Array:
     """Sample times ``t_start + k / rate_hz`` that fit in the motion's span."""
     if not rate_hz > 0:
         raise ValueError(f"IMU rate must be positive, got {rate_hz}")
-    n = int(np.floor((motion.t_end - motion.t_start) * rate_hz + 1e-9))
+    n = interval_count(motion.t_end - motion.t_start, rate_hz)
     if n < 1:
         raise ValueError(f"the motion lasts {motion.t_end - motion.t_start:g} s, shorter than one sample")
     return motion.t_start + np.arange(n + 1) / rate_hz

@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 
-from sins import io
+from sins import earth, io
 from sins.errors import SinsInputError
-from sins.nav import earth, motion
+from sins.nav import motion, trajectory
 from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
 from sins.scenario.validate import MAX_DURATION_S
 from sins.series import NavSeries
@@ -58,7 +58,7 @@ def sample_count(scenario: Scenario, motion_: motion.Motion | None = None) -> fl
     ``motion_`` is the scenario's motion when already built (a truth file is read to build it).
     """
     m = build_motion(scenario) if motion_ is None else motion_
-    return float(math.floor((m.t_end - m.t_start) * scenario.rate_hz + 1e-9))
+    return float(trajectory.interval_count(m.t_end - m.t_start, scenario.rate_hz))
 
 
 #: The largest latitude a trajectory may reach, degrees: the bound of ``[initial] lat_deg``.

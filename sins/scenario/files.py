@@ -59,10 +59,10 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
     top = TomlKeys(str(path), "", read_toml(path, "IMU"))
     grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
     unit_seed = top.integer("unit_seed", 0, high=MAX_SEED)
-    withhold = tuple(top.strings("withhold", [], imu.EFFECT_NAMES))
+    withhold = tuple(top.strings("withhold", [], imu.effect_names()))
     effects = []
     for table in top.tables("effect"):
-        name = table.string("name", choices=imu.EFFECT_NAMES)
+        name = table.string("name", choices=imu.effect_names())
         params = {k: table.get(k) for k in table.table if k != "name"}
         try:
             effects.append(imu_spec.effect_from_params(name, params))
@@ -87,6 +87,7 @@ def load_rig(path: str | os.PathLike[str]) -> calibration.RigProcedure:
                              ("orientation_error_deg", 0.0), ("rate_error_ppm", 0.0))
     }  # fmt: skip
     rig.done()
+    kwargs["h_m"] = kwargs.pop("alt_m")  # the file's key; the package's name of a height (glossary)
     rate_hz = kwargs["rate_hz"]
     positions = top.sub("positions")
     count = positions.number("count", 0)

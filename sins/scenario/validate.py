@@ -316,8 +316,8 @@ def _alignment(top: TomlKeys) -> dict[str, Any]:
 def _position(init: TomlKeys) -> tuple[float, float, float]:
     lat = init.bounded("lat_deg", _B["initial.lat_deg"])
     lon = init.bounded("lon_deg", _B["initial.lon_deg"], 0.0)
-    alt = init.bounded("alt_m", _B["initial.alt_m"], 0.0)
-    return math.radians(lat), math.radians(lon), alt
+    h_m = init.bounded("alt_m", _B["initial.alt_m"], 0.0)
+    return math.radians(lat), math.radians(lon), h_m
 
 
 def _segments(top: TomlKeys, rate_hz: float) -> SegmentsSpec:
@@ -342,11 +342,11 @@ def _segments(top: TomlKeys, rate_hz: float) -> SegmentsSpec:
 
 def _start(init: TomlKeys) -> motion.Start:
     """The ``[initial]`` table: position, speed and attitude at t = 0."""
-    lat, lon, alt = _position(init)
+    lat, lon, h_m = _position(init)
     start = motion.Start(
         lat=lat,
         lon=lon,
-        h=alt,
+        h=h_m,
         speed=init.bounded("speed_mps", _B["initial.speed_mps"], 0.0),
         roll=math.radians(init.bounded("roll_deg", _B["initial.roll_deg"], 0.0)),
         pitch=math.radians(init.bounded("pitch_deg", _B["initial.pitch_deg"], 0.0)),
@@ -453,7 +453,7 @@ def _exactly_one(seg: TomlKeys, keys: tuple[str, str]) -> str:
 
 def _waypoints(top: TomlKeys) -> WaypointsSpec:
     init = top.sub("initial")
-    lat, lon, alt = _position(init)
+    lat, lon, h_m = _position(init)
     init.done()
     if top.has("oscillation"):
         raise top.error("oscillations are only for [[segment]] trajectories", "oscillation")
@@ -478,7 +478,7 @@ def _waypoints(top: TomlKeys) -> WaypointsSpec:
     if (gaps < 1e-3).any():
         i = int(np.argmax(gaps < 1e-3)) + 2
         raise top.error(f"waypoint {i} is at the same place as waypoint {i - 1}", "waypoint")
-    return WaypointsSpec(lat=lat, lon=lon, h=alt, points_ned=tuple(points), speeds=tuple(speeds))
+    return WaypointsSpec(lat=lat, lon=lon, h=h_m, points_ned=tuple(points), speeds=tuple(speeds))
 
 
 __all__ = [

@@ -20,11 +20,11 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.signal import savgol_filter
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
 from sins.io.datasets.matfile import check_mat_v5
 from sins.io.datasets.root import check_magnitude, data_root, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.nav import earth, rotation
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]

@@ -18,6 +18,7 @@ import scipy.io
 from numpy.typing import NDArray
 from scipy.signal import savgol_filter
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
 from sins.io.datasets.broad import (
     BROAD_FOLDER,
@@ -30,7 +31,6 @@ from sins.io.datasets.broad import (
     sensor_of,
 )
 from sins.io.datasets.root import dataset_file
-from sins.nav import earth, rotation
 from sins.series import ImuIncrements, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]

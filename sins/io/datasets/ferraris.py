@@ -19,12 +19,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io
+from sins import earth, io
 from sins.errors import SinsInputError
 from sins.io.datasets.root import dataset_file
 from sins.io.documents import read_json
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.nav import earth
 from sins.series import CalibrationData, RigPhase
 
 Array = NDArray[np.float64]

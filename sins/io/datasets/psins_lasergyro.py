@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
 from sins.io.datasets.root import check_magnitude, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.nav import earth, rotation
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]

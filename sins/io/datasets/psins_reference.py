@@ -13,9 +13,9 @@ import scipy.io
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, RotationSpline
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
 from sins.io.datasets.psins_vehicle import _PSINS_TO_SINS, _load, _path, psins_alignment, read_psins_vehicle
-from sins.nav import earth, rotation
 from sins.series import ImuIncrements, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]

@@ -22,11 +22,11 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
+from sins import earth, rotation
 from sins.errors import SinsInputError
 from sins.io.datasets.matfile import check_mat_v5
 from sins.io.datasets.root import check_magnitude, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS, MAX_TIME_S, MAX_TRUTH_SPEED_MPS, TRUTH_ALT_M
-from sins.nav import earth, rotation
 from sins.series import CalibrationData, NavSeries
 
 Array = NDArray[np.float64]
