@@ -250,6 +250,7 @@ __all__ = [
     "generate",
     "generate_chunks",
     "ideal_rates",
+    "interval_count",
     "sample_times",
     "specific_force_and_rate",
     "start_state",
