@@ -230,6 +230,22 @@ def test_summary_statistics_and_intervals_follow_the_rows(tmp_path: Path) -> Non
     assert len(series) == len(table["series_t_s"][0]) >= 30  # 5 min at 0.1 Hz, and the start and end
 
 
+def test_bootstrap_intervals_equal_a_percentile_bootstrap_by_hand() -> None:
+    """The summary's intervals (scipy's percentile bootstrap) equal resampling the units by hand with the
+    same generator: the 2.5th and 97.5th percentiles of each statistic over the resamples (to 1e-12; the
+    two sum in other orders)."""
+    from sins.campaign import results
+
+    rng = np.random.default_rng(4)
+    for n in (2, 7, 40):
+        values = rng.lognormal(size=n)
+        draw = np.random.default_rng(results.BOOTSTRAP_SEED).integers(0, n, (results.BOOTSTRAP_RESAMPLES, n))
+        stats = results._statistics(values)
+        for name, q in results.STATISTICS.items():
+            boot = values[draw].mean(axis=1) if q is None else np.percentile(values[draw], q, axis=1)
+            np.testing.assert_allclose(stats[f"{name}_ci95"], np.percentile(boot, [2.5, 97.5]), rtol=1e-12)
+
+
 # --------------------------------------------------------------------------- refusals
 
 

