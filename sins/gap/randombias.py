@@ -54,8 +54,9 @@ def innovations(y: Array, phi: float, gain: float) -> Array:
 
 
 def log_likelihood(nu: Array) -> float:
-    """Gaussian log-likelihood of innovations with their own variance, up to a constant."""
-    return -0.5 * len(nu) * float(np.log(np.mean(nu * nu)))
+    """Gaussian log-likelihood of innovations with their own variance, up to a constant (+inf for
+    innovations of zero)."""
+    return float(_loglik(np.sum(nu * nu), len(nu)))
 
 
 #: Rows a running sum of squares takes before it is added to its total (keeps the sums' rounding at
@@ -115,8 +116,10 @@ def _grid_sums(
 
 
 def _loglik(sum_of_squares: Array, count: int | Array) -> Array:
-    """:func:`log_likelihood` of innovations from their sum of squares and number."""
-    return -0.5 * count * np.log(sum_of_squares / count)
+    """:func:`log_likelihood` of innovations from their sum of squares and number (+inf for a sum of
+    zero: a filter that leaves nothing fits perfectly)."""
+    with np.errstate(divide="ignore"):
+        return -0.5 * count * np.log(sum_of_squares / count)
 
 
 @dataclass(frozen=True, eq=False)
@@ -194,6 +197,8 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
         return True
     phi, common = process.phi, process.innovations
     nu = common[rows]
+    if not np.std(nu) > 0.0:  # nothing left for a process to drive: none is there
+        return True
     w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - process.gain))), 1, len(nu) // 4))
     c = np.concatenate([[0.0], np.cumsum(nu)])
     z = np.abs(c[w:] - c[:-w]) / (np.std(nu) * np.sqrt(w))
