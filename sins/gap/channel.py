@@ -185,7 +185,7 @@ class ChannelModel:
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
         delay_s, error = self.delay_s, self.error
-        lag = np.zeros_like(error)  # what a delay adds to the error: the reference at t − τ less at t
+        lag: Array | None = None  # what a delay adds to the error: the reference at t − τ less at t
         if self.delayed:
             if delay_s is None:
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
@@ -201,7 +201,8 @@ class ChannelModel:
             if process is None:  # not this process: see randombias.falsified
                 return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(pred, np.nan))
             pred, fit_loglik = process
-        pred = pred + lag
+        if lag is not None:
+            pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
         if self.output == "quantization":
             pred, quantizer, loglik_rows = self._quantized(pred, design)

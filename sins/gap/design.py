@@ -147,9 +147,10 @@ class Design:
             np.compress(mine, a, axis=0, out=own[:, :k])
             if target is not None:
                 np.compress(mine, target[lo:hi], out=own[:, k])
-            scaled_by = own[:, :k] if scale_rows is None else a[scale_rows[lo:hi]]
+            # The rows already gathered serve the scale where they are the same rows (no second copy).
+            scaled_by = own[:, :k] if scale_rows is None or scale_rows is rows else a[scale_rows[lo:hi]]
             if len(scaled_by):
-                top = np.maximum(top, np.maximum(scaled_by.max(axis=0), -scaled_by.min(axis=0)))
+                top = np.maximum(top, np.abs(scaled_by).max(axis=0))  # max(max, −min), in one pass
             if gram_rows is not None:
                 other = a[gram_rows[lo:hi]]
                 gram += other.T @ other
