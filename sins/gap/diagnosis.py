@@ -24,9 +24,7 @@ report (:func:`_report`).
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Iterator
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -61,12 +59,6 @@ from sins.imu import BASELINE, CHANNELS, EFFECT_NAMES
 from sins.series import STRETCH_LONGEST_S, CalibrationData
 
 Array = NDArray[np.float64]
-
-#: Threads that fit a candidate's channels side by side: two at most (a channel's fit holds a few
-#: series as long as the recording; two at once are what two cores can use).
-TRIAL_WORKERS = min(
-    2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-)
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,26 +277,19 @@ def _score_round(s: _Session, state: _Search, progress: Callable[[str], None] | 
 def _trial(s: _Session, state: _Search, cand: Candidate, channels: list[int]) -> Trial | None:
     """``cand`` tried on each of ``channels`` it may apply to (None if on none): beside the current
     model of a channel no disturbance outside the library explains, and, for quantization, whose
-    readings lie on a lattice. The channels are fitted side by side (:data:`TRIAL_WORKERS`
-    threads): each fit is its own, numpy's and the compiled filters' loops run without the
-    interpreter's lock, and the rows come back in the channels' order (the same report)."""
-    todo = [
-        i
-        for i in channels
-        if CHANNELS[i] not in state.outside_channels  # a disturbance outside the library explains it
-        and not (cand.name.endswith("quantization") and state.models[i].lattice is None)
-    ]
-    if not todo:
-        return None
-
-    def one(i: int) -> ChannelTrial:
+    readings lie on a lattice."""
+    rows = []
+    for i in channels:
+        if CHANNELS[i] in state.outside_channels:
+            continue  # explained by a disturbance outside the library: nothing to add there
         current = state.models[i]
+        if cand.name.endswith("quantization") and current.lattice is None:
+            continue
         m = current.tried(cand)
         gain, penalty = trial_gain(current, m, s.withheld, s.n_fit)
-        return ChannelTrial(i, gain, penalty, m.fit_rows_loglik())
-
-    with ThreadPoolExecutor(max(1, min(TRIAL_WORKERS, len(todo)))) as pool:
-        rows = list(pool.map(one, todo))
+        rows.append(ChannelTrial(i, gain, penalty, m.fit_rows_loglik()))
+    if not rows:
+        return None
     tried = [state.models[row.channel] for row in rows]
     allowance = refit_allowance(tried, s.withheld) if cand.kind == "process" else 0.0
     return Trial(tuple(rows), allowance)
