@@ -434,14 +434,23 @@ def _report(
         unfitted=state.unfitted,
         unreferenced=s.all_rows - len(s.data),
         model=tuple(dict.fromkeys((*BASELINE, *model))),
-        residual_before=np.column_stack([r[withheld] for r in s.residuals(before)]),
-        residual_after=np.column_stack([r[withheld] for r in s.residuals(after)]),
+        residual_before=_withheld_residuals(s, before),
+        residual_after=_withheld_residuals(s, after),
         predicted_before=before,
         predicted_after=after,
         t_withheld=s.data.t[withheld],
         allan=allan,
         quartiles=quartiles,
     )
+
+
+def _withheld_residuals(s: _Session, predicted: Array) -> Array:
+    """Each channel's residual on the withheld rows, under the ``predicted`` errors (n, 6): (m, 6),
+    filled a channel at a time (no list of six columns beside their stack)."""
+    out = np.empty((int(s.withheld.sum()), 6))
+    for i, r in enumerate(s.residuals(predicted)):
+        out[:, i] = r[s.withheld]
+    return out
 
 
 def _rms(s: _Session, predicted: Array) -> Array:

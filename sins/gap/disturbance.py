@@ -94,6 +94,7 @@ def _periodogram_peak(x: Array, step: float, lowest_hz: float) -> float:
                 if power[m] > best:
                     b = padded - (8 * m + r) if mirrored else 8 * m + r
                     best, peak = float(power[m]), float(np.float64(b) / (padded * step))
+        del power  # before the next turn's transform
     return peak
 
 
@@ -129,8 +130,10 @@ def _turned_power(x: Array, r: int, padded: int) -> Array:
             z.real[lo:hi] = x[lo:hi] * np.cos(angle)
             z.imag[lo:hi] = x[lo:hi] * np.sin(angle)
         z = fft.fft(z, overwrite_x=True)
-    power = np.square(z.real)
-    power += np.square(z.imag)
+    # The power in the transform's own real parts (a view): no n-long arrays beside it.
+    power, imag = z.real, z.imag
+    np.square(power, out=power)
+    power += np.square(imag, out=imag)
     return np.asarray(power)
 
 
@@ -147,7 +150,8 @@ def best_oscillation(
     ``factor``: the columns' factor on ``rows``, if the caller has it.
     """
     step = float(np.median(np.diff(t)))
-    x = np.where(rows, residual - residual[rows].mean(), 0.0)
+    x = residual - residual[rows].mean()
+    x[~rows] = 0.0  # the withheld rows may not choose
     peak = _periodogram_peak(x, step, 3.0 / (t[-1] - t[0]))
     del x
     projection = Projection.of(_design(columns), rows, factor)

@@ -196,14 +196,13 @@ def available(cand: Candidate, x: ReferenceInputs, readings: Array, fit: NDArray
     """
     if "temperature" in cand.name:
         return x.temp is not None and float(np.ptp(x.temp)) > 0.5
-    r = readings[fit]
-    if cand.name.endswith("saturation"):
-        ref = x.of(cand.sensor)[fit]
-        for j in range(r.shape[1]):
-            top, bottom, margin = r[:, j].max(), r[:, j].min(), 1e-3 * np.abs(r[:, j]).max()
-            if np.sum(r[:, j] == top) >= 10 and np.sum(ref[:, j] > top + margin) >= 10:
-                return True
-            if np.sum(r[:, j] == bottom) >= 10 and np.sum(ref[:, j] < bottom - margin) >= 10:
-                return True
-        return False
-    return True
+    if not cand.name.endswith("saturation"):
+        return True
+    for j in range(readings.shape[1]):  # a channel's fit rows at a time: no (n, 3) copies
+        r, ref = readings[fit, j], x.of(cand.sensor)[fit, j]
+        top, bottom, margin = r.max(), r.min(), 1e-3 * np.abs(r).max()
+        if np.sum(r == top) >= 10 and np.sum(ref > top + margin) >= 10:
+            return True
+        if np.sum(r == bottom) >= 10 and np.sum(ref < bottom - margin) >= 10:
+            return True
+    return False
