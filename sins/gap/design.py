@@ -143,7 +143,11 @@ class Design:
         for lo, hi in spans(self.n):
             a = self.block(lo, hi)
             mine = rows[lo:hi]
-            own = np.empty((int(mine.sum()), k + extra))  # the rows' columns and target, side by side
+            # The factor so far, then the rows' columns and target side by side, gathered under it:
+            # what is factored again (no stacking copy).
+            stack = np.empty((len(r) + int(mine.sum()), k + extra))
+            stack[: len(r)] = r
+            own = stack[len(r) :]
             np.compress(mine, a, axis=0, out=own[:, :k])
             if target is not None:
                 np.compress(mine, target[lo:hi], out=own[:, k])
@@ -154,7 +158,8 @@ class Design:
             if gram_rows is not None:
                 other = a[gram_rows[lo:hi]]
                 gram += other.T @ other
-            r = _stacked(r, own)
+            if len(own):
+                r = np.asarray(np.linalg.qr(stack, mode="r"))
         return Factor(r, k, int(rows.sum()), np.maximum(top, 1e-300), gram)
 
     def lstsq(
