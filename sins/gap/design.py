@@ -20,7 +20,10 @@ as it comes:
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import dataclasses
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -192,6 +195,26 @@ class Design:
         """Each chunk's span and the columns of its rows among ``rows``, built as they are asked for."""
         for lo, hi in spans(self.n):
             yield lo, hi, self.block(lo, hi)[rows[lo:hi]]
+
+
+def release_free_memory() -> None:
+    """Hand the C allocator's free pages back to the system, where it is glibc's (``malloc_trim``;
+    elsewhere nothing). numpy takes a chunk's arrays (a few MB each) from glibc's heap, and glibc
+    keeps what is freed there resident for the next: over a long diagnosis hundreds of MB that no
+    array holds. Called between the stages that build and drop a recording's worth of chunks."""
+    trim = getattr(_LIBC, "malloc_trim", None)
+    if trim is not None:
+        trim(0)
+
+
+def _libc() -> ctypes.CDLL | None:
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+    except OSError:
+        return None
+
+
+_LIBC = _libc() if sys.platform.startswith("linux") else None
 
 
 @dataclass(frozen=True, eq=False)

@@ -31,6 +31,7 @@ from scipy.stats import chi2
 from sins.gap import disturbance
 from sins.gap.candidates import CANDIDATES, OUTPUTS, PROCESSES, Candidate, ReferenceInputs
 from sins.gap.channel import ChannelModel
+from sins.gap.design import release_free_memory
 from sins.gap.report import Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS, ChannelTrial, Trial, trial_gain
 from sins.imu import CHANNELS
@@ -144,6 +145,7 @@ def outside_library(
     for row in trial.rows:
         if row.gain <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
+        release_free_memory()  # what the last channel's transforms and fits freed
         found = _disturbance(models[row.channel], row, process, withheld, n_fit)
         if found is not None:
             out.append(found)
