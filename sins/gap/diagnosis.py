@@ -423,6 +423,7 @@ def _report(
         for i, ch in enumerate(CHANNELS)
     }
     where, unexplained, quartiles, allan = _where(s, before, after, floors, outside)
+    release_free_memory()  # what the input quartiles and Allan curves freed, before the residuals
     passed_over = [
         dataclasses.replace(e, not_accepted_because=state.why_not.get(e.name, "") if e.score > 0.0 else "")
         for e in state.scores.values()
