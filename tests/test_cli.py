@@ -270,7 +270,7 @@ def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]
         "malformed-toml": (["run", str(malformed)], "invalid TOML"),
         "unknown-key": (["run", str(unknown)], "imu.filter"),
         "truth-file-missing": (["run", str(truth_file)], "gone.csv"),
-        "missing-column": (["integrate", str(imu), "--truth", str(no_yaw)], "'yaw'"),
+        "missing-column": (["integrate", str(imu), "--truth", str(no_yaw)], "'yaw_deg'"),
         "nan": (["integrate", str(nan), "--truth", str(truth)], f"{nan}:13: column 'dv_y'"),
         "non-increasing-time": (["integrate", str(back), "--truth", str(truth)], f"{back}:23: column 't'"),
         "mixed-forms": (["integrate", str(mixed), "--truth", str(truth)], "mixes rate columns"),

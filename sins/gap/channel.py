@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from sins.gap import lattice, randombias
-from sins.gap.candidates import Candidate, ReferenceInputs
+from sins.gap.candidates import Candidate, ReferenceInputs, spans
 from sins.gap.design import Design, Maker, Projection
 from sins.gap.floor import TINY, noise_floor
 from sins.gap.lattice import Printed
@@ -185,7 +185,7 @@ class ChannelModel:
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
         delay_s, error = self.delay_s, self.error
-        lag = np.zeros_like(error)  # what a delay adds to the error: the reference at t − τ less at t
+        lag: Array | None = None  # what a delay adds to the error: the reference at t − τ less at t
         if self.delayed:
             if delay_s is None:
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
@@ -197,11 +197,14 @@ class ChannelModel:
         pred = design.predict(coef)
         fit_loglik = self.fit_loglik
         if self.process is not None:
-            process = self._with_random_bias(error, pred, design, rows, rcond)
+            least_squares = error - pred
+            del pred  # what least squares leave is all the random bias's fit needs of them
+            process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
-                return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(pred, np.nan))
+                return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
             pred, fit_loglik = process
-        pred = pred + lag
+        if lag is not None:
+            pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
         if self.output == "quantization":
             pred, quantizer, loglik_rows = self._quantized(pred, design)
@@ -219,23 +222,29 @@ class ChannelModel:
         )
 
     def _with_random_bias(
-        self, error: Array, pred: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
+        self, error: Array, residual: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
     ) -> tuple[Array, float] | None:
-        """Given the least-squares prediction ``pred`` of ``error``, the regressors refitted beside the
-        random bias and the bias's one-step prediction added: the predicted error of every row and the
-        process's fit-row log-likelihood (None: falsified).
+        """Given what least squares leave of ``error`` (``residual``), the regressors refitted beside
+        the random bias and the bias's one-step prediction added: the predicted error of every row
+        and the process's fit-row log-likelihood (None: falsified).
 
         A random bias misleads least squares: a walk's level in each static position passes for
         scale factors. Generalised least squares instead: the innovations filter is linear, so the
-        regressors that whiten best are those fitted to the filtered error and columns.
+        regressors that whiten best are those fitted to the filtered error and columns. (Each series
+        is let go as soon as it has served: a long recording's rows are many.)
         """
-        process = self._fit_process(error - pred)
-        pred = design.predict(design.whitened_lstsq(error, rows, rcond, process.phi, process.gain))
+        first = self._fit_process(residual)
+        del residual
+        phi, gain = first.phi, first.gain
+        del first
+        pred = design.predict(design.whitened_lstsq(error, rows, rcond, phi, gain))
         y = error - pred
         process = self._fit_process(y)
         if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
             return None
-        return pred + y - process.innovations, process.fit_loglik
+        out = np.add(pred, y, out=pred)
+        out -= process.innovations
+        return out, process.fit_loglik
 
     def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
         """The random bias under the residual ``y``, its white part from first differences within the
@@ -319,7 +328,9 @@ def _fit_delay(
     both = design.with_makers(slope).factor(rows, error, scale_rows=fit)
     first = float(dataclasses.replace(both, scale=np.append(both.scale[:k], 1.0)).solve()[-1])
     projection = Projection.of(design, rows, both.leading(k))
-    central = x.rate(sensor, axis)
+    # The axis's rate of change a chunk of rows at a time (each row's the whole recording's, to the
+    # bit: its neighbours either side are taken in), without the whole-array differences' temporaries.
+    central = np.concatenate([x.rows(lo, hi).rate(sensor, axis) for lo, hi in spans(len(x.t))])
 
     def left(tau: float) -> float:
         return projection.residual(error - x.lag(sensor, axis, tau, central))

@@ -20,7 +20,10 @@ each chunk as it comes:
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import dataclasses
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -143,17 +146,23 @@ class Design:
         for lo, hi in spans(self.n):
             a = self.block(lo, hi)
             mine = rows[lo:hi]
-            own = np.empty((int(mine.sum()), k + extra))  # the rows' columns and target, side by side
+            # The factor so far, then the rows' columns and target side by side, gathered under it:
+            # what is factored again (no stacking copy).
+            stack = np.empty((len(r) + int(mine.sum()), k + extra))
+            stack[: len(r)] = r
+            own = stack[len(r) :]
             np.compress(mine, a, axis=0, out=own[:, :k])
             if target is not None:
                 np.compress(mine, target[lo:hi], out=own[:, k])
-            scaled_by = own[:, :k] if scale_rows is None else a[scale_rows[lo:hi]]
+            # The rows already gathered serve the scale where they are the same rows (no second copy).
+            scaled_by = own[:, :k] if scale_rows is None or scale_rows is rows else a[scale_rows[lo:hi]]
             if len(scaled_by):
-                top = np.maximum(top, np.maximum(scaled_by.max(axis=0), -scaled_by.min(axis=0)))
+                top = np.maximum(top, np.abs(scaled_by).max(axis=0))  # max(max, −min), in one pass
             if gram_rows is not None:
                 other = a[gram_rows[lo:hi]]
                 gram += other.T @ other
-            r = _stacked(r, own)
+            if len(own):
+                r = np.asarray(np.linalg.qr(stack, mode="r"))
         return Factor(r, k, int(rows.sum()), np.maximum(top, 1e-300), gram)
 
     def lstsq(
@@ -186,6 +195,26 @@ class Design:
         """Each chunk's span and the columns of its rows among ``rows``, built as they are asked for."""
         for lo, hi in spans(self.n):
             yield lo, hi, self.block(lo, hi)[rows[lo:hi]]
+
+
+def release_free_memory() -> None:
+    """Hand the C allocator's free pages back to the system, where it is glibc's (``malloc_trim``;
+    elsewhere nothing). numpy takes a chunk's arrays (a few MB each) from glibc's heap, and glibc
+    keeps what is freed there resident for the next: over a long diagnosis hundreds of MB that no
+    array holds. Called between the stages that build and drop a recording's worth of chunks."""
+    trim = getattr(_LIBC, "malloc_trim", None)
+    if trim is not None:
+        trim(0)
+
+
+def _libc() -> ctypes.CDLL | None:
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+    except OSError:
+        return None
+
+
+_LIBC = _libc() if sys.platform.startswith("linux") else None
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,6 +9,8 @@ refitted beside it.
 
 from __future__ import annotations
 
+import bisect
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy import fft
@@ -76,21 +78,44 @@ def _periodogram_peak(x: Array, step: float, lowest_hz: float) -> float:
     ``lowest_hz``: bin ``8m + r`` of the padded transform is bin ``m`` of ``x`` turned by
     ``e^(−2πi r j / 8n)``, so transforms of ``n`` points give it, never one of ``8n``; and as ``x`` is
     real, bin ``8n − b`` is bin ``b``'s conjugate, so the turns ``r ≤ 4`` give every bin up to ``4n``
-    (bins ``8m + r`` beyond it as the mirrors of ``8m' + 8 − r`` below it)."""
+    (bins ``8m + r`` beyond it as the mirrors of ``8m' + 8 − r`` below it). The bins allowed of each
+    turn, up to ``4n`` and at or above ``lowest_hz``, are a run of consecutive ``m``: found by
+    bisection with the test each bin would take, so no array of bins is built."""
     n = len(x)
     padded = 8 * n
-    index = np.arange(n)
     best, peak = -1.0, 0.0
     for r in range(5):
         power = _turned_power(x, r, padded)
-        for bins in (8 * index + r, padded - (8 * index + r))[: 2 if r in (1, 2, 3) else 1]:
+        for mirrored in (False, True)[: 2 if r in (1, 2, 3) else 1]:
             # b and its mirror 8n − b (r = 0 and 4 mirror onto their own turn)
-            allowed = (bins <= padded // 2) & (bins / (padded * step) >= lowest_hz)
-            if allowed.any():
-                m = int(np.argmax(np.where(allowed, power, -1.0)))
+            lo, hi = _allowed_run(n, r, mirrored, step, lowest_hz)
+            if lo < hi:
+                m = lo + int(np.argmax(power[lo:hi]))
                 if power[m] > best:
-                    best, peak = float(power[m]), float(bins[m] / (padded * step))
+                    b = padded - (8 * m + r) if mirrored else 8 * m + r
+                    best, peak = float(power[m]), float(np.float64(b) / (padded * step))
+        del power  # before the next turn's transform
     return peak
+
+
+def _allowed_run(n: int, r: int, mirrored: bool, step: float, lowest_hz: float) -> tuple[int, int]:
+    """The ``m`` (``lo ≤ m < hi``) whose bin ``b`` (``8m + r``, or ``8n − 8m − r`` ``mirrored``) of
+    the eightfold padded transform is at most ``4n`` with ``b / (8n step) ≥ lowest_hz``, that
+    frequency computed as a whole array of bins would compute it (so the run is the same to the
+    bin: the division is monotone in ``b``)."""
+    padded = 8 * n
+
+    def high_enough(m: int) -> bool:
+        b = padded - (8 * m + r) if mirrored else 8 * m + r
+        return bool(np.float64(b) / (padded * step) >= lowest_hz)
+
+    if mirrored:  # b falls as m rises: at most 4n from m ≥ (4n − r) / 8, high enough up to some m
+        lo = max(-(-(4 * n - r) // 8), 0)
+        hi = bisect.bisect_left(range(n), True, key=lambda m: not high_enough(m))
+        return lo, hi
+    hi = min(max((4 * n - r) // 8 + 1, 0), n)  # b rises with m: at most 4n up to m = (4n − r) / 8
+    lo = bisect.bisect_left(range(hi), True, key=high_enough)
+    return lo, hi
 
 
 def _turned_power(x: Array, r: int, padded: int) -> Array:
@@ -105,8 +130,10 @@ def _turned_power(x: Array, r: int, padded: int) -> Array:
             z.real[lo:hi] = x[lo:hi] * np.cos(angle)
             z.imag[lo:hi] = x[lo:hi] * np.sin(angle)
         z = fft.fft(z, overwrite_x=True)
-    power = np.square(z.real)
-    power += np.square(z.imag)
+    # The power in the transform's own real parts (a view): no n-long arrays beside it.
+    power, imag = z.real, z.imag
+    np.square(power, out=power)
+    power += np.square(imag, out=imag)
     return np.asarray(power)
 
 
@@ -123,7 +150,8 @@ def best_oscillation(
     ``factor``: the columns' factor on ``rows``, if the caller has it.
     """
     step = float(np.median(np.diff(t)))
-    x = np.where(rows, residual - residual[rows].mean(), 0.0)
+    x = residual - residual[rows].mean()
+    x[~rows] = 0.0  # the withheld rows may not choose
     peak = _periodogram_peak(x, step, 3.0 / (t[-1] - t[0]))
     del x
     projection = Projection.of(_design(columns), rows, factor)

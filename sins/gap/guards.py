@@ -31,6 +31,7 @@ from scipy.stats import chi2
 from sins.gap import disturbance
 from sins.gap.candidates import CANDIDATES, Candidate, ReferenceInputs, outputs, processes
 from sins.gap.channel import ChannelModel
+from sins.gap.design import release_free_memory
 from sins.gap.report import Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS, ChannelTrial, Trial, trial_gain
 from sins.imu import CHANNELS
@@ -144,6 +145,7 @@ def outside_library(
     for row in trial.rows:
         if row.gain <= 0.0 and trial.score > 0.0:
             continue  # the effect gains nothing here: no gain to take from it
+        release_free_memory()  # what the last channel's transforms and fits freed
         found = _disturbance(models[row.channel], row, process, withheld, n_fit)
         if found is not None:
             out.append(found)
@@ -196,17 +198,16 @@ def available(cand: Candidate, x: ReferenceInputs, readings: Array, fit: NDArray
     """
     if "temperature" in cand.name:
         return x.temp is not None and float(np.ptp(x.temp)) > 0.5
-    r = readings[fit]
-    if cand.name.endswith("saturation"):
-        ref = x.of(cand.sensor)[fit]
-        for j in range(r.shape[1]):
-            top, bottom, margin = r[:, j].max(), r[:, j].min(), 1e-3 * np.abs(r[:, j]).max()
-            if np.sum(r[:, j] == top) >= 10 and np.sum(ref[:, j] > top + margin) >= 10:
-                return True
-            if np.sum(r[:, j] == bottom) >= 10 and np.sum(ref[:, j] < bottom - margin) >= 10:
-                return True
-        return False
-    return True
+    if not cand.name.endswith("saturation"):
+        return True
+    for j in range(readings.shape[1]):  # a channel's fit rows at a time: no (n, 3) copies
+        r, ref = readings[fit, j], x.of(cand.sensor)[fit, j]
+        top, bottom, margin = r.max(), r.min(), 1e-3 * np.abs(r).max()
+        if np.sum(r == top) >= 10 and np.sum(ref > top + margin) >= 10:
+            return True
+        if np.sum(r == bottom) >= 10 and np.sum(ref < bottom - margin) >= 10:
+            return True
+    return False
 
 
 __all__ = [

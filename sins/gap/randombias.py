@@ -56,7 +56,7 @@ def innovations(y: Array, phi: float, gain: float) -> Array:
 def log_likelihood(nu: Array) -> float:
     """Gaussian log-likelihood of innovations with their own variance, up to a constant (+inf for
     innovations of zero)."""
-    return float(_loglik(np.sum(nu * nu), len(nu)))
+    return float(_loglik(np.asarray(np.sum(nu * nu)), len(nu)))
 
 
 #: Rows a running sum of squares takes before it is added to its total (keeps the sums' rounding at
@@ -201,11 +201,17 @@ def falsified(process: RandomBiasFit, rows: NDArray[np.bool_], t: Array) -> bool
         return True
     w = int(np.clip(round(1.0 / (1.0 - phi * (1.0 - process.gain))), 1, len(nu) // 4))
     c = np.concatenate([[0.0], np.cumsum(nu)])
-    z = np.abs(c[w:] - c[:-w]) / (np.std(nu) * np.sqrt(w))
+    spread = np.std(nu) * np.sqrt(w)
+    del nu
+    z = np.subtract(c[w:], c[:-w])  # the window sums, standardised in place (a long record's rows)
+    del c
+    np.abs(z, out=z)
+    z /= spread
     if float(z.max()) > float(norm.isf(0.0005 / len(z))):
         return True
+    del z
     edges = np.quantile(t[rows], [0.25, 0.5, 0.75])
-    quarter = np.searchsorted(edges, t, side="right").astype(np.int64)
+    quarter = np.searchsorted(edges, t, side="right").astype(np.int64, copy=False)
     sums = _grid_sums(process.y, rows, process.filters(), quarter)  # (drives, quarters)
     counts = np.bincount(quarter[rows], minlength=4)[:4].astype(np.float64)
     lls = _loglik(sums[:, :4], counts)
