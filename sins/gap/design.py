@@ -323,4 +323,5 @@ __all__ = [
     "Design",
     "Factor",
     "Projection",
+    "release_free_memory",
 ]
