@@ -70,11 +70,11 @@ from sins.compensation.points import (
 )
 from sins.compensation.regression import Regression
 from sins.imu import CHANNELS
+from sins.imu.vocabulary import SENSORS
 from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 
-SENSORS = ("gyro", "accel")
 _MIN_RATE_SCALE = np.radians(1.0)
 _MIN_TEMP_SPAN = 2.0
 #: The one-sided difference that gives a learner's edge slope, as a fraction of the box: small enough to
@@ -87,7 +87,7 @@ _PASSES = 2
 PATIENCE = 2
 
 
-def _columns(sensor: str, x: terms.Inputs) -> Array:
+def _columns(sensor: str, x: terms.TermInputs) -> Array:
     """:func:`input_columns` of scaled inputs."""
     return input_columns(sensor, x.w, x.f, x.t)
 
@@ -287,7 +287,7 @@ class ResidualStrategy(Strategy):
 
     @staticmethod
     def _fold_terms(
-        groups: list[tuple[str, ...]], x: terms.Inputs, train: NDArray[np.bool_], targets: Array
+        groups: list[tuple[str, ...]], x: terms.TermInputs, train: NDArray[np.bool_], targets: Array
     ) -> list[Array]:
         """The chosen terms' coefficients fitted on one fold's training rows."""
         x_train = x.rows(train)
@@ -386,7 +386,7 @@ class ResidualStrategy(Strategy):
         box = {s: self._scale(s, data.ref_gyro, data.ref_accel, data.temp) for s in SENSORS}
         self.box_ = {s: [box[s].min(axis=0).tolist(), box[s].max(axis=0).tolist()] for s in SENSORS}
 
-    def _scaled(self, w: Array, f: Array, temp: Array | None) -> terms.Inputs:
+    def _scaled(self, w: Array, f: Array, temp: Array | None) -> terms.TermInputs:
         """Rate, force and temperature in the physical scales (the rig's largest rate, ``G0``, half the
         temperature span about its centre): the terms' inputs, and the learners' (:meth:`_scale`)."""
         s = self.scaling_
@@ -395,13 +395,13 @@ class ResidualStrategy(Strategy):
             if temp is None:
                 raise ValueError(f"this {self.name} was fitted with temperature: give the temperature series")
             t = (np.asarray(temp, dtype=float) - s["temp_centre"]) / s["temp_half"]
-        return terms.Inputs(w / s["rate"], f / s["accel"], t)
+        return terms.TermInputs(w / s["rate"], f / s["accel"], t)
 
     def _scale(self, sensor: str, w: Array, f: Array, temp: Array | None) -> Array:
         """A sensor's learner inputs (:func:`input_columns`) in the physical scales."""
         return _columns(sensor, self._scaled(w, f, temp))
 
-    def _terms(self, x: terms.Inputs, channels: range) -> Array:
+    def _terms(self, x: terms.TermInputs, channels: range) -> Array:
         """The chosen terms' residual on ``channels`` (n, len(channels)); 0 on a channel without."""
         chosen = self.terms_
         groups = [tuple(chosen[ch]["groups"]) if ch in chosen else () for ch in CHANNELS]
@@ -563,7 +563,7 @@ def _check_terms(chosen: Any, uses_temp: bool) -> None:
     """Each channel's terms in a saved state: known groups, and as many coefficients as their columns."""
     if not isinstance(chosen, dict):
         raise ValueError("state.terms_ must be an object by channel")
-    one = terms.Inputs(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1) if uses_temp else None)
+    one = terms.TermInputs(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1) if uses_temp else None)
     for ch, entry in chosen.items():
         where = f"state.terms_.{ch}"
         if ch not in CHANNELS or not isinstance(entry, dict) or not isinstance(entry.get("groups"), list):
@@ -585,7 +585,6 @@ __all__ = [
     "EDGE_STEP",
     "MIN_REPEATS",
     "PATIENCE",
-    "SENSORS",
     "Points",
     "ResidualStrategy",
     "aggregate",

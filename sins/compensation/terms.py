@@ -106,10 +106,6 @@ class TermInputs:
         return TermInputs(self.omega_ib_b[index], self.f_ib_b[index], temp)
 
 
-#: The old name, which :mod:`sins.compensation.residual` still uses.
-Inputs = TermInputs
-
-
 def design(groups: tuple[str, ...] | list[str], channel: int, x: TermInputs) -> Array:
     """The columns of channel ``channel`` (0–5: gyro x, y, z, accel x, y, z) with ``groups`` (n, k): the
     seed model's ``[1, ω, f]``, then each group's (its effects' :meth:`sins.imu.Effect.columns`, in
@@ -255,7 +251,6 @@ def predict(groups: list[tuple[str, ...]], coef: list[Array], x: TermInputs, cha
 
 __all__ = [
     "SHOWN",
-    "Inputs",
     "TermInputs",
     "choose",
     "design",
