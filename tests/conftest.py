@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
-import gc
-import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -44,25 +40,3 @@ def _torch_on_one_thread() -> None:
     except ImportError:
         return
     torch.set_num_threads(1)
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _memory_handed_back_after_each_file() -> Iterator[None]:
-    """A worker runs test files one after another and keeps the C heap's free pages for the next
-    (glibc): the suite's peak was a worker that had touched everything, 1.36 GB where the largest file
-    alone needs ~0.9 GB. After each file, collect and hand free pages back (``malloc_trim``; elsewhere
-    than glibc, nothing)."""
-    yield
-    gc.collect()
-    if _LIBC is not None:
-        _LIBC.malloc_trim(0)
-
-
-def _libc() -> ctypes.CDLL | None:
-    try:
-        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-    except OSError:
-        return None
-
-
-_LIBC = _libc() if sys.platform.startswith("linux") else None
