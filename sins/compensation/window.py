@@ -14,7 +14,7 @@ on the true rate.
 
 The ridge's strength is chosen on :data:`FOLDS` contiguous held-back folds of the calibration data (the
 learners' rule: data it did not see), and the guard is theirs too: an axis whose held-back gain over the
-seed model alone is not above two standard errors (over the folds' blocks) keeps the seed model. The
+seed model alone is not above two standard errors (of the sum of the folds' gains) keeps the seed model. The
 per-sample references of a real recording (:func:`sins.compensation.interval_fit.interval_reference`) hold
 one draw of the reference's error over each interval; the folds are contiguous, so a held-back fold never
 shares an interval with the rows fitted.
