@@ -23,9 +23,15 @@ run: $(STAMP)
 # the gap diagnosis four times slower (2.0 s -> 8.1 s a case). No CPU kernels pinned: the quality gate
 # judges its figures over seeds, so a network that another machine's kernels train differently is a
 # draw within the seeds' spread, not a regression (docs/development.md, "CPU kernels").
+# The files that train networks on rigs (torch, hundreds of MB each) run first, on workers of their own:
+# a worker keeps what it has imported and allocated, and one that ran them among the rest peaked at
+# 1.7 GB (docs/speed.md, "The test suite").
+HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
 test: lint
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile $(HEAVY_TESTS)
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile $(addprefix --ignore=,$(HEAVY_TESTS))
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check sins tests tools examples
