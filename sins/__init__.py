@@ -49,6 +49,7 @@ IMU samples
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from sins.errors import SinsInputError
@@ -131,20 +132,31 @@ SUBMODULES = (
 )
 
 
-def __getattr__(name: str) -> Any:
-    """An entry point or a submodule, imported on first use (PEP 562)."""
-    if name in SUBMODULES:
-        return importlib.import_module(f"sins.{name}")
-    if name not in ENTRY_POINTS:
-        raise AttributeError(f"module 'sins' has no attribute {name!r}")
-    value = getattr(importlib.import_module(ENTRY_POINTS[name]), name)
-    globals()[name] = value  # the next use is a plain attribute
-    return value
+def _lazy(
+    namespace: dict[str, Any], names: dict[str, str], submodules: tuple[str, ...] = ()
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """A package's PEP 562 ``__getattr__`` and ``__dir__`` (``namespace`` its ``globals()``): each of
+    ``names`` imported from the module it maps to on first use, then a plain attribute; each of
+    ``submodules`` as the package's submodule. ``sins``, ``sins.nav`` and ``sins.aiding`` use it."""
+    package = namespace["__name__"]
+
+    def __getattr__(name: str) -> Any:
+        if name in submodules:
+            return importlib.import_module(f"{package}.{name}")
+        if name not in names:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(names[name]), name)
+        namespace[name] = value  # the next use is a plain attribute
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted({*namespace, *names, *submodules})
+
+    return __getattr__, __dir__
 
 
-def __dir__() -> list[str]:
-    """The names above, for completion in a notebook."""
-    return sorted({*globals(), *ENTRY_POINTS, *SUBMODULES})
+#: An entry point or a submodule, imported on first use; the names above, for completion in a notebook.
+__getattr__, __dir__ = _lazy(globals(), ENTRY_POINTS, SUBMODULES)
 
 
 __all__ = [

@@ -11,8 +11,9 @@ from its module the first time it is used: the filter's module imports filterpy,
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from sins import _lazy
 
 if TYPE_CHECKING:
     from sins.aiding.alignment import AlignmentConfig, MotionConfig
@@ -32,18 +33,8 @@ NAMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """A name of :data:`NAMES`, imported from its module on first use (PEP 562)."""
-    if name not in NAMES:
-        raise AttributeError(f"module 'sins.aiding' has no attribute {name!r}")
-    value = getattr(importlib.import_module(NAMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    """The names above, for completion in a notebook."""
-    return sorted({*globals(), *NAMES})
+#: A name of :data:`NAMES`, imported from its module on first use (PEP 562); the names, for completion.
+__getattr__, __dir__ = _lazy(globals(), NAMES)
 
 
 __all__ = [
