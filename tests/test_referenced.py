@@ -225,11 +225,26 @@ def test_refusals_in_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]
             "does not overlap",
         ),
         (["fit", str(imu), "--strategy", "nonsense", "--out", "m.json"], "unknown"),
+        (  # refused before the fit, not after it
+            [
+                "fit",
+                str(imu),
+                "--truth",
+                str(late),
+                "--strategy",
+                "regression",
+                "--out",
+                str(tmp_path / "no" / "m.json"),
+            ],
+            "does not exist",
+        ),
+        (["correct", "m.json", str(imu), "--out", str(tmp_path)], "is a directory"),
     ]
     for argv, text in cases:
         assert main(argv) == 2, argv
-        err = capsys.readouterr().err
-        assert text in err and err.count("\n") == 1, err
+        captured = capsys.readouterr()
+        assert text in captured.err and captured.err.count("\n") == 1, captured.err
+        assert "fitted" not in captured.out, captured.out
 
 
 @needs_broad

@@ -336,6 +336,16 @@ def add_plot(p: argparse.ArgumentParser, what: str) -> None:
     )  # fmt: skip
 
 
+def check_outputs(*paths: Path | None) -> None:
+    """Refuse, before the work, an output file that could not be written after it (``None``: not asked
+    for); :func:`sins.io.limits.check_writable` for each."""
+    from sins.io.limits import check_writable
+
+    for path in paths:
+        if path is not None:
+            check_writable(path)
+
+
 def check_plot(args: argparse.Namespace) -> None:
     """Refuse a ``--plot`` path that cannot be written, before the work."""
     if getattr(args, "plot", None):

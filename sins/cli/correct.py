@@ -9,6 +9,7 @@ from sins.cli.common import (
     Subparsers,
     add_dataset,
     add_recording_options,
+    check_outputs,
     progress_bar,
     recording_options,
     row_progress,
@@ -21,8 +22,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     from sins.io.recording import Recording
     from sins.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
 
-    if args.out.exists() and args.out.is_dir():
-        raise SinsInputError(f"--out {args.out}: is a folder; give a file name")
+    check_outputs(args.out)
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))

@@ -14,6 +14,7 @@ from sins.cli.common import (
     add_plot,
     add_recording_options,
     check_finite,
+    check_outputs,
     check_plot,
     display_unit,
     fixed_width,
@@ -33,6 +34,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins.series import CalibrationData, ReferencedRecording
 
     check_plot(args)
+    check_outputs(args.json)
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(

@@ -10,6 +10,7 @@ from sins.cli.common import (
     Subparsers,
     add_dataset,
     add_recording_options,
+    check_outputs,
     fixed_width,
     fraction,
     positive,
@@ -30,6 +31,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from sins.series import CalibrationData, ReferencedRecording
 
     _check_args(args)
+    check_outputs(args.out, args.json)  # before a fit that may take minutes
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(
         args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
