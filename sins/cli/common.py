@@ -372,6 +372,7 @@ __all__ = [
     "add_recording_options",
     "advance",
     "check_finite",
+    "check_outputs",
     "check_plot",
     "check_viewer_args",
     "count",
