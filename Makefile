@@ -23,15 +23,22 @@ run: $(STAMP)
 # the gap diagnosis four times slower (2.0 s -> 8.1 s a case). No CPU kernels pinned: the quality gate
 # judges its figures over seeds, so a network that another machine's kernels train differently is a
 # draw within the seeds' spread, not a regression (docs/development.md, "CPU kernels").
-# The files that train networks on rigs (torch, hundreds of MB each) run first, on workers of their own:
-# a worker keeps what it has imported and allocated, and one that ran them among the rest peaked at
-# 1.7 GB (docs/speed.md, "The test suite").
+# The suite runs as three pytest sessions, each on fresh workers: a worker keeps what it has imported and
+# allocated (torch, numba's compiled code, the allocators' high-water marks), so one that ran a share of
+# every file climbed to 1.2-1.7 GB (docs/speed.md, "The test suite"). First the three files that train
+# networks on rigs, one worker each (the same wall time as two workers, and no worker runs two of them),
+# then the other files in two halves by name. Every session runs even when one fails; make fails after.
 HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
+FIRST_HALF = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-h]*.py))
+SECOND_HALF = $(filter-out $(HEAVY_TESTS) $(FIRST_HALF),$(wildcard tests/test_*.py))
+PYTEST = OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+	$(VENV)/bin/python -m pytest -q --dist loadfile
 test: lint
-	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile $(HEAVY_TESTS)
-	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-		$(VENV)/bin/python -m pytest -q -n 2 --dist loadfile $(addprefix --ignore=,$(HEAVY_TESTS))
+	@status=0; \
+	echo "tests 1/3: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
+	echo "tests 2/3: test_a* to test_h*"; $(PYTEST) -n 2 $(FIRST_HALF) || status=1; \
+	echo "tests 3/3: test_i* to test_z*"; $(PYTEST) -n 2 $(SECOND_HALF) || status=1; \
+	exit $$status
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check sins tests tools examples

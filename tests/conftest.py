@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -32,11 +34,15 @@ def refusal(call: Callable[[], Any], *fragments: str) -> str:
     return message
 
 
-@pytest.fixture(autouse=True, scope="session")
-def _torch_on_one_thread() -> None:
-    """Tests use one thread for torch (reproducible, and fair to a 2-core CI machine)."""
-    try:
-        import torch
-    except ImportError:
-        return
-    torch.set_num_threads(1)
+# Tests use one thread for torch (reproducible, and fair to a 2-core CI machine). torch reads
+# OMP_NUM_THREADS when it is first imported, so setting it here covers a test that imports torch
+# itself; importing torch here instead would put ~230 MB into every test process, the many that
+# never touch it included.
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """Hold torch at one thread where an earlier test (or OMP_NUM_THREADS) left it otherwise."""
+    torch = sys.modules.get("torch")
+    if torch is not None and torch.get_num_threads() != 1:
+        torch.set_num_threads(1)

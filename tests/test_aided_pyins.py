@@ -41,12 +41,15 @@ from sins.aiding import ekf, gnss
 from sins.nav import strapdown
 from sins.series import ImuIncrements
 
-pyins = pytest.importorskip(
-    "pyins", reason="python-ins (pyins) is not installed: pip install -e '.[test]' (make test installs it)"
-)
-pd = pytest.importorskip(
-    "pandas", reason="pandas (pyins needs it) is not installed: pip install -e '.[test]'"
-)
+
+def _pyins_and_pandas() -> tuple:
+    """pyins and pandas, imported when a test needs them: with numba they add ~110 MB to a process,
+    and collecting this module should not cost every test process that."""
+    install = "pip install -e '.[test]'"
+    pyins = pytest.importorskip("pyins", reason=f"python-ins (pyins) is not installed: {install}")
+    pd = pytest.importorskip("pandas", reason=f"pandas (pyins needs it) is not installed: {install}")
+    return pyins, pd
+
 
 SEED = 1
 END_TOLERANCE = 0.25  # of the predicted horizontal σ at the outage's end
@@ -56,6 +59,7 @@ BIAS_AGREEMENT = 0.25  # of sins's σ
 
 def run_pyins(drive: common.Drive, readings: ImuIncrements, fixes: gnss.GnssFixes) -> object:
     """pyins's feedback filter on the readings and fixes, from the truth's first state."""
+    pyins, pd = _pyins_and_pandas()
     util = pyins.util
     config = common.CONFIG
     increments = np.hstack([readings.dtheta_b, readings.dv_b])

@@ -4,21 +4,35 @@ from __future__ import annotations
 
 from collections import defaultdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from conftest import refusal
 
-rr = pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
+from sins import earth, pipeline, scenario
+from sins.cli import main
+from sins.imu import CHANNELS, DEG_PER_H, MG
 
-from sins import (  # noqa: E402
-    earth,
-    pipeline,
-    scenario,
-    viz,
-)
-from sins.cli import main  # noqa: E402
-from sins.imu import CHANNELS, DEG_PER_H, MG  # noqa: E402
+# The bridge (and rerun under it) is imported when this module's first test runs, not when pytest
+# collects it: every test process collects every module, and rerun costs each of them ~100 MB.
+viz: Any = None
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _import_the_bridge() -> None:
+    global viz
+    pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
+    from sins import viz as bridge
+
+    viz = bridge
+
+
+def _rerun() -> Any:
+    import rerun
+
+    return rerun
+
 
 IMU = """\
 [[effect]]
@@ -80,6 +94,7 @@ duration_s = 70.05
 def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
     """Every time-indexed column of a recording: entity → {"t": seconds, component: values}."""
     out: dict[str, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+    rr = _rerun()
     for chunk in rr.chunk.RrdReader(path).stream():
         if chunk.is_static:
             out[chunk.entity_path]["static"].append(np.array([1]))
@@ -181,6 +196,7 @@ def test_one_more_run_beside_others(drive, tmp_path: Path) -> None:
     """A campaign logs extra runs under prefixes of their own into one recording."""
     _, result = drive
     path = tmp_path / "campaign.rrd"
+    rr = _rerun()
     rec = rr.RecordingStream(viz.APPLICATION_ID)
     rec.save(path)
     origin = (float(result.truth.lat[0]), float(result.truth.lon[0]), float(result.truth.h[0]))
