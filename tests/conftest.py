@@ -37,12 +37,12 @@ def refusal(call: Callable[[], Any], *fragments: str) -> str:
 # Tests use one thread for torch (reproducible, and fair to a 2-core CI machine). torch reads
 # OMP_NUM_THREADS when it is first imported, so setting it here covers a test that imports torch
 # itself; importing torch here instead would put ~230 MB into every test process, the many that
-# never touch it included.
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+# never touch it included. Set, not defaulted: a shell's own value would give that first test more.
+os.environ["OMP_NUM_THREADS"] = "1"
 
 
 def pytest_runtest_setup(item: pytest.Item) -> None:
-    """Hold torch at one thread where an earlier test (or OMP_NUM_THREADS) left it otherwise."""
+    """Hold torch at one thread where an earlier test set it otherwise."""
     torch = sys.modules.get("torch")
     if torch is not None and torch.get_num_threads() != 1:
         torch.set_num_threads(1)
