@@ -10,22 +10,18 @@ import numpy as np
 import pytest
 from conftest import refusal
 
+import sins
 from sins import earth, pipeline, scenario
 from sins.cli import main
 from sins.imu import CHANNELS, DEG_PER_H, MG
 
-# The bridge (and rerun under it) is imported when this module's first test runs, not when pytest
-# collects it: every test process collects every module, and rerun costs each of them ~100 MB.
-viz: Any = None
+# The bridge is ``sins.viz``, imported (with rerun under it) by the first test that uses it, not when
+# pytest collects this module: every test process collects every module, and rerun costs each ~100 MB.
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _import_the_bridge() -> None:
-    global viz
+def _rerun_installed() -> None:
     pytest.importorskip("rerun", reason="rerun-sdk is a dependency of sins; install the project")
-    from sins import viz as bridge
-
-    viz = bridge
 
 
 def _rerun() -> Any:
@@ -105,7 +101,7 @@ def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
         elif "unit" in batch.schema.names:  # a campaign's final errors, by unit
             t = batch.column("unit").to_numpy().astype(float)
         else:  # the gap's Allan deviations, by octave of the cluster time
-            t = batch.column(viz.ALLAN_TIMELINE).to_numpy().astype(float)
+            t = batch.column(sins.viz.ALLAN_TIMELINE).to_numpy().astype(float)
         out[chunk.entity_path]["t"].append(t)
         for name in batch.schema.names:
             if ":" in name:  # "Archetype:component"
@@ -128,7 +124,7 @@ def drive(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, pipeline.Scen
 @pytest.fixture(scope="module")
 def recorded(drive: tuple[Path, pipeline.ScenarioRun], tmp_path_factory: pytest.TempPathFactory):
     _, result = drive
-    out = viz.save(result, tmp_path_factory.mktemp("rrd") / "drive.rrd", summary="the table")
+    out = sins.viz.save(result, tmp_path_factory.mktemp("rrd") / "drive.rrd", summary="the table")
     return result, _read(out)
 
 
@@ -139,9 +135,9 @@ def test_entity_paths_and_row_counts(recorded) -> None:
     n_nav, n_imu = len(result.truth.t), len(result.sensor_t)
     assert n_nav == 1201 + 1  # 10 Hz of 120.05 s: every 10th of 12006 samples, and the last
     expected = {f"/world/{s}/vehicle": n_nav for s in ["truth", *strategies]}
-    expected |= {f"/errors/{panel}/{s}": n_nav for panel in viz.ERROR_PANELS for s in strategies}
+    expected |= {f"/errors/{panel}/{s}": n_nav for panel in sins.viz.ERROR_PANELS for s in strategies}
     labels = ["raw" if s == "none" else s for s in strategies]
-    expected |= {f"/imu/{viz.imu_entity(ch)}/{label}": n_imu for ch in CHANNELS for label in labels}
+    expected |= {f"/imu/{sins.viz.imu_entity(ch)}/{label}": n_imu for ch in CHANNELS for label in labels}
     for entity, rows in expected.items():
         assert entity in logged, entity
         assert len(logged[entity]["t"]) == rows, entity
@@ -153,7 +149,7 @@ def test_logged_final_errors_equal_the_runs_metrics(recorded) -> None:
     result, logged = recorded
     for name, run in result.runs.items():
         s = run.summary
-        final = {p: logged[f"/errors/{p}/{name}"]["scalars"][-1] for p in viz.ERROR_PANELS}
+        final = {p: logged[f"/errors/{p}/{name}"]["scalars"][-1] for p in sins.viz.ERROR_PANELS}
         assert logged[f"/errors/horizontal_m/{name}"]["t"][-1] == pytest.approx(result.truth.t[-1], abs=1e-9)
         assert final["horizontal_m"] == s.final_horizontal_m
         assert final["down_m"] == s.final_down_m
@@ -197,11 +193,11 @@ def test_one_more_run_beside_others(drive, tmp_path: Path) -> None:
     _, result = drive
     path = tmp_path / "campaign.rrd"
     rr = _rerun()
-    rec = rr.RecordingStream(viz.APPLICATION_ID)
+    rec = rr.RecordingStream(sins.viz.APPLICATION_ID)
     rec.save(path)
     origin = (float(result.truth.lat[0]), float(result.truth.lon[0]), float(result.truth.h[0]))
     for member in range(2):
-        viz.log_run(rec, "regression", result.runs["regression"], origin, prefix=f"campaign/{member}")
+        sins.viz.log_run(rec, "regression", result.runs["regression"], origin, prefix=f"campaign/{member}")
     rec.flush()
     rec.disconnect()
     logged = _read(path)
@@ -241,7 +237,7 @@ def test_cli_saves_a_recording_and_refuses_what_cannot_work(
 
     assert main(["run", str(path), "--rerun", str(tmp_path / "nowhere" / "x.rrd")]) == 2
     assert "no such folder" in capsys.readouterr().err
-    refusal(lambda: viz.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
+    refusal(lambda: sins.viz.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
 
 
 def _free_port() -> int:
@@ -257,7 +253,7 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
 
     _, result = drive
     web, grpc = _free_port(), _free_port()
-    address = viz.serve(result, summary="the table", web_port=web, grpc_port=grpc)
+    address = sins.viz.serve(result, summary="the table", web_port=web, grpc_port=grpc)
     assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
     with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
         assert page.status == 200 and b"<html" in page.read().lower()
@@ -276,11 +272,11 @@ def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_pat
     gyro = data.gyro.copy()
     gyro[:, 0] += np.radians(0.05) * np.sin(2 * np.pi * data.t / 20.0)  # a gap on gyro x to localise
     report = gap.diagnose(dataclasses.replace(data, gyro=gyro))
-    logged = _read(viz.save_gap(report, tmp_path / "gap.rrd"))
+    logged = _read(sins.viz.save_gap(report, tmp_path / "gap.rrd"))
     held = report.rows[1]
     for ch in CHANNELS:
         for label in ("before", "after"):
-            assert len(logged[f"/gap/{viz.imu_entity(ch)}/{label}"]["t"]) == held
+            assert len(logged[f"/gap/{sins.viz.imu_entity(ch)}/{label}"]["t"]) == held
     unit_size = DEG_PER_H
     np.testing.assert_allclose(
         logged["/gap/gyro_x_deg_per_h/before"]["scalars"], report.residual_before[:, 0] / unit_size
@@ -318,10 +314,10 @@ def test_a_campaign_logs_its_percentile_bands_and_each_units_final_error(tmp_pat
             rows["final_horizontal_m"].append(float(series[-1]))
             rows["series_t_s"].append(t.tolist())
             rows["series_horizontal_m"].append(series.tolist())
-    logged = _read(viz.save_campaign(rows, tmp_path / "c.rrd"))
+    logged = _read(sins.viz.save_campaign(rows, tmp_path / "c.rrd"))
     for strategy, rates in growth.items():
         all_series = rates[:, None] * t[None, :]
-        for q in viz.CAMPAIGN_PERCENTILES:
+        for q in sins.viz.CAMPAIGN_PERCENTILES:
             band = logged[f"/campaign/drive/horizontal_m/{strategy}/p{q}"]
             assert np.allclose(band["t"], t)
             assert np.allclose(band["scalars"], np.percentile(all_series, q, axis=0), rtol=1e-12)
