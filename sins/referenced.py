@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import compensation
-from sins.compensation import Strategy, interval_fit
+from sins.compensation import Strategy, identifiability, interval_fit
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
@@ -36,6 +36,8 @@ Array = NDArray[np.float64]
 
 #: Strategies whose whole model is the seed model: they take the interval fit's coefficients as they are.
 _SEED_ONLY = ("regression", "regression_robust")
+#: Fits at most, when a coefficient kept comes out less determined than predicted and is held.
+_REFITS = 3
 #: The model the PSINS demo's filter estimates: gyro and accelerometer biases alone.
 BIAS_ONLY = "bias_only"
 
@@ -46,6 +48,7 @@ class Fitted:
 
     strategy: Strategy
     intervals: IntervalFit
+    review: identifiability.Review | None = None
 
 
 def fit(
@@ -55,6 +58,7 @@ def fit(
     interval_s: float = INTERVAL_S,
     params: dict[str, Any] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    grade: str = identifiability.DEFAULT_GRADE,
 ) -> Fitted:
     """Fit strategy ``name`` on ``rec`` against its reference.
 
@@ -66,21 +70,35 @@ def fit(
     (:func:`~sins.compensation.interval_fit.interval_reference`); every other strategy is fitted by its
     own ``fit`` on those references. All read the readings at the fitted time offsets. ``none`` learns
     nothing and shifts nothing. ``progress(done, total)`` is handed to the
-    learned strategies' training.
+    learned strategies' training. The coefficients the intervals do not determine are held at zero
+    and every other one is checked against what a unit of class ``grade`` can have
+    (:mod:`sins.compensation.identifiability`); the verdict is :attr:`Fitted.review`, and the model's
+    ``fitted_on_`` records it.
 
     Raises
     ------
     SinsInputError
-        when the recording cannot determine the model (one line naming the recording).
+        when the recording cannot determine the model, or the model is beyond the class's bounds (one
+        line naming the recording).
     """
     where = rec.source or "recording"
+    bounds = identifiability.class_bounds(grade)
     try:
+        holds = identifiability.assess(rec, interval_s, bounds)
         if name == BIAS_ONLY:
-            return _bias_only(rec, interval_s)
-        fitted = interval_fit.fit_intervals(rec, interval_s=interval_s, robust=name == "regression_robust")
+            return _bias_only(rec, interval_s, holds)
+        for _ in range(_REFITS):
+            fitted = interval_fit.fit_intervals(
+                rec, interval_s=interval_s, robust=name == "regression_robust", holds=holds
+            )
+            loose = identifiability.loose(_values(fitted), holds)
+            if not loose:
+                break
+            holds.reasons.update(loose)  # determined less well than predicted: held, fitted again
+        review = identifiability.review(_values(fitted), holds.bounds, where, holds.reasons)
         strategy = compensation.make(name, **(params or {}))
         if name == "none":
-            return Fitted(strategy, fitted)
+            return Fitted(strategy, fitted, review)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fitted.seed)
@@ -97,8 +115,19 @@ def fit(
         text = str(exc)
         raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
     strategy.time_offset_s_ = np.array([fitted.time_offset_s, fitted.accel_time_offset_s])
-    strategy.fitted_on_ = fitted_on(rec)
-    return Fitted(strategy, fitted)
+    strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
+    return Fitted(strategy, fitted, review)
+
+
+def _values(fit: IntervalFit) -> dict[str, tuple[float, float | None]]:
+    """The interval fit's coefficients by name (:func:`sins.compensation.identifiability.review`):
+    the seed model's, the time offsets, and the lever arm (whose standard error the fit does not give)."""
+    values: dict[str, tuple[float, float | None]] = dict(identifiability.seed_values(fit.seed))
+    values["gyro.time_offset"] = (fit.time_offset_s, fit.time_offset_se_s)
+    values["accel.time_offset"] = (fit.accel_time_offset_s, fit.accel_time_offset_se_s)
+    for axis, arm in zip("xyz", fit.lever_arm_m, strict=True):
+        values[f"accel.lever_arm.{axis}"] = (float(arm), None)
+    return values
 
 
 def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
@@ -106,12 +135,15 @@ def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
     return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name}
 
 
-def _bias_only(rec: ReferencedRecording, interval_s: float) -> Fitted:
+def _bias_only(rec: ReferencedRecording, interval_s: float, holds: identifiability.Holds) -> Fitted:
     """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
-    fitted = interval_fit.fit_biases(rec, interval_s=interval_s)
+    fitted = interval_fit.fit_biases(rec, interval_s=interval_s, holds=holds)
+    biases = identifiability.bias_names("gyro") + identifiability.bias_names("accel")
+    values = {k: v for k, v in identifiability.seed_values(fitted.seed).items() if k in biases}
+    review = identifiability.review(values, holds.bounds, rec.source or "recording", holds.reasons)
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
-    strategy.fitted_on_ = fitted_on(rec)
-    return Fitted(strategy, fitted)
+    strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
+    return Fitted(strategy, fitted, review)
 
 
 def corrected(
@@ -302,9 +334,12 @@ def between(rec: ReferencedRecording, start_s: float, end_s: float) -> Reference
     )
 
 
-def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str) -> ReferencedRecording:
+def from_recording(
+    imu: ImuRates | ImuIncrements, truth: NavSeries, source: str, sensor: str = ""
+) -> ReferencedRecording:
     """A user's readings beside their reference trajectory (a truth CSV, a bag's poses, a EuRoC
-    ground truth): rate-form readings integrated between samples by the trapezoid rule.
+    ground truth): rate-form readings integrated between samples by the trapezoid rule; ``sensor`` the
+    unit's identity where the recording names it.
 
     Raises
     ------
@@ -325,7 +360,7 @@ def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str)
             f"({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
         )
     return ReferencedRecording(
-        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source
+        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source, sensor=sensor
     )
 
 
@@ -379,14 +414,18 @@ def read_inputs(
     reference = reference if reference is not None else rec.truth
     if reference is None:
         return rec
-    return from_recording(rec.imu, reference, str(path))
+    return from_recording(rec.imu, reference, str(path), rec.sensor)
 
 
 def check_fitted_on(
-    strategy: Strategy, rec: ReferencedRecording | CalibrationData | Recording, where: str
+    strategy: Strategy,
+    rec: ReferencedRecording | CalibrationData | Recording,
+    where: str,
+    sensor: str | None = None,
 ) -> None:
-    """Refuse a model fitted on another unit (both named) or, when it reads the sensors at time offsets
-    or tracks rests (both set in samples' terms), at another rate (more than 5 % apart).
+    """Refuse a model fitted on another unit (both named: ``sensor``, else the recording's own) or,
+    when it reads the sensors at time offsets or tracks rests (both set in samples' terms), at another
+    rate (more than 5 % apart).
 
     Raises
     ------
@@ -396,7 +435,7 @@ def check_fitted_on(
     fitted = getattr(strategy, "fitted_on_", None)
     if not isinstance(fitted, dict):
         return
-    sensor = getattr(rec, "sensor", "")
+    sensor = getattr(rec, "sensor", "") if sensor is None else sensor
     if fitted.get("sensor") and sensor and fitted["sensor"] != sensor:
         raise SinsInputError(
             f"{where}: the model was fitted on {fitted['sensor']}; this recording is {sensor}"

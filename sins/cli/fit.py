@@ -21,6 +21,10 @@ from sins.cli.common import (
 )
 from sins.errors import SinsInputError
 
+#: The classes of unit ``--grade`` takes (``sins.imu.spec.GRADES``, written out: importing it would slow
+#: every command's start).
+GRADES = ("consumer", "industrial", "tactical", "navigation")
+
 if TYPE_CHECKING:
     from sins.compensation import Strategy
     from sins.series import CalibrationData, ReferencedRecording
@@ -39,7 +43,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     if isinstance(inputs, ReferencedRecording):
         strategy, document = _fit_referenced(args, inputs, where)
     elif isinstance(inputs, CalibrationData):
-        strategy, document = _fit_rig(args, inputs, where)
+        strategy, document = _fit_rig(args, inputs, where, _unit_of(args, inputs))
     else:
         raise SinsInputError(
             f"{where}: no reference to fit against; give the recording's trajectory with --truth TRUTH.csv "
@@ -68,10 +72,23 @@ def _check_args(args: argparse.Namespace) -> None:
         raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
 
 
-def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tuple[Strategy, dict[str, Any]]:
-    """A rig recording (per-sample reference inputs): the strategy's own fit on its rows."""
+def _unit_of(args: argparse.Namespace, data: CalibrationData) -> str:
+    """The unit a rig recording or dataset was read from, as a model file records it: a sins CSV's
+    ``# sensor:`` line, a dataset's name."""
+    if args.dataset is not None:
+        return f"the {args.dataset} dataset's unit"
+    from sins.io import provenance
+
+    return provenance.read_provenance(args.recording).sensor
+
+
+def _fit_rig(
+    args: argparse.Namespace, data: CalibrationData, where: str, unit: str
+) -> tuple[Strategy, dict[str, Any]]:
+    """A rig recording (per-sample reference inputs): the strategy's own fit on its rows, its seed
+    model checked against the unit's class before the model is written."""
     from sins import compensation
-    from sins.compensation import coefficients
+    from sins.compensation import coefficients, identifiability
     from sins.compensation.mlp import MLP
     from sins.compensation.residual import ResidualStrategy
     from sins.imu import calibration
@@ -108,11 +125,15 @@ def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tup
         try:  # a session whose turns give only their angles (Ferraris) cannot tell K
             seed, with_k = calibration.fit_seed_model(part, g_sensitivity=False), False
         except ValueError:
-            return strategy, document
-    if strategy.name != "none":
+            seed = None
+    checks: dict[str, Any] = {"grade": args.grade, "held": {}}
+    if strategy.name != "none" and seed is not None:
         table = coefficients.engineering(seed, g_sensitivity=with_k)
         _print_coefficients(table, "least squares of the seed model on the rows (± 1σ)")
         document["coefficients"] = [c.to_dict() for c in table]
+        bounds = identifiability.class_bounds(args.grade)
+        checks = identifiability.review(identifiability.seed_values(seed), bounds, where).to_dict()
+    strategy.fitted_on_ = {"sensor": unit, "rate_hz": None, "reference": "rig", "checks": checks}
     return strategy, document
 
 
@@ -132,17 +153,23 @@ def _fit_referenced(
     params = {"guard": False} if args.no_guard else {}
     with progress_bar(f"fitting {args.strategy}", "training") as bar:
         fitted = referenced.fit(
-            args.strategy, part, interval_s=args.interval_s, params=params, progress=row_progress(bar)
-        )
+            args.strategy, part, interval_s=args.interval_s, params=params, progress=row_progress(bar),
+            grade=args.grade,
+        )  # fmt: skip
     fit = fitted.intervals
-    held = f", the last {args.validation:g} of its span held back" if args.validation else ""
+    back = f", the last {args.validation:g} of its span held back" if args.validation else ""
     print(
         f"fitted {fitted.strategy.label} on {where} ({rec.sensor or 'unit'} against {rec.reference_name}"
-        f"{held}): {fit.intervals} intervals of {fit.interval_s:g} s"
+        f"{back}): {fit.intervals} intervals of {fit.interval_s:g} s"
     )
     print(f"reference: {fit.quality.summary()}")
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
-    _print_coefficients(table, "the seed model on the intervals (± 1σ)")
+    _print_coefficients(table, "the seed model on the intervals (± 1σ; held: not determined, zero)")
+    held = fitted.review.held if fitted.review is not None else {}
+    if held:
+        print(f"held at zero, as the recording does not determine them for a {args.grade} unit:")
+        for line in fitted.review.lines() if fitted.review is not None else []:
+            print(f"  {line}")
     if fit.g_sensitivity_test is not None:
         kept, gain, se = fit.g_sensitivity_test
         verdict = "kept" if kept else "left out (zero)"
@@ -154,20 +181,25 @@ def _fit_referenced(
         "coefficients": [c.to_dict() for c in table],
         "reference_quality": fit.quality.__dict__,
         "g_sensitivity": fit.g_sensitivity,
+        "grade": args.grade,
+        "held": held,
     }
     if args.strategy != referenced.BIAS_ONLY:
         arm = np.asarray(fit.lever_arm_m) * 1e3
+        offset = lambda tau, se: f"{tau * 1e3:.3f} ± {se * 1e3:.3f} ms" if np.isfinite(se) else "0 (held)"  # noqa: E731
+        gyro, accel = (offset(fit.time_offset_s, fit.time_offset_se_s),
+                       offset(fit.accel_time_offset_s, fit.accel_time_offset_se_s))  # fmt: skip
         print(
-            f"time offsets (the readings lag the reference): gyro {fit.time_offset_s * 1e3:.3f} ± "
-            f"{fit.time_offset_se_s * 1e3:.3f} ms, accelerometer {fit.accel_time_offset_s * 1e3:.3f} ± "
-            f"{fit.accel_time_offset_se_s * 1e3:.3f} ms; accelerometer {arm[0]:.1f}, {arm[1]:.1f}, "
-            f"{arm[2]:.1f} mm from the reference's point"
+            f"time offsets (the readings lag the reference): gyro {gyro}, accelerometer {accel}; "
+            "accelerometer "
+            f"{arm[0]:.1f}, {arm[1]:.1f}, {arm[2]:.1f} mm from the reference's point"
         )
+        finite = lambda se: se * 1e3 if np.isfinite(se) else None  # noqa: E731
         document |= {
             "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
             "time_offset_se_ms": {
-                "gyro": fit.time_offset_se_s * 1e3,
-                "accel": fit.accel_time_offset_se_s * 1e3,
+                "gyro": finite(fit.time_offset_se_s),
+                "accel": finite(fit.accel_time_offset_se_s),
             },
             "lever_arm_mm": arm.tolist(),
         }
@@ -212,6 +244,11 @@ def add(sub: Subparsers) -> None:
         "regression on held-back blocks",
     )  # fmt: skip
     p.add_argument(
+        "--grade", choices=GRADES, default="consumer",
+        help="the class of unit recorded: what its coefficients can be, and how well the data must determine "
+        "them to be fitted rather than held at zero (default consumer, the loosest; guide: compensation)",
+    )  # fmt: skip
+    p.add_argument(
         "--json", type=Path, metavar="OUT.json", help="also write the coefficients and the fit's figures"
     )
     p.add_argument("--out", type=Path, required=True, metavar="MODEL.json")
@@ -220,5 +257,6 @@ def add(sub: Subparsers) -> None:
 
 
 __all__ = [
+    "GRADES",
     "add",
 ]

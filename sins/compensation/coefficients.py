@@ -71,11 +71,13 @@ def engineering(seed: SeedModelFit, *, g_sensitivity: bool = True) -> list[Coeff
 
 
 def table_rows(coefficients: list[Coefficient]) -> list[list[str]]:
-    """Rows for a fixed-width table: sensor, term, axis, value ± se, unit."""
+    """Rows for a fixed-width table: sensor, term, axis, value ± se, unit; a coefficient held at zero (an
+    infinite standard error: :mod:`sins.compensation.identifiability`) reads ``0 (held)``."""
     rows = []
     for c in coefficients:
         se = f" ± {c.se:.3g}" if math.isfinite(c.se) else ""
-        rows.append([c.sensor, c.term, c.axis, f"{c.value:.4g}{se}", c.unit])
+        value = "0 (held)" if c.se == math.inf and c.value == 0.0 else f"{c.value:.4g}{se}"
+        rows.append([c.sensor, c.term, c.axis, value, c.unit])
     return rows
 
 

@@ -37,6 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import rotation
+from sins.compensation import identifiability
+from sins.compensation.identifiability import Holds
 from sins.compensation.intervals import (
     INTERVAL_S,
     Intervals,
@@ -136,6 +138,7 @@ def fit_intervals(
     time_offset: bool = True,
     robust: bool = False,
     huber_k: float = 1.345,
+    holds: Holds | None = None,
 ) -> IntervalFit:
     """Fit the seed model (and the gyro's time offset) on intervals between reference epochs.
 
@@ -149,6 +152,8 @@ def fit_intervals(
     time_offset : fit the gyro's time offset against the reference (else zero)
     robust : weight intervals by Huber's function of their standardised residual (threshold
         ``huber_k``), so that a few bad reference epochs (a marker swap) do not pull the fit
+    holds : the coefficients held at zero (:func:`sins.compensation.identifiability.assess`: those
+        the intervals do not determine; their standard errors come out infinite); None fits every one
 
     Returns
     -------
@@ -181,13 +186,13 @@ def fit_intervals(
         corrected = correct_increments(imu, seed, tau, tau_a)
         q_int = attitude.propagate_increments(corrected.dtheta_b, np.array([0.0, 0.0, 0.0, 1.0]))
         A0, A, a_se, a_resid, lever_arm, tau_a, tau_a_se = _fit_accel(
-            iv, imu, dt, q_int, seed, tau_a, time_offset, robust, huber_k
+            iv, imu, dt, q_int, seed, tau_a, time_offset, robust, huber_k, holds
         )
         seed = _with(seed, A0=A0, A=A, A0_se=a_se[:3], A_se=a_se[3:12].reshape(3, 3))
         with_k = bool(g_sensitivity) and rounds == 1
         before = seed
         seed, tau, tau_se, g_resid, gyro_weights, n, x, z = _fit_gyro(
-            iv, imu, dt, seed, tau, tau_a, with_k, time_offset, robust, huber_k
+            iv, imu, dt, seed, tau, tau_a, with_k, time_offset, robust, huber_k, holds
         )
         iterations += n
         if with_k and g_sensitivity == "auto":
@@ -195,7 +200,7 @@ def fit_intervals(
             k_verdict = (keep, gain, gain_se)
             if not keep:
                 seed, tau, tau_se, g_resid, gyro_weights, n, _, _ = _fit_gyro(
-                    iv, imu, dt, before, tau, tau_a, False, time_offset, robust, huber_k
+                    iv, imu, dt, before, tau, tau_a, False, time_offset, robust, huber_k, holds
                 )
                 iterations += n
     resid = np.concatenate([_rms(g_resid), _rms(a_resid)])
@@ -208,7 +213,9 @@ def fit_intervals(
     )  # fmt: skip
 
 
-def fit_biases(rec: ReferencedRecording, *, interval_s: float = INTERVAL_S) -> IntervalFit:
+def fit_biases(
+    rec: ReferencedRecording, *, interval_s: float = INTERVAL_S, holds: Holds | None = None
+) -> IntervalFit:
     """The gyro's and the accelerometer's biases alone, on intervals: the model of a filter that
     estimates biases only (the PSINS demo's); no scale, misalignment, time offsets or lever arm.
 
@@ -234,13 +241,17 @@ def fit_biases(rec: ReferencedRecording, *, interval_s: float = INTERVAL_S) -> I
         rot = dcm(q)
         r_meas = np.einsum("kji,kjl->kil", rot[iv.start], rot[iv.stop])
         y = rotation.rotvec_from_quat(rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, r_ref)))
-        step, cov_g, g_resid, _ = _solve(x, y, iv, False, 1.345)
+        step, cov_g, g_resid, _ = _solve_held(
+            x, y, iv, False, 1.345, holds, identifiability.bias_names("gyro")
+        )
         xa, ya = np.empty((len(iv), 3, 3)), np.empty((len(iv), 3))
         for k, (a, b) in enumerate(zip(iv.start, iv.stop, strict=True)):
             c_nb = c_ref_a[k] @ rot[a].T @ (0.5 * (rot[a:b] + rot[a + 1 : b + 1]))
             ya[k] = expected[k] - np.einsum("jab,jb->a", c_nb, corrected.dv_b[a:b])
             xa[k] = -np.einsum("jab,j->ab", c_nb, dt[a:b])
-        step_a, cov_a, a_resid, _ = _solve(xa, ya, iv, False, 1.345)
+        step_a, cov_a, a_resid, _ = _solve_held(
+            xa, ya, iv, False, 1.345, holds, identifiability.bias_names("accel")
+        )
         seed = _with(
             seed, B0=seed.B0 + step, A0=seed.A0 + step_a,
             B0_se=np.sqrt(np.diag(cov_g)), A0_se=np.sqrt(np.diag(cov_a)),
@@ -312,7 +323,7 @@ def _with(seed: SeedModelFit, **changes: Array) -> SeedModelFit:
 
 def _fit_gyro(
     iv: Intervals, imu: ImuIncrements, dt: Array, seed: SeedModelFit, tau: float, tau_a: float,
-    g_sensitivity: bool, time_offset: bool, robust: bool, huber_k: float,
+    g_sensitivity: bool, time_offset: bool, robust: bool, huber_k: float, holds: Holds | None = None,
 ) -> tuple[SeedModelFit, float, float, Array, Array | None, int, Array, Array]:  # fmt: skip
     """Gauss–Newton on the gyro's coefficients (B0, B, K if asked, τ if asked). Returns the fit, τ and
     its standard error, the residuals, the weights, the iterations, and the last linearisation as
@@ -333,7 +344,8 @@ def _fit_gyro(
         q_a, q_b = dcm(q[iv.start]), dcm(q[iv.stop])
         r_meas = np.einsum("kji,kjl->kil", q_a, q_b)
         y = rotation.rotvec_from_quat(rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, r_ref)))
-        step, cov, resid, weights = _solve(x, y, iv, robust, huber_k)
+        names = identifiability.gyro_names(g_sensitivity, time_offset)
+        step, cov, resid, weights = _solve_held(x, y, iv, robust, huber_k, holds, names)
         theta = _gyro_vector(seed, tau, g_sensitivity, time_offset)
         seed, tau = _gyro_update(seed, tau, step, g_sensitivity, time_offset)
         se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
@@ -417,7 +429,7 @@ def _gyro_update(
 
 def _fit_accel(
     iv: Intervals, imu: ImuIncrements, dt: Array, q_int: Array, seed: SeedModelFit, tau_a: float,
-    time_offset: bool, robust: bool, huber_k: float,
+    time_offset: bool, robust: bool, huber_k: float, holds: Holds | None = None,
 ) -> tuple[Array, Array, Array, Array, Array, float, float]:  # fmt: skip
     """Least squares of the accelerometer's A0, A, time offset (if asked) and the lever arm ``r`` (the
     accelerometer's place relative to the reference's point, body axes) on the intervals' velocity
@@ -452,7 +464,9 @@ def _fit_accel(
         # The accelerometer's Δv is the reference point's plus Δ(C (ω × r)) = lever r: on y's side, −lever.
         # r is estimated whole in every pass (y holds none of it); the rest by increments.
         x[:, :, 12:15] = -arm_matrix
-        step, cov, resid, _ = _solve(x, y, iv, robust, huber_k)
+        step, cov, resid, _ = _solve_held(
+            x, y, iv, robust, huber_k, holds, identifiability.accel_names(time_offset)
+        )
         A0, A = A0 + step[:3], A + step[3:12].reshape(3, 3)
         if time_offset:
             tau_a += float(step[15])
@@ -502,6 +516,33 @@ def _solve(
     np.fill_diagonal(cov, diag)
     cov = cov / np.outer(scale, scale)
     return theta / scale, cov, resid, weights if robust else None
+
+
+def _solve_held(
+    x: Array,
+    y: Array,
+    iv: Intervals,
+    robust: bool,
+    huber_k: float,
+    holds: Holds | None,
+    names: tuple[str, ...],
+) -> tuple[Array, Array, Array, Array | None]:
+    """:func:`_solve` on the columns not held (all without ``holds``); a held one gets no step and an
+    infinite variance."""
+    if holds is None:
+        return _solve(x, y, iv, robust, huber_k)
+    free = holds.free(names)
+    if not free.any():
+        raise ValueError(
+            "the intervals determine none of the coefficients: " + "; ".join(holds.reasons.values())
+        )
+    step, cov, resid, weights = _solve(x[:, :, free], y, iv, robust, huber_k)
+    p = x.shape[2]
+    full_step, full_cov = np.zeros(p), np.zeros((p, p))
+    full_step[free] = step
+    full_cov[np.ix_(free, free)] = cov
+    full_cov[~free, ~free] = np.inf
+    return full_step, full_cov, resid, weights
 
 
 def _quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -> ReferenceQuality:

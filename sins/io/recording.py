@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
-from sins.io import axes, bags, euroc, formats
+from sins.io import axes, bags, euroc, formats, provenance
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.series import ImuIncrements, ImuRates, NavSeries
@@ -55,6 +55,8 @@ class Recording:
     fixes : a bag's ``NavSatFix`` positions, or None
     time_from_rate : the times were made from a given rate (the file has no time column)
     column_map : a CSV's sins column names and the file columns read for them (``{}`` for other kinds)
+    sensor, corrected_by : a CSV's ``# sensor:`` and ``# corrected by:`` lines (:mod:`sins.io.provenance`),
+        "" where it has none
     """
 
     imu: ImuRates | ImuIncrements
@@ -72,6 +74,8 @@ class Recording:
     fixes: bags.GeodeticFixes | None = None
     time_from_rate: bool = False
     column_map: Mapping[str, str] = field(default_factory=dict)
+    sensor: str = ""
+    corrected_by: str = ""
 
     @property
     def form(self) -> str:
@@ -212,8 +216,10 @@ def _read_sins(path: Path, frame: str, t_start: float | None) -> Recording:
     temp = table.column("temp").copy() if table.has("temp") else None
     form = "rate" if isinstance(samples, ImuRates) else "increment"
     names = formats.RATE_COLUMNS if form == "rate" else formats.INCREMENT_COLUMNS
+    said = provenance.read_provenance(path)
     rec = Recording(samples, str(path), "sins csv", units=_si(form), frame=axes.FRD, temp=temp,
-                    column_map={n: n for n in names})  # fmt: skip
+                    column_map={n: n for n in names}, sensor=said.sensor,
+                    corrected_by=said.corrected_by)  # fmt: skip
     return _turned(rec, frame)
 
 
@@ -231,6 +237,7 @@ def _read_columns(
                 f"start time {formats.format_number(t_start)} s"
             )
         imu = ImuIncrements(t=np.concatenate([[t_start], imu.t[1:]]), dtheta_b=imu.dtheta_b, dv_b=imu.dv_b)
+    said = provenance.read_provenance(path)
     renamed = {k: v for k, v in got.mapping.items() if k != v}
     notes = [f"columns {', '.join(f'{k}={v}' for k, v in renamed.items())}"] if renamed else []
     if any(v != unitdefs.SI[k] for k, v in got.units.items()):
@@ -241,7 +248,8 @@ def _read_columns(
                     time_from_rate=got.time_from_rate,
                     stated_rate_hz=rate_hz if got.time_from_rate else None,
                     stated_by="the given rate" if got.time_from_rate else "",
-                    column_map=got.mapping)  # fmt: skip
+                    column_map=got.mapping, sensor=said.sensor,
+                    corrected_by=said.corrected_by)  # fmt: skip
     return _turned(rec, frame)
 
 

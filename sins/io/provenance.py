@@ -1,0 +1,82 @@
+"""What a sins CSV says of where its readings came from: the unit that read them, and the model that
+corrected them.
+
+Two comment lines at the top of a sins CSV, among any free comment, carry it (``#`` lines before the
+header; other readers skip them as comments)::
+
+    # sensor: simulated tactical unit (unit seed 1)
+    # corrected by: regression model m.json (sha256 3f1c…), fitted on rig.csv
+
+``sins simulate`` and ``sins calibrate`` write the first; ``sins correct`` keeps the recording's
+``sensor`` line and adds the second, so that a corrected file says so, and by which model, and a second
+correction is refused unless asked for (``sins correct --again``). :func:`read_provenance` reads them back.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from sins.io.documents import printable
+from sins.io.tables import open_text
+
+#: The comment keys, as written (``# KEY: value``).
+SENSOR_KEY = "sensor"
+CORRECTED_KEY = "corrected by"
+#: The most comment lines read at the top of a file (a file of comments only is not scanned whole).
+MAX_COMMENT_LINES = 1000
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """A sins CSV's ``sensor`` and ``corrected by`` lines ("" where absent); ``corrections`` counts the
+    ``corrected by`` lines (one per correction)."""
+
+    sensor: str = ""
+    corrected_by: str = ""
+    corrections: int = 0
+
+    def comment(self) -> str:
+        """The lines as a writer's comment text (without ``# ``), one per key present."""
+        lines = [f"{SENSOR_KEY}: {self.sensor}"] if self.sensor else []
+        return "\n".join(lines)
+
+
+def read_provenance(path: str | os.PathLike[str]) -> Provenance:
+    """The ``sensor`` and ``corrected by`` comment lines of a CSV (before its header); a file that
+    cannot be read as text has none (its reader says why)."""
+    sensor, corrected, count = "", "", 0
+    try:
+        with open_text(Path(path)) as fh:
+            for number, line in enumerate(fh):
+                text = line.strip()
+                if number >= MAX_COMMENT_LINES or (text and not text.startswith("#")):
+                    break
+                key, _, value = text.lstrip("#").strip().partition(":")
+                if key.strip().lower() == SENSOR_KEY and not sensor:
+                    sensor = printable(value.strip())[:200]
+                elif key.strip().lower() == CORRECTED_KEY:
+                    corrected, count = printable(value.strip())[:300], count + 1
+    except (ValueError, OSError):  # SinsInputError is a ValueError; a UnicodeDecodeError too
+        return Provenance()
+    return Provenance(sensor, corrected, count)
+
+
+def corrected_line(model: str | os.PathLike[str], label: str, fitted_on: str = "") -> str:
+    """The ``corrected by`` line's text for a correction by the model file ``model`` (strategy
+    ``label``), with the file's SHA-256 (its first 16 hex digits) and what it was fitted on."""
+    digest = hashlib.sha256(Path(model).read_bytes()).hexdigest()[:16]
+    on = f", fitted on {fitted_on}" if fitted_on else ""
+    return f"{CORRECTED_KEY}: {label} model {model} (sha256 {digest}){on}"
+
+
+__all__ = [
+    "CORRECTED_KEY",
+    "MAX_COMMENT_LINES",
+    "SENSOR_KEY",
+    "Provenance",
+    "corrected_line",
+    "read_provenance",
+]
