@@ -44,20 +44,19 @@ _MG = 9.80665e-3
 
 
 def check_plot_path(path: str | os.PathLike[str]) -> None:
-    """Refuse a picture path :func:`save` cannot write, before any work is done.
+    """Refuse a picture path :func:`save` cannot write, before any work is done: its kind (the place
+    is :func:`sins.io.paths.check_outputs`'s, which the commands call with every output).
 
     Raises
     ------
     SinsInputError
-        a suffix other than ``.png`` or ``.html``; a folder that does not exist.
+        a suffix other than ``.png`` or ``.html``.
     """
     path = Path(path)
     if path.suffix.lower() not in SUFFIXES:
         raise SinsInputError(
             f"{path}: --plot writes .png or .html, not {path.suffix or 'a file without a suffix'}"
         )
-    if not path.parent.is_dir():
-        raise SinsInputError(f"{path}: directory {path.parent} does not exist")
 
 
 def save(fig: Figure, path: str | os.PathLike[str], title: str = "") -> Path:

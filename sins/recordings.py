@@ -134,6 +134,12 @@ class Recording:
     intervals: int
 
 
+#: Readings past the recording's own reference's last pose that are cut without ``within_truth``: at
+#: most this long, s, or this fraction of the recording (the last pose commonly comes a few readings
+#: before the last reading); longer is refused.
+OWN_TAIL_S, OWN_TAIL_FRACTION = 1.0, 0.01
+
+
 def load_recording(
     imu_path: str | os.PathLike[str],
     truth_path: str | os.PathLike[str] | None = None,
@@ -154,8 +160,9 @@ def load_recording(
         as the readers; a rate-form file starting outside the truth; an IMU running past the truth's
         end, unless ``within_truth`` (then the intervals inside it are kept, and ``intervals`` says how
         many the file held): nothing is cut without being asked for, except against the recording's
-        own reference, whose last pose commonly comes a few samples before the last reading (the
-        caller says so: ``intervals`` against ``len(imu)``).
+        own reference, whose last pose commonly comes a few samples before the last reading: a tail of
+        up to :data:`OWN_TAIL_S` or :data:`OWN_TAIL_FRACTION` of the span is cut (the caller says so:
+        ``intervals`` against ``len(imu)``), a longer one refused as a truth file's is.
     MissingInputError
         without ``truth_path`` when the recording has no reference of its own.
     """
@@ -164,7 +171,7 @@ def load_recording(
     rec = io.read_recording_any(imu_path, t_start=t_start, **(reading or {}))
     if truth is None:
         if rec.truth is None:
-            raise MissingInputError(f"{imu_path}: the recording has no reference trajectory", needs="truth")
+            raise io.recording.missing_reference(rec)
         truth = rec.truth
     truth_name = truth_path if truth_path is not None else "its own reference"
     samples = rec.imu
@@ -188,7 +195,9 @@ def load_recording(
     intervals = len(imu)
     if imu.t[-1] > truth.t[-1] + 1e-9:
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
-        if not within_truth and truth_path is not None:
+        tail = imu.t[-1] - truth.t[-1]
+        short = truth_path is None and tail <= max(OWN_TAIL_S, OWN_TAIL_FRACTION * (imu.t[-1] - imu.t[0]))
+        if not within_truth and not short:
             raise SinsInputError(
                 f"{imu_path}: the IMU runs to {imu.t[-1]:g} s but the truth ({truth_name}) ends at "
                 f"{truth.t[-1]:g} s ({inside - 1} of {intervals} intervals inside it); give the whole "
@@ -290,6 +299,8 @@ def _interval_means(increments: ImuIncrements, path: NavSeries) -> tuple[ImuRate
 
 
 __all__ = [
+    "OWN_TAIL_FRACTION",
+    "OWN_TAIL_S",
     "Recording",
     "SimulatedReadings",
     "cabin_temperature",

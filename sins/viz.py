@@ -45,6 +45,7 @@ from sins.characterise.check import ClosingCheck
 from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
+from sins.io.atomic import atomic_path
 from sins.pipeline import AidedRun, ScenarioRun, StrategyRun
 from sins.referenced import OpenLoop
 from sins.series import NavSeries
@@ -318,29 +319,25 @@ def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
 
 
 def check_rrd_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` as a Path if a recording can be written there, else a one-line error."""
+    """``path`` as a Path if it names a Rerun recording (``.rrd``), else a one-line error (the place is
+    :func:`sins.io.paths.check_outputs`'s, which the commands call with every output)."""
     path = Path(path)
     if path.suffix != ".rrd":
         raise SinsInputError(f"{path}: a Rerun recording's name must end in .rrd")
-    if not path.parent.is_dir():
-        raise SinsInputError(f"{path}: no such folder {path.parent}")
     return path
 
 
 def _write(
     path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None]
 ) -> Path:
-    """Log into a ``.rrd`` file through a temporary name, so a failed run leaves none."""
+    """Log into a ``.rrd`` file through a temporary name (:func:`sins.io.atomic_path`), so a failed run
+    leaves none."""
     path = check_rrd_path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
+    with atomic_path(path) as tmp:
         rec.save(tmp, default_blueprint=bp)
         log()
         rec.flush()
         rec.disconnect()
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
     return path
 
 

@@ -265,7 +265,11 @@ def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]
     )
     nan = _edit_csv(imu, tmp / "nan.csv", lambda ls: _set_cell(ls, 10, 5, "nan"))
     back = _edit_csv(imu, tmp / "back.csv", lambda ls: _set_cell(ls, 20, 0, "0.05"))
-    mixed = _edit_csv(imu, tmp / "mixed.csv", lambda ls: [ls[0], ls[1].replace("dtheta", "gyro"), *ls[2:]])
+    mixed = _edit_csv(
+        imu,
+        tmp / "mixed.csv",
+        lambda ls: [line if line.startswith("#") else line.replace("dtheta", "gyro") for line in ls],
+    )  # the header's names (rows are numbers)
     return {
         "malformed-toml": (["run", str(malformed)], "invalid TOML"),
         "unknown-key": (["run", str(unknown)], "imu.filter"),
@@ -308,8 +312,9 @@ def _shifted(imu: Path, tmp: Path) -> Path:
     """Increment rows whose first interval would end at the truth's first time (t = 0)."""
 
     def edit(lines: list[str]) -> list[str]:
-        body = [line.split(",") for line in lines[2:]]
-        return lines[:2] + [",".join([repr(float(c[0]) - 0.01), *c[1:]]) for c in body]
+        top = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1  # comments, header
+        body = [line.split(",") for line in lines[top:]]
+        return lines[:top] + [",".join([repr(float(c[0]) - 0.01), *c[1:]]) for c in body]
 
     return _edit_csv(imu, tmp / "shifted.csv", edit)
 

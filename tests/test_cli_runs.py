@@ -201,7 +201,8 @@ def test_a_truth_shorter_than_the_imu_is_refused_or_cut_when_asked(folder: Path,
     and how many intervals lie inside; with ``--within-truth`` integrated to its end, with a note."""
     assert main(["simulate", "drive.toml", "--imu", "imu.csv", "--truth", "truth.csv"]) == 0
     lines = (folder / "truth.csv").read_text(encoding="utf-8").splitlines()
-    (folder / "short.csv").write_text("\n".join(lines[:1002]) + "\n", encoding="utf-8")  # comment, head, 1000
+    head = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1  # comments, header
+    (folder / "short.csv").write_text("\n".join(lines[: head + 1000]) + "\n", encoding="utf-8")  # 1000 rows
     capsys.readouterr()
     assert main(["integrate", "imu.csv", "--truth", "short.csv", "--out", "sol.csv"]) == 2
     _one_line_error(capsys, "imu.csv", "short.csv", "999 of 3000 intervals", "--within-truth")

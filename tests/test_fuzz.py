@@ -355,7 +355,7 @@ RIG: dict[str, Any] = {
     "rig": {"lat_deg": 45.0, "lon_deg": 7.0, "alt_m": 200.0, "rate_hz": 10, "orientation_error_deg": 0.1,
             "rate_error_ppm": 10.0},
     "positions": {"count": 6, "dwell_s": 4.0},
-    "rate_table": {"rates_dps": [30.0], "axes": ["z"], "orientations": ["up"], "dwell_s": 4.0,
+    "rate_table": {"rates_dps": [30.0], "axes": ["x", "y", "z"], "orientations": ["up"], "dwell_s": 4.0,
                    "accel_dps2": 100.0},
     "temperature": {"times_s": [0.0, 20.0], "temps_degc": [20.0, 30.0]},
 }  # fmt: skip

@@ -36,6 +36,13 @@ def _fit(tmp_path: Path, imu: Path, truth: Path | None, *more: str) -> tuple[int
     return rc, stdout, err, document
 
 
+def _numbers(path: Path) -> np.ndarray:
+    """A sins CSV's numbers, read with numpy (its comment lines and header skipped)."""
+    lines = path.read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    return np.loadtxt(path, delimiter=",", skiprows=header + 1)
+
+
 def _coefficients(document: dict) -> dict[tuple[str, str, str], dict]:
     return {(c["sensor"], c["term"], c["axis"]): c for c in document["coefficients"]}
 
@@ -66,7 +73,7 @@ def test_a_still_recording_is_reduced_to_its_biases_which_are_the_units(tmp_path
     lat = np.radians(45.0)
     w_ie = np.array([np.cos(lat), 0.0, -np.sin(lat)]) * earth.OMEGA_IE
     f = np.array([0.0, 0.0, -float(earth.normal_gravity(lat, 0.0))])
-    readings = np.loadtxt(imu, delimiter=",", skiprows=2)
+    readings = _numbers(imu)
     excess = readings[:, 1:7].mean(axis=0) - np.concatenate([w_ie, f])
     expected = np.concatenate([excess[:3] / DEG_PER_H, excess[3:] / (1e-6 * earth.G0)])
     table = _coefficients(doc)
@@ -102,7 +109,7 @@ def test_the_five_minute_drive_keeps_what_it_determines_and_that_is_the_units(tm
     assert {"gyro.scale.z", "accel.scale.x", "accel.scale.y", *identifiability.bias_names("gyro")} <= names
     # A term held at zero leaves its mean effect to the bias of its channel (the bias's column is the
     # constant one): the unit's own term times the drive's mean input (from the file, with numpy).
-    readings = np.loadtxt(imu, delimiter=",", skiprows=2)
+    readings = _numbers(imu)
     span = readings[-1, 0] - readings[0, 0] + readings[1, 0] - readings[0, 0]
     mean_in = {"gyro": readings[:, 1:4].sum(axis=0) / span, "accel": readings[:, 4:7].sum(axis=0) / span}
     for name in held:

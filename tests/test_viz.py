@@ -236,7 +236,7 @@ def test_cli_saves_a_recording_and_refuses_what_cannot_work(
     assert err.err.count("\n") == 1 and "--rerun" in err.err and "--serve" in err.err
 
     assert main(["run", str(path), "--rerun", str(tmp_path / "nowhere" / "x.rrd")]) == 2
-    assert "no such folder" in capsys.readouterr().err
+    assert "does not exist" in capsys.readouterr().err
     refusal(lambda: sins.viz.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
 
 

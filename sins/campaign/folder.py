@@ -43,7 +43,7 @@ from sins.campaign.spec import CampaignSpec, describe
 from sins.campaign.unit import BIAS_FIELDS, RESIDUAL_FIELDS, SUMMARY_FIELDS
 from sins.errors import SinsInputError
 from sins.io.documents import printable
-from sins.io.limits import check_writable
+from sins.io.paths import check_writable
 from sins.scenario import TruthFileSpec
 
 FORMAT = "sins-campaign"
@@ -93,6 +93,7 @@ def locked(out: Path, spec: CampaignSpec) -> Iterator[None]:
         another campaign holds ``out``, naming its pid, host and start; or ``out`` cannot be created.
     """
     check_writable(out, folder=True)
+    check_owned(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -109,6 +110,26 @@ def locked(out: Path, spec: CampaignSpec) -> Iterator[None]:
         with contextlib.suppress(OSError):
             path.unlink()
         os.close(fd)  # releases the flock (after the unlink: no one takes the old file meanwhile)
+
+
+def check_owned(out: Path) -> None:
+    """Refuse a results folder that holds files of its own and is not a campaign's (no
+    ``campaign.json``): a campaign writes ``summary.json`` and ``results.parquet`` there, and would
+    replace a user's files of those names.
+
+    Raises
+    ------
+    SinsInputError
+        naming the folder and one of the files it holds.
+    """
+    if not out.is_dir() or (out / "campaign.json").exists():
+        return
+    others = sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME)
+    if others:
+        raise SinsInputError(
+            f"{out}: holds {len(others)} file(s) ({printable(others[0])[:80]}, ...) and no campaign.json: "
+            "not a campaign's results folder; give a new or empty --out"
+        )
 
 
 def _acquire(path: Path) -> int:
@@ -361,6 +382,7 @@ __all__ = [
     "SERIES_COLUMNS",
     "TEXT_COLUMNS",
     "Parts",
+    "check_owned",
     "check_parts",
     "identity",
     "locked",

@@ -8,9 +8,12 @@ runs it; :mod:`~sins.cli.common` holds what they share. Bad input ends in one li
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
 
 from sins import __version__
 from sins.cli import (
@@ -64,11 +67,36 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived (a BaseException, as KeyboardInterrupt is: no ``except Exception`` swallows it,
+    and every ``finally`` runs, so a write in progress removes its temporary file)."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def terminated_as_exception() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Terminated` in the main thread (as Ctrl-C raises
+    KeyboardInterrupt) instead of ending the process at once with its files half written; the handler
+    before is restored after. Elsewhere than the main thread, nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.func(args))
+        with terminated_as_exception():
+            return int(args.func(args))
     except MissingInputError as exc:
         flag = _FLAG_FOR.get(exc.needs)
         print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)
@@ -87,6 +115,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("sins: interrupted", file=sys.stderr)
         return 130
+    except Terminated:
+        print("sins: terminated", file=sys.stderr)
+        return 143
 
 
-__all__ = ["SUBCOMMANDS", "build_parser", "main"]
+__all__ = ["SUBCOMMANDS", "Terminated", "build_parser", "main", "terminated_as_exception"]

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from sins import __version__
-from sins.cli.common import Subparsers, progress_bar, row_progress
+from sins.cli.common import Subparsers, check_outputs, progress_bar, row_progress, simulated_unit
 from sins.scenario.budget import check_rig_size
 
 
@@ -16,12 +16,15 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     rig_path = scenario.resolve_preset(args.rig, "rig")
     rig = scenario.load_rig(rig_path)
-    spec = scenario.load_imu(scenario.resolve_preset(args.imu, "imu"))
+    imu_path = scenario.resolve_preset(args.imu, "imu")
+    spec = scenario.load_imu(imu_path)
+    check_outputs({"--out": args.out}, [rig_path, imu_path])
     check_rig_size(rig, rig_path, {args.out: len(io.RECORDING_COLUMNS) + 2})
     data = calibration.simulate_rig(rig, spec.model(run_seed=args.seed), seed=args.seed)
     note = (
         f"sins {__version__}: simulated rig {args.rig} with IMU {args.imu}, seed {args.seed}\n"
-        f"effects: {', '.join(spec.model(run_seed=args.seed).names) or 'none'}"
+        f"effects: {', '.join(spec.model(run_seed=args.seed).names) or 'none'}\n"
+        f"sensor: {simulated_unit(imu_path)}"
     )
     with progress_bar(f"writing {args.out}", "row") as bar:
         io.write_recording(args.out, data, comment=note, progress=row_progress(bar))

@@ -6,14 +6,23 @@ import argparse
 import sys
 from pathlib import Path
 
-from sins.cli.common import Subparsers, add_plot, check_plot, count, progress_bar, row_progress, save_plot
+from sins.cli.common import (
+    Subparsers,
+    add_plot,
+    check_outputs,
+    check_plot,
+    count,
+    progress_bar,
+    row_progress,
+    save_plot,
+    scenario_inputs,
+)
 from sins.errors import SinsInputError
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from sins import campaign
-    from sins.campaign import engine, results
-    from sins.io.limits import check_writable
+    from sins.campaign import engine, folder, results
 
     if args.workers is not None and args.scheduler:
         raise SinsInputError("--workers: the scheduler's cluster has its own workers; give one of the two")
@@ -21,12 +30,17 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
     spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
     out = args.out or Path(f"{spec.name}-campaign")
-    check_writable(out, folder=True)  # the outputs' places, before the work, not after it
     if args.rerun:
         from sins import viz
 
-        check_writable(viz.check_rrd_path(args.rerun))
+        viz.check_rrd_path(args.rerun)
     check_plot(args)
+    inputs = [spec.source, spec.imu.source, spec.compensation.rig]
+    for sc in spec.scenarios:
+        inputs += scenario_inputs(sc)
+    # The outputs' places, before the work, not after it; a folder of the user's own is not taken over.
+    check_outputs({"--rerun": args.rerun, "--plot": args.plot}, inputs, {"--out": out})
+    folder.check_owned(out)
     strategies = dict.fromkeys(["none", *spec.compensation.strategies])
     print(
         f"campaign {spec.name}: {spec.count} units x {len(spec.scenarios)} scenarios x "

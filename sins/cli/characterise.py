@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -13,7 +12,9 @@ from sins.cli.common import (
     add_dataset,
     add_plot,
     add_recording_options,
+    check_outputs,
     check_plot,
+    dataset_inputs,
     fixed_width,
     progress_bar,
     recording_options,
@@ -79,31 +80,17 @@ def _rig_recording(args: argparse.Namespace) -> bool:
     return any(c.startswith("ref_") for c in io.read_columns(args.recording))
 
 
-def _check_destination(path: Path | None, flag: str) -> None:
-    """Refuse, before any work, an output that could not be written."""
-    if path is None:
-        return
-    folder = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise SinsInputError(f"{flag} {path}: a folder, not a file name")
-    if not folder.is_dir():
-        raise SinsInputError(f"{flag} {path}: no such folder {folder}")
-    if not os.access(folder, os.W_OK):
-        raise SinsInputError(f"{flag} {path}: the folder {folder} is not writable")
-
-
 def _cmd_characterise(args: argparse.Namespace) -> int:
     from sins import characterise, io
     from sins.characterise import check, model_file
 
-    _check_destination(args.out, "--out")
-    _check_destination(args.json, "--json")
     if args.rerun:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
-        _check_destination(args.rerun, "--rerun")
     check_plot(args)
+    outputs = {"--out": args.out, "--json": args.json, "--rerun": args.rerun, "--plot": args.plot}
+    check_outputs(outputs, [args.recording, args.truth, *dataset_inputs(args.dataset)])
     with progress_bar("reading", "channels") as bar:
         res = _characterise_inputs(args)
         for line in res.warnings:

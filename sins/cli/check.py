@@ -7,7 +7,14 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import Subparsers, fixed_width, progress_bar, row_progress
+from sins.cli.common import (
+    Subparsers,
+    check_outputs,
+    fixed_width,
+    progress_bar,
+    row_progress,
+    scenario_inputs,
+)
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
@@ -18,7 +25,6 @@ if TYPE_CHECKING:
 def _cmd_check(args: argparse.Namespace) -> int:
     from sins import quality, scenario
     from sins.campaign.spec import is_campaign
-    from sins.io.limits import check_writable
 
     path = Path(args.suite)
     if not path.exists() and scenario.find_preset(args.suite, "campaign") is not None:
@@ -28,7 +34,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     suite = quality.load_suite(path)
     baseline = None
     if args.update_baseline:
-        check_writable(args.baseline)  # before the runs, not after them
+        check_outputs({"--baseline": args.baseline}, [path])  # before the runs, not after them
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     else:
@@ -78,12 +84,14 @@ def _check_campaign(args: argparse.Namespace, path: Path) -> int:
 
     from sins import campaign, io
     from sins.campaign import engine, gate, results
-    from sins.io.limits import check_writable
 
     spec = campaign.load(path)
     baseline = None
     if args.update_baseline:
-        check_writable(args.baseline)  # before the campaign, not after it
+        inputs = [spec.source, spec.imu.source, spec.compensation.rig]
+        for sc in spec.scenarios:
+            inputs += scenario_inputs(sc)
+        check_outputs({"--baseline": args.baseline}, inputs)  # before the campaign, not after it
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such campaign baseline; create it with --update-baseline")
     else:  # the whole baseline checked before any work: one that tests nothing or drops a figure is refused

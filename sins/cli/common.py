@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -14,6 +15,7 @@ from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
     from sins.pipeline import ScenarioRun
+    from sins.scenario import Scenario
 
 #: The object ``add_subparsers`` returns, to which each subcommand adds its parser.
 Subparsers = argparse._SubParsersAction
@@ -302,7 +304,7 @@ def check_viewer_args(args: argparse.Namespace) -> None:
             "or --serve for the web viewer"
         )
     if args.rerun:
-        viz.check_rrd_path(args.rerun)
+        viz.check_rrd_path(args.rerun)  # its suffix; the place is check_outputs's
 
 
 def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
@@ -336,14 +338,62 @@ def add_plot(p: argparse.ArgumentParser, what: str) -> None:
     )  # fmt: skip
 
 
-def check_outputs(*paths: Path | None) -> None:
-    """Refuse, before the work, an output file that could not be written after it (``None``: not asked
-    for); :func:`sins.io.limits.check_writable` for each."""
-    from sins.io.limits import check_writable
+def check_outputs(
+    outputs: dict[str, Path | None],
+    inputs: Iterable[str | os.PathLike[str] | None] = (),
+    folders: dict[str, Path | None] | None = None,
+) -> None:
+    """The one check of a command's outputs, before the work (:func:`sins.io.paths.check_outputs`):
+    each can be written, none is an input (``inputs``: every file and folder the command reads) or
+    another output. ``outputs`` and ``folders`` map each flag to its path (None: not asked for)."""
+    from sins.io.paths import check_outputs as check
 
-    for path in paths:
-        if path is not None:
-            check_writable(path)
+    check(outputs, inputs, folders)
+
+
+def dataset_inputs(name: str | None) -> list[Path]:
+    """The folder a ``--dataset`` is read from (its data root), as an input no output may be inside."""
+    if name is None:
+        return []
+    from sins.io.datasets.root import data_root
+
+    try:
+        return [data_root()]
+    except OSError:
+        return []
+
+
+def unit_of(recording: str | os.PathLike[str] | None, dataset: str | None, inputs: Any) -> str:
+    """The unit a recording or dataset was read from ("" where it does not say): a dataset's named
+    sensor, else its name; a recording's own (a sins CSV's ``# sensor:`` line, :mod:`sins.io.provenance`)."""
+    named = str(getattr(inputs, "sensor", "") or "")
+    if dataset is not None:
+        return named or f"the {dataset} dataset's unit"
+    if named or recording is None:
+        return named
+    from sins.io import provenance
+
+    return provenance.read_provenance(recording).sensor
+
+
+def simulated_unit(imu_file: Path | None) -> str:
+    """What a file of a simulated unit's readings says of the unit (its ``# sensor:`` line): the IMU file
+    and the unit it draws (a power-on seed is the same unit again)."""
+    if imu_file is None:
+        return "ideal IMU (simulated)"
+    from sins import scenario
+
+    spec = scenario.load_imu(imu_file)
+    return f"simulated {imu_file.stem} unit (unit seed {spec.unit_seed})"
+
+
+def scenario_inputs(sc: Scenario) -> list[Path | None]:
+    """The files a scenario reads: its own, its IMU and rig files, its truth file."""
+    from sins.scenario import TruthFileSpec
+
+    truth = sc.trajectory.path if isinstance(sc.trajectory, TruthFileSpec) else None
+    rig = sc.compensation.rig if sc.compensation is not None else None
+    return [sc.source, sc.imu_model, rig, truth]
 
 
 def check_plot(args: argparse.Namespace) -> None:
@@ -376,6 +426,7 @@ __all__ = [
     "check_plot",
     "check_viewer_args",
     "count",
+    "dataset_inputs",
     "display_unit",
     "fixed_width",
     "format_table",
@@ -385,7 +436,10 @@ __all__ = [
     "recording_options",
     "row_progress",
     "save_plot",
+    "scenario_inputs",
     "seed",
     "settings",
     "show",
+    "simulated_unit",
+    "unit_of",
 ]

@@ -4,37 +4,48 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
     add_dataset,
     add_recording_options,
     check_outputs,
+    dataset_inputs,
     progress_bar,
     recording_options,
     row_progress,
+    unit_of,
 )
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from sins.series import ImuIncrements, ImuRates
+
+    Array = NDArray[np.float64]
 
 
 def _cmd_correct(args: argparse.Namespace) -> int:
     from sins import __version__, compensation, io, referenced
-    from sins.io.recording import Recording
-    from sins.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
+    from sins.io import provenance
+    from sins.series import ImuRates
 
-    check_outputs(args.out)
+    check_outputs({"--out": args.out}, [args.model, args.recording, *dataset_inputs(args.dataset)])
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
-    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}")
-    temp = None
-    if isinstance(inputs, ReferencedRecording):
-        imu: ImuRates | ImuIncrements = inputs.imu
-    elif isinstance(inputs, CalibrationData):
-        imu, temp = ImuRates(t=inputs.t, omega_ib_b=inputs.gyro, f_ib_b=inputs.accel), inputs.temp
-    else:
-        assert isinstance(inputs, Recording)
-        imu, temp = inputs.imu, inputs.temp
+    unit = unit_of(args.recording, args.dataset, inputs)
+    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
+    said = provenance.Provenance() if args.recording is None else provenance.read_provenance(args.recording)
+    if said.corrected_by and not args.again:
+        raise SinsInputError(
+            f"{where}: already corrected ({said.corrected_by}); correcting again applies the model twice: "
+            "give the raw recording, or --again if that is meant"
+        )
+    imu, temp, rows_temp = _readings(inputs)
     try:
         out = (
             strategy.correct_rates(imu, temp)
@@ -43,13 +54,40 @@ def _cmd_correct(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
-    extra = None if temp is None else {"temp": temp if isinstance(imu, ImuRates) else temp[1:]}
-    note = f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})"
+    fitted_on = getattr(strategy, "fitted_on_", {}) or {}
+    lines = [
+        f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})",
+        *([f"{provenance.SENSOR_KEY}: {unit}"] if unit else []),
+        *([f"{provenance.CORRECTED_KEY}: {said.corrected_by}"] * said.corrections),
+        provenance.corrected_line(args.model, strategy.label, str(fitted_on.get("sensor") or "")),
+    ]
+    extra = None if rows_temp is None else {"temp": rows_temp}
     with progress_bar(f"writing {args.out}", "row") as bar:
-        io.write_imu(args.out, out, extra=extra, comment=note, progress=row_progress(bar))
+        io.write_imu(args.out, out, extra=extra, comment="\n".join(lines), progress=row_progress(bar))
     form = "rate" if isinstance(out, ImuRates) else "increment"
     print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
     return 0
+
+
+def _readings(inputs: Any) -> tuple[ImuRates | ImuIncrements, Array | None, Array | None]:
+    """The readings to correct, their temperature at the readings' times (increments: at each step's
+    boundaries, the first step's own taken at its start) and per written row (None without one)."""
+    import numpy as np
+
+    from sins.io.recording import Recording
+    from sins.series import CalibrationData, ImuRates, ReferencedRecording
+
+    if isinstance(inputs, ReferencedRecording):
+        return inputs.imu, None, None
+    if isinstance(inputs, CalibrationData):
+        rates = ImuRates(t=inputs.t, omega_ib_b=inputs.gyro, f_ib_b=inputs.accel)
+        return rates, inputs.temp, inputs.temp
+    assert isinstance(inputs, Recording)
+    temp = inputs.temp
+    if temp is None or isinstance(inputs.imu, ImuRates):
+        return inputs.imu, temp, temp
+    # Increments: one temperature per row (the step it ends); at the boundaries the first step's own.
+    return inputs.imu, np.concatenate([temp[:1], temp]), temp
 
 
 def add(sub: Subparsers) -> None:
@@ -63,6 +101,11 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--out", type=Path, required=True, metavar="CORRECTED.csv",
         help="the corrected readings, in the recording's form (rates or increments), sins's CSV columns",
+    )  # fmt: skip
+    p.add_argument(
+        "--again", action="store_true",
+        help="correct a recording that sins has corrected already (its '# corrected by' line): refused "
+        "without it, as the model would be applied twice",
     )  # fmt: skip
     add_recording_options(p)
     p.set_defaults(func=_cmd_correct)

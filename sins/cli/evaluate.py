@@ -16,11 +16,13 @@ from sins.cli.common import (
     check_finite,
     check_outputs,
     check_plot,
+    dataset_inputs,
     display_unit,
     fixed_width,
     fraction,
     recording_options,
     save_plot,
+    unit_of,
 )
 from sins.errors import SinsInputError
 
@@ -34,18 +36,27 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins.series import CalibrationData, ReferencedRecording
 
     check_plot(args)
-    check_outputs(args.json)
+    if args.rerun:
+        from sins import viz
+
+        viz.check_rrd_path(args.rerun)
+    outputs = {"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}
+    check_outputs(outputs, [args.model, args.recording, args.truth, *dataset_inputs(args.dataset)])
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(
         args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
     )
-    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}")
+    sensor = unit_of(args.recording, args.dataset, inputs)
+    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=sensor)
     if isinstance(inputs, ReferencedRecording):
         document = _evaluate_referenced(args, strategy, inputs, where)
     elif isinstance(inputs, CalibrationData):
         document = _evaluate_rig(args, strategy, inputs, where)
     else:
+        missing = io.recording.missing_reference(inputs)
+        if missing.needs == "truth_topic":  # a bag with several pose topics: name one
+            raise missing
         raise SinsInputError(
             f"{where}: no reference to judge against; give the recording's trajectory with --truth TRUTH.csv"
         )
@@ -100,10 +111,6 @@ def _evaluate_referenced(
     rest), and with ``--drive`` the corrected unit's free-inertial drift over a window."""
     from sins import referenced
 
-    if args.rerun:
-        from sins import viz
-
-        viz.check_rrd_path(args.rerun)  # before the work, not after
     if args.last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - args.last * span, rec.imu.t[-1])

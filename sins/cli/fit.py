@@ -11,6 +11,7 @@ from sins.cli.common import (
     add_dataset,
     add_recording_options,
     check_outputs,
+    dataset_inputs,
     fixed_width,
     fraction,
     positive,
@@ -18,6 +19,7 @@ from sins.cli.common import (
     recording_options,
     row_progress,
     settings,
+    unit_of,
 )
 from sins.errors import SinsInputError
 
@@ -35,7 +37,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from sins.series import CalibrationData, ReferencedRecording
 
     _check_args(args)
-    check_outputs(args.out, args.json)  # before a fit that may take minutes
+    read = [args.recording, args.truth, *dataset_inputs(args.dataset)]
+    check_outputs({"--out": args.out, "--json": args.json}, read)  # before a fit that may take minutes
     where = args.dataset or str(args.recording)
     inputs = referenced.read_inputs(
         args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
@@ -43,8 +46,11 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     if isinstance(inputs, ReferencedRecording):
         strategy, document = _fit_referenced(args, inputs, where)
     elif isinstance(inputs, CalibrationData):
-        strategy, document = _fit_rig(args, inputs, where, _unit_of(args, inputs))
+        strategy, document = _fit_rig(args, inputs, where, unit_of(args.recording, args.dataset, inputs))
     else:
+        missing = io.recording.missing_reference(inputs)
+        if missing.needs == "truth_topic":  # a bag with several pose topics: name one
+            raise missing
         raise SinsInputError(
             f"{where}: no reference to fit against; give the recording's trajectory with --truth TRUTH.csv "
             "(or a rig recording with ref_ columns, or a bag or EuRoC folder with ground truth)"
@@ -72,24 +78,15 @@ def _check_args(args: argparse.Namespace) -> None:
         raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
 
 
-def _unit_of(args: argparse.Namespace, data: CalibrationData) -> str:
-    """The unit a rig recording or dataset was read from, as a model file records it: a sins CSV's
-    ``# sensor:`` line, a dataset's name."""
-    if args.dataset is not None:
-        return f"the {args.dataset} dataset's unit"
-    from sins.io import provenance
-
-    return provenance.read_provenance(args.recording).sensor
-
-
 def _fit_rig(
-    args: argparse.Namespace, data: CalibrationData, where: str, unit: str
+    args: argparse.Namespace, data: CalibrationData, where: str, sensor: str
 ) -> tuple[Strategy, dict[str, Any]]:
     """A rig recording (per-sample reference inputs): the strategy's own fit on its rows, its seed
     model checked against the unit's class before the model is written."""
     from sins import compensation
     from sins.compensation import coefficients, identifiability
     from sins.compensation.mlp import MLP
+    from sins.compensation.regression import Regression
     from sins.compensation.residual import ResidualStrategy
     from sins.imu import calibration
 
@@ -97,8 +94,13 @@ def _fit_rig(
         raise SinsInputError(
             f"--strategy bias_only: fits a trajectory's reference; {where} is a rig recording"
         )
+    angles = any(p.angle_rad is not None for p in data.phases)
     try:
         strategy = compensation.make(args.strategy, **({"guard": False} if args.no_guard else {}))
+        if angles and isinstance(strategy, Regression) and strategy.g_sensitivity:
+            # Turns known by their angles alone cannot tell the gyro's g-sensitivity: it is left out.
+            strategy = compensation.make(args.strategy, g_sensitivity=False)
+            print(f"{where}: its turns give only their angles, which cannot tell the g-sensitivity: left out")
         part = data.split(args.validation)[0] if args.validation else data
         unit = "epochs" if isinstance(strategy, MLP) else "trainings"
         with progress_bar(f"fitting {args.strategy}", unit) as bar:
@@ -133,7 +135,7 @@ def _fit_rig(
         document["coefficients"] = [c.to_dict() for c in table]
         bounds = identifiability.class_bounds(args.grade)
         checks = identifiability.review(identifiability.seed_values(seed), bounds, where).to_dict()
-    strategy.fitted_on_ = {"sensor": unit, "rate_hz": None, "reference": "rig", "checks": checks}
+    strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks}
     return strategy, document
 
 

@@ -10,6 +10,8 @@ from sins.cli.common import (
     Subparsers,
     add_dataset,
     advance,
+    check_outputs,
+    dataset_inputs,
     display_unit,
     fixed_width,
     fraction,
@@ -29,6 +31,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
+    inputs = [args.recording, args.truth, args.model, *dataset_inputs(args.dataset)]
+    check_outputs({"--json": args.json, "--rerun": args.rerun}, inputs)
     data, truth, model = _gap_inputs(args)
     with progress_bar("diagnosing", "candidate") as bar:
 

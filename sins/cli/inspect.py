@@ -6,8 +6,14 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import Subparsers, add_recording_options, progress_bar, recording_options, row_progress
-from sins.errors import SinsInputError
+from sins.cli.common import (
+    Subparsers,
+    add_recording_options,
+    check_outputs,
+    progress_bar,
+    recording_options,
+    row_progress,
+)
 
 if TYPE_CHECKING:
     from sins.inspection import Finding, Inspection
@@ -21,8 +27,7 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     from sins import inspection, io
 
     options = recording_options(args)
-    if args.json and not args.json.parent.is_dir():
-        raise SinsInputError(f"{args.json}: directory {args.json.parent} does not exist")
+    check_outputs({"--json": args.json}, [args.recording])
     with progress_bar("reading", "messages") as bar:
         rec = io.read_recording_any(args.recording, **options, progress=row_progress(bar))
     result = inspection.inspect(rec)

@@ -10,6 +10,7 @@ from sins.cli.common import (
     Subparsers,
     add_recording_options,
     check_finite,
+    check_outputs,
     format_table,
     positive,
     progress_bar,
@@ -25,6 +26,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
 
     if args.out:
         solution.check_solution_path(args.out)  # before the work, not after
+    check_outputs({"--out": args.out, "--json": args.json}, [args.imu, args.truth])
     with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
         reading = {**recording_options(args), "progress": row_progress(bar)}
         rec = pipeline.load_recording(args.imu, args.truth, args.within_truth, reading)
@@ -66,7 +68,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--within-truth", action="store_true",
         help="integrate only the IMU intervals inside the truth's span (without it, an IMU that runs past "
-        "the truth's end is refused)",
+        "a truth file's end is refused; past the recording's own reference, a tail of up to 1 s or 1 %% of "
+        "the recording is cut with a note, a longer one refused)",
     )  # fmt: skip
     p.add_argument(
         "--vertical",

@@ -10,6 +10,7 @@ from sins.cli.common import (
     Subparsers,
     add_plot,
     check_finite,
+    check_outputs,
     check_plot,
     check_viewer_args,
     display_unit,
@@ -18,6 +19,7 @@ from sins.cli.common import (
     progress_bar,
     row_progress,
     save_plot,
+    scenario_inputs,
     seed,
     show,
 )
@@ -36,6 +38,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_plot(args)
     path = pipeline.resolve_scenario(args.scenario)
     sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)
+    check_outputs({"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}, scenario_inputs(sc))
     check_scenario_size(sc, path, "running")
     try:
         unit = None

@@ -6,7 +6,15 @@ import argparse
 from pathlib import Path
 
 from sins import __version__
-from sins.cli.common import Subparsers, progress_bar, row_progress, seed
+from sins.cli.common import (
+    Subparsers,
+    check_outputs,
+    progress_bar,
+    row_progress,
+    scenario_inputs,
+    seed,
+    simulated_unit,
+)
 from sins.errors import SinsInputError
 from sins.scenario.budget import check_scenario_size
 
@@ -18,6 +26,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise SinsInputError("--ideal: the ideal IMU has no unit to draw; leave out --model and --seed")
     path = pipeline.resolve_scenario(args.scenario)
     sc = pipeline.with_unit(scenario.load(path), args.model, args.seed)
+    check_outputs({"--imu": args.imu, "--truth": args.truth}, scenario_inputs(sc))
     columns = len(io.RATE_COLUMNS if args.form == "rate" else io.INCREMENT_COLUMNS) + 1
     check_scenario_size(sc, path, "simulating", {args.imu: columns, args.truth: len(io.TRUTH_COLUMNS)})
     with progress_bar(f"simulating {sc.name}", ""):
@@ -26,6 +35,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
     model = "" if sim.model is None else f", IMU file {sim.model}"
     note = f"sins {__version__}: {unit} of scenario {sc.name} ({path}{model})"
+    note += f"\nsensor: {simulated_unit(sim.model)}"
     extra = None if sim.temp is None else {"temp": sim.temp}
     with progress_bar(f"writing {args.imu}", "row") as bar:
         io.write_imu(args.imu, sim.readings, extra, comment=note, progress=row_progress(bar))

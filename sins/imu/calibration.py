@@ -502,7 +502,8 @@ def fit_seed_model(
                 continue
             if g_sensitivity:
                 raise ValueError(
-                    f"phase {p.name!r} constrains only the integrated rate: fit with g_sensitivity=False"
+                    f"phase {p.name!r} gives only its turn's angle, which cannot tell the gyro's "
+                    "g-sensitivity: leave the g-sensitivity out of the model (g_sensitivity off)"
                 )
             span = data.t[p.stop - 1] - data.t[p.start] + dt
             angle = np.asarray(p.angle_rad)

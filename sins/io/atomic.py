@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TextIO
 
 from sins.errors import SinsInputError
+from sins.io.paths import target, writes_in_place
 
 #: The process's umask, read once at import (reading it means setting it, which threads would race).
 _UMASK = os.umask(0o022)
@@ -26,15 +27,26 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     error and removed otherwise: a reader never sees half a file, and an interrupted run leaves none.
 
     The file gets the permissions a plain ``open`` would give it (``0o666`` less the umask), not the
-    owner-only mode of a temporary file. An ``OSError`` while writing (a full disk, a folder not
+    owner-only mode of a temporary file. A symbolic link is followed: its target is replaced, the link
+    kept. A character device (``/dev/null``) is written in place, not replaced; a FIFO, socket or block
+    device is refused (:mod:`sins.io.paths`). An ``OSError`` while writing (a full disk, a folder not
     writable) is raised again with ``path`` as its file name, not the temporary one.
     """
-    path = Path(path)
+    given = Path(path)
+    if writes_in_place(given):  # /dev/null, /dev/full: written as they are, never renamed over
+        try:
+            yield given
+        except OSError as exc:  # /dev/full: no space
+            raise OSError(exc.errno, exc.strerror or str(exc), str(given)) from None
+        return
+    path = target(given)  # a symbolic link: its target is replaced, the link kept
     directory = path.parent
     if not directory.is_dir():
-        raise SinsInputError(f"{path}: directory {directory} does not exist")
+        raise SinsInputError(f"{given}: directory {directory} does not exist")
     if path.is_dir():
-        raise SinsInputError(f"{path}: is a directory, expected a file name to write")
+        raise SinsInputError(f"{given}: is a directory, expected a file name to write")
+    if path.exists() and not path.is_file():
+        raise SinsInputError(f"{given}: is not a regular file; sins writes regular files (or /dev/null)")
     try:
         fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     except OSError as exc:

@@ -33,6 +33,8 @@ from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 
+#: How a note begins when a bag has several pose topics and none was named (no reference read).
+SEVERAL_POSES = "no reference read"
 IMU_TYPE = "sensor_msgs/msg/Imu"
 FIX_TYPE = "sensor_msgs/msg/NavSatFix"
 #: Message types read as the reference trajectory.
@@ -222,7 +224,7 @@ def _truth_topic(path: Path, types: dict[str, str], truth_topic: str | None) -> 
         return truth_topic, []
     found = sorted(n for n, t in types.items() if t in POSE_TYPES)
     if len(found) > 1:
-        return None, [f"no reference read: {len(found)} pose topics ({', '.join(found)}); name one"]
+        return None, [f"{SEVERAL_POSES}: {len(found)} pose topics ({', '.join(found)}); name the one to read"]
     return (found[0] if found else None), []
 
 
@@ -302,8 +304,8 @@ def _check_values(path: Path, topic: str, values: Array) -> None:
         k, c = (int(i) for i in np.argwhere(bad)[0])
         field = ("angular_velocity", "linear_acceleration")[c // 3] + "." + "xyz"[c % 3]
         raise SinsInputError(
-            f"{path}: topic {topic}: message {k + 1}: {field} {values[k, c]!r} is not finite or beyond "
-            f"±{limits[c]:g} {'rad/s' if c < 3 else 'm/s²'}, outside any physical range"
+            f"{path}: topic {topic}: message {k + 1}: {field} {float(values[k, c])!r} is not finite or "
+            f"beyond ±{limits[c]:g} {'rad/s' if c < 3 else 'm/s²'}, outside any physical range"
         )
 
 
@@ -348,6 +350,13 @@ def _truth(
     if not np.isfinite(a).all():
         k = int(np.argmax(~np.isfinite(a).all(axis=1)))
         raise SinsInputError(f"{path}: topic {topic}: message {k + 1} holds a non-finite pose")
+    norm = np.linalg.norm(a[:, 3:7], axis=1)
+    if not (np.abs(norm - 1.0) <= 1e-3).all():  # as EuRoC's: a zero quaternion is not a rotation
+        k = int(np.argmax(~(np.abs(norm - 1.0) <= 1e-3)))
+        raise SinsInputError(
+            f"{path}: topic {topic}: message {k + 1}: orientation (x, y, z, w) has norm "
+            f"{float(norm[k]):.6g}, not a unit quaternion"
+        )
     q = rotation.quat_normalize(a[:, 3:7])
     v_enu = None
     if msgtype.endswith("Odometry"):
@@ -381,6 +390,7 @@ __all__ = [
     "FIX_TYPE",
     "IMU_TYPE",
     "POSE_TYPES",
+    "SEVERAL_POSES",
     "BagRead",
     "GeodeticFixes",
     "bag_kind",

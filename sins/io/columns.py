@@ -110,6 +110,13 @@ def read_columns_csv(
                 f"{path}: columns: {name}={column!r}, but the header has no column {column!r} "
                 f"(it has {', '.join(header)})"
             )
+    for name, column in full.items():  # a name left to its own column, whose column another name took
+        other = next((n for n, c in full.items() if c == column and n != name), None)
+        if other is not None:
+            raise SinsInputError(
+                f"{path}: columns: file column {column!r} would be read for both {name!r} and {other!r}; "
+                f"map {other if name in mapping else name} to a column of its own"
+            )
     missing = [n for n in names[1:] if n not in full]
     if missing:
         raise SinsInputError(

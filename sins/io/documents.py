@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from sins.errors import SinsInputError
+from sins.io.paths import check_input
 
 #: The deepest nesting of tables and arrays a document may have (a model file's maps nest 10 deep).
 MAX_DEPTH = 64
@@ -175,8 +176,7 @@ def _read_bytes(path: Path, noun: str) -> bytes:
         info = path.stat()
         if stat.S_ISDIR(info.st_mode):
             raise SinsInputError(f"{path}: is a directory, expected a {noun}")
-        if not stat.S_ISREG(info.st_mode):
-            raise SinsInputError(f"{path}: not a regular file, expected a {noun}")
+        check_input(path)  # a FIFO or a device, refused before it is opened
         if info.st_size > MAX_BYTES:
             raise SinsInputError(f"{path}: {info.st_size} bytes, more than a {noun} may hold ({MAX_BYTES})")
         return path.read_bytes()

@@ -25,11 +25,14 @@ from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
 from sins.io import axes, formats, local
+from sins.io.paths import check_input
 from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 
 #: Reference folders in the order they are looked for, and the columns each has after the time.
+#: The largest nanosecond stamp read (int64's largest: the year 2262).
+MAX_STAMP_NS = 2**63 - 1
 REFERENCES = {"state_groundtruth_estimate0": 16, "mocap0": 7, "vicon0": 7}
 
 
@@ -149,7 +152,9 @@ def read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
 
 
 def _lines(path: Path) -> list[str]:
-    """``path``'s lines, or a one-line error (missing, a folder, unreadable, not UTF-8)."""
+    """``path``'s lines, or a one-line error (missing, a folder, not a regular file, unreadable, not
+    UTF-8)."""
+    check_input(path)
     try:
         return path.read_text(encoding="utf-8-sig").splitlines()
     except FileNotFoundError:
@@ -164,6 +169,11 @@ def _int_cell(path: Path, number: int, name: str, cell: str) -> int:
     text = cell.strip()
     if not re.fullmatch(r"[0-9]+", text):
         raise SinsInputError(f"{path}:{number}: column {name!r}: not a whole number of nanoseconds: {text!r}")
+    if len(text) > 19 or int(text) > MAX_STAMP_NS:
+        raise SinsInputError(
+            f"{path}:{number}: column {name!r}: stamp {text[:30]} ns is beyond {MAX_STAMP_NS} ns (the year "
+            "2262, the largest 64-bit nanosecond stamp)"
+        )
     return int(text)
 
 
@@ -208,8 +218,9 @@ def _reference(path: Path, width: int, t0: int, origin: tuple[float, float, floa
 def _rate(path: Path) -> float | None:
     """``rate_hz`` from a ``sensor.yaml``, or None."""
     try:
+        check_input(path)
         text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
+    except (OSError, SinsInputError):
         return None
     match = re.search(r"^\s*rate_hz\s*:\s*([0-9.eE+-]+)\s*$", text, flags=re.MULTILINE)
     try:
@@ -220,6 +231,7 @@ def _rate(path: Path) -> float | None:
 
 
 __all__ = [
+    "MAX_STAMP_NS",
     "REFERENCES",
     "EurocRead",
     "locate",

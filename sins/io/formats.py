@@ -229,7 +229,8 @@ def write_imu(
 
 
 def read_truth(path: str | os.PathLike[str]) -> NavSeries:
-    """Read a truth trajectory CSV into a :class:`NavSeries` (SI units, radians).
+    """Read a truth trajectory CSV (or a solution written as Parquet, ``sins integrate --out X.parquet``)
+    into a :class:`NavSeries` (SI units, radians).
 
     Raises
     ------
@@ -238,7 +239,8 @@ def read_truth(path: str | os.PathLike[str]) -> NavSeries:
         :data:`MAX_TIME_S`, a height outside :data:`TRUTH_ALT_M`, a velocity component beyond
         :data:`MAX_TRUTH_SPEED_MPS` or an angle beyond :data:`MAX_ANGLE_DEG` (naming line and column).
     """
-    _, header = read_header(Path(path))
+    path = Path(path)
+    header = read_table(path).columns if path.suffix.lower() == ".parquet" else read_header(path)[1]
     names = tuple(
         old if new not in header and old in header else new
         for new, old in zip(TRUTH_COLUMNS, TRUTH_COLUMNS_UNSUFFIXED, strict=True)

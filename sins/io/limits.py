@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 from sins.errors import SinsInputError
@@ -95,47 +94,11 @@ def check_disk(outputs: dict[Path, float], source: str | os.PathLike[str]) -> No
             )
 
 
-def check_writable(path: str | os.PathLike[str], folder: bool = False) -> None:
-    """Refuse, before the work, an output that could not be written after it: a file whose folder is
-    missing or not writable, a file name that is a folder; with ``folder``, a folder that is a file, or
-    whose nearest existing parent is not writable (it will be created).
-
-    Writability is tried, not read off the permission bits (which do not bind root, nor tell a
-    read-only mount): a temporary file is made in the folder and removed.
-
-    Raises
-    ------
-    SinsInputError
-        ``path: why``, naming the output as the user gave it.
-    """
-    path = Path(path)
-    if folder:
-        if path.exists() and not path.is_dir():
-            raise SinsInputError(f"{path}: is a file, expected a folder for the results")
-        probe = path
-        while not probe.exists() and probe != probe.parent:
-            probe = probe.parent
-        if not probe.is_dir():
-            raise SinsInputError(f"{path}: cannot create the folder: {probe} is not a folder")
-    else:
-        if path.is_dir():
-            raise SinsInputError(f"{path}: is a directory, expected a file name to write")
-        probe = path.parent
-        if not probe.is_dir():
-            raise SinsInputError(f"{path}: directory {probe} does not exist")
-    try:
-        with tempfile.TemporaryFile(dir=probe):
-            pass
-    except OSError as exc:
-        raise SinsInputError(f"{path}: cannot write in {probe}: {exc.strerror or exc}") from None
-
-
 __all__ = [
     "CSV_BYTES_PER_VALUE",
     "available_memory",
     "check_disk",
     "check_memory",
-    "check_writable",
     "csv_bytes",
     "format_size",
 ]

@@ -19,14 +19,18 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes, bags, euroc, formats, provenance
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
+from sins.io.paths import check_input
 from sins.series import ImuIncrements, ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 
+#: The sampling rates a recording may be stated or made at (``rate_hz``), Hz: from a slow logger's to
+#: beyond any IMU's (a scenario's ``[imu] rate_hz`` takes 1 Hz to 100 kHz).
+RATE_HZ_RANGE = (0.1, 1e5)
 #: What :attr:`Recording.kind` may be.
 KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc")
 
@@ -92,6 +96,24 @@ class Recording:
         return mid, self.imu.dtheta_b / dt, self.imu.dv_b / dt
 
 
+#: Suffixes that name a bag format, with what its file starts with (a file that does not is refused,
+#: not read as a CSV).
+_BAG_SUFFIXES = {
+    ".bag": ("a ROS 1 bag", "'#ROSBAG V2.0'"),
+    ".mcap": ("an MCAP file", "MCAP's magic"),
+    ".db3": ("a ROS 2 bag", "SQLite's header"),
+}
+
+
+def missing_reference(rec: Recording) -> MissingInputError:
+    """The error for a recording without the reference a command needs: a bag with several pose topics
+    wants one named (``needs="truth_topic"``); any other, a truth file (``needs="truth"``)."""
+    several = next((n for n in rec.notes if n.startswith(bags.SEVERAL_POSES)), None)
+    if several is not None:
+        return MissingInputError(f"{rec.source}: {several}", needs="truth_topic")
+    return MissingInputError(f"{rec.source}: the recording has no reference trajectory", needs="truth")
+
+
 def recording_kind(path: Path) -> str:
     """The :data:`KINDS` entry a path reads as (``"sins csv"`` standing for any CSV).
 
@@ -100,13 +122,17 @@ def recording_kind(path: Path) -> str:
     SinsInputError
         a path that does not exist, or a folder that is neither a ROS 2 bag nor a EuRoC/TUM-VI one.
     """
-    if not path.exists():
-        raise SinsInputError(f"{path}: no such file or folder")
+    check_input(path, folder=True)  # a FIFO, /dev/zero or a device refused before anything opens it
     kind = bags.bag_kind(path)
     if kind is not None:
         return kind
     if euroc.locate(path) is not None:
         return "euroc"
+    named = _BAG_SUFFIXES.get(path.suffix.lower())
+    if named is not None and path.is_file():
+        size = path.stat().st_size
+        why = "it is empty" if size == 0 else f"its first bytes are not {named[1]}"
+        raise SinsInputError(f"{path}: named as {named[0]}, but {why}; not read as a CSV")
     if path.is_dir():
         raise SinsInputError(
             f"{path}: a folder, but neither a ROS 2 bag (metadata.yaml) nor a EuRoC/TUM-VI recording "
@@ -140,8 +166,8 @@ def read_recording_any(
         EuRoC (SI by their definitions) a unit rescales what they hold
     frame : the readings' axes (:mod:`sins.io.axes`); None: ``flu`` for bags (REP 103), ``frd`` otherwise
         (EuRoC's S taken as it is)
-    rate_hz : the sampling rate, Hz: the times of a CSV without a time column; elsewhere the stated rate
-        :func:`sins.inspection.inspect` checks the stamps against
+    rate_hz : the sampling rate, Hz (within :data:`RATE_HZ_RANGE`): the times of a CSV without a time
+        column; elsewhere the stated rate :func:`sins.inspection.inspect` checks the stamps against
     truth_topic : a bag's reference topic, where it has several
     origin : ``(lat, lon, h)`` in rad, rad, m, where a local reference frame starts (bags: default the
         first fix, else 0°, 0°, 0 m; EuRoC: default 0°, 0°, 0 m)
@@ -159,6 +185,11 @@ def read_recording_any(
         bag lacks (``needs="truth_topic"``).
     """
     path = Path(path)
+    if rate_hz is not None and not RATE_HZ_RANGE[0] <= rate_hz <= RATE_HZ_RANGE[1]:
+        low, high = RATE_HZ_RANGE
+        raise SinsInputError(
+            f"--rate {rate_hz:g}: a sampling rate is within {low:g} Hz to {high:g} Hz ({path})"
+        )
     kind = recording_kind(path)
     _check_options(path, kind, topic=topic, columns=columns, truth_topic=truth_topic, origin=origin)
     chosen = _units(units)
@@ -289,7 +320,9 @@ def _with(rec: Recording, **changes: object) -> Recording:
 
 __all__ = [
     "KINDS",
+    "RATE_HZ_RANGE",
     "Recording",
+    "missing_reference",
     "read_recording_any",
     "recording_kind",
 ]

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
 from sins.io.atomic import atomic_text
+from sins.io.paths import check_input
 
 Array = NDArray[np.float64]
 
@@ -76,7 +77,10 @@ def read_table(
         one line naming the file, and the line and column where it applies.
     """
     path = Path(path)
-    header_line, columns = read_header(path)
+    if path.suffix.lower() == ".parquet":
+        header_line, columns, whole = 0, *_read_parquet(path)
+    else:
+        header_line, columns = read_header(path)
     if len(set(columns)) != len(columns):
         dup = next(c for c in columns if columns.count(c) > 1)
         raise SinsInputError(f"{path}:{header_line}: column {dup!r} appears twice in the header")
@@ -91,9 +95,11 @@ def read_table(
             raise SinsInputError(
                 f"{path}:{header_line}: missing required column {name!r} (header has {', '.join(columns)})"
             )
-    data = _read_fast(path, header_line, columns, wanted)
-    if data is None:
-        data = _read_slow(path, header_line, columns, wanted)
+    if header_line == 0:  # Parquet: every column read, the wanted ones taken
+        data: Array = whole[:, [columns.index(c) for c in wanted]]
+    else:
+        fast = _read_fast(path, header_line, columns, wanted)
+        data = fast if fast is not None else _read_slow(path, header_line, columns, wanted)
     if len(data) == 0:
         raise SinsInputError(f"{path}: no data rows after the header")
     columns = wanted
@@ -120,6 +126,27 @@ def read_table(
     return Table(path=path, columns=columns, data=data, first_data_line=header_line + 1)
 
 
+def _read_parquet(path: Path) -> tuple[tuple[str, ...], Array]:
+    """A Parquet file's column names and its numbers as floats (rows, columns): what sins writes as a
+    solution (``sins integrate --out X.parquet``), read back as a table whose "lines" are rows."""
+    check_input(path)
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(path)
+        columns = tuple(table.column_names)
+        data = (
+            np.column_stack(
+                [np.asarray(table.column(c).to_numpy(zero_copy_only=False), dtype=float) for c in columns]
+            )
+            if columns
+            else np.empty((table.num_rows, 0))
+        )
+    except (ValueError, TypeError, OSError, ArithmeticError) as exc:  # pyarrow's errors derive from these
+        raise SinsInputError(f"{path}: not a Parquet table of numbers ({type(exc).__name__})") from None
+    return columns, data.reshape(table.num_rows, len(columns))
+
+
 def format_number(value: float) -> str:
     """A float as text that reads back exactly (``repr``), for messages."""
     return repr(float(value))
@@ -133,6 +160,7 @@ def open_text(path: Path) -> TextIO:
     SinsInputError
         one line naming the file: missing, a directory, or not readable.
     """
+    check_input(path)  # a FIFO or a device is refused before it is opened
     try:
         return open(path, encoding="utf-8-sig")  # tolerate the byte-order mark spreadsheets write
     except FileNotFoundError:
@@ -238,7 +266,10 @@ def _read_slow(
 
 
 def line_of_row(path: Path, header_line: int, row: int) -> int:
-    """The file line holding data row ``row`` (0-based), counting blank and comment lines."""
+    """The file line holding data row ``row`` (0-based), counting blank and comment lines (a Parquet
+    file's row, 1-based)."""
+    if path.suffix.lower() == ".parquet":
+        return row + 1
     for i, (number, _) in enumerate(_data_lines(path, header_line)):
         if i == row:
             return number

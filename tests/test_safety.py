@@ -1,0 +1,469 @@
+"""Nothing a user runs destroys their data or hangs (issue 41): outputs that never replace an input or
+each other, special files written in place or refused, inputs that are regular files, a campaign that
+does not take over a user's folder, corrected files that say so, SIGTERM that leaves no temporary file.
+
+Every case checks the bytes of every input before and after (SHA-256): a refusal is one line on stderr
+naming the output, exit status 2, and nothing changed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_fuzz import IMU_MODEL, RIG, SCENARIO, assert_one_line, run_cli, to_toml
+
+from sins import io
+from sins.io import provenance
+from sins.io.datasets.root import data_root
+from sins.io.recording import RATE_HZ_RANGE
+
+STATIC_ROWS = 2400  # two minutes at 20 Hz
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Small valid inputs: a scenario and its simulated tactical unit (increments with temperature)
+    and truth, a 10 Hz rig session and the model fitted on it, a static recording."""
+    d = tmp_path_factory.mktemp("safety")
+    (d / "s.toml").write_text(to_toml(SCENARIO))
+    (d / "imu.toml").write_text(to_toml(IMU_MODEL))
+    (d / "rig.toml").write_text(to_toml(RIG))
+    for argv in (
+        ["simulate", str(d / "s.toml"), "--model", "tactical", "--imu", str(d / "inc.csv"), "--truth",
+         str(d / "truth.csv")],
+        ["calibrate", str(d / "rig.toml"), "--imu", str(d / "imu.toml"), "--out", str(d / "rig.csv")],
+        ["fit", str(d / "rig.csv"), "--strategy", "regression", "--out", str(d / "m.json")],
+    ):  # fmt: skip
+        rc, _, err = run_cli(argv)
+        assert rc == 0, err
+    rng = np.random.default_rng(1)
+    gravity = np.array([0.0, 0.0, -9.80665])
+    readings = np.column_stack([np.arange(STATIC_ROWS) / 20.0, rng.normal(0.0, 1e-3, (STATIC_ROWS, 3)),
+                                gravity + rng.normal(0.0, 2e-3, (STATIC_ROWS, 3))])  # fmt: skip
+    header = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    np.savetxt(d / "static.csv", readings, delimiter=",", header=header, comments="", fmt="%.17g")
+    return d
+
+
+def _digests(paths: list[Path]) -> dict[Path, str]:
+    return {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths if p.is_file()}
+
+
+def _copy(files: Path, tmp: Path, *names: str) -> list[Path]:
+    return [Path(shutil.copy(files / n, tmp / n)) for n in names]
+
+
+#: Each case: the files copied in, the command (``{n}``: the path of file n in the folder; split on
+#: spaces), and the output it must refuse to write.
+ALIASES: dict[str, tuple[tuple[str, ...], str, str]] = {
+    "correct onto its recording": (
+        ("m.json", "inc.csv"),
+        "correct {m.json} {inc.csv} --out {inc.csv}",
+        "--out",
+    ),
+    "integrate onto its truth": (
+        ("inc.csv", "truth.csv"),
+        "integrate {inc.csv} --truth {truth.csv} --out {truth.csv}",
+        "--out",
+    ),
+    "fit onto its rig recording": (("rig.csv",), "fit {rig.csv} --strategy none --out {rig.csv}", "--out"),
+    "evaluate onto its model": (
+        ("m.json", "rig.csv"),
+        "evaluate {m.json} {rig.csv} --json {m.json}",
+        "--json",
+    ),
+    "inspect onto its recording": (("inc.csv",), "inspect {inc.csv} --json {inc.csv}", "--json"),
+    "characterise onto its recording": (
+        ("static.csv",),
+        "characterise {static.csv} --static --out {static.csv}",
+        "--out",
+    ),
+    "fit's two outputs one file": (
+        ("rig.csv", "m.json"),
+        "fit {rig.csv} --strategy none --out {m.json} --json {m.json}",
+        "--json",
+    ),
+    "simulate onto its scenario": (("s.toml",), "simulate {s.toml} --imu {s.toml} --truth t2.csv", "--imu"),
+    "calibrate onto its IMU file": (
+        ("rig.toml", "imu.toml"),
+        "calibrate {rig.toml} --imu {imu.toml} --out {imu.toml}",
+        "--out",
+    ),
+    "run onto its scenario": (("s.toml",), "run {s.toml} --json {s.toml}", "--json"),
+    "a hard link to the input": (("inc.csv",), "inspect {inc.csv} --json link.json", "--json"),
+    "the input by another path": (("inc.csv",), "inspect {inc.csv} --json sub/../inc.csv", "--json"),
+}
+
+
+def _named(arg: str, folder: Path, names: tuple[str, ...]) -> str:
+    """``{n}`` in ``arg`` replaced by the path of file n in ``folder``."""
+    for name in names:
+        arg = arg.replace("{" + name + "}", str(folder / name))
+    return arg
+
+
+@pytest.mark.parametrize("case", sorted(ALIASES))
+def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> None:
+    """Before, each of these wrote over its input and ended 0 ("wrote m.json", the model gone)."""
+    names, argv, flag = ALIASES[case]
+    inputs = _copy(files, tmp_path, *names)
+    (tmp_path / "sub").mkdir()
+    os.link(tmp_path / names[0], tmp_path / "link.json")
+    before = _digests([*inputs, tmp_path / "link.json"])
+    cwd = os.getcwd()
+    os.chdir(tmp_path)  # the relative names resolve in the case's folder
+    try:
+        rc, _, err = run_cli([_named(a, tmp_path, names) for a in argv.split()])
+    finally:
+        os.chdir(cwd)
+    assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
+    assert_one_line(err, [Path(flag)])
+    assert "input of this command" in err or "is also" in err, err
+    assert _digests([*inputs, tmp_path / "link.json"]) == before
+
+
+def test_a_character_device_is_written_in_place_and_a_fifo_refused(files: Path, tmp_path: Path) -> None:
+    """``--out /dev/null`` stays the device (the atomic rename once made it a regular file, as root);
+    ``/dev/full`` is one line (no space); a FIFO is refused before the work, without waiting for a reader."""
+    (rig,) = _copy(files, tmp_path, "rig.csv")
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", "/dev/null"])
+    assert rc == 0, err
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    if Path("/dev/full").exists():
+        rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", "/dev/full"])
+        assert rc == 2 and "/dev/full" in err and "space" in err, err
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(fifo)])
+    assert rc == 2 and "FIFO" in err, err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+
+
+def test_a_symbolic_link_is_followed_and_stays_a_link(files: Path, tmp_path: Path) -> None:
+    (rig,) = _copy(files, tmp_path, "rig.csv")
+    (tmp_path / "kept").mkdir()
+    link = tmp_path / "m.json"
+    link.symlink_to(tmp_path / "kept" / "model.json")
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(link)])
+    assert rc == 0, err
+    assert (
+        link.is_symlink() and json.loads((tmp_path / "kept" / "model.json").read_text())["strategy"] == "none"
+    )
+    # A link to an input is that input.
+    (tmp_path / "rig_link.csv").symlink_to(rig)
+    before = _digests([rig])
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(tmp_path / "rig_link.csv")])
+    assert rc == 2 and "input of this command" in err, err
+    assert _digests([rig]) == before
+
+
+def test_a_campaign_does_not_take_over_a_folder_of_the_users(tmp_path: Path) -> None:
+    """A folder with files of its own and no ``campaign.json``: before, the campaign wrote its
+    ``summary.json`` over the user's."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "summary.json").write_text('{"mine": true}\n')
+    rc, _, err = run_cli(["campaign", "tactical_drives", "--out", str(out)])
+    assert rc == 2 and "no campaign.json" in err and str(out) in err, err
+    assert (out / "summary.json").read_text() == '{"mine": true}\n'
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+
+
+# --------------------------------------------------------------------------- inputs
+
+
+def _fifo(tmp_path: Path, name: str) -> Path:
+    path = tmp_path / name
+    os.mkfifo(path)
+    return path
+
+
+INPUTS: dict[str, Callable[[Path, Path], tuple[list[str], str]]] = {
+    "a FIFO as the recording": lambda f, t: (["inspect", str(_fifo(t, "f.csv"))], "FIFO"),
+    "a FIFO as the truth": lambda f, t: (["integrate", str(f / "inc.csv"), "--truth", str(_fifo(t, "t.csv"))],
+                                         "FIFO"),
+    "/dev/zero as the recording": lambda f, t: (["inspect", "/dev/zero"], "character device"),
+    "a FIFO as the model": lambda f, t: (["evaluate", str(_fifo(t, "m.json")), str(f / "rig.csv")], "FIFO"),
+    "a FIFO as the scenario": lambda f, t: (["run", str(_fifo(t, "s.toml"))], "FIFO"),
+    "a folder as the truth": lambda f, t: (["integrate", str(f / "inc.csv"), "--truth", str(t)], "directory"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(INPUTS))
+def test_inputs_that_would_hang_or_never_end_are_refused_in_one_line(
+    files: Path, tmp_path: Path, case: str
+) -> None:
+    """Before, a FIFO blocked its reader for ever and ``/dev/zero`` was read until memory ran out."""
+    argv, fragment = INPUTS[case](files, tmp_path)
+    rc, _, err = run_cli(argv)
+    assert rc == 2 and fragment in err and err.count("\n") == 1, err
+
+
+def test_a_euroc_stamp_beyond_64_bits_is_one_line(tmp_path: Path) -> None:
+    """Before: OverflowError (a traceback) turning the stamps into int64."""
+    imu = tmp_path / "mav0" / "imu0" / "data.csv"
+    imu.parent.mkdir(parents=True)
+    rows = [f"{1_403_636_579_758_555_392 + 5_000_000 * k},0,0,0,0,0,9.8" for k in range(50)]
+    rows[20] = "99999999999999999999,0,0,0,0,0,9.8"
+    imu.write_text("#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n" + "\n".join(rows) + "\n")
+    rc, _, err = run_cli(["inspect", str(tmp_path)])
+    assert rc == 2 and f"{imu}:22:" in err and "beyond" in err and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize("rate", ["1e300", "1e-300"])
+def test_a_stated_rate_beyond_the_documented_limits_is_refused(files: Path, rate: str) -> None:
+    """Before, ``--rate 1e300`` passed ``sins inspect`` and ``1e-300`` made times of 6e303 s."""
+    rc, _, err = run_cli(["inspect", str(files / "static.csv"), "--rate", rate])
+    assert rc == 2 and "0.1 Hz to 100000 Hz" in err, err
+    low, high = RATE_HZ_RANGE
+    assert (low, high) == (0.1, 1e5)
+
+
+# --------------------------------------------------------------------------- corrected files
+
+
+def test_a_corrected_file_says_so_and_is_not_corrected_twice_unless_told(files: Path, tmp_path: Path) -> None:
+    """``sins simulate``'s own output (increments with temperature): before, a ValueError (30000 vs
+    29999 rows) in the writer. The corrected file keeps the unit's ``sensor`` line, adds ``corrected
+    by`` naming the model and its digest, and keeps the temperature column as read; correcting it again
+    is refused unless ``--again``, which adds a second line."""
+    model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
+    # The rig's model was fitted on another simulated unit: read this recording as the same one.
+    text = rec.read_text().replace(
+        "sensor: simulated tactical unit (unit seed 1)", "sensor: " + _rig_unit(files)
+    )
+    rec.write_text(text)
+    out = tmp_path / "c.csv"
+    rc, _, err = run_cli(["correct", str(model), str(rec), "--out", str(out)])
+    assert rc == 0, err
+    said = provenance.read_provenance(out)
+    digest = hashlib.sha256(model.read_bytes()).hexdigest()[:16]
+    assert said.sensor == _rig_unit(files) and said.corrections == 1
+    assert f"model {model} (sha256 {digest})" in said.corrected_by
+    assert io.read_recording_any(out).corrected_by == said.corrected_by
+    np.testing.assert_array_equal(io.read_table(out).column("temp"), io.read_table(rec).column("temp"))
+    again = tmp_path / "c2.csv"
+    rc, _, err = run_cli(["correct", str(model), str(out), "--out", str(again)])
+    assert rc == 2 and "already corrected" in err and "--again" in err and not again.exists(), err
+    rc, _, err = run_cli(["correct", str(model), str(out), "--out", str(again), "--again"])
+    assert rc == 0 and provenance.read_provenance(again).corrections == 2, err
+
+
+def _rig_unit(files: Path) -> str:
+    return provenance.read_provenance(files / "rig.csv").sensor
+
+
+def test_a_model_of_another_unit_is_refused_on_every_path(files: Path, tmp_path: Path) -> None:
+    """The model was fitted on the rig's simulated unit (its file says which): the tactical unit
+    simulated in ``inc.csv`` is another one, for ``correct`` and ``evaluate`` alike."""
+    assert _rig_unit(files).startswith("simulated imu unit")
+    out = tmp_path / "c.csv"
+    rc, _, err = run_cli(["correct", str(files / "m.json"), str(files / "inc.csv"), "--out", str(out)])
+    assert (
+        rc == 2 and "the model was fitted on simulated imu unit" in err and "simulated tactical unit" in err
+    )
+    assert not out.exists()
+
+
+BROAD_18 = data_root() / "broad_mocap" / "18_undisturbed_fast_translation_with_breaks_B.mat"
+
+
+@pytest.mark.skipif(not BROAD_18.exists(), reason="BROAD not in the data root")
+def test_a_rig_model_is_not_applied_to_a_dataset_of_another_unit(files: Path, tmp_path: Path) -> None:
+    """Before, a model fitted on a simulated rig corrected ``--dataset broad_18`` without a word."""
+    rc, _, err = run_cli(
+        ["correct", str(files / "m.json"), "--dataset", "broad_18", "--out", str(tmp_path / "c.csv")]
+    )
+    assert rc == 2 and "BROAD IMU B" in err and "simulated imu unit" in err, err
+
+
+def test_one_file_column_read_into_two_channels_is_refused(files: Path) -> None:
+    rc, _, err = run_cli(["inspect", str(files / "static.csv"), "--columns", "gyro_x=gyro_y"])
+    assert rc == 2 and "'gyro_y' would be read for both 'gyro_x' and 'gyro_y'" in err, err
+
+
+# --------------------------------------------------------------------------- SIGTERM
+
+
+CHILD = """
+import sys, time
+from pathlib import Path
+import sins.cli.correct as correct
+
+ready = Path(sys.argv[1])
+
+def stall(bar):
+    def progress(done, total):
+        ready.write_text("writing")
+        while True:  # until SIGTERM
+            time.sleep(0.05)
+    return progress
+
+correct.row_progress = stall
+from sins.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: Path) -> None:
+    """Before, a killed ``sins correct`` left its 5 MB ``.tmp`` behind: SIGTERM now ends the command
+    as Ctrl-C does, every ``finally`` run (exit 143, one line)."""
+    model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
+    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    out, ready = tmp_path / "out" / "c.csv", tmp_path / "ready"
+    out.parent.mkdir()
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(ready), "correct", str(model), str(rec), "--out", str(out)],
+        stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        while not ready.exists() and child.poll() is None:  # waits for the child's progress, not a time
+            time.sleep(0.05)
+        assert child.poll() is None, child.communicate()[1]
+        assert [p.name for p in out.parent.iterdir() if p.name.endswith(".tmp")]  # mid-write
+        child.send_signal(signal.SIGTERM)
+        _, err = child.communicate(timeout=600)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == 143 and err.strip().endswith("sins: terminated"), err
+    assert list(out.parent.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- bags and messages
+
+
+def _still_bag(
+    path: Path, *, pose_topics: tuple[str, ...] = ("/pose",), zero_quaternion_at: int | None = None,
+    nan_reading_at: int | None = None, seconds: float = 60.0, poses_end_s: float | None = None,
+) -> Path:  # fmt: skip
+    """A ROS 1 bag of a unit at rest heading east at 45° N (FLU: Earth's rate and gravity with white
+    noise), with its own constant pose on each topic of ``pose_topics`` at 20 Hz (until ``poses_end_s``)."""
+    from rosbags.rosbag1 import Writer
+    from test_readers import T0_NS, _imu_msg, _pose_msg, _typestore
+
+    ts = _typestore(True)
+    rng = np.random.default_rng(5)
+    n = int(seconds * 100)
+    lat = np.radians(45.0)
+    w_enu = 7.292115e-5 * np.array([0.0, np.cos(lat), np.sin(lat)])  # the body's FLU is ENU here
+    w = w_enu + 3e-4 * rng.standard_normal((n, 3)) + np.radians(5.0 / 3600.0)
+    f = np.array([0.0, 0.0, 9.8061992]) + 0.01 * rng.standard_normal((n, 3)) + 1e-3
+    if nan_reading_at is not None:
+        w[nan_reading_at, 1] = np.nan
+    with Writer(path) as writer:
+        imu = writer.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=ts)
+        poses = [writer.add_connection(t, "geometry_msgs/msg/PoseStamped", typestore=ts) for t in pose_topics]
+        for k in range(n):
+            ns = T0_NS + 10_000_000 * k
+            writer.write(imu, ns, ts.serialize_ros1(_imu_msg(ts, ns, w[k], f[k], k), "sensor_msgs/msg/Imu"))
+            if k % 5 == 0 and (poses_end_s is None or k / 100 <= poses_end_s):
+                q = np.zeros(4) if k // 5 == zero_quaternion_at else np.array([0.0, 0.0, 0.0, 1.0])
+                msg = _pose_msg(ts, "pose", ns, np.zeros(3), q)
+                for c in poses:
+                    writer.write(c, ns, ts.serialize_ros1(msg, "geometry_msgs/msg/PoseStamped"))
+    return path
+
+
+def test_a_still_bag_with_its_own_poses_is_fitted_for_its_biases_alone(tmp_path: Path) -> None:
+    """Before, ``sins fit`` on a still bag wrote scale factors of 1e10 ppm, exit 0. The biases the bag
+    was written with (5 °/h on each gyro, 1 mm/s² on each accelerometer, FLU turned into FRD) come back
+    within 4 standard errors; everything else is held at zero."""
+    bag = _still_bag(tmp_path / "still.bag")
+    out, doc = tmp_path / "m.json", tmp_path / "f.json"
+    # The bag was written at 45° N; without a fix in it, the place is given.
+    argv = ["fit", str(bag), "--origin", "45,0,0", "--strategy", "regression", "--out", str(out)]
+    rc, stdout, err = run_cli([*argv, "--json", str(doc)])
+    assert rc == 0, err
+    fit = json.loads(doc.read_text())
+    kept = [c for c in fit["coefficients"] if c["se"] is not None]
+    assert {(c["sensor"], c["term"]) for c in kept} == {("gyro", "bias"), ("accel", "bias")}
+    frd = np.array([1.0, -1.0, -1.0])
+    for c in kept:
+        i = "xyz".index(c["axis"])
+        truth = 5.0 * frd[i] if c["sensor"] == "gyro" else 1e-3 / 9.80665e-6 * frd[i]
+        assert abs(c["value"] - truth) < 4.0 * c["se"], (c, truth)
+    assert "held at zero" in stdout
+
+
+def test_bag_messages_name_the_topic_and_the_option(tmp_path: Path) -> None:
+    """A zero quaternion: before, numpy's warnings then "came out nan" naming no topic. Two pose topics:
+    before, "give it with --truth" (no word of --truth-topic). A NaN reading: before,
+    "np.float64(nan) is not finite". An empty ``.bag``: before, read as a CSV."""
+    zero = _still_bag(tmp_path / "zero.bag", zero_quaternion_at=7, seconds=5.0)
+    rc, _, err = run_cli(["integrate", str(zero)])
+    assert rc == 2 and "topic /pose: message 8: orientation" in err and "norm 0" in err, err
+    two = _still_bag(tmp_path / "two.bag", pose_topics=("/a", "/b"), seconds=25.0)
+    for argv in (
+        ["integrate", str(two)],
+        ["fit", str(two), "--strategy", "regression", "--out", str(tmp_path / "m")],
+    ):
+        rc, _, err = run_cli(argv)
+        assert rc == 2 and "2 pose topics (/a, /b)" in err and "--truth-topic TOPIC" in err, err
+    nan = _still_bag(tmp_path / "nan.bag", nan_reading_at=12, seconds=5.0)
+    rc, _, err = run_cli(["inspect", str(nan)])
+    assert rc == 2 and "message 13: angular_velocity.y nan is not finite" in err, err
+    (tmp_path / "empty.bag").write_bytes(b"")
+    rc, _, err = run_cli(["inspect", str(tmp_path / "empty.bag")])
+    assert rc == 2 and "named as a ROS 1 bag, but it is empty" in err, err
+
+
+def test_a_parquet_solution_reads_back_as_a_truth(files: Path, tmp_path: Path) -> None:
+    """The formats guide says a solution reads back as a truth file; before, a Parquet one did not. The
+    integration against the solution it wrote is exact (every error zero)."""
+    sol = tmp_path / "sol.parquet"
+    rc, _, err = run_cli(
+        ["integrate", str(files / "inc.csv"), "--truth", str(files / "truth.csv"), "--out", str(sol)]
+    )
+    assert rc == 0, err
+    rc, _, err = run_cli(
+        ["integrate", str(files / "inc.csv"), "--truth", str(sol), "--json", str(tmp_path / "j.json")]
+    )
+    assert rc == 0, err
+    summary = json.loads((tmp_path / "j.json").read_text())
+    assert summary["max_horizontal_m"] < 1e-6 and abs(summary["final_yaw_deg"]) < 1e-9
+
+
+def test_the_help_and_the_behaviour_agree_on_a_reference_ending_early(tmp_path: Path) -> None:
+    """``--within-truth``'s help says what happens past a truth file's end (refused) and past the
+    recording's own reference (a short tail cut with a note, a longer one refused), and so it is: a
+    bag whose poses end 0.5 s before its readings is cut; one whose poses end after a third, refused."""
+    from sins.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    text = " ".join(sub.choices["integrate"].format_help().split())
+    assert "a tail of up to 1 s or 1 % of the recording is cut with a note, a longer one refused" in text
+    tail = _still_bag(tmp_path / "tail.bag", seconds=20.0, poses_end_s=19.4)
+    rc, _, err = run_cli(["integrate", str(tail)])
+    assert rc == 0 and "where its own reference ends" in err, err
+    short = _still_bag(tmp_path / "short.bag", seconds=20.0, poses_end_s=7.0)
+    rc, _, err = run_cli(["integrate", str(short)])
+    assert rc == 2 and "--within-truth" in err, err
+    rc, _, err = run_cli(["integrate", str(short), "--within-truth"])
+    assert rc == 0, err
+
+
+def test_a_session_of_turns_known_by_their_angles_fits_regression(tmp_path: Path) -> None:
+    """The Ferraris session's turns give only their angles: before, ``sins fit --strategy regression``
+    said "fit with g_sensitivity=False", an option no command has; now the g-sensitivity is left out,
+    said so, and the fit written."""
+    from conftest import dataset_folder
+
+    if not (dataset_folder("imucal_ferraris")).exists():
+        pytest.skip("the Ferraris session is not in the data root")
+    rc, out, err = run_cli(
+        ["fit", "--dataset", "ferraris", "--strategy", "regression", "--out", str(tmp_path / "m.json")]
+    )
+    assert rc == 0 and "cannot tell the g-sensitivity: left out" in out, err
