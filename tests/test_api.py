@@ -12,11 +12,11 @@ from __future__ import annotations
 import ast
 import importlib
 import json
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from conftest import run_process
 
 import sins
 
@@ -107,7 +107,7 @@ def test_every_name_in_all_exists():
 def _fresh(code: str) -> dict[str, list[str]]:
     """What a fresh interpreter has imported after ``code``: sins's modules and the top-level packages."""
     probe = "import json, sys\n" + code + "\nprint(json.dumps(sorted(sys.modules)))"
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    done = run_process([sys.executable, "-c", probe], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
     names = json.loads(done.stdout.splitlines()[-1])
     return {

@@ -8,7 +8,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +15,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from conftest import refusal
+from conftest import refusal, wait_for
 
 from sins import campaign, scenario
 from sins.campaign import engine, folder, gate, results
@@ -149,14 +148,6 @@ def _start(args: list[str], log: Path) -> subprocess.Popen[bytes]:
     )
 
 
-def _wait_for(condition, timeout_s: float, what: str) -> None:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.2)
-
-
 def test_a_cluster_started_by_hand_gives_the_same_rows_and_a_killed_worker_loses_nothing(
     tmp_path: Path,
 ) -> None:
@@ -173,7 +164,7 @@ def test_a_cluster_started_by_hand_gives_the_same_rows_and_a_killed_worker_loses
     )  # fmt: skip
     workers: list[subprocess.Popen[bytes]] = []
     try:
-        _wait_for(address_file.exists, 60, "the scheduler")
+        wait_for(address_file.exists, scheduler.pid, "the scheduler")
         address = json.loads(address_file.read_text())["address"]
 
         def worker(name: str) -> subprocess.Popen[bytes]:

@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from conftest import refusal
+from conftest import communicate, refusal, run_process
 
 from sins import campaign
 from sins.campaign import engine, folder, results
@@ -297,7 +297,7 @@ def test_an_interrupted_campaign_prints_one_line_and_another_into_its_folder_is_
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and f"pid {run.pid}" in err, err
         os.killpg(run.pid, signal.SIGINT)
-        _, stderr = run.communicate(timeout=120)
+        _, stderr = communicate(run)
     finally:
         if run.poll() is None:
             os.killpg(run.pid, signal.SIGKILL)
@@ -488,8 +488,8 @@ def test_a_unit_its_rig_cannot_fit_is_one_line_from_the_cluster(tmp_path: Path) 
     (tmp_path / "rig.toml").write_text(RIG.replace("count = 6", "count = 0"))
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
     sins = str(Path(sys.executable).parent / "sins")
-    run = subprocess.run([sins, "campaign", str(path), "--out", str(tmp_path / "out"), "--workers", "1"],
-                         capture_output=True, text=True, env=env, timeout=600)  # fmt: skip
+    run = run_process([sins, "campaign", str(path), "--out", str(tmp_path / "out"), "--workers", "1"],
+                      capture_output=True, text=True, env=env)  # fmt: skip
     assert run.returncode == 2
     # Progress lines (after 5 s of work, on a loaded machine) aside, the error is one line.
     said = [line for line in run.stderr.splitlines() if not _progress(line)]

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import run_process
 
 from sins import io, pipeline
 from sins.cli import main
@@ -353,9 +354,7 @@ def test_bad_input_in_process(
 @pytest.mark.parametrize("case", ["nan", "malformed-toml", "mixed-forms"])
 def test_bad_input_subprocess(case: str, short_files: dict[str, Path], tmp_path: Path) -> None:
     argv, fragment = _bad_cases(short_files, tmp_path)[case]
-    proc = subprocess.run(
-        [sys.executable, "-m", "sins.cli", *argv], capture_output=True, text=True, timeout=120, check=False
-    )
+    proc = run_process([sys.executable, "-m", "sins.cli", *argv], capture_output=True, text=True, check=False)
     _assert_one_line_error(proc.returncode, proc.stdout, proc.stderr)
     assert fragment in proc.stderr
 

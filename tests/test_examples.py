@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
+from conftest import run_process
 
 from sins.earth import G0
 
@@ -16,7 +16,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 def _run(*args: str, cwd: Path = EXAMPLES.parent) -> str:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
-    done = subprocess.run(args, capture_output=True, text=True, env=env, cwd=cwd, timeout=300)
+    done = run_process(list(args), capture_output=True, text=True, env=env, cwd=cwd)
     assert done.returncode == 0, (args, done.stderr[-2000:])
     return done.stdout
 

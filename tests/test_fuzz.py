@@ -9,8 +9,10 @@ negative, zero), keys removed, retyped or unknown. The property, for every examp
 * the command ends with exit status 0 and a sound result (no ``nan`` or ``inf`` in what it prints
   or in the JSON it writes), or with exit status 2 and exactly one line on stderr that names one of
   its input files (or, for a size refusal, its output) — never another exception (a traceback);
-* never a hang: each example runs under a wall-clock alarm of :data:`HANG_S` seconds (the inputs are
-  tiny, so any example that long is stuck);
+* never a hang: each example runs under a watchdog (:func:`watchdog`) that stops it when it has used
+  :data:`HANG_CPU_S` seconds of CPU (the inputs are tiny: an example that long spins) or made no
+  progress (its process and children gained almost no CPU time over ``conftest.STALL_S`` seconds: it is
+  blocked). Never wall time alone: a slow, loaded machine is not a hang;
 * never a file left behind: after a refusal the output it was asked for does not exist, and no
   temporary file is left in the output folder.
 
@@ -35,6 +37,7 @@ import re
 import shutil
 import signal
 import tempfile
+import threading
 from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -44,6 +47,7 @@ from typing import Any
 import numpy as np
 import pytest
 import scipy.io
+from conftest import STALL_CPU_S, STALL_S, Progress
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from test_dataset_psins_vehicle import synthetic_recording
@@ -51,9 +55,10 @@ from test_dataset_psins_vehicle import synthetic_recording
 from sins.cli import main
 from sins.errors import SinsInputError
 
-#: Wall-clock bound of one example, s. The inputs run in well under a second each (a few seconds of
-#: motion at 20 Hz, a 40 s rig session at 10 Hz); this is 30 times that, for a loaded CI machine.
-HANG_S = 30.0
+#: CPU time one example may use, s (this process and its children). The inputs run in well under a
+#: second each (a few seconds of motion at 20 Hz, a 40 s rig session at 10 Hz); one that spins this long
+#: is stuck. CPU time, not wall time: a loaded machine slows an example, it does not add CPU to it.
+HANG_CPU_S = 120.0
 
 #: Examples run per target in this process (for the reports of ``tools/fuzz_long.py``).
 EXAMPLES: Counter[str] = Counter()
@@ -66,7 +71,7 @@ LAST_ARGV: list[list[str]] = [[]]
 
 
 def ci(examples: int) -> Callable[[Any], Any]:
-    """The CI profile: ``examples`` per target, reproducible, no deadline (the alarm bounds time)."""
+    """The CI profile: ``examples`` per target, reproducible, no deadline (the watchdog finds hangs)."""
     return settings(
         max_examples=examples,
         deadline=None,
@@ -81,30 +86,56 @@ def ci(examples: int) -> Callable[[Any], Any]:
 
 
 class Hang(BaseException):
-    """An example ran past :data:`HANG_S` (a BaseException, so no ``except Exception`` swallows it)."""
+    """An example spun past :data:`HANG_CPU_S` of CPU or stopped progressing (a BaseException, so no
+    ``except Exception`` swallows it)."""
 
 
 @contextlib.contextmanager
-def wall_clock(seconds: float) -> Iterator[None]:
-    """Raise :class:`Hang` in this (main) thread when the block runs longer than ``seconds``."""
+def watchdog(
+    cpu_s: float = HANG_CPU_S, stall_s: float = STALL_S, stall_cpu_s: float = STALL_CPU_S
+) -> Iterator[None]:
+    """Raise :class:`Hang` in this (main) thread when the block has used ``cpu_s`` of CPU time (this
+    process and its children) or its process tree has stalled for ``stall_s`` (``conftest.Progress``).
 
-    def alarm(signum: int, frame: Any) -> None:
-        raise Hang(f"ran longer than {seconds:g} s")
+    A thread samples the CPU time every half second and, to stop the block, sends SIGUSR1 to the main
+    thread: a signal interrupts a blocking read (of a FIFO, say), whose handler raises :class:`Hang`."""
+    why: list[str] = []
 
-    previous = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    def stop(signum: int, frame: Any) -> None:
+        raise Hang(why[0] if why else "stopped")
+
+    main_thread = threading.main_thread().ident
+    assert main_thread is not None and threading.current_thread().ident == main_thread
+    previous = signal.signal(signal.SIGUSR1, stop)
+    done = threading.Event()
+    watch = Progress(os.getpid(), stall_s=stall_s, stall_cpu_s=stall_cpu_s)
+
+    def guard() -> None:
+        while not done.wait(0.5):
+            if watch.cpu_s() > cpu_s:
+                why.append(f"used more than {cpu_s:g} s of CPU")
+            elif watch.stalled():
+                why.append(f"made no progress in {stall_s:g} s")
+            else:
+                continue
+            signal.pthread_kill(main_thread, signal.SIGUSR1)
+            return
+
+    thread = threading.Thread(target=guard, name="fuzz-watchdog", daemon=True)
+    thread.start()
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
+        done.set()
+        thread.join()
+        signal.signal(signal.SIGUSR1, previous)
 
 
-def run_cli(argv: list[str], hang_s: float = HANG_S) -> tuple[int, str, str]:
+def run_cli(argv: list[str], hang_cpu_s: float = HANG_CPU_S) -> tuple[int, str, str]:
     """``sins.cli.main(argv)`` in this process: exit status, stdout, stderr. Any exception escapes."""
     out, err = _io.StringIO(), _io.StringIO()
     LAST_ARGV[0] = argv
-    with wall_clock(hang_s), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+    with watchdog(hang_cpu_s), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         rc = main(argv)
     return rc, out.getvalue(), err.getvalue()
 
@@ -129,18 +160,18 @@ def check_cli(
     outputs: list[Path],
     folder: Path,
     ok: tuple[int, ...] = (0,),
-    hang_s: float = HANG_S,
+    hang_cpu_s: float = HANG_CPU_S,
 ) -> tuple[int, str, str]:
     """Run ``argv`` and assert the fuzzing property (see the module docstring).
 
     ``inputs`` are the files the command reads (a refusal names one of them), ``outputs`` those it
     is asked to write (none exist before), ``folder`` where they go (no temporary file may stay, at any
     depth). ``ok`` are the exit statuses of a sound result (``sins check`` also ends 1 on a
-    regression); ``hang_s`` the wall-clock bound (a campaign starts a cluster).
+    regression); ``hang_cpu_s`` the CPU bound (a campaign starts a cluster).
     """
     for path in outputs:
         assert not path.exists()
-    rc, out, err = run_cli(argv, hang_s)
+    rc, out, err = run_cli(argv, hang_cpu_s)
     leftovers = [p.name for p in folder.rglob("*.tmp")]
     assert not leftovers, f"temporary files left behind: {leftovers}"
     if rc in ok:
@@ -625,7 +656,7 @@ def target_quality(b: Base, data: st.DataObject) -> None:
 def _assert_read(read: Callable[[], Any], files: list[Path]) -> None:
     """A sound result (finite readings, increasing time) or one SinsInputError line naming a file."""
     try:
-        with wall_clock(HANG_S):
+        with watchdog():
             result = read()
     except SinsInputError as exc:
         message = str(exc)
@@ -834,3 +865,27 @@ def test_the_base_files_are_sound(base: Base) -> None:
     for line in base.recording_csv.splitlines()[:3]:
         assert line.startswith("#")
     assert os.path.getsize(base.folder / "baseline.json") > 0
+
+
+def test_the_watchdog_stops_a_spin_and_a_block_but_not_a_slow_example(tmp_path: Path) -> None:
+    """Hangs by CPU time and progress, never wall time: a loop spinning past its CPU budget is stopped;
+    a FIFO's reader (blocked: no CPU at all) is stopped once it has stalled; an example that works a
+    fifth of the time (what a machine at load 5 gives a process) runs to its end."""
+    import time
+
+    with pytest.raises(Hang, match="CPU"), watchdog(cpu_s=1.0):
+        while True:
+            pass
+    fifo = tmp_path / "f"
+    os.mkfifo(fifo)
+    with pytest.raises(Hang, match="no progress"), watchdog(stall_s=2.0, stall_cpu_s=0.05):
+        fifo.read_bytes()  # blocks in open() until a writer comes: none will
+    worked = 0
+    with watchdog(cpu_s=60.0, stall_s=1.0, stall_cpu_s=0.05):
+        start = time.process_time()
+        while time.process_time() - start < 0.6:  # 0.6 s of CPU over about 3 s
+            tick = time.process_time()
+            while time.process_time() - tick < 0.01:
+                worked += 1
+            time.sleep(0.04)
+    assert worked > 0

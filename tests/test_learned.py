@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import dataset_folder
+from conftest import dataset_folder, run_process
 
 from sins import compensation, imu, io
 from sins.cli import main
@@ -332,13 +332,12 @@ def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Pa
 
     reader = threading.Thread(target=read)
     reader.start()
-    on_tty = subprocess.run([*command, str(tmp_path / "a.json")], stdout=subprocess.PIPE, stderr=follower,
-                            env=env, timeout=300, check=True)  # fmt: skip
+    on_tty = run_process([*command, str(tmp_path / "a.json")], stdout=subprocess.PIPE, stderr=follower,
+                         env=env, check=True)  # fmt: skip
     os.close(follower)
-    reader.join(timeout=10)
+    reader.join()  # the pty's last bytes, read once the child has ended
     os.close(leader)
-    piped = subprocess.run([*command, str(tmp_path / "b.json")], capture_output=True, env=env, timeout=300,
-                           check=True)  # fmt: skip
+    piped = run_process([*command, str(tmp_path / "b.json")], capture_output=True, env=env, check=True)
     assert b"fitting kohonen" in drawn and b"training" in drawn, bytes(drawn[-500:])
     logged = piped.stderr.decode().splitlines()
     assert all(re.fullmatch(r"fitting kohonen: .*\(\d+ s\)", line) for line in logged), logged

@@ -16,12 +16,12 @@ import signal
 import stat
 import subprocess
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import communicate, wait_for
 from test_fuzz import IMU_MODEL, RIG, SCENARIO, assert_one_line, run_cli, to_toml
 
 from sins import io
@@ -134,16 +134,34 @@ def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> 
     assert _digests([*inputs, tmp_path / "link.json"]) == before
 
 
+def device(folder: Path, name: str) -> Path:
+    """A character device to write to: as root, a node of our own in ``folder`` for the kernel's
+    ``name`` (``null``, ``full``), so that a regression replaces that node and not the machine's
+    ``/dev/null`` (the atomic rename did that, as root); else ``/dev/NAME`` itself, which a user cannot
+    replace."""
+    real = Path("/dev") / name
+    try:
+        node = folder / f"dev-{name}"
+        os.mknod(node, stat.S_IFCHR | 0o666, os.stat(real).st_rdev)
+        return node
+    except (PermissionError, OSError):
+        return real
+
+
 def test_a_character_device_is_written_in_place_and_a_fifo_refused(files: Path, tmp_path: Path) -> None:
-    """``--out /dev/null`` stays the device (the atomic rename once made it a regular file, as root);
-    ``/dev/full`` is one line (no space); a FIFO is refused before the work, without waiting for a reader."""
+    """An output that is the null device stays the device (the atomic rename once made ``/dev/null`` a
+    regular file, as root); the full device is one line (no space); a FIFO is refused before the work,
+    without waiting for a reader."""
     (rig,) = _copy(files, tmp_path, "rig.csv")
-    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", "/dev/null"])
+    null = device(tmp_path, "null")
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(null)])
     assert rc == 0, err
-    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
-    if Path("/dev/full").exists():
-        rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", "/dev/full"])
-        assert rc == 2 and "/dev/full" in err and "space" in err, err
+    assert stat.S_ISCHR(os.stat(null).st_mode)
+    full = device(tmp_path, "full")
+    if full.exists():
+        rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(full)])
+        assert rc == 2 and str(full) in err and "space" in err, err
+        assert stat.S_ISCHR(os.stat(full).st_mode)
     fifo = tmp_path / "pipe.json"
     os.mkfifo(fifo)
     rc, _, err = run_cli(["fit", str(rig), "--strategy", "none", "--out", str(fifo)])
@@ -329,12 +347,11 @@ def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: P
         stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
-        while not ready.exists() and child.poll() is None:  # waits for the child's progress, not a time
-            time.sleep(0.05)
+        wait_for(lambda: ready.exists() or child.poll() is not None, child.pid, "the child's write")
         assert child.poll() is None, child.communicate()[1]
         assert [p.name for p in out.parent.iterdir() if p.name.endswith(".tmp")]  # mid-write
         child.send_signal(signal.SIGTERM)
-        _, err = child.communicate(timeout=600)
+        _, err = communicate(child)
     finally:
         if child.poll() is None:
             child.kill()

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import os
 import shlex
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from conftest import run_process
 
 from sins.io.datasets import data_root
 
@@ -61,7 +61,7 @@ def test_the_readmes_tour_runs_in_order(tmp_path):
             continue
         if "--dataset" in argv and not data_root().exists():
             continue
-        done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+        done = run_process(argv, cwd=tmp_path, env=env, capture_output=True, text=True)
         assert done.returncode == 0, (line, done.stderr[-2000:])
         assert done.stdout.strip(), f"{line!r} printed nothing"
         ran.append(argv[1])

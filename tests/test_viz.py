@@ -255,7 +255,7 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
     web, grpc = _free_port(), _free_port()
     address = sins.viz.serve(result, summary="the table", web_port=web, grpc_port=grpc)
     assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
-    with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
+    with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=600) as page:  # a deadlock guard
         assert page.status == 200 and b"<html" in page.read().lower()
 
 
