@@ -36,8 +36,6 @@ Array = NDArray[np.float64]
 
 #: Strategies whose whole model is the seed model: they take the interval fit's coefficients as they are.
 _SEED_ONLY = ("regression", "regression_robust")
-#: Fits at most, when a coefficient kept comes out less determined than predicted and is held.
-_REFITS = 3
 #: The model the PSINS demo's filter estimates: gyro and accelerometer biases alone.
 BIAS_ONLY = "bias_only"
 
@@ -82,20 +80,15 @@ def fit(
         line naming the recording).
     """
     where = rec.source or "recording"
-    bounds = identifiability.class_bounds(grade)
     try:
-        holds = identifiability.assess(rec, interval_s, bounds)
         if name == BIAS_ONLY:
-            return _bias_only(rec, interval_s, holds)
-        for _ in range(_REFITS):
-            fitted = interval_fit.fit_intervals(
+            return _bias_only(rec, interval_s, grade)
+        fitted, review = identifiability.fit_determined(
+            lambda holds: interval_fit.fit_intervals(
                 rec, interval_s=interval_s, robust=name == "regression_robust", holds=holds
-            )
-            loose = identifiability.loose(_values(fitted), holds)
-            if not loose:
-                break
-            holds.reasons.update(loose)  # determined less well than predicted: held, fitted again
-        review = identifiability.review(_values(fitted), holds.bounds, where, holds.reasons)
+            ),
+            rec, interval_s, grade, where,
+        )  # fmt: skip
         strategy = compensation.make(name, **(params or {}))
         if name == "none":
             return Fitted(strategy, fitted, review)
@@ -119,28 +112,17 @@ def fit(
     return Fitted(strategy, fitted, review)
 
 
-def _values(fit: IntervalFit) -> dict[str, tuple[float, float | None]]:
-    """The interval fit's coefficients by name (:func:`sins.compensation.identifiability.review`):
-    the seed model's, the time offsets, and the lever arm (whose standard error the fit does not give)."""
-    values: dict[str, tuple[float, float | None]] = dict(identifiability.seed_values(fit.seed))
-    values["gyro.time_offset"] = (fit.time_offset_s, fit.time_offset_se_s)
-    values["accel.time_offset"] = (fit.accel_time_offset_s, fit.accel_time_offset_se_s)
-    for axis, arm in zip("xyz", fit.lever_arm_m, strict=True):
-        values[f"accel.lever_arm.{axis}"] = (float(arm), None)
-    return values
-
-
 def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
     """What a model file records of the recording it was fitted on: the unit, its rate, the reference."""
     return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name}
 
 
-def _bias_only(rec: ReferencedRecording, interval_s: float, holds: identifiability.Holds) -> Fitted:
+def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitted:
     """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
-    fitted = interval_fit.fit_biases(rec, interval_s=interval_s, holds=holds)
-    biases = identifiability.bias_names("gyro") + identifiability.bias_names("accel")
-    values = {k: v for k, v in identifiability.seed_values(fitted.seed).items() if k in biases}
-    review = identifiability.review(values, holds.bounds, rec.source or "recording", holds.reasons)
+    fitted, review = identifiability.fit_determined(
+        lambda holds: interval_fit.fit_biases(rec, interval_s=interval_s, holds=holds),
+        rec, interval_s, grade, rec.source or "recording", biases_only=True,
+    )  # fmt: skip
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
     strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
     return Fitted(strategy, fitted, review)
@@ -253,14 +235,16 @@ def open_loop_attitude(
 
 def frame_turn(rec: ReferencedRecording) -> Array:
     """The navigation frame's turn in inertial space over each step, rad (n, 3) in its axes: Earth's rate
-    at the reference's mean latitude (its vertical part only where ``heading_known`` is False; the
-    transport rate of a room or a slow vehicle is left out)."""
+    at the reference's mean latitude (its vertical part only where ``heading_known`` is False, none where
+    ``latitude_known`` is False; the transport rate of a room or a slow vehicle is left out)."""
     from sins import earth
 
     lat = float(np.mean(rec.reference.lat))
     w_ie = np.array(np.broadcast_arrays(*earth.earth_rate_n(lat)), dtype=float).reshape(3)
     if not rec.heading_known:
         w_ie[:2] = 0.0
+    if not rec.latitude_known:
+        w_ie[:] = 0.0
     return np.asarray(np.outer(np.diff(rec.imu.t), w_ie))
 
 
@@ -331,15 +315,13 @@ def between(rec: ReferencedRecording, start_s: float, end_s: float) -> Reference
         reference_name=rec.reference_name,
         source=rec.source,
         heading_known=rec.heading_known,
+        latitude_known=rec.latitude_known,
     )
 
 
-def from_recording(
-    imu: ImuRates | ImuIncrements, truth: NavSeries, source: str, sensor: str = ""
-) -> ReferencedRecording:
+def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str) -> ReferencedRecording:
     """A user's readings beside their reference trajectory (a truth CSV, a bag's poses, a EuRoC
-    ground truth): rate-form readings integrated between samples by the trapezoid rule; ``sensor`` the
-    unit's identity where the recording names it.
+    ground truth): rate-form readings integrated between samples by the trapezoid rule.
 
     Raises
     ------
@@ -360,7 +342,7 @@ def from_recording(
             f"({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
         )
     return ReferencedRecording(
-        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source, sensor=sensor
+        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source
     )
 
 
@@ -411,10 +393,9 @@ def read_inputs(
     reference = None if truth is None else io.read_truth(truth)
     start = None if reference is None else float(reference.t[0])
     rec = io.read_recording_any(path, **(options or {}), t_start=start)
-    reference = reference if reference is not None else rec.truth
-    if reference is None:
+    if reference is None and rec.truth is None:
         return rec
-    return from_recording(rec.imu, reference, str(path), rec.sensor)
+    return io.referenced(rec, reference, sensor=rec.sensor)
 
 
 def check_fitted_on(

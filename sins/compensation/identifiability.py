@@ -32,8 +32,9 @@ the loosest.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,6 +50,7 @@ from sins.nav import attitude
 from sins.series import ReferencedRecording
 
 Array = NDArray[np.float64]
+_F = TypeVar("_F", bound="_IntervalFit")
 
 #: The class assumed when the user names none: the loosest bounds.
 DEFAULT_GRADE = "consumer"
@@ -441,6 +443,65 @@ def loose(values: Mapping[str, tuple[float, float | None]], holds: Holds) -> dic
     return out
 
 
+class _IntervalFit(Protocol):
+    """What :func:`fit_determined` reads of an interval fit
+    (:class:`~sins.compensation.interval_fit.IntervalFit`)."""
+
+    @property
+    def seed(self) -> SeedModelFit: ...
+    @property
+    def time_offset_s(self) -> float: ...
+    @property
+    def time_offset_se_s(self) -> float: ...
+    @property
+    def accel_time_offset_s(self) -> float: ...
+    @property
+    def accel_time_offset_se_s(self) -> float: ...
+    @property
+    def lever_arm_m(self) -> Array: ...
+
+
+#: Fits at most, when a coefficient kept comes out less determined than predicted and is held.
+REFITS = 3
+
+
+def fit_determined(
+    fit: Callable[[Holds], _F], rec: ReferencedRecording, interval_s: float, grade: str, where: str,
+    *, biases_only: bool = False,
+) -> tuple[_F, Review]:  # fmt: skip
+    """``fit(holds)`` (an interval fit) with the coefficients ``rec`` does not determine for a unit of
+    ``grade`` held (:func:`assess`), made again holding any kept one that came out less determined than
+    predicted (:func:`loose`, at most :data:`REFITS` fits), then judged (:func:`review`).
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`review`, naming ``where``.
+    """
+    holds = assess(rec, interval_s, class_bounds(grade))
+    for _ in range(REFITS):
+        fitted = fit(holds)
+        values = interval_values(fitted, biases_only)
+        more = loose(values, holds)
+        if not more:
+            break
+        holds.reasons.update(more)
+    return fitted, review(values, holds.bounds, where, holds.reasons)
+
+
+def interval_values(fit: _IntervalFit, biases_only: bool = False) -> dict[str, tuple[float, float | None]]:
+    """An interval fit's coefficients by name: the seed model's, the time offsets and the lever arm
+    (whose standard error the fit does not give: None); with ``biases_only``, the biases alone."""
+    values: dict[str, tuple[float, float | None]] = dict(seed_values(fit.seed))
+    if biases_only:
+        return {k: v for k, v in values.items() if _term(k) == "bias"}
+    values["gyro.time_offset"] = (fit.time_offset_s, fit.time_offset_se_s)
+    values["accel.time_offset"] = (fit.accel_time_offset_s, fit.accel_time_offset_se_s)
+    for axis, arm in zip(_AXES, fit.lever_arm_m, strict=True):
+        values[f"accel.lever_arm.{axis}"] = (float(arm), None)
+    return values
+
+
 def seed_values_of_model(model: ImuModel) -> dict[str, float]:
     """A simulated unit's own seed-model coefficients by name (SI): the affine terms of its effects
     (bias, scale and misalignment, g-sensitivity), what a fit of it should find."""
@@ -519,6 +580,7 @@ __all__ = [
     "DEFAULT_GRADE",
     "LEVER_ARM_BOUND_M",
     "LEVER_ARM_SE_M",
+    "REFITS",
     "TIME_OFFSET_BOUND_S",
     "TIME_OFFSET_SE_S",
     "WIDER_BIASES",
@@ -530,7 +592,9 @@ __all__ = [
     "bias_names",
     "class_bounds",
     "determined",
+    "fit_determined",
     "gyro_names",
+    "interval_values",
     "loose",
     "review",
     "seed_values",

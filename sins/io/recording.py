@@ -2,8 +2,9 @@
 
 It picks the reader by what the path is: a folder with ``metadata.yaml`` (a ROS 2 bag), a ROS 1 bag or
 an MCAP file (by their first bytes, :mod:`sins.io.bags`), a EuRoC/TUM-VI folder or ASL file
-(:mod:`sins.io.euroc`), else a CSV: sins's own IMU forms (:func:`sins.io.read_imu`) or, with
-``columns`` or ``units``, one with its own columns and units (:mod:`sins.io.columns`). Every reader
+(:mod:`sins.io.euroc`), an ``.npz`` recording (:mod:`sins.io.npz`), else a CSV: sins's own IMU forms
+(:func:`sins.io.read_imu`) or, with ``columns`` or ``units``, one with its own columns and units
+(:mod:`sins.io.columns`). Every reader
 returns a :class:`Recording`: readings in SI on FRD axes, and the reference trajectory where the
 recording has one.
 """
@@ -20,11 +21,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.errors import MissingInputError, SinsInputError
-from sins.io import axes, bags, euroc, formats, provenance
+from sins.io import axes, bags, euroc, formats, npz, provenance
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.io.paths import check_input
-from sins.series import ImuIncrements, ImuRates, NavSeries
+from sins.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -32,7 +33,7 @@ Array = NDArray[np.float64]
 #: beyond any IMU's (a scenario's ``[imu] rate_hz`` takes 1 Hz to 100 kHz).
 RATE_HZ_RANGE = (0.1, 1e5)
 #: What :attr:`Recording.kind` may be.
-KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc")
+KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc", "npz")
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,9 @@ class Recording:
     column_map : a CSV's sins column names and the file columns read for them (``{}`` for other kinds)
     sensor, corrected_by : a CSV's ``# sensor:`` and ``# corrected by:`` lines (:mod:`sins.io.provenance`),
         "" where it has none
+    heading_known : whether the reference's north is true north (False for a room frame: EuRoC, .npz)
+    latitude_known : whether the reference's latitude is the recording's own (False where the frame was
+        placed at a nominal origin: Earth's rate then cannot be placed in it and is left out)
     """
 
     imu: ImuRates | ImuIncrements
@@ -80,6 +84,8 @@ class Recording:
     column_map: Mapping[str, str] = field(default_factory=dict)
     sensor: str = ""
     corrected_by: str = ""
+    heading_known: bool = True
+    latitude_known: bool = True
 
     @property
     def form(self) -> str:
@@ -114,6 +120,42 @@ def missing_reference(rec: Recording) -> MissingInputError:
     return MissingInputError(f"{rec.source}: the recording has no reference trajectory", needs="truth")
 
 
+def referenced(rec: Recording, truth: NavSeries | None = None, *, sensor: str = "") -> ReferencedRecording:
+    """``rec``'s readings beside a reference trajectory (``truth``, else the recording's own) as a
+    :class:`~sins.series.ReferencedRecording`: rate-form readings integrated between samples by the
+    trapezoid rule; the reference cut to the readings' span. A given ``truth`` is geodetic (its north and
+    latitude known); the recording's own keeps what the recording says of its frame.
+
+    Raises
+    ------
+    SinsInputError
+        when there is no reference, or it does not overlap the readings in time.
+    """
+    imu = rec.imu
+    own = truth is None
+    truth = rec.truth if truth is None else truth
+    if truth is None:
+        raise SinsInputError(f"{rec.source}: no reference trajectory (give one with --truth TRUTH.csv)")
+    if isinstance(imu, ImuRates):
+        dt = np.diff(imu.t)[:, None]
+        imu = ImuIncrements(
+            t=imu.t,
+            dtheta_b=0.5 * (imu.omega_ib_b[:-1] + imu.omega_ib_b[1:]) * dt,
+            dv_b=0.5 * (imu.f_ib_b[:-1] + imu.f_ib_b[1:]) * dt,
+        )
+    inside = np.flatnonzero((truth.t >= imu.t[0]) & (truth.t <= imu.t[-1]))
+    if len(inside) < 2:
+        raise SinsInputError(
+            f"{rec.source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the "
+            f"readings ({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
+        )
+    return ReferencedRecording(
+        imu=imu, reference=truth.at(inside), judged=None, sensor=sensor,
+        reference_name="truth" if not own else f"its own reference ({rec.kind})", source=rec.source,
+        heading_known=rec.heading_known or not own, latitude_known=rec.latitude_known or not own,
+    )  # fmt: skip
+
+
 def recording_kind(path: Path) -> str:
     """The :data:`KINDS` entry a path reads as (``"sins csv"`` standing for any CSV).
 
@@ -133,6 +175,8 @@ def recording_kind(path: Path) -> str:
         size = path.stat().st_size
         why = "it is empty" if size == 0 else f"its first bytes are not {named[1]}"
         raise SinsInputError(f"{path}: named as {named[0]}, but {why}; not read as a CSV")
+    if npz.is_npz(path):
+        return "npz"
     if path.is_dir():
         raise SinsInputError(
             f"{path}: a folder, but neither a ROS 2 bag (metadata.yaml) nor a EuRoC/TUM-VI recording "
@@ -200,7 +244,12 @@ def read_recording_any(
     elif kind == "euroc":
         got = euroc.read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
         rec = Recording(got.imu, str(path), kind, got.truth, _si("rate"), frame or axes.FRD, got.notes,
-                        got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "")  # fmt: skip
+                        got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "",
+                        heading_known=False, latitude_known=origin is not None)  # fmt: skip
+    elif kind == "npz":
+        imu, truth, t0_s, notes = npz.read_npz(path, frame=frame or axes.FRD)
+        rec = Recording(imu, str(path), kind, truth, _si("rate"), frame or axes.FRD, notes, round(t0_s * 1e9),
+                        heading_known=False, latitude_known=False)  # fmt: skip
     else:
         read = bags.read_bag(
             path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
@@ -325,4 +374,5 @@ __all__ = [
     "missing_reference",
     "read_recording_any",
     "recording_kind",
+    "referenced",
 ]
