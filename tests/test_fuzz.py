@@ -14,7 +14,9 @@ negative, zero), keys removed, retyped or unknown. The property, for every examp
   progress (its process and children gained almost no CPU time over ``conftest.STALL_S`` seconds: it is
   blocked). Never wall time alone: a slow, loaded machine is not a hang;
 * never a file left behind: after a refusal the output it was asked for does not exist, and no
-  temporary file is left in the output folder.
+  temporary file is left in the output folder;
+* never an input changed: every input's bytes (a folder's every file) are hashed before and after
+  (:func:`snapshot`), and a difference is an :class:`InputChanged` failure.
 
 The dataset readers are called directly (their files live under a data root, not on the command line):
 a result or one :class:`~sins.errors.SinsInputError` line naming the file.
@@ -140,6 +142,49 @@ def run_cli(argv: list[str], hang_cpu_s: float = HANG_CPU_S) -> tuple[int, str, 
     return rc, out.getvalue(), err.getvalue()
 
 
+class InputChanged(AssertionError):
+    """A command changed one of its inputs (its bytes, or what kind of file it is)."""
+
+
+def snapshot(paths: list[Path]) -> dict[str, str]:
+    """What each of ``paths`` is, never opening a special file: a regular file's SHA-256, a folder's
+    every regular file's (by name), a FIFO's or device's kind, a symbolic link's target and what that
+    is, "absent"."""
+    out: dict[str, str] = {}
+    for path in paths:
+        out[str(path)] = _what(Path(path))
+    return out
+
+
+def _what(path: Path) -> str:
+    import hashlib
+    import stat
+
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return "absent"
+    if stat.S_ISLNK(st.st_mode):
+        return f"link to {os.readlink(path)}: " + _what(Path(os.path.realpath(path)))
+    if stat.S_ISREG(st.st_mode):
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    if stat.S_ISDIR(st.st_mode):
+        files = sorted(p for p in path.rglob("*") if p.is_file() and not p.is_symlink())
+        inner = [f"{p.relative_to(path)}={hashlib.sha256(p.read_bytes()).hexdigest()}" for p in files]
+        return "folder " + hashlib.sha256("\n".join(inner).encode()).hexdigest()
+    return f"special {stat.S_IFMT(st.st_mode):o}"
+
+
+def check_unchanged(before: dict[str, str], argv: list[str]) -> None:
+    """Raise :class:`InputChanged` when an input is not what :func:`snapshot` found before ``argv``."""
+    after = snapshot([Path(p) for p in before])
+    changed = [p for p in before if before[p] != after[p]]
+    if changed:
+        raise InputChanged(
+            f"{argv[0]} changed its input(s) {changed}: {before[changed[0]]} -> {after[changed[0]]}"
+        )
+
+
 NON_FINITE = re.compile(r"(?<![\w./-])[-+]?(nan|inf|infinity)(?!\w)", re.IGNORECASE)
 
 
@@ -171,7 +216,9 @@ def check_cli(
     """
     for path in outputs:
         assert not path.exists()
+    before = snapshot(inputs)
     rc, out, err = run_cli(argv, hang_cpu_s)
+    check_unchanged(before, argv)
     leftovers = [p.name for p in folder.rglob("*.tmp")]
     assert not leftovers, f"temporary files left behind: {leftovers}"
     if rc in ok:

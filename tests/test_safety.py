@@ -16,6 +16,7 @@ import signal
 import stat
 import subprocess
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -365,6 +366,7 @@ def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: P
 def _still_bag(
     path: Path, *, pose_topics: tuple[str, ...] = ("/pose",), zero_quaternion_at: int | None = None,
     nan_reading_at: int | None = None, seconds: float = 60.0, poses_end_s: float | None = None,
+    quaternion: np.ndarray | None = None,
 ) -> Path:  # fmt: skip
     """A ROS 1 bag of a unit at rest heading east at 45° N (FLU: Earth's rate and gravity with white
     noise), with its own constant pose on each topic of ``pose_topics`` at 20 Hz (until ``poses_end_s``)."""
@@ -388,6 +390,8 @@ def _still_bag(
             writer.write(imu, ns, ts.serialize_ros1(_imu_msg(ts, ns, w[k], f[k], k), "sensor_msgs/msg/Imu"))
             if k % 5 == 0 and (poses_end_s is None or k / 100 <= poses_end_s):
                 q = np.zeros(4) if k // 5 == zero_quaternion_at else np.array([0.0, 0.0, 0.0, 1.0])
+                if quaternion is not None and k // 5 == 3:
+                    q = quaternion
                 msg = _pose_msg(ts, "pose", ns, np.zeros(3), q)
                 for c in poses:
                     writer.write(c, ns, ts.serialize_ros1(msg, "geometry_msgs/msg/PoseStamped"))
@@ -422,6 +426,13 @@ def test_bag_messages_name_the_topic_and_the_option(tmp_path: Path) -> None:
     zero = _still_bag(tmp_path / "zero.bag", zero_quaternion_at=7, seconds=5.0)
     rc, _, err = run_cli(["integrate", str(zero)])
     assert rc == 2 and "topic /pose: message 8: orientation" in err and "norm 0" in err, err
+    # Found by the long fuzz run: a quaternion of 1e200 made numpy warn of an overflow (a second line).
+    huge = _still_bag(tmp_path / "huge.bag", quaternion=np.array([1e200, 0.0, 0.0, 1.0]), seconds=5.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rc, _, err = run_cli(["integrate", str(huge)])
+    assert rc == 2 and "message 4: orientation (x, y, z, w) has norm inf" in err, err
+    assert [str(w.message) for w in caught] == []
     two = _still_bag(tmp_path / "two.bag", pose_topics=("/a", "/b"), seconds=25.0)
     for argv in (
         ["integrate", str(two)],
@@ -484,3 +495,18 @@ def test_a_session_of_turns_known_by_their_angles_fits_regression(tmp_path: Path
         ["fit", "--dataset", "ferraris", "--strategy", "regression", "--out", str(tmp_path / "m.json")]
     )
     assert rc == 0 and "cannot tell the g-sensitivity: left out" in out, err
+
+
+def test_a_huge_quaternion_in_an_npz_is_one_line_without_numpy_warnings(tmp_path: Path) -> None:
+    """Found by the long fuzz run: a ``q_wxyz`` row of 1e300 made numpy warn of an overflow (a line on
+    the user's terminal) before the reader's refusal."""
+    from test_npz import _write
+
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (400, 1))
+    q[9] = [1e300, 0.0, 0.0, 0.0]
+    _write(tmp_path / "r.npz", q_wxyz=q)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rc, _, err = run_cli(["inspect", str(tmp_path / "r.npz")])
+    assert rc == 2 and "q_wxyz: row 10 has norm inf" in err and err.count("\n") == 1, err
+    assert [str(w.message) for w in caught] == []

@@ -1,5 +1,5 @@
-"""The long fuzzing profile: the targets of ``tests/test_fuzz.py`` and ``tests/test_fuzz_surfaces.py``
-with many more examples, fresh randomness.
+"""The long fuzzing profile: the targets of ``tests/test_fuzz.py``, ``tests/test_fuzz_surfaces.py`` and
+``tests/test_fuzz_safety.py`` with many more examples, fresh randomness.
 
 Usage::
 
@@ -11,9 +11,11 @@ share of the time has not run out first. Each example is checked for the suite's
 sound result, or exit 2 with one line naming the file; no traceback, hang or file left behind); unlike
 the CI tests a failure does not stop the run: every distinct failure (by exception type and the deepest
 frame in ``sins/``) is counted and its first message printed, and ``--keep DIR`` copies the files of each
-failing example there. Prints per target the examples run, the failures and hangs found, the wall time
-and the peak resident memory so far of this process and of its children (a campaign's workers); exits 1
-when any failure was found. The memory figures are high-water marks: run a target alone (``--targets
+failing example there. Prints per target the examples run, the failures found and among them the hangs
+(an example past its CPU budget or without progress), the inputs changed (every input is hashed before
+and after each command) and the fitted models with a coefficient beyond its class's bounds, the wall
+time and the peak resident memory so far of this process and of its children (a campaign's workers);
+exits 1 when any failure was found. The memory figures are high-water marks: run a target alone (``--targets
 model_files``) for its own peak.
 """
 
@@ -36,14 +38,22 @@ from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import test_fuzz
+import test_fuzz_safety
 import test_fuzz_surfaces
 
 #: Each target's module (its ``run_target``, ``EXAMPLES`` and base files' maker).
 MODULES: dict[str, ModuleType] = {
     **dict.fromkeys(test_fuzz.TARGETS, test_fuzz),
     **dict.fromkeys(test_fuzz_surfaces.TARGETS, test_fuzz_surfaces),
+    **dict.fromkeys(test_fuzz_safety.TARGETS, test_fuzz_safety),
 }
-MAKERS = {test_fuzz: test_fuzz.make_base, test_fuzz_surfaces: test_fuzz_surfaces.make_surfaces}
+MAKERS = {
+    test_fuzz: test_fuzz.make_base,
+    test_fuzz_surfaces: test_fuzz_surfaces.make_surfaces,
+    test_fuzz_safety: test_fuzz_safety.make_base,
+}
+#: Failures counted apart in the report, by the exception's name.
+KINDS = {"hangs": "Hang", "inputs changed": "InputChanged", "beyond bounds": "BeyondBounds"}
 
 
 class _Spent(Exception):
@@ -136,9 +146,10 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as folder:
         bases: dict[ModuleType, Any] = {}
         seconds = 60.0 * args.minutes / len(names)
-        total = examples = hangs = 0
-        print(f"{'target':<22} {'examples':>9} {'failures':>9} {'hangs':>6} {'wall s':>7} {'peak MB':>8} "
-              f"{'children':>8}  (about {seconds:.0f} s each)")  # fmt: skip
+        total = examples = 0
+        kinds = dict.fromkeys(KINDS, 0)
+        print(f"{'target':<22} {'examples':>9} {'failures':>9} {'hangs':>6} {'changed':>8} {'beyond':>7} "
+              f"{'wall s':>7} {'peak MB':>8} {'children':>8}  (about {seconds:.0f} s each)")  # fmt: skip
         for name in names:
             module = MODULES[name]
             if module not in bases:
@@ -147,18 +158,23 @@ def main() -> int:
             count, failures, first = fuzz(name, bases[module], seconds, args.examples, args.seed)
             total += sum(failures.values())
             examples += count
-            hung = sum(n for key, n in failures.items() if key.startswith("Hang"))
-            hangs += hung
+            found = {
+                k: sum(n for key, n in failures.items() if key.startswith(f"{e} ")) for k, e in KINDS.items()
+            }
+            for k, n in found.items():
+                kinds[k] += n
             mine, children = _peak_mb()
             wall = time.monotonic() - started
-            print(f"{name:<22} {count:>9} {sum(failures.values()):>9} {hung:>6} {wall:>7.0f} {mine:>8.0f} "
+            print(f"{name:<22} {count:>9} {sum(failures.values()):>9} {found['hangs']:>6} "
+                  f"{found['inputs changed']:>8} {found['beyond bounds']:>7} {wall:>7.0f} {mine:>8.0f} "
                   f"{children:>8.0f}", flush=True)  # fmt: skip
             for key, n in failures.most_common():
                 print(f"    {n:>4} x {key}: {first[key]}", flush=True)
+    counted = ", ".join(f"{n} {k}" for k, n in kinds.items())
     print(
-        f"{examples} examples, {total} failing ({hangs} hangs)"
+        f"{examples} examples, {total} failing ({counted})"
         if total
-        else f"{examples} examples, no failures"
+        else f"{examples} examples, no failures ({counted})"
     )
     return 1 if total else 0
 

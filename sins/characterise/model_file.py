@@ -41,13 +41,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from pathlib import Path
 
 from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
 from sins.characterise.noise_terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG, MG, UG, ImuModel, spec
+from sins.io.atomic import atomic_text
 
 #: Per sensor, the effects written: (term, effect, parameter), the parameter in the file's unit.
 EFFECTS = {
@@ -232,14 +232,8 @@ def write_model(path: str | os.PathLike[str], result: Characterisation) -> Path:
     path = Path(path)
     imu_model(result)
     text = model_toml(result)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or Path("."))
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_text(path) as fh:  # links followed, devices written in place (sins.io.atomic)
+        fh.write(text)
     return path
 
 
