@@ -503,7 +503,7 @@ def workdir(b: Base) -> Iterator[Path]:
         except (Exception, Hang):
             if KEEP_FAILURES:
                 kept = KEEP_FAILURES[0] / Path(name).name
-                shutil.copytree(name, kept)
+                shutil.copytree(name, kept, symlinks=True)  # links kept as links (a dangling one too)
                 (kept / "argv.json").write_text(json.dumps([a.replace(name, "{dir}") for a in LAST_ARGV[0]]))
             raise
 

@@ -51,6 +51,7 @@ from test_fuzz import (
 from sins.compensation import identifiability
 from sins.earth import G0
 from sins.imu import DEG_PER_H
+from sins.io.paths import writes_in_place
 
 #: A drive of 30 s that turns about every axis, climbs, rolls and pitches (what a fit can determine).
 DRIVE: dict[str, Any] = {
@@ -266,6 +267,8 @@ def target_output_paths(b: SafetyBase, data: st.DataObject) -> None:
             if kind == "other output" and first is None:
                 kind = "fresh"
             path = _output(d, kind, inputs, slot, first, data)
+            if kind == "other output" and first is not None and writes_in_place(first):
+                kind = "null device"  # the same device twice: written in place twice, as asked
             first = path if first is None else first
             aliased = aliased or kind in ALIASES
             kinds.append((kind, path))
