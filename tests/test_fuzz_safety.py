@@ -23,6 +23,7 @@ import json
 import os
 import shutil
 import stat
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -140,6 +141,10 @@ def _npz_arrays(path: Path, n: int = 6000, seed: int = 3) -> dict[str, np.ndarra
     return arrays
 
 
+#: Fits written and checked (their coefficients kept and held), for the reports of tools/fuzz_long.py.
+FITS: Counter[str] = Counter()
+
+
 class BeyondBounds(AssertionError):
     """A fit ended 0 and wrote a coefficient beyond its class's bounds (or not determined)."""
 
@@ -149,6 +154,8 @@ def check_fit_document(path: Path, grade: str) -> None:
     zero (see the module docstring)."""
     doc = json.loads(path.read_text())
     bounds = identifiability.class_bounds(grade)
+    FITS["models"] += 1
+    FITS["held"] += len(doc.get("held", {}))
     units = {"°/h": DEG_PER_H, "µg": 1e-6 * G0, "ppm": 1e-6, "mrad": 1e-3, "°/h/g": DEG_PER_H / G0}
     for c in doc.get("coefficients", []):
         name = f"{c['sensor']}.{c['term']}.{c['axis']}"
@@ -162,6 +169,7 @@ def check_fit_document(path: Path, grade: str) -> None:
         se = c["se"] * units[c["unit"]]
         if not (abs(value) <= bounds.largest(name) and se <= bounds.limit(name)):
             raise BeyondBounds(f"{name} = {c['value']} ± {c['se']} {c['unit']} for a {grade} unit")
+        FITS["kept"] += 1
 
 
 def _run(argv: list[str], inputs: list[Path], folder: Path, aliased: bool = False) -> tuple[int, str, str]:

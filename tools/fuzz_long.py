@@ -170,6 +170,10 @@ def main() -> int:
                   f"{children:>8.0f}", flush=True)  # fmt: skip
             for key, n in failures.most_common():
                 print(f"    {n:>4} x {key}: {first[key]}", flush=True)
+    fits = test_fuzz_safety.FITS
+    if fits["models"]:
+        print(f"fits written and checked against their class: {fits['models']} models, {fits['kept']} "
+              f"coefficients kept within the bounds, {fits['held']} held at zero")  # fmt: skip
     counted = ", ".join(f"{n} {k}" for k, n in kinds.items())
     print(
         f"{examples} examples, {total} failing ({counted})"
