@@ -224,3 +224,34 @@ def test_a_real_trial_holds_only_the_g_sensitivity_it_cannot_tell(tmp_path: Path
     assert (
         json.loads((tmp_path / "m.json").read_text())["state"]["fitted_on_"]["checks"]["grade"] == "consumer"
     )
+
+
+def _still_npz(path: Path, k: int) -> Path:
+    """A still ``.npz`` recording (the shared EuRoC form), its reference constant, its gyro bias
+    1e-3 (k + 1) rad/s."""
+    rng = np.random.default_rng(k)
+    n = 6000
+    t = 1.4e9 + np.arange(n) / 200.0 + 100.0 * k
+    np.savez(path, t_s=t, gyro_rad_s=rng.normal(1e-3 * (k + 1), 1e-3, (n, 3)).astype(np.float32),
+             accel_m_s2=(np.array([0.0, 0.0, 9.81]) + rng.normal(0, 1e-2, (n, 3))).astype(np.float32),
+             q_wxyz=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)).astype(np.float32),
+             v_m_s=np.zeros((n, 3), np.float32), p_m=np.zeros((n, 3), np.float32))  # fmt: skip
+    return path
+
+
+def test_a_fit_on_several_still_recordings_is_refused_not_written(tmp_path: Path) -> None:
+    """Two still recordings of one unit fitted together (every coefficient shared but the biases): the
+    shared scale factors are not determined; before, the model was written with 6.5e10 ppm. Each alone is
+    fitted for its biases (what it determines)."""
+    a, b = _still_npz(tmp_path / "a.npz", 0), _still_npz(tmp_path / "b.npz", 1)
+    rc, _, err = run_cli(
+        ["fit", str(a), str(b), "--strategy", "regression", "--out", str(tmp_path / "m.json")]
+    )
+    assert rc == 2 and "gyro scale" in err and str(a) in err, err
+    assert not (tmp_path / "m.json").exists()
+    rc, _, err, doc = _fit(tmp_path, a, None)
+    assert rc == 0, err
+    assert {(c["sensor"], c["term"]) for c in doc["coefficients"] if c["se"] is not None} == {
+        ("gyro", "bias"),
+        ("accel", "bias"),
+    }

@@ -31,6 +31,7 @@ from sins.cli import (
     run,
     scenarios,
     simulate,
+    strategies,
 )
 from sins.cli.common import Subparsers
 from sins.errors import MissingInputError, SinsInputError
@@ -51,6 +52,7 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     inspect.add,
     effects.add,
     scenarios.add,
+    strategies.add,
 )
 
 #: The flag that gives what a :class:`MissingInputError` says is missing.

@@ -220,14 +220,15 @@ def fraction(text: str) -> float:
     return value
 
 
-def add_dataset(p: argparse.ArgumentParser) -> None:
+def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
     """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
-    command's start)."""
+    command's start); with ``repeat``, given once per recording."""
     p.add_argument(
-        "--dataset", metavar="NAME",
+        "--dataset", metavar="NAME", action="append" if repeat else "store",
         help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
         "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
-        "root's broad_mocap/)",
+        "root's broad_mocap/), or FOLDER/NAME for any NAME.npz in a folder of the data root "
+        "(euroc/V1_01_easy)" + ("; repeat it to fit on several recordings of one unit" if repeat else ""),
     )  # fmt: skip
 
 
@@ -352,13 +353,23 @@ def check_outputs(
 
 
 def dataset_inputs(name: str | None) -> list[Path]:
-    """The folder a ``--dataset`` is read from (its data root), as an input no output may be inside."""
+    """The folder of the data root a ``--dataset`` is read from (``FOLDER/NAME``'s folder, a named
+    dataset's own), as an input no output may be inside: an output there must not be one of its files."""
     if name is None:
         return []
+    from sins.io.datasets.broad import BROAD_FOLDER
+    from sins.io.datasets.ferraris import FERRARIS_FOLDER
+    from sins.io.datasets.psins_lasergyro import PSINS_LASERGYRO_FOLDER
+    from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FOLDER
     from sins.io.datasets.root import data_root
 
+    folders = {"broad_": BROAD_FOLDER, "ferraris": FERRARIS_FOLDER, "psins_lasergyro": PSINS_LASERGYRO_FOLDER,
+               "psins_vehicle": PSINS_VEHICLE_FOLDER}  # fmt: skip
+    folder = (
+        name.split("/")[0] if "/" in name else next((f for k, f in folders.items() if name.startswith(k)), "")
+    )
     try:
-        return [data_root()]
+        return [data_root() / folder] if folder else []
     except OSError:
         return []
 
