@@ -492,7 +492,8 @@ def target_euroc(b: SafetyBase, data: st.DataObject) -> None:
 
 def target_npz(b: SafetyBase, data: st.DataObject) -> None:
     """An ``.npz`` recording with a key missing, lengths that disagree, non-finite or huge values, time
-    that does not increase, another shape or a zero quaternion: inspected, integrated, fitted."""
+    that does not increase, another shape or a zero quaternion: inspected, integrated, fitted alone or
+    with another recording of the unit (a fit on several)."""
     arrays = dict(np.load(b.folder / "rec.npz"))
     key = data.draw(st.sampled_from(sorted(arrays)), label="key")
     how = data.draw(st.sampled_from(["drop", "shorter", "value", "time back", "shape", "zero quaternion",
@@ -522,12 +523,14 @@ def target_npz(b: SafetyBase, data: st.DataObject) -> None:
         np.savez(path, **arrays)
         out = d / "out"
         out.mkdir()
-        command = data.draw(st.sampled_from(["inspect", "integrate", "fit"]), label="command")
+        command = data.draw(st.sampled_from(["inspect", "integrate", "fit", "fit two"]), label="command")
+        other = Path(shutil.copy(b.folder / "rec.npz", d / "other.npz"))
+        fit = ["--strategy", "regression", "--out", str(out / "m.json"), "--json", str(out / "f.json")]
         argv = {"inspect": ["inspect", str(path)], "integrate": ["integrate", str(path)],
-                "fit": ["fit", str(path), "--strategy", "regression", "--out", str(out / "m.json"), "--json",
-                        str(out / "f.json")]}[command]  # fmt: skip
-        rc, _, _ = _run(argv, [path], out)
-        if rc == 0 and command == "fit":
+                "fit": ["fit", str(path), *fit],
+                "fit two": ["fit", str(path), str(other), *fit]}[command]  # fmt: skip
+        rc, _, _ = _run(argv, [path, other], out)
+        if rc == 0 and command.startswith("fit"):
             check_fit_document(out / "f.json", identifiability.DEFAULT_GRADE)
 
 
