@@ -363,7 +363,7 @@ def test_cli_refusals(tmp_path, capsys):
         (["characterise", str(rec), "--dataset", "ferraris"], "one of them"),
         (["characterise", str(rec), "--out", str(out)], "--static"),
         (["characterise", str(rec), "--static", "--truth", str(rec)], "exclude each other"),
-        (["characterise", str(rec), "--static", "--out", str(tmp_path / "no" / "u.toml")], "no such folder"),
+        (["characterise", str(rec), "--static", "--out", str(tmp_path / "no" / "u.toml")], "does not exist"),
         (["characterise", str(short), "--static", "--out", str(out)], "needs at least 128"),
         (["characterise", str(flat), "--static", "--out", str(out)], "gyro.x is constant"),
     ):

@@ -70,6 +70,9 @@ CONDITION = 1e-8
 #: Orders: the higher is held first (a bias last).
 _ORDER = {"bias": 0, "scale": 1, "misalignment": 1, "g_sensitivity": 2, "lever_arm": 2, "time_offset": 2}
 _AXES = "xyz"
+GYRO, ACCEL = "gyro", "accel"
+#: The seed model's bias and g-sensitivity terms (words an IMU effect's name shares).
+BIAS, G_SENSITIVITY = "bias", "g_sensitivity"
 
 
 @dataclass(frozen=True)
@@ -112,17 +115,17 @@ def class_bounds(grade: str = DEFAULT_GRADE) -> ClassBounds:
         raise SinsInputError(f"unknown grade {grade!r} (known: {', '.join(GRADES)})")
     g = GRADES[grade]
     spread = {
-        "gyro.bias": math.hypot(g.gyro_bias_dph, g.gyro_turn_on_dph) * DEG_PER_H,
-        "gyro.scale": g.gyro_scale_ppm * 1e-6,
-        "gyro.misalignment": g.gyro_misalignment_ppm * 1e-6,
-        "gyro.g_sensitivity": g.g_sensitivity_dph_per_g * DEG_PER_H / G0,
-        "accel.bias": math.hypot(g.accel_bias_mg, g.accel_turn_on_mg) * MG,
-        "accel.scale": g.accel_scale_ppm * 1e-6,
-        "accel.misalignment": g.accel_misalignment_ppm * 1e-6,
+        _key(GYRO, BIAS): math.hypot(g.gyro_bias_dph, g.gyro_turn_on_dph) * DEG_PER_H,
+        _key(GYRO, "scale"): g.gyro_scale_ppm * 1e-6,
+        _key(GYRO, "misalignment"): g.gyro_misalignment_ppm * 1e-6,
+        _key(GYRO, G_SENSITIVITY): g.g_sensitivity_dph_per_g * DEG_PER_H / G0,
+        _key(ACCEL, BIAS): math.hypot(g.accel_bias_mg, g.accel_turn_on_mg) * MG,
+        _key(ACCEL, "scale"): g.accel_scale_ppm * 1e-6,
+        _key(ACCEL, "misalignment"): g.accel_misalignment_ppm * 1e-6,
     }
     bound = {k: BOUND_SIGMAS * v for k, v in spread.items()}
     for sensor, value in WIDER_BIASES.get(grade, {}).items():
-        bound[f"{sensor}.bias"] = max(bound[f"{sensor}.bias"], value)
+        bound[_key(sensor, BIAS)] = max(bound[_key(sensor, BIAS)], value)
     return ClassBounds(grade, spread, bound)
 
 
@@ -131,23 +134,34 @@ def class_bounds(grade: str = DEFAULT_GRADE) -> ClassBounds:
 
 def gyro_names(g_sensitivity: bool, time_offset: bool) -> tuple[str, ...]:
     """The gyro's columns in the interval fit's order: B0, B and K row-major, the time offset."""
-    names = [f"gyro.bias.{a}" for a in _AXES] + _matrix("gyro", "scale")
+    names = [*bias_names(GYRO), *_matrix(GYRO, "scale")]
     if g_sensitivity:
-        names += [f"gyro.g_sensitivity.{r}←{c}" for r in _AXES for c in _AXES]
-    return tuple(names + (["gyro.time_offset"] if time_offset else []))
+        names += _g_sensitivity_names()
+    return tuple(names + ([_key(GYRO, "time_offset")] if time_offset else []))
 
 
 def accel_names(time_offset: bool) -> tuple[str, ...]:
     """The accelerometer's columns in the interval fit's order: A0, A row-major, the lever arm, the
     time offset."""
-    names = [f"accel.bias.{a}" for a in _AXES] + _matrix("accel", "scale")
-    names += [f"accel.lever_arm.{a}" for a in _AXES]
-    return tuple(names + (["accel.time_offset"] if time_offset else []))
+    names = [*bias_names(ACCEL), *_matrix(ACCEL, "scale")]
+    names += [_key(ACCEL, "lever_arm", a) for a in _AXES]
+    return tuple(names + ([_key(ACCEL, "time_offset")] if time_offset else []))
 
 
 def bias_names(sensor: str) -> tuple[str, ...]:
     """A sensor's three biases."""
-    return tuple(f"{sensor}.bias.{a}" for a in _AXES)
+    return tuple(_key(sensor, BIAS, a) for a in _AXES)
+
+
+def _g_sensitivity_names() -> list[str]:
+    return [_key(GYRO, G_SENSITIVITY, f"{r}←{c}") for r in _AXES for c in _AXES]
+
+
+def _key(sensor: str, term: str, axis: str = "") -> str:
+    """A coefficient's name, ``SENSOR.TERM.AXIS`` (or a term's, ``SENSOR.TERM``). Built from its parts:
+    the seed model's terms share their words with the IMU effects' names, which only the effect
+    registry spells out (tests/test_vocabulary.py)."""
+    return ".".join(p for p in (sensor, term, axis) if p)
 
 
 def _matrix(sensor: str, _: str) -> list[str]:
@@ -377,7 +391,7 @@ def _pretty(name: str) -> str:
 
 #: Display units by term: factor from SI and the unit's name.
 _UNITS = {
-    "gyro.bias": (DEG_PER_H, "°/h"), "accel.bias": (1e-6 * G0, "µg"), "scale": (1e-6, "ppm"),
+    _key(GYRO, BIAS): (DEG_PER_H, "°/h"), _key(ACCEL, BIAS): (1e-6 * G0, "µg"), "scale": (1e-6, "ppm"),
     "misalignment": (1e-3, "mrad"), "g_sensitivity": (DEG_PER_H / G0, "°/h/g"), "time_offset": (1e-3, "ms"),
     "lever_arm": (1e-3, "mm"),
 }  # fmt: skip
@@ -385,7 +399,7 @@ _UNITS = {
 
 def _shown(name: str, value: float) -> str:
     """``value`` (SI) of coefficient ``name`` in its datasheet unit."""
-    key = f"{_sensor(name)}.bias" if _term(name) == "bias" else _term(name)
+    key = _key(_sensor(name), BIAS) if _term(name) == BIAS else _term(name)
     factor, unit = _UNITS[key]
     return f"{value / factor:.3g} {unit}"
 
@@ -423,7 +437,7 @@ def seed_values(seed: SeedModelFit) -> dict[str, tuple[float, float]]:
             out[name] = (float(bias[i]), float(bias_se[i]))
         for k, name in enumerate(_matrix(sensor, "")):
             out[name] = (float(matrix.flat[k]), float(matrix_se.flat[k]))
-    for k, name in enumerate(f"gyro.g_sensitivity.{r}←{c}" for r in _AXES for c in _AXES):
+    for k, name in enumerate(_g_sensitivity_names()):
         out[name] = (float(seed.K.flat[k]), float(seed.K_se.flat[k]))
     return out
 
@@ -495,10 +509,10 @@ def interval_values(fit: _IntervalFit, biases_only: bool = False) -> dict[str, t
     values: dict[str, tuple[float, float | None]] = dict(seed_values(fit.seed))
     if biases_only:
         return {k: v for k, v in values.items() if _term(k) == "bias"}
-    values["gyro.time_offset"] = (fit.time_offset_s, fit.time_offset_se_s)
-    values["accel.time_offset"] = (fit.accel_time_offset_s, fit.accel_time_offset_se_s)
+    values[_key(GYRO, "time_offset")] = (fit.time_offset_s, fit.time_offset_se_s)
+    values[_key(ACCEL, "time_offset")] = (fit.accel_time_offset_s, fit.accel_time_offset_se_s)
     for axis, arm in zip(_AXES, fit.lever_arm_m, strict=True):
-        values[f"accel.lever_arm.{axis}"] = (float(arm), None)
+        values[_key(ACCEL, "lever_arm", axis)] = (float(arm), None)
     return values
 
 
@@ -575,9 +589,13 @@ def _judge(name: str, value: float, se: float | None, bounds: ClassBounds, where
 
 
 __all__ = [
+    "ACCEL",
+    "BIAS",
     "BOUND_SIGMAS",
     "CONDITION",
     "DEFAULT_GRADE",
+    "GYRO",
+    "G_SENSITIVITY",
     "LEVER_ARM_BOUND_M",
     "LEVER_ARM_SE_M",
     "REFITS",
