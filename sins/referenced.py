@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,7 @@ from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
 from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
+from sins.compensation.window_net import WindowNet
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
@@ -158,6 +159,15 @@ def fit_several(
         elif name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fit_all.seed)
+        elif isinstance(strategy, WindowNet):
+            # A learner of what moves between recordings: each recording's references with the mean bias.
+            pooled = [replace(fit_all.for_recording(r), seed=fit_all.seed) for r in range(len(recs))]
+            parts = [interval_fit.interval_reference(rec, f) for rec, f in zip(recs, pooled, strict=True)]
+            strategy.progress = progress
+            say(f"training {name} (each recording held back in turn, then on all)")
+            strategy.set_fit(fit_all.seed)
+            strategy.time_offset_s_ = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
+            strategy.fit_recordings(parts, recs)
         else:
             data = _joined([interval_fit.interval_reference(rec, fit_all.for_recording(r)) for r, rec in
                             enumerate(recs)])  # fmt: skip
@@ -238,8 +248,6 @@ def _check_one_unit(recs: list[ReferencedRecording]) -> None:
 
 def _biases_only(seed: Any) -> Any:
     """``seed`` with every coefficient but the biases zero."""
-    from dataclasses import replace
-
     zeros = np.zeros((3, 3))
     return replace(seed, B=zeros, K=zeros, A=zeros)
 
@@ -259,8 +267,6 @@ def _joined(parts: list[CalibrationData]) -> CalibrationData:
 
 
 def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecording:
-    from dataclasses import replace
-
     return replace(rec, imu=imu)
 
 
