@@ -66,6 +66,10 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "ferraris": ("ferraris", {}),
 }
 
+#: Variants fitted only against a reference trajectory (:mod:`sins.referenced`), which a model file may
+#: name beside :data:`VARIANTS`: the biases alone, a ``regression`` whose other terms stay zero.
+REFERENCE_VARIANTS = ("bias_only",)
+
 #: Names a model file may carry (the registered classes that can be fitted).
 SAVED_STRATEGIES = (
     "none",
@@ -140,7 +144,8 @@ def load(path: str | os.PathLike[str]) -> Strategy:
         strategy.check_state(state)
         strategy.set_state(state)
         variant = doc.get("variant", name)
-        strategy.variant = variant if isinstance(variant, str) and variant in VARIANTS else name
+        known = isinstance(variant, str) and (variant in VARIANTS or variant in REFERENCE_VARIANTS)
+        strategy.variant = variant if known else name
         # A probe: what the checks above do not see fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))
@@ -193,6 +198,7 @@ __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "MAX_MODEL_VALUE",
+    "REFERENCE_VARIANTS",
     "SAVED_STRATEGIES",
     "VARIANTS",
     "load",
