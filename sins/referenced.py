@@ -222,14 +222,16 @@ def open_loop_attitude(
 
 def frame_turn(rec: ReferencedRecording) -> Array:
     """The navigation frame's turn in inertial space over each step, rad (n, 3) in its axes: Earth's rate
-    at the reference's mean latitude (its vertical part only where ``heading_known`` is False; the
-    transport rate of a room or a slow vehicle is left out)."""
+    at the reference's mean latitude (its vertical part only where ``heading_known`` is False, none where
+    ``latitude_known`` is False; the transport rate of a room or a slow vehicle is left out)."""
     from sins import earth
 
     lat = float(np.mean(rec.reference.lat))
     w_ie = np.array(np.broadcast_arrays(*earth.earth_rate_n(lat)), dtype=float).reshape(3)
     if not rec.heading_known:
         w_ie[:2] = 0.0
+    if not rec.latitude_known:
+        w_ie[:] = 0.0
     return np.asarray(np.outer(np.diff(rec.imu.t), w_ie))
 
 
@@ -300,6 +302,7 @@ def between(rec: ReferencedRecording, start_s: float, end_s: float) -> Reference
         reference_name=rec.reference_name,
         source=rec.source,
         heading_known=rec.heading_known,
+        latitude_known=rec.latitude_known,
     )
 
 
@@ -377,10 +380,9 @@ def read_inputs(
     reference = None if truth is None else io.read_truth(truth)
     start = None if reference is None else float(reference.t[0])
     rec = io.read_recording_any(path, **(options or {}), t_start=start)
-    reference = reference if reference is not None else rec.truth
-    if reference is None:
+    if reference is None and rec.truth is None:
         return rec
-    return from_recording(rec.imu, reference, str(path))
+    return io.referenced(rec, reference)
 
 
 def check_fitted_on(

@@ -372,6 +372,8 @@ class ReferencedRecording:
     source : where the data came from, for messages
     heading_known : whether the reference's north is true north; where it is not (a motion capture's
         room frame), only the vertical part of Earth's rate is known in its axes
+    latitude_known : whether the reference's latitude is where the unit was; where it is not (a room
+        frame placed at a nominal origin), Earth's rate is not known in its axes at all and is left out
     """
 
     imu: ImuIncrements
@@ -381,6 +383,7 @@ class ReferencedRecording:
     reference_name: str = "reference"
     source: str = ""
     heading_known: bool = True
+    latitude_known: bool = True
 
     @property
     def rate_hz(self) -> float:

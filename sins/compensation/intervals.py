@@ -150,6 +150,8 @@ def choose_intervals(rec: ReferencedRecording, interval_s: float = INTERVAL_S) -
         w_in = w_in + np.stack(earth.transport_rate_n(lat, h, v[:, 0], v[:, 1]), axis=1)
     else:  # a room frame of unknown heading: only Earth's rate about the vertical is known in its axes
         w_in[:, :2] = 0.0
+    if not rec.latitude_known:  # a room frame at a nominal origin: Earth's rate is not known in it at all
+        w_in[:, :] = 0.0
     span = t[boundary[z]] - t[boundary[a]]
     turn = rotation.dcm_from_quat(rotation.quat_from_rotvec(w_in * span[:, None]))
     return Intervals(

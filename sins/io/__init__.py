@@ -22,7 +22,7 @@ from sins.io.formats import (
     write_truth,
 )
 from sins.io.json_files import read_json_document, write_json
-from sins.io.recording import KINDS, Recording, read_recording_any
+from sins.io.recording import KINDS, Recording, read_recording_any, referenced
 from sins.io.rig import (
     PHASE_KINDS,
     RECORDING_COLUMNS,
@@ -60,6 +60,7 @@ __all__ = [
     "read_recording_any",
     "read_table",
     "read_truth",
+    "referenced",
     "write_imu",
     "write_json",
     "write_recording",

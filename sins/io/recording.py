@@ -2,8 +2,9 @@
 
 It picks the reader by what the path is: a folder with ``metadata.yaml`` (a ROS 2 bag), a ROS 1 bag or
 an MCAP file (by their first bytes, :mod:`sins.io.bags`), a EuRoC/TUM-VI folder or ASL file
-(:mod:`sins.io.euroc`), else a CSV: sins's own IMU forms (:func:`sins.io.read_imu`) or, with
-``columns`` or ``units``, one with its own columns and units (:mod:`sins.io.columns`). Every reader
+(:mod:`sins.io.euroc`), an ``.npz`` recording (:mod:`sins.io.npz`), else a CSV: sins's own IMU forms
+(:func:`sins.io.read_imu`) or, with ``columns`` or ``units``, one with its own columns and units
+(:mod:`sins.io.columns`). Every reader
 returns a :class:`Recording`: readings in SI on FRD axes, and the reference trajectory where the
 recording has one.
 """
@@ -20,15 +21,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
-from sins.io import axes, bags, euroc, formats
+from sins.io import axes, bags, euroc, formats, npz
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
-from sins.series import ImuIncrements, ImuRates, NavSeries
+from sins.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 
 #: What :attr:`Recording.kind` may be.
-KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc")
+KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc", "npz")
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,9 @@ class Recording:
     fixes : a bag's ``NavSatFix`` positions, or None
     time_from_rate : the times were made from a given rate (the file has no time column)
     column_map : a CSV's sins column names and the file columns read for them (``{}`` for other kinds)
+    heading_known : whether the reference's north is true north (False for a room frame: EuRoC, .npz)
+    latitude_known : whether the reference's latitude is the recording's own (False where the frame was
+        placed at a nominal origin: Earth's rate then cannot be placed in it and is left out)
     """
 
     imu: ImuRates | ImuIncrements
@@ -72,6 +76,8 @@ class Recording:
     fixes: bags.GeodeticFixes | None = None
     time_from_rate: bool = False
     column_map: Mapping[str, str] = field(default_factory=dict)
+    heading_known: bool = True
+    latitude_known: bool = True
 
     @property
     def form(self) -> str:
@@ -86,6 +92,42 @@ class Recording:
         dt = np.diff(self.imu.t)[:, None]
         mid = 0.5 * (self.imu.t[:-1] + self.imu.t[1:])
         return mid, self.imu.dtheta_b / dt, self.imu.dv_b / dt
+
+
+def referenced(rec: Recording, truth: NavSeries | None = None, *, sensor: str = "") -> ReferencedRecording:
+    """``rec``'s readings beside a reference trajectory (``truth``, else the recording's own) as a
+    :class:`~sins.series.ReferencedRecording`: rate-form readings integrated between samples by the
+    trapezoid rule; the reference cut to the readings' span. A given ``truth`` is geodetic (its north and
+    latitude known); the recording's own keeps what the recording says of its frame.
+
+    Raises
+    ------
+    SinsInputError
+        when there is no reference, or it does not overlap the readings in time.
+    """
+    imu = rec.imu
+    own = truth is None
+    truth = rec.truth if truth is None else truth
+    if truth is None:
+        raise SinsInputError(f"{rec.source}: no reference trajectory (give one with --truth TRUTH.csv)")
+    if isinstance(imu, ImuRates):
+        dt = np.diff(imu.t)[:, None]
+        imu = ImuIncrements(
+            t=imu.t,
+            dtheta_b=0.5 * (imu.omega_ib_b[:-1] + imu.omega_ib_b[1:]) * dt,
+            dv_b=0.5 * (imu.f_ib_b[:-1] + imu.f_ib_b[1:]) * dt,
+        )
+    inside = np.flatnonzero((truth.t >= imu.t[0]) & (truth.t <= imu.t[-1]))
+    if len(inside) < 2:
+        raise SinsInputError(
+            f"{rec.source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the "
+            f"readings ({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
+        )
+    return ReferencedRecording(
+        imu=imu, reference=truth.at(inside), judged=None, sensor=sensor,
+        reference_name="truth" if not own else f"its own reference ({rec.kind})", source=rec.source,
+        heading_known=rec.heading_known or not own, latitude_known=rec.latitude_known or not own,
+    )  # fmt: skip
 
 
 def recording_kind(path: Path) -> str:
@@ -103,6 +145,8 @@ def recording_kind(path: Path) -> str:
         return kind
     if euroc.locate(path) is not None:
         return "euroc"
+    if npz.is_npz(path):
+        return "npz"
     if path.is_dir():
         raise SinsInputError(
             f"{path}: a folder, but neither a ROS 2 bag (metadata.yaml) nor a EuRoC/TUM-VI recording "
@@ -165,7 +209,12 @@ def read_recording_any(
     elif kind == "euroc":
         got = euroc.read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
         rec = Recording(got.imu, str(path), kind, got.truth, _si("rate"), frame or axes.FRD, got.notes,
-                        got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "")  # fmt: skip
+                        got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "",
+                        heading_known=False, latitude_known=origin is not None)  # fmt: skip
+    elif kind == "npz":
+        imu, truth, t0_s, notes = npz.read_npz(path, frame=frame or axes.FRD)
+        rec = Recording(imu, str(path), kind, truth, _si("rate"), frame or axes.FRD, notes, round(t0_s * 1e9),
+                        heading_known=False, latitude_known=False)  # fmt: skip
     else:
         read = bags.read_bag(
             path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
@@ -284,4 +333,5 @@ __all__ = [
     "Recording",
     "read_recording_any",
     "recording_kind",
+    "referenced",
 ]

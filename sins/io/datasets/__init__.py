@@ -22,6 +22,13 @@ from sins.io.datasets.ferraris import (
     read_ferraris,
     read_ferraris_annotated,
 )
+from sins.io.datasets.npz_folders import (
+    is_folder_name,
+    npz_names,
+    read_npz_recording,
+    read_npz_reference,
+    read_npz_with_truth,
+)
 from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
 from sins.io.datasets.psins_vehicle import read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
@@ -44,14 +51,15 @@ TRAJECTORY_REFERENCES = ("psins_vehicle", "broad_NN")
 
 def names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     """:data:`NAMES`, with every BROAD trial in the data root's ``broad_mocap/`` (a user who has more of
-    BROAD's 39 trials puts them there; each ``NN_*.mat`` is ``broad_NN``)."""
+    BROAD's 39 trials puts them there; each ``NN_*.mat`` is ``broad_NN``) and every ``.npz`` recording in
+    a folder of the data root as ``FOLDER/NAME`` (:mod:`sins.io.datasets.npz_folders`)."""
     from sins.io.datasets.broad import trials
 
     found = {
         f"broad_{n}": f"BROAD trial {stem}: a MEMS IMU against optical motion capture"
         for n, stem in trials(root).items()
     }
-    return {**{k: v for k, v in NAMES.items() if not k.startswith("broad_")}, **found}
+    return {**{k: v for k, v in NAMES.items() if not k.startswith("broad_")}, **found, **npz_names(root)}
 
 
 def load_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording | None:
@@ -63,6 +71,8 @@ def load_reference(name: str, root: str | os.PathLike[str] | None = None) -> Ref
     SinsInputError
         for an unknown name (listing the known ones), or as the readers do.
     """
+    if is_folder_name(name):
+        return read_npz_reference(name, root)
     known = names(root)
     if name not in known:
         raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(known)})")
@@ -87,9 +97,12 @@ def load_with_truth(
 ) -> tuple[CalibrationData, NavSeries | None]:
     """A dataset by name, and its reference trajectory at the readings' times where it has one.
 
-    Only ``psins_vehicle`` has one (the FOG-INS's solution); its first and last rows, which the
-    solution does not span, are left out.
+    ``psins_vehicle`` has one (the FOG-INS's solution; its first and last rows, which the solution does
+    not span, are left out), and every ``FOLDER/NAME`` with a reference
+    (:func:`~sins.io.datasets.npz_folders.read_npz_with_truth`).
     """
+    if is_folder_name(name):
+        return read_npz_with_truth(name, root)
     if name == "psins_vehicle":
         # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
         # vibration the MEMS sees, which would pass for a sensor gap.
@@ -130,6 +143,9 @@ __all__ = [
     "read_broad",
     "read_ferraris",
     "read_ferraris_annotated",
+    "read_npz_recording",
+    "read_npz_reference",
+    "read_npz_with_truth",
     "read_psins_lasergyro",
     "read_psins_vehicle",
 ]

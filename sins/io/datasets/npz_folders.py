@@ -1,0 +1,118 @@
+"""Recordings in the ``.npz`` form (:mod:`sins.io.npz`) in any folder of the data root, by the name
+``FOLDER/NAME`` (``euroc/V1_01_easy`` is ``<data root>/euroc/V1_01_easy.npz``).
+
+The recordings of one folder are taken to be of one unit: the folder's name is the unit's identity in a
+model fitted on them (``fitted_on_["sensor"]``), so a model fitted on ``euroc/…`` is refused on another
+folder's recordings as fitted on another unit.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from sins.errors import SinsInputError
+from sins.io import npz
+from sins.io.datasets.root import data_root, dataset_file
+from sins.io.recording import Recording, read_recording_any, referenced
+from sins.series import CalibrationData, NavSeries, ReferencedRecording
+
+
+def is_folder_name(name: str) -> bool:
+    """Whether ``name`` has the ``FOLDER/NAME`` form of an ``.npz`` recording in the data root."""
+    return "/" in name
+
+
+def npz_names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
+    """``{"FOLDER/NAME": description}`` for every ``NAME.npz`` in a folder of the data root."""
+    where = data_root(root)
+    if not where.is_dir():
+        return {}
+    found = {}
+    for folder in sorted(p for p in where.iterdir() if p.is_dir()):
+        for file in sorted(folder.glob("*.npz")):
+            found[f"{folder.name}/{file.stem}"] = f"an .npz recording in {folder.name}/ (readings, reference)"
+    return found
+
+
+def npz_path(name: str, root: str | os.PathLike[str] | None = None) -> Path:
+    """The file of ``FOLDER/NAME``.
+
+    Raises
+    ------
+    SinsInputError
+        a name not of that form, or no such file (naming where it was looked for).
+    """
+    folder, _, stem = name.partition("/")
+    if not folder or not stem or "/" in stem or stem in (".", "..") or folder in (".", ".."):
+        raise SinsInputError(
+            f"--dataset {name!r}: expected FOLDER/NAME (NAME.npz in a folder of the data root)"
+        )
+    return dataset_file(folder, f"{stem}.npz", root)
+
+
+def read_npz_recording(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
+    """``FOLDER/NAME`` as the :class:`~sins.io.Recording` :func:`~sins.io.read_recording_any` reads.
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`npz_path` and :func:`sins.io.npz.read_npz`.
+    """
+    path = npz_path(name, root)
+    if not npz.is_npz(path):
+        raise SinsInputError(f"{path}: not an .npz archive")
+    return read_recording_any(path)
+
+
+def read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
+    """``FOLDER/NAME``'s readings beside its reference; the unit is the folder.
+
+    Raises
+    ------
+    SinsInputError
+        as :func:`read_npz_recording`, or a recording without the reference keys.
+    """
+    rec = read_npz_recording(name, root)
+    if rec.truth is None:
+        raise SinsInputError(
+            f"{rec.source}: no reference (keys {', '.join(npz.REFERENCE_KEYS)}): it cannot be fitted or "
+            "judged against"
+        )
+    return referenced(rec, sensor=name.partition("/")[0])
+
+
+def read_npz_with_truth(
+    name: str, root: str | os.PathLike[str] | None = None
+) -> tuple[CalibrationData, NavSeries | None]:
+    """``FOLDER/NAME`` as readings beside per-sample reference inputs (the exact ideal IMU of a motion
+    through the reference: splines, then the strapdown equations backwards; NaN without a reference),
+    and the reference at the readings' times."""
+    from sins.nav import motion, trajectory
+
+    rec = read_npz_recording(name, root)
+    imu = rec.imu
+    t, gyro, accel = rec.mean_rates()
+    if rec.truth is None:
+        nan = np.full_like(gyro, np.nan)
+        return CalibrationData(
+            t=t, gyro=gyro, accel=accel, ref_gyro=nan, ref_accel=nan, source=rec.source
+        ), None
+    at = rec.truth.interpolate(imu.t)
+    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
+    data = CalibrationData(
+        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
+    )
+    return data, at
+
+
+__all__ = [
+    "is_folder_name",
+    "npz_names",
+    "npz_path",
+    "read_npz_recording",
+    "read_npz_reference",
+    "read_npz_with_truth",
+]
