@@ -29,6 +29,7 @@ from sins.cli import (
     run,
     scenarios,
     simulate,
+    strategies,
 )
 from sins.cli.common import Subparsers
 from sins.errors import MissingInputError, SinsInputError
@@ -50,6 +51,7 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     bias.add,
     effects.add,
     scenarios.add,
+    strategies.add,
 )
 
 #: The flag that gives what a :class:`MissingInputError` says is missing.

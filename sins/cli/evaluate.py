@@ -121,14 +121,21 @@ def _evaluate_referenced(
         with progress_bar(f"open loop: {label}", ""):
             runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
         r = runs[label].rmse()
-        attitude[label] = r.to_dict()
-        rows.append([label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}"])
+        aoe = runs[label].aoe_deg()
+        attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
+        rows.append(
+            [label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}", f"{aoe:.3f}"]
+        )
     judged = "the judged rows (movement phases)" if rec.judged is not None else "every reference epoch"
     print(
         f"{args.model} ({strategy.label}) on {where}: the gyro integrated alone from the reference's first "
-        f"attitude, RMS error against {rec.reference_name} over {judged}, degrees"
+        f"attitude, RMS error against {rec.reference_name} over {judged}, degrees (AOE: over every epoch)"
     )
-    print(fixed_width(["readings", "total", "heading", "inclination"], rows))
+    if not rec.latitude_known:
+        print("the reference's frame has no known latitude or heading: Earth's rate is left out")
+    elif not rec.heading_known:
+        print("the reference's frame has no known north: only the vertical part of Earth's rate is put in")
+    print(fixed_width(["readings", "total", "heading", "inclination", "AOE"], rows))
     document: dict[str, Any] = {
         "open_loop_attitude": attitude[strategy.label],
         "open_loop_attitude_raw": attitude["none (raw readings)"],
@@ -141,7 +148,7 @@ def _evaluate_referenced(
         from sins import viz
 
         summary = f"{args.model} ({strategy.label}) on {where}\n\n" + fixed_width(
-            ["readings", "total", "heading", "inclination"], rows
+            ["readings", "total", "heading", "inclination", "AOE"], rows
         )
         viz.save_open_loop(runs, args.rerun, summary=summary)
         print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")

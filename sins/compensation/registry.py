@@ -70,6 +70,31 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
 #: name beside :data:`VARIANTS`: the biases alone, a ``regression`` whose other terms stay zero.
 REFERENCE_VARIANTS = ("bias_only",)
 
+#: What each strategy a user can fit is, one line each, in the order ``sins strategies`` lists them: every
+#: variant but the oracle (a simulation's own unit), and ``bias_only``, fitted against a trajectory only
+#: (the biases of the seed model, what a filter that estimates biases alone keeps).
+DESCRIPTIONS: dict[str, str] = {
+    "none": "the readings as they are",
+    "regression": "least squares of the seed model: biases, scale factors, misalignments, g-sensitivity",
+    "regression_robust": "regression with Huber-weighted rows or intervals",
+    "regression_extended": "regression with the terms the data choose (scale nonlinearity, asymmetry, ...)",
+    "regression_rest": "regression, then the gyro bias taken again at every rest",
+    "regression_window": "regression, then a ridge gyro correction from a window of past readings",
+    "mlp": "regression, then a feed-forward network of what it leaves (guarded on held-back data)",
+    "mlp_pure": "the seed paper's network from readings to errors",
+    "mlp_seed": "the seed paper's network, trained as the paper does",
+    "kohonen": "regression, then a self-organising local linear map of what it leaves (guarded)",
+    "kohonen_pure": "the seed paper's self-organising map",
+    "ferraris": "the Ferraris calibration of six holds and three turns",
+    "bias_only": "against a trajectory: the gyro's and accelerometer's biases alone",
+}
+
+
+def strategy_names() -> list[str]:
+    """The strategies a user can fit (:data:`DESCRIPTIONS`), in order."""
+    return list(DESCRIPTIONS)
+
+
 #: Names a model file may carry (the registered classes that can be fitted).
 SAVED_STRATEGIES = (
     "none",
@@ -195,6 +220,7 @@ def _check_values(path: Path, name: str, value: Any, where: str) -> None:
 
 __all__ = [
     "CLASSES",
+    "DESCRIPTIONS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "MAX_MODEL_VALUE",
@@ -205,4 +231,5 @@ __all__ = [
     "make",
     "save",
     "strategy_class",
+    "strategy_names",
 ]
