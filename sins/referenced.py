@@ -279,6 +279,7 @@ def _bias_only(rec: ReferencedRecording, interval_s: float) -> Fitted:
     """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
     fitted = interval_fit.fit_biases(rec, interval_s=interval_s)
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
+    strategy.variant = BIAS_ONLY  # reported and saved by its name, not as the class it is fitted with
     strategy.fitted_on_ = fitted_on(rec)
     return Fitted(strategy, fitted)
 

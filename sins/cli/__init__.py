@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 
 from sins import __version__
 from sins.cli import (
+    bias,
     calibrate,
     campaign,
     characterise,
@@ -47,6 +48,7 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     gap.add,
     characterise.add,
     inspect.add,
+    bias.add,
     effects.add,
     scenarios.add,
     strategies.add,

@@ -42,9 +42,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         recording = args.recording[0] if args.recording else None
         dataset = args.dataset[0] if args.dataset else None
         where = dataset or str(recording)
-        inputs = referenced.read_inputs(
-            recording, dataset=dataset, truth=args.truth, options=recording_options(args)
-        )
+        with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
+            inputs = referenced.read_inputs(
+                recording, dataset=dataset, truth=args.truth, options=recording_options(args)
+            )
         if isinstance(inputs, ReferencedRecording):
             strategy, document = _fit_referenced(args, inputs, where)
         elif isinstance(inputs, CalibrationData):
@@ -231,6 +232,8 @@ def _fit_referenced(
     )
     print(f"reference: {fit.quality.summary()}")
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    if args.strategy == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
+        table = [c for c in table if c.term == "bias"]
     _print_coefficients(table, "the seed model on the intervals (± 1σ)")
     if fit.g_sensitivity_test is not None:
         kept, gain, se = fit.g_sensitivity_test

@@ -68,6 +68,10 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "ferraris": ("ferraris", {}),
 }
 
+#: Variants fitted only against a reference trajectory (:mod:`sins.referenced`), which a model file may
+#: name beside :data:`VARIANTS`: the biases alone, a ``regression`` whose other terms stay zero.
+REFERENCE_VARIANTS = ("bias_only",)
+
 #: What each strategy a user can fit is, one line each, in the order ``sins strategies`` lists them: every
 #: variant but the oracle (a simulation's own unit), and ``bias_only``, fitted against a trajectory only
 #: (the biases of the seed model, what a filter that estimates biases alone keeps).
@@ -170,7 +174,8 @@ def load(path: str | os.PathLike[str]) -> Strategy:
         strategy.check_state(state)
         strategy.set_state(state)
         variant = doc.get("variant", name)
-        strategy.variant = variant if isinstance(variant, str) and variant in VARIANTS else name
+        known = isinstance(variant, str) and (variant in VARIANTS or variant in REFERENCE_VARIANTS)
+        strategy.variant = variant if known else name
         # A probe: what the checks above do not see fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))
@@ -224,6 +229,7 @@ __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "MAX_MODEL_VALUE",
+    "REFERENCE_VARIANTS",
     "SAVED_STRATEGIES",
     "VARIANTS",
     "load",
