@@ -89,8 +89,8 @@ def main_(argv: list[str] | None = None) -> int:
         seconds = time.perf_counter() - start
         doc = json.loads(fit_json.read_text())
         results["fits"][strategy] = {"seconds": seconds, "bias_rule": doc.get("bias_rule", {})}
-        print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {doc.get('bias_rule', {}).get('mode', '-')})",
-              file=sys.stderr)  # fmt: skip
+        mode = doc.get("bias_rule", {}).get("mode", "-")
+        print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {mode})", file=sys.stderr)
         for name in args.judge:
             judged = _evaluate(model, args.folder, name, work / f"{strategy}.{name}.json")
             results["aoe_deg"].setdefault(name, {})["none"] = judged["open_loop_attitude_raw"]["aoe_deg"]
@@ -115,7 +115,8 @@ def _table(results: dict[str, Any], strategies: list[str], published: bool) -> N
         cells = [f"{row[c]:.2f}" for c in cols]
         if published:
             raw = row["none"]
-            cells += [f"{BROSSARD[name]:.2f}", f"{RAW_SOURCE[name]:.1f} ({100 * (raw / RAW_SOURCE[name] - 1):+.2f} %)"]
+            off = 100 * (raw / RAW_SOURCE[name] - 1)
+            cells += [f"{BROSSARD[name]:.2f}", f"{RAW_SOURCE[name]:.1f} ({off:+.2f} %)"]
         print(f"| {name} | " + " | ".join(cells) + " |")
     mean = [f"**{sums[c] / len(names):.2f}**" for c in cols]
     if published:
