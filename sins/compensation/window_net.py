@@ -349,6 +349,8 @@ __all__ = [
     "FEATURES",
     "HOLD_LAST",
     "MAX_FOLDS",
+    "MAX_LAYERS",
+    "MAX_WIDTH",
     "PER_BLOCK",
     "STRIDE",
     "WindowNet",
