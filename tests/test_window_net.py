@@ -4,6 +4,7 @@ not, and its model file."""
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 
@@ -23,14 +24,14 @@ RATE_HZ = 200.0
 def test_window_inputs_are_the_past_blocks_means_and_spreads() -> None:
     rng = np.random.default_rng(1)
     n = 4000
-    w, f = rng.normal(0, 1, (n, 3)), rng.normal(0, 1, (n, 3)) + [0, 0, 9.8]
+    w, f = rng.normal(0, 1, (n, 3)), [*rng.normal(0, 1, (n, 3)), 0, 0, 9.8]
     dt = 1.0 / RATE_HZ
     rows, x = window_inputs(w, f, dt)
     np.testing.assert_array_equal(rows, np.arange(0, n, STRIDE))
     for r in (0, 5, 1000, 3990):  # row 5 is not a stride row: take the nearest row below
         k = r // STRIDE
         row = rows[k]
-        for b, (near, far) in enumerate(zip(EDGES_S[:-1], EDGES_S[1:], strict=True)):
+        for b, (near, far) in enumerate(itertools.pairwise(EDGES_S)):
             lo, hi = max(row - round(far / dt), 0), max(row - round(near / dt), 0)
             got = x[k, 8 * b : 8 * b + 8]
             if hi == lo:  # before the recording: the first reading, no spread
