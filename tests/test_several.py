@@ -149,6 +149,15 @@ def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
     np.testing.assert_array_equal(out_a.dtheta_b, out_b.dtheta_b)
 
 
+def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
+    recs, _, biases = _recordings(10)
+    fitted = referenced.fit_several("bias_only", recs, rule_mode="pooled")
+    s = fitted.strategy
+    assert s.label == "bias_only"
+    np.testing.assert_array_equal(s.B_, np.zeros((3, 3)))
+    np.testing.assert_allclose(s.B0_, fitted.several.gyro_bias.mean(axis=0))
+
+
 def test_a_damaged_rule_is_refused(tmp_path: Path) -> None:
     recs, _, _ = _recordings(7, count=2)
     fitted = referenced.fit_several("regression", recs)
