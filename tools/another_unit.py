@@ -8,9 +8,8 @@ Usage::
 sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
 with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
 ``shared/data/euroc`` into a temporary data root (folder ``broad_b``; the reference slerped across the
-motion capture's short gaps, its world frame the optical one, z up). The models are fitted on the first
-part of trial 05 and the first and last of trial 18... precisely: on the parts listed by ``--train``
-(default ``05_1 18_1 18_3``), and judged on the others (default ``05_2 05_3 18_2``), by
+motion capture's short gaps, its world frame the optical one, z up). The models are fitted on the parts
+``--train`` lists (default ``05_1 18_1 18_3``) and judged on the others (default ``05_2 05_3 18_2``) by
 ``tools/euroc_benchmark.py``'s commands (``sins fit --dataset broad_b/...``, ``sins evaluate``). Prints the
 open-loop table; what must hold is that no correction is worse than the raw readings.
 """
@@ -58,8 +57,8 @@ def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -
         v = ref.v_n[:, [1, 0, 2]] * [1.0, 1.0, -1.0]
         name = f"{stem}_{k + 1}"
         np.savez(
-            folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force, q_wxyz=q.as_quat(scalar_first=True),
-            v_m_s=v, p_m=np.zeros_like(v),
+            folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force,
+            q_wxyz=q.as_quat(scalar_first=True), v_m_s=v, p_m=np.zeros_like(v),
         )  # fmt: skip
         names.append(name)
     return names
