@@ -150,7 +150,7 @@ def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
 
 
 def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
-    recs, _, biases = _recordings(10)
+    recs, _, _ = _recordings(10)
     fitted = referenced.fit_several("bias_only", recs, rule_mode="pooled")
     s = fitted.strategy
     assert s.label == "bias_only"

@@ -26,10 +26,10 @@ from scipy.spatial.transform import Rotation
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import euroc_benchmark  # noqa: E402
+import euroc_benchmark
 
-from sins.io import datasets  # noqa: E402
-from sins.series import ReferencedRecording  # noqa: E402
+from sins.io import datasets
+from sins.series import ReferencedRecording
 
 #: NED to ENU (and back): east and north swapped, down turned up.
 _NED_TO_ENU = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
