@@ -154,8 +154,10 @@ def _check_args(args: argparse.Namespace) -> None:
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    if args.no_guard and args.strategy not in ("mlp", "kohonen"):
-        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
+    if args.no_guard and args.strategy not in ("mlp", "kohonen", "mlp_window"):
+        raise SinsInputError(
+            f"--no-guard: {args.strategy} has no guard (only mlp, kohonen and mlp_window do)"
+        )
 
 
 def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tuple[Strategy, dict[str, Any]]:
@@ -302,8 +304,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--no-guard", action="store_true",
-        help="mlp, kohonen: use the learned correction on every channel, even where it does not beat "
-        "regression on held-back blocks",
+        help="mlp, kohonen, mlp_window: use the learned correction on every channel, even where it does not "
+        "beat regression on held-back blocks (recordings)",
     )  # fmt: skip
     p.add_argument(
         "--bias-rule", choices=("pooled", "rest", "online", "rest+online"),
