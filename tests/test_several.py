@@ -240,6 +240,27 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     refusal(lambda: _exit(main(["evaluate", str(model), "--dataset", "other/x"])), "fitted on unit")
 
 
+def test_a_model_fitted_at_another_rate_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    recs, _, _ = _recordings(11)
+    fitted = referenced.fit_several("regression", recs[:2], rule_mode="pooled")
+    model = tmp_path / "m.json"
+    compensation.save(fitted.strategy, model)
+    rec = recs[2]
+    slow = ImuIncrements(
+        t=rec.imu.t[::2], dtheta_b=rec.imu.dtheta_b[: len(rec.imu.dtheta_b) // 2 * 2].reshape(-1, 2, 3).sum(1),
+        dv_b=rec.imu.dv_b[: len(rec.imu.dv_b) // 2 * 2].reshape(-1, 2, 3).sum(1),
+    )  # fmt: skip
+    halved = replace(rec, imu=slow)
+    (tmp_path / "u").mkdir()
+    _npz(tmp_path / "u", "slow", halved)
+    code = main(["evaluate", str(model), str(tmp_path / "u" / "slow.npz")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err, err
+    assert "slow.npz" in err and "100 Hz" in err and "50 Hz" in err, err
+
+
 def _exit(code: int) -> None:
     if code:
         from sins.errors import SinsInputError
