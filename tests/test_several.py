@@ -248,9 +248,10 @@ def test_a_model_fitted_at_another_rate_is_refused(
     model = tmp_path / "m.json"
     compensation.save(fitted.strategy, model)
     rec = recs[2]
+    pairs = len(rec.imu.dtheta_b) // 2 * 2  # the same readings at half the rate: pairs of steps summed
     slow = ImuIncrements(
-        t=rec.imu.t[::2], dtheta_b=rec.imu.dtheta_b[: len(rec.imu.dtheta_b) // 2 * 2].reshape(-1, 2, 3).sum(1),
-        dv_b=rec.imu.dv_b[: len(rec.imu.dv_b) // 2 * 2].reshape(-1, 2, 3).sum(1),
+        t=rec.imu.t[: pairs + 1 : 2], dtheta_b=rec.imu.dtheta_b[:pairs].reshape(-1, 2, 3).sum(1),
+        dv_b=rec.imu.dv_b[:pairs].reshape(-1, 2, 3).sum(1),
     )  # fmt: skip
     halved = replace(rec, imu=slow)
     (tmp_path / "u").mkdir()
