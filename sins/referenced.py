@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,7 @@ from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
 from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
+from sins.compensation.window_net import WindowNet
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
@@ -151,7 +152,7 @@ def fit_several(
     SinsInputError
         fewer than two recordings, recordings of different units or rates, or as :func:`fit`.
     """
-    from sins.compensation import interval_fit, several
+    from sins.compensation import several
 
     _check_one_unit(recs)
     where = " + ".join(rec.source or "recording" for rec in recs)
@@ -159,26 +160,20 @@ def fit_several(
     try:
         say(f"the seed model on {len(recs)} recordings")
         fit_all = several.fit_several(recs, interval_s=interval_s, robust=name == "regression_robust")
-        strategy = compensation.make(name, **(params or {}))
         offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
+        if name == BIAS_ONLY:  # the seed model's biases alone, read as they come
+            strategy: Strategy = Regression(g_sensitivity=False).set_fit(_biases_only(fit_all.seed))
+            strategy.variant = BIAS_ONLY
+            offsets = np.zeros(2)
+        else:
+            strategy = compensation.make(name, **(params or {}))
         if name == "none":
             return FittedSeveral(strategy, fit_all, None)
-        if name == BIAS_ONLY:
-            strategy = Regression(g_sensitivity=False).set_fit(_biases_only(fit_all.seed))
-            offsets = np.zeros(2)
-        elif name in _SEED_ONLY:
+        if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fit_all.seed)
-        else:
-            data = _joined([interval_fit.interval_reference(rec, fit_all.for_recording(r)) for r, rec in
-                            enumerate(recs)])  # fmt: skip
-            if isinstance(strategy, Regression) and type(strategy).fit_beyond is not Regression.fit_beyond:
-                strategy.set_fit(fit_all.seed).fit_beyond(data)
-            else:
-                if progress is not None and hasattr(strategy, "progress"):
-                    strategy.progress = progress
-                say(f"training {name}")
-                strategy.fit(data)
+        elif name != BIAS_ONLY:
+            _learn_several(strategy, name, recs, fit_all, progress, say)
         strategy.time_offset_s_ = offsets
         rule = choose_rule(strategy, recs, fit_all, interval_s=interval_s, mode=rule_mode, stage=say)
     except ValueError as exc:
@@ -188,6 +183,34 @@ def fit_several(
     strategy.unit_bias_ = rule.to_dict()
     strategy.fitted_on_ = {**fitted_on(recs[0]), "recordings": [rec.source for rec in recs]}
     return FittedSeveral(strategy, fit_all, rule)
+
+
+def _learn_several(
+    strategy: Strategy, name: str, recs: list[ReferencedRecording], fit_all: SeveralFit,
+    progress: Callable[[int, int], None] | None, say: Callable[[str], None],
+) -> None:  # fmt: skip
+    """A strategy that learns beyond the seed model, on the per-sample references of every recording."""
+    from sins.compensation import interval_fit
+
+    if isinstance(strategy, WindowNet):
+        # A learner of what moves between recordings: each recording's references with the mean bias.
+        pooled = [replace(fit_all.for_recording(r), seed=fit_all.seed) for r in range(len(recs))]
+        parts = [interval_fit.interval_reference(rec, f) for rec, f in zip(recs, pooled, strict=True)]
+        strategy.progress = progress
+        say(f"training {name} (each recording held back in turn, then on all)")
+        strategy.set_fit(fit_all.seed)
+        strategy.time_offset_s_ = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
+        strategy.fit_recordings(parts, recs)
+        return
+    data = _joined([interval_fit.interval_reference(rec, fit_all.for_recording(r)) for r, rec in
+                    enumerate(recs)])  # fmt: skip
+    if isinstance(strategy, Regression) and type(strategy).fit_beyond is not Regression.fit_beyond:
+        strategy.set_fit(fit_all.seed).fit_beyond(data)
+        return
+    if progress is not None and hasattr(strategy, "progress"):
+        strategy.progress = progress
+    say(f"training {name}")
+    strategy.fit(data)
 
 
 def choose_rule(
@@ -249,8 +272,6 @@ def _check_one_unit(recs: list[ReferencedRecording]) -> None:
 
 def _biases_only(seed: Any) -> Any:
     """``seed`` with every coefficient but the biases zero."""
-    from dataclasses import replace
-
     zeros = np.zeros((3, 3))
     return replace(seed, B=zeros, K=zeros, A=zeros)
 
@@ -270,8 +291,6 @@ def _joined(parts: list[CalibrationData]) -> CalibrationData:
 
 
 def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecording:
-    from dataclasses import replace
-
     return replace(rec, imu=imu)
 
 
@@ -287,6 +306,7 @@ def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitte
         rec, interval_s, grade, rec.source or "recording", biases_only=True,
     )  # fmt: skip
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
+    strategy.variant = BIAS_ONLY  # reported and saved by its name, not as the class it is fitted with
     strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
     return Fitted(strategy, fitted, review)
 

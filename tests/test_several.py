@@ -149,6 +149,15 @@ def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
     np.testing.assert_array_equal(out_a.dtheta_b, out_b.dtheta_b)
 
 
+def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
+    recs, _, _ = _recordings(10)
+    fitted = referenced.fit_several("bias_only", recs, rule_mode="pooled")
+    s = fitted.strategy
+    assert s.label == "bias_only"
+    np.testing.assert_array_equal(s.B_, np.zeros((3, 3)))
+    np.testing.assert_allclose(s.B0_, fitted.several.gyro_bias.mean(axis=0))
+
+
 def test_a_damaged_rule_is_refused(tmp_path: Path) -> None:
     recs, _, _ = _recordings(7, count=2)
     fitted = referenced.fit_several("regression", recs)
@@ -229,6 +238,28 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     (tmp_path / "other").mkdir()
     _npz(tmp_path / "other", "x", recs[2])
     refusal(lambda: _exit(main(["evaluate", str(model), "--dataset", "other/x"])), "fitted on unit")
+
+
+def test_a_model_fitted_at_another_rate_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    recs, _, _ = _recordings(11)
+    fitted = referenced.fit_several("regression", recs[:2], rule_mode="pooled")
+    model = tmp_path / "m.json"
+    compensation.save(fitted.strategy, model)
+    rec = recs[2]
+    pairs = len(rec.imu.dtheta_b) // 2 * 2  # the same readings at half the rate: pairs of steps summed
+    slow = ImuIncrements(
+        t=rec.imu.t[: pairs + 1 : 2], dtheta_b=rec.imu.dtheta_b[:pairs].reshape(-1, 2, 3).sum(1),
+        dv_b=rec.imu.dv_b[:pairs].reshape(-1, 2, 3).sum(1),
+    )  # fmt: skip
+    halved = replace(rec, imu=slow)
+    (tmp_path / "u").mkdir()
+    _npz(tmp_path / "u", "slow", halved)
+    code = main(["evaluate", str(model), str(tmp_path / "u" / "slow.npz")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err, err
+    assert "slow.npz" in err and "100 Hz" in err and "50 Hz" in err, err
 
 
 def _exit(code: int) -> None:

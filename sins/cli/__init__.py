@@ -17,6 +17,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 from sins import __version__
 from sins.cli import (
+    bias,
     calibrate,
     campaign,
     characterise,
@@ -50,6 +51,7 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     gap.add,
     characterise.add,
     inspect.add,
+    bias.add,
     effects.add,
     scenarios.add,
     strategies.add,

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
+    from sins.compensation import Strategy
     from sins.series import ImuIncrements, ImuRates
 
     Array = NDArray[np.float64]
@@ -36,15 +37,40 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     check_outputs({"--out": args.out}, [args.model, args.recording, *dataset_inputs(args.dataset)])
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
-    inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
-    unit = unit_of(args.recording, args.dataset, inputs)
-    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
     said = provenance.Provenance() if args.recording is None else provenance.read_provenance(args.recording)
     if said.corrected_by and not args.again:
         raise SinsInputError(
             f"{where}: already corrected ({said.corrected_by}); correcting again applies the model twice: "
             "give the raw recording, or --again if that is meant"
         )
+    with progress_bar(f"reading {where}", "") as bar:
+        inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
+        unit = unit_of(args.recording, args.dataset, inputs)
+        bar.set_description(f"correcting {where}")
+        out, extra = _corrected(args, strategy, inputs, where, unit)
+    fitted_on = getattr(strategy, "fitted_on_", {}) or {}
+    lines = [
+        f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})",
+        *([f"{provenance.SENSOR_KEY}: {unit}"] if unit else []),
+        *([f"{provenance.CORRECTED_KEY}: {said.corrected_by}"] * said.corrections),
+        provenance.corrected_line(args.model, strategy.label, str(fitted_on.get("sensor") or "")),
+    ]
+    with progress_bar(f"writing {args.out}", "row") as bar:
+        io.write_imu(args.out, out, extra=extra, comment="\n".join(lines), progress=row_progress(bar))
+    form = "rate" if isinstance(out, ImuRates) else "increment"
+    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
+    return 0
+
+
+def _corrected(
+    args: argparse.Namespace, strategy: Strategy, inputs: Any, where: str, unit: str
+) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
+    """The readings corrected in the form sins holds them in, and the temperature column to keep (the
+    model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
+    from sins import referenced
+    from sins.series import ImuRates
+
+    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
     imu, temp, rows_temp = _readings(inputs)
     try:
         out = (
@@ -54,19 +80,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
-    fitted_on = getattr(strategy, "fitted_on_", {}) or {}
-    lines = [
-        f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})",
-        *([f"{provenance.SENSOR_KEY}: {unit}"] if unit else []),
-        *([f"{provenance.CORRECTED_KEY}: {said.corrected_by}"] * said.corrections),
-        provenance.corrected_line(args.model, strategy.label, str(fitted_on.get("sensor") or "")),
-    ]
-    extra = None if rows_temp is None else {"temp": rows_temp}
-    with progress_bar(f"writing {args.out}", "row") as bar:
-        io.write_imu(args.out, out, extra=extra, comment="\n".join(lines), progress=row_progress(bar))
-    form = "rate" if isinstance(out, ImuRates) else "increment"
-    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
-    return 0
+    return out, None if rows_temp is None else {"temp": rows_temp}
 
 
 def _readings(inputs: Any) -> tuple[ImuRates | ImuIncrements, Array | None, Array | None]:
@@ -100,7 +114,10 @@ def add(sub: Subparsers) -> None:
     add_dataset(p)
     p.add_argument(
         "--out", type=Path, required=True, metavar="CORRECTED.csv",
-        help="the corrected readings, in the recording's form (rates or increments), sins's CSV columns",
+        help="the corrected readings in sins's CSV columns, in the form sins reads the recording in: rates "
+        "for a rig recording or a rate file (a CSV, a bag, EuRoC), increments for an increment file and for "
+        "a recording read against its reference trajectory (--dataset broad_NN or psins_vehicle), which "
+        "sins holds as increments",
     )  # fmt: skip
     p.add_argument(
         "--again", action="store_true",

@@ -20,6 +20,7 @@ from sins.cli.common import (
     display_unit,
     fixed_width,
     fraction,
+    progress_bar,
     recording_options,
     save_plot,
     unit_of,
@@ -44,9 +45,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     check_outputs(outputs, [args.model, args.recording, args.truth, *dataset_inputs(args.dataset)])
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
-    inputs = referenced.read_inputs(
-        args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
-    )
+    with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
+        inputs = referenced.read_inputs(
+            args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
+        )
     sensor = unit_of(args.recording, args.dataset, inputs)
     referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=sensor)
     if isinstance(inputs, ReferencedRecording):
@@ -82,7 +84,8 @@ def _evaluate_rig(
             _, data = data.split(args.last)
         except ValueError as exc:
             raise SinsInputError(f"{where}: {exc}") from None
-    channels = compensation.residual_rms(strategy, data)
+    with progress_bar("judging", ""):
+        channels = compensation.residual_rms(strategy, data)
     for name, v in channels.items():
         check_finite(v, f"{args.model} on {where}: {name}")
     scope = f"the last {args.last:g} of each phase" if args.last else "the whole recording"
@@ -122,7 +125,8 @@ def _evaluate_referenced(
     if args.bias_from_rest:
         variants.append((f"{strategy.label}, gyro bias from the opening rest", strategy, True))
     for label, s, rest in variants:
-        runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
+        with progress_bar(f"open loop: {label}", ""):
+            runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
         r = runs[label].rmse()
         aoe = runs[label].aoe_deg()
         attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
@@ -172,7 +176,8 @@ def _drive(args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecordin
         raise SinsInputError(f"--drive {args.drive!r}: expected START:END in seconds") from None
     out, rows = {}, []
     for label, s in (("none (raw readings)", None), (strategy.label, strategy)):
-        d = referenced.drive_errors(s, rec, start, end)
+        with progress_bar(f"free inertial: {label}", ""):
+            d = referenced.drive_errors(s, rec, start, end)
         out[label] = d.to_dict()
         figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
         rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])

@@ -50,9 +50,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         recording = args.recording[0] if args.recording else None
         dataset = args.dataset[0] if args.dataset else None
         where = dataset or str(recording)
-        inputs = referenced.read_inputs(
-            recording, dataset=dataset, truth=args.truth, options=recording_options(args)
-        )
+        with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
+            inputs = referenced.read_inputs(
+                recording, dataset=dataset, truth=args.truth, options=recording_options(args)
+            )
         if isinstance(inputs, ReferencedRecording):
             strategy, document = _fit_referenced(args, inputs, where)
         elif isinstance(inputs, CalibrationData):
@@ -190,8 +191,10 @@ def _check_args(args: argparse.Namespace) -> None:
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    if args.no_guard and args.strategy not in ("mlp", "kohonen"):
-        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
+    if args.no_guard and args.strategy not in ("mlp", "kohonen", "mlp_window"):
+        raise SinsInputError(
+            f"--no-guard: {args.strategy} has no guard (only mlp, kohonen and mlp_window do)"
+        )
 
 
 def _fit_rig(
@@ -282,6 +285,8 @@ def _fit_referenced(
     )
     print(f"reference: {fit.quality.summary()}")
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    if args.strategy == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
+        table = [c for c in table if c.term == "bias"]
     _print_coefficients(table, "the seed model on the intervals (± 1σ; held: not determined, zero)")
     held = fitted.review.held if fitted.review is not None else {}
     if held:
@@ -360,8 +365,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--no-guard", action="store_true",
-        help="mlp, kohonen: use the learned correction on every channel, even where it does not beat "
-        "regression on held-back blocks",
+        help="mlp, kohonen, mlp_window: use the learned correction on every channel, even where it does not "
+        "beat regression on held-back blocks (recordings)",
     )  # fmt: skip
     p.add_argument(
         "--grade", choices=GRADES, default="consumer",

@@ -33,6 +33,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -170,43 +171,96 @@ def _online(
     """The velocity-bounded estimate (module docstring), every :data:`UPDATE_S`, from the readings
     before each update; ``track`` holds what is used before the first."""
     dt = np.diff(imu.t)
-    q0 = _levelled(force)
-    q = attitude.propagate_increments(imu.dtheta_b - prior * dt[:, None], q0)
-    c = attitude_dcm(q[:-1])  # body to the levelled frame (z up), each step's start
-    f_n = np.einsum("kij,kj->ki", c, force)
-    v = np.vstack([np.zeros(3), np.cumsum((f_n - [0.0, 0.0, _G]) * dt[:, None], axis=0)])
-    t = imu.t - imu.t[0]
-    s = _integral(c, dt)  # ∫ C dt: a bias change δ tilts the frame by S δ
-    i_s = _integral(s[:-1], dt)  # ∫ S dt: ... and moves the velocity by g ∫ S δ
-    i_c = s  # ∫ C dt again: an accelerometer bias moves the velocity by -∫ C b_a
     step = max(1, round(UPDATE_S / float(np.median(dt))))
-    at = np.arange(step, len(t), step)
+    at = np.arange(step, len(imu.t), step)
+    if not len(at):
+        return track
+    c0 = attitude_dcm(_levelled(force)[None, :])[0]
+    v, s, i_s = _velocity_terms(imu.dtheta_b - prior * dt[:, None], imu.dv_b, dt, c0, at)
+    t = (imu.t - imu.t[0])[at]
+    zero, one = np.zeros(len(at)), np.ones(len(at))
     # Unknowns: the true velocity at the start (2), the initial tilt (2), the bias change (3), the
-    # accelerometer's bias (3); two rows (east, north) per update time.
-    rows_e = np.column_stack([-np.ones(len(at)), np.zeros(len(at)), np.zeros(len(at)), -_G * t[at],
-                              _G * i_s[at, 1], i_c[at, 0]])  # fmt: skip
-    rows_n = np.column_stack([np.zeros(len(at)), -np.ones(len(at)), _G * t[at], np.zeros(len(at)),
-                              -_G * i_s[at, 0], i_c[at, 1]])  # fmt: skip
+    # accelerometer's bias (3); two rows (east, north) per update time. A bias change δ tilts the frame
+    # by S δ (S = ∫ C dt), which moves the velocity by g ∫ S δ; an accelerometer bias by -∫ C b_a = -S b_a.
+    rows_e = np.column_stack([-one, zero, zero, -_G * t, _G * i_s[:, 1], s[:, 0]])
+    rows_n = np.column_stack([zero, -one, _G * t, zero, -_G * i_s[:, 0], s[:, 1]])
     design = np.stack([rows_e, rows_n], axis=1) / rule.sigma_v_mps  # (m, 2, 10)
-    target = v[at][:, :2] / rule.sigma_v_mps
+    target = v[:, :2] / rule.sigma_v_mps
     prior_rows = np.diag(
         np.r_[1 / 2.0, 1 / 2.0, 1 / 0.2, 1 / 0.2, 1 / sigma, np.full(3, 1 / rule.sigma_accel_mps2)]
     )
-    gram = prior_rows.T @ prior_rows
-    rhs = np.zeros(10)
+    # Running sums of the normal equations: the estimate at each update from the rows before it.
+    grams = prior_rows.T @ prior_rows + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
+    rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
+    thetas = np.linalg.solve(grams, rhss[:, :, None])[:, :, 0]
     out = track.copy()
-    for j, k in enumerate(at):
-        gram = gram + design[j].T @ design[j]
-        rhs = rhs + design[j].T @ target[j]
-        theta = np.linalg.solve(gram, rhs)
-        out[k:] = prior + theta[4:7]
+    ends = np.r_[at[1:], len(out)]
+    for k, end, theta in zip(at, ends, thetas, strict=True):
+        out[k:end] = prior + theta[4:7]
     return out
 
 
-def _integral(x: Array, dt: Array) -> Array:
-    """The running integral of ``x`` (n, ...) over steps ``dt`` (n,), from 0: (n+1, ...)."""
-    shape = (1, *x.shape[1:])
-    return np.concatenate([np.zeros(shape), np.cumsum(x * dt.reshape(-1, *([1] * (x.ndim - 1))), axis=0)])
+@numba.njit(cache=True, nogil=True)
+def _velocity_terms(
+    dtheta: Array, dv: Array, dt: Array, c0: Array, at: NDArray[np.int64]
+) -> tuple[Array, Array, Array]:  # pragma: no cover  (compiled)
+    """One pass over the steps: the attitude ``C`` (body to the levelled frame) the increments ``dtheta``
+    integrate to from ``c0``, the velocity the specific force's increments ``dv`` make in it less
+    gravity's, ``S = ∫ C dt`` and ``∫ S dt``; returned at the step boundaries ``at``: velocity (m, 3),
+    ``S`` and ``∫ S dt`` (m, 3, 3). Scalar arithmetic throughout (no array is made within the loop)."""
+    m = len(at)
+    v_at = np.zeros((m, 3))
+    s_at = np.zeros((m, 3, 3))
+    is_at = np.zeros((m, 3, 3))
+    c = c0.copy()
+    turned = np.empty((3, 3))
+    v = np.zeros(3)
+    s = np.zeros((3, 3))
+    i_s = np.zeros((3, 3))
+    j = 0
+    for k in range(len(dt) + 1):
+        while j < m and at[j] == k:
+            v_at[j, :] = v
+            s_at[j, :, :] = s
+            is_at[j, :, :] = i_s
+            j += 1
+        if k == len(dt):
+            break
+        h = dt[k]
+        px, py, pz = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
+        ax, ay, az = dv[k, 0], dv[k, 1], dv[k, 2]
+        # The step's velocity increment turned by half the step's own turn (first order), into the frame.
+        mx = ax + 0.5 * (py * az - pz * ay)
+        my = ay + 0.5 * (pz * ax - px * az)
+        mz = az + 0.5 * (px * ay - py * ax)
+        for r in range(3):
+            v[r] += c[r, 0] * mx + c[r, 1] * my + c[r, 2] * mz
+            for q in range(3):
+                i_s[r, q] += s[r, q] * h + 0.5 * c[r, q] * h * h
+                s[r, q] += c[r, q] * h
+        v[2] -= _G * h
+        # C ← C Exp(φ), Rodrigues: Exp(φ) = I + a [φ]× + b [φ]×², a = sin θ/θ, b = (1 − cos θ)/θ².
+        th2 = px * px + py * py + pz * pz
+        if th2 > 1e-24:
+            th = np.sqrt(th2)
+            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
+        else:
+            a, b = 1.0, 0.5
+        e00, e11, e22 = (
+            1.0 - b * (py * py + pz * pz),
+            1.0 - b * (px * px + pz * pz),
+            1.0 - b * (px * px + py * py),
+        )
+        e01, e10 = -a * pz + b * px * py, a * pz + b * px * py
+        e02, e20 = a * py + b * px * pz, -a * py + b * px * pz
+        e12, e21 = -a * px + b * py * pz, a * px + b * py * pz
+        for r in range(3):
+            c0r, c1r, c2r = c[r, 0], c[r, 1], c[r, 2]
+            turned[r, 0] = c0r * e00 + c1r * e10 + c2r * e20
+            turned[r, 1] = c0r * e01 + c1r * e11 + c2r * e21
+            turned[r, 2] = c0r * e02 + c1r * e12 + c2r * e22
+        c[:, :] = turned
+    return v_at, s_at, is_at
 
 
 def _levelled(force: Array) -> Array:
