@@ -59,11 +59,7 @@ def _corrected(
         assert isinstance(inputs, Recording)
         imu, temp = inputs.imu, inputs.temp
     try:
-        out = (
-            strategy.correct_rates(imu, temp)
-            if isinstance(imu, ImuRates)
-            else strategy.correct_increments(imu, temp)
-        )
+        out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
     extra = None if temp is None else {"temp": temp if isinstance(imu, ImuRates) else temp[1:]}
