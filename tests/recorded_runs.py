@@ -58,9 +58,8 @@ def differences(got: Any, want: Any, where: str = "") -> list[str]:
     """Where ``got`` differs from ``want``: numbers beyond :data:`RELATIVE` (or :data:`ABSOLUTE`), other
     values or shapes at all; one line each, naming the field."""
     if isinstance(want, dict) and isinstance(got, dict):
-        if set(got) != set(want):
-            return [f"{where}: keys {sorted(set(got) ^ set(want))} differ"]
-        return [d for k in want for d in differences(got[k], want[k], f"{where}.{k}")]
+        odd = [f"{where}: keys {sorted(set(got) ^ set(want))} differ"] if set(got) != set(want) else []
+        return odd + [d for k in want if k in got for d in differences(got[k], want[k], f"{where}.{k}")]
     if isinstance(want, list) and isinstance(got, list):
         if len(got) != len(want):
             return [f"{where}: {len(got)} items, recorded {len(want)}"]
