@@ -41,9 +41,11 @@ Earth
     correction, Earth rate 7.292115e-5 rad/s; transport rate and Coriolis
     terms are always modelled.
 IMU samples
-    Increment form: row ``k`` holds the integrals of ``omega_ib_b`` and
-    ``f_ib_b`` over ``(t[k-1], t[k]]``. Rate form: instantaneous values at
-    ``t[k]``.
+    Increment form (:class:`~sins.series.ImuIncrements`): ``t`` holds the
+    n+1 step boundaries and row ``k`` of ``dtheta_b``, ``dv_b`` the integrals
+    of ``omega_ib_b`` and ``f_ib_b`` over ``(t[k], t[k+1]]``; a file's row
+    is stamped with its step's end. Rate form: instantaneous values at
+    ``t[k]``. (Stated here only; ``tests/test_trajectory.py`` holds it.)
 """
 
 from __future__ import annotations

@@ -94,12 +94,11 @@ class NavSeries:
 
 @dataclass(frozen=True)
 class ImuIncrements:
-    """IMU output in increment form.
+    """IMU output in increment form (the convention: :mod:`sins`'s docstring, "IMU samples").
 
     Attributes
     ----------
-    t : (n+1,) s; ``t[0]`` starts the first interval, row ``k`` of the
-        increments covers ``(t[k], t[k+1]]``
+    t : (n+1,) s, the step boundaries
     dtheta_b : (n, 3) rad, integral of ``omega_ib_b`` over each interval
     dv_b : (n, 3) m/s, integral of ``f_ib_b`` over each interval
     """

@@ -47,6 +47,35 @@ def normalised(document: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+#: How far a recorded number may move on another machine's arithmetic: relative, and absolute near zero.
+#: Rounding in the last bits of a sum over a run (1e-16 relative a step, 60,000 steps, a filter's
+#: gains amplifying it by at most a few hundred) stays below 1e-9; a change of code moves results by
+#: 1e-6 and more.
+RELATIVE, ABSOLUTE = 1e-9, 1e-12
+
+
+def differences(got: Any, want: Any, where: str = "") -> list[str]:
+    """Where ``got`` differs from ``want``: numbers beyond :data:`RELATIVE` (or :data:`ABSOLUTE`), other
+    values or shapes at all; one line each, naming the field."""
+    if isinstance(want, dict) and isinstance(got, dict):
+        odd = [f"{where}: keys {sorted(set(got) ^ set(want))} differ"] if set(got) != set(want) else []
+        return odd + [d for k in want if k in got for d in differences(got[k], want[k], f"{where}.{k}")]
+    if isinstance(want, list) and isinstance(got, list):
+        if len(got) != len(want):
+            return [f"{where}: {len(got)} items, recorded {len(want)}"]
+        return [
+            d
+            for i, (g, w) in enumerate(zip(got, want, strict=True))
+            for d in differences(g, w, f"{where}[{i}]")
+        ]
+    numbers = (int, float)
+    if isinstance(want, numbers) and isinstance(got, numbers) and not isinstance(want, bool):
+        if abs(got - want) <= max(RELATIVE * abs(want), ABSOLUTE):
+            return []
+        return [f"{where}: {got!r}, recorded {want!r}"]
+    return [] if got == want else [f"{where}: {got!r}, recorded {want!r}"]
+
+
 def write(folder: Path, documents: dict[str, dict[str, Any]]) -> None:
     """Record ``{preset: document}`` and :func:`platform` in ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)

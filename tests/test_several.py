@@ -13,37 +13,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import dataset_folder, refusal
-from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
+from numpy_units import recordings, write_npz
 from scipy.spatial.transform import Rotation
 
 from sins import compensation, referenced
 from sins.cli import main
 from sins.compensation import several, unit_bias
-from sins.series import ImuIncrements, ImuRates, NavSeries
+from sins.series import ImuIncrements
 
 EUROC = dataset_folder("euroc")
 needs_euroc = pytest.mark.skipif(not (EUROC / "V1_01_easy.npz").is_file(), reason=f"no EuRoC data in {EUROC}")
-
-
-def _recordings(seed: int, count: int = 3) -> tuple[list[referenced.ReferencedRecording], object, np.ndarray]:
-    """``count`` sessions of one numpy unit whose gyro and accelerometer biases are drawn anew for each
-    (the bias between power-ups), everything else shared."""
-    rng = np.random.default_rng(seed)
-    unit = typical_unit(rng)
-    recs, biases = [], []
-    for k in range(count):
-        own = replace(unit, B0=np.radians(rng.normal(0.0, 0.1, 3)), A0=rng.normal(0.0, 0.05, 3))
-        s = session(rng, own, duration_s=120.0)
-        truth = NavSeries(
-            t=s.t_ref, lat=np.full(len(s.t_ref), math.radians(LAT_DEG)), lon=np.zeros(len(s.t_ref)),
-            h=np.full(len(s.t_ref), HEIGHT_M), v_n=s.v_n, q_nb=s.q_nb,
-        )  # fmt: skip
-        rec = referenced.from_recording(
-            ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"numpy {k}"
-        )
-        recs.append(rec)
-        biases.append(own.B0)
-    return recs, unit, np.array(biases)
 
 
 @pytest.mark.parametrize("seed", [4, 5])
@@ -51,7 +30,7 @@ def test_shared_coefficients_and_each_recordings_bias_are_recovered(seed: int) -
     """Three recordings, three gyro biases 0.1 °/s apart: each recording's bias within 4 of its standard
     errors, the shared scale and misalignment too, and their z-scores' RMS between 0.4 and 2 (honest
     standard errors; 3 × 9 + 9 values scatter by ~0.15)."""
-    recs, unit, biases = _recordings(seed)
+    recs, unit, biases = recordings(seed)
     fit = several.fit_several(recs)
     z_bias = (fit.gyro_bias - biases) / fit.gyro_bias_se
     z_b = (fit.seed.B - unit.B) / fit.seed.B_se
@@ -65,7 +44,7 @@ def test_shared_coefficients_and_each_recordings_bias_are_recovered(seed: int) -
 
 
 def test_one_recording_for_each_recording_reproduces_its_own_fit_bias() -> None:
-    recs, _, _ = _recordings(6)
+    recs, _, _ = recordings(6)
     fit = several.fit_several(recs)
     for r in range(len(recs)):
         own = fit.for_recording(r)
@@ -137,7 +116,7 @@ def test_the_online_rule_finds_a_bias_the_prior_missed_on_the_horizontal_axes(se
 
 
 def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
-    recs, _, _ = _recordings(7)
+    recs, _, _ = recordings(7)
     fitted = referenced.fit_several("regression", recs)
     assert fitted.rule is not None and fitted.rule.mode in unit_bias.MODES
     assert set(fitted.rule.held_back_deg) == set(unit_bias.MODES)  # chosen on held-back recordings
@@ -150,7 +129,7 @@ def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
 
 
 def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
-    recs, _, _ = _recordings(10)
+    recs, _, _ = recordings(10)
     fitted = referenced.fit_several("bias_only", recs, rule_mode="pooled")
     s = fitted.strategy
     assert s.label == "bias_only"
@@ -159,7 +138,7 @@ def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
 
 
 def test_a_damaged_rule_is_refused(tmp_path: Path) -> None:
-    recs, _, _ = _recordings(7, count=2)
+    recs, _, _ = recordings(7, count=2)
     fitted = referenced.fit_several("regression", recs)
     path = tmp_path / "m.json"
     compensation.save(fitted.strategy, path)
@@ -170,7 +149,7 @@ def test_a_damaged_rule_is_refused(tmp_path: Path) -> None:
 
 
 def test_recordings_of_two_units_or_rates_are_refused() -> None:
-    recs, _, _ = _recordings(8, count=2)
+    recs, _, _ = recordings(8, count=2)
     refusal(lambda: referenced.fit_several("regression", recs[:1]), "two or more")
     other = replace(recs[1], sensor="another unit")
     first = replace(recs[0], sensor="a unit")
@@ -184,30 +163,13 @@ def test_strategies_lists_the_registry_one_name_a_line(capsys: pytest.CaptureFix
     assert set(names) == (set(compensation.VARIANTS) - {"oracle"}) | {"bias_only"}
 
 
-def _npz(folder: Path, name: str, rec: referenced.ReferencedRecording) -> None:
-    """A numpy recording written in the .npz form (rates at the step boundaries, the reference there)."""
-    keep = int(np.searchsorted(rec.imu.t, rec.reference.t[-1], side="right"))
-    t = rec.imu.t[:keep]
-    dt = np.diff(t)[:, None]
-    rate = np.vstack([rec.imu.dtheta_b[: keep - 1] / dt, rec.imu.dtheta_b[keep - 2 : keep - 1] / dt[-1:]])
-    force = np.vstack([rec.imu.dv_b[: keep - 1] / dt, rec.imu.dv_b[keep - 2 : keep - 1] / dt[-1:]])
-    ref = rec.reference.interpolate(t)
-    q = Rotation.from_quat(ref.q_nb)
-    ned_to_enu = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-    np.savez(
-        folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force,
-        q_wxyz=(ned_to_enu * q).as_quat(scalar_first=True), v_m_s=ref.v_n[:, [1, 0, 2]] * [1, 1, -1],
-        p_m=np.zeros((len(t), 3)),
-    )  # fmt: skip
-
-
 def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    recs, _, _ = _recordings(9)
+    recs, _, _ = recordings(9)
     (tmp_path / "unit").mkdir()
     for k, rec in enumerate(recs):
-        _npz(tmp_path / "unit", f"r{k}", rec)
+        write_npz(tmp_path / "unit", f"r{k}", rec)
     monkeypatch.setenv("SINS_DATA", str(tmp_path))
     model, fit_json, out = tmp_path / "m.json", tmp_path / "fit.json", tmp_path / "e.json"
     args = [
@@ -236,14 +198,14 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert online < pooled < raw, (online, pooled, raw)
     # A model fitted on this folder's unit is refused on a recording of another folder (another unit).
     (tmp_path / "other").mkdir()
-    _npz(tmp_path / "other", "x", recs[2])
+    write_npz(tmp_path / "other", "x", recs[2])
     refusal(lambda: _exit(main(["evaluate", str(model), "--dataset", "other/x"])), "fitted on unit")
 
 
 def test_a_model_fitted_at_another_rate_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    recs, _, _ = _recordings(11)
+    recs, _, _ = recordings(11)
     fitted = referenced.fit_several("regression", recs[:2], rule_mode="pooled")
     model = tmp_path / "m.json"
     compensation.save(fitted.strategy, model)
@@ -255,7 +217,7 @@ def test_a_model_fitted_at_another_rate_is_refused(
     )  # fmt: skip
     halved = replace(rec, imu=slow)
     (tmp_path / "u").mkdir()
-    _npz(tmp_path / "u", "slow", halved)
+    write_npz(tmp_path / "u", "slow", halved)
     code = main(["evaluate", str(model), str(tmp_path / "u" / "slow.npz")])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err, err

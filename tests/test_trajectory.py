@@ -198,3 +198,18 @@ def test_recorded_truth_motion_reproduces_the_record(motion, tmp_path):
     assert np.abs(e.att_rpy_rad).max() < 5e-5
     e2 = nav_errors(strapdown.integrate(imu, strapdown.InitialState.from_series(again)), again)
     assert e2.horizontal_m.max() < 0.01
+
+
+def test_the_increment_convention() -> None:
+    """The package's convention (sins's docstring, "IMU samples"): row ``k`` of an increment series is the
+    integral over ``(t[k], t[k+1]]``. A rate ramp ``ω = t`` integrates to ``(t[k+1]² − t[k]²) / 2`` there,
+    whatever the steps; the rate form's conversion (cubic where the steps are uniform) is exact for it."""
+    from sins.series import ImuRates
+
+    t = np.cumsum(np.r_[0.0, np.full(50, 0.01)]) + 3.0
+    ramp = np.column_stack([t, 2 * t, -t])
+    inc = ImuRates(t=t, omega_ib_b=ramp, f_ib_b=ramp).to_increments()
+    expected = 0.5 * (t[1:] ** 2 - t[:-1] ** 2)
+    np.testing.assert_allclose(inc.dtheta_b[:, 0], expected, rtol=1e-12)
+    np.testing.assert_allclose(inc.dv_b[:, 2], -expected, rtol=1e-12)
+    assert len(inc.t) == len(inc.dtheta_b) + 1 and inc.t[0] == t[0]

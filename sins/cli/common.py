@@ -258,6 +258,37 @@ def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
     )  # fmt: skip
 
 
+def add_npz_dataset(p: argparse.ArgumentParser, positional: str) -> None:
+    """``--dataset FOLDER/NAME`` for a command that reads a recording file: any ``NAME.npz`` in a folder
+    of the data root, in place of the ``positional`` argument (:func:`npz_dataset` resolves it)."""
+    p.add_argument(
+        "--dataset", metavar="FOLDER/NAME",
+        help=f"instead of {positional}: NAME.npz in a folder of the data root (euroc/V1_01_easy)",
+    )  # fmt: skip
+
+
+def npz_dataset(args: argparse.Namespace, positional: str) -> None:
+    """Set ``args.<positional>`` to the file ``--dataset FOLDER/NAME`` names (one of them must be given).
+
+    Raises
+    ------
+    SinsInputError
+        for both or neither, or a name that is not ``FOLDER/NAME`` of an ``.npz`` in the data root.
+    """
+    given = getattr(args, positional)
+    if (given is None) == (args.dataset is None):
+        raise SinsInputError(f"give a {positional.upper()} or --dataset FOLDER/NAME (one of them)")
+    if args.dataset is not None:
+        from sins.io.datasets import npz_folders
+
+        if not npz_folders.is_folder_name(args.dataset):
+            raise SinsInputError(
+                f"--dataset {args.dataset}: this command reads recordings as files; name an .npz one as "
+                "FOLDER/NAME (the datasets by name go with fit, evaluate, correct, gap and characterise)"
+            )
+        setattr(args, positional, npz_folders.npz_path(args.dataset))
+
+
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """The options that say how to read a recording that is not a sins CSV (``sins.io.read_recording_any``;
     the formats guide lists them): every command that takes a recording path adds them, and passes
@@ -473,6 +504,7 @@ __all__ = [
     "LogProgress",
     "Subparsers",
     "add_dataset",
+    "add_npz_dataset",
     "add_plot",
     "add_recording_options",
     "advance",
@@ -487,6 +519,7 @@ __all__ = [
     "format_table",
     "fraction",
     "has_display",
+    "npz_dataset",
     "positive",
     "progress_bar",
     "recording_options",

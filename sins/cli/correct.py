@@ -68,16 +68,11 @@ def _corrected(
     """The readings corrected in the form sins holds them in, and the temperature column to keep (the
     model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
     from sins import referenced
-    from sins.series import ImuRates
 
     referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
     imu, temp, rows_temp = _readings(inputs)
     try:
-        out = (
-            strategy.correct_rates(imu, temp)
-            if isinstance(imu, ImuRates)
-            else strategy.correct_increments(imu, temp)
-        )
+        out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
     return out, None if rows_temp is None else {"temp": rows_temp}

@@ -11,12 +11,14 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
+    add_npz_dataset,
     add_plot,
     add_recording_options,
     check_finite,
     check_outputs,
     check_plot,
     format_table,
+    npz_dataset,
     positive,
     progress_bar,
     recording_options,
@@ -46,6 +48,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins import io, pipeline
     from sins.io import solution
 
+    npz_dataset(args, "imu")
     if args.out:
         solution.check_solution_path(args.out)  # before the work, not after
     check_plot(args)
@@ -303,7 +306,8 @@ def add(sub: Subparsers) -> None:
     p = sub.add_parser(
         "integrate", help="integrate a recorded IMU against its truth, or from a given or aligned start"
     )
-    p.add_argument("imu", type=Path, metavar="RECORDING")
+    p.add_argument("imu", type=Path, nargs="?", metavar="RECORDING")
+    add_npz_dataset(p, "imu")
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv", help="the truth (default: the recording's own reference)"
     )

@@ -22,6 +22,7 @@ them by name and keeps their model files.
 
 from __future__ import annotations
 
+import inspect
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
@@ -161,8 +162,15 @@ class Strategy(ABC):
             setattr(self, k, np.asarray(v, dtype=float) if isinstance(v, list) else v)
 
     def params(self) -> dict[str, Any]:
-        """Constructor parameters (saved beside the state)."""
-        return {}
+        """The constructor's parameters as it holds them (scikit-learn's rule: each ``__init__`` argument
+        is kept under its own name), in JSON's terms (tuples as lists): what a model file saves beside
+        the state, and what the class is made again from."""
+        found = {}
+        for name, p in inspect.signature(type(self).__init__).parameters.items():
+            if name == "self" or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+                continue
+            found[name] = _json_param(getattr(self, name))
+        return found
 
 
 def state_array(
@@ -195,6 +203,13 @@ def checked_array(value: Any, shape: tuple[int | None, ...], where: str) -> Arra
     if not np.isfinite(array).all():
         raise ValueError(f"{where} holds a number that is not finite")
     return array
+
+
+def _json_param(value: Any) -> Any:
+    """A constructor parameter in JSON's terms: tuples (nested too) as lists."""
+    if isinstance(value, tuple | list):
+        return [_json_param(v) for v in value]
+    return value
 
 
 def _plain(value: Any) -> Any:

@@ -20,7 +20,6 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -96,10 +95,6 @@ class Ferraris(Strategy):
         self.g_sensitivity = g_sensitivity
         self.turn_sd_deg = turn_sd_deg
         self.batches = batches
-
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: ``g_sensitivity``, ``turn_sd_deg`` and ``batches``."""
-        return {"g_sensitivity": self.g_sensitivity, "turn_sd_deg": self.turn_sd_deg, "batches": self.batches}
 
     def fit(self, data: CalibrationData) -> Ferraris:
         """Fit the seed model from the session's holds and turns; returns self.

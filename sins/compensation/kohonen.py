@@ -78,13 +78,6 @@ class Kohonen(Strategy):
         self.neighbours = neighbours
         self.seed = seed
 
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: map size, training settings, ``neighbours`` and ``seed``."""
-        return {
-            "rows": self.rows, "cols": self.cols, "sigma": self.sigma, "learning_rate": self.learning_rate,
-            "iterations": self.iterations, "neighbours": self.neighbours, "seed": self.seed,
-        }  # fmt: skip
-
     def fit(self, data: CalibrationData) -> Kohonen:
         """Train the map on standardised readings and store each node's mean error; returns self."""
         from minisom import MiniSom
@@ -194,14 +187,6 @@ class LocalLinearMap(ResidualStrategy):
         self.smoothing = smoothing
         self.slope_ridge = slope_ridge
         self.som_iterations = som_iterations
-
-    def params(self) -> dict[str, Any]:
-        """The base's parameters plus map sizes, neighbourhoods, penalties and SOM iterations."""
-        return {
-            **super().params(), "sizes": list(self.sizes), "sigmas": list(self.sigmas),
-            "smoothing": self.smoothing, "slope_ridge": self.slope_ridge,
-            "som_iterations": self.som_iterations,
-        }  # fmt: skip
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
         return [{"size": n} for n in self.sizes]

@@ -131,16 +131,6 @@ class MLP(Strategy):
         #: Called as ``progress(epochs_done, max_epochs)`` after each epoch (a progress bar's); not saved.
         self.progress: Callable[[int, int], None] | None = None
 
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: topology, ``mode`` and the training settings."""
-        return {
-            "hidden": list(self.hidden), "mode": self.mode, "alpha": self.alpha, "gain": self.gain,
-            "residual": self.residual, "max_epochs": self.max_epochs, "batch_size": self.batch_size,
-            "patience": self.patience, "validation": self.validation, "seed": self.seed,
-        }  # fmt: skip
-
-    # ------------------------------------------------------------------ network
-
     def _network(self, n_in: int) -> Any:
         import torch
         from torch import nn
@@ -416,14 +406,6 @@ class ResidualMLP(ResidualStrategy):
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
         self.hidden_sizes = tuple(check_hidden(tuple(hs), "hidden_sizes") for hs in hidden_sizes)
         self.decays = tuple(float(d) for d in decays)
-
-    def params(self) -> dict[str, Any]:
-        """The base's parameters plus the candidate hidden layers and weight decays."""
-        return {
-            **super().params(),
-            "hidden_sizes": [list(h) for h in self.hidden_sizes],
-            "decays": list(self.decays),
-        }
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
         return [{"hidden": list(h), "decay": d} for h in self.hidden_sizes for d in self.decays]

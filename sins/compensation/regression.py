@@ -27,10 +27,6 @@ class Regression(Strategy):
         self.huber_k = huber_k
         self.g_sensitivity = g_sensitivity
 
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: ``robust``, ``huber_k``, ``g_sensitivity``."""
-        return {"robust": self.robust, "huber_k": self.huber_k, "g_sensitivity": self.g_sensitivity}
-
     def fit(self, data: CalibrationData) -> Regression:
         """Fit the seed model by least squares (Huber-weighted if ``robust``), then :meth:`fit_beyond`;
         returns self."""
@@ -119,15 +115,6 @@ class ExtendedRegression(Strategy):
         self.temperature = temperature
         self.t0 = t0
         self.iterations = iterations
-
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: the extra regressors, ``t0`` (°C) and ``iterations``."""
-        return {
-            "squares": self.squares,
-            "temperature": self.temperature,
-            "t0": self.t0,
-            "iterations": self.iterations,
-        }
 
     def check_state(self, state: dict[str, Any]) -> None:
         """``uses_temp_`` a boolean; ``coef_`` (6, p) with the columns of the fitted regressors; at most

@@ -177,11 +177,6 @@ class ResidualStrategy(Strategy):
         #: bar, say); not a parameter, and not saved.
         self.progress: Callable[[int, int], None] | None = None
 
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters: ``folds``, ``guard``, ``guard_z``, ``seed``, ``physics``."""
-        return {"folds": self.folds, "guard": self.guard, "guard_z": self.guard_z, "seed": self.seed,
-                "physics": self.physics}  # fmt: skip
-
     # ------------------------------------------------------------------ what a learner supplies
 
     @abstractmethod

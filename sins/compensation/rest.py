@@ -19,8 +19,6 @@ that corrects its stream a chunk at a time (``sins run``) starts each chunk with
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -46,10 +44,6 @@ class RestAware(Regression):
     """The seed model with the gyro bias re-taken at every rest in operation (see the module docstring)."""
 
     name = "regression_rest"
-
-    def params(self) -> dict[str, Any]:
-        """Constructor parameters (those of :class:`Regression`)."""
-        return super().params()
 
     def fit_beyond(self, data: CalibrationData) -> RestAware:
         """The rest detector's threshold and the motion offset, after the seed model; returns self.

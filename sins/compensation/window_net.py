@@ -95,14 +95,6 @@ class WindowNet(Regression):
         self.seed = int(seed)
         self.progress: Callable[[int, int], None] | None = None
 
-    def params(self) -> dict[str, Any]:
-        """The constructor's parameters."""
-        return {
-            "hidden": list(self.hidden), "weight_decay": self.weight_decay, "steps": self.steps,
-            "ensemble": self.ensemble, "guard": self.guard, "guard_z": self.guard_z, "seed": self.seed,
-            "g_sensitivity": self.g_sensitivity,
-        }  # fmt: skip
-
     def fit_beyond(self, data: CalibrationData) -> WindowNet:
         """One recording's per-sample references (the seed model set first): the network on its first
         part, judged on the last :data:`HOLD_LAST` for the guard, then trained on all of it."""

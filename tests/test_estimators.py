@@ -1,0 +1,97 @@
+"""The estimator laws every registered strategy keeps (scikit-learn's ``check_estimator``, for sins):
+parametrised over the registry, so a new strategy is checked without editing this file.
+
+Each strategy is fitted on a short simulated rig session of a tactical unit (the Ferraris calibration on
+tests/test_ferraris.py's numpy session of holds and turns; the oracle is given the unit it corrects) and
+must: be made by name with its variant's parameters; report as ``params()`` exactly its constructor's
+arguments, and be made again from them with the same parameters; return itself from ``fit``; keep what
+it learnt in attributes ending in ``_``; give ``predict_error`` as readings less ``correct``; correct
+increments as its rates, a whole recording as its increments (no bias rule fitted); and come back from
+its model file with the same parameters and the same corrections, to the last bit.
+"""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sins import compensation, imu
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
+from sins.series import CalibrationData, ImuIncrements, ImuRates
+
+FAST = calibration.RigProcedure(position_dwell_s=8.0, rate_table=calibration.RateTable(dwell_s=4.0))
+#: Parameters that keep a learner's fit short here (the laws do not depend on its size).
+QUICK = {
+    "mlp_window": {"steps": 200, "ensemble": 1}, "mlp_pure": {"max_epochs": 5}, "mlp_seed": {"max_epochs": 3},
+    "kohonen_pure": {"iterations": 2000},
+}  # fmt: skip
+
+
+def _unit() -> imu.ImuModel:
+    return imu_spec.draw_unit("tactical", 1, 101).only(*imu.BASELINE)
+
+
+def _data(name: str) -> CalibrationData:
+    if name == "ferraris":
+        from test_ferraris import Hand, Unit, _numpy_session
+
+        rng = np.random.default_rng(5)
+        return _numpy_session(Unit.draw(rng), Hand(), rng)
+    return calibration.simulate_rig(FAST, _unit(), seed=1)
+
+
+def _make(name: str) -> compensation.Strategy:
+    if name == "oracle":
+        return compensation.Oracle(_unit())
+    return compensation.make(name, **QUICK.get(name, {}))
+
+
+@pytest.mark.parametrize("name", list(compensation.VARIANTS))
+def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> None:
+    data = _data(name)
+    strategy = _make(name)
+    assert strategy.label == name or name == "oracle"
+    # params(): exactly the constructor's arguments, and a clone made from them says the same.
+    arguments = [
+        n for n, p in inspect.signature(type(strategy).__init__).parameters.items()
+        if n != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+    ]  # fmt: skip
+    params = strategy.params()
+    if name != "oracle":  # the oracle's model is a simulation's, not a file's
+        assert list(params) == arguments
+        assert type(strategy)(**params).params() == params
+    assert strategy.fit(data) is strategy
+    learned = [k for k in vars(strategy) if k.endswith("_")]
+    assert (len(learned) > 0) == (name not in ("none", "oracle"))
+    probe_w, probe_f = data.gyro[::97], data.accel[::97]
+    probe_t = None if data.temp is None else data.temp[::97]
+    w, f = strategy.correct(probe_w, probe_f, probe_t)
+    eg, ea = strategy.predict_error(probe_w, probe_f, probe_t)
+    np.testing.assert_array_equal(eg, probe_w - w)
+    np.testing.assert_array_equal(ea, probe_f - f)
+    rates = ImuRates(t=data.t[:2000], omega_ib_b=data.gyro[:2000], f_ib_b=data.accel[:2000])
+    temp = None if data.temp is None else data.temp[:2000]
+    steps = rates.to_increments()
+    by_steps = strategy.correct_increments(steps, temp)
+    assert isinstance(by_steps, ImuIncrements) and by_steps.dtheta_b.shape == steps.dtheta_b.shape
+    whole = strategy.correct_recording(steps, temp)
+    np.testing.assert_array_equal(whole.dtheta_b, by_steps.dtheta_b)  # no bias rule: the same
+    if name == "oracle":
+        return
+    path = tmp_path / "model.json"
+    compensation.save(strategy, path)
+    back = compensation.load(path)
+    assert type(back) is type(strategy) and back.params() == params and back.label == strategy.label
+    w2, f2 = back.correct(probe_w, probe_f, probe_t)
+    np.testing.assert_array_equal(w2, w)
+    np.testing.assert_array_equal(f2, f)
+    np.testing.assert_array_equal(back.correct_increments(steps, temp).dtheta_b, by_steps.dtheta_b)
+
+
+def test_every_saved_strategy_is_a_registered_variant() -> None:
+    assert set(compensation.SAVED_STRATEGIES) <= set(compensation.VARIANTS)
+    assert set(compensation.strategy_names()) == (set(compensation.VARIANTS) - {"oracle"}) | {"bias_only"}
