@@ -24,7 +24,7 @@ RATE_HZ = 200.0
 def test_window_inputs_are_the_past_blocks_means_and_spreads() -> None:
     rng = np.random.default_rng(1)
     n = 4000
-    w, f = rng.normal(0, 1, (n, 3)), [*rng.normal(0, 1, (n, 3)), 0, 0, 9.8]
+    w, f = rng.normal(0, 1, (n, 3)), rng.normal(0, 1, (n, 3)) + np.array([0.0, 0.0, 9.8])
     dt = 1.0 / RATE_HZ
     rows, x = window_inputs(w, f, dt)
     np.testing.assert_array_equal(rows, np.arange(0, n, STRIDE))
