@@ -118,11 +118,13 @@ def fit(
 @dataclass(frozen=True)
 class FittedSeveral:
     """A strategy fitted on several recordings of one unit: the shared seed model with each recording's
-    own bias (``several``) and what the model does about a new recording's bias (``rule``)."""
+    own bias (``several``), what the model does about a new recording's bias (``rule``), and what the
+    recordings did not determine (``review``: held at zero, with reasons)."""
 
     strategy: Strategy
     several: SeveralFit
     rule: BiasRule | None
+    review: identifiability.Review | None = None
 
 
 def fit_several(
@@ -134,6 +136,7 @@ def fit_several(
     progress: Callable[[int, int], None] | None = None,
     rule_mode: str | None = None,
     stage: Callable[[str], None] | None = None,
+    grade: str = identifiability.DEFAULT_GRADE,
 ) -> FittedSeveral:
     """Fit strategy ``name`` on several recordings of one unit against their references.
 
@@ -152,14 +155,13 @@ def fit_several(
     SinsInputError
         fewer than two recordings, recordings of different units or rates, or as :func:`fit`.
     """
-    from sins.compensation import several
 
     _check_one_unit(recs)
     where = " + ".join(rec.source or "recording" for rec in recs)
     say = stage or (lambda text: None)
     try:
         say(f"the seed model on {len(recs)} recordings")
-        fit_all = several.fit_several(recs, interval_s=interval_s, robust=name == "regression_robust")
+        fit_all, review = _several_determined(recs, interval_s, name, grade, where)
         offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
         if name == BIAS_ONLY:  # the seed model's biases alone, read as they come
             strategy: Strategy = Regression(g_sensitivity=False).set_fit(_biases_only(fit_all.seed))
@@ -168,7 +170,7 @@ def fit_several(
         else:
             strategy = compensation.make(name, **(params or {}))
         if name == "none":
-            return FittedSeveral(strategy, fit_all, None)
+            return FittedSeveral(strategy, fit_all, None, review)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fit_all.seed)
@@ -181,8 +183,40 @@ def fit_several(
             raise
         raise SinsInputError(f"{where}: {exc}") from None
     strategy.unit_bias_ = rule.to_dict()
-    strategy.fitted_on_ = {**fitted_on(recs[0]), "recordings": [rec.source for rec in recs]}
-    return FittedSeveral(strategy, fit_all, rule)
+    strategy.fitted_on_ = {
+        **fitted_on(recs[0]), "recordings": [rec.source for rec in recs], "checks": review.to_dict(),
+    }  # fmt: skip
+    return FittedSeveral(strategy, fit_all, rule, review)
+
+
+def _several_determined(
+    recs: list[ReferencedRecording], interval_s: float, name: str, grade: str, where: str
+) -> tuple[SeveralFit, identifiability.Review]:
+    """The fit on several recordings with the shared coefficients they do not determine for a unit of
+    ``grade`` held at zero (:func:`~sins.compensation.identifiability.assess_several`), made again
+    holding any that came out less determined than predicted, then judged against the class's bounds,
+    each recording's biases too (:func:`~sins.compensation.identifiability.review`)."""
+    from sins.compensation import several
+
+    holds = identifiability.assess_several(recs, interval_s, identifiability.class_bounds(grade))
+    biases_only = name == BIAS_ONLY
+    for _ in range(identifiability.REFITS):
+        fit_all = several.fit_several(
+            recs, interval_s=interval_s, robust=name == "regression_robust", held=holds.reasons
+        )
+        values = identifiability.interval_values(fit_all, biases_only)
+        more = identifiability.loose(values, holds)
+        if not more:
+            break
+        holds.reasons.update(more)
+    review = identifiability.review(values, holds.bounds, where, holds.reasons)
+    names = [*identifiability.bias_names("gyro"), *identifiability.bias_names("accel")]
+    for r, source in enumerate(fit_all.sources):
+        own = np.concatenate([fit_all.gyro_bias[r], fit_all.accel_bias[r]])
+        own_se = np.concatenate([fit_all.gyro_bias_se[r], fit_all.accel_bias_se[r]])
+        biases = {n: (float(v), float(e)) for n, v, e in zip(names, own, own_se, strict=True)}
+        identifiability.review(biases, holds.bounds, f"{where}: {source}")
+    return fit_all, review
 
 
 def _learn_several(

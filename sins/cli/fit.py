@@ -106,35 +106,16 @@ def _fit_several(args: argparse.Namespace) -> tuple[Strategy, dict[str, Any]]:
             recs.append(got)
         fitted = referenced.fit_several(
             args.strategy, recs, interval_s=args.interval_s, params=params, progress=row_progress(bar),
-            rule_mode=args.bias_rule, stage=bar.set_description,
+            rule_mode=args.bias_rule, stage=bar.set_description, grade=args.grade,
         )  # fmt: skip
     document = _several_report(fitted, [n for _, n in named])
-    _review_several(args, fitted, " + ".join(n for _, n in named))
+    held = fitted.review.held if fitted.review is not None else {}
+    if held:
+        print(f"held at zero, as the recordings do not determine them for a {args.grade} unit:")
+        for line in fitted.review.lines() if fitted.review is not None else []:
+            print(f"  {line}")
+    document |= {"grade": args.grade, "held": held}
     return fitted.strategy, document
-
-
-def _review_several(args: argparse.Namespace, fitted: Any, where: str) -> None:
-    """Refuse a fit on several recordings whose shared coefficients or any recording's biases are not
-    determined, or beyond the unit's class (``--grade``), before the model is written; record the class
-    in the model file (sins.compensation.identifiability: held coefficients are the single fit's; here
-    an undetermined one is refused)."""
-    import numpy as np
-
-    from sins.compensation import identifiability
-
-    if args.strategy == "none":
-        return
-    fit = fitted.several
-    bounds = identifiability.class_bounds(args.grade)
-    values = identifiability.interval_values(fit, biases_only=args.strategy == "bias_only")
-    review = identifiability.review(values, bounds, where)
-    names = [*identifiability.bias_names("gyro"), *identifiability.bias_names("accel")]
-    for r, source in enumerate(fit.sources):
-        own = np.concatenate([fit.gyro_bias[r], fit.accel_bias[r]])
-        own_se = np.concatenate([fit.gyro_bias_se[r], fit.accel_bias_se[r]])
-        biases = {n: (float(v), float(e)) for n, v, e in zip(names, own, own_se, strict=True)}
-        identifiability.review(biases, bounds, f"{where}: {source}")
-    fitted.strategy.fitted_on_ = {**fitted.strategy.fitted_on_, "checks": review.to_dict()}
 
 
 def _several_report(fitted: Any, names: list[str]) -> dict[str, Any]:

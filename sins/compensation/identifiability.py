@@ -217,6 +217,29 @@ def assess(rec: ReferencedRecording, interval_s: float, bounds: ClassBounds) -> 
     return holds
 
 
+def assess_several(recs: list[ReferencedRecording], interval_s: float, bounds: ClassBounds) -> Holds:
+    """:func:`assess` for a fit on several recordings of one unit: what their intervals together
+    determine of the shared coefficients (each recording's biases are its own and always fitted).
+
+    Raises
+    ------
+    ValueError
+        as :func:`sins.compensation.intervals.choose_intervals` (too few intervals in one).
+    """
+    holds = Holds(bounds)
+    ivs = [choose_intervals(rec, interval_s) for rec in recs]
+    for names, design in (
+        (gyro_names(True, True), _gyro_design),
+        (accel_names(True), _accel_design),
+    ):
+        parts = [design(rec, iv) for rec, iv in zip(recs, ivs, strict=True)]
+        x, y = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+        free, reasons = determined(x, y, names, bounds)
+        holds.reasons.update({n: reasons[n] for n, kept in zip(names, free, strict=True)
+                              if not kept and _term(n) != BIAS})  # fmt: skip
+    return holds
+
+
 def _ends(rec: ReferencedRecording, iv: Intervals) -> tuple[Array, Array, Array, Array]:
     """The reference's body rate (body axes) and specific force (NED) at each interval's two ends, from
     its attitude and velocity over ±a tenth of the interval (what a time offset and a lever arm are read
@@ -607,6 +630,7 @@ __all__ = [
     "Review",
     "accel_names",
     "assess",
+    "assess_several",
     "bias_names",
     "class_bounds",
     "determined",

@@ -16,12 +16,14 @@ What the per-recording biases say about a new recording of the unit is the corre
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, replace
 from types import SimpleNamespace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation.identifiability import accel_names, gyro_names
 from sins.compensation.interval_fit import (
     IntervalFit,
     ReferenceQuality,
@@ -101,10 +103,13 @@ def fit_several(
     g_sensitivity: bool = False,
     time_offset: bool = True,
     robust: bool = False,
+    held: Collection[str] = (),
 ) -> SeveralFit:
     """Fit the seed model on ``recs`` (two or more recordings of one unit): shared ``B``, ``K`` (with
     ``g_sensitivity``), ``A``, time offsets and lever arm; each recording's own gyro and accelerometer
-    bias. ``robust`` weights intervals by Huber's function of their residual.
+    bias. ``robust`` weights intervals by Huber's function of their residual. The shared coefficients
+    named in ``held`` (:mod:`sins.compensation.identifiability`'s names) are held at zero, their standard
+    errors NaN; the biases are always fitted.
 
     Raises
     ------
@@ -123,7 +128,7 @@ def fit_several(
         B_se=np.full((3, 3), np.nan), K_se=np.full((3, 3), np.nan), A0_se=np.full(3, np.nan),
         A_se=np.full((3, 3), np.nan), residual_rms=np.full(6, np.nan),
     )  # fmt: skip
-    state = _State(seed, np.zeros((n, 3)), np.zeros((n, 3)), 0.0, 0.0)
+    state = _State(seed, np.zeros((n, 3)), np.zeros((n, 3)), 0.0, 0.0, frozenset(held))
     joined = _joined(ivs)
     g_cov = a_cov = np.zeros((0, 0))
     g_resid = a_resid = [np.zeros((0, 3))] * n
@@ -146,6 +151,12 @@ class _State:
     accel_bias: Array
     tau: float
     tau_a: float
+    held: frozenset[str] = frozenset()
+
+    def free(self, names: tuple[str, ...], n: int) -> NDArray[np.bool_]:
+        """The stacked problem's free columns: the shared ones of ``names`` (biases, the first three,
+        left out) not held, then ``n`` recordings' three bias columns each."""
+        return np.r_[[name not in self.held for name in names[3:]], np.ones(3 * n, dtype=bool)]
 
     def seed_of(self, r: int) -> SeedModelFit:
         return replace(self.seed, B0=self.gyro_bias[r], A0=self.accel_bias[r])
@@ -207,7 +218,7 @@ def _accel_round(
             for r in range(n)
         ]  # fmt: skip
         x, y = _stack(parts, shared, slice(0, 3))
-        step, cov, res, _ = solve(x, y, joined, robust)  # type: ignore[arg-type]
+        step, cov, res = _solve_free(x, y, joined, robust, state.free(accel_names(time_offset), n))
         state.seed = replace(state.seed, A=state.seed.A + step[:9].reshape(3, 3))
         arm = step[9:12]  # estimated whole in every pass (the problem holds none of it)
         if time_offset:
@@ -236,7 +247,8 @@ def _gyro_rounds(
             for r in range(n)
         ]  # fmt: skip
         x, y = _stack(parts, shared, slice(0, 3))
-        step, cov, res, _ = solve(x, y, joined, robust)  # type: ignore[arg-type]
+        free = state.free(gyro_names(with_k, time_offset), n)
+        step, cov, res = _solve_free(x, y, joined, robust, free)
         B = state.seed.B + step[:9].reshape(3, 3)
         K = state.seed.K + step[9:18].reshape(3, 3) if with_k else state.seed.K
         state.seed = replace(state.seed, B=B, K=K)
@@ -244,10 +256,23 @@ def _gyro_rounds(
             state.tau += float(step[len(shared) - 1])
         state.gyro_bias = state.gyro_bias + step[len(shared) :].reshape(n, 3)
         resid = np.split(res, np.cumsum([len(p[1]) for p in parts])[:-1])
-        se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
-        if np.all(np.abs(step) <= _CONVERGED_SE * se):
+        se = np.sqrt(np.maximum(np.diag(cov)[free], 1e-300))
+        if np.all(np.abs(step[free]) <= _CONVERGED_SE * se):
             break
     return cov, resid
+
+
+def _solve_free(
+    x: Array, y: Array, joined: SimpleNamespace, robust: bool, free: NDArray[np.bool_]
+) -> tuple[Array, Array, Array]:
+    """:func:`~sins.compensation.interval_fit.solve` on the ``free`` columns alone: the step zero and
+    the covariance NaN on the others."""
+    step_free, cov_free, res, _ = solve(x[:, :, free], y, joined, robust)  # type: ignore[arg-type]
+    step = np.zeros(len(free))
+    step[free] = step_free
+    cov = np.full((len(free), len(free)), np.nan)
+    cov[np.ix_(free, free)] = cov_free
+    return step, cov, res
 
 
 def _result(
