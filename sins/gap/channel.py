@@ -80,6 +80,8 @@ class ChannelModel:
     predicted : (n,) the predicted error of every row, once fitted
     loglik_rows : (n,) a quantizer's ln P of every row's reading, once fitted
     fit_loglik : the process's innovations' log-likelihood on the fit rows, once fitted
+    coefficients : the regressors' coefficients, of the unscaled columns in :attr:`columns`' order, once
+        fitted (beside a random bias, its generalised least squares')
     """
 
     x: ReferenceInputs
@@ -98,6 +100,7 @@ class ChannelModel:
     predicted: Array | None = None
     loglik_rows: Array | None = None
     fit_loglik: float = np.nan
+    coefficients: Array | None = None
 
     @classmethod
     def baseline(
@@ -133,6 +136,12 @@ class ChannelModel:
     def design(self) -> Design:
         """The regressors' columns, unscaled."""
         return Design(self.x, self.columns)
+
+    def widths(self) -> list[int]:
+        """How many columns each block of :attr:`columns` has (the baseline's, then each regressor
+        effect's in the order they were added)."""
+        one = self.x.rows(0, 1)
+        return [int(np.asarray(make(one)).reshape(1, -1).shape[1]) for make in self.columns]
 
     def tried(self, cand: Candidate) -> ChannelModel:
         """This model with ``cand`` added, fitted."""
@@ -202,7 +211,7 @@ class ChannelModel:
             process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
                 return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
-            pred, fit_loglik = process
+            pred, fit_loglik, coef = process
         if lag is not None:
             pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
@@ -219,14 +228,15 @@ class ChannelModel:
             predicted=pred,
             loglik_rows=loglik_rows,
             fit_loglik=fit_loglik,
+            coefficients=coef / scale,
         )
 
     def _with_random_bias(
         self, error: Array, residual: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
-    ) -> tuple[Array, float] | None:
+    ) -> tuple[Array, float, Array] | None:
         """Given what least squares leave of ``error`` (``residual``), the regressors refitted beside
-        the random bias and the bias's one-step prediction added: the predicted error of every row
-        and the process's fit-row log-likelihood (None: falsified).
+        the random bias and the bias's one-step prediction added: the predicted error of every row,
+        the process's fit-row log-likelihood and the regressors' coefficients (None: falsified).
 
         A random bias misleads least squares: a walk's level in each static position passes for
         scale factors. Generalised least squares instead: the innovations filter is linear, so the
@@ -237,14 +247,15 @@ class ChannelModel:
         del residual
         phi, gain = first.phi, first.gain
         del first
-        pred = design.predict(design.whitened_lstsq(error, rows, rcond, phi, gain))
+        coef = design.whitened_lstsq(error, rows, rcond, phi, gain)
+        pred = design.predict(coef)
         y = error - pred
         process = self._fit_process(y)
         if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
             return None
         out = np.add(pred, y, out=pred)
         out -= process.innovations
-        return out, process.fit_loglik
+        return out, process.fit_loglik, coef
 
     def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
         """The random bias under the residual ``y``, its white part from first differences within the
