@@ -31,12 +31,14 @@ _EDGE = 3
 
 @dataclass(frozen=True)
 class Tried:
-    """A disturbance tried on one channel: what it is, its columns (k, 3, q), and its withheld gain on
-    the channel's own component."""
+    """A disturbance tried on one channel: what it is, its columns (k, 3, q), its withheld gain on the
+    channel's own component, and there the fit intervals' log-likelihood less BIC's penalty for its
+    parameters (a step's size and time, a hum's two amplitudes and period)."""
 
     outside: Outside
     columns: Array
     gain: float
+    fit_score: float = 0.0
 
 
 def _reduction(sf: SensorFit, basis: Array, left_w: Array, column: Array) -> float:
@@ -108,14 +110,28 @@ def _tried(sf: SensorFit, current: Array, columns: Array, what: Outside, axis: i
     size = float(own[0]) if what.kind == "bias step" else float(np.hypot(*own[:2]))
     gain = float(sf.gains(before, after)[axis])
     score = gain - SIGNIFICANT_NATS
-    return Tried(Outside(what.channel, what.kind, size, score, what.t_s, what.period_s), columns, gain)
+    k = 2 if what.kind == "bias step" else 3
+    fit_score = float(sf.fit_loglik(after)[axis]) - 0.5 * k * float(np.log(max(int(sf.fit.sum()), 2)))
+    outside = Outside(what.channel, what.kind, size, score, what.t_s, what.period_s)
+    return Tried(outside, columns, gain, fit_score)
 
 
-def explains_as_well(tried: list[Tried], effect_gain: float) -> Outside | None:
+def explains_as_well(
+    tried: list[Tried], effect_gain: float, effect_fit: float | None = None
+) -> Outside | None:
     """The disturbance that explains its channel as well as an effect gaining ``effect_gain`` there
     (withheld gain above :data:`~sins.gap.scoring.SIGNIFICANT_NATS` and within
-    :data:`~sins.gap.scoring.TIE_NATS` of the effect's), the better if both do; else None."""
-    found = [t for t in tried if t.gain > SIGNIFICANT_NATS and t.gain > effect_gain - TIE_NATS]
+    :data:`~sins.gap.scoring.TIE_NATS` of the effect's), the better if both do; else None.
+
+    Against a random bias (``effect_fit``: its fit intervals' log-likelihood less BIC's penalty on the
+    channel), the fit intervals decide instead, as on samples (:func:`sins.gap.guards.outside_library`):
+    its noise follows a step that falls inside a withheld block, where the fit intervals cannot place
+    the step (any boundary within the block fits them alike); on the fit intervals it pays for trailing
+    the step."""
+    if effect_fit is None:
+        found = [t for t in tried if t.gain > SIGNIFICANT_NATS and t.gain > effect_gain - TIE_NATS]
+    else:
+        found = [t for t in tried if t.gain > SIGNIFICANT_NATS and t.fit_score > effect_fit - TIE_NATS]
     return max(found, key=lambda t: t.gain).outside if found else None
 
 

@@ -14,10 +14,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.gap.floor import SIGNIFICANT_RATIO
 from sins.gap.report import GapReport
 from sins.imu import BASELINE, CHANNELS, DEG_PER_H, MG
-from sins.unit_gap.search import BLOCK_S, IntervalDiagnosis, channel_figures, not_on_intervals
+from sins.unit_gap.search import (
+    BLOCK_S,
+    IntervalDiagnosis,
+    channel_figures,
+    not_on_intervals,
+    significant_ratio,
+)
 
 Array = NDArray[np.float64]
 
@@ -42,7 +47,7 @@ def interval_report(d: IntervalDiagnosis, holdout: float, statistic: dict[str, A
     where: list[dict[str, Any]] = []
     for ch, v in figures.items():
         disturbances = [o.describe() for o in d.outside if o.channel == ch]
-        if v["rms_before"] > SIGNIFICANT_RATIO * v["noise_floor"] or disturbances:
+        if v["rms_before"] > significant_ratio(int(d.withheld.sum())) * v["noise_floor"] or disturbances:
             where.append({
                 "channel": ch,
                 "excess": v["rms_before"] / v["noise_floor"],

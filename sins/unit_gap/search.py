@@ -34,7 +34,15 @@ from sins.gap.report import EffectScore, Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS
 from sins.imu import CHANNELS, vocabulary
 from sins.series import ReferencedRecording
-from sins.unit_gap.fitter import INSTABILITY, NO_WANDER, RANDOM_WALK, SensorFit, cross_gains, refit_allowance
+from sins.unit_gap.fitter import (
+    INSTABILITY,
+    NO_WANDER,
+    RANDOM_WALK,
+    SensorFit,
+    chains,
+    cross_gains,
+    refit_allowance,
+)
 from sins.unit_gap.intervals import IntervalResiduals, interval_residuals
 from sins.unit_gap.outside import Tried, explains_as_well, try_disturbances
 
@@ -91,6 +99,7 @@ class Trial:
     candidate: Candidate
     gains: Array
     allowance: float = 0.0
+    fit_scores: Array | None = None  # a random bias's: per component, fit log-likelihood less BIC's penalty
 
     def gain(self, aside: set[int]) -> float:
         """The gain over the components not set aside."""
@@ -263,7 +272,9 @@ def _round(
             wandering = SensorFit.of(fit.y, fit.fit, fit.withheld, fit.joined, st.columns(), cand.phis)
             _, after = wandering.solve(st.columns())
             allowance = refit_allowance(fit, st.columns(), SIGNIFICANT_NATS)
-            trials.append(Trial(cand, cross_gains(fit, before, wandering, after), allowance))
+            penalty = 0.5 * float(np.log(max(int(fit.fit.sum()), 2)))  # its one more parameter, φ
+            scores = wandering.fit_loglik(after) - penalty
+            trials.append(Trial(cand, cross_gains(fit, before, wandering, after), allowance, scores))
             continue
         _, after = st.fit.solve(st.columns(cand))
         trials.append(Trial(cand, st.fit.gains(before, after)))
@@ -280,7 +291,8 @@ def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Out
         if axis in st.aside or best.gains[axis] <= 0.0:
             continue
         tried = try_disturbances(st.fit, res, best.candidate.sensor, axis, current, left)
-        disturbance = explains_as_well(tried, float(best.gains[axis]))
+        fit_score = None if best.fit_scores is None else float(best.fit_scores[axis])
+        disturbance = explains_as_well(tried, float(best.gains[axis]), fit_score)
         if disturbance is not None:
             found.append(disturbance)
             st.aside.add(axis)
@@ -361,25 +373,48 @@ def _correlation_time(phi: float, interval_s: float = 1.0) -> float:
     return float(-interval_s / np.log(phi)) if 0.0 < phi < 1.0 else float("inf")
 
 
+def interval_noise_level(residual: Array, joined: Rows) -> float:
+    """:func:`~sins.gap.floor.noise_level` of an interval residual (k,) over every chain of joined
+    intervals, fit and withheld alike: the withheld blocks alone hold one triple of neighbours each,
+    too few to measure a lag-one correlation."""
+    d0, d1, n0, n1 = 0.0, 0.0, 0, 0
+    for a, b in chains(joined):
+        d = np.diff(residual[a:b])
+        d0, n0 = d0 + float(np.sum(d * d)), n0 + len(d)
+        d1, n1 = d1 + float(np.sum(d[1:] * d[:-1])), n1 + max(len(d) - 1, 0)
+    if n1 == 0 or d0 / n0 + d1 / n1 <= 0.0:
+        return noise_level(residual)
+    return float(np.sqrt(d0 / n0 + d1 / n1))
+
+
+def significant_ratio(withheld: int) -> float:
+    """The RMS over ``withheld`` intervals against the floor beyond which a channel is above it:
+    :data:`~sins.gap.floor.SIGNIFICANT_RATIO`, or two standard errors of an RMS of that many values
+    (``1 + 2/√(2m)``) where that is larger: 1.21 for a 150 s recording's 45 withheld intervals, whose
+    RMS a clean recording's (``tests/numpy_unit_gap.py``) spread from 0.94 to 1.19 of its floor."""
+    return max(SIGNIFICANT_RATIO, 1.0 + 2.0 / np.sqrt(2.0 * max(withheld, 1)))
+
+
 def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], list[str]]:
     """Per channel, the withheld RMS before and after the accepted effects and the noise floor, as
     mean rates over the intervals (rad/s, m/s²); and the channels left unexplained (above the floor by
-    :data:`~sins.gap.floor.SIGNIFICANT_RATIO`, or taken by a disturbance outside the library)."""
+    :func:`significant_ratio`, or taken by a disturbance outside the library)."""
     span = float(np.median(d.residuals.span))
+    ratio = significant_ratio(int(d.withheld.sum()))
     figures, unexplained = {}, []
     disturbed = {o.channel for o in d.outside}
     for sensor in ("gyro", "accel"):
         for a in range(3):
             ch = f"{sensor}.{'xyz'[a]}"
             before, after = d.before[sensor][:, a], d.after[sensor][:, a]
-            floor = max(noise_level(after, d.withheld), TINY) / span
+            floor = max(interval_noise_level(after, d.residuals.joined), TINY) / span
             rms_after = float(np.sqrt(np.mean(after[d.withheld] ** 2))) / span
             figures[ch] = {
                 "rms_before": float(np.sqrt(np.mean(before[d.withheld] ** 2))) / span,
                 "rms_after": rms_after,
                 "noise_floor": floor,
             }
-            if rms_after > SIGNIFICANT_RATIO * floor or ch in disturbed:
+            if rms_after > ratio * floor or ch in disturbed:
                 unexplained.append(ch)
     return figures, unexplained
 
@@ -394,6 +429,8 @@ __all__ = [
     "candidates",
     "channel_figures",
     "diagnose_intervals",
+    "interval_noise_level",
     "not_on_intervals",
+    "significant_ratio",
     "withheld_intervals",
 ]
