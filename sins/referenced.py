@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +25,9 @@ from sins.compensation import Strategy, interval_fit
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
+from sins.compensation.several import SeveralFit
+from sins.compensation.unit_bias import BiasRule
+from sins.compensation.window_net import WindowNet
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
@@ -101,6 +104,185 @@ def fit(
     return Fitted(strategy, fitted)
 
 
+@dataclass(frozen=True)
+class FittedSeveral:
+    """A strategy fitted on several recordings of one unit: the shared seed model with each recording's
+    own bias (``several``) and what the model does about a new recording's bias (``rule``)."""
+
+    strategy: Strategy
+    several: SeveralFit
+    rule: BiasRule | None
+
+
+def fit_several(
+    name: str,
+    recs: list[ReferencedRecording],
+    *,
+    interval_s: float = INTERVAL_S,
+    params: dict[str, Any] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    rule_mode: str | None = None,
+    stage: Callable[[str], None] | None = None,
+) -> FittedSeveral:
+    """Fit strategy ``name`` on several recordings of one unit against their references.
+
+    The seed model is fitted on all of them at once, every coefficient shared but the biases, which are
+    each recording's own (:func:`sins.compensation.several.fit_several`); the model's bias is their
+    mean. A strategy that learns beyond the seed model learns on the per-sample references of every
+    recording, each corrected with its own bias (so that it learns what moves within a recording, not
+    between them). What the model does about a new recording's bias is a
+    :class:`~sins.compensation.unit_bias.BiasRule` (the model file keeps it as ``unit_bias_``), its mode
+    chosen on held-back recordings (:func:`choose_rule`) unless ``rule_mode`` names one. ``none`` learns
+    nothing and has no rule. ``progress(done, total)`` is handed to a learner's training, ``stage(text)``
+    told of each stage.
+
+    Raises
+    ------
+    SinsInputError
+        fewer than two recordings, recordings of different units or rates, or as :func:`fit`.
+    """
+    from sins.compensation import several
+
+    _check_one_unit(recs)
+    where = " + ".join(rec.source or "recording" for rec in recs)
+    say = stage or (lambda text: None)
+    try:
+        say(f"the seed model on {len(recs)} recordings")
+        fit_all = several.fit_several(recs, interval_s=interval_s, robust=name == "regression_robust")
+        offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
+        if name == BIAS_ONLY:  # the seed model's biases alone, read as they come
+            strategy: Strategy = Regression(g_sensitivity=False).set_fit(_biases_only(fit_all.seed))
+            strategy.variant = BIAS_ONLY
+            offsets = np.zeros(2)
+        else:
+            strategy = compensation.make(name, **(params or {}))
+        if name == "none":
+            return FittedSeveral(strategy, fit_all, None)
+        if name in _SEED_ONLY:
+            assert isinstance(strategy, Regression)
+            strategy.set_fit(fit_all.seed)
+        elif name != BIAS_ONLY:
+            _learn_several(strategy, name, recs, fit_all, progress, say)
+        strategy.time_offset_s_ = offsets
+        rule = choose_rule(strategy, recs, fit_all, interval_s=interval_s, mode=rule_mode, stage=say)
+    except ValueError as exc:
+        if isinstance(exc, SinsInputError):
+            raise
+        raise SinsInputError(f"{where}: {exc}") from None
+    strategy.unit_bias_ = rule.to_dict()
+    strategy.fitted_on_ = {**fitted_on(recs[0]), "recordings": [rec.source for rec in recs]}
+    return FittedSeveral(strategy, fit_all, rule)
+
+
+def _learn_several(
+    strategy: Strategy, name: str, recs: list[ReferencedRecording], fit_all: SeveralFit,
+    progress: Callable[[int, int], None] | None, say: Callable[[str], None],
+) -> None:  # fmt: skip
+    """A strategy that learns beyond the seed model, on the per-sample references of every recording."""
+    from sins.compensation import interval_fit
+
+    if isinstance(strategy, WindowNet):
+        # A learner of what moves between recordings: each recording's references with the mean bias.
+        pooled = [replace(fit_all.for_recording(r), seed=fit_all.seed) for r in range(len(recs))]
+        parts = [interval_fit.interval_reference(rec, f) for rec, f in zip(recs, pooled, strict=True)]
+        strategy.progress = progress
+        say(f"training {name} (each recording held back in turn, then on all)")
+        strategy.set_fit(fit_all.seed)
+        strategy.time_offset_s_ = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
+        strategy.fit_recordings(parts, recs)
+        return
+    data = _joined([interval_fit.interval_reference(rec, fit_all.for_recording(r)) for r, rec in
+                    enumerate(recs)])  # fmt: skip
+    if isinstance(strategy, Regression) and type(strategy).fit_beyond is not Regression.fit_beyond:
+        strategy.set_fit(fit_all.seed).fit_beyond(data)
+        return
+    if progress is not None and hasattr(strategy, "progress"):
+        strategy.progress = progress
+    say(f"training {name}")
+    strategy.fit(data)
+
+
+def choose_rule(
+    strategy: Strategy,
+    recs: list[ReferencedRecording],
+    fit_all: SeveralFit,
+    *,
+    interval_s: float = INTERVAL_S,
+    mode: str | None = None,
+    stage: Callable[[str], None] | None = None,
+) -> BiasRule:
+    """What ``strategy`` (fitted on ``recs``) does about a new recording's bias: the bias each recording's
+    corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
+    mode is the one whose open-loop attitude on held-back recordings is least (each recording in turn
+    held back, the seed model and the rule made from the others alone), unless ``mode`` names one."""
+    from sins.compensation import interval_fit, several, unit_bias
+
+    streams = [corrected(strategy, rec) for rec in recs]
+    left = np.array([interval_fit.fit_biases(_with_imu(rec, s), interval_s=interval_s).seed.B0
+                     for rec, s in zip(recs, streams, strict=True)])  # fmt: skip
+    held: dict[str, float] = {}
+    if mode is None and len(recs) >= 3:
+        scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
+        for k, rec in enumerate(recs):
+            if stage is not None:
+                stage(f"the bias rule: recording {k + 1} of {len(recs)} held back")
+            others = [r for i, r in enumerate(recs) if i != k]
+            part = several.fit_several(others, interval_s=interval_s)
+            seed = Regression(g_sensitivity=False).set_fit(part.seed)
+            seed.time_offset_s_ = np.array([part.time_offset_s, part.accel_time_offset_s])
+            own = [seed.correct_increments(r.imu) for r in others]
+            base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own)
+            stream = seed.correct_increments(rec.imu)
+            for m in unit_bias.MODES:
+                scores[m].append(
+                    unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
+                )
+        held = {m: float(np.mean(v)) for m, v in scores.items()}
+        mode = min(held, key=held.__getitem__)
+    return unit_bias.rule_from(left, streams, mode=mode or "pooled", held_back_deg=held)
+
+
+def _check_one_unit(recs: list[ReferencedRecording]) -> None:
+    """Refuse fewer than two recordings, two units, or rates more than 5 % apart (one line, both named)."""
+    if len(recs) < 2:
+        raise SinsInputError("a fit on several recordings needs two or more")
+    for rec in recs[1:]:
+        if recs[0].sensor and rec.sensor and rec.sensor != recs[0].sensor:
+            raise SinsInputError(
+                f"{rec.source}: recordings of one unit are fitted together; {recs[0].source} is "
+                f"{recs[0].sensor}, this is {rec.sensor}"
+            )
+        if abs(rec.rate_hz - recs[0].rate_hz) > 0.05 * recs[0].rate_hz:
+            raise SinsInputError(
+                f"{rec.source}: readings at {rec.rate_hz:.6g} Hz; {recs[0].source} at "
+                f"{recs[0].rate_hz:.6g} Hz: one model is fitted on recordings at one rate"
+            )
+
+
+def _biases_only(seed: Any) -> Any:
+    """``seed`` with every coefficient but the biases zero."""
+    zeros = np.zeros((3, 3))
+    return replace(seed, B=zeros, K=zeros, A=zeros)
+
+
+def _joined(parts: list[CalibrationData]) -> CalibrationData:
+    """Per-sample references of several recordings one after another: each recording's times moved on
+    past the last one's, a second apart, so time keeps increasing and no block spans two of them."""
+    out_t, shift = [], 0.0
+    for p in parts:
+        out_t.append(p.t - p.t[0] + shift)
+        shift = out_t[-1][-1] + 1.0
+    cat = lambda name: np.vstack([getattr(p, name) for p in parts])  # noqa: E731
+    return CalibrationData(
+        t=np.concatenate(out_t), gyro=cat("gyro"), accel=cat("accel"), ref_gyro=cat("ref_gyro"),
+        ref_accel=cat("ref_accel"), source=" + ".join(p.source for p in parts),
+    )  # fmt: skip
+
+
+def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecording:
+    return replace(rec, imu=imu)
+
+
 def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
     """What a model file records of the recording it was fitted on: the unit, its rate, the reference."""
     return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name}
@@ -110,6 +292,7 @@ def _bias_only(rec: ReferencedRecording, interval_s: float) -> Fitted:
     """The gyro's and accelerometer's biases alone, on intervals (no scale, misalignment, offsets)."""
     fitted = interval_fit.fit_biases(rec, interval_s=interval_s)
     strategy = Regression(g_sensitivity=False).set_fit(fitted.seed)
+    strategy.variant = BIAS_ONLY  # reported and saved by its name, not as the class it is fitted with
     strategy.fitted_on_ = fitted_on(rec)
     return Fitted(strategy, fitted)
 
@@ -126,7 +309,8 @@ def corrected(
     SinsInputError
         with ``bias_from_rest``, when the recording does not open with a rest.
     """
-    imu = rec.imu if strategy is None else strategy.correct_increments(rec.imu)
+    imu = rec.imu if strategy is None else strategy.correct_recording(rec.imu)
+    assert isinstance(imu, ImuIncrements)
     if not bias_from_rest:
         return imu
     rest = opening_rest(rec)
@@ -177,6 +361,11 @@ class OpenLoop:
     heading: Array
     inclination: Array
     judged: NDArray[np.bool_]
+
+    def aoe_deg(self) -> float:
+        """The absolute orientation error (Brossard et al. 2020): the RMS of the total attitude error over
+        every epoch, judged or not, degrees."""
+        return float(np.degrees(np.sqrt(np.mean(self.total**2))))
 
     def rmse(self) -> AttitudeRmse:
         """BROAD's three RMS figures over the judged rows, degrees."""
@@ -418,12 +607,15 @@ __all__ = [
     "MIN_OPENING_REST_S",
     "DriveErrors",
     "Fitted",
+    "FittedSeveral",
     "OpenLoop",
     "between",
     "check_fitted_on",
+    "choose_rule",
     "corrected",
     "drive_errors",
     "fit",
+    "fit_several",
     "fitted_on",
     "frame_turn",
     "from_recording",

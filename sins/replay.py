@@ -1,21 +1,30 @@
 """A recorded IMU replayed through the integrator against its truth: ``sins integrate`` and the drift of
-``sins gap``.
+``sins gap``; or, without a truth, from a given start or a still unit's own coarse alignment.
 
 :func:`navigate` integrates increments from the truth's state at their first time and compares the
 solution with the truth; :func:`integrate_recording` does so for a file (any format sins reads);
-:func:`gap_navigation` sets a real unit's drift beside its simulated twin's.
+:func:`gap_navigation` sets a real unit's drift beside its simulated twin's. Without a truth,
+:func:`free_start` starts a unit at rest at a given position, in a given attitude or in the one its
+opening rest implies (levelling and gyrocompassing, :mod:`sins.aiding.alignment`, its accuracy from the
+noise the rest shows and the bias levels given, :func:`sins.characterise.bias.alignment_accuracy`), and
+:func:`navigate_free` integrates from there; :func:`still_drift` is the error the biases measured at the
+rest would cause (:func:`sins.nav.budget.bias_error_ned`), what a still recording's solution should show.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.nav import strapdown
+from sins import rotation
+from sins.errors import SinsInputError
+from sins.nav import budget, strapdown
 from sins.nav.metrics import nav_errors, summarize
 from sins.nav.vertical import VerticalMode
 from sins.recordings import load_recording
@@ -23,6 +32,7 @@ from sins.run_results import StrategyRun
 from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 if TYPE_CHECKING:
+    from sins.characterise.bias import BiasEstimate
     from sins.gap import GapReport
 
 
@@ -89,4 +99,122 @@ def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -
     return out
 
 
-__all__ = ["gap_navigation", "integrate_recording", "navigate"]
+@dataclass(frozen=True)
+class FreeStart:
+    """Where a navigation without a reference starts.
+
+    Attributes
+    ----------
+    initial : the state at ``imu.t[index]`` (at rest: zero velocity)
+    index : the IMU time it starts at (0 from a given attitude; after the aligning rest)
+    how : ``"given"`` (position and attitude given) or ``"aligned"`` (attitude from the opening rest)
+    rest : the aligning rest's biases in the attitude started from (None when given)
+    tilt_sigma, heading_sigma : the alignment's stated 1σ, rad: the noise's part and the bias levels'
+        (:func:`sins.characterise.bias.alignment_accuracy`); heading None where it was given
+    levels : the gyro and accelerometer bias levels (1σ, rad/s and m/s²) that accuracy assumes (0: the
+        noise's part alone)
+    initial_t : ``imu.t[index]``, s
+    """
+
+    initial: strapdown.InitialState
+    index: int
+    how: str
+    rest: BiasEstimate | None = None
+    tilt_sigma: float | None = None
+    heading_sigma: float | None = None
+    levels: tuple[float, float] = (0.0, 0.0)
+    initial_t: float = 0.0
+
+
+def free_start(
+    imu: ImuIncrements,
+    origin: tuple[float, float, float],
+    *,
+    attitude: tuple[float, float, float] | None = None,
+    align_s: float | None = None,
+    heading: float | None = None,
+    levels: tuple[float, float] = (0.0, 0.0),
+    source: str = "",
+) -> FreeStart:
+    """A unit at rest at ``origin`` (lat, lon rad, h m): in ``attitude`` (roll, pitch, yaw rad) from its
+    first time, or aligned on its first ``align_s`` seconds (roll and pitch from the accelerometers, the
+    heading gyrocompassed, or ``heading`` rad where given) from their end.
+
+    Raises
+    ------
+    SinsInputError
+        neither or both of ``attitude`` and ``align_s``; a recording shorter than the alignment, or
+        moving in it; a heading the gyros do not resolve and that is not given.
+    """
+    from sins.characterise import bias  # the noise fits: only a start without a reference needs them
+    from sins.characterise.still import motion
+
+    lat, lon, h = origin
+    if (attitude is None) == (align_s is None):
+        raise SinsInputError(f"{source}: start from a given attitude or from an alignment (one of them)")
+    if attitude is not None:
+        q = rotation.quat_from_euler(*attitude)
+        initial = strapdown.InitialState(lat=lat, lon=lon, h=h, v_n=np.zeros(3), q_nb=q)
+        return FreeStart(initial, 0, "given", initial_t=float(imu.t[0]))
+    assert align_s is not None
+    k = int(np.searchsorted(imu.t, imu.t[0] + align_s - 1e-9))
+    if k >= len(imu.t) - 1:
+        raise SinsInputError(
+            f"{source}: --align {align_s:g}: the recording spans {imu.t[-1] - imu.t[0]:.6g} s, leaving "
+            "nothing to navigate after the alignment"
+        )
+    dt = np.diff(imu.t[: k + 1])[:, None]
+    t, readings = 0.5 * (imu.t[:k] + imu.t[1 : k + 1]), np.hstack([imu.dtheta_b[:k], imu.dv_b[:k]]) / dt
+    moved = motion(t, readings)
+    if moved is not None:
+        raise SinsInputError(f"{source}: --align {align_s:g}: the unit moves in it: {moved}")
+    rest = bias.estimate_bias(t, readings, lat, h, source=source, location="the start given")
+    a = rest.attitude
+    if heading is not None:
+        rest = bias.in_attitude(rest, (a.roll, a.pitch, heading), "levelled, heading given")
+    elif a.yaw is None:
+        raise SinsInputError(
+            f"{source}: --align: the heading is not resolved: {a.heading_note}; give it with --heading DEG"
+        )
+    tilt, yaw_sigma = bias.alignment_accuracy(rest, *levels)
+    att = rest.attitude
+    q = rotation.quat_from_euler(att.roll, att.pitch, att.yaw or 0.0)
+    initial = strapdown.InitialState(lat=lat, lon=lon, h=h, v_n=np.zeros(3), q_nb=q)
+    heading_sigma = None if heading is not None else yaw_sigma
+    return FreeStart(initial, k, "aligned", rest, tilt, heading_sigma, levels, float(imu.t[k]))
+
+
+def navigate_free(
+    imu: ImuIncrements, start: FreeStart, vertical: VerticalMode = "free", vertical_tau_s: float = 10.0
+) -> NavSeries:
+    """Integrate ``imu`` from ``start`` (from its ``index``); held or damped, the vertical channel goes
+    to the start's height."""
+    k = start.index
+    part = imu if k == 0 else ImuIncrements(t=imu.t[k:], dtheta_b=imu.dtheta_b[k:], dv_b=imu.dv_b[k:])
+    h_ref = None if vertical == "free" else np.full(len(part.t), start.initial.h)
+    return strapdown.integrate(
+        part, start.initial, vertical=vertical, h_ref=h_ref, vertical_tau_s=vertical_tau_s
+    )
+
+
+def still_drift(rest: BiasEstimate, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The north, east, down error (k, 3), m, ``rest``'s biases (in its attitude, resolved in NED) cause
+    after ``t`` (k,) s of free inertial navigation of a unit that stays at rest
+    (:func:`sins.nav.budget.bias_error_ned`). Aligned on that rest, the level accelerometer biases and
+    the east gyro bias are zero by construction: the tilt and heading took them."""
+    C_nb = rest.attitude.C_nb
+    gyro_n = C_nb @ rest.vector("gyro")
+    accel_n = C_nb @ rest.vector("accel")
+    h = rest.h if math.isfinite(rest.h) else 0.0
+    return budget.bias_error_ned(gyro_n, accel_n, t, rest.lat, h)
+
+
+__all__ = [
+    "FreeStart",
+    "free_start",
+    "gap_navigation",
+    "integrate_recording",
+    "navigate",
+    "navigate_free",
+    "still_drift",
+]

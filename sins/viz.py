@@ -360,16 +360,32 @@ def has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
+#: The environment the viewer sins spawns gets: rerun's viewer collects no usage data, and prints no
+#: first-run banner announcing it, where ``CI`` is set (``re_analytics``'s native pipeline; checked with
+#: rerun 0.41). ``rerun analytics disable`` turns it off for every viewer (docs/guide/rerun.md).
+VIEWER_ENV = {"CI": "1"}
+
+
 def spawn(result: ScenarioRun, *, summary: str = "") -> None:
-    """Open the native viewer on the run (it stays open after this process ends)."""
+    """Open the native viewer on the run (it stays open after this process ends), without rerun's
+    analytics (:data:`VIEWER_ENV`)."""
     if not has_display():
         raise SinsInputError(NO_DISPLAY)
     viewer = Path(sys.executable).with_name("rerun")  # the venv's viewer, whatever PATH says
     rec, bp = _recording(result)
-    if viewer.exists():
-        rr.spawn(executable_path=str(viewer), recording=rec, default_blueprint=bp)
-    else:
-        rr.spawn(recording=rec, default_blueprint=bp)
+    saved = {k: os.environ.get(k) for k in VIEWER_ENV}
+    os.environ.update({k: saved[k] or v for k, v in VIEWER_ENV.items()})  # the child inherits it
+    try:
+        if viewer.exists():
+            rr.spawn(executable_path=str(viewer), recording=rec, default_blueprint=bp)
+        else:
+            rr.spawn(recording=rec, default_blueprint=bp)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
     log_scenario_run(rec, result, summary=summary)
     rec.flush()
 
@@ -641,6 +657,7 @@ __all__ = [
     "NO_DISPLAY",
     "RED",
     "TIMELINE",
+    "VIEWER_ENV",
     "blueprint",
     "check_rrd_path",
     "colour",

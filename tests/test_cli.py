@@ -357,9 +357,12 @@ def test_bad_input_subprocess(case: str, short_files: dict[str, Path], tmp_path:
 
 def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as info:
-        main(["integrate"])  # the recording is required
+        main(["fit", "rig.csv", "--out", "m.json"])  # --strategy is required
     assert info.value.code == 2
     assert "Traceback" not in capsys.readouterr().err
+    # A recording or --dataset FOLDER/NAME, one of them: sins's own one-line refusal, exit 2 too.
+    rc = main(["integrate"])
+    _assert_one_line_error(rc, "", capsys.readouterr().err)
 
 
 def test_json_onto_a_directory(

@@ -51,7 +51,7 @@ RANKS = {
 CONFINED = {
     "rerun": {"sins.viz"},
     "matplotlib": {"sins.plots"},
-    "torch": {"sins.compensation.mlp"},
+    "torch": {"sins.compensation.mlp", "sins.compensation.window_net"},
     "minisom": {"sins.compensation.kohonen"},
     "dask": {"sins.campaign.engine"},
     "distributed": {"sins.campaign.engine"},

@@ -132,3 +132,49 @@ def test_raw_open_loop_matches_source_md(name: str, published: float) -> None:
     fitted); sins integrates the trapezoid increments: the same within 1 %."""
     rec = datasets.load_reference(f"euroc/{name}")
     assert referenced.open_loop_attitude(None, rec).total_deg == pytest.approx(published, rel=0.01)
+
+
+@pytest.fixture(scope="module")
+def unit_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A data root with one numpy unit's three recordings in the .npz form, and a model fitted on two."""
+    from numpy_units import recordings, write_npz
+
+    root = tmp_path_factory.mktemp("data")
+    (root / "unit").mkdir()
+    recs, _, _ = recordings(12)
+    for k, rec in enumerate(recs):
+        write_npz(root / "unit", f"r{k}", rec)
+    fitted = referenced.fit_several("regression", recs[:2], rule_mode="pooled")
+    from sins import compensation
+
+    compensation.save(fitted.strategy, root / "model.json")
+    return root
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["fit", "{npz}", "--strategy", "regression", "--out", "{out}/m.json"],
+        ["evaluate", "{root}/model.json", "{npz}", "--json", "{out}/e.json"],
+        ["correct", "{root}/model.json", "{npz}", "--out", "{out}/c.csv"],
+        ["inspect", "{npz}", "--json", "{out}/i.json"],
+        ["inspect", "--dataset", "unit/r2"],
+        ["integrate", "{npz}", "--out", "{out}/sol.csv"],
+        ["integrate", "--dataset", "unit/r2", "--out", "{out}/sol.csv"],
+        ["characterise", "{npz}", "--out", "{out}/imu.toml"],
+        ["characterise", "--dataset", "unit/r2", "--out", "{out}/imu.toml"],
+    ],
+    ids=lambda a: " ".join(a[:2]),
+)
+def test_every_command_reads_an_npz_recording(
+    argv: list[str], unit_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """By its path and, where a command takes one, as --dataset FOLDER/NAME; each writes what it says."""
+    from sins.cli import main
+
+    monkeypatch.setenv("SINS_DATA", str(unit_root))
+    fill = {"npz": str(unit_root / "unit" / "r2.npz"), "root": str(unit_root), "out": str(tmp_path)}
+    assert main([a.format(**fill) for a in argv]) == 0
+    for a in argv:
+        if "{out}" in a:
+            assert Path(a.format(**fill)).is_file()

@@ -78,11 +78,16 @@ def coarse_attitude(imu: ImuIncrements, seconds: float) -> Array:
     span = imu.t[k] - imu.t[0]
     f_b = imu.dv_b[:k].sum(axis=0) / span
     omega_b = imu.dtheta_b[:k].sum(axis=0) / span
-    roll = np.arctan2(-f_b[1], -f_b[2])
-    pitch = np.arctan2(f_b[0], np.hypot(f_b[1], f_b[2]))
-    w = rotation.dcm_from_euler(roll, pitch, 0.0) @ omega_b
-    yaw = np.arctan2(-w[1], w[0])
-    return rotation.quat_from_euler(roll, pitch, yaw)
+    return rotation.quat_from_euler(*still_attitude(f_b, omega_b))
+
+
+def still_attitude(f_b: Array, omega_b: Array) -> tuple[float, float, float]:
+    """Roll, pitch and yaw (rad) of a still unit from its mean specific force ``f_b`` and angular rate
+    ``omega_b`` (3,): levelling, then gyrocompassing (:func:`coarse_attitude`'s formulas)."""
+    roll = float(np.arctan2(-f_b[1], -f_b[2]))
+    pitch = float(np.arctan2(f_b[0], np.hypot(f_b[1], f_b[2])))
+    w = rotation.dcm_from_euler(roll, pitch, 0.0) @ np.asarray(omega_b, dtype=float)
+    return roll, pitch, float(np.arctan2(-w[1], w[0]))
 
 
 def coarse_covariance(config: ekf.FilterConfig, lat: float, seconds: float, position_sigma_m: float) -> Array:
@@ -393,4 +398,5 @@ __all__ = [
     "in_motion_run",
     "in_motion_start",
     "static_limits",
+    "still_attitude",
 ]

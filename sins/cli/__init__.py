@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 
 from sins import __version__
 from sins.cli import (
+    bias,
     calibrate,
     campaign,
     characterise,
@@ -28,6 +29,7 @@ from sins.cli import (
     run,
     scenarios,
     simulate,
+    strategies,
 )
 from sins.cli.common import Subparsers
 from sins.errors import MissingInputError, SinsInputError
@@ -46,8 +48,10 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
     gap.add,
     characterise.add,
     inspect.add,
+    bias.add,
     effects.add,
     scenarios.add,
+    strategies.add,
 )
 
 #: The flag that gives what a :class:`MissingInputError` says is missing.

@@ -7,12 +7,12 @@ from pathlib import Path
 
 from sins import __version__
 from sins.cli.common import Subparsers, progress_bar, row_progress
-from sins.scenario.budget import check_rig_size
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from sins import io, scenario
     from sins.imu import calibration
+    from sins.scenario.budget import check_rig_size
 
     rig_path = scenario.resolve_preset(args.rig, "rig")
     rig = scenario.load_rig(rig_path)

@@ -35,6 +35,7 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
 
     from sins import characterise, io, pipeline
     from sins.characterise import reference, still
+    from sins.io import npz
 
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
@@ -52,6 +53,12 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     if args.truth is not None or _rig_recording(args):
         data, _ = pipeline.gap_data(args.recording, args.truth)
         return reference.reference_residual(data, str(args.recording))
+    if not args.static and npz.is_npz(Path(args.recording)):  # an .npz with its own reference
+        from sins.io.datasets import npz_folders
+
+        data, truth = npz_folders.with_truth(io.read_recording_any(args.recording, **recording_options(args)))
+        if truth is not None:
+            return reference.reference_residual(data, str(args.recording))
     if not args.static:
         raise MissingInputError(
             f"{args.recording}: no ref_ columns; a moving unit needs its trajectory, a static one --static",

@@ -44,11 +44,37 @@ def fixed_width(head: list[str], rows: list[list[str]]) -> str:
     return "\n".join(line(r) for r in [head, *rows])
 
 
+#: Per-hour drift rates (the final horizontal error over the duration) are withheld for runs shorter than
+#: this, s: a drift that grows as t² or t³ scaled from minutes to an hour says nothing (a 60 s bag's
+#: 1.2 km reads 73,700 m/h) ...
+MIN_RATE_S = 600.0
+#: ... and marked as extrapolated for runs shorter than an hour.
+HOUR_S = 3600.0
+_RATE_KEYS = ("drift_rate_m_per_h", "drift_rate_nmi_per_h")
+
+
 def format_table(summaries: dict[str, dict[str, Any]]) -> str:
-    """A fixed-width table: one row per strategy, the headline errors as columns."""
+    """A fixed-width table: one row per strategy, the headline errors as columns. The per-hour rates of a
+    run under :data:`MIN_RATE_S` read "-", of one under an hour end in "*" (an extrapolation), each with
+    a line below saying so."""
     head = ["strategy"] + [c[0] for c in _COLUMNS]
-    rows = [[name] + [fmt.format(s[key]) for _, key, fmt in _COLUMNS] for name, s in summaries.items()]
-    return fixed_width(head, rows)
+    rows, notes = [], set()
+    for name, s in summaries.items():
+        duration = float(s.get("duration_s", HOUR_S))
+        cells = [name]
+        for _, key, fmt in _COLUMNS:
+            cell = fmt.format(s[key])
+            if key in _RATE_KEYS and duration < MIN_RATE_S:
+                cell = "-"
+                notes.add(f"m/h, nmi/h: withheld for a run under {MIN_RATE_S / 60:g} min ({duration:.4g} s)")
+            elif key in _RATE_KEYS and duration < HOUR_S:
+                cell += "*"
+                notes.add(
+                    f"* the {duration:.4g} s run's final horizontal error scaled to an hour: an extrapolation"
+                )
+            cells.append(cell)
+        rows.append(cells)
+    return "\n".join([fixed_width(head, rows), *sorted(notes)])
 
 
 def check_finite(values: dict[str, Any], where: str) -> None:
@@ -218,15 +244,47 @@ def fraction(text: str) -> float:
     return value
 
 
-def add_dataset(p: argparse.ArgumentParser) -> None:
+def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
     """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
-    command's start)."""
+    command's start); with ``repeat``, given once per recording."""
     p.add_argument(
-        "--dataset", metavar="NAME",
+        "--dataset", metavar="NAME", action="append" if repeat else "store",
         help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
         "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
-        "root's broad_mocap/)",
+        "root's broad_mocap/), or FOLDER/NAME for any NAME.npz in a folder of the data root "
+        "(euroc/V1_01_easy)" + ("; repeat it to fit on several recordings of one unit" if repeat else ""),
     )  # fmt: skip
+
+
+def add_npz_dataset(p: argparse.ArgumentParser, positional: str) -> None:
+    """``--dataset FOLDER/NAME`` for a command that reads a recording file: any ``NAME.npz`` in a folder
+    of the data root, in place of the ``positional`` argument (:func:`npz_dataset` resolves it)."""
+    p.add_argument(
+        "--dataset", metavar="FOLDER/NAME",
+        help=f"instead of {positional}: NAME.npz in a folder of the data root (euroc/V1_01_easy)",
+    )  # fmt: skip
+
+
+def npz_dataset(args: argparse.Namespace, positional: str) -> None:
+    """Set ``args.<positional>`` to the file ``--dataset FOLDER/NAME`` names (one of them must be given).
+
+    Raises
+    ------
+    SinsInputError
+        for both or neither, or a name that is not ``FOLDER/NAME`` of an ``.npz`` in the data root.
+    """
+    given = getattr(args, positional)
+    if (given is None) == (args.dataset is None):
+        raise SinsInputError(f"give a {positional.upper()} or --dataset FOLDER/NAME (one of them)")
+    if args.dataset is not None:
+        from sins.io.datasets import npz_folders
+
+        if not npz_folders.is_folder_name(args.dataset):
+            raise SinsInputError(
+                f"--dataset {args.dataset}: this command reads recordings as files; name an .npz one as "
+                "FOLDER/NAME (the datasets by name go with fit, evaluate, correct, gap and characterise)"
+            )
+        setattr(args, positional, npz_folders.npz_path(args.dataset))
 
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
@@ -290,18 +348,32 @@ def _origin(text: str) -> tuple[float, float, float]:
     return math.radians(lat), math.radians(lon), h
 
 
+#: Why ``--spawn`` cannot open the native viewer (:func:`has_display`).
+NO_DISPLAY = "no display to open the native viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
+
+
+def has_display() -> bool:
+    """Whether a native window can open here (always on macOS and Windows; X11 or Wayland elsewhere):
+    :func:`sins.viz.has_display`, asked without importing the viewer's bridge (rerun takes seconds to
+    import, and ``--spawn`` without a display is refused before any work)."""
+    if sys.platform in ("darwin", "win32"):
+        return True
+    import os
+
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def check_viewer_args(args: argparse.Namespace) -> None:
-    """Refuse what cannot work before the run, not after it."""
+    """Refuse what cannot work before the run, not after it: ``--spawn`` without a display at once."""
     if not (args.rerun or args.spawn or args.serve):
         return
-    from sins import viz
-
-    if args.spawn and not viz.has_display():
+    if args.spawn and not has_display():
         raise SinsInputError(
-            f"--spawn: {viz.NO_DISPLAY}; use --rerun OUT.rrd to save a recording, "
-            "or --serve for the web viewer"
+            f"--spawn: {NO_DISPLAY}; use --rerun OUT.rrd to save a recording, or --serve for the web viewer"
         )
     if args.rerun:
+        from sins import viz
+
         viz.check_rrd_path(args.rerun)
 
 
@@ -356,18 +428,23 @@ def check_plot(args: argparse.Namespace) -> None:
 
 def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
     """Build the figure (``figure()``, a :mod:`sins.plots` call) and save it at ``path``."""
-    from sins import plots
+    with progress_bar(f"drawing {path}", ""):  # matplotlib's import and a grid's layout take seconds
+        from sins import plots
 
-    plots.save(figure(), path, title)
+        plots.save(figure(), path, title)
     print(f"wrote {path}")
 
 
 __all__ = [
+    "HOUR_S",
     "LOG_EVERY_S",
     "LOG_FIRST_S",
+    "MIN_RATE_S",
+    "NO_DISPLAY",
     "LogProgress",
     "Subparsers",
     "add_dataset",
+    "add_npz_dataset",
     "add_plot",
     "add_recording_options",
     "advance",
@@ -380,6 +457,8 @@ __all__ = [
     "fixed_width",
     "format_table",
     "fraction",
+    "has_display",
+    "npz_dataset",
     "positive",
     "progress_bar",
     "recording_options",

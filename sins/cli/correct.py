@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
@@ -16,16 +17,38 @@ from sins.cli.common import (
 )
 from sins.errors import SinsInputError
 
+if TYPE_CHECKING:
+    from sins.compensation import Strategy
+    from sins.series import ImuIncrements, ImuRates
+
 
 def _cmd_correct(args: argparse.Namespace) -> int:
     from sins import __version__, compensation, io, referenced
-    from sins.io.recording import Recording
-    from sins.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
+    from sins.series import ImuRates
 
     check_outputs(args.out)
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
-    inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
+    with progress_bar(f"reading {where}", "") as bar:
+        inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
+        bar.set_description(f"correcting {where}")
+        out, extra = _corrected(args, strategy, inputs, where)
+    note = f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})"
+    with progress_bar(f"writing {args.out}", "row") as bar:
+        io.write_imu(args.out, out, extra=extra, comment=note, progress=row_progress(bar))
+    form = "rate" if isinstance(out, ImuRates) else "increment"
+    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
+    return 0
+
+
+def _corrected(
+    args: argparse.Namespace, strategy: Strategy, inputs: Any, where: str
+) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
+    """The readings corrected in the form sins holds them in, and the temperature column to keep."""
+    from sins import referenced
+    from sins.io.recording import Recording
+    from sins.series import CalibrationData, ImuRates, ReferencedRecording
+
     referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}")
     temp = None
     if isinstance(inputs, ReferencedRecording):
@@ -36,20 +59,11 @@ def _cmd_correct(args: argparse.Namespace) -> int:
         assert isinstance(inputs, Recording)
         imu, temp = inputs.imu, inputs.temp
     try:
-        out = (
-            strategy.correct_rates(imu, temp)
-            if isinstance(imu, ImuRates)
-            else strategy.correct_increments(imu, temp)
-        )
+        out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
     extra = None if temp is None else {"temp": temp if isinstance(imu, ImuRates) else temp[1:]}
-    note = f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})"
-    with progress_bar(f"writing {args.out}", "row") as bar:
-        io.write_imu(args.out, out, extra=extra, comment=note, progress=row_progress(bar))
-    form = "rate" if isinstance(out, ImuRates) else "increment"
-    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
-    return 0
+    return out, extra
 
 
 def add(sub: Subparsers) -> None:
@@ -62,7 +76,10 @@ def add(sub: Subparsers) -> None:
     add_dataset(p)
     p.add_argument(
         "--out", type=Path, required=True, metavar="CORRECTED.csv",
-        help="the corrected readings, in the recording's form (rates or increments), sins's CSV columns",
+        help="the corrected readings in sins's CSV columns, in the form sins reads the recording in: rates "
+        "for a rig recording or a rate file (a CSV, a bag, EuRoC), increments for an increment file and for "
+        "a recording read against its reference trajectory (--dataset broad_NN or psins_vehicle), which "
+        "sins holds as increments",
     )  # fmt: skip
     add_recording_options(p)
     p.set_defaults(func=_cmd_correct)

@@ -19,6 +19,7 @@ from sins.cli.common import (
     display_unit,
     fixed_width,
     fraction,
+    progress_bar,
     recording_options,
     save_plot,
 )
@@ -37,9 +38,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     check_outputs(args.json)
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
-    inputs = referenced.read_inputs(
-        args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
-    )
+    with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
+        inputs = referenced.read_inputs(
+            args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
+        )
     referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}")
     if isinstance(inputs, ReferencedRecording):
         document = _evaluate_referenced(args, strategy, inputs, where)
@@ -71,7 +73,8 @@ def _evaluate_rig(
             _, data = data.split(args.last)
         except ValueError as exc:
             raise SinsInputError(f"{where}: {exc}") from None
-    channels = compensation.residual_rms(strategy, data)
+    with progress_bar("judging", ""):
+        channels = compensation.residual_rms(strategy, data)
     for name, v in channels.items():
         check_finite(v, f"{args.model} on {where}: {name}")
     scope = f"the last {args.last:g} of each phase" if args.last else "the whole recording"
@@ -115,16 +118,24 @@ def _evaluate_referenced(
     if args.bias_from_rest:
         variants.append((f"{strategy.label}, gyro bias from the opening rest", strategy, True))
     for label, s, rest in variants:
-        runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
+        with progress_bar(f"open loop: {label}", ""):
+            runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
         r = runs[label].rmse()
-        attitude[label] = r.to_dict()
-        rows.append([label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}"])
+        aoe = runs[label].aoe_deg()
+        attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
+        rows.append(
+            [label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}", f"{aoe:.3f}"]
+        )
     judged = "the judged rows (movement phases)" if rec.judged is not None else "every reference epoch"
     print(
         f"{args.model} ({strategy.label}) on {where}: the gyro integrated alone from the reference's first "
-        f"attitude, RMS error against {rec.reference_name} over {judged}, degrees"
+        f"attitude, RMS error against {rec.reference_name} over {judged}, degrees (AOE: over every epoch)"
     )
-    print(fixed_width(["readings", "total", "heading", "inclination"], rows))
+    if not rec.latitude_known:
+        print("the reference's frame has no known latitude or heading: Earth's rate is left out")
+    elif not rec.heading_known:
+        print("the reference's frame has no known north: only the vertical part of Earth's rate is put in")
+    print(fixed_width(["readings", "total", "heading", "inclination", "AOE"], rows))
     document: dict[str, Any] = {
         "open_loop_attitude": attitude[strategy.label],
         "open_loop_attitude_raw": attitude["none (raw readings)"],
@@ -137,7 +148,7 @@ def _evaluate_referenced(
         from sins import viz
 
         summary = f"{args.model} ({strategy.label}) on {where}\n\n" + fixed_width(
-            ["readings", "total", "heading", "inclination"], rows
+            ["readings", "total", "heading", "inclination", "AOE"], rows
         )
         viz.save_open_loop(runs, args.rerun, summary=summary)
         print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
@@ -158,7 +169,8 @@ def _drive(args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecordin
         raise SinsInputError(f"--drive {args.drive!r}: expected START:END in seconds") from None
     out, rows = {}, []
     for label, s in (("none (raw readings)", None), (strategy.label, strategy)):
-        d = referenced.drive_errors(s, rec, start, end)
+        with progress_bar(f"free inertial: {label}", ""):
+            d = referenced.drive_errors(s, rec, start, end)
         out[label] = d.to_dict()
         figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
         rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])

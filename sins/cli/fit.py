@@ -32,24 +32,113 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     _check_args(args)
     check_outputs(args.out, args.json)  # before a fit that may take minutes
-    where = args.dataset or str(args.recording)
-    inputs = referenced.read_inputs(
-        args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
-    )
-    if isinstance(inputs, ReferencedRecording):
-        strategy, document = _fit_referenced(args, inputs, where)
-    elif isinstance(inputs, CalibrationData):
-        strategy, document = _fit_rig(args, inputs, where)
+    sources = [*args.recording, *(args.dataset or [])]
+    if not sources:
+        raise SinsInputError("give a RECORDING or --dataset NAME (once per recording to fit on several)")
+    if len(sources) > 1:
+        strategy, document = _fit_several(args)
+        where = " + ".join(sources)
     else:
-        raise SinsInputError(
-            f"{where}: no reference to fit against; give the recording's trajectory with --truth TRUTH.csv "
-            "(or a rig recording with ref_ columns, or a bag or EuRoC folder with ground truth)"
-        )
+        recording = args.recording[0] if args.recording else None
+        dataset = args.dataset[0] if args.dataset else None
+        where = dataset or str(recording)
+        with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
+            inputs = referenced.read_inputs(
+                recording, dataset=dataset, truth=args.truth, options=recording_options(args)
+            )
+        if isinstance(inputs, ReferencedRecording):
+            strategy, document = _fit_referenced(args, inputs, where)
+        elif isinstance(inputs, CalibrationData):
+            strategy, document = _fit_rig(args, inputs, where)
+        else:
+            raise SinsInputError(
+                f"{where}: no reference to fit against; give the recording's trajectory with --truth "
+                "TRUTH.csv (or a rig recording with ref_ columns, or a bag or EuRoC folder with ground truth)"
+            )
     compensation.save(strategy, args.out)
     if args.json:
         io.write_json(args.json, {"model": str(args.out), "recording": where, **document})
     print(f"wrote {args.out}")
     return 0
+
+
+def _fit_several(args: argparse.Namespace) -> tuple[Strategy, dict[str, Any]]:
+    """Several recordings of one unit: each read with its own reference, then one fit on all of them."""
+    from sins import referenced
+    from sins.series import ReferencedRecording
+
+    if args.truth is not None:
+        raise SinsInputError(
+            "--truth goes with one RECORDING; to fit on several, give recordings with their "
+            "own references (a dataset, an .npz, a bag or EuRoC folder with ground truth)"
+        )
+    if args.validation:
+        raise SinsInputError(
+            "--validation holds back part of one recording; to judge a fit on several, "
+            "leave recordings out of it and judge them with sins evaluate"
+        )
+    recs = []
+    named = [("path", r) for r in args.recording] + [("dataset", d) for d in args.dataset or []]
+    params = {"guard": False} if args.no_guard else {}
+    with progress_bar(f"fitting {args.strategy}", "") as bar:
+        for kind, name in named:
+            bar.set_description(f"reading {name}")
+            got = referenced.read_inputs(
+                name if kind == "path" else None, dataset=name if kind == "dataset" else None,
+                options=recording_options(args) if kind == "path" else None,
+            )  # fmt: skip
+            if not isinstance(got, ReferencedRecording):
+                raise SinsInputError(
+                    f"{name}: a fit on several recordings needs each beside its reference trajectory (a "
+                    "rig recording or a recording without a reference cannot be one of them)"
+                )
+            recs.append(got)
+        fitted = referenced.fit_several(
+            args.strategy, recs, interval_s=args.interval_s, params=params, progress=row_progress(bar),
+            rule_mode=args.bias_rule, stage=bar.set_description,
+        )  # fmt: skip
+    return fitted.strategy, _several_report(fitted, [n for _, n in named])
+
+
+def _several_report(fitted: Any, names: list[str]) -> dict[str, Any]:
+    """Print what a fit on several recordings found; return it as the ``--json`` document."""
+    import numpy as np
+
+    from sins.compensation import coefficients
+
+    fit = fitted.several
+    print(f"fitted {fitted.strategy.label} on {len(names)} recordings of one unit: "
+          f"{sum(fit.intervals)} intervals of {fit.interval_s:g} s")  # fmt: skip
+    table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    _print_coefficients(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
+    per_hour = np.degrees(1.0) * 3600.0
+    rows, biases = [], []
+    for name, b, se, a, n in zip(names, fit.gyro_bias, fit.gyro_bias_se, fit.accel_bias, fit.intervals,
+                                 strict=True):  # fmt: skip
+        rows.append(
+            [name, str(n), *(f"{x * per_hour:.1f} ± {e * per_hour:.1f}" for x, e in zip(b, se, strict=True))]
+        )
+        biases.append({
+            "recording": name, "intervals": n, "gyro_bias_deg_h": (b * per_hour).tolist(),
+            "gyro_bias_se_deg_h": (se * per_hour).tolist(), "accel_bias_m_s2": a.tolist(),
+        })  # fmt: skip
+    print("each recording's own gyro bias, °/h (± 1σ)")
+    print(fixed_width(["recording", "intervals", "x", "y", "z"], rows))
+    spread = fit.bias_spread() * per_hour
+    print(f"spread of the bias between recordings: {spread[0]:.1f}, {spread[1]:.1f}, {spread[2]:.1f} °/h")
+    document: dict[str, Any] = {
+        "strategy": fitted.strategy.label, "recordings": names, "intervals": list(fit.intervals),
+        "interval_s": fit.interval_s, "coefficients": [c.to_dict() for c in table],
+        "recording_biases": biases,
+        "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
+    }  # fmt: skip
+    if fitted.rule is not None:
+        rule = fitted.rule
+        held = "; ".join(f"{m} {v:.2f}°" for m, v in rule.held_back_deg.items())
+        judged = f" (open-loop attitude on held-back recordings: {held})" if held else ""
+        print(f"a new recording's bias: {rule.mode}{judged}")
+        document["bias_rule"] = rule.to_dict()
+    return document
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -58,14 +147,17 @@ def _check_args(args: argparse.Namespace) -> None:
         raise SinsInputError(
             "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
         )
-    from sins import referenced
-    from sins.compensation import VARIANTS
+    from sins.compensation import strategy_names
 
-    if args.strategy not in VARIANTS and args.strategy != referenced.BIAS_ONLY:
-        known = ", ".join(n for n in VARIANTS if n != "oracle")
-        raise SinsInputError(f"unknown strategy {args.strategy!r} (known: {known}, {referenced.BIAS_ONLY})")
-    if args.no_guard and args.strategy not in ("mlp", "kohonen"):
-        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only mlp and kohonen do)")
+    if args.strategy not in strategy_names():
+        raise SinsInputError(
+            f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
+            "sins strategies lists them)"
+        )
+    if args.no_guard and args.strategy not in ("mlp", "kohonen", "mlp_window"):
+        raise SinsInputError(
+            f"--no-guard: {args.strategy} has no guard (only mlp, kohonen and mlp_window do)"
+        )
 
 
 def _fit_rig(args: argparse.Namespace, data: CalibrationData, where: str) -> tuple[Strategy, dict[str, Any]]:
@@ -142,6 +234,8 @@ def _fit_referenced(
     )
     print(f"reference: {fit.quality.summary()}")
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    if args.strategy == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
+        table = [c for c in table if c.term == "bias"]
     _print_coefficients(table, "the seed model on the intervals (± 1σ)")
     if fit.g_sensitivity_test is not None:
         kept, gain, se = fit.g_sensitivity_test
@@ -186,17 +280,19 @@ def add(sub: Subparsers) -> None:
     p = sub.add_parser(
         "fit", help="fit a compensation strategy on a rig recording or a recording beside its reference"
     )
-    p.add_argument("recording", nargs="?", metavar="RECORDING", help="a rig CSV, or a recording with --truth")
-    add_dataset(p)
+    p.add_argument(
+        "recording", nargs="*", metavar="RECORDING",
+        help="a rig CSV, or a recording with --truth or its own reference; several recordings of one unit "
+        "(each with its own reference) are fitted together",
+    )  # fmt: skip
+    add_dataset(p, repeat=True)
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv",
         help="the recording's reference trajectory (attitude and velocity): the fit is made on intervals",
     )  # fmt: skip
     p.add_argument(
         "--strategy", required=True,
-        help="none, regression, regression_robust, regression_extended, regression_rest, regression_window, "
-        "mlp, kohonen, "
-        "bias_only (or the seed paper's mlp_pure, mlp_seed, kohonen_pure)",
+        help="the strategy to fit: sins strategies lists them (regression, mlp, kohonen, ...)",
     )  # fmt: skip
     p.add_argument(
         "--validation", type=fraction, metavar="FRACTION",
@@ -208,8 +304,13 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--no-guard", action="store_true",
-        help="mlp, kohonen: use the learned correction on every channel, even where it does not beat "
-        "regression on held-back blocks",
+        help="mlp, kohonen, mlp_window: use the learned correction on every channel, even where it does not "
+        "beat regression on held-back blocks (recordings)",
+    )  # fmt: skip
+    p.add_argument(
+        "--bias-rule", choices=("pooled", "rest", "online", "rest+online"),
+        help="several recordings: how a new recording's gyro bias is taken (default: the one that does best "
+        "on held-back recordings)",
     )  # fmt: skip
     p.add_argument(
         "--json", type=Path, metavar="OUT.json", help="also write the coefficients and the fit's figures"

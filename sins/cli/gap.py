@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
+    add_dataset,
     add_recording_options,
     advance,
     display_unit,
@@ -217,11 +218,7 @@ def add(sub: Subparsers) -> None:
         help="a rig CSV, a recording with --truth, or one with its own reference (.npz, EuRoC/TUM-VI "
         "folder, bag)",
     )  # fmt: skip
-    p.add_argument(
-        "--dataset", action="append", metavar="NAME",
-        help="a real dataset from the data root (repeat for several recordings of one unit): ferraris, "
-        "ferraris_annotated, psins_vehicle, psins_lasergyro, broad_NN, FOLDER/NAME for NAME.npz",
-    )  # fmt: skip
+    add_dataset(p, repeat=True)
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
     p.add_argument(
         "--statistic", choices=("auto", "samples", "intervals"), default="auto",

@@ -6,7 +6,15 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import Subparsers, add_recording_options, progress_bar, recording_options, row_progress
+from sins.cli.common import (
+    Subparsers,
+    add_npz_dataset,
+    add_recording_options,
+    npz_dataset,
+    progress_bar,
+    recording_options,
+    row_progress,
+)
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
@@ -20,6 +28,7 @@ FLAGS = {"units": "--units", "frame": "--frame", "columns": "--columns", "rate":
 def _cmd_inspect(args: argparse.Namespace) -> int:
     from sins import inspection, io
 
+    npz_dataset(args, "recording")
     options = recording_options(args)
     if args.json and not args.json.parent.is_dir():
         raise SinsInputError(f"{args.json}: directory {args.json.parent} does not exist")
@@ -71,7 +80,8 @@ def add(sub: Subparsers) -> None:
         "inspect",
         help="a recording's rate, gaps, clipping and likely unit and frame mistakes, found from its data",
     )
-    p.add_argument("recording", type=Path, metavar="RECORDING")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING")
+    add_npz_dataset(p, "recording")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="write the figures and findings (SI units)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_inspect)

@@ -22,7 +22,6 @@ from sins.cli.common import (
     show,
 )
 from sins.errors import SinsInputError
-from sins.scenario.budget import check_scenario_size
 
 if TYPE_CHECKING:
     from sins.pipeline import ScenarioRun
@@ -30,10 +29,11 @@ if TYPE_CHECKING:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from sins import io, pipeline, plots, scenario
-
-    check_viewer_args(args)
+    check_viewer_args(args)  # before the imports below: --spawn without a display is refused at once
     check_plot(args)
+    from sins import io, pipeline, plots, scenario
+    from sins.scenario.budget import check_scenario_size
+
     path = pipeline.resolve_scenario(args.scenario)
     sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)
     check_scenario_size(sc, path, "running")
@@ -212,7 +212,11 @@ def _scenario_json(sc: Scenario, path: Path, n: int) -> dict[str, Any]:
 
 def add(sub: Subparsers) -> None:
     """Add ``sins run`` to ``sub``."""
-    p = sub.add_parser("run", help="simulate a scenario, integrate it, print the drift summary")
+    p = sub.add_parser(
+        "run",
+        help="simulate a scenario, integrate it and print the drift per strategy (with [gnss], aided through "
+        "outages); draw it, or show it in Rerun",
+    )
     p.add_argument("scenario", nargs="?", help="scenario file or preset name (default: car_drive)")
     p.add_argument(
         "--imu", metavar="GRADE|IMU.toml",

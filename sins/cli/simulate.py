@@ -8,11 +8,11 @@ from pathlib import Path
 from sins import __version__
 from sins.cli.common import Subparsers, progress_bar, row_progress, seed
 from sins.errors import SinsInputError
-from sins.scenario.budget import check_scenario_size
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from sins import io, pipeline, scenario
+    from sins.scenario.budget import check_scenario_size
 
     if args.ideal and (args.model or args.seed is not None):
         raise SinsInputError("--ideal: the ideal IMU has no unit to draw; leave out --model and --seed")

@@ -14,6 +14,7 @@ from sins.compensation.base import (
 )
 from sins.compensation.registry import (
     CLASSES,
+    DESCRIPTIONS,
     FORMAT_NAME,
     FORMAT_VERSION,
     SAVED_STRATEGIES,
@@ -22,11 +23,13 @@ from sins.compensation.registry import (
     make,
     save,
     strategy_class,
+    strategy_names,
 )
 from sins.compensation.regression import ExtendedRegression, Regression
 
 __all__ = [
     "CLASSES",
+    "DESCRIPTIONS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "SAVED_STRATEGIES",
@@ -41,4 +44,5 @@ __all__ = [
     "residual_rms",
     "save",
     "strategy_class",
+    "strategy_names",
 ]

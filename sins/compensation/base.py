@@ -48,6 +48,10 @@ class Strategy(ABC):
     #: What the strategy was fitted on, where a real unit's recording says: ``sensor``, ``rate_hz``,
     #: ``reference``; absent otherwise.
     fitted_on_: dict[str, Any]
+    #: What the strategy does about a new recording's gyro bias, where it was fitted on several
+    #: recordings of one unit (:class:`sins.compensation.unit_bias.BiasRule` as a dict; applied by
+    #: :meth:`correct_recording`); absent otherwise.
+    unit_bias_: dict[str, Any]
 
     @abstractmethod
     def fit(self, data: CalibrationData) -> Strategy:
@@ -84,6 +88,25 @@ class Strategy(ABC):
         return ImuIncrements(
             t=imu.t, dtheta_b=rowwise.mul_col(omega_ib_b, dt), dv_b=rowwise.mul_col(f_ib_b, dt)
         )
+
+    def correct_recording(
+        self, readings: ImuRates | ImuIncrements, temp: Array | None = None
+    ) -> ImuRates | ImuIncrements:
+        """A whole recording, in time order and in its own form: :meth:`correct_rates` or
+        :meth:`correct_increments`, then, where the strategy was fitted on several recordings of one unit,
+        its rule for the recording's own gyro bias (``unit_bias_``: estimated from the readings before
+        each one). A stream corrected a chunk at a time (``correct_increments`` alone) has no rule."""
+        out = (
+            self.correct_rates(readings, temp)
+            if isinstance(readings, ImuRates)
+            else self.correct_increments(readings, temp)
+        )
+        rule = getattr(self, "unit_bias_", None)
+        if not isinstance(rule, dict):
+            return out
+        from sins.compensation import unit_bias
+
+        return unit_bias.corrected_any(unit_bias.BiasRule.from_dict(rule), out)
 
     def aligned_rates(self, rates: ImuRates) -> ImuRates:
         """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends
@@ -125,6 +148,12 @@ class Strategy(ABC):
         odd = [k for k in state if not k.endswith("_")]
         if odd:
             raise ValueError(f"state.{odd[0]} is not a fitted attribute")
+        if "unit_bias_" in state:
+            from sins.compensation import unit_bias
+
+            if not isinstance(state["unit_bias_"], dict):
+                raise ValueError("state.unit_bias_ is not an object")
+            unit_bias.BiasRule.from_dict(state["unit_bias_"])
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`get_state` gave (lists become float arrays)."""

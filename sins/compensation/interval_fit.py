@@ -323,16 +323,7 @@ def _fit_gyro(
     iteration = 0
     while iteration < _MAX_ITERATIONS:
         iteration += 1
-        corrected = correct_increments(imu, seed, tau, tau_a)
-        dtheta, dv = corrected.dtheta_b, corrected.dv_b
-        q = attitude.propagate_increments(dtheta, np.array([0.0, 0.0, 0.0, 1.0]))
-        b_inv = np.asarray(np.linalg.inv(np.eye(3) + seed.B), dtype=float)
-        blocks = [dt[:, None], dtheta] + ([dv] if g_sensitivity else [])
-        extra = shift_derivative(imu.t, imu.dtheta_b, tau) @ b_inv.T if time_offset else None
-        x = _gyro_design(q, b_inv, blocks, extra, iv)
-        q_a, q_b = dcm(q[iv.start]), dcm(q[iv.stop])
-        r_meas = np.einsum("kji,kjl->kil", q_a, q_b)
-        y = rotation.rotvec_from_quat(rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, r_ref)))
+        x, y = gyro_problem(iv, imu, dt, seed, tau, tau_a, g_sensitivity, time_offset, r_ref)
         step, cov, resid, weights = _solve(x, y, iv, robust, huber_k)
         theta = _gyro_vector(seed, tau, g_sensitivity, time_offset)
         seed, tau = _gyro_update(seed, tau, step, g_sensitivity, time_offset)
@@ -348,6 +339,27 @@ def _fit_gyro(
     )  # fmt: skip
     tau_se = float(se[-1]) if time_offset else 0.0
     return seed, tau, tau_se, resid, weights, iteration, x, y + np.einsum("kap,p->ka", x, theta)
+
+
+def gyro_problem(
+    iv: Intervals, imu: ImuIncrements, dt: Array, seed: SeedModelFit, tau: float, tau_a: float,
+    g_sensitivity: bool, time_offset: bool, r_ref: Array | None = None,
+) -> tuple[Array, Array]:  # fmt: skip
+    """The gyro's linearised problem at ``seed``: each interval's Jacobian ``x`` (k, 3, p) (columns B0,
+    B, K if asked, τ if asked) and residual rotation ``y`` (k, 3) of the corrected increments against the
+    reference (``r_ref`` :meth:`Intervals.body_turn`, computed when not given)."""
+    r_ref = iv.body_turn() if r_ref is None else r_ref
+    corrected = correct_increments(imu, seed, tau, tau_a)
+    dtheta, dv = corrected.dtheta_b, corrected.dv_b
+    q = attitude.propagate_increments(dtheta, np.array([0.0, 0.0, 0.0, 1.0]))
+    b_inv = np.asarray(np.linalg.inv(np.eye(3) + seed.B), dtype=float)
+    blocks = [dt[:, None], dtheta] + ([dv] if g_sensitivity else [])
+    extra = shift_derivative(imu.t, imu.dtheta_b, tau) @ b_inv.T if time_offset else None
+    x = _gyro_design(q, b_inv, blocks, extra, iv)
+    q_a, q_b = dcm(q[iv.start]), dcm(q[iv.stop])
+    r_meas = np.einsum("kji,kjl->kil", q_a, q_b)
+    y = rotation.rotvec_from_quat(rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, r_ref)))
+    return x, y
 
 
 def _gyro_vector(seed: SeedModelFit, tau: float, g_sensitivity: bool, time_offset: bool) -> Array:
@@ -424,40 +436,61 @@ def _fit_accel(
     changes; a few passes settle the inverse ``(I + A)⁻¹`` and the shift. Returns A0, A, their
     standard errors (12,), the residuals, ``r``, the offset and its standard error."""
     A0, A = seed.A0.copy(), seed.A.copy()
-    c_ref = dcm(iv.q_start)
-    q_a = dcm(q_int[iv.start])
     expected = expected_dv(iv, dt)
     arm_matrix = lever(iv, imu, seed, dt)
     width = 16 if time_offset else 15
     cov = np.zeros((width, width))
     resid = np.zeros((len(iv), 3))
     for _ in range(4):
-        a_inv = np.asarray(np.linalg.inv(np.eye(3) + A), dtype=float)
-        dv = (shifted(imu.t, imu.dv_b, tau_a) - A0 * dt[:, None]) @ a_inv.T
-        cols = [-a_inv[:, r][None, :] * dt[:, None] for r in range(3)]
-        cols += [-a_inv[:, r][None, :] * dv[:, c : c + 1] for r in range(3) for c in range(3)]
-        if time_offset:
-            cols.append(shift_derivative(imu.t, imu.dv_b, tau_a) @ a_inv.T)
-        f = np.stack(cols, axis=2)
-        x = np.empty((len(iv), 3, width))
-        y = np.empty((len(iv), 3))
-        for k, (a, b) in enumerate(zip(iv.start, iv.stop, strict=True)):
-            rot = dcm(q_int[a : b + 1])
-            mid = 0.5 * (rot[:-1] + rot[1:])  # the step's middle, to first order
-            c_nb = np.einsum("ab,jbd->jad", c_ref[k] @ q_a[k].T, mid)
-            y[k] = expected[k] - np.einsum("jab,jb->a", c_nb, dv[a:b])
-            x[k, :, :12] = np.einsum("jab,jbp->ap", c_nb, f[a:b, :, :12])
-            if time_offset:
-                x[k, :, 15] = np.einsum("jab,jb->a", c_nb, f[a:b, :, 12])
-        # The accelerometer's Δv is the reference point's plus Δ(C (ω × r)) = lever r: on y's side, −lever.
-        # r is estimated whole in every pass (y holds none of it); the rest by increments.
-        x[:, :, 12:15] = -arm_matrix
+        x, y = accel_problem(iv, imu, dt, q_int, A0, A, tau_a, time_offset, expected, arm_matrix)
         step, cov, resid, _ = _solve(x, y, iv, robust, huber_k)
         A0, A = A0 + step[:3], A + step[3:12].reshape(3, 3)
         if time_offset:
             tau_a += float(step[15])
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return A0, A, se[:12], resid, step[12:15], tau_a, float(se[15]) if time_offset else 0.0
+
+
+def accel_problem(
+    iv: Intervals, imu: ImuIncrements, dt: Array, q_int: Array, A0: Array, A: Array, tau_a: float,
+    time_offset: bool, expected: Array, arm_matrix: Array,
+) -> tuple[Array, Array]:  # fmt: skip
+    """The accelerometer's linear problem at ``A0``, ``A``, ``tau_a``: each interval's Jacobian ``x``
+    (k, 3, 15 or 16) (columns A0, A, the lever arm ``r``, τ if asked) and the velocity change the
+    corrected increments leave ``y`` (k, 3); ``q_int`` the attitude the corrected gyro integrates to,
+    ``expected`` :func:`~sins.compensation.intervals.expected_dv`, ``arm_matrix``
+    :func:`~sins.compensation.intervals.lever`."""
+    width = 16 if time_offset else 15
+    c_ref = dcm(iv.q_start)
+    q_a = dcm(q_int[iv.start])
+    a_inv = np.asarray(np.linalg.inv(np.eye(3) + A), dtype=float)
+    dv = (shifted(imu.t, imu.dv_b, tau_a) - A0 * dt[:, None]) @ a_inv.T
+    cols = [-a_inv[:, r][None, :] * dt[:, None] for r in range(3)]
+    cols += [-a_inv[:, r][None, :] * dv[:, c : c + 1] for r in range(3) for c in range(3)]
+    if time_offset:
+        cols.append(shift_derivative(imu.t, imu.dv_b, tau_a) @ a_inv.T)
+    f = np.stack(cols, axis=2)
+    x = np.empty((len(iv), 3, width))
+    y = np.empty((len(iv), 3))
+    for k, (a, b) in enumerate(zip(iv.start, iv.stop, strict=True)):
+        rot = dcm(q_int[a : b + 1])
+        mid = 0.5 * (rot[:-1] + rot[1:])  # the step's middle, to first order
+        c_nb = np.einsum("ab,jbd->jad", c_ref[k] @ q_a[k].T, mid)
+        y[k] = expected[k] - np.einsum("jab,jb->a", c_nb, dv[a:b])
+        x[k, :, :12] = np.einsum("jab,jbp->ap", c_nb, f[a:b, :, :12])
+        if time_offset:
+            x[k, :, 15] = np.einsum("jab,jb->a", c_nb, f[a:b, :, 12])
+    # The accelerometer's Δv is the reference point's plus Δ(C (ω × r)) = lever r: on y's side, −lever.
+    # r is estimated whole in every pass (y holds none of it); the rest by increments.
+    x[:, :, 12:15] = -arm_matrix
+    return x, y
+
+
+def solve(
+    x: Array, y: Array, iv: Intervals, robust: bool = False, huber_k: float = 1.345
+) -> tuple[Array, Array, Array, Array | None]:
+    """Weighted least squares of ``y ≈ x θ`` over intervals (see :func:`_solve`)."""
+    return _solve(x, y, iv, robust, huber_k)
 
 
 def _solve(
@@ -504,6 +537,11 @@ def _solve(
     return theta / scale, cov, resid, weights if robust else None
 
 
+def quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -> ReferenceQuality:
+    """The residuals of still and moving intervals, and the sensor's own spread where still."""
+    return _quality(imu, iv, g_resid, a_resid)
+
+
 def _quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -> ReferenceQuality:
     """The residuals of still and moving intervals, and the sensor's own spread where still."""
     turn = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(iv.q_start), iv.q_stop))
@@ -533,7 +571,11 @@ def _quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) 
 __all__ = [
     "IntervalFit",
     "ReferenceQuality",
+    "accel_problem",
     "fit_biases",
     "fit_intervals",
+    "gyro_problem",
     "interval_reference",
+    "quality",
+    "solve",
 ]

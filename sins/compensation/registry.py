@@ -32,6 +32,7 @@ CLASSES: dict[str, str] = {
     "regression_extended": "sins.compensation.regression:ExtendedRegression",
     "regression_rest": "sins.compensation.rest:RestAware",
     "regression_window": "sins.compensation.window:WindowRegression",
+    "mlp_window": "sins.compensation.window_net:WindowNet",
     "mlp": "sins.compensation.mlp:ResidualMLP",
     "mlp_pure": "sins.compensation.mlp:MLP",
     "kohonen": "sins.compensation.kohonen:LocalLinearMap",
@@ -58,6 +59,7 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "regression_extended": ("regression_extended", {}),
     "regression_rest": ("regression_rest", {}),
     "regression_window": ("regression_window", {}),
+    "mlp_window": ("mlp_window", {}),
     "mlp": ("mlp", {}),
     "mlp_pure": ("mlp_pure", {}),
     "mlp_seed": ("mlp_pure", {"mode": "seed", "hidden": (16,), "alpha": 0.05, "max_epochs": 30}),
@@ -66,6 +68,37 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "ferraris": ("ferraris", {}),
 }
 
+#: Variants fitted only against a reference trajectory (:mod:`sins.referenced`), which a model file may
+#: name beside :data:`VARIANTS`: the biases alone, a ``regression`` whose other terms stay zero.
+REFERENCE_VARIANTS = ("bias_only",)
+
+#: What each strategy a user can fit is, one line each, in the order ``sins strategies`` lists them: every
+#: variant but the oracle (a simulation's own unit), and ``bias_only``, fitted against a trajectory only
+#: (the biases of the seed model, what a filter that estimates biases alone keeps).
+DESCRIPTIONS: dict[str, str] = {
+    "none": "the readings as they are",
+    "regression": "least squares of the seed model: biases, scale factors, misalignments, g-sensitivity",
+    "regression_robust": "regression with Huber-weighted rows or intervals",
+    "regression_extended": "regression with the terms the data choose (scale nonlinearity, asymmetry, ...)",
+    "regression_rest": "regression, then the gyro bias taken again at every rest",
+    "regression_window": "regression, then a ridge gyro correction from a window of past readings",
+    "mlp": "regression, then a feed-forward network of what it leaves (guarded on held-back data)",
+    "mlp_window": "regression, then a network of the gyro's error from a window of past readings (guarded "
+    "on held-back recordings)",
+    "mlp_pure": "the seed paper's network from readings to errors",
+    "mlp_seed": "the seed paper's network, trained as the paper does",
+    "kohonen": "regression, then a self-organising local linear map of what it leaves (guarded)",
+    "kohonen_pure": "the seed paper's self-organising map",
+    "ferraris": "the Ferraris calibration of six holds and three turns",
+    "bias_only": "against a trajectory: the gyro's and accelerometer's biases alone",
+}
+
+
+def strategy_names() -> list[str]:
+    """The strategies a user can fit (:data:`DESCRIPTIONS`), in order."""
+    return list(DESCRIPTIONS)
+
+
 #: Names a model file may carry (the registered classes that can be fitted).
 SAVED_STRATEGIES = (
     "none",
@@ -73,6 +106,7 @@ SAVED_STRATEGIES = (
     "regression_extended",
     "regression_rest",
     "regression_window",
+    "mlp_window",
     "ferraris",
     "mlp",
     "mlp_pure",
@@ -140,7 +174,8 @@ def load(path: str | os.PathLike[str]) -> Strategy:
         strategy.check_state(state)
         strategy.set_state(state)
         variant = doc.get("variant", name)
-        strategy.variant = variant if isinstance(variant, str) and variant in VARIANTS else name
+        known = isinstance(variant, str) and (variant in VARIANTS or variant in REFERENCE_VARIANTS)
+        strategy.variant = variant if known else name
         # A probe: what the checks above do not see fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))
@@ -190,13 +225,16 @@ def _check_values(path: Path, name: str, value: Any, where: str) -> None:
 
 __all__ = [
     "CLASSES",
+    "DESCRIPTIONS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "MAX_MODEL_VALUE",
+    "REFERENCE_VARIANTS",
     "SAVED_STRATEGIES",
     "VARIANTS",
     "load",
     "make",
     "save",
     "strategy_class",
+    "strategy_names",
 ]

@@ -87,20 +87,23 @@ def read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) ->
 def read_npz_with_truth(
     name: str, root: str | os.PathLike[str] | None = None
 ) -> tuple[CalibrationData, NavSeries | None]:
-    """``FOLDER/NAME`` as readings beside per-sample reference inputs (the exact ideal IMU of a motion
-    through the reference: splines, then the strapdown equations backwards; NaN without a reference),
-    and the reference at the readings' times."""
+    """``FOLDER/NAME`` as :func:`with_truth` gives it."""
+    return with_truth(read_npz_recording(name, root))
+
+
+def with_truth(rec: Recording) -> tuple[CalibrationData, NavSeries | None]:
+    """A recording as readings beside per-sample reference inputs (the exact ideal IMU of a motion
+    through its own reference: splines, then the strapdown equations backwards; NaN without a
+    reference), and the reference at the readings' times."""
     from sins.nav import motion, trajectory
 
-    rec = read_npz_recording(name, root)
-    imu = rec.imu
     t, gyro, accel = rec.mean_rates()
     if rec.truth is None:
         nan = np.full_like(gyro, np.nan)
         return CalibrationData(
             t=t, gyro=gyro, accel=accel, ref_gyro=nan, ref_accel=nan, source=rec.source
         ), None
-    at = rec.truth.interpolate(imu.t)
+    at = rec.truth.interpolate(rec.imu.t)
     ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
     data = CalibrationData(
         t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
@@ -115,4 +118,5 @@ __all__ = [
     "read_npz_recording",
     "read_npz_reference",
     "read_npz_with_truth",
+    "with_truth",
 ]

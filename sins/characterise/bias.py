@@ -1,0 +1,519 @@
+"""A still unit's biases: each channel's mean reading less Earth's rate and gravity, with a standard error
+that counts the noise's colour; the attitude they imply; a warm-up trend.
+
+At rest a gyro reads ``ω_b = C_bn Ω_n + b_g`` and an accelerometer ``f_b = C_bn (0, 0, −g) + b_a``, with
+``Ω_n = Ω (cos φ, 0, −sin φ)`` (Earth's rate, 7.292115e-5 rad/s, at latitude ``φ``) and ``g`` normal
+gravity at ``φ`` and the height. The bias is the mean reading less that expectation; the expectation needs
+the attitude ``C_nb``:
+
+* **given** (a levelled table facing a known heading, :func:`estimate_bias`'s ``attitude``), or a
+  reference's (a dataset's per-sample Earth rate and gravity, a bag's odometry): every axis's bias
+  follows. An error ``δ`` in the given tilt moves the level accelerometers' biases by ``g δ`` (171 µg per
+  0.01°), an error in the heading the level gyros' by ``Ω cos φ δ``;
+* **levelled** from the data (:func:`sins.aiding.alignment.still_attitude`): roll and pitch from the mean
+  specific force, the heading from the levelled mean rate (gyrocompassing) where the gyro resolves it.
+  A still unit cannot tell a tilt from a level accelerometer bias, nor a heading error from an east gyro
+  bias (:func:`sins.aiding.alignment.static_limits`): levelled, the accelerometers' bias is the part
+  along gravity, ``|f| − g``, and the gyros' has no east part. The heading is *resolved* when the
+  measured level rate lies within :data:`LEVEL_RATE_TOL` of ``Ω cos φ`` and the noise leaves it within
+  :data:`~sins.aiding.alignment.GYROCOMPASS_MAX_SIGMA_RAD`; otherwise only the vertical part of Earth's
+  rate is taken away and each gyro's bias carries up to ``Ω cos φ`` times its axis's level part
+  (:attr:`ChannelBias.heading_bound`).
+
+**Standard error.** The mean of ``n`` readings of white noise of deviation ``σ`` has ``σ/√n``; coloured
+noise (a Gauss–Markov bias, flicker, a rate random walk) averages down more slowly. The error reported
+is the Allan deviation of the channel's fitted noise model (:mod:`sins.characterise`, the IEEE terms the
+data resolve) at the averaging time ``T`` (the rows' span): for white noise ``N/√T = σ/√n`` exactly;
+for a Gauss–Markov bias of correlation time ``T_c ≪ T`` it is ``√(2 σ_b² T_c / T)``, the standard error
+of the mean of such a process; for flicker and a random walk, whose mean has no fixed value to converge
+to, it is how far two such means ``T`` apart differ over ``√2``: the bias of this run, as repeatable as
+the noise lets it be. The white-noise figure is reported beside it (:attr:`ChannelBias.sigma_white`).
+
+**Warm-up.** The rate's least-squares line over the rows (:func:`sins.characterise.trend.fit_ramp`),
+judged against the slow noise the Allan curve allows: *significant* at 3σ. The bias reported is the mean,
+the bias at the rows' middle; a warm-up that settles exponentially shows as a significant line.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins import earth, rotation
+from sins.aiding import alignment, ekf
+from sins.characterise.analysis import ChannelResult, characterise, residual
+from sins.characterise.still import motion, still_rows
+from sins.errors import SinsInputError
+from sins.imu import CHANNELS, DEG_PER_H, UG
+from sins.io.recording import Recording
+from sins.series import CalibrationData
+
+Array = NDArray[np.float64]
+
+#: The heading is gyrocompassed only where the measured level rate lies within this fraction of Earth's
+#: level rate ``Ω cos φ`` (a gyro bias a fifth of it, 2 °/h at 45°, already turns the heading by ~11°
+#: if it points east).
+LEVEL_RATE_TOL = 0.2
+#: Latitudes beyond this, rad, have too little level Earth rate to gyrocompass on (cos 89° = 0.017).
+MAX_GYROCOMPASS_LAT = math.radians(89.0)
+#: The rows used are drawn as the means of this many blocks at most.
+BLOCKS = 200
+#: The display units: °/h for gyros, µg for accelerometers.
+DISPLAY = {"gyro": (DEG_PER_H, "°/h"), "accel": (UG, "µg")}
+
+
+@dataclass(frozen=True)
+class ChannelBias:
+    """One channel at rest, SI units (rad/s or m/s²).
+
+    Attributes
+    ----------
+    channel : ``gyro.x`` … ``accel.z``
+    mean : the reading's mean over the rows used
+    expected : Earth's rate or gravity on this axis in the attitude used (what is taken away)
+    bias : ``mean − expected``
+    sigma : its standard error: the fitted noise model's Allan deviation at the averaging time
+    sigma_white : what white noise alone would give, the readings' standard deviation over ``√n``
+    heading_bound : a gyro's part of Earth's level rate an unknown heading may leave in ``bias`` (its
+        axis's level part times ``Ω cos φ``); 0 where the heading is known
+    trend : the rate's fitted slope, per s
+    trend_sigma : its standard error under the noise model
+    trend_significant : ``|trend|`` at least 3 standard errors of the slowest noise the curve allows
+    """
+
+    channel: str
+    mean: float
+    expected: float
+    bias: float
+    sigma: float
+    sigma_white: float
+    heading_bound: float
+    trend: float
+    trend_sigma: float
+    trend_significant: bool
+
+    @property
+    def sensor(self) -> str:
+        """``gyro`` or ``accel``."""
+        return self.channel.split(".")[0]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The SI figures, and the bias and its error in the display unit."""
+        size, unit = DISPLAY[self.sensor]
+        out: dict[str, Any] = {k: v for k, v in self.__dict__.items() if k != "channel"}
+        out |= {"unit": unit, "bias_display": self.bias / size, "sigma_display": self.sigma / size}
+        return out
+
+
+@dataclass(frozen=True)
+class RestAttitude:
+    """The attitude the biases are taken in.
+
+    Attributes
+    ----------
+    roll, pitch : rad
+    yaw : rad, or None where the heading is neither given nor resolved
+    source : ``"given"``, ``"reference"`` (a dataset's Earth rate and gravity, a recording's trajectory)
+        or ``"levelled"`` (roll and pitch from gravity, the heading gyrocompassed where resolved)
+    tilt_sigma, yaw_sigma : levelled: the 1σ the readings' noise leaves in roll and pitch, and in a
+        resolved heading (the standard errors over ``g`` and ``Ω cos φ``), rad; else 0 (None: no heading)
+    level_rate_ratio : the measured level rate over ``Ω cos φ`` (levelled; 1 for a gyro without bias)
+    heading_note : why the heading is not resolved, in words ("" where it is)
+    """
+
+    roll: float
+    pitch: float
+    yaw: float | None
+    source: str
+    tilt_sigma: float = 0.0
+    yaw_sigma: float | None = 0.0
+    level_rate_ratio: float = float("nan")
+    heading_note: str = ""
+
+    @property
+    def C_nb(self) -> Array:
+        """The direction cosine matrix (heading 0 where it is not known)."""
+        return rotation.dcm_from_euler(self.roll, self.pitch, self.yaw or 0.0)
+
+
+@dataclass(frozen=True)
+class BiasEstimate:
+    """A still unit's biases (see the module's text).
+
+    Attributes
+    ----------
+    source : the recording or dataset
+    start_s, end_s : the rows used, s
+    rows : how many
+    rate_hz : the sampling rate
+    lat, h : where Earth's rate and gravity were taken, rad and m
+    location : where those came from, in words
+    attitude : the attitude they were taken in
+    channels : ``gyro.x`` … ``accel.z`` → :class:`ChannelBias`
+    notes : what was done, one line each
+    block_t, block_bias : the rows used in up to :data:`BLOCKS` blocks: each block's middle time (k,) s
+        and mean reading less what was taken away (k, 6), for a picture of the rest (not in the JSON)
+    """
+
+    source: str
+    start_s: float
+    end_s: float
+    rows: int
+    rate_hz: float
+    lat: float
+    h: float
+    location: str
+    attitude: RestAttitude
+    channels: dict[str, ChannelBias] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    block_t: Array = field(default_factory=lambda: np.zeros(0))
+    block_bias: Array = field(default_factory=lambda: np.zeros((0, 6)))
+
+    @property
+    def seconds(self) -> float:
+        """The span averaged, s."""
+        return self.rows / self.rate_hz
+
+    def vector(self, sensor: str, what: str = "bias") -> Array:
+        """``bias`` (or ``sigma``, ``mean`` …) of the three axes of ``sensor`` (3,), SI."""
+        return np.array([getattr(self.channels[f"{sensor}.{a}"], what) for a in "xyz"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document: SI units (rad, rad/s, m/s², s), each channel also in °/h or µg."""
+        a = self.attitude
+        return {
+            "format": "sins-bias",
+            "source": self.source,
+            "start_s": self.start_s,
+            "end_s": self.end_s,
+            "rows": self.rows,
+            "rate_hz": self.rate_hz,
+            "lat_deg": math.degrees(self.lat),
+            "h_m": self.h if math.isfinite(self.h) else None,
+            "location": self.location,
+            "earth_rate_radps": earth.OMEGA_IE,
+            "gravity_mps2": float(np.linalg.norm(self.vector("accel", "expected"))),
+            "attitude": {
+                "roll_deg": math.degrees(a.roll), "pitch_deg": math.degrees(a.pitch),
+                "yaw_deg": None if a.yaw is None else math.degrees(a.yaw), "source": a.source,
+                "tilt_sigma_deg": math.degrees(a.tilt_sigma),
+                "yaw_sigma_deg": None if a.yaw_sigma is None else math.degrees(a.yaw_sigma),
+                "level_rate_ratio": a.level_rate_ratio, "heading_note": a.heading_note,
+            },
+            "channels": {ch: c.to_dict() for ch, c in self.channels.items()},
+            "notes": list(self.notes),
+        }  # fmt: skip
+
+
+def _expected(C_nb: Array, lat: float, h: float, heading_known: bool) -> tuple[Array, Array, Array]:
+    """Earth's rate and gravity in the body axes (3,) each, and each gyro's heading bound (3,): without
+    the heading, the vertical part of Earth's rate alone, and the level part's size on each axis."""
+    omega_n = np.array(earth.earth_rate_n(lat), dtype=float)
+    g_n = np.array([0.0, 0.0, -float(earth.normal_gravity(lat, h))])
+    if heading_known:
+        return C_nb.T @ omega_n, C_nb.T @ g_n, np.zeros(3)
+    vertical = np.array([0.0, 0.0, omega_n[2]])
+    level_part = np.hypot(C_nb[0], C_nb[1])  # each body axis's level length (columns of C_nb)
+    return C_nb.T @ vertical, C_nb.T @ g_n, earth.OMEGA_IE * math.cos(lat) * level_part
+
+
+def _levelled(mean: Array, sigma: Array, lat: float) -> RestAttitude:
+    """Roll and pitch from gravity, the heading by gyrocompassing where the gyro resolves it."""
+    roll, pitch, yaw = alignment.still_attitude(mean[3:], mean[:3])
+    g = float(np.linalg.norm(mean[3:]))
+    tilt = float(np.max(sigma[3:])) / g
+    level = rotation.dcm_from_euler(roll, pitch, 0.0) @ mean[:3]
+    level_rate = earth.OMEGA_IE * math.cos(lat)
+    ratio = float(np.hypot(level[0], level[1])) / level_rate if level_rate > 0 else math.inf
+    yaw_sigma = float(np.max(sigma[:3])) / level_rate + abs(math.tan(lat)) * tilt
+    note = ""
+    if abs(lat) > MAX_GYROCOMPASS_LAT:
+        note = f"at {math.degrees(lat):.3g}° the level Earth rate is too small to gyrocompass on"
+    elif abs(ratio - 1.0) > LEVEL_RATE_TOL:
+        excess = abs(ratio - 1.0) * level_rate / DEG_PER_H
+        note = (
+            f"the level rate is {ratio:.3g} × Earth's level rate Ω cos φ ({level_rate / DEG_PER_H:.3g} °/h): "
+            f"a gyro bias of at least {excess:.3g} °/h, which a still unit cannot tell from its heading"
+        )
+    elif yaw_sigma > alignment.GYROCOMPASS_MAX_SIGMA_RAD:
+        note = (
+            f"the gyro noise over the rows leaves the heading 1σ {math.degrees(yaw_sigma):.3g}° (more than "
+            f"{math.degrees(alignment.GYROCOMPASS_MAX_SIGMA_RAD):g}°)"
+        )
+    if note:
+        return RestAttitude(roll, pitch, None, "levelled", tilt, None, ratio, note)
+    return RestAttitude(roll, pitch, yaw, "levelled", tilt, yaw_sigma, ratio)
+
+
+def _from_reference(reference_mean: Array) -> RestAttitude:
+    """The attitude a reference's Earth rate and gravity (6,) in the body axes imply, exactly."""
+    roll, pitch, yaw = alignment.still_attitude(reference_mean[3:], reference_mean[:3])
+    return RestAttitude(roll, pitch, yaw, "reference")
+
+
+def _standard_errors(result: dict[str, ChannelResult], seconds: float) -> Array:
+    """Each channel's (6,) standard error of its mean over ``seconds``: its noise model's Allan deviation
+    there (a removed ramp left out: it is the trend, reported apart)."""
+    tau = np.array([seconds])
+    return np.array([math.sqrt(max(float(result[ch].fit.avar(tau)[0]), 0.0)) for ch in CHANNELS])
+
+
+def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white: Array, expected: Array,
+              bound: Array) -> dict[str, ChannelBias]:  # fmt: skip
+    """Each channel's bias, its standard error and its trend."""
+    out = {}
+    for i, ch in enumerate(CHANNELS):
+        ramp = result[ch].ramp
+        assert ramp is not None  # characterise_channel always fits one
+        out[ch] = ChannelBias(
+            ch, float(mean[i]), float(expected[i]), float(mean[i] - expected[i]), float(sigma[i]),
+            float(white[i]), float(bound[i]), ramp.value, ramp.sigma, ramp.resolved,
+        )  # fmt: skip
+    return out
+
+
+def estimate_bias(
+    t: Array,
+    readings: Array,
+    lat: float,
+    h: float = 0.0,
+    *,
+    attitude: tuple[float, float, float] | None = None,
+    attitude_source: str = "given",
+    reference: Array | None = None,
+    keep: NDArray[np.bool_] | None = None,
+    source: str = "",
+    location: str = "given",
+    progress: Callable[[int, int], None] | None = None,
+) -> BiasEstimate:
+    """The biases of a still unit (see the module's text).
+
+    Parameters
+    ----------
+    t : (n,) s
+    readings : (n, 6) gyro and accelerometer rates, rad/s and m/s², FRD
+    lat, h : where it stood, rad and m
+    attitude : ``(roll, pitch, yaw)`` rad where it is known (``attitude_source`` says how: "given",
+        "reference"); None: levelled from the data
+    reference : (n, 6) Earth's rate and gravity in the body axes per row (a dataset's reference), taken
+        away instead (the attitude is what they imply)
+    keep : (n,) the rows to use (default all)
+    source, location : for messages and the report
+    progress : ``progress(channels_done, 6)`` while the noise is fitted
+
+    Raises
+    ------
+    SinsInputError
+        too few rows for the noise fit (one line naming ``source``), a channel without noise.
+    """
+    res = residual(t, readings, None, source, keep)
+    rows = np.zeros(len(t), dtype=bool)
+    for a, b in res.segments:
+        rows[a:b] = True
+    used = np.asarray(readings, dtype=float)[rows]
+    mean, n = used.mean(axis=0), len(used)
+    white = used.std(axis=0, ddof=1) / math.sqrt(n)
+    result = characterise(res, progress=progress).channels
+    sigma = _standard_errors(result, n * res.dt)
+    if reference is not None:
+        expected, bound = np.asarray(reference, dtype=float)[rows].mean(axis=0), np.zeros(6)
+        att = _from_reference(expected)
+    else:
+        att = _levelled(mean, sigma, lat)
+        if attitude is not None:
+            att = RestAttitude(*attitude, attitude_source, level_rate_ratio=att.level_rate_ratio)
+        gyro, accel, gyro_bound = _expected(att.C_nb, lat, h, att.yaw is not None)
+        expected, bound = np.r_[gyro, accel], np.r_[gyro_bound, np.zeros(3)]
+    idx = np.flatnonzero(rows)
+    block_t, block_mean = _blocks(np.asarray(t, dtype=float)[rows], used)
+    return BiasEstimate(
+        source, float(t[idx[0]]), float(t[idx[-1]]), n, 1.0 / res.dt, lat, h, location, att,
+        _channels(result, mean, sigma, white, expected, bound), tuple(res.notes) + tuple(res.warnings),
+        block_t, block_mean - expected,
+    )  # fmt: skip
+
+
+def _blocks(t: Array, values: Array) -> tuple[Array, Array]:
+    """The means of up to :data:`BLOCKS` consecutive blocks of rows: times (k,) and values (k, 6)."""
+    size = max(1, len(t) // BLOCKS)
+    k = len(t) // size
+    cut = k * size
+    return t[:cut].reshape(k, size).mean(axis=1), values[:cut].reshape(k, size, 6).mean(axis=1)
+
+
+def in_attitude(
+    estimate: BiasEstimate, attitude: tuple[float, float, float], source: str = "given"
+) -> BiasEstimate:
+    """``estimate``'s biases taken again in another attitude (roll, pitch, yaw rad): Earth's rate and
+    gravity in it taken from the same means (no refit: the errors and trends stay)."""
+    att = RestAttitude(*attitude, source, level_rate_ratio=estimate.attitude.level_rate_ratio)
+    gyro, accel, _ = _expected(att.C_nb, estimate.lat, estimate.h, True)
+    expected = np.r_[gyro, accel]
+    old = np.array([estimate.channels[ch].expected for ch in CHANNELS])
+    channels = {
+        ch: replace(c, expected=float(expected[i]), bias=c.mean - float(expected[i]), heading_bound=0.0)
+        for i, (ch, c) in enumerate(estimate.channels.items())
+    }
+    blocks = estimate.block_bias + old - expected
+    return replace(estimate, attitude=att, channels=channels, block_bias=blocks)
+
+
+def opening_rest(t: Array, readings: Array, source: str = "") -> tuple[NDArray[np.bool_], str]:
+    """The rows a still unit's biases are taken from: every row where the recording does not move
+    (:func:`sins.characterise.still.motion`), else its opening rest (the still rows from the first up to
+    the first that is not, :func:`sins.characterise.still.still_rows`), and a note saying which.
+
+    Raises
+    ------
+    SinsInputError
+        a recording that moves from its start.
+    """
+    n = len(t)
+    if motion(t, readings) is None:
+        return np.ones(n, dtype=bool), ""
+    dt = float(np.median(np.diff(t)))
+    still = still_rows(readings, dt)
+    # The opening rest: still_rows drops one window at either end of a run, so it starts a window late.
+    first = int(np.argmax(still)) if still.any() else n
+    stop = first + int(np.argmax(~still[first:])) if not still[first:].all() else n
+    if first >= n or t[first] - t[0] > 1.0:
+        raise SinsInputError(
+            f"{source or 'recording'}: the unit moves from its start; the biases need it at rest "
+            "(a still recording, or one that opens with a rest)"
+        )
+    keep = np.zeros(n, dtype=bool)
+    keep[first:stop] = True
+    note = f"the unit moves after {t[stop - 1] - t[0]:.4g} s: the biases are its opening rest's"
+    return keep, note
+
+
+def location_of(rec: Recording) -> tuple[float, float, str] | None:
+    """``(lat, h, where)`` a recording says it lies at: its reference's or its fixes' mean, or None."""
+    if rec.truth is not None:
+        return float(np.mean(rec.truth.lat)), float(np.mean(rec.truth.h)), "the recording's reference"
+    if rec.fixes is not None and len(rec.fixes.t):
+        return float(np.mean(rec.fixes.lat)), float(np.mean(rec.fixes.h)), "the recording's fixes"
+    return None
+
+
+def recording_bias(
+    rec: Recording,
+    lat: float | None = None,
+    h: float | None = None,
+    attitude: tuple[float, float, float] | None = None,
+    seconds: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> BiasEstimate:
+    """:func:`estimate_bias` of a recording (any format sins reads) at rest: the whole of a still one,
+    else its opening rest; ``seconds`` keeps the first that many.
+
+    The latitude and height are the given ones, else the recording's (its reference's or its fixes'
+    mean); the attitude the given one, else the reference's (a bag's odometry) at rest, else levelled.
+
+    Raises
+    ------
+    SinsInputError
+        no latitude given or read; a recording that moves from its start; too few rows.
+    """
+    t, omega, force = rec.mean_rates()
+    readings = np.hstack([omega, force])
+    if seconds is not None:
+        within = t <= t[0] + seconds
+        t, readings = t[within], readings[within]
+    keep, note = opening_rest(t, readings, rec.source)
+    read = location_of(rec)
+    where = "given"
+    if lat is None:
+        if read is None:
+            raise SinsInputError(
+                f"{rec.source}: no latitude: give it with --lat DEG (the recording has no fixes or reference "
+                "to read it from); Earth's rate and gravity depend on it"
+            )
+        lat, where = read[0], read[2]
+        h = read[1] if h is None else h
+    how = "given"
+    if attitude is None and rec.truth is not None:
+        mid = float(np.mean(t[keep]))
+        roll, pitch, yaw = rotation.euler_from_quat(rec.truth.interpolate(np.array([mid])).q_nb[0])
+        attitude, how = (float(roll), float(pitch), float(yaw)), "reference"
+    estimate = estimate_bias(
+        t, readings, lat, 0.0 if h is None else h, attitude=attitude, attitude_source=how, keep=keep,
+        source=rec.source, location=where, progress=progress,
+    )  # fmt: skip
+    return replace(estimate, notes=tuple(rec.notes) + ((note,) if note else ()) + estimate.notes)
+
+
+def dataset_bias(
+    data: CalibrationData, name: str, progress: Callable[[int, int], None] | None = None
+) -> BiasEstimate:
+    """:func:`estimate_bias` of a dataset against its own reference inputs (Earth's rate and gravity, or
+    a trajectory's), over the rows where the unit stood still (all of a still recording). The latitude
+    reported is the one the reference's Earth rate implies (its vertical part is ``−Ω sin φ``).
+
+    Raises
+    ------
+    SinsInputError
+        a dataset without a reference at rest, or with too few still rows.
+    """
+    readings = np.hstack([data.gyro, data.accel])
+    reference = np.hstack([data.ref_gyro, data.ref_accel])
+    known: NDArray[np.bool_] = np.asarray(np.isfinite(reference).all(axis=1))
+    keep = known.copy()
+    if motion(data.t, readings) is not None:
+        keep &= still_rows(readings, _step(data.t))
+    if not keep.any():
+        raise SinsInputError(f"{name}: no row at rest with a reference to take the biases against")
+    ref = reference[keep].mean(axis=0)
+    down = -ref[3:] / np.linalg.norm(ref[3:])
+    lat = math.asin(float(np.clip(-(ref[:3] @ down) / earth.OMEGA_IE, -1.0, 1.0)))
+    where = "the dataset's reference (its Earth rate and gravity per row)"
+    note = () if keep.all() else (f"the rows at rest: {int(keep.sum())} of {len(keep)}",)
+    estimate = estimate_bias(data.t, readings, lat, math.nan, reference=reference, keep=keep, source=name,
+                             location=where, progress=progress)  # fmt: skip
+    return replace(estimate, notes=note + estimate.notes)
+
+
+def _step(t: Array) -> float:
+    return float(np.median(np.diff(t)))
+
+
+def alignment_accuracy(
+    estimate: BiasEstimate, gyro_bias_sigma: float = 0.0, accel_bias_sigma: float = 0.0
+) -> tuple[float, float]:
+    """The 1σ of a coarse alignment on ``estimate``'s rows: tilt and heading, rad.
+
+    :func:`sins.aiding.alignment.coarse_covariance` with the noise the estimate measured (each sensor's
+    largest standard error at the averaging time, as a white noise of that much over the span) and the
+    bias levels given (rad/s, m/s²; 1σ per axis, a unit's grade): tilt ``hypot(σ_ba, σ_f) / g``, heading
+    ``hypot(σ_bg, σ_ω) / (Ω cos φ) + |tan φ|·tilt``. With the levels 0, the noise's part alone.
+    """
+    seconds = estimate.seconds
+    arw = float(np.max(estimate.vector("gyro", "sigma"))) * math.sqrt(seconds)
+    vrw = float(np.max(estimate.vector("accel", "sigma"))) * math.sqrt(seconds)
+    config = ekf.FilterConfig(arw_rad_rt_s=arw, vrw_mps_rt_s=vrw, gyro_bias_sigma=gyro_bias_sigma,
+                              accel_bias_sigma=accel_bias_sigma)  # fmt: skip
+    P0 = alignment.coarse_covariance(config, estimate.lat, seconds, 0.0)
+    return float(math.sqrt(P0[6, 6])), float(math.sqrt(P0[8, 8]))
+
+
+__all__ = [
+    "BLOCKS",
+    "DISPLAY",
+    "LEVEL_RATE_TOL",
+    "MAX_GYROCOMPASS_LAT",
+    "BiasEstimate",
+    "ChannelBias",
+    "RestAttitude",
+    "alignment_accuracy",
+    "dataset_bias",
+    "estimate_bias",
+    "in_attitude",
+    "location_of",
+    "opening_rest",
+    "recording_bias",
+]

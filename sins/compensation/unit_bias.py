@@ -1,0 +1,367 @@
+"""The gyro bias of a recording the model was not fitted on: what a model fitted on several recordings of
+one unit does about it at correction time, causally and from the recording alone.
+
+A MEMS gyro's bias moves between power-ups and days by more than anything else in its model (EuRoC's
+ADIS16448: 4e-3 rad/s between days, 1e-3 within one; 1e-3 rad/s over two minutes is 4° of open-loop
+attitude). :mod:`sins.compensation.several` fits each training recording's own bias; a new recording's is
+estimated from the recording itself, by one of these :data:`MODES`:
+
+``pooled``
+    the training recordings' mean bias (what a calibration does when it knows nothing of the day).
+``rest``
+    the mean rate over the recording's opening rest (:func:`opening_rest`, found from the readings: the
+    specific force's direction and the mean rate both steady), plus the training recordings' own
+    difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
+    tremor: the bias at rest is not the bias in motion); ``pooled`` where the recording opens moving.
+``online``
+    the bias's horizontal components (and what of the vertical one the motion reveals) estimated as the
+    recording goes, from the one thing every recording of a vehicle that stays within reach knows: its
+    velocity stays bounded. A gyro bias tilts the attitude the gyro integrates, the tilt turns gravity
+    into a horizontal specific force, and the velocity that force integrates to grows as ``g b t²/2``
+    (4.4 m/s after 30 s for 1e-3 rad/s), while the true velocity stays within a few m/s. Every
+    :data:`UPDATE_S` the bias is estimated again by least squares on the velocity so far (the true
+    velocity as noise of ``sigma_v``, the initial tilt and velocity and the accelerometer's bias as
+    nuisances), regularised towards the prior (``pooled`` or ``rest``) by the training recordings'
+    spread. Readings are corrected by the last estimate made before them (causal).
+
+The mode is chosen on held-back training recordings (:func:`choose_mode`): each recording judged by its
+open-loop attitude with the prior made from the others, never from its own reference.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.nav import attitude
+from sins.series import ImuIncrements, ImuRates, ReferencedRecording
+
+Array = NDArray[np.float64]
+
+#: The ways of estimating a recording's bias (see the module docstring).
+MODES = ("pooled", "rest", "online", "rest+online")
+#: Window of the rest detection, s.
+REST_WINDOW_S = 0.5
+#: A rest's specific force turns by less than this, deg (the reference's own rest test: 0.5° of turn;
+#: a window's mean force under motor vibration is good to about 0.2°).
+REST_MAX_TILT_DEG = 1.0
+#: ... and its mean rate moves by less than this, rad/s (0.5° of turn over a window).
+REST_MAX_RATE_STEP = 0.02
+#: The shortest opening rest used, s.
+MIN_REST_S = 1.0
+#: How often the online estimate is made again, s.
+UPDATE_S = 2.0
+#: Normal gravity's size for the velocity model, m/s² (the latitude is not known; only the horizontal
+#: components are used, where its size scales the tilt's effect by less than 0.3 %).
+_G = 9.81
+
+
+@dataclass(frozen=True)
+class BiasRule:
+    """What a model does about a new recording's gyro bias (see the module docstring).
+
+    ``prior`` (3,) rad/s: the bias left in the model's corrected readings on average over the training
+    recordings (the model's own bias removes the mean; this is its remainder, ~0); ``spread`` (3,):
+    the training recordings' standard deviation about it; ``rest_offset`` (3,): bias in motion less the
+    bias at the opening rest, averaged over the training recordings that open with one (zero where none
+    does); ``rest_spread`` (3,): its spread; ``sigma_v_mps``: the true velocity's size in the online
+    model; ``sigma_accel_mps2``: the accelerometer bias's prior size there; ``held_back_deg``: the
+    open-loop attitude error of each mode on the held-back training recordings (mean), what chose it.
+    """
+
+    mode: str = "pooled"
+    prior: Array = field(default_factory=lambda: np.zeros(3))
+    spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
+    rest_offset: Array = field(default_factory=lambda: np.zeros(3))
+    rest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
+    sigma_v_mps: float = 1.0
+    sigma_accel_mps2: float = 0.2
+    held_back_deg: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join(MODES)})")
+        for key in ("prior", "spread", "rest_offset", "rest_spread"):
+            value = np.asarray(getattr(self, key), dtype=float)
+            if value.shape != (3,) or not np.isfinite(value).all():
+                raise ValueError(f"bias rule {key}: expected 3 finite numbers")
+            object.__setattr__(self, key, value)
+        if not (0.0 < self.sigma_v_mps < 1e3 and 0.0 < self.sigma_accel_mps2 < 1e3):
+            raise ValueError("bias rule: sigma_v_mps and sigma_accel_mps2 must be in (0, 1000)")
+        if np.any(self.spread <= 0.0) or np.any(self.rest_spread <= 0.0):
+            raise ValueError("bias rule: spreads must be positive")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The rule as a JSON object (what a model file keeps)."""
+        return {
+            "mode": self.mode, "prior": self.prior.tolist(), "spread": self.spread.tolist(),
+            "rest_offset": self.rest_offset.tolist(), "rest_spread": self.rest_spread.tolist(),
+            "sigma_v_mps": self.sigma_v_mps, "sigma_accel_mps2": self.sigma_accel_mps2,
+            "held_back_deg": dict(self.held_back_deg),
+        }  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, doc: dict[str, Any]) -> BiasRule:
+        """The rule :meth:`to_dict` wrote; ``ValueError`` naming what is wrong."""
+        known = {f for f in cls.__dataclass_fields__}
+        odd = [k for k in doc if k not in known]
+        if odd:
+            raise ValueError(f"bias rule: unknown key {odd[0]!r}")
+        held = doc.get("held_back_deg", {})
+        if not isinstance(held, dict):
+            raise ValueError("bias rule held_back_deg: expected an object")
+        return cls(**{**doc, "held_back_deg": {str(k): float(v) for k, v in held.items()}})
+
+
+def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
+    """How many readings the recording's opening rest holds (0 where it opens moving or rests less than
+    :data:`MIN_REST_S`): the leading windows of :data:`REST_WINDOW_S` whose mean specific force points
+    within :data:`REST_MAX_TILT_DEG` of the first window's and whose mean rate stays within
+    :data:`REST_MAX_RATE_STEP` of it. From the readings alone (their bias, up to 0.08 rad/s here, is the
+    first window's as much as any other's: only changes are tested)."""
+    n = max(1, round(REST_WINDOW_S / dt))
+    k_all = len(omega_ib_b) // n
+    if k_all < 2:
+        return 0
+    rate = omega_ib_b[: k_all * n].reshape(k_all, n, 3).mean(axis=1)
+    force = f_ib_b[: k_all * n].reshape(k_all, n, 3).mean(axis=1)
+    norm = np.linalg.norm(force, axis=1)
+    if norm[0] <= 0.0:
+        return 0
+    cos = (force @ force[0]) / np.maximum(norm * norm[0], 1e-300)
+    steady = (np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) < REST_MAX_TILT_DEG) & (
+        np.abs(rate - rate[0]).max(axis=1) < REST_MAX_RATE_STEP
+    )
+    k = len(steady) if steady.all() else int(np.argmin(steady))
+    return k * n if k * n * dt >= MIN_REST_S else 0
+
+
+def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
+    """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
+    from the readings before it only."""
+    dt = np.diff(imu.t)
+    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
+    prior, sigma = rule.prior, rule.spread
+    track = np.tile(prior, (len(dt), 1))
+    if rule.mode in ("rest", "rest+online"):
+        rest = opening_rest(omega, force, float(np.median(dt)))
+        if rest:
+            # Before the rest has ended nothing better than the prior is known; after, its mean.
+            prior = omega[:rest].mean(axis=0) + rule.rest_offset
+            sigma = rule.rest_spread
+            track[rest:] = prior
+    if rule.mode in ("online", "rest+online"):
+        track = _online(imu, omega, force, track, prior, sigma, rule)
+    return track
+
+
+def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
+    """``imu`` with :func:`bias_track`'s bias taken away."""
+    dt = np.diff(imu.t)
+    return ImuIncrements(t=imu.t, dtheta_b=imu.dtheta_b - bias_track(rule, imu) * dt[:, None], dv_b=imu.dv_b)
+
+
+def _online(
+    imu: ImuIncrements, omega: Array, force: Array, track: Array, prior: Array, sigma: Array, rule: BiasRule
+) -> Array:
+    """The velocity-bounded estimate (module docstring), every :data:`UPDATE_S`, from the readings
+    before each update; ``track`` holds what is used before the first."""
+    dt = np.diff(imu.t)
+    step = max(1, round(UPDATE_S / float(np.median(dt))))
+    at = np.arange(step, len(imu.t), step)
+    if not len(at):
+        return track
+    c0 = attitude_dcm(_levelled(force)[None, :])[0]
+    v, s, i_s = _velocity_terms(imu.dtheta_b - prior * dt[:, None], imu.dv_b, dt, c0, at)
+    t = (imu.t - imu.t[0])[at]
+    zero, one = np.zeros(len(at)), np.ones(len(at))
+    # Unknowns: the true velocity at the start (2), the initial tilt (2), the bias change (3), the
+    # accelerometer's bias (3); two rows (east, north) per update time. A bias change δ tilts the frame
+    # by S δ (S = ∫ C dt), which moves the velocity by g ∫ S δ; an accelerometer bias by -∫ C b_a = -S b_a.
+    rows_e = np.column_stack([-one, zero, zero, -_G * t, _G * i_s[:, 1], s[:, 0]])
+    rows_n = np.column_stack([zero, -one, _G * t, zero, -_G * i_s[:, 0], s[:, 1]])
+    design = np.stack([rows_e, rows_n], axis=1) / rule.sigma_v_mps  # (m, 2, 10)
+    target = v[:, :2] / rule.sigma_v_mps
+    prior_rows = np.diag(
+        np.r_[1 / 2.0, 1 / 2.0, 1 / 0.2, 1 / 0.2, 1 / sigma, np.full(3, 1 / rule.sigma_accel_mps2)]
+    )
+    # Running sums of the normal equations: the estimate at each update from the rows before it.
+    grams = prior_rows.T @ prior_rows + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
+    rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
+    thetas = np.linalg.solve(grams, rhss[:, :, None])[:, :, 0]
+    out = track.copy()
+    ends = np.r_[at[1:], len(out)]
+    for k, end, theta in zip(at, ends, thetas, strict=True):
+        out[k:end] = prior + theta[4:7]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _velocity_terms(
+    dtheta: Array, dv: Array, dt: Array, c0: Array, at: NDArray[np.int64]
+) -> tuple[Array, Array, Array]:  # pragma: no cover  (compiled)
+    """One pass over the steps: the attitude ``C`` (body to the levelled frame) the increments ``dtheta``
+    integrate to from ``c0``, the velocity the specific force's increments ``dv`` make in it less
+    gravity's, ``S = ∫ C dt`` and ``∫ S dt``; returned at the step boundaries ``at``: velocity (m, 3),
+    ``S`` and ``∫ S dt`` (m, 3, 3). Scalar arithmetic throughout (no array is made within the loop)."""
+    m = len(at)
+    v_at = np.zeros((m, 3))
+    s_at = np.zeros((m, 3, 3))
+    is_at = np.zeros((m, 3, 3))
+    c = c0.copy()
+    turned = np.empty((3, 3))
+    v = np.zeros(3)
+    s = np.zeros((3, 3))
+    i_s = np.zeros((3, 3))
+    j = 0
+    for k in range(len(dt) + 1):
+        while j < m and at[j] == k:
+            v_at[j, :] = v
+            s_at[j, :, :] = s
+            is_at[j, :, :] = i_s
+            j += 1
+        if k == len(dt):
+            break
+        h = dt[k]
+        px, py, pz = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
+        ax, ay, az = dv[k, 0], dv[k, 1], dv[k, 2]
+        # The step's velocity increment turned by half the step's own turn (first order), into the frame.
+        mx = ax + 0.5 * (py * az - pz * ay)
+        my = ay + 0.5 * (pz * ax - px * az)
+        mz = az + 0.5 * (px * ay - py * ax)
+        for r in range(3):
+            v[r] += c[r, 0] * mx + c[r, 1] * my + c[r, 2] * mz
+            for q in range(3):
+                i_s[r, q] += s[r, q] * h + 0.5 * c[r, q] * h * h
+                s[r, q] += c[r, q] * h
+        v[2] -= _G * h
+        # C ← C Exp(φ), Rodrigues: Exp(φ) = I + a [φ]× + b [φ]×², a = sin θ/θ, b = (1 − cos θ)/θ².
+        th2 = px * px + py * py + pz * pz
+        if th2 > 1e-24:
+            th = np.sqrt(th2)
+            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
+        else:
+            a, b = 1.0, 0.5
+        e00, e11, e22 = (
+            1.0 - b * (py * py + pz * pz),
+            1.0 - b * (px * px + pz * pz),
+            1.0 - b * (px * px + py * py),
+        )
+        e01, e10 = -a * pz + b * px * py, a * pz + b * px * py
+        e02, e20 = a * py + b * px * pz, -a * py + b * px * pz
+        e12, e21 = -a * px + b * py * pz, a * px + b * py * pz
+        for r in range(3):
+            c0r, c1r, c2r = c[r, 0], c[r, 1], c[r, 2]
+            turned[r, 0] = c0r * e00 + c1r * e10 + c2r * e20
+            turned[r, 1] = c0r * e01 + c1r * e11 + c2r * e21
+            turned[r, 2] = c0r * e02 + c1r * e12 + c2r * e22
+        c[:, :] = turned
+    return v_at, s_at, is_at
+
+
+def _levelled(force: Array) -> Array:
+    """A scalar-last quaternion of the body in a frame with z up, levelled by the first 0.1 s of specific
+    force (its heading arbitrary)."""
+    up = force[: max(1, min(len(force), 20))].mean(axis=0)
+    z = up / np.linalg.norm(up)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    from sins import rotation
+
+    return np.asarray(rotation.quat_from_dcm(np.array([x, y, z])), dtype=float)
+
+
+def attitude_dcm(q: Array) -> Array:
+    """Direction cosine matrices of scalar-last quaternions (body to frame)."""
+    from sins import rotation
+
+    return np.asarray(rotation.dcm_from_quat(q), dtype=float)
+
+
+def with_mode(rule: BiasRule, mode: str) -> BiasRule:
+    """``rule`` with another mode."""
+    return replace(rule, mode=mode)
+
+
+def corrected_any(rule: BiasRule, readings: ImuRates | ImuIncrements) -> ImuRates | ImuIncrements:
+    """Readings in either form with :func:`bias_track`'s bias taken away: rates through their steps'
+    mean rates (a sample is corrected by the estimate of the steps before it; the first by the prior)."""
+    if isinstance(readings, ImuIncrements):
+        return corrected(rule, readings)
+    dt = np.diff(readings.t)[:, None]
+    steps = ImuIncrements(
+        t=readings.t,
+        dtheta_b=0.5 * (readings.omega_ib_b[:-1] + readings.omega_ib_b[1:]) * dt,
+        dv_b=0.5 * (readings.f_ib_b[:-1] + readings.f_ib_b[1:]) * dt,
+    )
+    track = bias_track(rule, steps)
+    per_sample = np.vstack([track[:1], track])
+    return ImuRates(t=readings.t, omega_ib_b=readings.omega_ib_b - per_sample, f_ib_b=readings.f_ib_b)
+
+
+def rule_from(
+    biases: Array,
+    streams: list[ImuIncrements],
+    *,
+    mode: str = "pooled",
+    held_back_deg: dict[str, float] | None = None,
+) -> BiasRule:
+    """A rule from training recordings: ``biases`` (r, 3) the bias each recording's ``streams`` (the
+    model's corrected readings) still hold, fitted against its reference. The prior is their mean, the
+    spread their standard deviation (at least :data:`_MIN_SPREAD`); the rest offset the mean of bias
+    less opening-rest rate over the recordings that open with a rest."""
+    offsets = []
+    for b, s in zip(biases, streams, strict=True):
+        dt = np.diff(s.t)
+        omega, force = s.dtheta_b / dt[:, None], s.dv_b / dt[:, None]
+        rest = opening_rest(omega, force, float(np.median(dt)))
+        if rest:
+            offsets.append(b - omega[:rest].mean(axis=0))
+    spread = np.maximum(biases.std(axis=0, ddof=1) if len(biases) > 1 else np.full(3, 1e-3), _MIN_SPREAD)
+    off = np.array(offsets) if offsets else np.zeros((1, 3))
+    rest_spread = np.maximum(off.std(axis=0, ddof=1), _MIN_SPREAD) if len(off) > 1 else spread
+    return BiasRule(
+        mode=mode, prior=biases.mean(axis=0), spread=spread, rest_offset=off.mean(axis=0),
+        rest_spread=rest_spread, held_back_deg=held_back_deg or {},
+    )  # fmt: skip
+
+
+#: The least spread a rule takes, rad/s (0.2 °/h): two recordings that happen to agree say little more.
+_MIN_SPREAD = 1e-6
+
+
+def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
+    """The absolute orientation error of ``readings`` (corrected increments on ``rec``'s steps)
+    integrated alone from the reference's first attitude: RMS over every reference epoch on the steps'
+    grid, deg. Earth's rate is left out (the rule is judged on recordings of a room frame and on those
+    of a known one alike; over a few minutes it is below the figures that choose a mode)."""
+    first = int(np.searchsorted(readings.t, rec.reference.t[0]))
+    q = attitude.propagate_increments(readings.dtheta_b[first:], rec.reference.q_nb[0])
+    at = np.clip(np.searchsorted(readings.t, rec.reference.t) - first, 0, len(q) - 1)
+    total, _, _ = attitude.attitude_errors(q[at], rec.reference.q_nb)
+    return float(np.degrees(np.sqrt(np.mean(total**2))))
+
+
+__all__ = [
+    "MIN_REST_S",
+    "MODES",
+    "REST_MAX_RATE_STEP",
+    "REST_MAX_TILT_DEG",
+    "REST_WINDOW_S",
+    "UPDATE_S",
+    "BiasRule",
+    "attitude_dcm",
+    "bias_track",
+    "corrected",
+    "corrected_any",
+    "open_loop_deg",
+    "opening_rest",
+    "rule_from",
+    "with_mode",
+]

@@ -1,0 +1,53 @@
+"""Recordings of one numpy unit, and the .npz form written from them, for the tests of fits on several
+recordings and of the .npz reader: numpy and scipy's Rotation only (tests/numpy_referenced.py's sessions)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
+from scipy.spatial.transform import Rotation
+
+from sins import referenced
+from sins.series import ImuRates, NavSeries
+
+
+def recordings(seed: int, count: int = 3) -> tuple[list[referenced.ReferencedRecording], object, np.ndarray]:
+    """``count`` sessions of one numpy unit whose gyro and accelerometer biases are drawn anew for each
+    (the bias between power-ups), everything else shared."""
+    rng = np.random.default_rng(seed)
+    unit = typical_unit(rng)
+    recs, biases = [], []
+    for k in range(count):
+        own = replace(unit, B0=np.radians(rng.normal(0.0, 0.1, 3)), A0=rng.normal(0.0, 0.05, 3))
+        s = session(rng, own, duration_s=120.0)
+        truth = NavSeries(
+            t=s.t_ref, lat=np.full(len(s.t_ref), math.radians(LAT_DEG)), lon=np.zeros(len(s.t_ref)),
+            h=np.full(len(s.t_ref), HEIGHT_M), v_n=s.v_n, q_nb=s.q_nb,
+        )  # fmt: skip
+        rec = referenced.from_recording(
+            ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"numpy {k}"
+        )
+        recs.append(rec)
+        biases.append(own.B0)
+    return recs, unit, np.array(biases)
+
+
+def write_npz(folder: Path, name: str, rec: referenced.ReferencedRecording) -> None:
+    """A numpy recording written in the .npz form (rates at the step boundaries, the reference there)."""
+    keep = int(np.searchsorted(rec.imu.t, rec.reference.t[-1], side="right"))
+    t = rec.imu.t[:keep]
+    dt = np.diff(t)[:, None]
+    rate = np.vstack([rec.imu.dtheta_b[: keep - 1] / dt, rec.imu.dtheta_b[keep - 2 : keep - 1] / dt[-1:]])
+    force = np.vstack([rec.imu.dv_b[: keep - 1] / dt, rec.imu.dv_b[keep - 2 : keep - 1] / dt[-1:]])
+    ref = rec.reference.interpolate(t)
+    q = Rotation.from_quat(ref.q_nb)
+    ned_to_enu = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    np.savez(
+        folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force,
+        q_wxyz=(ned_to_enu * q).as_quat(scalar_first=True), v_m_s=ref.v_n[:, [1, 0, 2]] * [1, 1, -1],
+        p_m=np.zeros((len(t), 3)),
+    )  # fmt: skip

@@ -1,0 +1,404 @@
+"""A navigation engineer's first hour with a unit: ``sins bias`` on still recordings written here (ROS bags
+with rosbags, CSVs and EuRoC folders with numpy) of a known bias and noise, and ``sins integrate`` started
+from an alignment on the opening rest, judged against closed forms written out here.
+
+The oracles are independent of sins: the readings are Earth's rate (7.292115e-5 rad/s) and normal gravity
+(9.8061992 m/s² at 45° N, less the free-air 3.086e-6 /s² per metre) turned into the body axes with scipy,
+plus the bias, plus white noise and a first-order Gauss–Markov process drawn with scipy's ``lfilter``; the
+standard error of the mean of such noise is the closed form of an AR(1) process; the error growth of a
+still unit's biases is the short-time series of the Schuler solutions.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import dataset_folder
+from scipy.signal import lfilter
+from scipy.spatial.transform import Rotation
+
+from sins import io
+from sins.cli import main
+from sins.nav import budget
+from sins.series import ImuRates
+
+SEED = 44
+OMEGA = 7.292115e-5
+LAT_DEG, LON_DEG, H_M = 45.0, 7.5, 100.0
+G_45 = 9.8061992 - 3.086e-6 * H_M  # Somigliana at 45° N, sea level, less the free-air gradient
+DPH = math.pi / 180.0 / 3600.0
+UG = 9.80665e-6
+ATT_DEG = (2.0, -1.0, 30.0)  # roll, pitch, yaw
+FLU = np.array([1.0, -1.0, -1.0])  # FRD into ROS's FLU
+T0_NS = 1_700_000_000_000_000_000
+#: The issue's unit: gyro biases of a consumer MEMS, FRD, °/h.
+MEMS_GYRO_DPH = (412.5, 618.8, -825.1)
+ACCEL_UG = (300.0, -500.0, 200.0)
+
+
+def _C_nb(att_deg: tuple[float, float, float] = ATT_DEG) -> np.ndarray:
+    roll, pitch, yaw = np.radians(att_deg)
+    return Rotation.from_euler("ZYX", [yaw, pitch, roll]).as_matrix()
+
+
+def _inputs(att_deg: tuple[float, float, float] = ATT_DEG) -> tuple[np.ndarray, np.ndarray]:
+    """Earth's rate and gravity in the body axes of a unit standing still at 45° N, 100 m."""
+    lat = math.radians(LAT_DEG)
+    C = _C_nb(att_deg)
+    return C.T @ (OMEGA * np.array([math.cos(lat), 0.0, -math.sin(lat)])), C.T @ np.array([0.0, 0.0, -G_45])
+
+
+def still_unit(
+    seconds: float,
+    gyro_bias: np.ndarray,
+    accel_bias: np.ndarray,
+    white: np.ndarray,
+    gm: np.ndarray | None = None,
+    tc_s: float = 1.0,
+    rate: float = 100.0,
+    seed: int = SEED,
+    att_deg: tuple[float, float, float] = ATT_DEG,
+) -> tuple[ImuRates, np.ndarray]:
+    """A still unit's readings (FRD, SI) and the standard error of each channel's mean (6,): white noise
+    of ``white`` (6,) per sample plus a stationary AR(1) process of deviation ``gm`` and correlation
+    time ``tc_s``, whose mean of n samples has variance ``s²/n² [n (1+φ)/(1−φ) − 2φ (1−φⁿ)/(1−φ)²]``."""
+    rng = np.random.default_rng(seed)
+    n = round(seconds * rate)
+    omega, force = _inputs(att_deg)
+    noise = rng.standard_normal((n, 6)) * white
+    var = white**2 / n
+    if gm is not None:
+        phi = math.exp(-1.0 / (rate * tc_s))
+        drive = rng.standard_normal((n, 6)) * gm * math.sqrt(1.0 - phi**2)
+        start = rng.standard_normal(6) * gm * phi
+        noise += lfilter([1.0], [1.0, -phi], drive, axis=0, zi=start[None, :])[0]
+        var = var + gm**2 / n**2 * (n * (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**n) / (1 - phi) ** 2)
+    values = np.r_[omega + gyro_bias, force + accel_bias] + noise
+    return ImuRates(t=np.arange(n) / rate, omega_ib_b=values[:, :3], f_ib_b=values[:, 3:]), np.sqrt(var)
+
+
+# --------------------------------------------------------------------------- writers
+
+
+def _bag(path: Path, imu: ImuRates, kind: str = "ros2", fix: bool = True) -> Path:
+    """A bag of ``kind`` (ros1, ros2, ros2-mcap) with the readings on /imu in FLU and, with ``fix``, a
+    NavSatFix at 45° N, 7.5° E, 100 m every second."""
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = kind == "ros1"
+    ts = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    serialize = ts.serialize_ros1 if ros1 else ts.serialize_cdr
+    t = ts.types
+    storage = StoragePlugin.MCAP if kind == "ros2-mcap" else StoragePlugin.SQLITE3
+    writer = Writer1(path) if ros1 else Writer2(path, version=9, storage_plugin=storage)
+
+    def header(ns: int, frame: str, seq: int):  # type: ignore[no-untyped-def]
+        stamp = t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+        if ros1:
+            return t["std_msgs/msg/Header"](seq=seq, stamp=stamp, frame_id=frame)
+        return t["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+
+    vec, quat = t["geometry_msgs/msg/Vector3"], t["geometry_msgs/msg/Quaternion"]
+    w, f = imu.omega_ib_b * FLU, imu.f_ib_b * FLU
+    with writer:
+        c_imu = writer.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=ts)
+        c_fix = writer.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=ts) if fix else None
+        for k, tk in enumerate(imu.t):
+            ns = T0_NS + round(tk * 1e9)
+            msg = t["sensor_msgs/msg/Imu"](
+                header=header(ns, "imu", k), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0),
+                orientation_covariance=np.full(9, -1.0),
+                angular_velocity=vec(x=w[k, 0], y=w[k, 1], z=w[k, 2]),
+                angular_velocity_covariance=np.zeros(9),
+                linear_acceleration=vec(x=f[k, 0], y=f[k, 1], z=f[k, 2]),
+                linear_acceleration_covariance=np.zeros(9),
+            )  # fmt: skip
+            writer.write(c_imu, ns, serialize(msg, "sensor_msgs/msg/Imu"))
+            if c_fix is not None and k % 100 == 0:
+                fix_msg = t["sensor_msgs/msg/NavSatFix"](
+                    header=header(ns, "gps", k),
+                    status=t["sensor_msgs/msg/NavSatStatus"](status=0, service=1),
+                    latitude=LAT_DEG, longitude=LON_DEG, altitude=H_M, position_covariance=np.zeros(9),
+                    position_covariance_type=0,
+                )  # fmt: skip
+                writer.write(c_fix, ns, serialize(fix_msg, "sensor_msgs/msg/NavSatFix"))
+    return path
+
+
+def _euroc(root: Path, imu: ImuRates) -> Path:
+    """A EuRoC folder (mav0/imu0/data.csv, ns stamps, the readings on S taken as FRD)."""
+    folder = root / "mav0" / "imu0"
+    folder.mkdir(parents=True)
+    ns = T0_NS + np.round(imu.t * 1e9).astype(np.int64)
+    head = "#timestamp [ns]," + ",".join(
+        [f"w_RS_S_{a} [rad s^-1]" for a in "xyz"] + [f"a_RS_S_{a} [m s^-2]" for a in "xyz"]
+    )
+    rows = np.hstack([imu.omega_ib_b, imu.f_ib_b])
+    lines = [head] + [
+        f"{s}," + ",".join(repr(float(x)) for x in row) for s, row in zip(ns, rows, strict=True)
+    ]
+    (folder / "data.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return root
+
+
+def _json(path: Path) -> dict:
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+# --------------------------------------------------------------------------- sins bias
+
+
+def test_bias_on_a_bag_lands_within_3_sigma_and_its_sigma_counts_the_noise_colour(tmp_path: Path) -> None:
+    """The issue's MEMS unit on a ROS 2 bag with fixes: 200 s at 100 Hz, white noise and a Gauss–Markov
+    process of 1 s that dominates the mean's error (white noise alone would give a fifth of it)."""
+    gyro_b, accel_b = np.array(MEMS_GYRO_DPH) * DPH, np.array(ACCEL_UG) * UG
+    white = np.r_[[3e-4] * 3, [0.01] * 3]
+    imu, sigma = still_unit(200.0, gyro_b, accel_b, white, gm=white / 3.0)
+    bag = _bag(tmp_path / "still", imu)
+    out = tmp_path / "bias.json"
+    assert main(["bias", str(bag), "--attitude", ",".join(map(str, ATT_DEG)), "--json", str(out)]) == 0
+    doc = _json(out)
+    assert doc["location"] == "the recording's fixes"
+    assert doc["lat_deg"] == pytest.approx(LAT_DEG, abs=1e-9) and doc["h_m"] == pytest.approx(H_M, abs=1e-6)
+    assert doc["attitude"]["source"] == "given" and doc["rows"] == 20000
+    truth = np.r_[gyro_b, accel_b]
+    for i, (name, c) in enumerate(doc["channels"].items()):
+        assert abs(c["bias"] - truth[i]) <= 3.0 * c["sigma"], (name, (c["bias"] - truth[i]) / c["sigma"])
+        assert 1 / 1.5 <= c["sigma"] / sigma[i] <= 1.5, (name, c["sigma"] / sigma[i])
+        assert c["sigma_white"] < 0.5 * sigma[i]  # what a white-noise error would have claimed
+    assert doc["channels"]["gyro.x"]["unit"] == "°/h" and doc["channels"]["accel.z"]["unit"] == "µg"
+
+
+def test_levelled_the_tilt_takes_the_level_accelerometer_bias_and_the_heading_is_not_resolved(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Without an attitude: roll and pitch are those of the mean specific force (bias included), the
+    heading of a gyro biased 75 × Earth's level rate is refused, and each gyro's bias carries at most
+    its axis's share of Earth's level rate."""
+    gyro_b, accel_b = np.array(MEMS_GYRO_DPH) * DPH, np.array(ACCEL_UG) * UG
+    white = np.r_[[3e-4] * 3, [0.01] * 3]
+    imu, sigma = still_unit(60.0, gyro_b, accel_b, white)
+    io.write_imu(tmp_path / "still.csv", imu)
+    out = tmp_path / "bias.json"
+    assert (
+        main(["bias", str(tmp_path / "still.csv"), "--lat", "45", "--height", "100", "--json", str(out)]) == 0
+    )
+    assert "heading not resolved" in capsys.readouterr().out
+    doc = _json(out)
+    att = doc["attitude"]
+    assert att["source"] == "levelled" and att["yaw_deg"] is None and "cannot tell" in att["heading_note"]
+    omega, force = _inputs()
+    f = force + accel_b  # the mean specific force, without noise
+    roll, pitch = math.atan2(-f[1], -f[2]), math.atan2(f[0], math.hypot(f[1], f[2]))
+    tilt = 3.0 * math.radians(att["tilt_sigma_deg"])
+    assert math.radians(att["roll_deg"]) == pytest.approx(roll, abs=tilt)
+    assert math.radians(att["pitch_deg"]) == pytest.approx(pitch, abs=tilt)
+    level = Rotation.from_euler("ZYX", [0.0, pitch, roll]).as_matrix() @ (omega + gyro_b)
+    assert att["level_rate_ratio"] == pytest.approx(
+        math.hypot(*level[:2]) / (OMEGA * math.cos(math.radians(45))), rel=0.01
+    )
+    ch = doc["channels"]
+    for i, axis in enumerate("xyz"):
+        c = ch[f"gyro.{axis}"]
+        assert abs(c["bias"] - gyro_b[i]) <= 3.0 * c["sigma"] + c["heading_bound"]
+    # Levelled, the accelerometers' bias is the part along gravity, |f| − g, on every axis.
+    along = np.array([ch[f"accel.{a}"]["bias"] for a in "xyz"])
+    assert np.linalg.norm(along) == pytest.approx(abs(np.linalg.norm(f) - G_45), abs=3.0 * sigma[5])
+
+
+@pytest.mark.parametrize("kind", ["ros1", "mcap", "euroc"])
+def test_bias_reads_every_recording_format(tmp_path: Path, kind: str) -> None:
+    """The same still readings as a ROS 1 bag, an MCAP file and a EuRoC folder: the same means (the
+    floats written, turned back into FRD exactly) and the bias of the given attitude within 3σ."""
+    gyro_b, accel_b = np.array([10.0, -20.0, 5.0]) * DPH, np.array(ACCEL_UG) * UG
+    imu, _ = still_unit(30.0, gyro_b, accel_b, np.r_[[3e-4] * 3, [0.01] * 3], seed=SEED + 1)
+    if kind == "euroc":
+        path = _euroc(tmp_path / "MH", imu)
+    elif kind == "ros1":
+        path = _bag(tmp_path / "still.bag", imu, "ros1", fix=False)
+    else:
+        path = next(_bag(tmp_path / "still", imu, "ros2-mcap", fix=False).glob("*.mcap"))
+    out = tmp_path / "bias.json"
+    args = ["bias", str(path), "--lat", "45", "--height", "100", "--attitude", "2,-1,30", "--json", str(out)]
+    assert main(args) == 0
+    doc = _json(out)
+    means = np.r_[imu.omega_ib_b.mean(axis=0), imu.f_ib_b.mean(axis=0)]
+    truth = np.r_[gyro_b, accel_b]
+    for i, c in enumerate(doc["channels"].values()):
+        assert c["mean"] == pytest.approx(means[i], rel=1e-12, abs=1e-15)
+        assert abs(c["bias"] - truth[i]) <= 3.0 * c["sigma"]
+
+
+def test_bias_of_the_psins_ring_laser_dataset() -> None:
+    """The PSINS static ring-laser INS against its own reference: the latitude its Earth rate implies is
+    the header's 34.246048° (SOURCE.md), the rate taken away Earth's 15.041 °/h, and a navigation-grade
+    gyro's biases below 1 °/h."""
+    dataset_folder("psins_lasergyro_static")
+    from sins.characterise.bias import dataset_bias
+    from sins.io import datasets
+
+    est = dataset_bias(datasets.load("psins_lasergyro"), "psins_lasergyro")
+    assert math.degrees(est.lat) == pytest.approx(34.246048, abs=1e-6)
+    assert np.linalg.norm(est.vector("gyro", "expected")) / DPH == pytest.approx(15.041, abs=1e-3)
+    assert np.all(np.abs(est.vector("gyro")) < 1.0 * DPH)
+    assert est.rows == 184718 and est.attitude.source == "reference"
+
+
+# --------------------------------------------------------------------------- sins integrate, no reference
+
+
+def _nav_noise() -> np.ndarray:
+    """A navigation-grade unit's white noise per sample at 100 Hz: 0.002 °/√h and 20 µg/√Hz."""
+    arw = math.radians(0.002) / 60.0 * 10.0
+    vrw = 20e-6 * 9.80665 * 10.0
+    return np.r_[[arw] * 3, [vrw] * 3]
+
+
+def test_an_aligned_attitude_lies_within_its_stated_accuracy(tmp_path: Path) -> None:
+    """A navigation-grade unit (biases of the grade's size) on a bag: --align 30 --grade navigation
+    states 1σ from the noise and the grade's bias levels; the attitude lies within 3σ of the truth, and
+    the noise's part alone is the closed form (the accelerometers' standard error over g)."""
+    C = _C_nb()
+    gyro_b = C.T @ (np.array([0.008, -0.006, 0.01]) * DPH)
+    accel_b = np.array([40.0, -30.0, 50.0]) * UG
+    imu, _ = still_unit(60.0, gyro_b, accel_b, _nav_noise(), seed=SEED + 2)
+    bag = _bag(tmp_path / "nav", imu)
+    out = tmp_path / "run.json"
+    args = ["integrate", str(bag), "--align", "30", "--grade", "navigation", "--json", str(out)]
+    assert main(args) == 0
+    doc = _json(out)
+    a = doc["alignment"]
+    assert doc["start"] == "aligned" and a["rows"] == 3000 and doc["origin_deg"][0] == pytest.approx(LAT_DEG)
+    tilt, heading = a["tilt_sigma_deg"], a["heading_sigma_deg"]
+    for got, want, sd in ((a["roll_deg"], ATT_DEG[0], tilt), (a["pitch_deg"], ATT_DEG[1], tilt),
+                          (a["yaw_deg"], ATT_DEG[2], heading)):  # fmt: skip
+        assert abs(got - want) <= 3.0 * sd, (got, want, sd)
+    noise_tilt = math.degrees(_nav_noise()[3] / math.sqrt(3000) / G_45)
+    assert a["tilt_sigma_noise_deg"] == pytest.approx(noise_tilt, rel=0.5)
+    assert a["tilt_sigma_deg"] > 2.0 * a["tilt_sigma_noise_deg"]  # the grade's 0.05 mg counted
+
+
+def test_a_still_units_position_error_after_60_s_follows_its_measured_bias(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Aligned on 30 s, a still unit drifts by what the alignment leaves: the level accelerometer biases
+    are in the tilt and the east gyro bias in the heading, so the level error is the north gyro bias
+    ``ε = |Ω_h + b_h| − Ω cos φ`` (the levelled rate's excess over Earth's) through ``g ε t³/6``, and the
+    height error the vertical accelerometer bias ``|f| − g`` through ``b t²/2`` (both the short-time
+    Schuler and vertical solutions, exact to (ω_s t)²/20 = 0.3 % and (t/τ)²/12 = 0.1 % at 60 s). The
+    tolerance is 3σ of what the noise adds: the alignment's tilt (½ g σθ t²), the accelerometer's
+    velocity random walk (σ_v t^1.5/√3), the gyro's angle random walk (g σ_θ t^2.5/√20) and the window's
+    rate error (g σ_ω t³/6)."""
+    C = _C_nb()
+    lat = math.radians(LAT_DEG)
+    gyro_n = np.array([1.5, 0.05, 0.8]) * DPH
+    accel_b = np.array(ACCEL_UG) * UG
+    noise = _nav_noise()
+    imu, _ = still_unit(90.0, C.T @ gyro_n, accel_b, noise, seed=SEED + 3)
+    io.write_imu(tmp_path / "still.csv", imu)
+    out = tmp_path / "run.json"
+    origin = f"{LAT_DEG},{LON_DEG},{H_M}"
+    args = ["integrate", str(tmp_path / "still.csv"), "--origin", origin, "--align", "30",
+            "--out", str(tmp_path / "sol.csv"), "--json", str(out)]  # fmt: skip
+    assert main(args) == 0
+    assert "for a unit that stood still, these are its errors" in capsys.readouterr().out
+    doc = _json(out)
+    t = doc["duration_s"]
+    assert t == pytest.approx(60.0, abs=0.02)
+    level = OMEGA * math.cos(lat)
+    eps = math.hypot(level + gyro_n[0], gyro_n[1]) - level
+    _, force = _inputs()
+    b_up = np.linalg.norm(force + accel_b) - G_45  # a unit reading less than gravity falls
+    dt, n_align = 0.01, 3000
+    per_axis = math.sqrt(
+        (0.5 * t**2 * noise[3] / math.sqrt(n_align)) ** 2
+        + (noise[3] * math.sqrt(dt) * t**1.5 / math.sqrt(3)) ** 2
+        + (G_45 * noise[0] * math.sqrt(dt) * t**2.5 / math.sqrt(20)) ** 2
+        + (G_45 * noise[0] / math.sqrt(n_align) * t**3 / 6) ** 2
+    )  # fmt: skip
+    assert doc["final_horizontal_offset_m"] == pytest.approx(
+        G_45 * eps * t**3 / 6, abs=3 * math.sqrt(2) * per_axis
+    )
+    assert doc["final_offset_ned_m"][2] == pytest.approx(
+        -b_up * t**2 / 2, abs=3 * noise[3] * math.sqrt(dt) * t**1.5
+    )
+    # The command's own prediction, from the biases it measured on the 30 s, says the same.
+    predicted = np.array(doc["predicted_offset_ned_m"])
+    assert math.hypot(*predicted[:2]) == pytest.approx(G_45 * eps * t**3 / 6, rel=0.1)
+    assert predicted[2] == pytest.approx(-b_up * t**2 / 2, rel=0.1)
+    # The solution file as from a reference: one row per IMU time from the alignment's end.
+    sol = io.read_truth(tmp_path / "sol.csv")
+    assert sol.t[0] == pytest.approx(30.0, abs=0.011) and len(sol.t) == 6000
+
+
+def test_the_budget_terms_are_the_short_time_forms() -> None:
+    """:mod:`sins.nav.budget` against the series of its closed forms at 60 s: ½ b t², g ε t³/6, ½ b t²."""
+    lat, t = math.radians(45.0), np.array([60.0])
+    w2 = budget.schuler_frequency(lat) ** 2 * 60.0**2
+    g = 9.8061992
+    assert budget.accel_bias_growth(1e-3, t, lat)[0] == pytest.approx(0.5e-3 * 3600 * (1 - w2 / 12), rel=1e-5)
+    assert budget.gyro_bias_growth(1e-6, t, lat)[0] == pytest.approx(
+        g * 1e-6 * 60**3 / 6 * (1 - w2 / 20), rel=1e-4
+    )
+    tau2 = budget.mean_radius(lat) / (2 * g)
+    assert budget.vertical_bias_growth(1e-3, t, lat)[0] == pytest.approx(
+        0.5e-3 * 3600 * (1 + 3600 / (12 * tau2)), rel=1e-5
+    )
+    ned = budget.bias_error_ned([1e-6, 2e-6, 0.0], [1e-3, -1e-3, 2e-3], t, lat)[0]
+    a, gy = budget.accel_bias_growth(1.0, t, lat)[0], budget.gyro_bias_growth(1.0, t, lat)[0]
+    np.testing.assert_allclose(ned[:2], [1e-3 * a - 2e-6 * gy, -1e-3 * a + 1e-6 * gy], rtol=1e-12)
+
+
+def test_refusals_without_a_reference(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    imu, _ = still_unit(20.0, np.zeros(3), np.zeros(3), np.r_[[3e-4] * 3, [0.01] * 3])
+    csv = tmp_path / "still.csv"
+    io.write_imu(csv, imu)
+
+    def refused(*args: str) -> str:
+        assert main(list(args)) == 2
+        # The error is one line, the last; a loaded machine may show a progress line before it.
+        err = capsys.readouterr().err.splitlines()[-1]
+        assert err.startswith("sins: error: "), err
+        return err
+
+    assert "--origin LAT,LON,H" in refused("integrate", str(csv), "--align", "5")
+    assert "--align" in refused("integrate", str(csv), "--heading", "30")
+    assert "exclude each other" in refused("integrate", str(csv), "--origin", "45,7,0", "--attitude", "0,0,0",
+                                           "--align", "5")  # fmt: skip
+    assert "leaving nothing to navigate" in refused(
+        "integrate", str(csv), "--origin", "45,7,0", "--align", "60"
+    )
+    err = refused("integrate", str(csv))
+    assert "no reference trajectory" in err and "--truth TRUTH.csv" in err and "--align SECONDS" in err
+    assert "--lat DEG" in refused("bias", str(csv))
+    assert "latitude" in refused("bias", str(csv), "--lat", "91")
+    # A gyro bias far above Earth's level rate: no heading to gyrocompass, and none given.
+    big, _ = still_unit(20.0, np.array(MEMS_GYRO_DPH) * DPH, np.zeros(3), np.r_[[3e-4] * 3, [0.01] * 3])
+    io.write_imu(tmp_path / "mems.csv", big)
+    assert "--heading DEG" in refused(
+        "integrate", str(tmp_path / "mems.csv"), "--origin", "45,7,0", "--align", "10"
+    )
+    # Given the heading, the same unit aligns.
+    assert (
+        main(
+            [
+                "integrate",
+                str(tmp_path / "mems.csv"),
+                "--origin",
+                "45,7,0",
+                "--align",
+                "10",
+                "--heading",
+                "30",
+            ]
+        )
+        == 0
+    )
+    assert "heading given: 30.0000°" in capsys.readouterr().out

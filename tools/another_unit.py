@@ -1,0 +1,89 @@
+"""The EuRoC protocol's commands, unchanged, on another unit: BROAD's hand-held MEMS IMU (unit B).
+
+Usage::
+
+    .venv/bin/python tools/another_unit.py [--parts 3] [--strategies regression mlp_window ...]
+        [--json OUT.json] [--keep DIR]
+
+sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
+with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
+``shared/data/euroc`` into a temporary data root (folder ``broad_b``; the reference slerped across the
+motion capture's short gaps, its world frame the optical one, z up). The models are fitted on the parts
+``--train`` lists (default ``05_1 18_1 18_3``) and judged on the others (default ``05_2 05_3 18_2``) by
+``tools/euroc_benchmark.py``'s commands (``sins fit --dataset broad_b/...``, ``sins evaluate``). Prints the
+open-loop table; what must hold is that no correction is worse than the raw readings.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import euroc_benchmark
+
+from sins.io import datasets
+from sins.series import ReferencedRecording
+
+#: NED to ENU (and back): east and north swapped, down turned up.
+_NED_TO_ENU = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -> list[str]:
+    """``rec`` cut into ``parts`` recordings of equal length within its reference's span, each written as
+    ``folder/{stem}_{k}.npz``; returns the names."""
+    t_all = rec.imu.t
+    first = int(np.searchsorted(t_all, rec.reference.t[0]))
+    last = int(np.searchsorted(t_all, rec.reference.t[-1], side="right")) - 1
+    cuts = np.linspace(first, last, parts + 1).round().astype(int)
+    names = []
+    for k in range(parts):
+        a, b = int(cuts[k]), int(cuts[k + 1])
+        t = t_all[a : b + 1]
+        dt = np.diff(t)[:, None]
+        steps = slice(a, b)
+        rate = rec.imu.dtheta_b[steps] / dt
+        force = rec.imu.dv_b[steps] / dt
+        # Readings at the step boundaries: each step's mean rate, the last repeated.
+        rate, force = np.vstack([rate, rate[-1:]]), np.vstack([force, force[-1:]])
+        ref = rec.reference.interpolate(t)
+        q = _NED_TO_ENU * Rotation.from_quat(ref.q_nb)
+        v = ref.v_n[:, [1, 0, 2]] * [1.0, 1.0, -1.0]
+        name = f"{stem}_{k + 1}"
+        np.savez(
+            folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force,
+            q_wxyz=q.as_quat(scalar_first=True), v_m_s=v, p_m=np.zeros_like(v),
+        )  # fmt: skip
+        names.append(name)
+    return names
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--parts", type=int, default=3)
+    p.add_argument("--train", nargs="+", default=["05_1", "18_1", "18_3"])
+    p.add_argument("--judge", nargs="+", default=["05_2", "05_3", "18_2"])
+    p.add_argument("--strategies", nargs="+", default=euroc_benchmark.STRATEGIES)
+    p.add_argument("--json", type=Path)
+    p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
+    args = p.parse_args(argv)
+    root = args.keep or Path(tempfile.mkdtemp(prefix="sins-broad-b-"))
+    folder = root / "broad_b"
+    folder.mkdir(parents=True, exist_ok=True)
+    for trial in ("05", "18"):
+        write_parts(datasets.load_reference(f"broad_{trial}"), trial, args.parts, folder)
+    bench = ["--root", str(root), "--folder", "broad_b", "--train", *args.train, "--judge", *args.judge,
+             "--strategies", *args.strategies]  # fmt: skip
+    if args.json:
+        bench += ["--json", str(args.json)]
+    return euroc_benchmark.main_(bench)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

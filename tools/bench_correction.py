@@ -1,0 +1,69 @@
+"""How fast a model fitted on several recordings corrects a recording: samples a second.
+
+Usage::
+
+    .venv/bin/python tools/bench_correction.py MODEL.json [MODEL.json ...] [--samples 1000000] [--repeat 5]
+
+Each model (``sins fit --dataset ... --out MODEL.json``) corrects a recording of ``--samples`` readings at
+200 Hz (EuRoC's V1_01_easy repeated end to end, or a seeded random walk without the data) through
+``Strategy.correct_recording``, the path ``sins evaluate`` and ``sins correct`` take: the seed model, the
+learner where there is one, and the rule for the recording's own bias. Prints the median over
+``--repeat`` runs and the samples a second; the first run (imports, numba's compilation) is not counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sins import compensation
+from sins.series import ImuIncrements
+
+
+def _readings(samples: int) -> ImuIncrements:
+    try:
+        from sins.io import datasets
+
+        rec = datasets.load_reference("euroc/V1_01_easy").imu
+        reps = -(-samples // len(rec.dtheta_b))
+        dtheta = np.tile(rec.dtheta_b, (reps, 1))[:samples]
+        dv = np.tile(rec.dv_b, (reps, 1))[:samples]
+    except Exception:
+        rng = np.random.default_rng(0)
+        dtheta = np.cumsum(rng.normal(0, 1e-4, (samples, 3)), axis=0) * 1e-2 + 4e-4
+        dv = np.tile([0.0, 0.0, -9.81 / 200.0], (samples, 1)) + rng.normal(0, 1e-3, (samples, 3))
+    return ImuIncrements(t=np.arange(samples + 1) / 200.0, dtheta_b=dtheta, dv_b=dv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("models", nargs="+", type=Path)
+    p.add_argument("--samples", type=int, default=1_000_000)
+    p.add_argument("--repeat", type=int, default=5)
+    args = p.parse_args(argv)
+    imu = _readings(args.samples)
+    print(f"{args.samples} readings at 200 Hz; median of {args.repeat} runs after one not counted")
+    for path in args.models:
+        model = compensation.load(path)
+        model.correct_recording(imu)  # imports and compilation
+        times = []
+        for _ in range(args.repeat):
+            start = time.perf_counter()
+            model.correct_recording(imu)
+            times.append(time.perf_counter() - start)
+        med = statistics.median(times)
+        rule = getattr(model, "unit_bias_", {}).get("mode", "-")
+        print(
+            f"{path.name}: {model.label}, bias rule {rule}: {med:.3f} s, "
+            f"{args.samples / med / 1e6:.2f} M samples/s"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,129 @@
+"""The published open-loop gyro benchmark on EuRoC, run with sins's own commands.
+
+Usage::
+
+    .venv/bin/python tools/euroc_benchmark.py [--strategies none regression ...] [--root DATA_ROOT]
+        [--folder euroc] [--train A B ...] [--judge X Y ...] [--json OUT.json] [--models DIR]
+
+The protocol of Brossard et al. 2020 (``shared/data/euroc/SOURCE.md``): every strategy fitted with
+``sins fit --dataset euroc/A --dataset euroc/B ... --strategy S --out M`` on the six training sequences,
+then judged with ``sins evaluate M --dataset euroc/X --json OUT`` on the five others by its absolute
+orientation error (AOE: the corrected gyro integrated alone from the reference's first attitude, RMS of
+the angle over every sample, no Earth rate). Nothing of a judged sequence is read by a fit. Prints one
+row per judged sequence (raw, every strategy, Brossard 2020 as SOURCE.md cites it) and the mean, each
+fit's wall time, and checks the raw row against SOURCE.md's independent scipy integration (within 1 %).
+
+``--folder``, ``--train`` and ``--judge`` run the same commands on another unit's ``.npz`` recordings
+(``--folder myunit --train a b c --judge d e f``); the published columns are then left out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from sins.cli import main
+
+TRAIN = ["MH_01_easy", "MH_03_medium", "MH_05_difficult", "V1_02_medium", "V2_01_easy", "V2_03_difficult"]
+JUDGE = ["MH_02_easy", "MH_04_difficult", "V1_01_easy", "V1_03_difficult", "V2_02_medium"]
+#: SOURCE.md: the raw gyro's AOE by an independent scipy integration, and Brossard et al. 2020's network
+#: as cited there (deg).
+RAW_SOURCE = {"MH_02_easy": 123.1, "MH_04_difficult": 130.3, "V1_01_easy": 114.1, "V1_03_difficult": 120.1,
+              "V2_02_medium": 116.9}  # fmt: skip
+BROSSARD = {"MH_02_easy": 1.39, "MH_04_difficult": 1.40, "V1_01_easy": 1.13, "V1_03_difficult": 2.70,
+            "V2_02_medium": 3.85}  # fmt: skip
+STRATEGIES = ["regression", "bias_only", "regression_robust", "regression_rest", "regression_window",
+              "mlp", "kohonen", "mlp_window"]  # fmt: skip
+
+
+def _run(argv: list[str], quiet: bool = True) -> int:
+    """``sins ARGV`` in this process; its output kept quiet."""
+    sink = io.StringIO()
+    with contextlib.redirect_stdout(sink) if quiet else contextlib.nullcontext():
+        code = main(argv)
+    if code:
+        print(sink.getvalue(), file=sys.stderr)
+    return code
+
+
+def _evaluate(model: Path, folder: str, name: str, out: Path) -> dict[str, Any]:
+    code = _run(["evaluate", str(model), "--dataset", f"{folder}/{name}", "--json", str(out)])
+    if code:
+        raise SystemExit(f"sins evaluate {model} on {folder}/{name} failed ({code})")
+    return dict(json.loads(out.read_text()))
+
+
+def main_(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--strategies", nargs="+", default=STRATEGIES)
+    p.add_argument("--root", type=Path, help="the data root (default: SINS_DATA or ../shared/data)")
+    p.add_argument("--folder", default="euroc")
+    p.add_argument("--train", nargs="+", default=TRAIN)
+    p.add_argument("--judge", nargs="+", default=JUDGE)
+    p.add_argument("--json", type=Path, help="write every figure here")
+    p.add_argument("--models", type=Path, help="keep the fitted models in this folder")
+    args = p.parse_args(argv)
+    if args.root is not None:
+        os.environ["SINS_DATA"] = str(args.root)
+    published = args.folder == "euroc" and args.judge == JUDGE and args.train == TRAIN
+    work = Path(tempfile.mkdtemp(prefix="sins-euroc-"))
+    models = args.models or work
+    models.mkdir(parents=True, exist_ok=True)
+    results: dict[str, Any] = {"train": args.train, "judge": args.judge, "fits": {}, "aoe_deg": {}}
+    for strategy in args.strategies:
+        model = models / f"{strategy}.json"
+        fit_json = work / f"{strategy}.fit.json"
+        argv_fit = ["fit", *(a for n in args.train for a in ("--dataset", f"{args.folder}/{n}")),
+                    "--strategy", strategy, "--out", str(model), "--json", str(fit_json)]  # fmt: skip
+        start = time.perf_counter()
+        if _run(argv_fit):
+            raise SystemExit(f"sins fit --strategy {strategy} failed")
+        seconds = time.perf_counter() - start
+        doc = json.loads(fit_json.read_text())
+        results["fits"][strategy] = {"seconds": seconds, "bias_rule": doc.get("bias_rule", {})}
+        mode = doc.get("bias_rule", {}).get("mode", "-")
+        print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {mode})", file=sys.stderr)
+        for name in args.judge:
+            judged = _evaluate(model, args.folder, name, work / f"{strategy}.{name}.json")
+            results["aoe_deg"].setdefault(name, {})["none"] = judged["open_loop_attitude_raw"]["aoe_deg"]
+            results["aoe_deg"][name][strategy] = judged["open_loop_attitude"]["aoe_deg"]
+    _table(results, args.strategies, published)
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2))
+    return 0
+
+
+def _table(results: dict[str, Any], strategies: list[str], published: bool) -> None:
+    cols = ["none", *strategies]
+    head = ["sequence", *cols] + (["Brossard 2020", "raw (SOURCE.md)"] if published else [])
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    sums = dict.fromkeys(cols, 0.0)
+    names = list(results["aoe_deg"])
+    for name in names:
+        row = results["aoe_deg"][name]
+        for c in cols:
+            sums[c] += row[c]
+        cells = [f"{row[c]:.2f}" for c in cols]
+        if published:
+            raw = row["none"]
+            off = 100 * (raw / RAW_SOURCE[name] - 1)
+            cells += [f"{BROSSARD[name]:.2f}", f"{RAW_SOURCE[name]:.1f} ({off:+.2f} %)"]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+    mean = [f"**{sums[c] / len(names):.2f}**" for c in cols]
+    if published:
+        mean += [f"**{sum(BROSSARD.values()) / len(BROSSARD):.2f}**", ""]
+    print("| mean | " + " | ".join(mean) + " |")
+    print("\nfit wall time: " + ", ".join(f"{s} {f['seconds']:.0f} s" for s, f in results["fits"].items()))
+
+
+if __name__ == "__main__":
+    sys.exit(main_())
