@@ -565,7 +565,7 @@ def test_cli_diagnoses_a_real_dataset_by_name(tmp_path: Path, capsys: pytest.Cap
     assert main(["gap", "--dataset", "nonesuch"]) == 2
     assert "no dataset 'nonesuch'" in capsys.readouterr().err
     assert main(["gap"]) == 2
-    assert "RECORDING.csv or --dataset" in capsys.readouterr().err
+    assert "RECORDING or --dataset" in capsys.readouterr().err
 
 
 def test_with_a_trajectory_the_simulated_unit_navigates_beside_the_real_one(tmp_path: Path, capsys):

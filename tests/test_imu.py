@@ -1110,7 +1110,8 @@ def test_effect_vocabulary_matches_the_design():
     # the gyro-only g and g² sensitivities and the accel-only size effect
     both = (
         "bias scale_misalignment noise bias_instability rate_random_walk scale_nonlinearity scale_asymmetry "
-        "temperature_bias temperature_scale time_offset quantization saturation quantization_noise"
+        "temperature_bias temperature_scale time_offset quantization saturation quantization_noise "
+        "motion_bias"
     ).split()
     expected = {f"{s}.{k}" for s in ("gyro", "accel") for k in both}
     expected |= {"gyro.g_sensitivity", "gyro.g2_sensitivity", "accel.size_effect"}

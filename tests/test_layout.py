@@ -39,6 +39,7 @@ RANKS = {
     "sins.pipeline": 7,
     "sins.referenced": 7,
     "sins.referenced_aiding": 7,
+    "sins.unit_gap": 7.5,  # a unit's recordings diagnosed: over the gap, compensation's intervals, referenced
     "sins.campaign": 8,
     "sins.quality": 9,
     "sins.viz": 10,

@@ -9,95 +9,136 @@ from typing import TYPE_CHECKING, Any
 from sins.cli.common import (
     Subparsers,
     add_dataset,
+    add_recording_options,
     advance,
     check_outputs,
     dataset_inputs,
     display_unit,
     fixed_width,
     fraction,
+    positive,
     progress_bar,
+    recording_options,
 )
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
     from sins.gap import GapReport
-    from sins.series import CalibrationData
 
 
 def _cmd_gap(args: argparse.Namespace) -> int:
-    from sins import gap, io, pipeline
+    from sins import io, pipeline
+    from sins.unit_gap import run
 
     if args.rerun:
         from sins import viz
 
         viz.check_rrd_path(args.rerun)
-    inputs = [args.recording, args.truth, args.model, *dataset_inputs(args.dataset)]
-    check_outputs({"--json": args.json, "--rerun": args.rerun}, inputs)
-    data, truth, model = _gap_inputs(args)
-    with progress_bar("diagnosing", "candidate") as bar:
+    read = [
+        *(args.recording or []),
+        args.truth,
+        args.model,
+        *(p for d in (args.dataset or []) for p in dataset_inputs(d)),
+    ]
+    check_outputs({"--json": args.json, "--rerun": args.rerun}, read)
+    inputs, model = _gap_inputs(args)
+    if args.rerun and len(inputs) > 1:
+        raise SinsInputError("gap: --rerun goes with one recording")
+    results = []
+    for inp in inputs:
+        with progress_bar(f"diagnosing {inp.name}", "candidate") as bar:
 
-        def progress(name: str) -> None:
-            assert bar is not None  # passed only when there is a bar
-            bar.set_postfix_str(name)
-            advance(bar, bar.n + 1)
+            def progress(name: str) -> None:
+                assert bar is not None  # passed only when there is a bar
+                bar.set_postfix_str(name)
+                advance(bar, bar.n + 1)
 
-        report = gap.diagnose(data, args.holdout, model, progress if bar is not None else None)
-    _print_gap_report(args, data, report)
-    document = {"recording": str(args.recording), **report.to_dict()}
-    if truth is not None and not report.unreferenced:
-        nav = pipeline.gap_navigation(data, truth, report)
-        print(
-            "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
-            f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with the "
-            f"model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
-            f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
-            f"{nav['sim_to_real_after_m']:.3f} m after"
-        )
-        document["navigation"] = nav
+            result = run.diagnose_one(
+                inp,
+                args.holdout,
+                model,
+                args.statistic,
+                args.interval_s,
+                progress if bar is not None else None,
+            )
+        _print_gap_report(result.name, result.rows, result.report, args.top)
+        results.append(result)
+    if len(results) == 1:
+        result = results[0]
+        document: dict[str, Any] = {"recording": result.name, **result.report.to_dict()}
+        data, truth = result.samples if result.samples is not None else (None, None)
+        if data is not None and truth is not None and not result.report.unreferenced:
+            nav = pipeline.gap_navigation(data, truth, result.report)
+            print(
+                "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
+                f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with "
+                f"the model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
+                f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
+                f"{nav['sim_to_real_after_m']:.3f} m after"
+            )
+            document["navigation"] = nav
+    else:
+        verdicts = run.verdicts(results)
+        _print_across(verdicts)
+        judged = run.shrinks(inputs, results, args.interval_s)
+        _print_shrinks(judged)
+        document = {
+            "recordings": [{"recording": r.name, **r.report.to_dict()} for r in results],
+            "across": verdicts,
+            "shrink": judged,
+        }
     if args.json:
         io.write_json(args.json, document)
     if args.rerun:
-        viz.save_gap(report, args.rerun)
+        viz.save_gap(results[0].report, args.rerun)
         print(f"wrote {args.rerun}")
     return 0
 
 
-def _gap_inputs(args: argparse.Namespace) -> tuple[Any, Any, tuple[str, ...]]:
-    """``sins gap``'s recording (a file, or a dataset by name), its truth if any, and the model's effects."""
-    from sins import imu, io, pipeline, scenario
+def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
+    """``sins gap``'s recordings (files, datasets by name, or both), each with its reference, and the
+    model's effects."""
+    from sins import imu, scenario
+    from sins.unit_gap.inputs import check_names, read_gap_input
 
-    if (args.recording is None) == (args.dataset is None):
-        raise SinsInputError("gap: give a RECORDING.csv or --dataset NAME (one of them)")
+    paths, names = list(args.recording or []), list(args.dataset or [])
+    if not paths and not names:
+        raise SinsInputError("gap: give a RECORDING or --dataset NAME (one or more)")
     if not 0.0 < args.holdout < 1.0:
         raise SinsInputError(f"--holdout must be in (0, 1), got {args.holdout}")
-    if args.dataset is not None:
-        from sins.io import datasets
-
-        if args.truth is not None:
-            raise SinsInputError("gap: --truth goes with a RECORDING.csv, not with --dataset")
-        data, truth = datasets.load_with_truth(args.dataset)
-        args.recording = args.dataset
-    else:
-        data, truth = pipeline.gap_data(args.recording, args.truth)
-        if args.truth is None:
-            io.check_recording_range(args.recording, data)
+    if args.truth is not None and (names or len(paths) != 1):
+        raise SinsInputError("gap: --truth goes with one RECORDING, not with --dataset or several")
+    check_names([str(p) for p in paths] + names)
+    options = recording_options(args)
+    inputs = [read_gap_input(p, truth=args.truth, options=options) for p in paths]
+    inputs += [read_gap_input(None, dataset=n) for n in names]
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
         spec = scenario.load_imu(scenario.resolve_preset(args.model, "imu"))
         model = tuple(e.name for e in spec.model().effects)
-    return data, truth, model
+    return inputs, model
 
 
-def _print_gap_report(args: argparse.Namespace, data: CalibrationData, report: GapReport) -> None:
-    """The report as ``sins gap`` prints it: the rows, the residuals against the floor, where the gap
-    is, the candidates, the diagnosis and what is left unexplained."""
+def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -> None:
+    """The report as ``sins gap`` prints it: the rows, the statistic and why, the residuals against the
+    floor, where the gap is, the candidates, the diagnosis and what is left unexplained."""
     from sins import gap
 
     _, held_rows = report.rows
     skipped = (
         f" ({report.unreferenced} without a per-sample reference left out)" if report.unreferenced else ""
     )
-    print(f"{args.recording}: {len(data)} rows{skipped}, {held_rows} withheld: {report.withholding}")
+    intervals = report.statistic.get("kind") == "intervals"
+    held = f"{held_rows} intervals withheld" if intervals else f"{held_rows} withheld"
+    print(f"{name}: {n_rows} rows{skipped}, {held}: {report.withholding}")
+    if report.statistic:
+        what = (
+            "integrated rotation and velocity change over intervals" if intervals else "per-sample residuals"
+        )
+        print(f"statistic: {what}; {report.statistic.get('why', '')}")
+        key = "reference_limits" if intervals else "interval_quality"
+        if key in report.statistic:
+            print(f"  reference: {report.statistic[key]}")
     print(f"model: {', '.join(report.model)}")
     head = ["channel", "unit", "before", "after", "noise floor", "before/floor", "after/floor"]
     rows = []
@@ -108,7 +149,11 @@ def _print_gap_report(args: argparse.Namespace, data: CalibrationData, report: G
             f"{v['noise_floor'] / size:.4f}", f"{v['rms_before'] / v['noise_floor']:.3f}",
             f"{v['rms_after'] / v['noise_floor']:.3f}",
         ])  # fmt: skip
-    print("RMS of reading - model on the withheld rows")
+    print(
+        "RMS of reading - model on the withheld intervals, as mean rates over each"
+        if intervals
+        else "RMS of reading - model on the withheld rows"
+    )
     print(fixed_width(head, rows))
     if report.where:
         print("\nwhere the gap is (channels above their noise floor, largest first):")
@@ -119,7 +164,7 @@ def _print_gap_report(args: argparse.Namespace, data: CalibrationData, report: G
     threshold = f"{gap.SIGNIFICANT_NATS:.1f} nats"
     print(f"\ncandidate effects (withheld log-likelihood gain less {threshold}, and a random bias's")
     print("allowance; the best above 0 is accepted, then the rest are scored again beside it):")
-    for e in report.effects[: args.top]:
+    for e in report.effects[:top]:
         mark = "accepted" if e.accepted else ""
         if e.not_accepted_because:
             mark = f"not accepted: {e.not_accepted_because}"
@@ -132,14 +177,67 @@ def _print_gap_report(args: argparse.Namespace, data: CalibrationData, report: G
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
+    for effect, channels in report.sizes.items():
+        from sins.gap.report import in_units
+        from sins.unit_gap.across import size_text
+
+        shown = {
+            ch: {"values": in_units(effect, v)[0], "unit": in_units(effect, v)[1]}
+            for ch, v in channels.items()
+        }
+        print(f"  {effect}: {size_text(shown)}")
+
+
+def _print_across(verdicts: dict[str, Any]) -> None:
+    """The verdicts across the recordings: each accepted effect, on which, its sizes side by side."""
+    print(f"\nacross {len(verdicts['recordings'])} recordings of the unit:")
+    if not verdicts["effects"]:
+        print("  no effect accepted on any")
+        return
+    from sins.unit_gap.across import table_rows
+
+    print(fixed_width(["effect", "holds on", *verdicts["recordings"]], table_rows(verdicts)))
+    if verdicts["on_one_only"]:
+        print(f"found on one recording only: {', '.join(verdicts['on_one_only'])}")
+
+
+def _print_shrinks(judged: list[dict[str, Any]]) -> None:
+    """Each model's shrink on another recording, in degrees (and m/s)."""
+    print("\nthe shrink on another recording (bias from its opening rest; open loop, the gyro alone):")
+    for j in judged:
+        print(f"  fitted on {j['fitted_on']}, judged on {j['judged_on']}: {j['verdict']}")
+        if "with_effects" in j:
+            w, wo, raw = j["with_effects"], j["without_effects"], j["raw"]
+            if "free_inertial_velocity_mps" in w:
+                att, vel = "free_inertial_attitude_deg", "free_inertial_velocity_mps"
+                print(
+                    f"    free inertial over {w['free_inertial_windows']} windows of 10 s: attitude "
+                    f"{raw[att]:.3g}° raw, {wo[att]:.3g}° without, {w[att]:.3g}° with; velocity "
+                    f"{raw[vel]:.3g}, {wo[vel]:.3g}, {w[vel]:.3g} m/s"
+                )
+            total = raw["open_loop_attitude_deg"]["total"]
+            print(f"    raw readings (bias from {j['bias_from']}): {total:.3g}°")
 
 
 def add(sub: Subparsers) -> None:
     """Add ``sins gap`` to ``sub``."""
     p = sub.add_parser("gap", help="sim-to-real gap: where the model fails, which effect explains it")
-    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
-    add_dataset(p)
+    p.add_argument(
+        "recording", nargs="*", metavar="RECORDING",
+        help="a rig CSV, a recording with --truth, or one with its own reference (.npz, EuRoC/TUM-VI "
+        "folder, bag)",
+    )  # fmt: skip
+    add_dataset(p, repeat=True)
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
+    p.add_argument(
+        "--statistic", choices=("auto", "samples", "intervals"), default="auto",
+        help="per-sample residuals, or integrated rotation and velocity change over the reference's "
+        "intervals (default auto: intervals where the differentiated reference adds to the sensor's noise)",
+    )  # fmt: skip
+    p.add_argument(
+        "--interval-s", type=positive, default=1.0, metavar="S",
+        help="with the interval statistic: the interval between the reference epochs compared (default 1)",
+    )  # fmt: skip
     p.add_argument("--model", metavar="MODEL.toml", help="the simulation's IMU model (default: the baseline)")
     p.add_argument(
         "--holdout", type=fraction, default=0.3, metavar="FRACTION",
@@ -155,6 +253,7 @@ def add(sub: Subparsers) -> None:
         help="log the residuals before and after, their Allan deviations and the excess by input quartile",
     )  # fmt: skip
     p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
+    add_recording_options(p)
     p.set_defaults(func=_cmd_gap)
 
 

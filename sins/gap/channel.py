@@ -39,6 +39,8 @@ Array = NDArray[np.float64]
 
 #: The white noise before rounding, in quantization steps, tried for the quantization candidate.
 _NOISE_PER_STEP = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.7, 1.0)
+#: Points of the delay's scan over its span of four steps (quarter steps; :func:`_fit_delay`).
+_DELAY_GRID = 17
 #: The two quantizers (see :mod:`sins.gap.lattice`).
 _QUANTIZERS = {"rounded": lattice.rounded, "carried": lattice.carried}
 #: Their readings' log-probabilities alone, for choosing one (the carried kind's filter gives all at once).
@@ -80,6 +82,14 @@ class ChannelModel:
     predicted : (n,) the predicted error of every row, once fitted
     loglik_rows : (n,) a quantizer's ln P of every row's reading, once fitted
     fit_loglik : the process's innovations' log-likelihood on the fit rows, once fitted
+    coefficients : the regressors' coefficients, of the unscaled columns in :attr:`columns`' order, once
+        fitted (beside a random bias, its generalised least squares')
+    late : with a delay, once fitted, the inputs at ``t − τ`` (:func:`delayed_inputs`), which the
+        columns are built from: a sensor that reads its input late forms every error of it from what
+        it read (a scale factor scales the delayed input), so beside a large lag (a rig that steps
+        its orientation within a row: a 3 ms delay at 20 Hz lags the force by 2.3 m/s² there) the
+        scale and misalignment of the lag itself are not the noise's (they had left the accelerometers
+        at 1.07-1.08 of their floor, and the delay 17 % long)
     """
 
     x: ReferenceInputs
@@ -98,6 +108,8 @@ class ChannelModel:
     predicted: Array | None = None
     loglik_rows: Array | None = None
     fit_loglik: float = np.nan
+    coefficients: Array | None = None
+    late: ReferenceInputs | None = None
 
     @classmethod
     def baseline(
@@ -131,8 +143,14 @@ class ChannelModel:
         return dataclasses.replace(self, columns=(*self.columns, columns))
 
     def design(self) -> Design:
-        """The regressors' columns, unscaled."""
-        return Design(self.x, self.columns)
+        """The regressors' columns, unscaled (of the inputs at ``t − τ`` with a fitted delay)."""
+        return Design(self.late or self.x, self.columns)
+
+    def widths(self) -> list[int]:
+        """How many columns each block of :attr:`columns` has (the baseline's, then each regressor
+        effect's in the order they were added)."""
+        one = self.x.rows(0, 1)
+        return [int(np.asarray(make(one)).reshape(1, -1).shape[1]) for make in self.columns]
 
     def tried(self, cand: Candidate) -> ChannelModel:
         """This model with ``cand`` added, fitted."""
@@ -184,11 +202,18 @@ class ChannelModel:
             # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
-        delay_s, error = self.delay_s, self.error
+        delay_s, error, late = self.delay_s, self.error, self.late
         lag: Array | None = None  # what a delay adds to the error: the reference at t − τ less at t
         if self.delayed:
             if delay_s is None:
+                # First beside the columns of the inputs at t, then beside those at t − τ (the
+                # channel's errors are those of the input it reads late): a second search from there.
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
+                late = delayed_inputs(self.x, delay_s)
+                design = Design(late, self.columns)
+                delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
+                late = delayed_inputs(self.x, delay_s)
+            design = Design(late or self.x, self.columns)
             lag = self.x.lag(self.sensor, self.axis, delay_s)
             error = error - lag
         # The columns scaled on the fit rows, whichever rows fit them.
@@ -202,7 +227,7 @@ class ChannelModel:
             process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
                 return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
-            pred, fit_loglik = process
+            pred, fit_loglik, coef = process
         if lag is not None:
             pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
@@ -215,18 +240,20 @@ class ChannelModel:
         return dataclasses.replace(
             self,
             delay_s=delay_s,
+            late=late,
             quantizer=quantizer,
             predicted=pred,
             loglik_rows=loglik_rows,
             fit_loglik=fit_loglik,
+            coefficients=coef / scale,
         )
 
     def _with_random_bias(
         self, error: Array, residual: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
-    ) -> tuple[Array, float] | None:
+    ) -> tuple[Array, float, Array] | None:
         """Given what least squares leave of ``error`` (``residual``), the regressors refitted beside
-        the random bias and the bias's one-step prediction added: the predicted error of every row
-        and the process's fit-row log-likelihood (None: falsified).
+        the random bias and the bias's one-step prediction added: the predicted error of every row,
+        the process's fit-row log-likelihood and the regressors' coefficients (None: falsified).
 
         A random bias misleads least squares: a walk's level in each static position passes for
         scale factors. Generalised least squares instead: the innovations filter is linear, so the
@@ -237,14 +264,15 @@ class ChannelModel:
         del residual
         phi, gain = first.phi, first.gain
         del first
-        pred = design.predict(design.whitened_lstsq(error, rows, rcond, phi, gain))
+        coef = design.whitened_lstsq(error, rows, rcond, phi, gain)
+        pred = design.predict(coef)
         y = error - pred
         process = self._fit_process(y)
         if self.process_on_trial and randombias.falsified(process, self.fit, self.x.t):
             return None
         out = np.add(pred, y, out=pred)
         out -= process.innovations
-        return out, process.fit_loglik
+        return out, process.fit_loglik, coef
 
     def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
         """The random bias under the residual ``y``, its white part from first differences within the
@@ -283,6 +311,16 @@ class ChannelModel:
             mu, quantizer = mu + design.predict(delta), ("rounded", s)
         loglik_rows, expected, _ = _QUANTIZERS[kind](m, mu, s)
         return expected * grid.step + grid.offset - reference, quantizer, loglik_rows
+
+
+def delayed_inputs(x: ReferenceInputs, delay_s: float) -> ReferenceInputs:
+    """The reference inputs at ``t − τ`` (the rate and the force of every axis along their Hermite
+    curves, :meth:`~sins.gap.candidates.ReferenceInputs.lag`): what a sensor reading its input
+    ``delay_s`` late forms its errors from. The simulator delays the whole input alike
+    (:func:`sins.imu.effect_set.shift_samples`)."""
+    omega = np.column_stack([x.omega_ib_b[:, j] + x.lag("gyro", j, delay_s) for j in range(3)])
+    force = np.column_stack([x.f_ib_b[:, j] + x.lag("accel", j, delay_s) for j in range(3)])
+    return dataclasses.replace(x, omega_ib_b=omega, f_ib_b=force)
 
 
 def _baseline_block(sensor: str, x: ReferenceInputs) -> Array:
@@ -335,13 +373,23 @@ def _fit_delay(
     def left(tau: float) -> float:
         return projection.residual(error - x.lag(sensor, axis, tau, central))
 
-    span = 2.0 * x.step_s
+    # What is left is not unimodal over two steps where the reference steps within a row (a rig that
+    # turns faster than a row): a bounded search over the whole span had settled in another valley
+    # (−50 ms for a 3 ms delay at 20 Hz) and kept the first order's 3.5 ms. So the span is scanned on a
+    # grid of quarter steps first, and the search refines about the best point of it.
+    grid = first + np.linspace(-2.0, 2.0, _DELAY_GRID) * x.step_s
+    values = [left(float(tau)) for tau in grid]
+    best = int(np.argmin(values))
+    spacing = float(grid[1] - grid[0])
     found = minimize_scalar(
-        left, bounds=(first - span, first + span), method="bounded", options={"xatol": 1e-3 * x.step_s}
-    )
-    return float(found.x) if found.fun < left(first) else first
+        left, bounds=(grid[best] - spacing, grid[best] + spacing), method="bounded",
+        options={"xatol": 1e-3 * x.step_s},
+    )  # fmt: skip
+    candidates = [(float(found.fun), float(found.x)), (float(values[best]), float(grid[best]))]
+    return min(candidates)[1]
 
 
 __all__ = [
     "ChannelModel",
+    "delayed_inputs",
 ]

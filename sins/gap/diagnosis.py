@@ -44,7 +44,7 @@ from sins.gap.floor import (
     allan_curves,
     concentrates,
     input_features,
-    noise_floor,
+    noise_level,
     quartile_shares,
 )
 from sins.gap.guards import (
@@ -103,6 +103,8 @@ class _Search:
     outside: list[Outside] = field(default_factory=list)
     outside_channels: set[str] = field(default_factory=set)  # of ``outside``, kept beside it
     unfitted: dict[str, str] = field(default_factory=dict)  # candidates only the withheld rows excite
+    #: Each accepted effect's channels, and where a regressor effect's block sits in their columns.
+    blocks: dict[str, dict[int, int]] = field(default_factory=dict)
 
 
 def diagnose(
@@ -131,7 +133,7 @@ def diagnose(
     with threadpool_limits(limits=1, user_api="blas"):
         s = _session(data, holdout)
         models, before = _starting_models(s, model)
-        floors = _floors(s, before)
+        floors = _floors(s, before, models)
         taken = set().union(*(exclusive(n) for n in model))
         state = _search(s, models, [c for c in CANDIDATES.values() if c.name not in taken], progress)
         del models
@@ -223,16 +225,24 @@ def _starting_models(s: _Session, model: tuple[str, ...]) -> tuple[list[ChannelM
     return models, predicted
 
 
-def _floors(s: _Session, predicted: Array) -> Array:
-    """Each channel's noise floor under the ``predicted`` errors (n, 6): the larger of the fit
-    rows' and the withheld rows'.
+def _floors(s: _Session, predicted: Array, models: list[ChannelModel]) -> Array:
+    """Each channel's noise floor under the ``predicted`` errors (n, 6): the withheld rows' noise
+    level (:func:`~sins.gap.floor.noise_level`), which their RMS is set against; on a lattice, the
+    larger of the fit rows' and the withheld rows'.
 
-    Both portions measure the same white noise; where it is rounding's, its level depends on where
-    each hold's mean sits in its lattice cell, and a portion may see no reading change.
+    A unit's noise need not be the same all through a recording (a vehicle's vibration follows its
+    speed: 0.0165 and 0.0134 m/s² in the fit and withheld rows of the PSINS drive's accel.x), so the
+    withheld RMS is set against the withheld rows' own. Where the noise is rounding's, its level
+    depends on where each hold's mean sits in its lattice cell, and a portion may see no reading
+    change: there both portions measure it, and the larger is taken.
     """
-    return np.array(
-        [max(noise_floor(r, s.fit), noise_floor(r, s.withheld), TINY) for r in s.residuals(predicted)]
-    )
+    out = []
+    for r, m in zip(s.residuals(predicted), models, strict=True):
+        level = noise_level(r, s.withheld)
+        if m.lattice is not None:
+            level = max(level, noise_level(r, s.fit))
+        out.append(max(level, TINY))
+    return np.array(out)
 
 
 def _search(
@@ -334,8 +344,10 @@ def _accept(state: _Search, choice: Choice, trials: dict[str, Trial]) -> None:
     for name in exclusive(best) - {best}:
         what = "random bias" if name.split(".")[1] in processes() else "output map"
         state.why_not.setdefault(name, f"a sensor takes one {what}, and {best} was taken")
+    state.blocks[best] = {}
     for i in trials[best].channels:
         state.models[i] = state.models[i].tried(CANDIDATES[best])
+        state.blocks[best][i] = len(state.models[i].columns) - 1
     state.remaining = [c for c in state.remaining if c.name not in exclusive(best)]
 
 
@@ -411,7 +423,7 @@ def _report(
     # differences of the residual before it as well: where the accepted effects leave the
     # differences smaller, theirs are the white noise's (a heavy clip: 0.02-0.4 of the floor before).
     # Not below FLOOR_DROP of the floor before: what a near-exact model leaves is not noise.
-    floors = np.maximum(np.minimum(floors, _floors(s, after)), FLOOR_DROP * floors)
+    floors = np.maximum(np.minimum(floors, _floors(s, after, state.models)), FLOOR_DROP * floors)
     withheld = s.withheld
     rms_before, rms_after = _rms(s, before), _rms(s, after)
     channels = {
@@ -449,7 +461,28 @@ def _report(
         t_withheld=s.data.t[withheld],
         allan=allan,
         quartiles=quartiles,
+        sizes=_sizes(state),
     )
+
+
+def _sizes(state: _Search) -> dict[str, dict[str, list[float]]]:
+    """Each accepted effect's fitted size per channel, SI: a regressor effect's coefficients (its block
+    of each channel's columns), a delay's seconds, a quantizer's step; a random bias's, a clip's: none."""
+    out: dict[str, dict[str, list[float]]] = {}
+    for name, channels in state.blocks.items():
+        kind = CANDIDATES[name].kind
+        out[name] = {}
+        for i, block in channels.items():
+            m = state.models[i]
+            if kind == "regressors" and m.coefficients is not None:
+                widths = m.widths()
+                start = int(sum(widths[:block]))
+                out[name][CHANNELS[i]] = [float(v) for v in m.coefficients[start : start + widths[block]]]
+            elif kind == "delay" and m.delay_s is not None:
+                out[name][CHANNELS[i]] = [float(m.delay_s)]
+            elif name.endswith("quantization") and m.lattice is not None:
+                out[name][CHANNELS[i]] = [float(m.lattice.step)]
+    return {n: v for n, v in out.items() if v}
 
 
 def _withheld_residuals(s: _Session, predicted: Array) -> Array:

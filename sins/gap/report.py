@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.imu import BASELINE, display_unit
+from sins.imu import BASELINE, display_unit, vocabulary
 
 Array = NDArray[np.float64]
 
@@ -105,6 +105,13 @@ class GapReport:
     #: The models' predicted errors of every referenced row, (n, 6) SI: before and after the accepted effects.
     predicted_before: Array = field(default_factory=lambda: np.zeros((0, 6)))
     predicted_after: Array = field(default_factory=lambda: np.zeros((0, 6)))
+    #: Per accepted effect and channel, its fitted coefficients, SI (:func:`in_units` gives them in its
+    #: parameters' units): its columns' coefficients in the order its class gives them, a delay's
+    #: seconds, a quantizer's step; a random bias's correlation time (s) where the intervals fit it.
+    sizes: dict[str, dict[str, list[float]]] = field(default_factory=dict)
+    #: Which statistic the verdicts were reached on, and why (``sins.unit_gap.statistic``); empty when
+    #: :func:`sins.gap.diagnose` is called directly (samples).
+    statistic: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The stable JSON form: the findings and Allan deviations, not the series."""
@@ -118,11 +125,42 @@ class GapReport:
             "withholding": self.withholding,
             "unfitted": self.unfitted,
             "allan": self.allan,
+            "sizes": {
+                name: {
+                    ch: {"values": in_units(name, v)[0], "unit": in_units(name, v)[1], "si": v}
+                    for ch, v in channels.items()
+                }
+                for name, channels in self.sizes.items()
+            },
+            "statistic": self.statistic or {"kind": "samples"},
         }
+
+
+def in_units(name: str, values: list[float]) -> tuple[list[float], str]:
+    """An accepted effect's fitted coefficients on one channel (SI) in its file parameters' units
+    (:class:`sins.imu.vocabulary.Param`), and the unit: each column's parameter where the effect has
+    one vector parameter per column (``k2``; a temperature bias's ``c1`` and ``c2``), else its one
+    matrix parameter's for all (a size effect's lever arm, mm; a g² sensitivity's coefficients of
+    ``f_j f_k``, °/h/g², where those of the cross products are twice the symmetric tensor's element).
+    A random bias's correlation time is in s; an effect without parameters keeps SI ("SI")."""
+    sensor, kind = name.split(".")
+    if kind in ("bias_instability", "rate_random_walk"):
+        return list(values), "s (correlation time)"
+    cls = vocabulary.effect_class(name)
+    params = [p for p in cls.params.get(sensor, ()) if p.shape != ()]
+    vectors = [p for p in params if p.shape == (3,)]
+    if len(vectors) == len(values) and vectors:
+        return [v / p.factor for v, p in zip(values, vectors, strict=True)], " | ".join(
+            p.unit for p in vectors
+        )
+    if params:
+        return [v / params[0].factor for v in values], params[0].unit
+    return list(values), "SI"
 
 
 __all__ = [
     "EffectScore",
     "GapReport",
     "Outside",
+    "in_units",
 ]

@@ -361,6 +361,56 @@ def lever_arm_acceleration(omega: Array, omega_dot: Array, r: Array) -> Array:
 
 
 @dataclass(frozen=True)
+class MotionBias(Effect):
+    """A bias that differs while the unit turns from its bias at rest, by ``b`` in full motion:
+    ``b · m``, ``m = |ω|² / (|ω|² + ω₀²)`` (0 at rest, ½ at ``ω₀``, 1 well above it), ``ω₀``
+    :data:`HALF_RATE_DPS`.
+
+    A MEMS gyro's bias in motion need not be its bias at rest (vibration rectified in the sensing
+    element, the rotation's own cross-coupling): BROAD's unit B differs by some 80-160 °/h between its
+    rests and its rotations, in the compensation fit and in the gap's intervals alike. ``ω₀`` is fixed,
+    so that the effect is one coefficient per axis, a regression column like any other; a unit whose
+    bias turns over at another rate fits it in part.
+    """
+
+    value: Array = _array()
+    kind: ClassVar[str] = "motion_bias"
+    #: The rate at which half the bias in motion is reached, °/s: ten times a MEMS gyro's noise at
+    #: rest (0.1-0.2 °/s per sample), a fifth of a slow hand-turned rotation.
+    HALF_RATE_DPS: ClassVar[float] = 5.0
+    params: ClassVar[dict[str, tuple[Param, ...]]] = {
+        "gyro": (_v("bias_dph", "value", DEG_PER_H, "°/h"),),
+        "accel": (_v("bias_mg", "value", MG, "mg", -1e5, 1e5),),
+    }
+    description: ClassVar[dict[str, str]] = {
+        s: "bias in motion beyond that at rest: b·|ω|²/(|ω|²+ω₀²), ω₀ = 5 °/s" for s in ("gyro", "accel")
+    }
+    candidate: ClassVar[str | None] = "regressors"
+
+    @classmethod
+    def motion(cls, omega: Array) -> Array:
+        """``m`` (n,) of the angular rate ``omega`` (n, 3), rad/s."""
+        w2 = np.einsum("ij,ij->i", omega, omega)
+        w0 = cls.HALF_RATE_DPS * _DPS
+        return np.asarray(w2 / (w2 + w0 * w0))
+
+    @classmethod
+    def columns(cls, x: RegressorInputs, sensor: str, axis: int) -> Array:
+        """``m`` of the rate, the same on every axis."""
+        return cls.motion(x.omega_ib_b)[:, None]
+
+    @classmethod
+    def typical(cls, sensor: str, rng: np.random.Generator, scale: float) -> Effect | None:
+        """20 °/h (gyro), 0.1 mg (accel)."""
+        size = 20.0 * DEG_PER_H if sensor == "gyro" else 0.1 * MG
+        return cls(sensor, scale * size * _signs(rng))
+
+    def error(self, inputs: TrueInputs, u: Array) -> Array:
+        """``b · m`` on each axis."""
+        return rowwise.outer(self.motion(inputs.omega_ib_b), self.value)
+
+
+@dataclass(frozen=True)
 class TimeOffset(Effect):
     """The channel reports its input ``delay`` seconds late (``u(t - delay)``)."""
 
@@ -558,7 +608,7 @@ class Quantization(Effect):
 
 for _cls in (Bias, ScaleMisalignment, GSensitivity, Noise, BiasInstability, RateRandomWalk, ScaleNonlinearity,
              ScaleAsymmetry, G2Sensitivity, TemperatureBias, TemperatureScale, TimeOffset, Quantization,
-             QuantizationNoise, Saturation, SizeEffect):  # fmt: skip
+             QuantizationNoise, Saturation, SizeEffect, MotionBias):  # fmt: skip
     register(_cls)
 
 #: The seed paper's model plus white noise.
@@ -572,6 +622,7 @@ __all__ = [
     "BiasInstability",
     "G2Sensitivity",
     "GSensitivity",
+    "MotionBias",
     "Noise",
     "Quantization",
     "QuantizationNoise",

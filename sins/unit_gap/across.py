@@ -1,0 +1,86 @@
+"""Verdicts across recordings of one unit: which accepted effects hold on all, which on some, which on
+one only, with their fitted sizes side by side.
+
+A sensor effect of the unit should be found wherever the recordings excite it; one found on a single
+recording of several is as likely that recording's (its reference, its motion) as the unit's, and is
+labelled so. The sizes are the accepted effects' fitted coefficients
+(:attr:`sins.gap.report.GapReport.sizes`) in their parameters' units
+(:func:`sins.gap.report.in_units`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from sins.gap.report import GapReport, in_units
+
+#: The labels, by on how many of the recordings an effect was accepted.
+ALL, SOME, ONE = "all", "some", "one only"
+
+
+def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
+    """Every effect accepted on any of the named ``reports``: on which it holds, its label
+    (:data:`ALL`, :data:`SOME`, :data:`ONE`), and its sizes on each, per channel, in its units."""
+    names = [n for n, _ in reports]
+    accepted: list[str] = []
+    for _, r in reports:
+        accepted += [e for e in r.diagnosis if e not in accepted]
+    effects: dict[str, Any] = {}
+    for e in accepted:
+        found = [n for n, r in reports if e in r.diagnosis]
+        label = ALL if len(found) == len(reports) else ONE if len(found) == 1 else SOME
+        sizes = {}
+        for n, r in reports:
+            if e in r.sizes:
+                sizes[n] = {
+                    ch: {"values": in_units(e, v)[0], "unit": in_units(e, v)[1]}
+                    for ch, v in r.sizes[e].items()
+                }
+        effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes}
+    return {
+        "recordings": names,
+        "effects": effects,
+        "on_all": [e for e, v in effects.items() if v["holds_on"] == ALL],
+        "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
+        "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
+    }
+
+
+def size_text(per_channel: dict[str, Any]) -> str:
+    """One recording's sizes of an effect, short: per channel its value (or, for several, the largest
+    in magnitude), then the unit."""
+    parts, unit = [], ""
+    for ch, v in per_channel.items():
+        values = np.asarray(v["values"], dtype=float)
+        unit = v["unit"]
+        shown = values[0] if len(values) == 1 else values[np.argmax(np.abs(values))]
+        mark = "" if len(values) == 1 else " (largest)"
+        parts.append(f"{ch.split('.')[1]} {shown:.3g}{mark}")
+    return f"{', '.join(parts)} {unit}".strip()
+
+
+def table_rows(across: dict[str, Any]) -> list[list[str]]:
+    """The verdicts as rows: effect, on which, then each recording's sizes ("-" where not accepted)."""
+    rows = []
+    for e, v in across["effects"].items():
+        label = (
+            v["holds_on"]
+            if v["holds_on"] != SOME
+            else f"some ({len(v['found_on'])} of {len(across['recordings'])})"
+        )
+        cells = [size_text(v["sizes"][n]) if n in v["found_on"] and n in v["sizes"] else
+                 ("accepted" if n in v["found_on"] else "-") for n in across["recordings"]]  # fmt: skip
+        rows.append([e, label, *cells])
+    return rows
+
+
+__all__ = [
+    "ALL",
+    "ONE",
+    "SOME",
+    "size_text",
+    "table_rows",
+    "verdicts",
+]

@@ -1,0 +1,142 @@
+"""What ``sins gap`` reads: every recording ``sins fit`` reads, each with its own reference.
+
+A recording comes as a dataset's name (``--dataset broad_05``, ``--dataset euroc/V1_01_easy``) or a path:
+a sins rig CSV (``ref_`` columns: per-sample reference inputs), a recording in any format sins reads (a
+CSV, an ``.npz``, a EuRoC/TUM-VI folder, a ROS bag or MCAP) beside its own reference or a ``--truth``
+trajectory. A :class:`GapInput` holds both forms a recording can be diagnosed in: its readings beside
+per-sample reference inputs (the per-sample statistic; for a trajectory, the exact ideal IMU of the
+motion through it: splines, differentiated), and, where the reference is a trajectory, the readings
+beside it at its epochs (the interval statistic, :mod:`sins.unit_gap.intervals`). The per-sample form
+of a trajectory is made only when asked for.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sins.errors import MissingInputError, SinsInputError
+from sins.io.recording import Recording
+from sins.series import CalibrationData, NavSeries, ReferencedRecording
+
+Samples = tuple[CalibrationData, NavSeries | None]
+
+
+@dataclass
+class GapInput:
+    """One recording to diagnose: what the user named it, its trajectory form (None: its reference is
+    per-sample inputs), and how to make its per-sample form (made once, when first asked for)."""
+
+    name: str
+    referenced: ReferencedRecording | None
+    make_samples: Callable[[], Samples]
+    _samples: Samples | None = field(default=None, repr=False)
+
+    def samples(self) -> Samples:
+        """The readings beside per-sample reference inputs, and the trajectory at their times (None
+        without one)."""
+        if self._samples is None:
+            self._samples = self.make_samples()
+        return self._samples
+
+
+def read_gap_input(
+    recording: str | os.PathLike[str] | None,
+    *,
+    dataset: str | None = None,
+    truth: str | os.PathLike[str] | None = None,
+    options: dict[str, Any] | None = None,
+) -> GapInput:
+    """A recording by dataset name or path, as ``sins fit`` reads it (:func:`sins.referenced.read_inputs`).
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the recording: both or neither of a path and a dataset, ``truth`` beside a
+        dataset, a recording without any reference, and as the readers do.
+    """
+    from sins import pipeline, referenced
+
+    if dataset is not None:
+        return _dataset(dataset, truth)
+    name = str(recording)
+    _check_csv(Path(name), truth, options)
+    inputs = referenced.read_inputs(recording, truth=truth, options=options)
+    if isinstance(inputs, CalibrationData):
+        return GapInput(name, None, lambda: (inputs, None))
+    if isinstance(inputs, Recording):
+        raise MissingInputError(f"{name}: the recording has no reference trajectory", needs="truth")
+    if truth is not None:  # a sins IMU file and its truth: the exact ideal IMU, in either form
+        return GapInput(name, inputs, lambda: pipeline.gap_data(Path(str(recording)), truth))
+    opts = dict(options or {})
+    return GapInput(name, inputs, lambda: _own_reference_samples(name, opts))
+
+
+def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:
+    """A CSV of sins's or its own columns, without a trajectory and without ``ref_`` columns: the
+    trajectory is what is missing (said before its columns are read as some other form)."""
+    from sins import io
+
+    if (
+        truth is not None
+        or not path.is_file()
+        or path.suffix.lower() != ".csv"
+        or (options or {}).get("columns")
+    ):
+        return
+    if not any(c.startswith("ref_") for c in io.read_columns(path)):
+        raise MissingInputError(
+            f"{path}: no ref_ columns (a rig recording has them); an IMU recording needs its trajectory "
+            "(a truth file)",
+            needs="truth",
+        )
+
+
+def _dataset(name: str, truth: str | os.PathLike[str] | None) -> GapInput:
+    from sins.io import datasets
+
+    if truth is not None:
+        raise SinsInputError("gap: --truth goes with a RECORDING, not with --dataset")
+    trajectory = datasets.load_reference(name)
+    return GapInput(name, trajectory, lambda: datasets.load_with_truth(name))
+
+
+def _own_reference_samples(path: str, options: dict[str, Any]) -> Samples:
+    """A recording read again with its own reference, as readings beside the exact ideal IMU of the
+    motion through that reference (splines, then the strapdown equations backwards), at the readings'
+    times (mean rates at their middles for increments); rows outside the reference are left out."""
+    from sins import io
+    from sins.nav import motion, trajectory
+
+    rec = io.read_recording_any(path, **options)
+    assert rec.truth is not None  # read once already, with its reference
+    t, gyro, accel = rec.mean_rates()
+    inside = (t >= rec.truth.t[0]) & (t <= rec.truth.t[-1])
+    t, gyro, accel = t[inside], gyro[inside], accel[inside]
+    if len(t) < 4:
+        raise SinsInputError(f"{path}: fewer than 4 readings within the reference's time span")
+    at = rec.truth.interpolate(t)
+    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
+    data = CalibrationData(
+        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=path
+    )
+    return data, at
+
+
+def check_names(names: list[str]) -> None:
+    """Refuse a recording named twice (its verdicts would agree with themselves)."""
+    seen = set()
+    for n in names:
+        if n in seen:
+            raise SinsInputError(f"gap: {n} is given twice")
+        seen.add(n)
+
+
+__all__ = [
+    "GapInput",
+    "check_names",
+    "read_gap_input",
+]

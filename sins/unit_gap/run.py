@@ -1,0 +1,134 @@
+"""A unit's recordings diagnosed: each on the statistic its reference calls for, then the verdicts across
+them and the shrink of each one's model judged on another (what ``sins gap`` does).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from sins.compensation.interval_fit import IntervalFit
+from sins.errors import SinsInputError
+from sins.gap import GapReport, diagnose
+from sins.imu import BASELINE
+from sins.series import CalibrationData, NavSeries
+from sins.unit_gap import across, shrink, statistic
+from sins.unit_gap.inputs import GapInput
+from sins.unit_gap.report import interval_report
+from sins.unit_gap.search import baseline_fit, diagnose_intervals
+
+
+@dataclass
+class Diagnosed:
+    """One recording diagnosed: its name, the report, how many rows it has, and its per-sample form
+    where it was diagnosed on samples (for the navigation beside a trajectory)."""
+
+    name: str
+    report: GapReport
+    rows: int
+    samples: tuple[CalibrationData, NavSeries | None] | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def diagnose_one(
+    inp: GapInput,
+    holdout: float = 0.3,
+    model: tuple[str, ...] = BASELINE,
+    asked: str = "auto",
+    interval_s: float = 1.0,
+    progress: Callable[[str], None] | None = None,
+) -> Diagnosed:
+    """``inp`` diagnosed on the statistic ``asked`` for ("auto": :func:`sins.unit_gap.statistic.choose`).
+
+    Raises
+    ------
+    SinsInputError
+        one line naming the recording: intervals asked of a per-sample reference, a recording whose
+        intervals cannot be fitted, a model beyond the baseline on intervals, and as the diagnosis does.
+    """
+    if asked == "intervals" and inp.referenced is None:
+        raise SinsInputError(
+            f"{inp.name}: --statistic intervals needs a reference trajectory; this one is per-sample inputs"
+        )
+    baseline = _baseline(inp, interval_s) if inp.referenced is not None else None
+    data = _samples(inp, asked)
+    trajectory = inp.referenced.reference if inp.referenced is not None else None
+    chosen = statistic.choose(
+        asked, data[0] if data else None, trajectory, baseline.quality if baseline else None
+    )
+    if chosen.kind == "samples":
+        if data is None:
+            data = inp.samples()
+        report = diagnose(data[0], holdout, model, progress)
+        report = _with_statistic(report, chosen.to_dict())
+        return Diagnosed(inp.name, report, len(data[0]), data)
+    if tuple(model) != tuple(BASELINE):
+        raise SinsInputError(f"{inp.name}: --model goes with the per-sample statistic (--statistic samples)")
+    assert inp.referenced is not None and baseline is not None
+    try:
+        d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
+    except ValueError as exc:
+        raise SinsInputError(f"{inp.name}: {exc}") from None
+    return Diagnosed(inp.name, interval_report(d, holdout, chosen.to_dict()), len(inp.referenced.imu.t) - 1)
+
+
+def _baseline(inp: GapInput, interval_s: float) -> IntervalFit | None:
+    """The interval fit of the baseline, or None where the recording's intervals cannot be fitted."""
+    assert inp.referenced is not None
+    try:
+        return baseline_fit(inp.referenced, interval_s)
+    except ValueError:
+        return None
+
+
+def _samples(inp: GapInput, asked: str) -> tuple[CalibrationData, NavSeries | None] | None:
+    """The per-sample form where the choice needs it (``auto``) or it is asked for; None where it
+    cannot be made from a trajectory (the choice then takes the intervals)."""
+    if inp.referenced is None or asked == "samples":
+        return inp.samples()
+    if asked == "intervals":
+        return None
+    try:
+        return inp.samples()
+    except (SinsInputError, ValueError):
+        return None
+
+
+def _with_statistic(report: GapReport, chosen: dict[str, Any]) -> GapReport:
+    return dataclasses.replace(report, statistic=chosen)
+
+
+def shrinks(
+    inputs: list[GapInput], results: list[Diagnosed], interval_s: float = 1.0
+) -> list[dict[str, Any]]:
+    """Each recording's accepted effects fitted on it and judged on the next (the last on the first):
+    :func:`sins.unit_gap.shrink.shrink`, where both have a reference trajectory."""
+    out = []
+    n = len(inputs)
+    for i in range(n):
+        a, b = inputs[i], inputs[(i + 1) % n]
+        if a.referenced is None or b.referenced is None:
+            out.append({"fitted_on": a.name, "judged_on": b.name,
+                        "verdict": "needs a reference trajectory on both recordings"})  # fmt: skip
+            continue
+        try:
+            figures = shrink.shrink(a.referenced, b.referenced, results[i].report.diagnosis, interval_s)
+        except (SinsInputError, ValueError) as exc:
+            figures = {"verdict": f"not judged: {exc}"}
+        out.append({**figures, "fitted_on": a.name, "judged_on": b.name})
+    return out
+
+
+def verdicts(results: list[Diagnosed]) -> dict[str, Any]:
+    """The verdicts across the recordings (:func:`sins.unit_gap.across.verdicts`)."""
+    return across.verdicts([(r.name, r.report) for r in results])
+
+
+__all__ = [
+    "Diagnosed",
+    "diagnose_one",
+    "shrinks",
+    "verdicts",
+]

@@ -1,0 +1,436 @@
+"""The gap diagnosis on a reference's intervals: the greedy search of :mod:`sins.gap.diagnosis`, scored
+on the residuals of integrated rotation and velocity change (:mod:`sins.unit_gap.intervals`).
+
+The baseline is the seed model (bias, scale and misalignment, the gyro's g-sensitivity) fitted on the
+intervals by :func:`sins.compensation.interval_fit.fit_intervals` (its linearisation point; no time
+offsets and no lever arm: both are library effects, ``time_offset`` and ``size_effect``). Every library
+effect whose class declares regression columns, and the time offsets, are candidates: each adds its
+columns (built from the readings' own steps) to its sensor's least squares. The intervals are
+withheld in blocks as samples are (the last ``holdout`` of every block of :data:`BLOCK_S`), each
+candidate is fitted on the others and scored by its withheld gain less
+:data:`~sins.gap.scoring.SIGNIFICANT_NATS` (:class:`~sins.unit_gap.fitter.SensorFit`: the noise that
+shared epochs give the intervals whitened), and the one of greatest gain among those above it is
+accepted, until none is. A bias step or an oscillation that explains a channel as well as the best
+candidate takes the channel (:mod:`sins.unit_gap.outside`); candidates within
+:data:`~sins.gap.scoring.TIE_NATS` of the accepted one are listed as indistinguishable.
+
+Random biases and output maps (quantization, saturation) are effects of single readings: the intervals
+say nothing of them, and the report names them as not fitted, with the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.compensation import interval_fit
+from sins.compensation.interval_fit import IntervalFit
+from sins.gap.floor import SIGNIFICANT_RATIO, TINY, noise_level
+from sins.gap.report import EffectScore, Outside
+from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS
+from sins.imu import CHANNELS, vocabulary
+from sins.series import ReferencedRecording
+from sins.unit_gap.fitter import (
+    INSTABILITY,
+    NO_WANDER,
+    RANDOM_WALK,
+    SensorFit,
+    chains,
+    cross_gains,
+    refit_allowance,
+)
+from sins.unit_gap.intervals import IntervalResiduals, interval_residuals
+from sins.unit_gap.outside import Tried, explains_as_well, try_disturbances
+
+Array = NDArray[np.float64]
+Rows = NDArray[np.bool_]
+
+#: Intervals are withheld at the end of blocks of this length, s: short beside a recording's kinds of
+#: motion (a rest, a turn, a drive), so that every kind is both fitted and judged.
+BLOCK_S = 10.0
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A library effect on intervals: its columns for each of its sensor's axes, (k, 3, p) each; a
+    random bias has none, and the wander ``phis`` its noise may take instead (see
+    :mod:`sins.unit_gap.fitter`)."""
+
+    name: str
+    sensor: str
+    per_axis: tuple[Array, Array, Array]
+    phis: Array | None = None
+
+    def columns(self, axes: list[int]) -> Array:
+        """Its columns on ``axes``, side by side."""
+        return np.concatenate([self.per_axis[a] for a in axes], axis=2)
+
+
+@dataclass
+class SensorState:
+    """A sensor's model as the search builds it: its fit, the accepted candidates and what they leave."""
+
+    fit: SensorFit
+    baseline: Array
+    accepted: list[Candidate] = field(default_factory=list)
+    aside: set[int] = field(default_factory=set)  # axes a disturbance outside the library explains
+    phis: Array = field(default_factory=lambda: NO_WANDER)  # the wander its noise may take
+
+    def columns(self, extra: Candidate | None = None) -> Array:
+        """The baseline's and the accepted candidates' columns (and ``extra``'s), on the axes not set
+        aside for a candidate."""
+        axes = [a for a in range(3) if a not in self.aside]
+        blocks = [self.baseline] + [c.columns(axes) for c in self.accepted]
+        if extra is not None:
+            blocks.append(extra.columns(axes))
+        return np.concatenate(blocks, axis=2)
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A candidate fitted beside its sensor's model: the withheld gain of each component, and what a
+    random bias may gain by chance beyond :data:`~sins.gap.scoring.SIGNIFICANT_NATS`
+    (:func:`~sins.unit_gap.fitter.refit_allowance`)."""
+
+    candidate: Candidate
+    gains: Array
+    allowance: float = 0.0
+    fit_scores: Array | None = None  # a random bias's: per component, fit log-likelihood less BIC's penalty
+
+    def gain(self, aside: set[int]) -> float:
+        """The gain over the components not set aside."""
+        return float(sum(g for a, g in enumerate(self.gains) if a not in aside))
+
+    def score(self, aside: set[int]) -> float:
+        """The gain beyond what it needs: accepted above 0."""
+        return self.gain(aside) - SIGNIFICANT_NATS - self.allowance
+
+
+@dataclass(frozen=True)
+class IntervalDiagnosis:
+    """What the search on intervals found, for :mod:`sins.unit_gap.report`."""
+
+    residuals: IntervalResiduals
+    baseline: IntervalFit
+    states: dict[str, SensorState]
+    before: dict[str, Array]  # what the baseline leaves, (k, 3)
+    after: dict[str, Array]  # what the accepted effects leave
+    effects: list[EffectScore]
+    diagnosis: list[str]
+    outside: list[Outside]
+    sizes: dict[str, dict[str, list[float]]]  # accepted effect -> channel -> its coefficients, SI
+    fit: Rows
+    withheld: Rows
+
+
+def withheld_intervals(t_mid: Array, holdout: float, block_s: float = BLOCK_S) -> Rows:
+    """The intervals withheld: the last ``holdout`` of each block of ``block_s`` (at least one each
+    way in a block of two or more)."""
+    block = np.floor((t_mid - t_mid[0]) / block_s).astype(int)
+    out = np.zeros(len(t_mid), dtype=bool)
+    for b in np.unique(block):
+        rows = np.flatnonzero(block == b)
+        held = min(max(int(np.floor(holdout * len(rows) + 0.5)), 1), len(rows) - 1) if len(rows) > 1 else 0
+        out[rows[len(rows) - held :]] = True
+    return out
+
+
+def baseline_fit(rec: ReferencedRecording, interval_s: float) -> IntervalFit:
+    """The seed model fitted on the intervals (:func:`sins.compensation.interval_fit.fit_intervals`,
+    no time offsets), the gyro's g-sensitivity kept only where it predicts intervals it was not fitted
+    on (the compensation fit's own rule: a recording whose rests all face one way cannot tell it from
+    the bias, and a K fitted on its noise corrects another recording wrongly; ``g_sensitivity`` says
+    which).
+
+    Raises
+    ------
+    ValueError
+        as :func:`~sins.compensation.interval_fit.fit_intervals`, without the g-sensitivity too.
+    """
+    try:
+        return interval_fit.fit_intervals(rec, interval_s=interval_s, time_offset=False, g_sensitivity="auto")
+    except ValueError:
+        return interval_fit.fit_intervals(rec, interval_s=interval_s, time_offset=False, g_sensitivity=False)
+
+
+def candidates(res: IntervalResiduals) -> list[Candidate]:
+    """Every library effect the intervals can judge: regression columns (those that need a temperature
+    only with one), the time offsets, and the random biases as a wander of the intervals' noise."""
+    none = np.zeros((len(res.iv), 3, 0))
+    out = [
+        Candidate(f"{sensor}.{kind}", sensor, (none, none, none), phis)
+        for sensor in ("gyro", "accel")
+        for kind, phis in (("bias_instability", INSTABILITY), ("rate_random_walk", RANDOM_WALK))
+    ]
+    for name, cls in vocabulary.effects_where(lambda t: t.candidate in ("regressors", "delay")):
+        sensor = name.split(".")[0]
+        if cls.candidate == "delay":
+            per_axis = tuple(res.delay(sensor, a) for a in range(3))
+        elif cls.needs_temp and res.steps.temp_offset is None:
+            continue
+        else:
+            per_axis = tuple(res.columns(sensor, cls.columns(res.steps, sensor, a), a) for a in range(3))
+        out.append(Candidate(name, sensor, per_axis))  # type: ignore[arg-type]
+    return out
+
+
+def not_on_intervals() -> dict[str, str]:
+    """The library's candidates the intervals say nothing of, with the reason."""
+    return {
+        name: "an effect of single readings: judged on samples, not on intervals (--statistic samples)"
+        for name, _ in vocabulary.effects_where(lambda t: t.candidate == "output")
+    }
+
+
+def diagnose_intervals(
+    rec: ReferencedRecording,
+    holdout: float = 0.3,
+    interval_s: float = 1.0,
+    progress: Callable[[str], None] | None = None,
+    baseline: IntervalFit | None = None,
+) -> IntervalDiagnosis:
+    """The gap diagnosis of ``rec`` on its reference's intervals (see the module docstring);
+    ``baseline``: :func:`baseline_fit`'s, if the caller has it.
+
+    Raises
+    ------
+    ValueError
+        where the intervals cannot be formed or fitted (too few, too little turning).
+    """
+    baseline = baseline or baseline_fit(rec, interval_s)
+    res = interval_residuals(rec, baseline.seed, interval_s)
+    withheld = withheld_intervals(res.t_mid, holdout)
+    fit = ~withheld
+    states = {}
+    for sensor in ("gyro", "accel"):
+        base = res.baseline(sensor, baseline.g_sensitivity)
+        states[sensor] = SensorState(
+            SensorFit.of(res.residual[sensor], fit, withheld, res.joined, base), base
+        )
+    before = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
+    remaining = candidates(res)
+    scores: dict[str, EffectScore] = {}
+    accepted: list[str] = []
+    outside: list[Outside] = []
+    while remaining:
+        trials = _round(states, remaining, progress)
+        for t in trials:
+            aside = states[t.candidate.sensor].aside
+            scores[t.candidate.name] = EffectScore(
+                t.candidate.name, _names(t.candidate.sensor, aside), t.score(aside), False
+            )
+        positive = [t for t in trials if t.score(states[t.candidate.sensor].aside) > 0.0]
+        if not positive:
+            break
+        best = max(positive, key=lambda t: t.gain(states[t.candidate.sensor].aside))
+        found = _set_aside(states[best.candidate.sensor], res, best)
+        if found:
+            outside += found
+            continue
+        _accept(states, best, trials, scores, accepted)
+        taken = best.candidate
+        bias = taken.phis is not None  # a sensor takes one random bias
+        remaining = [
+            c
+            for c in remaining
+            if c.name != taken.name and not (bias and c.phis is not None and c.sensor == taken.sensor)
+        ]
+    outside += _leftover(states, res)
+    after = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
+    ordered = [scores[n] for n in accepted] + sorted(
+        (e for n, e in scores.items() if n not in accepted), key=lambda e: -e.score
+    )
+    return IntervalDiagnosis(
+        res, baseline, states, before, after, ordered, accepted,
+        sorted(outside, key=lambda o: CHANNELS.index(o.channel)), _sizes(states, float(np.median(res.span))),
+        fit, withheld,
+    )  # fmt: skip
+
+
+def _names(sensor: str, aside: set[int]) -> tuple[str, ...]:
+    return tuple(f"{sensor}.{'xyz'[a]}" for a in range(3) if a not in aside)
+
+
+def _round(
+    states: dict[str, SensorState], remaining: list[Candidate], progress: Callable[[str], None] | None
+) -> list[Trial]:
+    """Every remaining candidate fitted beside its sensor's model."""
+    trials = []
+    for cand in remaining:
+        if progress:
+            progress(cand.name)
+        st = states[cand.sensor]
+        if len(st.aside) == 3:
+            continue
+        _, before = st.fit.solve(st.columns())
+        if cand.phis is not None:  # a random bias: the same columns, the noise with its wander
+            fit = st.fit
+            wandering = SensorFit.of(fit.y, fit.fit, fit.withheld, fit.joined, st.columns(), cand.phis)
+            _, after = wandering.solve(st.columns())
+            allowance = refit_allowance(fit, st.columns(), SIGNIFICANT_NATS)
+            penalty = 0.5 * float(np.log(max(int(fit.fit.sum()), 2)))  # its one more parameter, φ
+            scores = wandering.fit_loglik(after) - penalty
+            trials.append(Trial(cand, cross_gains(fit, before, wandering, after), allowance, scores))
+            continue
+        _, after = st.fit.solve(st.columns(cand))
+        trials.append(Trial(cand, st.fit.gains(before, after)))
+    return trials
+
+
+def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Outside]:
+    """The channels of ``best``'s sensor where a disturbance outside the library explains as much as
+    ``best`` does; they are set aside (no candidate is fitted there again)."""
+    current = st.columns()
+    _, left = st.fit.solve(current)
+    found = []
+    for axis in range(3):
+        if axis in st.aside or best.gains[axis] <= 0.0:
+            continue
+        tried = try_disturbances(st.fit, res, best.candidate.sensor, axis, current, left)
+        fit_score = None if best.fit_scores is None else float(best.fit_scores[axis])
+        disturbance = explains_as_well(tried, float(best.gains[axis]), fit_score)
+        if disturbance is not None:
+            found.append(disturbance)
+            st.aside.add(axis)
+    return found
+
+
+def _accept(
+    states: dict[str, SensorState], best: Trial, trials: list[Trial], scores: dict[str, EffectScore],
+    accepted: list[str],
+) -> None:  # fmt: skip
+    """Take ``best`` into its sensor's model; note those this data cannot tell from it."""
+    name = best.candidate.name
+    aside = states[best.candidate.sensor].aside
+    ties = tuple(
+        t.candidate.name
+        for t in trials
+        if t.candidate.name != name
+        and t.candidate.sensor == best.candidate.sensor
+        and abs(t.gain(aside) - best.gain(aside)) < TIE_NATS
+    )
+    scores[name] = dataclasses.replace(scores[name], accepted=True, indistinguishable=ties)
+    for tie in ties:
+        scores[tie] = dataclasses.replace(
+            scores[tie], not_accepted_because=f"this data cannot tell it from {name}, which was taken"
+        )
+    st = states[best.candidate.sensor]
+    st.accepted.append(best.candidate)
+    if best.candidate.phis is not None:
+        st.phis = best.candidate.phis
+    # The noise is the model's: what the accepted effect explained is no longer the noise's to whiten.
+    st.fit = SensorFit.of(st.fit.y, st.fit.fit, st.fit.withheld, st.fit.joined, st.columns(), st.phis)
+    accepted.append(name)
+
+
+def _leftover(states: dict[str, SensorState], res: IntervalResiduals) -> list[Outside]:
+    """A step or an oscillation significant on a channel the library leaves: a gap all the same."""
+    out = []
+    for sensor, st in states.items():
+        current = st.columns()
+        _, left = st.fit.solve(current)
+        for axis in range(3):
+            if axis in st.aside:
+                continue
+            tried: list[Tried] = try_disturbances(st.fit, res, sensor, axis, current, left)
+            found = explains_as_well(tried, 0.0)
+            if found is not None:
+                out.append(found)
+    return out
+
+
+def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, list[float]]]:
+    """Each accepted effect's fitted coefficients per channel, SI (the columns' own, in the order the
+    effect's class gives them; a random bias's correlation time, s, its intervals ``span`` s long)."""
+    out: dict[str, dict[str, list[float]]] = {}
+    for sensor, st in states.items():
+        coef, _ = st.fit.solve(st.columns())
+        at = st.baseline.shape[2]
+        axes = [a for a in range(3) if a not in st.aside]
+        for cand in st.accepted:
+            out[cand.name] = {}
+            if cand.phis is not None:  # a Gauss-Markov bias: its correlation time, s; a walk: none
+                if cand.name.endswith("bias_instability"):
+                    out[cand.name] = {
+                        f"{sensor}.{'xyz'[a]}": [_correlation_time(float(st.fit.phi[a]), span)] for a in axes
+                    }
+                else:
+                    del out[cand.name]
+                continue
+            for a in axes:
+                width = cand.per_axis[a].shape[2]
+                out[cand.name][f"{sensor}.{'xyz'[a]}"] = [float(v) for v in coef[at : at + width]]
+                at += width
+    return out
+
+
+def _correlation_time(phi: float, interval_s: float = 1.0) -> float:
+    """A Gauss-Markov bias's correlation time, s, from its coefficient between intervals of ``interval_s``."""
+    return float(-interval_s / np.log(phi)) if 0.0 < phi < 1.0 else float("inf")
+
+
+def interval_noise_level(residual: Array, joined: Rows) -> float:
+    """:func:`~sins.gap.floor.noise_level` of an interval residual (k,) over every chain of joined
+    intervals, fit and withheld alike: the withheld blocks alone hold one triple of neighbours each,
+    too few to measure a lag-one correlation."""
+    d0, d1, n0, n1 = 0.0, 0.0, 0, 0
+    for a, b in chains(joined):
+        d = np.diff(residual[a:b])
+        d0, n0 = d0 + float(np.sum(d * d)), n0 + len(d)
+        d1, n1 = d1 + float(np.sum(d[1:] * d[:-1])), n1 + max(len(d) - 1, 0)
+    if n1 == 0 or d0 / n0 + d1 / n1 <= 0.0:
+        return noise_level(residual)
+    return float(np.sqrt(d0 / n0 + d1 / n1))
+
+
+def significant_ratio(withheld: int) -> float:
+    """The RMS over ``withheld`` intervals against the floor beyond which a channel is above it:
+    :data:`~sins.gap.floor.SIGNIFICANT_RATIO`, or two standard errors of an RMS of that many values
+    (``1 + 2/√(2m)``) where that is larger: 1.21 for a 150 s recording's 45 withheld intervals, whose
+    RMS a clean recording's (``tests/numpy_unit_gap.py``) spread from 0.94 to 1.19 of its floor."""
+    return max(SIGNIFICANT_RATIO, 1.0 + 2.0 / np.sqrt(2.0 * max(withheld, 1)))
+
+
+def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], list[str]]:
+    """Per channel, the withheld RMS before and after the accepted effects and the noise floor, as
+    mean rates over the intervals (rad/s, m/s²); and the channels left unexplained (above the floor by
+    :func:`significant_ratio`, or taken by a disturbance outside the library)."""
+    span = float(np.median(d.residuals.span))
+    ratio = significant_ratio(int(d.withheld.sum()))
+    figures, unexplained = {}, []
+    disturbed = {o.channel for o in d.outside}
+    for sensor in ("gyro", "accel"):
+        for a in range(3):
+            ch = f"{sensor}.{'xyz'[a]}"
+            before, after = d.before[sensor][:, a], d.after[sensor][:, a]
+            floor = max(interval_noise_level(after, d.residuals.joined), TINY) / span
+            rms_after = float(np.sqrt(np.mean(after[d.withheld] ** 2))) / span
+            figures[ch] = {
+                "rms_before": float(np.sqrt(np.mean(before[d.withheld] ** 2))) / span,
+                "rms_after": rms_after,
+                "noise_floor": floor,
+            }
+            if rms_after > ratio * floor or ch in disturbed:
+                unexplained.append(ch)
+    return figures, unexplained
+
+
+__all__ = [
+    "BLOCK_S",
+    "Candidate",
+    "IntervalDiagnosis",
+    "SensorState",
+    "Trial",
+    "baseline_fit",
+    "candidates",
+    "channel_figures",
+    "diagnose_intervals",
+    "interval_noise_level",
+    "not_on_intervals",
+    "significant_ratio",
+    "withheld_intervals",
+]
