@@ -27,8 +27,7 @@ if TYPE_CHECKING:
 
 
 def _cmd_gap(args: argparse.Namespace) -> int:
-    from sins import io, pipeline
-    from sins.unit_gap import run
+    from sins import io
 
     if args.rerun:
         from sins import viz
@@ -44,55 +43,66 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     inputs, model = _gap_inputs(args)
     if args.rerun and len(inputs) > 1:
         raise SinsInputError("gap: --rerun goes with one recording")
-    results = []
-    for inp in inputs:
-        with progress_bar(f"diagnosing {inp.name}", "candidate") as bar:
-
-            def progress(name: str) -> None:
-                assert bar is not None  # passed only when there is a bar
-                bar.set_postfix_str(name)
-                advance(bar, bar.n + 1)
-
-            result = run.diagnose_one(
-                inp,
-                args.holdout,
-                model,
-                args.statistic,
-                args.interval_s,
-                progress if bar is not None else None,
-            )
-        _print_gap_report(result.name, result.rows, result.report, args.top)
-        results.append(result)
-    if len(results) == 1:
-        result = results[0]
-        document: dict[str, Any] = {"recording": result.name, **result.report.to_dict()}
-        data, truth = result.samples if result.samples is not None else (None, None)
-        if data is not None and truth is not None and not result.report.unreferenced:
-            nav = pipeline.gap_navigation(data, truth, result.report)
-            print(
-                "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
-                f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with "
-                f"the model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
-                f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
-                f"{nav['sim_to_real_after_m']:.3f} m after"
-            )
-            document["navigation"] = nav
-    else:
-        verdicts = run.verdicts(results)
-        _print_across(verdicts)
-        judged = run.shrinks(inputs, results, args.interval_s)
-        _print_shrinks(judged)
-        document = {
-            "recordings": [{"recording": r.name, **r.report.to_dict()} for r in results],
-            "across": verdicts,
-            "shrink": judged,
-        }
+    results = [_diagnose(args, inp, model) for inp in inputs]
+    document = _one_document(results[0]) if len(results) == 1 else _several_document(args, inputs, results)
     if args.json:
         io.write_json(args.json, document)
     if args.rerun:
         viz.save_gap(results[0].report, args.rerun)
         print(f"wrote {args.rerun}")
     return 0
+
+
+def _diagnose(args: argparse.Namespace, inp: Any, model: tuple[str, ...]) -> Any:
+    """One recording's diagnosis, behind a progress bar, printed."""
+    from sins.unit_gap import run
+
+    with progress_bar(f"diagnosing {inp.name}", "candidate") as bar:
+
+        def progress(name: str) -> None:
+            assert bar is not None  # passed only when there is a bar
+            bar.set_postfix_str(name)
+            advance(bar, bar.n + 1)
+
+        result = run.diagnose_one(
+            inp, args.holdout, model, args.statistic, args.interval_s, progress if bar is not None else None
+        )
+    _print_gap_report(result.name, result.rows, result.report, args.top)
+    return result
+
+
+def _one_document(result: Any) -> dict[str, Any]:
+    """One recording's report; with a trajectory, the navigation of the real and simulated units."""
+    from sins import pipeline
+
+    document: dict[str, Any] = {"recording": result.name, **result.report.to_dict()}
+    data, truth = result.samples if result.samples is not None else (None, None)
+    if data is not None and truth is not None and not result.report.unreferenced:
+        nav = pipeline.gap_navigation(data, truth, result.report)
+        print(
+            "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
+            f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with "
+            f"the model, {nav['simulated_after_m']:.3f} m with the accepted effects\n"
+            f"  simulated against real at the end: {nav['sim_to_real_before_m']:.3f} m before, "
+            f"{nav['sim_to_real_after_m']:.3f} m after"
+        )
+        document["navigation"] = nav
+    return document
+
+
+def _several_document(args: argparse.Namespace, inputs: list[Any], results: list[Any]) -> dict[str, Any]:
+    """Several recordings of one unit: the verdicts across them and each model's shrink on another."""
+    from sins.unit_gap import run
+
+    verdicts = run.verdicts(results)
+    _print_across(verdicts)
+    judged = run.shrinks(inputs, results, args.interval_s)
+    _print_shrinks(judged)
+    return {
+        "recordings": [{"recording": r.name, **r.report.to_dict()} for r in results],
+        "across": verdicts,
+        "shrink": judged,
+    }
 
 
 def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
