@@ -7,7 +7,7 @@ period makes no difference this early).
 
 import numpy as np
 
-from sins.earth import G0
+from sins.core.earth import G0
 from sins.nav import motion, strapdown, trajectory
 from sins.nav.metrics import nav_errors, summarize
 

@@ -55,7 +55,7 @@ for name, stream in {"raw": readings, "regression": corrected}.items():
     row = "".join(f"{v:10.3f}" for v in reading_error.mean(axis=0) * to_units)
     print(f"{name:<12}{row}{final_m:10.2f}")
 
-# 5. Plot: matplotlib, headless; sins.plots.save writes the picture atomically.
+# 5. Plot: matplotlib, headless; sins.viz.plots.save writes the picture atomically.
 import matplotlib.pyplot as plt  # noqa: E402  (only this step needs it)
 
 fig, ax = plt.subplots(figsize=(8, 4))
@@ -63,4 +63,4 @@ for name, e in errors.items():
     ax.plot(e.t, e.horizontal_m, label=name)
 ax.set(xlabel="time (s)", ylabel="horizontal error (m)", title="tactical unit, 3-minute drive")
 ax.legend()
-print(f"wrote {sins.plots.save(fig, sys.argv[1] if len(sys.argv) > 1 else 'drift.png')}")
+print(f"wrote {sins.viz.plots.save(fig, sys.argv[1] if len(sys.argv) > 1 else 'drift.png')}")

@@ -2,7 +2,7 @@
 
 ``import sins`` gives the main entry points (:data:`ENTRY_POINTS`: the data, ``generate``,
 ``draw_unit``, ``simulate_rig``, ``integrate``, ``run_scenario`` …) and the subpackages
-(:data:`SUBMODULES`: ``sins.compensation``, ``sins.referenced``, ``sins.characterise`` …), each imported
+(:data:`SUBMODULES`: ``sins.compensation``, ``sins.runs``, ``sins.characterise`` …), each imported
 the first time it is used, so that ``import sins`` itself is quick. The library guide
 (``docs/guide/library.md``) walks through them: simulate, corrupt, compensate, integrate, plot.
 
@@ -41,7 +41,7 @@ Earth
     correction, Earth rate 7.292115e-5 rad/s; transport rate and Coriolis
     terms are always modelled.
 IMU samples
-    Increment form (:class:`~sins.series.ImuIncrements`): ``t`` holds the
+    Increment form (:class:`~sins.core.series.ImuIncrements`): ``t`` holds the
     n+1 step boundaries and row ``k`` of ``dtheta_b``, ``dv_b`` the integrals
     of ``omega_ib_b`` and ``f_ib_b`` over ``(t[k], t[k+1]]``; a file's row
     is stamped with its step's end. Rate form: instantaneous values at
@@ -65,34 +65,32 @@ if TYPE_CHECKING:  # what the lazy names below are, for type checkers and editor
     from sins import imu as imu
     from sins import io as io
     from sins import nav as nav
-    from sins import pipeline as pipeline
-    from sins import plots as plots
-    from sins import referenced as referenced
+    from sins import runs as runs
     from sins import scenario as scenario
     from sins import viz as viz
+    from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
     from sins.imu import ImuModel
     from sins.imu.calibration import RigProcedure, simulate_rig
     from sins.imu.spec import GRADES, Grade, draw_unit
     from sins.nav.metrics import nav_errors, summarize
     from sins.nav.strapdown import InitialState, integrate
     from sins.nav.trajectory import generate
-    from sins.pipeline import resolve_scenario, run_scenario
-    from sins.replay import navigate
-    from sins.run_results import ScenarioRun
-    from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
-    from sins.unit_fit import fit_unit
+    from sins.runs.pipeline import resolve_scenario, run_scenario
+    from sins.runs.replay import navigate
+    from sins.runs.results import ScenarioRun
+    from sins.runs.unit_fit import fit_unit
 
 __version__ = "0.1.0"
 
 #: The main entry points, each imported from its module the first time it is asked for: ``import sins``
 #: loads none of them (nor numpy, numba, torch, rerun, dask or matplotlib).
 ENTRY_POINTS = {
-    # the data: time-major arrays in SI units (sins.series)
-    "NavSeries": "sins.series",
-    "ImuIncrements": "sins.series",
-    "ImuRates": "sins.series",
-    "CalibrationData": "sins.series",
-    "ReferencedRecording": "sins.series",
+    # the data: time-major arrays in SI units (sins.core.series)
+    "NavSeries": "sins.core.series",
+    "ImuIncrements": "sins.core.series",
+    "ImuRates": "sins.core.series",
+    "CalibrationData": "sins.core.series",
+    "ReferencedRecording": "sins.core.series",
     # simulate: the truth and the exact ideal IMU along a motion (sins.nav.motion builds one)
     "generate": "sins.nav.trajectory",
     # corrupt: an IMU's error model, a unit of a grade, a rig session
@@ -108,11 +106,11 @@ ENTRY_POINTS = {
     "nav_errors": "sins.nav.metrics",
     "summarize": "sins.nav.metrics",
     # runs: a scenario in one call, a unit fitted once, a recorded IMU against its truth
-    "resolve_scenario": "sins.pipeline",
-    "run_scenario": "sins.pipeline",
-    "ScenarioRun": "sins.run_results",
-    "fit_unit": "sins.unit_fit",
-    "navigate": "sins.replay",
+    "resolve_scenario": "sins.runs.pipeline",
+    "run_scenario": "sins.runs.pipeline",
+    "ScenarioRun": "sins.runs.results",
+    "fit_unit": "sins.runs.unit_fit",
+    "navigate": "sins.runs.replay",
 }
 
 #: The subpackages and modules a notebook reaches from here (``sins.compensation.make("mlp")``), imported
@@ -126,9 +124,7 @@ SUBMODULES = (
     "imu",
     "io",
     "nav",
-    "pipeline",
-    "plots",
-    "referenced",
+    "runs",
     "scenario",
     "viz",
 )

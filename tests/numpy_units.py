@@ -11,8 +11,8 @@ import numpy as np
 from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.spatial.transform import Rotation
 
-from sins import referenced
-from sins.series import ImuRates, NavSeries
+from sins.compensation import referenced
+from sins.core.series import ImuRates, NavSeries
 
 
 def recordings(seed: int, count: int = 3) -> tuple[list[referenced.ReferencedRecording], object, np.ndarray]:

@@ -38,8 +38,8 @@ import pytest
 import test_aided_reference as common
 
 from sins.aiding import ekf, gnss
+from sins.core.series import ImuIncrements
 from sins.nav import strapdown
-from sins.series import ImuIncrements
 
 
 def _pyins_and_pandas() -> tuple:

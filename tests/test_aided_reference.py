@@ -47,10 +47,11 @@ import numpy as np
 import numpy_ins_filter as ref
 import pytest
 
-from sins import imu, pipeline, scenario
+from sins import imu, scenario
 from sins.aiding import ekf, gnss
+from sins.core.series import ImuIncrements, NavSeries
 from sins.nav import strapdown
-from sins.series import ImuIncrements, NavSeries
+from sins.runs import pipeline
 
 CONFIG = ekf.FilterConfig.for_grade("tactical")
 TUNING = ref.Tuning(

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from conftest import refusal
 
-from sins import earth, rotation
 from sins.aiding import ekf, gnss
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, NavSeries
 from sins.nav import strapdown, trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start, Turn
-from sins.series import ImuIncrements, NavSeries
 
 D = np.radians
 

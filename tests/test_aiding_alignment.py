@@ -17,12 +17,13 @@ import pytest
 from conftest import refusal
 from scipy import stats
 
-from sins import earth, imu, rotation
+from sins import imu
 from sins.aiding import alignment, ekf, gnss, policy
+from sins.core import earth, rotation
+from sins.core.series import NavSeries
 from sins.imu import spec
 from sins.nav import trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start
-from sins.series import NavSeries
 
 D = np.radians
 LAT = D(45.0)

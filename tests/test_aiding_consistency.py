@@ -22,11 +22,12 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from sins import earth, imu, rotation
+from sins import imu
 from sins.aiding import ekf, gnss
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, NavSeries
 from sins.nav import strapdown, trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start, Turn
-from sins.series import ImuIncrements, NavSeries
 
 D = np.radians
 RUNS = 50

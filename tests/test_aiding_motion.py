@@ -20,13 +20,13 @@ from conftest import refusal
 from scipy.stats import chi2
 from test_fuzz import run_cli, to_toml
 
-from sins import pipeline
 from sins.aiding import alignment, ekf, gnss
+from sins.core.series import ImuIncrements, NavSeries
 from sins.imu import spec
 from sins.nav import strapdown, trajectory
 from sins.nav.motion import Accelerate, Hold, SegmentMotion, Start, Turn
+from sins.runs import pipeline
 from sins.scenario import from_dict
-from sins.series import ImuIncrements, NavSeries
 
 D = np.radians
 ARM = np.array([1.0, 0.0, -1.2])

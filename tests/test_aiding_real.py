@@ -13,7 +13,7 @@ import pytest
 import scipy.io
 from conftest import dataset_folder
 
-from sins import referenced_aiding
+from sins.aiding import recorded as referenced_aiding
 from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FILE, PSINS_VEHICLE_FOLDER
 from sins.io.datasets.root import ENV_VAR
 

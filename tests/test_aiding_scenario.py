@@ -19,7 +19,7 @@ import pytest
 from conftest import refusal
 from test_fuzz import run_cli, to_toml
 
-from sins import pipeline
+from sins.runs import pipeline
 from sins.scenario import from_dict
 
 DRIVE: dict[str, Any] = {
@@ -79,8 +79,8 @@ def test_the_outage_error_is_the_solutions_error_at_that_sample():
     result = pipeline.run_scenario(sc)
     (window,) = result.aided["none"].outages
     # The same aided run from the library's pieces: the error at the last sample before 130 s.
-    from sins import earth
     from sins.aiding import ekf, gnss
+    from sins.core import earth
     from sins.nav import strapdown
     from sins.scenario import load_imu
 
@@ -171,8 +171,8 @@ def test_a_scenario_without_gnss_reports_no_aided_runs(tmp_path: Path):
 def test_rerun_shows_the_aided_errors_with_3_sigma_fixes_outages_and_biases(tmp_path: Path):
     from test_viz import _read
 
-    from sins import viz
     from sins.imu import CHANNELS, display_unit
+    from sins.viz import viewer as viz
 
     result = pipeline.run_scenario(from_dict(DRIVE))
     logged = _read(viz.save(result, tmp_path / "aided.rrd"))

@@ -69,6 +69,9 @@ def _top_level(tree: ast.Module) -> tuple[list[str], set[str], list[str] | None]
                 if not _is_alias(node.value):
                     defined.extend(names)
         elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            if node.target.id == "__all__" and node.value is not None:  # a package of modules only: ``= []``
+                listed = list(ast.literal_eval(node.value))
+                continue
             bound.add(node.target.id)
             defined.append(node.target.id)
         elif isinstance(node, ast.Import | ast.ImportFrom):

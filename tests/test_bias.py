@@ -23,8 +23,8 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.cli import main
+from sins.core.series import ImuRates
 from sins.nav import budget
-from sins.series import ImuRates
 
 SEED = 44
 OMEGA = 7.292115e-5

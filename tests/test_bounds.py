@@ -22,7 +22,7 @@ import pytest
 from conftest import refusal
 from test_fuzz import IMU_MODEL, NON_FINITE, RIG, SCENARIO, WAYPOINTS, assert_one_line, run_cli, to_toml
 
-from sins import quality
+from sins.campaign import quality
 from sins.imu import spec as imu_spec
 from sins.imu.vocabulary import Param
 from sins.scenario import validate

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from sins import earth, imu, rotation
+from sins import imu
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 from sins.imu.calibration import RateTable, RigProcedure, TemperatureProfile
 from sins.io import datasets
-from sins.series import CalibrationData
 
 FAST = RigProcedure(positions=24, position_dwell_s=8.0, rate_table=RateTable(dwell_s=4.0), lat_deg=45.0)
 

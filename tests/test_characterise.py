@@ -23,8 +23,8 @@ from sins import cli, io, scenario
 from sins.characterise import analysis, check, model_file, reference, selection, still, trend
 from sins.characterise import noise_terms as terms
 from sins.characterise.allan import allan, edf_overlapping
+from sins.core.series import ImuRates
 from sins.errors import SinsInputError
-from sins.series import ImuRates
 from tests.conftest import dataset_folder, refusal
 from tests.numpy_noise import CASES, DT, KEYS, case_series, exact_avar, generate, truths
 

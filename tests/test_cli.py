@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from conftest import run_process
 
-from sins import io, pipeline
+from sins import io
 from sins.cli import main
+from sins.runs import pipeline
 
 SUMMARY_KEYS = (
     "final_north_m",

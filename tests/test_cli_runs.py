@@ -12,8 +12,9 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from sins import earth, io
+from sins import io
 from sins.cli import main
+from sins.core import earth
 
 # 20 s still, then 10 s speeding up: a tactical unit, its power-on seed 3.
 SCENARIO = """\

@@ -12,11 +12,11 @@ from conftest import refusal
 
 from sins import compensation, imu, io
 from sins.cli import main
+from sins.core.series import CalibrationData, ImuRates
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 from sins.nav import trajectory
 from sins.nav.motion import Hold, SegmentMotion, Start, Turn
-from sins.series import CalibrationData, ImuRates
 
 FAST = calibration.RigProcedure(position_dwell_s=8.0, rate_table=calibration.RateTable(dwell_s=4.0))
 
@@ -423,7 +423,8 @@ def test_regression_drift_is_bounded_by_its_calibration_on_linear_errors(tmp_pat
     error within 5 % of the oracle's, and a drift far below the uncompensated one and within a
     factor 2 of the oracle's.
     """
-    from sins import pipeline, scenario
+    from sins import scenario
+    from sins.runs import pipeline
 
     (tmp_path / "imu.toml").write_text(LINEAR_IMU)
     ratios = []

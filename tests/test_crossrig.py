@@ -18,8 +18,8 @@ import numpy_rigs as nr
 import pytest
 
 from sins import compensation, imu
+from sins.core.series import CalibrationData
 from sins.imu import calibration
-from sins.series import CalibrationData
 
 STRATEGIES = ("regression", "mlp", "kohonen")
 

@@ -19,6 +19,7 @@ from conftest import dataset_folder, refusal
 from scipy.ndimage import maximum_filter1d
 from scipy.spatial.transform import Rotation
 
+from sins.core.series import CalibrationData
 from sins.io.datasets.broad import (
     BROAD_FOLDER,
     BROAD_GRAVITY,
@@ -26,7 +27,6 @@ from sins.io.datasets.broad import (
     BROAD_TRIALS,
     read_broad,
 )
-from sins.series import CalibrationData
 
 FOLDER = dataset_folder(BROAD_FOLDER)
 

@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 from conftest import dataset_folder, refusal
 
-from sins import earth
+from sins.core import earth
+from sins.core.series import CalibrationData
 from sins.io.datasets.psins_lasergyro import (
     PSINS_LASERGYRO_FILE,
     PSINS_LASERGYRO_FOLDER,
     read_psins_lasergyro,
 )
-from sins.series import CalibrationData
 
 FOLDER = dataset_folder(PSINS_LASERGYRO_FOLDER)
 PATH = FOLDER / PSINS_LASERGYRO_FILE

@@ -19,7 +19,8 @@ import pytest
 import scipy.io
 from conftest import dataset_folder, refusal
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData, NavSeries
 from sins.io.datasets.psins_vehicle import (
     PSINS_VEHICLE_FILE,
     PSINS_VEHICLE_FOLDER,
@@ -28,7 +29,6 @@ from sins.io.datasets.psins_vehicle import (
     read_psins_vehicle,
 )
 from sins.io.datasets.root import ENV_VAR
-from sins.series import CalibrationData, NavSeries
 
 FOLDER = dataset_folder(PSINS_VEHICLE_FOLDER)
 PATH = FOLDER / PSINS_VEHICLE_FILE

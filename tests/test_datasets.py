@@ -15,9 +15,10 @@ import pytest
 from conftest import dataset_folder, refusal
 
 import sins
-from sins import earth, io
+from sins import io
+from sins.core import earth
+from sins.core.series import CalibrationData
 from sins.io import datasets
-from sins.series import CalibrationData
 
 FOLDER = dataset_folder(datasets.FERRARIS_FOLDER)
 FILES = ("example_ferraris_session.csv", "example_ferraris_session_list.json")

@@ -1,4 +1,4 @@
-"""Tests of ``sins.earth`` against independent references.
+"""Tests of ``sins.core.earth`` against independent references.
 
 Nothing here reuses the formulas of the module under test: gravity is compared with
 Somigliana's original closed form, with the exact normal gravity field of the
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sins import earth
+from sins.core import earth
 
 # WGS84 defining and derived constants, written out (NIMA TR8350.2).
 A = 6378137.0

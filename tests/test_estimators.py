@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from sins import compensation, imu
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
-from sins.series import CalibrationData, ImuIncrements, ImuRates
 
 FAST = calibration.RigProcedure(position_dwell_s=8.0, rate_table=calibration.RateTable(dwell_s=4.0))
 #: Parameters that keep a learner's fit short here (the laws do not depend on its size).

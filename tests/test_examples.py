@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from conftest import run_process
 
-from sins.earth import G0
+from sins.core.earth import G0
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -21,8 +21,8 @@ from scipy.spatial.transform import Rotation
 
 from sins import compensation
 from sins.compensation.ferraris import HOLDS, TURNS, Ferraris, check_session, compare_with_imucal, to_imucal
+from sins.core.series import CalibrationData, RigPhase
 from sins.io import datasets
-from sins.series import CalibrationData, RigPhase
 
 G = 9.81
 FOLDER = dataset_folder(datasets.FERRARIS_FOLDER)
@@ -261,7 +261,7 @@ def test_registered_saved_and_loaded_bit_for_bit(tmp_path: Path) -> None:
 def test_correction_inverts_the_seed_model_on_rates_and_increments() -> None:
     """Readings made by the fitted model from known inputs come back to those inputs; increments are
     corrected as their mean rate times the step (the model is affine)."""
-    from sins.series import ImuIncrements
+    from sins.core.series import ImuIncrements
 
     rng = np.random.default_rng(6)
     fitted = Ferraris().fit(_numpy_session(Unit.draw(rng), Hand(), rng))

@@ -50,7 +50,7 @@ from test_fuzz import (
 )
 
 from sins.compensation import identifiability
-from sins.earth import G0
+from sins.core.earth import G0
 from sins.imu import DEG_PER_H
 from sins.io.paths import writes_in_place
 

@@ -379,7 +379,7 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
     refusal(lambda: gap.diagnose(data, model=("gyro.wobble",)), "unknown effect")
     imu_only = tmp_path / "imu.csv"
     imu_only.write_text("t,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n")
-    from sins import pipeline
+    from sins.runs import pipeline
 
     refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "trajectory")
 
@@ -486,8 +486,8 @@ def test_a_recording_by_another_tool_on_another_procedure_is_diagnosed(
 def _drive_recording(tmp_path: Path, seed: int = 2) -> tuple[calibration.CalibrationData, Any, Any]:
     """A baseline unit's IMU recording over 80 s of driving (speeding up, a turn, a straight) with
     its truth, written and read back as ``sins gap --truth`` does; and the truth and its ideal IMU."""
-    from sins import pipeline
     from sins.nav import motion, trajectory
+    from sins.runs import pipeline
 
     drive = motion.SegmentMotion.from_segments(
         motion.Start(np.radians(45.0), np.radians(7.0), 200.0),
@@ -509,7 +509,7 @@ def test_an_imu_recording_with_its_truth_gets_the_exact_ideal_imu_as_reference(t
     Nothing is diagnosed, though a gyro walk gains 7.1 nats on gyro.y's withheld rows (the last
     straight): the baseline's coefficients, fitted on the turn, are off there, and the walk's
     filter follows the misfit (see the next test)."""
-    from sins import pipeline
+    from sins.runs import pipeline
 
     data, truth, rates = _drive_recording(tmp_path)
     # Far below a tactical unit's noise per sample (60 °/h, 1 mg); measured 4e-8 rad/s and 8e-6 m/s².

@@ -12,10 +12,10 @@ import numpy as np
 import numpy_gap as ng
 import pytest
 
+from sins.core.series import CalibrationData
 from sins.gap import candidates, channel, diagnose, disturbance, lattice, randombias
 from sins.gap.design import Design, Projection
 from sins.imu.numerics import hermite_slopes
-from sins.series import CalibrationData
 
 
 @pytest.fixture

@@ -30,8 +30,8 @@ import pytest
 
 from sins import gap, io
 from sins.cli import main
+from sins.core.series import RigPhase
 from sins.gap import candidates, channel
-from sins.series import RigPhase
 
 # ----------------------------------------------------------------------------- the generator's physics
 

@@ -13,8 +13,8 @@ import pytest
 from conftest import refusal
 from test_fuzz import run_cli, to_toml
 
-from sins import earth
 from sins.compensation import identifiability
+from sins.core import earth
 from sins.imu import DEG_PER_H, BiasInstability
 from sins.imu.spec import GRADES, draw_unit
 from sins.io.datasets.root import data_root

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from sins.core.series import ImuIncrements, ImuRates
 from sins.imu import (
     BASELINE,
     Bias,
@@ -37,7 +38,6 @@ from sins.imu import (
     TimeOffset,
     effect_names,
 )
-from sins.series import ImuIncrements, ImuRates
 
 EPS = np.finfo(float).eps
 Z = 4.0  # statistical checks are 4σ bounds: a false failure has odds < 1e-4 per check (and seeds are fixed)

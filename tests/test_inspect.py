@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 from conftest import dataset_folder
 
-from sins import inspection, io
+from sins import io
 from sins.cli import main
-from sins.series import ImuRates
+from sins.core.series import ImuRates
+from sins.io import inspection
 
 OMEGA = 7.292115e-5  # Earth's rate, rad/s
 G = 9.8062  # normal gravity at 45° N, m/s²

@@ -12,7 +12,7 @@ from conftest import refusal
 from scipy.spatial.transform import Rotation
 
 from sins import io
-from sins.series import ImuIncrements, ImuRates, NavSeries
+from sins.core.series import ImuIncrements, ImuRates, NavSeries
 
 SEED = 20240611
 

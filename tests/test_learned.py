@@ -113,7 +113,7 @@ def test_on_broad_the_rows_of_an_interval_are_counted_as_the_draws_they_repeat()
     intervals give hold one draw of the reference's error over each interval, and the learners average
     runs of the rows that repeat one (``repeats_``), at most an interval's rows and more for longer
     intervals (measured: 69 and 71 rows for 1 s, 286 rows; about 40 for 0.2 s, 57 rows)."""
-    from sins import referenced
+    from sins.compensation import referenced
     from sins.io.datasets import broad_reference
 
     rec = broad_reference.read_broad_reference("05")

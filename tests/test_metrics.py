@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import NavSeries
 from sins.nav.metrics import DriftAccumulator, NavErrors, euler_errors, nav_errors, summarize
-from sins.series import NavSeries
 
 
 def test_euler_errors_match_the_rotation_module_and_scipy():

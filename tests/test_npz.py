@@ -10,7 +10,8 @@ import pytest
 from conftest import dataset_folder, refusal
 from scipy.spatial.transform import Rotation
 
-from sins import io, referenced
+from sins import io
+from sins.compensation import referenced
 from sins.io import datasets
 
 EUROC = dataset_folder("euroc")

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from matplotlib import image
 
-from sins import compensation, io, plots
+from sins import compensation, io
 from sins.cli import main
+from sins.viz import plots
 
 SHORT = """\
 name = "short"
@@ -208,7 +209,7 @@ def test_the_error_grid_splits_north_east_down_and_goes_logarithmic_where_errors
 def aided_run():  # type: ignore[no-untyped-def]
     from test_aiding_scenario import DRIVE
 
-    from sins import pipeline
+    from sins.runs import pipeline
     from sins.scenario import from_dict
 
     return pipeline.run_scenario(from_dict(DRIVE))
@@ -242,7 +243,7 @@ def test_the_aided_rows_hold_the_filters_envelopes_and_the_budget_its_bias_terms
 def test_open_loop_runs_get_their_own_axes() -> None:
     """The raw readings' 34° and a correction's 1.2° in panels of their own: the corrected curve keeps
     its scale instead of lying flat under the raw one."""
-    from sins.referenced import OpenLoop
+    from sins.compensation.referenced import OpenLoop
 
     t = np.linspace(0.0, 100.0, 101)
     raw = OpenLoop(t, np.radians(0.34 * t), np.radians(0.3 * t), np.radians(0.1 * t), np.ones(101, bool))
@@ -281,8 +282,8 @@ def test_integrate_plots_errors_with_a_truth_and_the_solution_without(
     capsys.readouterr()
     _check_image(folder / "free.png", 4, 3)
     from sins import io as sins_io
-    from sins import replay
-    from sins.series import ImuRates
+    from sins.core.series import ImuRates
+    from sins.runs import replay
 
     rec = sins_io.read_recording_any(folder / "still.csv")
     assert isinstance(rec.imu, ImuRates)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from sins.cli import common, main
-from sins.series import CalibrationData
+from sins.core.series import CalibrationData
 
 STILL = """\
 [imu]

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from sins import compensation, quality
+from sins import compensation
+from sins.campaign import quality
 from sins.campaign.gate import FALSE_ALARM
 from sins.cli import main
 

@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.cli import main
-from sins.earth import local_ned
+from sins.core.earth import local_ned
 from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes
 

@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sins import io
+from sins.core.series import CalibrationData, RigPhase
 from sins.io import tables
-from sins.series import CalibrationData, RigPhase
 
 SEED = 20240917
 

@@ -1,5 +1,6 @@
 """Compensation fitted against a reference trajectory on intervals (sins.compensation.interval_fit,
-sins.referenced, ``sins fit/evaluate/correct`` with a reference), judged on data sins did not make: a
+sins.compensation.referenced, ``sins fit/evaluate/correct`` with a reference), judged on data sins did not
+make: a
 unit of known errors written with numpy whose reference is ten times noisier than the sensor
 (tests/numpy_referenced.py), BROAD's motion capture and the PSINS drive (skipped without the data)."""
 
@@ -15,12 +16,13 @@ import pytest
 from numpy_referenced import GRAVITY, HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.spatial.transform import Rotation
 
-from sins import compensation, earth, referenced
+from sins import compensation
 from sins.cli import main
-from sins.compensation import coefficients, interval_fit
+from sins.compensation import coefficients, interval_fit, referenced
+from sins.core import earth
+from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.imu.calibration import SeedModelFit
 from sins.io.datasets.root import data_root
-from sins.series import ImuIncrements, ImuRates, NavSeries
 
 DATA = data_root()
 BROAD = DATA / "broad_mocap" / "05_undisturbed_slow_rotation_with_breaks_B.mat"

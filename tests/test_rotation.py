@@ -1,4 +1,4 @@
-"""Property tests of ``sins.rotation`` against ``scipy.spatial.transform.Rotation``.
+"""Property tests of ``sins.core.rotation`` against ``scipy.spatial.transform.Rotation``.
 
 scipy is the independent reference throughout: it shares the conventions of the
 package (scalar-last quaternions, Hamilton product, ``from_euler("ZYX", [yaw, pitch,
@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy.spatial.transform import Rotation
 
-from sins import rotation
+from sins.core import rotation
 
 SETTINGS = settings(max_examples=200, deadline=None)
 

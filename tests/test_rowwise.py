@@ -1,4 +1,4 @@
-"""sins.rowwise's compiled row arithmetic gives numpy's broadcasting results to the last bit, and
+"""sins.core.rowwise's compiled row arithmetic gives numpy's broadcasting results to the last bit, and
 sins.imu.numerics.apply_matrix gives ``rows @ matrix.T``'s: both replace numpy expressions in the corruption,
 the corrections and the rig fits, whose outputs must not move by a rounding."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sins import rowwise
+from sins.core import rowwise
 from sins.imu.numerics import apply_matrix
 
 SPECIALS = np.array([0.0, -0.0, np.inf, -np.inf, np.nan, 5e-324, -2.2e-308, 1e308, -1.0, 3.0])

@@ -15,9 +15,10 @@ import recorded_runs
 from conftest import refusal
 from scipy.spatial.transform import Rotation
 
-from sins import io, pipeline, scenario
+from sins import io, scenario
 from sins.imu import calibration
 from sins.nav import motion, trajectory
+from sins.runs import pipeline
 
 SEED = 7_2024
 PRESET_DIR = Path(__file__).resolve().parents[1] / "scenarios"

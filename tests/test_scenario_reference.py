@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from sins import pipeline
+from sins.runs import pipeline
 from sins.scenario import toml as toml_module
 from sins.scenario import validate
 

@@ -1,4 +1,5 @@
-"""Fits on several recordings of one unit (sins.compensation.several, sins.referenced.fit_several), the
+"""Fits on several recordings of one unit (sins.compensation.several,
+sins.compensation.referenced.fit_several), the
 rule for a new recording's gyro bias (sins.compensation.unit_bias) and ``sins fit`` on several recordings,
 judged on data sins did not make: units of known errors written with numpy (tests/numpy_referenced.py, and
 a bounded-velocity recording below) and EuRoC's real recordings (skipped without the data)."""
@@ -16,10 +17,10 @@ from conftest import dataset_folder, refusal
 from numpy_units import recordings, write_npz
 from scipy.spatial.transform import Rotation
 
-from sins import compensation, referenced
+from sins import compensation
 from sins.cli import main
-from sins.compensation import several, unit_bias
-from sins.series import ImuIncrements
+from sins.compensation import referenced, several, unit_bias
+from sins.core.series import ImuIncrements
 
 EUROC = dataset_folder("euroc")
 needs_euroc = pytest.mark.skipif(not (EUROC / "V1_01_easy.npz").is_file(), reason=f"no EuRoC data in {EUROC}")

@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sins import earth
+from sins.core import earth
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import DriftAccumulator, nav_errors, summarize
 from sins.nav.motion import Accelerate, Climb, Hold, Rotate, SegmentMotion, Start, Turn

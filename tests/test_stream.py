@@ -14,12 +14,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sins import compensation, pipeline, scenario
+from sins import compensation, scenario
+from sins.core.series import ImuIncrements
 from sins.imu import Quantization, QuantizationNoise, TimeOffset, spec
 from sins.imu.stream import IncrementStream
 from sins.nav import motion, trajectory
 from sins.nav.metrics import BlockMeans, block_means
-from sins.series import ImuIncrements
+from sins.runs import pipeline
 
 SEED = 20261125
 D = np.radians

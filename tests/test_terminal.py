@@ -61,7 +61,7 @@ def test_spawn_without_a_display_is_refused_before_any_work(tmp_path: Path) -> N
 
 
 def test_the_cli_and_the_viewer_bridge_agree_on_a_display(monkeypatch: pytest.MonkeyPatch) -> None:
-    from sins import viz
+    from sins.viz import viewer as viz
 
     assert common.NO_DISPLAY == viz.NO_DISPLAY
     for env in ({}, {"DISPLAY": ":0"}, {"WAYLAND_DISPLAY": "wayland-0"}):
@@ -75,7 +75,7 @@ def test_the_cli_and_the_viewer_bridge_agree_on_a_display(monkeypatch: pytest.Mo
 def test_the_viewer_sins_spawns_runs_without_analytics(monkeypatch: pytest.MonkeyPatch) -> None:
     """rerun's viewer collects nothing and prints no first-run banner where CI is set: sins sets it for
     the child it spawns, and leaves its own environment as it was."""
-    from sins import viz
+    from sins.viz import viewer as viz
 
     seen: dict[str, str | None] = {}
     monkeypatch.setattr(viz, "has_display", lambda: True)

@@ -16,7 +16,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from sins import earth, io, rotation
+from sins import io
+from sins.core import earth, rotation
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import nav_errors
 from sins.nav.motion import (
@@ -204,7 +205,7 @@ def test_the_increment_convention() -> None:
     """The package's convention (sins's docstring, "IMU samples"): row ``k`` of an increment series is the
     integral over ``(t[k], t[k+1]]``. A rate ramp ``ω = t`` integrates to ``(t[k+1]² − t[k]²) / 2`` there,
     whatever the steps; the rate form's conversion (cubic where the steps are uniform) is exact for it."""
-    from sins.series import ImuRates
+    from sins.core.series import ImuRates
 
     t = np.cumsum(np.r_[0.0, np.full(50, 0.01)]) + 3.0
     ramp = np.column_stack([t, 2 * t, -t])

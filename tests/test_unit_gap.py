@@ -21,10 +21,10 @@ import pytest
 from sins import imu
 from sins.cli import main
 from sins.compensation.intervals import shift_increments
+from sins.core.series import CalibrationData, ImuIncrements
 from sins.gap.floor import noise_floor, noise_level
 from sins.io import datasets
 from sins.io.datasets import read_npz_reference
-from sins.series import CalibrationData, ImuIncrements
 from sins.unit_gap import statistic
 from sins.unit_gap.inputs import read_gap_input
 from sins.unit_gap.intervals import interval_residuals

@@ -11,11 +11,13 @@ import pytest
 from conftest import refusal
 
 import sins
-from sins import earth, pipeline, scenario
+from sins import scenario
 from sins.cli import main
+from sins.core import earth
 from sins.imu import CHANNELS, DEG_PER_H, MG
+from sins.runs import pipeline
 
-# The bridge is ``sins.viz``, imported (with rerun under it) by the first test that uses it, not when
+# The bridge is ``sins.viz.viewer``, imported (with rerun under it) by the first test that uses it, not when
 # pytest collects this module: every test process collects every module, and rerun costs each ~100 MB.
 
 
@@ -101,7 +103,7 @@ def _read(path: Path) -> dict[str, dict[str, np.ndarray]]:
         elif "unit" in batch.schema.names:  # a campaign's final errors, by unit
             t = batch.column("unit").to_numpy().astype(float)
         else:  # the gap's Allan deviations, by octave of the cluster time
-            t = batch.column(sins.viz.ALLAN_TIMELINE).to_numpy().astype(float)
+            t = batch.column(sins.viz.viewer.ALLAN_TIMELINE).to_numpy().astype(float)
         out[chunk.entity_path]["t"].append(t)
         for name in batch.schema.names:
             if ":" in name:  # "Archetype:component"
@@ -124,7 +126,7 @@ def drive(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, pipeline.Scen
 @pytest.fixture(scope="module")
 def recorded(drive: tuple[Path, pipeline.ScenarioRun], tmp_path_factory: pytest.TempPathFactory):
     _, result = drive
-    out = sins.viz.save(result, tmp_path_factory.mktemp("rrd") / "drive.rrd", summary="the table")
+    out = sins.viz.viewer.save(result, tmp_path_factory.mktemp("rrd") / "drive.rrd", summary="the table")
     return result, _read(out)
 
 
@@ -135,9 +137,11 @@ def test_entity_paths_and_row_counts(recorded) -> None:
     n_nav, n_imu = len(result.truth.t), len(result.sensor_t)
     assert n_nav == 1201 + 1  # 10 Hz of 120.05 s: every 10th of 12006 samples, and the last
     expected = {f"/world/{s}/vehicle": n_nav for s in ["truth", *strategies]}
-    expected |= {f"/errors/{panel}/{s}": n_nav for panel in sins.viz.ERROR_PANELS for s in strategies}
+    expected |= {f"/errors/{panel}/{s}": n_nav for panel in sins.viz.viewer.ERROR_PANELS for s in strategies}
     labels = ["raw" if s == "none" else s for s in strategies]
-    expected |= {f"/imu/{sins.viz.imu_entity(ch)}/{label}": n_imu for ch in CHANNELS for label in labels}
+    expected |= {
+        f"/imu/{sins.viz.viewer.imu_entity(ch)}/{label}": n_imu for ch in CHANNELS for label in labels
+    }
     for entity, rows in expected.items():
         assert entity in logged, entity
         assert len(logged[entity]["t"]) == rows, entity
@@ -149,7 +153,7 @@ def test_logged_final_errors_equal_the_runs_metrics(recorded) -> None:
     result, logged = recorded
     for name, run in result.runs.items():
         s = run.summary
-        final = {p: logged[f"/errors/{p}/{name}"]["scalars"][-1] for p in sins.viz.ERROR_PANELS}
+        final = {p: logged[f"/errors/{p}/{name}"]["scalars"][-1] for p in sins.viz.viewer.ERROR_PANELS}
         assert logged[f"/errors/horizontal_m/{name}"]["t"][-1] == pytest.approx(result.truth.t[-1], abs=1e-9)
         assert final["horizontal_m"] == s.final_horizontal_m
         assert final["down_m"] == s.final_down_m
@@ -193,11 +197,13 @@ def test_one_more_run_beside_others(drive, tmp_path: Path) -> None:
     _, result = drive
     path = tmp_path / "campaign.rrd"
     rr = _rerun()
-    rec = rr.RecordingStream(sins.viz.APPLICATION_ID)
+    rec = rr.RecordingStream(sins.viz.viewer.APPLICATION_ID)
     rec.save(path)
     origin = (float(result.truth.lat[0]), float(result.truth.lon[0]), float(result.truth.h[0]))
     for member in range(2):
-        sins.viz.log_run(rec, "regression", result.runs["regression"], origin, prefix=f"campaign/{member}")
+        sins.viz.viewer.log_run(
+            rec, "regression", result.runs["regression"], origin, prefix=f"campaign/{member}"
+        )
     rec.flush()
     rec.disconnect()
     logged = _read(path)
@@ -237,7 +243,7 @@ def test_cli_saves_a_recording_and_refuses_what_cannot_work(
 
     assert main(["run", str(path), "--rerun", str(tmp_path / "nowhere" / "x.rrd")]) == 2
     assert "does not exist" in capsys.readouterr().err
-    refusal(lambda: sins.viz.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
+    refusal(lambda: sins.viz.viewer.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
 
 
 def _free_port() -> int:
@@ -253,7 +259,7 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
 
     _, result = drive
     web, grpc = _free_port(), _free_port()
-    address = sins.viz.serve(result, summary="the table", web_port=web, grpc_port=grpc)
+    address = sins.viz.viewer.serve(result, summary="the table", web_port=web, grpc_port=grpc)
     assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
     with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=600) as page:  # a deadlock guard
         assert page.status == 200 and b"<html" in page.read().lower()
@@ -272,11 +278,11 @@ def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_pat
     gyro = data.gyro.copy()
     gyro[:, 0] += np.radians(0.05) * np.sin(2 * np.pi * data.t / 20.0)  # a gap on gyro x to localise
     report = gap.diagnose(dataclasses.replace(data, gyro=gyro))
-    logged = _read(sins.viz.save_gap(report, tmp_path / "gap.rrd"))
+    logged = _read(sins.viz.viewer.save_gap(report, tmp_path / "gap.rrd"))
     held = report.rows[1]
     for ch in CHANNELS:
         for label in ("before", "after"):
-            assert len(logged[f"/gap/{sins.viz.imu_entity(ch)}/{label}"]["t"]) == held
+            assert len(logged[f"/gap/{sins.viz.viewer.imu_entity(ch)}/{label}"]["t"]) == held
     unit_size = DEG_PER_H
     np.testing.assert_allclose(
         logged["/gap/gyro_x_deg_per_h/before"]["scalars"], report.residual_before[:, 0] / unit_size
@@ -314,10 +320,10 @@ def test_a_campaign_logs_its_percentile_bands_and_each_units_final_error(tmp_pat
             rows["final_horizontal_m"].append(float(series[-1]))
             rows["series_t_s"].append(t.tolist())
             rows["series_horizontal_m"].append(series.tolist())
-    logged = _read(sins.viz.save_campaign(rows, tmp_path / "c.rrd"))
+    logged = _read(sins.viz.viewer.save_campaign(rows, tmp_path / "c.rrd"))
     for strategy, rates in growth.items():
         all_series = rates[:, None] * t[None, :]
-        for q in sins.viz.CAMPAIGN_PERCENTILES:
+        for q in sins.viz.viewer.CAMPAIGN_PERCENTILES:
             band = logged[f"/campaign/drive/horizontal_m/{strategy}/p{q}"]
             assert np.allclose(band["t"], t)
             assert np.allclose(band["scalars"], np.percentile(all_series, q, axis=0), rtol=1e-12)

@@ -20,11 +20,11 @@ from numpy.typing import NDArray
 from sins import gap, imu
 from sins.cli import main
 from sins.compensation import terms
-from sins.earth import G0
+from sins.core.earth import G0
+from sins.core.series import ImuIncrements, ImuRates
 from sins.imu import calibration, vocabulary
 from sins.imu import spec as imu_spec
 from sins.imu.vocabulary import Param, RegressorInputs, Term, TrueInputs, parameter_field, vector_param
-from sins.series import ImuIncrements, ImuRates
 
 Array = NDArray[np.float64]
 DPS = np.pi / 180.0

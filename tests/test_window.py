@@ -16,7 +16,7 @@ import pytest
 
 from sins import compensation
 from sins.compensation import window
-from sins.series import CalibrationData, ImuRates
+from sins.core.series import CalibrationData, ImuRates
 
 RATE_HZ = 100.0
 NOISE = 2e-3  # rad/s per sample

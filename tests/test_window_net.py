@@ -15,8 +15,8 @@ from conftest import refusal
 from sins import compensation
 from sins.compensation import window_net
 from sins.compensation.window_net import EDGES_S, STRIDE, WindowNet, window_inputs
+from sins.core.series import CalibrationData, ImuRates
 from sins.imu.calibration import SeedModelFit
-from sins.series import CalibrationData, ImuRates
 
 RATE_HZ = 200.0
 

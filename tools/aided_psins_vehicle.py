@@ -17,9 +17,9 @@ import argparse
 import numpy as np
 import scipy.io
 
+from sins.aiding.recorded import psins_vehicle_outages
 from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FILE, PSINS_VEHICLE_FOLDER
 from sins.io.datasets.root import dataset_file
-from sins.referenced_aiding import psins_vehicle_outages
 
 #: PSINS right-forward-up into forward-right-down (the reader's turn).
 _RFU_TO_FRD = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])

@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
 
+from sins.core.series import ReferencedRecording
 from sins.io import datasets
-from sins.series import ReferencedRecording
 
 #: NED to ENU (and back): east and north swapped, down turned up.
 _NED_TO_ENU = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])

@@ -30,10 +30,11 @@ def child(scenario_name: str, grade: str) -> None:
     t0 = time.perf_counter()
     import numpy as np
 
-    from sins import pipeline, scenario
+    from sins import scenario
     from sins.aiding import ekf, gnss
     from sins.imu import spec
     from sins.nav import strapdown
+    from sins.runs import pipeline
 
     stages["imports"] = time.perf_counter() - t0
     t = time.perf_counter()

@@ -44,11 +44,12 @@ from typing import Any
 
 import psutil
 
-from sins import campaign, compensation, pipeline
+from sins import campaign, compensation
 from sins.campaign import engine, unit
 from sins.compensation import base
 from sins.imu import stream
 from sins.nav import metrics
+from sins.runs import pipeline
 
 CAMPAIGN = """name = "bench"
 [units]

@@ -20,7 +20,8 @@ that every size is made alike; per size the median fit time (wall, and this proc
 busy machine inflates far less) and the exponent of a least-squares line through log time against log
 rows (1: time linear in the rows).
 
-``--real``: each strategy fitted by :func:`sins.referenced.fit` (intervals of 1 s) on BROAD trial 05 and
+``--real``: each strategy fitted by :func:`sins.compensation.referenced.fit` (intervals of 1 s) on BROAD
+trial 05 and
 judged on trial 18 (open-loop attitude), and on the PSINS drive's first 70 s, judged on its last 30 s
 (free-inertial drive); the data root is ``../shared/data`` (``SINS_DATA`` overrides it).
 """
@@ -43,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import numpy_rigs
 
 from sins import compensation
-from sins.series import CalibrationData
+from sins.core.series import CalibrationData
 
 STRATEGIES = ("regression", "regression_robust", "regression_extended", "mlp", "kohonen", "mlp_pure",
               "kohonen_pure")  # fmt: skip
@@ -122,7 +123,7 @@ def scaling(strategies: list[str], rows: list[int], repeat: int) -> None:
 
 def real(strategies: list[str]) -> None:
     """Fit and judge on BROAD (05 -> 18) and on the PSINS drive (first 70 s -> last 30 s)."""
-    from sins import referenced
+    from sins.compensation import referenced
     from sins.errors import SinsInputError
     from sins.io.datasets import broad_reference, psins_reference
 

@@ -60,8 +60,9 @@ def _median(label: str, args: list[str], repeat: int) -> None:
 
 
 def _kernel_throughput(repeat: int) -> None:
-    from sins import pipeline, scenario
+    from sins import scenario
     from sins.nav import strapdown
+    from sins.runs import pipeline
 
     sc = scenario.load(pipeline.resolve_scenario(pipeline.DEFAULT_SCENARIO))
     truth, imu = pipeline.simulate(sc)

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from sins import compensation
-from sins.series import ImuIncrements
+from sins.core.series import ImuIncrements
 
 
 def _readings(samples: int) -> ImuIncrements:

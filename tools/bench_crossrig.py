@@ -45,11 +45,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy_rigs as ind
 
-from sins import compensation, imu, pipeline, scenario
+from sins import compensation, imu, scenario
+from sins.core.series import CalibrationData, ImuIncrements
 from sins.imu import calibration
 from sins.nav import strapdown
 from sins.nav.metrics import nav_errors, summarize
-from sins.series import CalibrationData, ImuIncrements
+from sins.runs import pipeline
 
 REGIMES = (
     "seed",

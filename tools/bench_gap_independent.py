@@ -61,7 +61,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import numpy_gap as ng
 from bench_gap import run_cases  # the same runner as sins's own rig bench (tools/ is on the path)
 
-from sins import gap, io, pipeline
+from sins import gap, io
+from sins.runs import pipeline
 
 FORMAT = "sins-bench-gap-independent"
 

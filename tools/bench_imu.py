@@ -16,10 +16,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from sins import imu, pipeline, scenario
+from sins import imu, scenario
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 from sins.nav import trajectory
+from sins.runs import pipeline
 
 
 def _time(label: str, call: Callable[[], object], repeat: int) -> None:

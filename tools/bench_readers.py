@@ -1,5 +1,5 @@
 """How fast the recording readers go: a ROS 2 bag, a ROS 1 bag and a EuRoC folder of N readings, written
-here, read with ``sins.io.read_recording_any``; and ``sins.inspection.inspect`` on the result.
+here, read with ``sins.io.read_recording_any``; and ``sins.io.inspection.inspect`` on the result.
 
     .venv/bin/python tools/bench_readers.py [--rows 200000]
 
@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sins import inspection, io
+from sins import io
+from sins.io import inspection
 
 
 def _imu(ts, ns: int, w: np.ndarray, f: np.ndarray):  # type: ignore[no-untyped-def]

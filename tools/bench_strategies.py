@@ -22,11 +22,11 @@ import time
 import numpy as np
 
 from sins import compensation, imu
+from sins.core.series import ImuIncrements, NavSeries
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 from sins.nav import motion, strapdown, trajectory
 from sins.nav.metrics import nav_errors, summarize
-from sins.series import ImuIncrements, NavSeries
 
 STRATEGIES = ("none", "regression", "regression_robust", "mlp", "kohonen", "mlp_pure", "kohonen_pure")
 

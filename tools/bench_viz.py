@@ -7,7 +7,7 @@ Usage::
 Runs the scenario once with four strategies (``none``, ``oracle``, ``regression``,
 ``regression_robust``: what is logged does not depend on which, and these fit in
 seconds), then writes it to a ``.rrd`` file ``--repeat`` times with
-:func:`sins.viz.save` and prints the median and range of the wall time, the file
+:func:`sins.viz.viewer.save` and prints the median and range of the wall time, the file
 size and how many rows went out.
 """
 
@@ -20,7 +20,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from sins import pipeline, scenario, viz
+from sins import scenario
+from sins.runs import pipeline
+from sins.viz import viewer as viz
 
 
 def main() -> None:

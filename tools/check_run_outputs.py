@@ -9,7 +9,7 @@ Usage::
 
 For every preset ``sins scenarios`` lists, and a few variants (another unit or power-on on a preset, the
 aided drive with the ideal IMU), it keeps ``sins run --json`` and a SHA-256 of every array and figure
-of the :class:`sins.pipeline.ScenarioRun` (thinned truth and solutions, errors, sensor errors, the aided
+of the :class:`sins.runs.pipeline.ScenarioRun` (thinned truth and solutions, errors, sensor errors, the aided
 runs' errors, filter records and outage windows); and ``sins integrate --json`` of a simulated
 recording in each form. ``compare`` runs them again and names every file or field that differs. The
 machine's BLAS and torch kernels are part of the figures: record and compare on one machine, with the
@@ -34,8 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from sins import pipeline, scenario
+from sins import scenario
 from sins.cli import main as sins_main
+from sins.runs import pipeline
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 

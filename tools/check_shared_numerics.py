@@ -4,10 +4,10 @@ Usage::
 
     OMP_NUM_THREADS=1 .venv/bin/python tools/check_shared_numerics.py
 
-* the overlapping Allan deviation (:mod:`sins.allan`, the rate's mean taken out) against the gap floor's
+* the overlapping Allan deviation (:mod:`sins.core.allan`, the rate's mean taken out) against the gap floor's
   before issue 34 (the running sum of the rate as it comes), on zero-mean residuals and on a 9.8 m/s²
   reading;
-* :meth:`sins.series.NavSeries.interpolate`'s slerp against ``scipy.spatial.transform.Slerp``;
+* :meth:`sins.core.series.NavSeries.interpolate`'s slerp against ``scipy.spatial.transform.Slerp``;
 * :func:`sins.imu.numerics.cubic_hermite` against ``scipy.interpolate.CubicHermiteSpline``.
 """
 
@@ -18,9 +18,9 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicHermiteSpline
 from scipy.spatial.transform import Rotation, Slerp
 
-from sins.allan import allan_deviation
+from sins.core.allan import allan_deviation
+from sins.core.series import NavSeries
 from sins.imu.numerics import cubic_hermite
-from sins.series import NavSeries
 
 Array = NDArray[np.float64]
 

@@ -33,10 +33,10 @@ from imucal import FerrarisCalibration, ferraris_regions_from_df
 from sins import compensation
 from sins.compensation.base import NoCompensation, Strategy
 from sins.compensation.ferraris import Ferraris, ImucalCalibration, check_session, compare_with_imucal
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.io import datasets
 from sins.io.datasets import ferraris as reader
-from sins.series import CalibrationData
 
 UNITS = {
     "accel_unit_mps2": reader.ANNOTATED_ACCEL_MPS2_PER_COUNT,

@@ -8,12 +8,14 @@ Usage::
 
 * **BROAD** (unit B, optical motion capture): fitted on trial 05, judged on 18, and the other way round:
   the gyro integrated alone from the first optical orientation, BROAD's total / heading / inclination
-  RMSE over the movement rows (``sins.referenced.open_loop_attitude``), as fitted and with the gyro bias
+  RMSE over the movement rows (``sins.compensation.referenced.open_loop_attitude``), as fitted and with the
+  gyro bias
   taken again from the judged trial's opening rest (what a user does with a calibration from another
   day). The time to fit on one trial and judge the other is printed beside each strategy.
 * **PSINS drive** (MEMS against the FOG-INS): fitted on the first 70 s, judged over the last 30 s: the
   corrected MEMS navigating free inertial from the FOG-INS state at 70 s (vertical held), RMS attitude and
-  velocity errors and the horizontal error at the end (``sins.referenced.drive_errors``); beside the raw
+  velocity errors and the horizontal error at the end (``sins.compensation.referenced.drive_errors``);
+  beside the raw
   MEMS, the file's own ``eb0``/``db0`` and ``bias_only`` (the PSINS demo filter's model fitted here).
 
 Every figure is a judgement on readings the fit did not see. The VQF and Madgwick figures beside BROAD's
@@ -30,8 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from sins import referenced
-from sins.compensation import Regression
+from sins.compensation import Regression, referenced
 from sins.errors import SinsInputError
 from sins.imu.calibration import SeedModelFit
 from sins.io import datasets

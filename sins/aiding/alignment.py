@@ -24,12 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
 from sins.aiding import ekf, gnss
 from sins.aiding.gnss import GnssFixes
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements
 from sins.errors import SinsInputError
 from sins.nav import strapdown
-from sins.series import ImuIncrements
 
 Array = NDArray[np.float64]
 

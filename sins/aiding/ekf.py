@@ -37,12 +37,12 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from sins import earth, rotation
 from sins.aiding.gnss import GnssFixes, check_fixes
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, NavSeries
 from sins.errors import SinsInputError
 from sins.imu import spec
 from sins.nav import strapdown
-from sins.series import ImuIncrements, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
-from sins.series import NavSeries
 
 Array = NDArray[np.float64]
 

@@ -18,9 +18,9 @@ import numpy as np
 
 from sins.aiding import alignment, ekf
 from sins.aiding.gnss import GnssFixes
+from sins.core.series import ImuIncrements, NavSeries
 from sins.errors import SinsInputError
 from sins.nav import strapdown
-from sins.series import ImuIncrements, NavSeries
 
 #: The shortest stop at the start an automatic alignment aligns still on, s.
 AUTO_MIN_STOP_S = 30.0

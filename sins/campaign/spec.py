@@ -136,8 +136,8 @@ def load(path: str | os.PathLike[str]) -> CampaignSpec:
 def check(sc: Scenario, grade: str | None) -> None:
     """What ``sins run`` refuses of a scenario before any work, for a unit of ``grade``: its memory
     (aided runs hold their arrays whole), a motion shorter than a sample, an alignment the trajectory
-    cannot give (:func:`sins.pipeline.check_runnable`)."""
-    from sins import pipeline
+    cannot give (:func:`sins.runs.pipeline.check_runnable`)."""
+    from sins.runs import pipeline
 
     assert sc.source is not None
     check_scenario_size(sc, sc.source, "a unit driving")

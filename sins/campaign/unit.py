@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from sins import pipeline
 from sins.campaign.spec import CampaignSpec, nav_seed, rig_seed
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS
+from sins.runs import pipeline
 
 #: The figures of a row, in the order of its columns (a :class:`sins.nav.metrics.DriftSummary`'s,
 #: then the held-back rig residual's RMS and the bias left, per channel).
@@ -45,9 +45,9 @@ def run_units(spec: CampaignSpec, units: Sequence[int]) -> list[dict[str, Any]]:
     """Every row of ``units``: by unit, then scenario and strategy in the campaign's order.
 
     Each unit's rig session is simulated and every strategy fitted once
-    (:func:`sins.pipeline.fit_unit`); each scenario's trajectory is then generated once and driven by
+    (:func:`sins.runs.pipeline.fit_unit`); each scenario's trajectory is then generated once and driven by
     every unit with its navigation power-on (:func:`~sins.campaign.spec.nav_seed`), corrected by each
-    strategy and integrated (:func:`sins.pipeline.run_units`): each unit's figures are those of
+    strategy and integrated (:func:`sins.runs.pipeline.run_units`): each unit's figures are those of
     ``sins run`` on that unit, to the last bit.
     """
     seeds = [spec.unit_seed(u) for u in units]

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from sins.allan import segment_sums as segment_sums
+from sins.core.allan import segment_sums as segment_sums
 
 Array = NDArray[np.float64]
 

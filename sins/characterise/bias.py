@@ -44,14 +44,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
 from sins.aiding import alignment, ekf
 from sins.characterise.analysis import ChannelResult, characterise, residual
 from sins.characterise.still import motion, still_rows
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG_PER_H, UG
 from sins.io.recording import Recording
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

@@ -24,9 +24,9 @@ from scipy import stats
 
 from sins.characterise.allan import allan
 from sins.characterise.analysis import Characterisation
+from sins.core.series import ImuIncrements
 from sins.imu import CHANNELS, ImuModel
 from sins.imu.stream import IncrementStream
-from sins.series import ImuIncrements
 
 Array = NDArray[np.float64]
 

@@ -30,10 +30,10 @@ from numpy.typing import NDArray
 from sins.characterise.allan import allan
 from sins.characterise.analysis import MIN_ROWS, Residual, duration, residual
 from sins.characterise.still import still_rows
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS
 from sins.imu.calibration import fit_seed_model
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

@@ -42,7 +42,7 @@ def _cmd_bias(args: argparse.Namespace) -> int:
     if args.json:
         io.write_json(args.json, estimate.to_dict())
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         save_plot(args.plot, lambda: plots.bias_figure(estimate), f"sins bias {estimate.source}")
     return 0
@@ -91,7 +91,7 @@ def latitude(degrees: float) -> float:
 
 def format_attitude(a: RestAttitude, lat: float) -> list[str]:
     """The attitude the biases were taken in, and what a levelled one cannot tell."""
-    from sins import earth
+    from sins.core import earth
     from sins.imu import DEG_PER_H
 
     roll, pitch = math.degrees(a.roll), math.degrees(a.pitch)
@@ -123,7 +123,7 @@ def format_attitude(a: RestAttitude, lat: float) -> list[str]:
 def format_bias(e: BiasEstimate) -> str:
     """The report: what was averaged, where, in which attitude; each channel's bias ± 1σ and trend."""
     from sins.characterise.bias import DISPLAY
-    from sins.earth import G0
+    from sins.core.earth import G0
 
     g = float(sum(x * x for x in e.vector("accel", "expected"))) ** 0.5
     where = f"{math.degrees(e.lat):.4f}°" + (f", {e.h:g} m" if math.isfinite(e.h) else "")

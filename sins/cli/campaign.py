@@ -31,7 +31,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     spec = campaign.load(scenario.resolve_preset(args.campaign, "campaign"))
     out = args.out or Path(f"{spec.name}-campaign")
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)
     check_plot(args)
@@ -58,7 +58,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     if args.rerun:
         import pyarrow.parquet as pq
 
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.save_campaign(pq.read_table(out / "results.parquet").to_pydict(), args.rerun)
         written = f"{out / 'results.parquet'}, {out / 'summary.json'} and {args.rerun}"
@@ -66,7 +66,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     if args.plot:
         import pyarrow.parquet as pq
 
-        from sins import plots
+        from sins.viz import plots
 
         rows = pq.read_table(out / "results.parquet").to_pydict()
         title = f"campaign {spec.name}: {spec.count} units"

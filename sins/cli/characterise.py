@@ -34,9 +34,10 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     is the noisier), or a static unit's readings as they are (refused if they move)."""
     import numpy as np
 
-    from sins import characterise, io, pipeline
+    from sins import characterise, io
     from sins.characterise import reference, still
     from sins.io import npz
+    from sins.runs import pipeline
 
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
@@ -92,7 +93,7 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
     from sins.characterise import check, model_file
 
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)
     check_plot(args)
@@ -120,7 +121,7 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
         viz.save_characterisation(result, closing, args.rerun)
         print(f"wrote {args.rerun}")
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         save_plot(
             args.plot, lambda: plots.characterise_figure(result, closing), f"sins characterise {res.source}"

@@ -19,11 +19,12 @@ from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
     from sins.campaign.gate import Check
-    from sins.quality import Figures, Suite
+    from sins.campaign.quality import Figures, Suite
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from sins import quality, scenario
+    from sins import scenario
+    from sins.campaign import quality
     from sins.campaign.spec import is_campaign
 
     path = Path(args.suite)
@@ -51,7 +52,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 def _report_suite(checks: list[Check], baseline: Figures, measured: Figures, suite: Suite) -> int:
     """Print the suite's verdicts; 1 if a figure regressed or went missing."""
-    from sins import quality
+    from sins.campaign import quality
     from sins.campaign.gate import FALSE_ALARM
 
     rows = [

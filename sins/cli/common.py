@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
-    from sins.pipeline import ScenarioRun
+    from sins.runs.pipeline import ScenarioRun
     from sins.scenario import Scenario
 
 #: The object ``add_subparsers`` returns, to which each subcommand adds its parser.
@@ -356,7 +356,7 @@ NO_DISPLAY = "no display to open the native viewer on (DISPLAY and WAYLAND_DISPL
 
 def has_display() -> bool:
     """Whether a native window can open here (always on macOS and Windows; X11 or Wayland elsewhere):
-    :func:`sins.viz.has_display`, asked without importing the viewer's bridge (rerun takes seconds to
+    :func:`sins.viz.viewer.has_display`, asked without importing the viewer's bridge (rerun takes seconds to
     import, and ``--spawn`` without a display is refused before any work)."""
     if sys.platform in ("darwin", "win32"):
         return True
@@ -374,7 +374,7 @@ def check_viewer_args(args: argparse.Namespace) -> None:
             f"--spawn: {NO_DISPLAY}; use --rerun OUT.rrd to save a recording, or --serve for the web viewer"
         )
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)  # its suffix; the place is check_outputs's
 
@@ -383,7 +383,7 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
     """Hand the run to Rerun as the flags ask: save, spawn the native viewer, serve the web viewer."""
     if not (args.rerun or args.spawn or args.serve):
         return
-    from sins import viz
+    from sins.viz import viewer as viz
 
     if args.rerun:
         viz.save(result, args.rerun, summary=summary)
@@ -403,7 +403,7 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
 
 
 def add_plot(p: argparse.ArgumentParser, what: str) -> None:
-    """``--plot OUT.png|.html``: a picture of ``what`` without a display (:mod:`sins.plots`)."""
+    """``--plot OUT.png|.html``: a picture of ``what`` without a display (:mod:`sins.viz.plots`)."""
     p.add_argument(
         "--plot", type=Path, metavar="OUT.png|.html",
         help=f"draw {what} as a PNG image, or an HTML page holding it (no display needed)",
@@ -481,15 +481,15 @@ def scenario_inputs(sc: Scenario) -> list[Path | None]:
 def check_plot(args: argparse.Namespace) -> None:
     """Refuse a ``--plot`` path that cannot be written, before the work."""
     if getattr(args, "plot", None):
-        from sins import plots
+        from sins.viz import plots
 
         plots.check_plot_path(args.plot)
 
 
 def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
-    """Build the figure (``figure()``, a :mod:`sins.plots` call) and save it at ``path``."""
+    """Build the figure (``figure()``, a :mod:`sins.viz.plots` call) and save it at ``path``."""
     with progress_bar(f"drawing {path}", ""):  # matplotlib's import and a grid's layout take seconds
-        from sins import plots
+        from sins.viz import plots
 
         plots.save(figure(), path, title)
     print(f"wrote {path}")

@@ -24,15 +24,16 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
     from sins.compensation import Strategy
-    from sins.series import ImuIncrements, ImuRates
+    from sins.core.series import ImuIncrements, ImuRates
 
     Array = NDArray[np.float64]
 
 
 def _cmd_correct(args: argparse.Namespace) -> int:
-    from sins import __version__, compensation, io, referenced
+    from sins import __version__, compensation, io
+    from sins.compensation import referenced
+    from sins.core.series import ImuRates
     from sins.io import provenance
-    from sins.series import ImuRates
 
     check_outputs({"--out": args.out}, [args.model, args.recording, *dataset_inputs(args.dataset)])
     strategy = compensation.load(args.model)
@@ -67,7 +68,7 @@ def _corrected(
 ) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
     """The readings corrected in the form sins holds them in, and the temperature column to keep (the
     model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
-    from sins import referenced
+    from sins.compensation import referenced
 
     referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
     imu, temp, rows_temp = _readings(inputs)
@@ -83,8 +84,8 @@ def _readings(inputs: Any) -> tuple[ImuRates | ImuIncrements, Array | None, Arra
     boundaries, the first step's own taken at its start) and per written row (None without one)."""
     import numpy as np
 
+    from sins.core.series import CalibrationData, ImuRates, ReferencedRecording
     from sins.io.recording import Recording
-    from sins.series import CalibrationData, ImuRates, ReferencedRecording
 
     if isinstance(inputs, ReferencedRecording):
         return inputs.imu, None, None

@@ -29,16 +29,17 @@ from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
     from sins.compensation import Strategy
-    from sins.series import CalibrationData, ReferencedRecording
+    from sins.core.series import CalibrationData, ReferencedRecording
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from sins import compensation, io, referenced
-    from sins.series import CalibrationData, ReferencedRecording
+    from sins import compensation, io
+    from sins.compensation import referenced
+    from sins.core.series import CalibrationData, ReferencedRecording
 
     check_plot(args)
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)
     outputs = {"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}
@@ -100,7 +101,7 @@ def _evaluate_rig(
     print(fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows))
     print("beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)")
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         title = f"{args.model} ({strategy.label}) on {where}, {scope}"
         save_plot(args.plot, lambda: plots.evaluate_figure(channels, title), title)
@@ -112,7 +113,7 @@ def _evaluate_referenced(
 ) -> dict[str, Any]:
     """Open-loop attitude of the corrected gyro (and of the raw one, and with the bias from the opening
     rest), and with ``--drive`` the corrected unit's free-inertial drift over a window."""
-    from sins import referenced
+    from sins.compensation import referenced
 
     if args.last:
         span = rec.imu.t[-1] - rec.imu.t[0]
@@ -152,7 +153,7 @@ def _evaluate_referenced(
     if args.drive:
         document["drive"] = _drive(args, strategy, rec)
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         summary = f"{args.model} ({strategy.label}) on {where}\n\n" + fixed_width(
             ["readings", "total", "heading", "inclination", "AOE"], rows
@@ -160,7 +161,7 @@ def _evaluate_referenced(
         viz.save_open_loop(runs, args.rerun, summary=summary)
         print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         title = f"{args.model} ({strategy.label}) on {where}: open-loop attitude error"
         save_plot(args.plot, lambda: plots.open_loop_figure(runs, title), title)
@@ -168,7 +169,7 @@ def _evaluate_referenced(
 
 
 def _drive(args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecording) -> dict[str, Any]:
-    from sins import referenced
+    from sins.compensation import referenced
 
     try:
         start, end = (float(x) for x in args.drive.split(":"))

@@ -29,12 +29,13 @@ GRADES = ("consumer", "industrial", "tactical", "navigation")
 
 if TYPE_CHECKING:
     from sins.compensation import Strategy
-    from sins.series import CalibrationData, ReferencedRecording
+    from sins.core.series import CalibrationData, ReferencedRecording
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
-    from sins import compensation, io, referenced
-    from sins.series import CalibrationData, ReferencedRecording
+    from sins import compensation, io
+    from sins.compensation import referenced
+    from sins.core.series import CalibrationData, ReferencedRecording
 
     _check_args(args)
     datasets = [*(args.dataset or [])]
@@ -75,8 +76,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 def _fit_several(args: argparse.Namespace) -> tuple[Strategy, dict[str, Any]]:
     """Several recordings of one unit: each read with its own reference, then one fit on all of them."""
-    from sins import referenced
-    from sins.series import ReferencedRecording
+    from sins.compensation import referenced
+    from sins.core.series import ReferencedRecording
 
     if args.truth is not None:
         raise SinsInputError(
@@ -245,8 +246,7 @@ def _fit_referenced(
     """A recording beside its reference trajectory: the seed model on intervals, then the strategy."""
     import numpy as np
 
-    from sins import referenced
-    from sins.compensation import coefficients
+    from sins.compensation import coefficients, referenced
 
     part = rec
     if args.validation:

@@ -30,7 +30,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     from sins import io
 
     if args.rerun:
-        from sins import viz
+        from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)
     read = [
@@ -72,13 +72,12 @@ def _diagnose(args: argparse.Namespace, inp: Any, model: tuple[str, ...]) -> Any
 
 
 def _one_document(result: Any) -> dict[str, Any]:
-    """One recording's report; with a trajectory, the navigation of the real and simulated units."""
-    from sins import pipeline
+    from sins.gap.navigation import gap_navigation
 
     document: dict[str, Any] = {"recording": result.name, **result.report.to_dict()}
     data, truth = result.samples if result.samples is not None else (None, None)
     if data is not None and truth is not None and not result.report.unreferenced:
-        nav = pipeline.gap_navigation(data, truth, result.report)
+        nav = gap_navigation(data, truth, result.report)
         print(
             "\nnavigation over the recording (vertical held to the truth), final horizontal error:\n"
             f"  real unit {nav['real_m']:.3f} m; simulated unit {nav['simulated_before_m']:.3f} m with "

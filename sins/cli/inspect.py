@@ -18,7 +18,7 @@ from sins.cli.common import (
 )
 
 if TYPE_CHECKING:
-    from sins.inspection import Finding, Inspection
+    from sins.io.inspection import Finding, Inspection
     from sins.io.recording import Recording
 
 #: The flag each reader option is given with.
@@ -26,7 +26,8 @@ FLAGS = {"units": "--units", "frame": "--frame", "columns": "--columns", "rate":
 
 
 def _cmd_inspect(args: argparse.Namespace) -> int:
-    from sins import inspection, io
+    from sins import io
+    from sins.io import inspection
 
     npz_dataset(args, "recording")
     options = recording_options(args)

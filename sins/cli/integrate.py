@@ -28,9 +28,9 @@ from sins.cli.common import (
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
+    from sins.core.series import ImuIncrements, NavSeries
     from sins.io.recording import Recording
-    from sins.replay import FreeStart
-    from sins.series import ImuIncrements, NavSeries
+    from sins.runs.replay import FreeStart
 
 #: ``--vertical``'s choices: :data:`sins.nav.vertical.VERTICAL_MODES`, written out so that the parser is
 #: built without numpy (the test suite holds them equal).
@@ -45,8 +45,9 @@ NO_REFERENCE = (
 
 
 def _cmd_integrate(args: argparse.Namespace) -> int:
-    from sins import io, pipeline
+    from sins import io
     from sins.io import solution
+    from sins.runs import pipeline
 
     npz_dataset(args, "imu")
     if args.out:
@@ -84,7 +85,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
         io.write_json(args.json, {"imu": str(args.imu), "truth": truth, **summary})
     _write_solution(args, run.solution, f"solution of {args.imu} from {against}")
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         title = f"sins integrate {args.imu} against {against}"
         save_plot(args.plot, lambda: plots.errors_figure({"none": run.errors}, title), title)
@@ -104,7 +105,8 @@ def _write_solution(args: argparse.Namespace, sol: NavSeries, comment: str) -> N
 
 def _integrate_free(args: argparse.Namespace) -> int:
     """No reference: from ``--origin`` in ``--attitude``, or aligned on the opening rest (``--align``)."""
-    from sins import io, replay
+    from sins import io
+    from sins.runs import replay
 
     _check_free(args)
     with progress_bar("reading", "messages") as bar:
@@ -128,7 +130,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
         io.write_json(args.json, document)
     _write_solution(args, sol, f"solution of {args.imu} from {start.how} start")
     if args.plot:
-        from sins import plots
+        from sins.viz import plots
 
         title = f"sins integrate {args.imu}: no reference, {start.how} start"
         save_plot(args.plot, lambda: plots.solution_figure(sol, title, _expected(start, sol)), title)
@@ -174,7 +176,7 @@ def _start_position(args: argparse.Namespace, rec: Recording) -> tuple[float, fl
 
 
 def _increments(rec: Recording) -> ImuIncrements:
-    from sins.series import ImuRates
+    from sins.core.series import ImuRates
 
     if isinstance(rec.imu, ImuRates):
         if len(rec.imu) < 2:
@@ -206,7 +208,7 @@ def _expected(start: FreeStart, sol: NavSeries) -> list[tuple[str, Any, Any, str
     """The growth the rest's biases predict, for the picture (horizontal and height)."""
     import numpy as np
 
-    from sins.replay import still_drift
+    from sins.runs.replay import still_drift
 
     if start.rest is None:
         return []
@@ -220,8 +222,8 @@ def _report_free(args: argparse.Namespace, start: FreeStart, sol: NavSeries) -> 
     """Print the start, the alignment and the solution's offsets; the JSON document."""
     import numpy as np
 
-    from sins import earth, rotation
-    from sins.replay import still_drift
+    from sins.core import earth, rotation
+    from sins.runs.replay import still_drift
 
     init = start.initial
     offset = earth.ned_offset(sol.lat[-1], sol.lon[-1], sol.h[-1], init.lat, init.lon, init.h)
@@ -260,7 +262,7 @@ def _report_free(args: argparse.Namespace, start: FreeStart, sol: NavSeries) -> 
 
 def _alignment_lines(args: argparse.Namespace, start: FreeStart) -> dict[str, Any]:
     """Print the alignment and its stated accuracy; its JSON object."""
-    from sins import earth
+    from sins.core import earth
     from sins.imu import DEG_PER_H, MG
 
     rest = start.rest

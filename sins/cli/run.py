@@ -26,15 +26,17 @@ from sins.cli.common import (
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
-    from sins.pipeline import ScenarioRun
+    from sins.runs.pipeline import ScenarioRun
     from sins.scenario import AidingSpec, Scenario
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     check_viewer_args(args)  # before the imports below: --spawn without a display is refused at once
     check_plot(args)
-    from sins import io, pipeline, plots, scenario
+    from sins import io, scenario
+    from sins.runs import pipeline
     from sins.scenario.budget import check_scenario_size
+    from sins.viz import plots
 
     path = pipeline.resolve_scenario(args.scenario)
     sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)

@@ -8,7 +8,8 @@ from sins.cli.common import Subparsers
 
 
 def _cmd_scenarios(args: argparse.Namespace) -> int:
-    from sins import pipeline, scenario
+    from sins import scenario
+    from sins.runs import pipeline
 
     shipped = scenario.presets()
     width = max(map(len, shipped), default=0)

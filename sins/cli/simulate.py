@@ -19,7 +19,8 @@ from sins.errors import SinsInputError
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from sins import io, pipeline, scenario
+    from sins import io, scenario
+    from sins.runs import pipeline
     from sins.scenario.budget import check_scenario_size
 
     if args.ideal and (args.model or args.seed is not None):

@@ -2,7 +2,7 @@
 
 Every strategy follows one interface (scikit-learn style):
 
-* ``fit(data)`` on a :class:`~sins.series.CalibrationData` returns the
+* ``fit(data)`` on a :class:`~sins.core.series.CalibrationData` returns the
   strategy; what it learned sits in attributes ending in ``_``;
 * ``correct(gyro, accel, temp=None)`` maps readings (rate form, SI) to
   estimates of the true inputs; ``correct_rates`` and ``correct_increments``
@@ -29,10 +29,10 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rowwise
+from sins.core import rowwise
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, ImuModel
-from sins.series import CalibrationData, ImuIncrements, ImuRates
 
 Array = NDArray[np.float64]
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from sins.earth import G0
+from sins.core.earth import G0
 from sins.imu.calibration import SeedModelFit
 
 _AXES = "xyz"

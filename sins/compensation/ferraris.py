@@ -23,12 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sins import rotation
 from sins.compensation.base import Array, Strategy
+from sins.core import rotation
+from sins.core.series import CalibrationData, ImuIncrements, RigPhase
 from sins.errors import SinsInputError
 from sins.imu import calibration
 from sins.nav import attitude
-from sins.series import CalibrationData, ImuIncrements, RigPhase
 
 #: The static holds, in pairs (axis up, axis down) for x, y and z.
 HOLDS = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")

@@ -39,15 +39,15 @@ from typing import Protocol, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
 from sins.compensation.intervals import Intervals, choose_intervals, dcm, expected_dv
-from sins.earth import G0
+from sins.core import earth, rotation
+from sins.core.earth import G0
+from sins.core.series import ReferencedRecording
 from sins.errors import SinsInputError
 from sins.imu import DEG, DEG_PER_H, MG, ImuModel
 from sins.imu.calibration import SeedModelFit
 from sins.imu.spec import GRADES
 from sins.nav import attitude
-from sins.series import ReferencedRecording
 
 Array = NDArray[np.float64]
 _F = TypeVar("_F", bound="_IntervalFit")

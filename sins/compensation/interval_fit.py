@@ -36,7 +36,6 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
 from sins.compensation import identifiability
 from sins.compensation.identifiability import Holds
 from sins.compensation.intervals import (
@@ -51,9 +50,10 @@ from sins.compensation.intervals import (
     shift_increments,
     shifted,
 )
+from sins.core import rotation
+from sins.core.series import CalibrationData, ImuIncrements, ReferencedRecording
 from sins.imu.calibration import SeedModelFit
 from sins.nav import attitude
-from sins.series import CalibrationData, ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]
 

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, ReferencedRecording
 from sins.imu import calibration
 from sins.imu.calibration import SeedModelFit
-from sins.series import ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]
 Index = NDArray[np.intp]

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from sins.compensation.base import Strategy, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
-from sins.series import CalibrationData
+from sins.core.series import CalibrationData
 
 Array = NDArray[np.float64]
 

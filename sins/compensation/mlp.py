@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from sins.compensation.base import Strategy, checked_array, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
-from sins.series import CalibrationData
+from sins.core.series import CalibrationData
 
 Array = NDArray[np.float64]
 

@@ -68,7 +68,8 @@ VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
     "ferraris": ("ferraris", {}),
 }
 
-#: Variants fitted only against a reference trajectory (:mod:`sins.referenced`), which a model file may
+#: Variants fitted only against a reference trajectory (:mod:`sins.compensation.referenced`), which a model
+#: file may
 #: name beside :data:`VARIANTS`: the biases alone, a ``regression`` whose other terms stay zero.
 REFERENCE_VARIANTS = ("bias_only",)
 

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from sins.compensation.base import Array, Strategy, state_array
+from sins.core.series import CalibrationData, ImuIncrements
 from sins.imu import calibration
-from sins.series import CalibrationData, ImuIncrements
 
 
 class Regression(Strategy):

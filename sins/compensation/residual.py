@@ -55,7 +55,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth
 from sins.compensation import terms
 from sins.compensation.base import Strategy, state_array
 from sins.compensation.points import (
@@ -69,9 +68,10 @@ from sins.compensation.points import (
     segment,
 )
 from sins.compensation.regression import Regression
+from sins.core import earth
+from sins.core.series import CalibrationData
 from sins.imu import CHANNELS
 from sins.imu.vocabulary import SENSORS
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from sins.compensation.base import Array
 from sins.compensation.regression import Regression
-from sins.series import CalibrationData, ImuIncrements, ImuRates
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 
 #: Trailing window of the rest detector, s.
 WINDOW_S = 0.5

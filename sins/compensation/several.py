@@ -40,9 +40,9 @@ from sins.compensation.intervals import (
     expected_dv,
     lever,
 )
+from sins.core.series import ReferencedRecording
 from sins.imu.calibration import SeedModelFit
 from sins.nav import attitude
-from sins.series import ReferencedRecording
 
 Array = NDArray[np.float64]
 

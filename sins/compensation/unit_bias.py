@@ -37,8 +37,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuIncrements, ImuRates, ReferencedRecording
 from sins.nav import attitude
-from sins.series import ImuIncrements, ImuRates, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -272,14 +272,14 @@ def _levelled(force: Array) -> Array:
     x = np.cross(helper, z)
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
-    from sins import rotation
+    from sins.core import rotation
 
     return np.asarray(rotation.quat_from_dcm(np.array([x, y, z])), dtype=float)
 
 
 def attitude_dcm(q: Array) -> Array:
     """Direction cosine matrices of scalar-last quaternions (body to frame)."""
-    from sins import rotation
+    from sins.core import rotation
 
     return np.asarray(rotation.dcm_from_quat(q), dtype=float)
 

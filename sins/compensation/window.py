@@ -33,7 +33,7 @@ import numpy as np
 
 from sins.compensation.base import Array, state_array
 from sins.compensation.regression import Regression
-from sins.series import CalibrationData, ImuIncrements, ImuRates
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 
 #: Length of the past the correction reads, s.
 WINDOW_S = 2.0

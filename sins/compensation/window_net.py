@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from sins.compensation.base import checked_array, state_array
 from sins.compensation.regression import Regression
-from sins.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
 
 Array = NDArray[np.float64]
 

@@ -27,9 +27,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PPoly
 
+from sins.core.series import CalibrationData
 from sins.imu import vocabulary
 from sins.imu.numerics import hermite_slopes
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

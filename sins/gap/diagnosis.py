@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
+from sins.core.series import STRETCH_LONGEST_S, CalibrationData
 from sins.errors import SinsInputError
 from sins.gap import lattice
 from sins.gap.candidates import CANDIDATES, Candidate, ReferenceInputs, processes, reference_inputs
@@ -58,7 +59,6 @@ from sins.gap.guards import (
 from sins.gap.report import EffectScore, GapReport, Outside
 from sins.gap.scoring import TIE_NATS, ChannelTrial, Trial, refit_allowance, trial_gain
 from sins.imu import BASELINE, CHANNELS, effect_names
-from sins.series import STRETCH_LONGEST_S, CalibrationData
 
 Array = NDArray[np.float64]
 
@@ -169,7 +169,7 @@ def _session(data: CalibrationData, holdout: float) -> _Session:
     split into fit and withheld rows, with their reference inputs and readings.
 
     The end of every phase is withheld; a recording without phases, the end of every stretch of like
-    input (:meth:`~sins.series.CalibrationData.stretches`): its tail alone may hold the only minutes
+    input (:meth:`~sins.core.series.CalibrationData.stretches`): its tail alone may hold the only minutes
     of some input (a table's top rate, a mount), which the fit rows would then never see.
     """
     referenced = data.referenced()

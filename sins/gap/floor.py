@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.allan import allan_deviation as allan_deviation
+from sins.core.allan import allan_deviation as allan_deviation
 from sins.gap.candidates import ReferenceInputs, spans
 
 Array = NDArray[np.float64]

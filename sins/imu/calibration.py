@@ -31,9 +31,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData, ImuRates, RigPhase
 from sins.imu import ImuModel
-from sins.series import CalibrationData, ImuRates, RigPhase
 
 Array = NDArray[np.float64]
 

@@ -15,8 +15,8 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rowwise
-from sins.earth import G0
+from sins.core import rowwise
+from sins.core.earth import G0
 from sins.imu.numerics import apply_matrix, ar1, uniform_steps
 from sins.imu.vocabulary import (
     DEG,

@@ -44,12 +44,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuIncrements, ImuRates
 from sins.imu.effect_set import EffectSet, check_temp, shift_samples
 from sins.imu.effects import Noise, QuantizationNoise
 from sins.imu.numerics import random_stream
 from sins.imu.stream import IncrementStream
 from sins.imu.vocabulary import SENSORS, TrueInputs
-from sins.series import ImuIncrements, ImuRates
 
 Array = NDArray[np.float64]
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from sins import imu
-from sins.earth import G0
+from sins.core.earth import G0
 from sins.imu.vocabulary import Param
 
 DEG = imu.DEG

@@ -32,7 +32,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rowwise
+from sins.core import rowwise
+from sins.core.series import ImuIncrements
 from sins.imu.effect_set import EffectSet
 from sins.imu.effects import (
     BiasInstability,
@@ -44,7 +45,6 @@ from sins.imu.effects import (
 )
 from sins.imu.numerics import cubic_hermite, random_stream, uniform_steps
 from sins.imu.vocabulary import SENSORS, Effect, TrueInputs
-from sins.series import ImuIncrements
 
 Array = NDArray[np.float64]
 

@@ -23,7 +23,7 @@ from typing import Any, ClassVar, Protocol, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.earth import G0
+from sins.core.earth import G0
 
 Array = NDArray[np.float64]
 

@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
+from sins.core import rotation
+from sins.core.series import ImuRates, NavSeries
 from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes, formats, local
-from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuIncrements, ImuRates
 from sins.errors import SinsInputError
 from sins.io import formats, units
-from sins.series import ImuIncrements, ImuRates
 
 Array = NDArray[np.float64]
 

@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuRates, NavSeries
 from sins.errors import SinsInputError
 from sins.io import axes, formats, local
 from sins.io.paths import check_input
-from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 

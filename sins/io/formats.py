@@ -38,7 +38,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
+from sins.core import rotation
+from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.errors import SinsInputError
 
 # These lived here before the tables, atomic writes and JSON files had modules of their own.
@@ -48,7 +49,6 @@ from sins.io.json_files import write_json as write_json
 from sins.io.tables import WRITE_BLOCK_ROWS as WRITE_BLOCK_ROWS
 from sins.io.tables import Table, format_number, line_of_row, read_header, read_table, write_table
 from sins.io.tables import read_columns as read_columns
-from sins.series import ImuIncrements, ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -1,5 +1,5 @@
 """Reference trajectories given in a local Cartesian frame (a ROS ``odom`` or ``map`` frame, a motion-capture
-room) placed on the WGS84 ellipsoid as a :class:`~sins.series.NavSeries`.
+room) placed on the WGS84 ellipsoid as a :class:`~sins.core.series.NavSeries`.
 
 The local frame is ENU (x east, y north, z up, as ROS's REP 103 and 105 have it) with its origin at a
 geodetic point. Positions go through ECEF exactly (a drive of many kilometres keeps its shape); each
@@ -12,11 +12,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
-from sins.earth import E2, lla_to_ecef, radii
+from sins.core import rotation
+from sins.core.earth import E2, lla_to_ecef, radii
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.io.axes import ENU_TO_NED
-from sins.series import NavSeries
 
 Array = NDArray[np.float64]
 

@@ -31,9 +31,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuRates, NavSeries
 from sins.errors import SinsInputError
 from sins.io import axes, formats, local
-from sins.series import ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 

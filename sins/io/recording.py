@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
 from sins.io import axes, bags, euroc, formats, npz, provenance
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.io.paths import check_input
-from sins.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -48,7 +48,7 @@ class Recording:
     kind : one of :data:`KINDS`
     truth : the reference trajectory (a bag's poses, a EuRoC reference) at its own times, or None
     units : ``{key: unit}`` the file's readings were taken to be in (:mod:`sins.io.units`), every key of
-        the form; what :func:`sins.inspection.inspect` reasons from
+        the form; what :func:`sins.io.inspection.inspect` reasons from
     frame : the axes the readings were taken to be on (:mod:`sins.io.axes`) before the turn into FRD
     notes : what was converted or left out, one line each, for the user
     t0_ns : the absolute stamp (ns since the epoch) of ``t = 0`` where the times were made relative to
@@ -122,7 +122,7 @@ def missing_reference(rec: Recording) -> MissingInputError:
 
 def referenced(rec: Recording, truth: NavSeries | None = None, *, sensor: str = "") -> ReferencedRecording:
     """``rec``'s readings beside a reference trajectory (``truth``, else the recording's own) as a
-    :class:`~sins.series.ReferencedRecording`: rate-form readings integrated between samples by the
+    :class:`~sins.core.series.ReferencedRecording`: rate-form readings integrated between samples by the
     trapezoid rule; the reference cut to the readings' span. A given ``truth`` is geodetic (its north and
     latitude known); the recording's own keeps what the recording says of its frame.
 
@@ -211,7 +211,7 @@ def read_recording_any(
     frame : the readings' axes (:mod:`sins.io.axes`); None: ``flu`` for bags (REP 103), ``frd`` otherwise
         (EuRoC's S taken as it is)
     rate_hz : the sampling rate, Hz (within :data:`RATE_HZ_RANGE`): the times of a CSV without a time
-        column; elsewhere the stated rate :func:`sins.inspection.inspect` checks the stamps against
+        column; elsewhere the stated rate :func:`sins.io.inspection.inspect` checks the stamps against
     truth_topic : a bag's reference topic, where it has several
     origin : ``(lat, lon, h)`` in rad, rad, m, where a local reference frame starts (bags: default the
         first fix, else 0°, 0°, 0 m; EuRoC: default 0°, 0°, 0 m)

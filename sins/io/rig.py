@@ -32,10 +32,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sins.core.series import CalibrationData, RigPhase
 from sins.errors import SinsInputError
 from sins.io.formats import RATE_COLUMNS, check_readings, imu_form
 from sins.io.tables import Table, format_number, line_of_row, open_text, read_header, read_table, write_table
-from sins.series import CalibrationData, RigPhase
 
 REF_COLUMNS = ("ref_gyro_x", "ref_gyro_y", "ref_gyro_z", "ref_accel_x", "ref_accel_y", "ref_accel_z")
 RECORDING_COLUMNS = RATE_COLUMNS + REF_COLUMNS
@@ -109,7 +109,7 @@ def write_recording(
 
 
 def read_recording(path: str | os.PathLike[str]) -> CalibrationData:
-    """Read a rig recording (the module's format) into :class:`~sins.series.CalibrationData`.
+    """Read a rig recording (the module's format) into :class:`~sins.core.series.CalibrationData`.
 
     Returns
     -------

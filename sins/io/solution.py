@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.io.formats import TRUTH_COLUMNS, atomic_path, write_truth
-from sins.series import NavSeries
 
 #: Each solution column's unit (the table of the module docstring).
 SOLUTION_UNITS = dict(

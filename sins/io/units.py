@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from sins.earth import G0
+from sins.core.earth import G0
 from sins.errors import SinsInputError
 
 #: Per key, each unit's factor into sins's unit (a value in the unit times the factor is SI).

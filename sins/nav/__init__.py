@@ -3,7 +3,7 @@ error metrics. Pure functions over arrays; nothing here knows about IMU errors.
 
 The names a user needs are importable from here (``from sins.nav import SegmentMotion, generate,
 integrate``), each from its module the first time it is used. Rotations and the Earth are at the base
-layer (:mod:`sins.rotation`, :mod:`sins.earth`), below the data containers the rest builds on.
+layer (:mod:`sins.core.rotation`, :mod:`sins.core.earth`), below the data containers the rest builds on.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sins import earth
+from sins.core import earth
 
 Array = NDArray[np.float64]
 

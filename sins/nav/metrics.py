@@ -14,8 +14,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth
-from sins.series import NavSeries
+from sins.core import earth
+from sins.core.series import NavSeries
 
 Array = NDArray[np.float64]
 
@@ -152,7 +152,7 @@ def errors_against(estimate: NavSeries, frame: TruthFrame) -> tuple[NavErrors, A
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _euler(x: float, y: float, z: float, w: float) -> tuple[float, float, float]:
-    """ZYX Euler angles (roll, pitch, yaw) of a scalar-last quaternion, as :mod:`sins.rotation`."""
+    """ZYX Euler angles (roll, pitch, yaw) of a scalar-last quaternion, as :mod:`sins.core.rotation`."""
     c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
     c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
     pitch = np.arctan2(-c20, np.sqrt(c00 * c00 + c10 * c10))
@@ -220,7 +220,7 @@ def euler_errors(q_est: Array, q_true: Array) -> Array:
     """Roll, pitch, yaw of ``q_est`` minus those of ``q_true``, wrapped to ±π, shape (n, 3).
 
     The compiled equivalent of ``wrap_angle(euler_from_quat(q_est) - euler_from_quat(q_true))``
-    (:mod:`sins.rotation`), which ``tests/test_metrics.py`` holds it to.
+    (:mod:`sins.core.rotation`), which ``tests/test_metrics.py`` holds it to.
     """
     return _euler_errors(np.ascontiguousarray(q_est, dtype=float), np.ascontiguousarray(q_true, dtype=float))
 

@@ -28,12 +28,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
-from sins.earth import E2, G0, radii
+from sins.core import rotation
+from sins.core.earth import E2, G0, radii
 from sins.nav.pulses import Channel
 
 if TYPE_CHECKING:
-    from sins.series import NavSeries
+    from sins.core.series import NavSeries
 
 Array = NDArray[np.float64]
 

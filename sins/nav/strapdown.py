@@ -30,9 +30,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth
+from sins.core import earth
+from sins.core.series import ImuIncrements, NavSeries
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
-from sins.series import ImuIncrements, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -22,9 +22,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth
+from sins.core import earth
+from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.nav.motion import Kinematics, Motion
-from sins.series import ImuIncrements, ImuRates, NavSeries
 
 Array = NDArray[np.float64]
 

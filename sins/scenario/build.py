@@ -7,12 +7,13 @@ import math
 
 import numpy as np
 
-from sins import earth, io
+from sins import io
+from sins.core import earth
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.nav import motion, trajectory
 from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
 from sins.scenario.validate import MAX_DURATION_S
-from sins.series import NavSeries
 
 
 def build_motion(scenario: Scenario) -> motion.Motion:

@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
 from sins.io.recording import Recording
-from sins.series import CalibrationData, NavSeries, ReferencedRecording
 
 Samples = tuple[CalibrationData, NavSeries | None]
 
@@ -50,7 +50,8 @@ def read_gap_input(
     truth: str | os.PathLike[str] | None = None,
     options: dict[str, Any] | None = None,
 ) -> GapInput:
-    """A recording by dataset name or path, as ``sins fit`` reads it (:func:`sins.referenced.read_inputs`).
+    """A recording by dataset name or path, as ``sins fit`` reads it
+    (:func:`sins.compensation.referenced.read_inputs`).
 
     Raises
     ------
@@ -58,7 +59,8 @@ def read_gap_input(
         one line naming the recording: both or neither of a path and a dataset, ``truth`` beside a
         dataset, a recording without any reference, and as the readers do.
     """
-    from sins import pipeline, referenced
+    from sins.compensation import referenced
+    from sins.runs import pipeline
 
     if dataset is not None:
         return _dataset(dataset, truth)

@@ -33,7 +33,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
 from sins.compensation.intervals import (
     Intervals,
     choose_intervals,
@@ -42,9 +41,10 @@ from sins.compensation.intervals import (
     expected_dv,
     shift_derivative,
 )
+from sins.core import rotation
+from sins.core.series import ImuIncrements, ReferencedRecording
 from sins.imu.calibration import SeedModelFit
 from sins.nav import attitude
-from sins.series import ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]
 

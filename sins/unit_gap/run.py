@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sins.compensation.interval_fit import IntervalFit
+from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE
-from sins.series import CalibrationData, NavSeries
 from sins.unit_gap import across, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report

@@ -29,11 +29,11 @@ from numpy.typing import NDArray
 
 from sins.compensation import interval_fit
 from sins.compensation.interval_fit import IntervalFit
+from sins.core.series import ReferencedRecording
 from sins.gap.floor import SIGNIFICANT_RATIO, TINY, noise_level
 from sins.gap.report import EffectScore, Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS
 from sins.imu import CHANNELS, vocabulary
-from sins.series import ReferencedRecording
 from sins.unit_gap.fitter import (
     INSTABILITY,
     NO_WANDER,

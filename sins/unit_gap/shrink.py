@@ -6,8 +6,9 @@ B's readings (read later by the fitted time offsets, the effects' errors taken a
 the seed model inverted). B's gyro bias is then taken from B's opening rest, as a user does with a
 calibration from another day (a MEMS bias moves between recordings: 0.08 rad/s between EuRoC's); without
 such a rest it is fitted on B's intervals, and the report says so. Judged on B, open loop
-(:func:`sins.referenced.open_loop`: the corrected gyro integrated alone from B's first reference
-attitude) and free inertial over windows (:func:`sins.referenced.drive_errors`: attitude and velocity).
+(:func:`sins.compensation.referenced.open_loop`: the corrected gyro integrated alone from B's first reference
+attitude) and free inertial over windows (:func:`sins.compensation.referenced.drive_errors`: attitude and
+velocity).
 Random biases and output maps predict nothing of another recording; they are named and left out.
 """
 
@@ -20,13 +21,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import referenced
+from sins.compensation import referenced
 from sins.compensation.interval_fit import fit_biases
 from sins.compensation.intervals import correct_increments, shifted
+from sins.core.series import ImuIncrements, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.imu import vocabulary
 from sins.imu.calibration import SeedModelFit
-from sins.series import ImuIncrements, ReferencedRecording
 from sins.unit_gap.fitter import SensorFit
 from sins.unit_gap.intervals import interval_residuals, step_inputs
 from sins.unit_gap.search import baseline_fit, candidates

@@ -26,8 +26,8 @@ from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from sins.compensation.interval_fit import ReferenceQuality
+from sins.core.series import CalibrationData, NavSeries
 from sins.gap.floor import TINY, noise_floor, noise_level
-from sins.series import CalibrationData, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -13,6 +13,7 @@ import os
 
 import numpy as np
 
+from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io.datasets.broad import BROAD_TRIALS, read_broad
 from sins.io.datasets.ferraris import (
@@ -32,7 +33,6 @@ from sins.io.datasets.npz_folders import (
 from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
 from sins.io.datasets.psins_vehicle import read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
-from sins.series import CalibrationData, NavSeries, ReferencedRecording
 
 #: Dataset names for :func:`load`, and what each is.
 NAMES = {

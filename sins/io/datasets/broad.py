@@ -3,7 +3,7 @@ D. Laidig, M. Caruso, A. Cereatti, T. Seel, Data 6(7), 2021, doi:10.3390/data607
 github.com/dlaidig/broad)
     A hand-moved MEMS IMU (myon aktos-t) with optical motion capture (OptiTrack, eight Flex13 cameras)
     of its orientation and position, both on one 285.714 Hz sample grid. :func:`read_broad` returns a
-    trial as :class:`~sins.series.CalibrationData`, the reference rate and specific force derived from
+    trial as :class:`~sins.core.series.CalibrationData`, the reference rate and specific force derived from
     the optical data.
 """
 
@@ -20,12 +20,12 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.signal import savgol_filter
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.io.datasets.matfile import check_mat_v5
 from sins.io.datasets.root import check_magnitude, data_root, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

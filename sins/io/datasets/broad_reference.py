@@ -1,4 +1,4 @@
-"""A BROAD trial as a :class:`~sins.series.ReferencedRecording`: the IMU's readings beside the optical
+"""A BROAD trial as a :class:`~sins.core.series.ReferencedRecording`: the IMU's readings beside the optical
 motion capture's orientation and position at every sample where the markers were seen.
 
 Unlike :func:`~sins.io.datasets.broad.read_broad`, nothing is differentiated: the optical data are the
@@ -18,7 +18,8 @@ import scipy.io
 from numpy.typing import NDArray
 from scipy.signal import savgol_filter
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io.datasets.broad import (
     BROAD_FOLDER,
@@ -31,7 +32,6 @@ from sins.io.datasets.broad import (
     sensor_of,
 )
 from sins.io.datasets.root import dataset_file
-from sins.series import ImuIncrements, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 

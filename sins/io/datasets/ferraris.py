@@ -5,7 +5,7 @@ github.com/mad-lab-fau/imucal)
     :func:`read_ferraris` returns the example session (physical units, a
     continuous recording with a section list) and :func:`read_ferraris_annotated`
     the annotated session (raw counts, only the sections) as
-    :class:`~sins.series.CalibrationData`.
+    :class:`~sins.core.series.CalibrationData`.
 """
 
 from __future__ import annotations
@@ -19,12 +19,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, io
+from sins import io
+from sins.core import earth
+from sins.core.series import CalibrationData, RigPhase
 from sins.errors import SinsInputError
 from sins.io.datasets.root import dataset_file
 from sins.io.documents import read_json
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.series import CalibrationData, RigPhase
 
 Array = NDArray[np.float64]
 

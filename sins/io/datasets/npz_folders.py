@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io import npz
 from sins.io.datasets.root import data_root, dataset_file
 from sins.io.recording import Recording, read_recording_any, referenced
-from sins.series import CalibrationData, NavSeries, ReferencedRecording
 
 
 def is_folder_name(name: str) -> bool:

@@ -3,7 +3,7 @@ NWPU Xi'an, from the PSINS toolbox's ``data/lasergyro.imu``)
     31 min of a ring-laser-gyro strapdown INS standing still at 34.246°N, 380 m,
     100 Hz angle and velocity increments in the toolbox's compact SIMU text,
     kept xz-compressed. :func:`read_psins_lasergyro` returns it as
-    :class:`~sins.series.CalibrationData` with Earth rate and normal gravity as
+    :class:`~sins.core.series.CalibrationData` with Earth rate and normal gravity as
     the reference.
 
 The file's rows are integers in LSB (0.1 arcsec for the gyros, 125 µg·s for the accelerometers, µg
@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
 from sins.io.datasets.root import check_magnitude, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
-from sins.series import CalibrationData
 
 Array = NDArray[np.float64]
 

@@ -1,4 +1,4 @@
-"""The PSINS FOG/MEMS vehicle recording as a :class:`~sins.series.ReferencedRecording`: the MEMS's own
+"""The PSINS FOG/MEMS vehicle recording as a :class:`~sins.core.series.ReferencedRecording`: the MEMS's own
 increments beside the FOG-INS navigation solution at its 10 Hz epochs, on the MEMS's clock and in its
 axes (the time offset and mounting rotation :func:`~sins.io.datasets.psins_vehicle.psins_alignment`
 estimates), nothing differentiated.
@@ -13,10 +13,10 @@ import scipy.io
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, RotationSpline
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import ImuIncrements, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io.datasets.psins_vehicle import _PSINS_TO_SINS, _load, _path, psins_alignment, read_psins_vehicle
-from sins.series import ImuIncrements, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 

@@ -4,8 +4,8 @@ Gongmin Yan, NWPU; github.com/WangShanpeng/PSINS ``data/transfer_align_fog_mems.
     fibre-optic-gyro INS (10 Hz attitude, velocity, position) on a vehicle driving
     north at 12–16 m/s while the mount rolls through ±32°.
     :func:`read_psins_vehicle` returns the MEMS readings beside a reference derived
-    from the FOG-INS solution as :class:`~sins.series.CalibrationData`, and the
-    FOG-INS solution as a :class:`~sins.series.NavSeries`.
+    from the FOG-INS solution as :class:`~sins.core.series.CalibrationData`, and the
+    FOG-INS solution as a :class:`~sins.core.series.NavSeries`.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
-from sins import earth, rotation
+from sins.core import earth, rotation
+from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.io.datasets.matfile import check_mat_v5
 from sins.io.datasets.root import check_magnitude, dataset_file
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS, MAX_TIME_S, MAX_TRUTH_SPEED_MPS, TRUTH_ALT_M
-from sins.series import CalibrationData, NavSeries
 
 Array = NDArray[np.float64]
 

@@ -1,6 +1,6 @@
 """Compensation of a real unit against its reference trajectory: fitted on intervals, judged open loop.
 
-:func:`fit` fits any strategy on a :class:`~sins.series.ReferencedRecording`: the seed model and the
+:func:`fit` fits any strategy on a :class:`~sins.core.series.ReferencedRecording`: the seed model and the
 sensors' time offsets on the intervals between reference epochs (:mod:`sins.compensation.interval_fit`),
 then, for strategies that learn more than the seed model, on the per-sample references the intervals
 give. :func:`open_loop_attitude` judges a strategy the way an orientation benchmark does: the corrected
@@ -28,12 +28,12 @@ from sins.compensation.regression import Regression
 from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io.recording import Recording
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
 from sins.nav.metrics import nav_errors
-from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -460,7 +460,7 @@ def frame_turn(rec: ReferencedRecording) -> Array:
     """The navigation frame's turn in inertial space over each step, rad (n, 3) in its axes: Earth's rate
     at the reference's mean latitude (its vertical part only where ``heading_known`` is False, none where
     ``latitude_known`` is False; the transport rate of a room or a slow vehicle is left out)."""
-    from sins import earth
+    from sins.core import earth
 
     lat = float(np.mean(rec.reference.lat))
     w_ie = np.array(np.broadcast_arrays(*earth.earth_rate_n(lat)), dtype=float).reshape(3)

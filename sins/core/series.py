@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
+from sins.core import rotation
 
 Array = NDArray[np.float64]
 

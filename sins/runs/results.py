@@ -1,8 +1,8 @@
 """What a run gives back: one integrated stream's errors, one aided run's, and a scenario's runs.
 
-Plain frozen dataclasses of arrays, made by :mod:`sins.pipeline` (scenarios), :mod:`sins.replay`
-(recorded IMUs) and read by the command line, :mod:`sins.plots`, :mod:`sins.viz` and campaigns.
-Summaries cover every sample; the series are thinned for display (:data:`sins.pipeline.MAX_KEPT`).
+Plain frozen dataclasses of arrays, made by :mod:`sins.runs.pipeline` (scenarios), :mod:`sins.runs.replay`
+(recorded IMUs) and read by the command line, :mod:`sins.viz.plots`, :mod:`sins.viz.viewer` and campaigns.
+Summaries cover every sample; the series are thinned for display (:data:`sins.runs.pipeline.MAX_KEPT`).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.aiding.outages import OutageError
+from sins.core.series import NavSeries
 from sins.nav.metrics import DriftSummary, NavErrors
 from sins.scenario import Scenario
-from sins.series import NavSeries
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,7 @@ class AidedRun:
 
     The summary covers every sample; for display, ``errors`` are thinned as the scenario's plain
     runs', and the filter's records (``t_cov``: each propagation step's end and each update) to at
-    most :data:`~sins.pipeline.MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position
+    most :data:`~sins.runs.pipeline.MAX_KEPT`: ``sigma`` (m, 15) the 1σ of the filter's states (position
     NED m, velocity m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s²), ``bias`` (m, 6) the
     estimated gyro and accelerometer biases. ``true_bias`` (6,) is the unit's constant bias (None for
     the ideal IMU); ``fix_t`` the fixes' times; ``restarts`` when the filter started again from a fix
@@ -76,7 +76,7 @@ class ScenarioRun:
 
     Summaries use every sample; ``truth`` and each run's ``solution`` and
     ``errors`` are thinned to about ``keep_hz`` (every ``round(rate/keep_hz)``-th
-    sample, plus the last), and to at most :data:`~sins.pipeline.MAX_KEPT` samples for longer
+    sample, plus the last), and to at most :data:`~sins.runs.pipeline.MAX_KEPT` samples for longer
     runs, so that memory stays bounded whatever the duration, and the
     runs' ``sensor_error`` are means over blocks of as many intervals, centred
     at ``sensor_t``: a mean keeps the systematic error a plot can show and

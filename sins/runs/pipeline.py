@@ -1,7 +1,7 @@
 """Runs of a scenario: from its file to each strategy's drift, the one streaming engine.
 
 These are the library calls behind ``sins run`` and campaigns; each returns plain results
-(:mod:`sins.run_results`) that the command line prints and writes.
+(:mod:`sins.runs.results`) that the command line prints and writes.
 
 One engine runs every scenario (:func:`run_units`; :func:`run_scenario` is that of one unit): the
 trajectory is generated chunk by chunk on a second thread, and each unit's stream (its corruption, or
@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from sins import scenario
 from sins.aiding.outages import OutageError as OutageError
 from sins.aiding.outages import outage_errors
+from sins.core.series import ImuIncrements, NavSeries
 from sins.errors import SinsInputError
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import (
@@ -43,25 +44,23 @@ from sins.nav.metrics import (
     summarize,
     thinned_indices,
 )
-from sins.recordings import Recording as Recording
-from sins.recordings import SimulatedReadings as SimulatedReadings
-from sins.recordings import cabin_temperature as _cabin
-from sins.recordings import gap_data as gap_data
-from sins.recordings import input_errors
-from sins.recordings import load_recording as load_recording
-from sins.recordings import simulate as simulate
-from sins.recordings import simulate_readings as simulate_readings
-from sins.recordings import with_unit as with_unit
-from sins.replay import gap_navigation as gap_navigation
-from sins.replay import integrate_recording as integrate_recording
-from sins.replay import navigate as navigate
-from sins.run_results import AidedRun, ScenarioRun, StrategyRun
+from sins.runs.readings import Recording as Recording
+from sins.runs.readings import SimulatedReadings as SimulatedReadings
+from sins.runs.readings import cabin_temperature as _cabin
+from sins.runs.readings import gap_data as gap_data
+from sins.runs.readings import input_errors
+from sins.runs.readings import load_recording as load_recording
+from sins.runs.readings import simulate as simulate
+from sins.runs.readings import simulate_readings as simulate_readings
+from sins.runs.readings import with_unit as with_unit
+from sins.runs.replay import integrate_recording as integrate_recording
+from sins.runs.replay import navigate as navigate
+from sins.runs.results import AidedRun, ScenarioRun, StrategyRun
+from sins.runs.unit_fit import FittedUnit as FittedUnit
+from sins.runs.unit_fit import fit_unit
 from sins.scenario import PresetKind, Scenario, resolve_preset
 from sins.scenario import preset_dir as preset_dir
 from sins.scenario import presets as presets
-from sins.series import ImuIncrements, NavSeries
-from sins.unit_fit import FittedUnit as FittedUnit
-from sins.unit_fit import fit_unit
 
 if TYPE_CHECKING:
     from sins.aiding.gnss import GnssConfig

@@ -16,7 +16,7 @@ What a run looks like in the viewer, against the ``sim_time`` timeline (seconds)
   with the ``fixes`` (points at 0) and the ``outages`` (a step over each window);
   ``aided/bias/<channel>/<strategy>`` the estimated bias beside the unit's ``true`` one, °/h and mg.
 
-Display series are the :class:`~sins.pipeline.ScenarioRun`'s thinned ones:
+Display series are the :class:`~sins.runs.pipeline.ScenarioRun`'s thinned ones:
 navigation errors every ``round(rate / keep_hz)``-th sample plus the last
 (so the last logged error is the run's final error, exactly), IMU errors as
 block means over as many intervals. Whole series go out in one
@@ -39,16 +39,16 @@ import rerun as rr
 import rerun.blueprint as rrb
 from numpy.typing import NDArray
 
-from sins import earth
 from sins.characterise import Characterisation
 from sins.characterise.check import ClosingCheck
+from sins.compensation.referenced import OpenLoop
+from sins.core import earth
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
 from sins.io.atomic import atomic_path
-from sins.pipeline import AidedRun, ScenarioRun, StrategyRun
-from sins.referenced import OpenLoop
-from sins.series import NavSeries
+from sins.runs.pipeline import AidedRun, ScenarioRun, StrategyRun
 
 APPLICATION_ID = "sins"
 TIMELINE = "sim_time"
@@ -505,7 +505,8 @@ def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
 
 
 def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, summary: str = "") -> Path:
-    """Open-loop attitude errors (:func:`sins.referenced.open_loop`) of several corrections in a ``.rrd``
+    """Open-loop attitude errors (:func:`sins.compensation.referenced.open_loop`) of several corrections in
+    a ``.rrd``
     file: per correction, its total, heading and inclination error over time, degrees (NaN outside the
     judged rows, so that the rests the benchmark does not count show as gaps)."""
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="open_loop")

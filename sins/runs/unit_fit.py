@@ -2,7 +2,7 @@
 
 :func:`fit_unit` simulates the rig session of a scenario's ``[compensation]`` (its own power-on of the
 unit) and fits and judges each strategy on it; the :class:`FittedUnit` it returns is what
-:func:`sins.pipeline.run_units` drives, and what a campaign fits once per unit.
+:func:`sins.runs.pipeline.run_units` drives, and what a campaign fits once per unit.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@ positions as fixes, through outages opened in them.
 
 :func:`aided_through_outages` takes any recording's increments, its reference at the IMU's place and
 the fixes; :func:`psins_vehicle_outages` prepares the PSINS vehicle recording (its MEMS, the FOG-INS
-solution as the reference) for it. Beside :mod:`sins.referenced` (compensation judged against a
+solution as the reference) for it. Beside :mod:`sins.compensation.referenced` (compensation judged against a
 recording's reference), which it does not import.
 """
 
@@ -16,12 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
 from sins.aiding import ekf, gnss
 from sins.aiding.outages import EDGE_S, OutageError, outage_errors, window_rows
+from sins.core import rotation
+from sins.core.series import ImuIncrements, NavSeries
 from sins.nav import strapdown
 from sins.nav.metrics import nav_errors
-from sins.series import ImuIncrements, NavSeries
 
 
 @dataclass(frozen=True)

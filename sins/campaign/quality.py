@@ -56,7 +56,7 @@ from sins.io.documents import printable, short
 #: Absolute floors below which a change is not judged (metres, SI residual units).
 FLOORS = {"horizontal": 0.5, "residual": 1e-9}
 DEFAULT_TOLERANCES = {"horizontal": 0.02, "residual": 0.01}
-BASELINE_FORMAT = "sins.quality-baseline"
+BASELINE_FORMAT = "sins.campaign.quality-baseline"
 #: The largest relative tolerance a suite may give (a metric may grow 100-fold): beyond it no change
 #: is judged, and the gate tests nothing.
 MAX_TOLERANCE = 100.0
@@ -139,7 +139,8 @@ def load_suite(path: str | os.PathLike[str]) -> Suite:
 def _check_case(path: Path) -> None:
     """Refuse, before any case runs, a case's scenario that would not run as a case: one that does not
     validate, has no IMU model and compensation, or that ``sins run`` would refuse before its work."""
-    from sins import pipeline, scenario
+    from sins import scenario
+    from sins.runs import pipeline
     from sins.scenario.budget import check_scenario_size
 
     sc = scenario.load(path)
@@ -153,12 +154,13 @@ def measure(suite: Suite, progress: Callable[[int, int], None] | None = None) ->
     """Run every case with every seed of the suite; ``progress(runs_done, runs)`` after each seed's fit
     (the fits are most of the time) and after each case's drives.
 
-    Each seed's strategies are fitted on its own rig session (:func:`sins.pipeline.fit_unit`), then
+    Each seed's strategies are fitted on its own rig session (:func:`sins.runs.pipeline.fit_unit`), then
     the case's trajectory is generated once and driven by every seed's unit
-    (:func:`sins.pipeline.run_units`): each seed's figures are ``sins run``'s on that scenario with
+    (:func:`sins.runs.pipeline.run_units`): each seed's figures are ``sins run``'s on that scenario with
     ``[compensation] seed = 2u`` and ``[imu] seed = 2u + 1``, to the last bit.
     """
-    from sins import pipeline, scenario
+    from sins import scenario
+    from sins.runs import pipeline
 
     out: CaseFigures = {}
     total, done = len(suite.cases) * (len(suite.seeds) + 1), 0

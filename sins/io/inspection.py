@@ -24,12 +24,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.earth import OMEGA_IE
+from sins.core.earth import OMEGA_IE
+from sins.core.series import ImuRates
 from sins.errors import SinsInputError
 from sins.io import axes
 from sins.io import units as unitdefs
 from sins.io.recording import Recording
-from sins.series import ImuRates
 
 Array = NDArray[np.float64]
 

@@ -31,10 +31,10 @@ if TYPE_CHECKING:
     from sins.characterise.analysis import ChannelResult, Characterisation
     from sins.characterise.bias import BiasEstimate
     from sins.characterise.check import ClosingCheck
+    from sins.compensation.referenced import OpenLoop
+    from sins.core.series import NavSeries
     from sins.nav.metrics import NavErrors
-    from sins.referenced import OpenLoop
-    from sins.run_results import AidedRun, ScenarioRun, StrategyRun
-    from sins.series import NavSeries
+    from sins.runs.results import AidedRun, ScenarioRun, StrategyRun
 
 #: The file kinds :func:`save` writes, by suffix.
 SUFFIXES = (".png", ".html")
@@ -268,7 +268,7 @@ def solution_figure(
     position (m), its velocity (m/s) and attitude (°) against time, and its horizontal and down offsets
     beside the growth ``expected`` (``(label, t, values, "horizontal" | "down")``: a still unit's bias
     terms, :mod:`sins.nav.budget`), the horizontal on a log scale."""
-    from sins import earth, rotation
+    from sins.core import earth, rotation
 
     fig, axes = _grid(4, 3, title)
     t = solution.t
@@ -327,7 +327,7 @@ def evaluate_figure(channels: Mapping[str, Mapping[str, float]], title: str) -> 
 def open_loop_figure(runs: Mapping[str, OpenLoop], title: str) -> Figure:
     """``sins evaluate`` against a trajectory: per correction, in a panel of its own (so a correction to
     a degree stays readable below the raw readings' tens), the open-loop attitude's total, heading and
-    inclination errors against time, degrees (:func:`sins.referenced.open_loop`; blank where not
+    inclination errors against time, degrees (:func:`sins.compensation.referenced.open_loop`; blank where not
     judged)."""
     fig, axes = _panels(len(runs), title)
     for ax, (name, run) in zip(axes, runs.items(), strict=True):

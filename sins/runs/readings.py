@@ -2,7 +2,7 @@
 its truth, and a recording's reference inputs for the sim-to-real diagnosis.
 
 The library calls behind ``sins simulate``, ``sins integrate``'s reading of its files and ``sins gap`` /
-``sins characterise --truth``; :mod:`sins.pipeline` runs what they read (and re-exports these names).
+``sins characterise --truth``; :mod:`sins.runs.pipeline` runs what they read (and re-exports these names).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import io, scenario
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 from sins.errors import MissingInputError, SinsInputError
 from sins.nav import trajectory
 from sins.scenario import Scenario, resolve_preset
 from sins.scenario.toml import MAX_SEED
-from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
 
 
 @contextmanager

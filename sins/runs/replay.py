@@ -1,9 +1,9 @@
-"""A recorded IMU replayed through the integrator against its truth: ``sins integrate`` and the drift of
-``sins gap``; or, without a truth, from a given start or a still unit's own coarse alignment.
+"""A recorded IMU replayed through the integrator against its truth (``sins integrate``); or, without a
+truth, from a given start or a still unit's own coarse alignment.
 
 :func:`navigate` integrates increments from the truth's state at their first time and compares the
 solution with the truth; :func:`integrate_recording` does so for a file (any format sins reads);
-:func:`gap_navigation` sets a real unit's drift beside its simulated twin's. Without a truth,
+(The gap diagnosis's drift check is :func:`sins.gap.navigation.gap_navigation`.) Without a truth,
 :func:`free_start` starts a unit at rest at a given position, in a given attitude or in the one its
 opening rest implies (levelling and gyrocompassing, :mod:`sins.aiding.alignment`, its accuracy from the
 noise the rest shows and the bias levels given, :func:`sins.characterise.bias.alignment_accuracy`), and
@@ -22,18 +22,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import rotation
+from sins.core import rotation
+from sins.core.series import ImuIncrements, NavSeries
 from sins.errors import SinsInputError
 from sins.nav import budget, strapdown
 from sins.nav.metrics import nav_errors, summarize
 from sins.nav.vertical import VerticalMode
-from sins.recordings import load_recording
-from sins.run_results import StrategyRun
-from sins.series import CalibrationData, ImuIncrements, ImuRates, NavSeries
+from sins.runs.readings import load_recording
+from sins.runs.results import StrategyRun
 
 if TYPE_CHECKING:
     from sins.characterise.bias import BiasEstimate
-    from sins.gap import GapReport
 
 
 def navigate(
@@ -66,37 +65,12 @@ def integrate_recording(
 ) -> StrategyRun:
     """Integrate a recorded IMU from its truth's first state; errors against the truth.
 
-    :func:`sins.recordings.load_recording` (any format sins reads, ``reading`` its options; without
+    :func:`sins.runs.readings.load_recording` (any format sins reads, ``reading`` its options; without
     ``truth_path`` the recording's own reference; an IMU running past the truth refused unless
     ``within_truth``), then :func:`navigate`.
     """
     rec = load_recording(imu_path, truth_path, within_truth, reading)
     return navigate(rec.imu, rec.truth, vertical, vertical_tau_s)
-
-
-def gap_navigation(data: CalibrationData, truth: NavSeries, report: GapReport) -> dict[str, float]:
-    """Navigation drift of the real unit and of the simulated one (the model before and after the
-    accepted effects), integrated over the recording from the truth, vertical channel held to it.
-
-    The simulated unit's readings are the reference plus the model's predicted error (no noise: the
-    drift of what the model explains). Returns final horizontal errors against the truth and the
-    horizontal distance between the simulated and the real unit's solutions at the end, m.
-
-    ``truth`` is at the recording's times, as :func:`sins.recordings.gap_data` returns it.
-    """
-    start = strapdown.InitialState.from_series(truth.at(0))
-
-    def solve(gyro: NDArray[np.float64], accel: NDArray[np.float64]) -> NavSeries:
-        increments = ImuRates(t=data.t, omega_ib_b=gyro, f_ib_b=accel).to_increments()
-        return strapdown.integrate(increments, start, vertical="hold", h_ref=truth.h)
-
-    real = solve(data.gyro, data.accel)
-    out = {"real_m": summarize(nav_errors(real, truth)).final_horizontal_m}
-    for label, predicted in (("before", report.predicted_before), ("after", report.predicted_after)):
-        sim = solve(data.ref_gyro + predicted[:, :3], data.ref_accel + predicted[:, 3:])
-        out[f"simulated_{label}_m"] = summarize(nav_errors(sim, truth)).final_horizontal_m
-        out[f"sim_to_real_{label}_m"] = summarize(nav_errors(sim, real)).final_horizontal_m
-    return out
 
 
 @dataclass(frozen=True)
@@ -212,7 +186,6 @@ def still_drift(rest: BiasEstimate, t: NDArray[np.float64]) -> NDArray[np.float6
 __all__ = [
     "FreeStart",
     "free_start",
-    "gap_navigation",
     "integrate_recording",
     "navigate",
     "navigate_free",
