@@ -498,5 +498,5 @@ def test_a_unit_its_rig_cannot_fit_is_one_line_from_the_cluster(tmp_path: Path) 
 
 def _progress(line: str) -> bool:
     """A log's progress line (``campaign NAME: working (5 s)``, ``...: done``), which a long job on a busy
-    machine writes to stderr beside its result (:class:`sins.cli.common.LogProgress`)."""
+    machine writes to stderr beside its result (:class:`sins.cli.progress.LogProgress`)."""
     return not line.startswith("sins:") and re.search(r": .* \(\d+ s\)$", line) is not None

@@ -300,7 +300,7 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
 def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Path):
     """On a terminal, ``sins fit`` draws its cross-validation's progress on stderr; piped to a file
     (a log, CI) stderr holds plain progress lines at most (none for a fit under 5 s, then one every
-    10 s: ``sins.cli.common.LogProgress``), never a bar, and stdout is the same result lines."""
+    10 s: ``sins.cli.progress.LogProgress``), never a bar, and stdout is the same result lines."""
     import fcntl
     import os
     import pty

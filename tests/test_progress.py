@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sins.cli import common, main
+from sins.cli import main
+from sins.cli import progress as bars
 from sins.core.series import CalibrationData
 
 STILL = """\
@@ -37,24 +38,24 @@ def test_log_lines_come_after_the_first_seconds_then_regularly(
 ) -> None:
     """A job of 0.5 s with the first line due at 0.1 s and then every 0.1 s: about four lines naming the
     count done of the total, then a closing one; a job shorter than the first line writes nothing."""
-    monkeypatch.setattr(common, "LOG_FIRST_S", 0.1)
-    monkeypatch.setattr(common, "LOG_EVERY_S", 0.1)
-    with common.progress_bar("working hard", "row") as bar:
+    monkeypatch.setattr(bars, "LOG_FIRST_S", 0.1)
+    monkeypatch.setattr(bars, "LOG_EVERY_S", 0.1)
+    with bars.progress_bar("working hard", "row") as bar:
         for k in range(5):
-            common.advance(bar, k + 1, 5)
+            bars.advance(bar, k + 1, 5)
             time.sleep(0.1)
     err = capsys.readouterr().err.splitlines()
     assert 2 <= len(err) <= 7, err  # 4 due; the scheduler of a loaded machine may shift one
     assert all(re.fullmatch(r"working hard: \d/5 rows \(\d+ s\)", line) for line in err[:-1]), err
     assert err[-1].startswith("working hard: done, 5 rows")
-    with common.progress_bar("quick", "row") as bar:
-        common.advance(bar, 1, 1)
+    with bars.progress_bar("quick", "row") as bar:
+        bars.advance(bar, 1, 1)
     assert capsys.readouterr().err == ""
 
 
 def test_a_failed_job_ends_on_its_error_not_on_done(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
-    monkeypatch.setattr(common, "LOG_FIRST_S", 0.05)
-    with pytest.raises(RuntimeError), common.progress_bar("failing", "row"):
+    monkeypatch.setattr(bars, "LOG_FIRST_S", 0.05)
+    with pytest.raises(RuntimeError), bars.progress_bar("failing", "row"):
         time.sleep(0.2)
         raise RuntimeError("boom")
     err = capsys.readouterr().err
@@ -67,8 +68,8 @@ def test_a_command_logs_its_progress(
     """``sins characterise`` run as in a log (stderr captured, not a terminal), with the lines due from
     the start: its stages and channel counts, each job closed with "done"; stdout holds the results only."""
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(common, "LOG_FIRST_S", 0.0)
-    monkeypatch.setattr(common, "LOG_EVERY_S", 0.05)
+    monkeypatch.setattr(bars, "LOG_FIRST_S", 0.0)
+    monkeypatch.setattr(bars, "LOG_EVERY_S", 0.05)
     (tmp_path / "still.toml").write_text(STILL, encoding="utf-8")
     assert main(["simulate", "still.toml", "--imu", "imu.csv", "--truth", "truth.csv"]) == 0
     capsys.readouterr()

@@ -93,7 +93,7 @@ def test_the_viewer_sins_spawns_runs_without_analytics(monkeypatch: pytest.Monke
 
 
 class _Steps:
-    """Stands in for :func:`sins.cli.common.progress_bar` and records each step's descriptions."""
+    """Stands in for :func:`sins.cli.progress.progress_bar` and records each step's descriptions."""
 
     def __init__(self) -> None:
         self.names: list[str] = []

@@ -8,20 +8,9 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import (
-    Subparsers,
-    add_dataset,
-    add_plot,
-    add_recording_options,
-    check_outputs,
-    check_plot,
-    dataset_inputs,
-    fixed_width,
-    progress_bar,
-    recording_options,
-    row_progress,
-    save_plot,
-)
+from sins.cli.common import Subparsers, check_outputs, check_plot, fixed_width, save_plot
+from sins.cli.options import add_dataset, add_plot, add_recording_options, dataset_inputs, recording_options
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:

@@ -6,7 +6,9 @@ import argparse
 from pathlib import Path
 
 from sins import __version__
-from sins.cli.common import Subparsers, check_outputs, progress_bar, row_progress, simulated_unit
+from sins.cli.common import Subparsers, check_outputs, simulated_unit
+from sins.cli.options import seed
+from sins.cli.progress import progress_bar, row_progress
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
@@ -41,7 +43,13 @@ def add(sub: Subparsers) -> None:
     p.add_argument("rig", metavar="RIG.toml", help="rig file or preset (e.g. 24pos_ratetable)")
     p.add_argument("--imu", required=True, metavar="IMU.toml", help="IMU file or preset (e.g. tactical)")
     p.add_argument("--out", type=Path, required=True, metavar="RECORDING.csv")
-    p.add_argument("--seed", type=int, default=0, help="seeds the rig's errors and the IMU's run (default 0)")
+    p.add_argument(
+        "--seed",
+        type=seed,
+        default=0,
+        metavar="N",
+        help="seeds the rig's errors and the IMU's run (default 0)",
+    )
     p.set_defaults(func=_cmd_calibrate)
 
 

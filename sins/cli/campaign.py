@@ -6,17 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from sins.cli.common import (
-    Subparsers,
-    add_plot,
-    check_outputs,
-    check_plot,
-    count,
-    progress_bar,
-    row_progress,
-    save_plot,
-    scenario_inputs,
-)
+from sins.cli.common import Subparsers, check_outputs, check_plot, save_plot, scenario_inputs
+from sins.cli.options import add_plot, count
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 

@@ -7,20 +7,16 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import (
-    Subparsers,
+from sins.cli.common import Subparsers, check_outputs, check_plot, fixed_width, save_plot
+from sins.cli.options import (
     add_dataset,
     add_plot,
     add_recording_options,
-    check_outputs,
-    check_plot,
     dataset_inputs,
-    fixed_width,
-    progress_bar,
     recording_options,
-    row_progress,
-    save_plot,
+    seed,
 )
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
@@ -190,17 +186,6 @@ def _format_closing(closing: ClosingCheck) -> str:
     return "\n".join(lines)
 
 
-def _seed(text: str) -> int:
-    """An argument type: a seed, a whole number of at least 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
-    return value
-
-
 def add(sub: Subparsers) -> None:
     """Add ``sins characterise`` to ``sub``."""
     p = sub.add_parser(
@@ -217,7 +202,7 @@ def add(sub: Subparsers) -> None:
         "--json", type=Path, metavar="OUT.json", help="write the curves, terms and check (SI units)"
     )
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
-    p.add_argument("--seed", type=_seed, default=0, help="the closing simulation's seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="the closing simulation's seed (default 0)")
     add_plot(p, "the real and simulated Allan curves")
     add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)

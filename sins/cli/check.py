@@ -7,14 +7,8 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import (
-    Subparsers,
-    check_outputs,
-    fixed_width,
-    progress_bar,
-    row_progress,
-    scenario_inputs,
-)
+from sins.cli.common import Subparsers, check_outputs, fixed_width, scenario_inputs
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:

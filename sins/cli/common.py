@@ -1,4 +1,4 @@
-"""What every command shares: tables, progress, argument types, the checks before the work."""
+"""What every command shares: tables, the viewer and pictures, the checks before the work."""
 
 from __future__ import annotations
 
@@ -6,11 +6,12 @@ import argparse
 import math
 import os
 import sys
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from sins.cli.progress import progress_bar
+from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
@@ -32,18 +33,6 @@ _COLUMNS = (
     ("m/h", "drift_rate_m_per_h", "{:.3f}"),
     ("nmi/h", "drift_rate_nmi_per_h", "{:.4f}"),
 )
-
-
-def fixed_width(head: list[str], rows: list[list[str]]) -> str:
-    """Columns padded to their widest cell: the first left-aligned, the rest right-aligned."""
-    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
-
-    def line(cells: list[str]) -> str:
-        return "  ".join(
-            c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths, strict=True))
-        )
-
-    return "\n".join(line(r) for r in [head, *rows])
 
 
 #: Per-hour drift rates (the final horizontal error over the duration) are withheld for runs shorter than
@@ -95,259 +84,6 @@ def display_unit(channel: str) -> tuple[float, str]:
     from sins.imu import display_unit
 
     return display_unit(channel)
-
-
-#: A job's first progress line in a log comes after this long, s (shorter jobs write none) ...
-LOG_FIRST_S = 5.0
-#: ... and the next ones at most this often, s.
-LOG_EVERY_S = 10.0
-
-
-class LogProgress:
-    """Progress for a log (stderr not a terminal): plain lines, the first after :data:`LOG_FIRST_S`, then
-    one every :data:`LOG_EVERY_S` while the job runs (a heartbeat thread writes them, so a job whose
-    steps are long still shows it is alive), and a closing line if any was written. The part of tqdm's
-    interface the commands use (``n``, ``total``, ``update``, ``set_postfix_str``, ``set_description``).
-    """
-
-    def __init__(self, description: str, unit: str, stream: Any = None) -> None:
-        import threading
-        import time
-
-        self.description = description
-        self.unit = unit if not unit or unit.endswith("s") else f"{unit}s"  # "12 rows" in a line
-        self.stream = stream if stream is not None else sys.stderr
-        self.n: int = 0
-        self.total: int | None = None
-        self.postfix = ""
-        self.lines = 0
-        self._start = time.monotonic()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._beat, name="sins-progress", daemon=True)
-        self._thread.start()
-
-    def _beat(self) -> None:
-        wait = LOG_FIRST_S
-        while not self._stop.wait(wait):
-            self._line(self._state())
-            wait = LOG_EVERY_S
-
-    def _state(self) -> str:
-        of = f"/{self.total}" if self.total else ""
-        done = f"{self.n}{of} {self.unit}" if self.n or self.total else "working"
-        return done + (f", {self.postfix}" if self.postfix else "")
-
-    def _line(self, text: str) -> None:
-        import time
-
-        elapsed = time.monotonic() - self._start
-        print(f"{self.description}: {text} ({elapsed:.0f} s)", file=self.stream, flush=True)
-        self.lines += 1
-
-    def update(self, count: int = 1) -> None:
-        """``count`` more done."""
-        self.n += count
-
-    def set_postfix_str(self, text: str) -> None:
-        """What is being done now (named in the next line)."""
-        self.postfix = text
-
-    def set_description(self, text: str) -> None:
-        """Another stage of the job."""
-        self.description = text
-
-    def stop(self) -> None:
-        """Stop the heartbeat."""
-        self._stop.set()
-        self._thread.join()
-
-    def close(self) -> None:
-        """Stop, and write a closing line if the job wrote any."""
-        self.stop()
-        if self.lines:
-            self._line("done" + (f", {self.n} {self.unit}" if self.n else ""))
-
-
-@contextmanager
-def progress_bar(description: str, unit: str) -> Iterator[Any]:
-    """Progress on stderr: a tqdm bar on a terminal; plain lines for a log or CI when the job runs past
-    :data:`LOG_FIRST_S` (:class:`LogProgress`), nothing for a shorter one."""
-    if not sys.stderr.isatty():
-        log = LogProgress(description, unit)
-        try:
-            yield log
-        except BaseException:
-            log.stop()  # no closing line: the job's error is the last one
-            raise
-        log.close()
-        return
-    from tqdm import tqdm
-
-    # A job without a count (one stage) shows its name and the time it has taken, not a rate of nothing.
-    shape = {"unit": f" {unit}"} if unit else {"bar_format": "{desc}: {elapsed}"}
-    with tqdm(desc=description, leave=False, file=sys.stderr, **shape) as bar:
-        yield bar
-
-
-def advance(bar: Any, done: int, total: int | None = None) -> None:
-    """Move ``bar`` to ``done`` of ``total`` (a tqdm bar)."""
-    if total is not None:
-        bar.total = total
-    bar.update(done - bar.n)
-
-
-def row_progress(bar: Any) -> Callable[[int, int], None] | None:
-    """A ``progress(done, total)`` callback advancing ``bar``, or None without a bar."""
-    if bar is None:
-        return None
-    return lambda done, total: advance(bar, done, total)
-
-
-def settings(config: dict[str, Any]) -> str:
-    """A chosen configuration as ``key value, key value``."""
-    return ", ".join(f"{k} {v}" for k, v in config.items())
-
-
-def positive(text: str) -> float:
-    """An argument type: a finite number above 0."""
-    value = float(text)
-    if not 0.0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
-    return value
-
-
-def count(text: str) -> int:
-    """An argument type: a whole number of at least 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
-    return value
-
-
-def seed(text: str) -> int:
-    """An argument type: a seed, a whole number in [0, 2⁶³ − 1] (what a TOML file's seeds take)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
-    if not 0 <= value <= 2**63 - 1:
-        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1], got {text}")
-    return value
-
-
-def fraction(text: str) -> float:
-    """An argument type: a fraction in (0, 1)."""
-    value = float(text)
-    if not 0.0 < value < 1.0:
-        raise argparse.ArgumentTypeError(f"must be a fraction in (0, 1), got {text}")
-    return value
-
-
-def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
-    """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
-    command's start); with ``repeat``, given once per recording."""
-    p.add_argument(
-        "--dataset", metavar="NAME", action="append" if repeat else "store",
-        help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
-        "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
-        "root's broad_mocap/), or FOLDER/NAME for any NAME.npz in a folder of the data root "
-        "(euroc/V1_01_easy)" + ("; repeat it to fit on several recordings of one unit" if repeat else ""),
-    )  # fmt: skip
-
-
-def add_npz_dataset(p: argparse.ArgumentParser, positional: str) -> None:
-    """``--dataset FOLDER/NAME`` for a command that reads a recording file: any ``NAME.npz`` in a folder
-    of the data root, in place of the ``positional`` argument (:func:`npz_dataset` resolves it)."""
-    p.add_argument(
-        "--dataset", metavar="FOLDER/NAME",
-        help=f"instead of {positional}: NAME.npz in a folder of the data root (euroc/V1_01_easy)",
-    )  # fmt: skip
-
-
-def npz_dataset(args: argparse.Namespace, positional: str) -> None:
-    """Set ``args.<positional>`` to the file ``--dataset FOLDER/NAME`` names (one of them must be given).
-
-    Raises
-    ------
-    SinsInputError
-        for both or neither, or a name that is not ``FOLDER/NAME`` of an ``.npz`` in the data root.
-    """
-    given = getattr(args, positional)
-    if (given is None) == (args.dataset is None):
-        raise SinsInputError(f"give a {positional.upper()} or --dataset FOLDER/NAME (one of them)")
-    if args.dataset is not None:
-        from sins.io.datasets import npz_folders
-
-        if not npz_folders.is_folder_name(args.dataset):
-            raise SinsInputError(
-                f"--dataset {args.dataset}: this command reads recordings as files; name an .npz one as "
-                "FOLDER/NAME (the datasets by name go with fit, evaluate, correct, gap and characterise)"
-            )
-        setattr(args, positional, npz_folders.npz_path(args.dataset))
-
-
-def add_recording_options(p: argparse.ArgumentParser) -> None:
-    """The options that say how to read a recording that is not a sins CSV (``sins.io.read_recording_any``;
-    the formats guide lists them): every command that takes a recording path adds them, and passes
-    :func:`recording_options` on."""
-    g = p.add_argument_group(
-        "recording formats",
-        "a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file or a "
-        "EuRoC/TUM-VI folder (docs/guide/formats.md)",
-    )
-    g.add_argument("--topic", metavar="TOPIC", help="a bag's sensor_msgs/Imu topic, where it has several")
-    g.add_argument(
-        "--truth-topic", metavar="TOPIC",
-        help="a bag's reference topic (Odometry, PoseStamped, TransformStamped), where it has several",
-    )  # fmt: skip
-    g.add_argument(
-        "--columns", metavar="MAP", help="a CSV's own columns, sins name=file column: t=time,gyro_x=wx,..."
-    )
-    g.add_argument(
-        "--units", metavar="MAP",
-        help="the readings' units: t=ms,gyro=deg/s,accel=g (keys t, gyro, accel, dtheta, dv, temp)",
-    )  # fmt: skip
-    g.add_argument(
-        "--frame", metavar="AXES",
-        help="the readings' axes, three letters from f/b, r/l, d/u: frd (default), flu (ROS; bags' default)",
-    )  # fmt: skip
-    g.add_argument(
-        "--rate", type=positive, metavar="HZ",
-        help="the sampling rate: the times of a CSV without a time column; else the rate stated for the unit",
-    )  # fmt: skip
-    g.add_argument(
-        "--origin", metavar="LAT,LON,H",
-        help="where a bag's or EuRoC's local reference frame lies, degrees, degrees, metres "
-        "(default: a bag's first NavSatFix, else 0,0,0)",
-    )  # fmt: skip
-
-
-def recording_options(args: argparse.Namespace) -> dict[str, Any]:
-    """The keyword arguments of ``sins.io.read_recording_any`` from :func:`add_recording_options`'s flags."""
-    return {
-        "topic": args.topic,
-        "truth_topic": args.truth_topic,
-        "columns": args.columns,
-        "units": args.units,
-        "frame": args.frame,
-        "rate_hz": args.rate,
-        "origin": None if args.origin is None else _origin(args.origin),
-    }
-
-
-def _origin(text: str) -> tuple[float, float, float]:
-    """``(lat, lon, h)`` in rad, rad, m from ``"LAT,LON,H"`` in degrees, degrees, metres."""
-    parts = text.split(",")
-    try:
-        lat, lon, h = (float(p) for p in parts)
-    except ValueError:
-        raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
-    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= 1e5):
-        raise SinsInputError(f"--origin {text!r}: latitude within ±90°, longitude ±360°, height ±1e5 m")
-    return math.radians(lat), math.radians(lon), h
 
 
 #: Why ``--spawn`` cannot open the native viewer (:func:`has_display`).
@@ -402,14 +138,6 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
             time.sleep(3600)
 
 
-def add_plot(p: argparse.ArgumentParser, what: str) -> None:
-    """``--plot OUT.png|.html``: a picture of ``what`` without a display (:mod:`sins.viz.plots`)."""
-    p.add_argument(
-        "--plot", type=Path, metavar="OUT.png|.html",
-        help=f"draw {what} as a PNG image, or an HTML page holding it (no display needed)",
-    )  # fmt: skip
-
-
 def check_outputs(
     outputs: dict[str, Path | None],
     inputs: Iterable[str | os.PathLike[str] | None] = (),
@@ -421,28 +149,6 @@ def check_outputs(
     from sins.io.paths import check_outputs as check
 
     check(outputs, inputs, folders)
-
-
-def dataset_inputs(name: str | None) -> list[Path]:
-    """The folder of the data root a ``--dataset`` is read from (``FOLDER/NAME``'s folder, a named
-    dataset's own), as an input no output may be inside: an output there must not be one of its files."""
-    if name is None:
-        return []
-    from sins.io.datasets.broad import BROAD_FOLDER
-    from sins.io.datasets.ferraris import FERRARIS_FOLDER
-    from sins.io.datasets.psins_lasergyro import PSINS_LASERGYRO_FOLDER
-    from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FOLDER
-    from sins.io.datasets.root import data_root
-
-    folders = {"broad_": BROAD_FOLDER, "ferraris": FERRARIS_FOLDER, "psins_lasergyro": PSINS_LASERGYRO_FOLDER,
-               "psins_vehicle": PSINS_VEHICLE_FOLDER}  # fmt: skip
-    folder = (
-        name.split("/")[0] if "/" in name else next((f for k, f in folders.items() if name.startswith(k)), "")
-    )
-    try:
-        return [data_root() / folder] if folder else []
-    except OSError:
-        return []
 
 
 def unit_of(recording: str | os.PathLike[str] | None, dataset: str | None, inputs: Any) -> str:
@@ -497,37 +203,19 @@ def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
 
 __all__ = [
     "HOUR_S",
-    "LOG_EVERY_S",
-    "LOG_FIRST_S",
     "MIN_RATE_S",
     "NO_DISPLAY",
-    "LogProgress",
     "Subparsers",
-    "add_dataset",
-    "add_npz_dataset",
-    "add_plot",
-    "add_recording_options",
-    "advance",
     "check_finite",
     "check_outputs",
     "check_plot",
     "check_viewer_args",
-    "count",
-    "dataset_inputs",
     "display_unit",
     "fixed_width",
     "format_table",
-    "fraction",
     "has_display",
-    "npz_dataset",
-    "positive",
-    "progress_bar",
-    "recording_options",
-    "row_progress",
     "save_plot",
     "scenario_inputs",
-    "seed",
-    "settings",
     "show",
     "simulated_unit",
     "unit_of",

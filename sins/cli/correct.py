@@ -6,17 +6,9 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sins.cli.common import (
-    Subparsers,
-    add_dataset,
-    add_recording_options,
-    check_outputs,
-    dataset_inputs,
-    progress_bar,
-    recording_options,
-    row_progress,
-    unit_of,
-)
+from sins.cli.common import Subparsers, check_outputs, unit_of
+from sins.cli.options import add_dataset, add_recording_options, dataset_inputs, recording_options
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:

@@ -10,21 +10,23 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
-    add_dataset,
-    add_plot,
-    add_recording_options,
     check_finite,
     check_outputs,
     check_plot,
-    dataset_inputs,
     display_unit,
     fixed_width,
-    fraction,
-    progress_bar,
-    recording_options,
     save_plot,
     unit_of,
 )
+from sins.cli.options import (
+    add_dataset,
+    add_plot,
+    add_recording_options,
+    dataset_inputs,
+    fraction,
+    recording_options,
+)
+from sins.cli.progress import progress_bar
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:

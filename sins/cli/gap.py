@@ -6,20 +6,16 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sins.cli.common import (
-    Subparsers,
+from sins.cli.common import Subparsers, check_outputs, display_unit, fixed_width
+from sins.cli.options import (
     add_dataset,
     add_recording_options,
-    advance,
-    check_outputs,
     dataset_inputs,
-    display_unit,
-    fixed_width,
     fraction,
     positive,
-    progress_bar,
     recording_options,
 )
+from sins.cli.progress import advance, progress_bar
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
@@ -91,12 +87,12 @@ def _one_document(result: Any) -> dict[str, Any]:
 
 def _several_document(args: argparse.Namespace, inputs: list[Any], results: list[Any]) -> dict[str, Any]:
     """Several recordings of one unit: the verdicts across them and each model's shrink on another."""
-    from sins.unit_gap import run
+    from sins.unit_gap import across, run, shrink
 
     verdicts = run.verdicts(results)
-    _print_across(verdicts)
+    print("\n".join(across.lines(verdicts)))
     judged = run.shrinks(inputs, results, args.interval_s)
-    _print_shrinks(judged)
+    print("\n".join(shrink.lines(judged)))
     return {
         "recordings": [{"recording": r.name, **r.report.to_dict()} for r in results],
         "across": verdicts,
@@ -195,37 +191,6 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
             for ch, v in channels.items()
         }
         print(f"  {effect}: {size_text(shown)}")
-
-
-def _print_across(verdicts: dict[str, Any]) -> None:
-    """The verdicts across the recordings: each accepted effect, on which, its sizes side by side."""
-    print(f"\nacross {len(verdicts['recordings'])} recordings of the unit:")
-    if not verdicts["effects"]:
-        print("  no effect accepted on any")
-        return
-    from sins.unit_gap.across import table_rows
-
-    print(fixed_width(["effect", "holds on", *verdicts["recordings"]], table_rows(verdicts)))
-    if verdicts["on_one_only"]:
-        print(f"found on one recording only: {', '.join(verdicts['on_one_only'])}")
-
-
-def _print_shrinks(judged: list[dict[str, Any]]) -> None:
-    """Each model's shrink on another recording, in degrees (and m/s)."""
-    print("\nthe shrink on another recording (bias from its opening rest; open loop, the gyro alone):")
-    for j in judged:
-        print(f"  fitted on {j['fitted_on']}, judged on {j['judged_on']}: {j['verdict']}")
-        if "with_effects" in j:
-            w, wo, raw = j["with_effects"], j["without_effects"], j["raw"]
-            if "free_inertial_velocity_mps" in w:
-                att, vel = "free_inertial_attitude_deg", "free_inertial_velocity_mps"
-                print(
-                    f"    free inertial over {w['free_inertial_windows']} windows of 10 s: attitude "
-                    f"{raw[att]:.3g}° raw, {wo[att]:.3g}° without, {w[att]:.3g}° with; velocity "
-                    f"{raw[vel]:.3g}, {wo[vel]:.3g}, {w[vel]:.3g} m/s"
-                )
-            total = raw["open_loop_attitude_deg"]["total"]
-            print(f"    raw readings (bias from {j['bias_from']}): {total:.3g}°")
 
 
 def add(sub: Subparsers) -> None:

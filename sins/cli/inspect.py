@@ -6,16 +6,9 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sins.cli.common import (
-    Subparsers,
-    add_npz_dataset,
-    add_recording_options,
-    check_outputs,
-    npz_dataset,
-    progress_bar,
-    recording_options,
-    row_progress,
-)
+from sins.cli.common import Subparsers, check_outputs
+from sins.cli.options import add_npz_dataset, add_recording_options, npz_dataset, recording_options
+from sins.cli.progress import progress_bar, row_progress
 
 if TYPE_CHECKING:
     from sins.io.inspection import Finding, Inspection

@@ -9,28 +9,20 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sins.cli.common import (
-    Subparsers,
+from sins.cli.common import Subparsers, check_finite, check_outputs, check_plot, format_table, save_plot
+from sins.cli.options import (
     add_npz_dataset,
     add_plot,
     add_recording_options,
-    check_finite,
-    check_outputs,
-    check_plot,
-    format_table,
     npz_dataset,
     positive,
-    progress_bar,
     recording_options,
-    row_progress,
-    save_plot,
 )
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import MissingInputError, SinsInputError
 
 if TYPE_CHECKING:
-    from sins.core.series import ImuIncrements, NavSeries
-    from sins.io.recording import Recording
-    from sins.runs.replay import FreeStart
+    from sins.core.series import NavSeries
 
 #: ``--vertical``'s choices: :data:`sins.nav.vertical.VERTICAL_MODES`, written out so that the parser is
 #: built without numpy (the test suite holds them equal).
@@ -106,7 +98,7 @@ def _write_solution(args: argparse.Namespace, sol: NavSeries, comment: str) -> N
 def _integrate_free(args: argparse.Namespace) -> int:
     """No reference: from ``--origin`` in ``--attitude``, or aligned on the opening rest (``--align``)."""
     from sins import io
-    from sins.runs import replay
+    from sins.runs import free_report, replay
 
     _check_free(args)
     with progress_bar("reading", "messages") as bar:
@@ -116,24 +108,32 @@ def _integrate_free(args: argparse.Namespace) -> int:
             f"{args.imu}: the recording has its own reference; integrate it against that (without "
             "--attitude or --align)"
         )
-    origin = _start_position(args, rec)
-    imu = _increments(rec)
+    origin = free_report.start_position(rec, recording_options(args)["origin"])
+    imu = free_report.increments(rec)
     attitude = None if args.attitude is None else _angles(args.attitude, "--attitude")
     heading = None if args.heading is None else math.radians(args.heading)
     with progress_bar("aligning" if args.align else "integrating", "") as bar:
+        levels = free_report.grade_levels(args.grade)
         start = replay.free_start(imu, origin, attitude=attitude, align_s=args.align, heading=heading,
-                                  levels=_levels(args.grade), source=str(args.imu))  # fmt: skip
+                                  levels=levels, source=str(args.imu))  # fmt: skip
         bar.set_description("integrating")
         sol = replay.navigate_free(imu, start, args.vertical, args.vertical_tau_s)
-    document = _report_free(args, start, sol)
+    report = free_report.free_report(
+        str(args.imu), start, sol, args.align, args.grade, heading_given=args.heading is not None
+    )
+    print("\n".join(report.lines))
     if args.json:
-        io.write_json(args.json, document)
+        io.write_json(args.json, report.to_dict())
     _write_solution(args, sol, f"solution of {args.imu} from {start.how} start")
     if args.plot:
         from sins.viz import plots
 
         title = f"sins integrate {args.imu}: no reference, {start.how} start"
-        save_plot(args.plot, lambda: plots.solution_figure(sol, title, _expected(start, sol)), title)
+        save_plot(
+            args.plot,
+            lambda: plots.solution_figure(sol, title, free_report.expected_growth(start, sol)),
+            title,
+        )
     return 0
 
 
@@ -162,145 +162,10 @@ def _free_options(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
-def _start_position(args: argparse.Namespace, rec: Recording) -> tuple[float, float, float]:
-    """``--origin``, else the recording's first fix."""
-    options = recording_options(args)
-    if options["origin"] is not None:
-        origin: tuple[float, float, float] = options["origin"]
-        return origin
-    if rec.fixes is not None and len(rec.fixes.t):
-        return float(rec.fixes.lat[0]), float(rec.fixes.lon[0]), float(rec.fixes.h[0])
-    raise SinsInputError(
-        f"{args.imu}: no start position: give it with --origin LAT,LON,H (degrees, degrees, m)"
-    )
-
-
-def _increments(rec: Recording) -> ImuIncrements:
-    from sins.core.series import ImuRates
-
-    if isinstance(rec.imu, ImuRates):
-        if len(rec.imu) < 2:
-            raise SinsInputError(f"{rec.source}: need at least two rate samples")
-        return rec.imu.to_increments()
-    return rec.imu
-
-
 def _angles(text: str, flag: str) -> tuple[float, float, float]:
     from sins.cli.bias import angles
 
     return angles(text, flag)
-
-
-def _levels(grade: str | None) -> tuple[float, float]:
-    """A grade's bias levels, 1σ per axis (its unit-to-unit and turn-on spreads together), rad/s and m/s²."""
-    if grade is None:
-        return 0.0, 0.0
-    from sins.imu import DEG_PER_H, MG, spec
-
-    g = spec.GRADES[grade]
-    return (
-        math.hypot(g.gyro_bias_dph, g.gyro_turn_on_dph) * DEG_PER_H,
-        math.hypot(g.accel_bias_mg, g.accel_turn_on_mg) * MG,
-    )
-
-
-def _expected(start: FreeStart, sol: NavSeries) -> list[tuple[str, Any, Any, str]]:
-    """The growth the rest's biases predict, for the picture (horizontal and height)."""
-    import numpy as np
-
-    from sins.runs.replay import still_drift
-
-    if start.rest is None:
-        return []
-    t = sol.t - sol.t[0]
-    ned = still_drift(start.rest, t)
-    return [("from the rest's biases", sol.t, np.hypot(ned[:, 0], ned[:, 1]), "horizontal"),
-            ("from the rest's biases", sol.t, -ned[:, 2], "down")]  # fmt: skip
-
-
-def _report_free(args: argparse.Namespace, start: FreeStart, sol: NavSeries) -> dict[str, Any]:
-    """Print the start, the alignment and the solution's offsets; the JSON document."""
-    import numpy as np
-
-    from sins.core import earth, rotation
-    from sins.runs.replay import still_drift
-
-    init = start.initial
-    offset = earth.ned_offset(sol.lat[-1], sol.lon[-1], sol.h[-1], init.lat, init.lon, init.h)
-    roll, pitch, yaw = (math.degrees(float(a)) for a in rotation.euler_from_quat(init.q_nb))
-    span = float(sol.t[-1] - sol.t[0])
-    where = f"{math.degrees(init.lat):.6f}°, {math.degrees(init.lon):.6f}°, {init.h:g} m"
-    print(f"{args.imu}: {len(sol.t) - 1} intervals without a reference, from {where} at rest")
-    doc: dict[str, Any] = {
-        "imu": str(args.imu), "truth": None, "start": start.how, "start_s": float(sol.t[0]),
-        "origin_deg": [math.degrees(init.lat), math.degrees(init.lon), init.h],
-        "attitude_deg": [roll, pitch, yaw], "duration_s": span,
-        "final_offset_ned_m": [float(x) for x in offset],
-        "final_horizontal_offset_m": float(np.hypot(offset[0], offset[1])),
-        "final_velocity_ned_mps": [float(x) for x in sol.v_n[-1]],
-    }  # fmt: skip
-    if start.rest is not None:
-        doc["alignment"] = _alignment_lines(args, start)
-        predicted = still_drift(start.rest, np.array([span]))[0]
-        doc["predicted_offset_ned_m"] = [float(x) for x in predicted]
-        level = float(np.hypot(predicted[0], predicted[1]))
-        print(
-            f"a unit still all along drifts by its rest's biases alone: {level:.4g} m level, "
-            f"{-predicted[2]:+.4g} m up after {span:.4g} s (level gyro bias through the Schuler loop, the "
-            "vertical accelerometer bias through the free vertical channel)"
-        )
-    else:
-        print(f"attitude given: roll {roll:.4f}°, pitch {pitch:.4f}°, yaw {yaw:.4f}°")
-    speed = float(np.linalg.norm(sol.v_n[-1]))
-    print(
-        f"after {span:.6g} s: {offset[0]:+.4g} m north, {offset[1]:+.4g} m east, {offset[2]:+.4g} m down of "
-        f"the start ({doc['final_horizontal_offset_m']:.4g} m level); velocity {speed:.4g} m/s; for a unit "
-        "that stood still, these are its errors"
-    )
-    return doc
-
-
-def _alignment_lines(args: argparse.Namespace, start: FreeStart) -> dict[str, Any]:
-    """Print the alignment and its stated accuracy; its JSON object."""
-    from sins.core import earth
-    from sins.imu import DEG_PER_H, MG
-
-    rest = start.rest
-    assert rest is not None and start.tilt_sigma is not None
-    a = rest.attitude
-    noise_tilt, noise_heading = _noise_accuracy(start)
-    tilt = math.degrees(start.tilt_sigma)
-    per_mg = math.degrees(MG / earth.G0)
-    per_dph = math.degrees(DEG_PER_H / (earth.OMEGA_IE * math.cos(rest.lat)))
-    levels = f"the {args.grade} grade's bias levels" if args.grade else "the noise alone (no --grade)"
-    roll, pitch, yaw = math.degrees(a.roll), math.degrees(a.pitch), math.degrees(a.yaw or 0.0)
-    print(
-        f"aligned on the first {args.align:g} s at rest ({rest.rows} rows), navigating from "
-        f"{start.initial_t:.6g} s: roll {roll:.4f}°, pitch {pitch:.4f}° (1σ {tilt:.2g}° from {levels}; a "
-        f"level accelerometer bias tilts them by {per_mg:.3g}° per mg)"
-    )
-    doc: dict[str, Any] = {
-        "seconds": args.align, "rows": rest.rows, "roll_deg": roll, "pitch_deg": pitch, "yaw_deg": yaw,
-        "tilt_sigma_deg": tilt, "tilt_sigma_noise_deg": math.degrees(noise_tilt), "grade": args.grade,
-        "heading_given": args.heading is not None, "deg_per_mg": per_mg, "heading_deg_per_dph": per_dph,
-        "rest": rest.to_dict(),
-    }  # fmt: skip
-    if start.heading_sigma is None:
-        print(f"heading given: {yaw:.4f}°")
-        return doc
-    heading = math.degrees(start.heading_sigma)
-    print(
-        f"heading {yaw:.4f}° by gyrocompassing (1σ {heading:.2g}° from {levels}; an east gyro bias turns it "
-        f"by {per_dph:.3g}° per °/h)"
-    )
-    return doc | {"heading_sigma_deg": heading, "heading_sigma_noise_deg": math.degrees(noise_heading)}
-
-
-def _noise_accuracy(start: FreeStart) -> tuple[float, float]:
-    from sins.characterise.bias import alignment_accuracy
-
-    assert start.rest is not None
-    return alignment_accuracy(start.rest)
 
 
 def add(sub: Subparsers) -> None:

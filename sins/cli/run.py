@@ -8,7 +8,6 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
     Subparsers,
-    add_plot,
     check_finite,
     check_outputs,
     check_plot,
@@ -16,13 +15,12 @@ from sins.cli.common import (
     display_unit,
     fixed_width,
     format_table,
-    progress_bar,
-    row_progress,
     save_plot,
     scenario_inputs,
-    seed,
     show,
 )
+from sins.cli.options import add_plot, seed
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:

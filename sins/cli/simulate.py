@@ -6,15 +6,9 @@ import argparse
 from pathlib import Path
 
 from sins import __version__
-from sins.cli.common import (
-    Subparsers,
-    check_outputs,
-    progress_bar,
-    row_progress,
-    scenario_inputs,
-    seed,
-    simulated_unit,
-)
+from sins.cli.common import Subparsers, check_outputs, scenario_inputs, simulated_unit
+from sins.cli.options import seed
+from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 

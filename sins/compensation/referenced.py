@@ -618,7 +618,7 @@ def read_inputs(
     rec = io.read_recording_any(path, **(options or {}), t_start=start)
     if reference is None and rec.truth is None:
         return rec
-    return io.referenced(rec, reference, sensor=rec.sensor)
+    return io.beside_reference(rec, reference, sensor=rec.sensor)
 
 
 def check_fitted_on(

@@ -217,7 +217,7 @@ class ResidualStrategy(Strategy):
         """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self."""
         started = time.perf_counter()
         self.__dict__.pop("_restored", None)
-        data = data.referenced()
+        data = data.rows_with_reference()
         if len(data) < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
         base = Regression().fit(data)

@@ -323,7 +323,7 @@ class CalibrationData:
         ok = np.isfinite(self.ref_gyro).all(axis=1) & np.isfinite(self.ref_accel).all(axis=1)
         return np.asarray(ok, dtype=bool)
 
-    def referenced(self) -> CalibrationData:
+    def rows_with_reference(self) -> CalibrationData:
         """The rows with a per-sample reference (:attr:`has_reference`), phases kept."""
         ok = self.has_reference
         return self if ok.all() else self._subset(np.flatnonzero(ok))

@@ -172,7 +172,7 @@ def _session(data: CalibrationData, holdout: float) -> _Session:
     input (:meth:`~sins.core.series.CalibrationData.stretches`): its tail alone may hold the only minutes
     of some input (a table's top rate, a mount), which the fit rows would then never see.
     """
-    referenced = data.referenced()
+    referenced = data.rows_with_reference()
     withheld = referenced.held_back(holdout, like_input=True)
     if referenced.phases:
         withholding = f"the last {holdout:g} of each of its {len(referenced.phases)} phases"

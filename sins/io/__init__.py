@@ -22,7 +22,7 @@ from sins.io.formats import (
     write_truth,
 )
 from sins.io.json_files import read_json_document, write_json
-from sins.io.recording import KINDS, Recording, read_recording_any, referenced
+from sins.io.recording import KINDS, Recording, beside_reference, read_recording_any
 from sins.io.rig import (
     PHASE_KINDS,
     RECORDING_COLUMNS,
@@ -46,6 +46,7 @@ __all__ = [
     "Recording",
     "Table",
     "atomic_path",
+    "beside_reference",
     "check_range",
     "check_recording_range",
     "format_number",
@@ -60,7 +61,6 @@ __all__ = [
     "read_recording_any",
     "read_table",
     "read_truth",
-    "referenced",
     "write_imu",
     "write_json",
     "write_recording",

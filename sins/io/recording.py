@@ -120,7 +120,9 @@ def missing_reference(rec: Recording) -> MissingInputError:
     return MissingInputError(f"{rec.source}: the recording has no reference trajectory", needs="truth")
 
 
-def referenced(rec: Recording, truth: NavSeries | None = None, *, sensor: str = "") -> ReferencedRecording:
+def beside_reference(
+    rec: Recording, truth: NavSeries | None = None, *, sensor: str = ""
+) -> ReferencedRecording:
     """``rec``'s readings beside a reference trajectory (``truth``, else the recording's own) as a
     :class:`~sins.core.series.ReferencedRecording`: rate-form readings integrated between samples by the
     trapezoid rule; the reference cut to the readings' span. A given ``truth`` is geodetic (its north and
@@ -371,8 +373,8 @@ __all__ = [
     "KINDS",
     "RATE_HZ_RANGE",
     "Recording",
+    "beside_reference",
     "missing_reference",
     "read_recording_any",
     "recording_kind",
-    "referenced",
 ]

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from sins.core.text import fixed_width
 from sins.gap.report import GapReport, in_units
 
 #: The labels, by on how many of the recordings an effect was accepted.
@@ -76,10 +77,22 @@ def table_rows(across: dict[str, Any]) -> list[list[str]]:
     return rows
 
 
+def lines(across: dict[str, Any]) -> list[str]:
+    """The verdicts across the recordings as lines: each accepted effect, on which, its sizes side by side."""
+    out = [f"\nacross {len(across['recordings'])} recordings of the unit:"]
+    if not across["effects"]:
+        return [*out, "  no effect accepted on any"]
+    out.append(fixed_width(["effect", "holds on", *across["recordings"]], table_rows(across)))
+    if across["on_one_only"]:
+        out.append(f"found on one recording only: {', '.join(across['on_one_only'])}")
+    return out
+
+
 __all__ = [
     "ALL",
     "ONE",
     "SOME",
+    "lines",
     "size_text",
     "table_rows",
     "verdicts",

@@ -196,10 +196,30 @@ def _identity(seed: SeedModelFit) -> UnitModel:
     return UnitModel(zero, {}, {})
 
 
+def lines(judged: list[dict[str, Any]]) -> list[str]:
+    """Each model's shrink on another recording as lines, in degrees (and m/s)."""
+    out = ["\nthe shrink on another recording (bias from its opening rest; open loop, the gyro alone):"]
+    for j in judged:
+        out.append(f"  fitted on {j['fitted_on']}, judged on {j['judged_on']}: {j['verdict']}")
+        if "with_effects" in j:
+            w, wo, raw = j["with_effects"], j["without_effects"], j["raw"]
+            if "free_inertial_velocity_mps" in w:
+                att, vel = "free_inertial_attitude_deg", "free_inertial_velocity_mps"
+                out.append(
+                    f"    free inertial over {w['free_inertial_windows']} windows of 10 s: attitude "
+                    f"{raw[att]:.3g}° raw, {wo[att]:.3g}° without, {w[att]:.3g}° with; velocity "
+                    f"{raw[vel]:.3g}, {wo[vel]:.3g}, {w[vel]:.3g} m/s"
+                )
+            total = raw["open_loop_attitude_deg"]["total"]
+            out.append(f"    raw readings (bias from {j['bias_from']}): {total:.3g}°")
+    return out
+
+
 __all__ = [
     "WINDOW_S",
     "UnitModel",
     "fit_model",
     "judged",
+    "lines",
     "shrink",
 ]

@@ -90,7 +90,7 @@ def per_sample_ratios(data: CalibrationData, reference: NavSeries | None) -> tup
     """Per channel, the per-sample residual's noise (reading less its reference input, over every row
     with a reference) over the sensor's own: its readings' at rest (where the ``reference`` trajectory
     stands still for a second), else :func:`sensor_noise` of all rows; and which of the two it was."""
-    data = data.referenced()
+    data = data.rows_with_reference()
     rest = rest_rows(data.t, reference) if reference is not None else np.zeros(len(data.t), dtype=bool)
     at_rest = int(rest.sum()) >= _FEWEST_AT_REST
     out = {}

@@ -17,7 +17,7 @@ from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io import npz
 from sins.io.datasets.root import data_root, dataset_file
-from sins.io.recording import Recording, read_recording_any, referenced
+from sins.io.recording import Recording, beside_reference, read_recording_any
 
 
 def is_folder_name(name: str) -> bool:
@@ -81,7 +81,7 @@ def read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) ->
             f"{rec.source}: no reference (keys {', '.join(npz.REFERENCE_KEYS)}): it cannot be fitted or "
             "judged against"
         )
-    return referenced(rec, sensor=name.partition("/")[0])
+    return beside_reference(rec, sensor=name.partition("/")[0])
 
 
 def read_npz_with_truth(

@@ -1,0 +1,197 @@
+"""The options commands share: argument types, datasets by name, how to read a recording, pictures."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from sins.errors import SinsInputError
+
+
+def positive(text: str) -> float:
+    """An argument type: a finite number above 0."""
+    value = float(text)
+    if not 0.0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
+
+
+def count(text: str) -> int:
+    """An argument type: a whole number of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
+    return value
+
+
+def seed(text: str) -> int:
+    """An argument type: a seed, a whole number in [0, 2⁶³ − 1] (what a TOML file's seeds take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text}") from None
+    if not 0 <= value <= 2**63 - 1:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**63 - 1], got {text}")
+    return value
+
+
+def fraction(text: str) -> float:
+    """An argument type: a fraction in (0, 1)."""
+    value = float(text)
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"must be a fraction in (0, 1), got {text}")
+    return value
+
+
+def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
+    """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
+    command's start); with ``repeat``, given once per recording."""
+    p.add_argument(
+        "--dataset", metavar="NAME", action="append" if repeat else "store",
+        help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
+        "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
+        "root's broad_mocap/), or FOLDER/NAME for any NAME.npz in a folder of the data root "
+        "(euroc/V1_01_easy)" + ("; repeat it to fit on several recordings of one unit" if repeat else ""),
+    )  # fmt: skip
+
+
+def add_npz_dataset(p: argparse.ArgumentParser, positional: str) -> None:
+    """``--dataset FOLDER/NAME`` for a command that reads a recording file: any ``NAME.npz`` in a folder
+    of the data root, in place of the ``positional`` argument (:func:`npz_dataset` resolves it)."""
+    p.add_argument(
+        "--dataset", metavar="FOLDER/NAME",
+        help=f"instead of {positional}: NAME.npz in a folder of the data root (euroc/V1_01_easy)",
+    )  # fmt: skip
+
+
+def npz_dataset(args: argparse.Namespace, positional: str) -> None:
+    """Set ``args.<positional>`` to the file ``--dataset FOLDER/NAME`` names (one of them must be given).
+
+    Raises
+    ------
+    SinsInputError
+        for both or neither, or a name that is not ``FOLDER/NAME`` of an ``.npz`` in the data root.
+    """
+    given = getattr(args, positional)
+    if (given is None) == (args.dataset is None):
+        raise SinsInputError(f"give a {positional.upper()} or --dataset FOLDER/NAME (one of them)")
+    if args.dataset is not None:
+        from sins.io.datasets import npz_folders
+
+        if not npz_folders.is_folder_name(args.dataset):
+            raise SinsInputError(
+                f"--dataset {args.dataset}: this command reads recordings as files; name an .npz one as "
+                "FOLDER/NAME (the datasets by name go with fit, evaluate, correct, gap and characterise)"
+            )
+        setattr(args, positional, npz_folders.npz_path(args.dataset))
+
+
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """The options that say how to read a recording that is not a sins CSV (``sins.io.read_recording_any``;
+    the formats guide lists them): every command that takes a recording path adds them, and passes
+    :func:`recording_options` on."""
+    g = p.add_argument_group(
+        "recording formats",
+        "a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file or a "
+        "EuRoC/TUM-VI folder (docs/guide/formats.md)",
+    )
+    g.add_argument("--topic", metavar="TOPIC", help="a bag's sensor_msgs/Imu topic, where it has several")
+    g.add_argument(
+        "--truth-topic", metavar="TOPIC",
+        help="a bag's reference topic (Odometry, PoseStamped, TransformStamped), where it has several",
+    )  # fmt: skip
+    g.add_argument(
+        "--columns", metavar="MAP", help="a CSV's own columns, sins name=file column: t=time,gyro_x=wx,..."
+    )
+    g.add_argument(
+        "--units", metavar="MAP",
+        help="the readings' units: t=ms,gyro=deg/s,accel=g (keys t, gyro, accel, dtheta, dv, temp)",
+    )  # fmt: skip
+    g.add_argument(
+        "--frame", metavar="AXES",
+        help="the readings' axes, three letters from f/b, r/l, d/u: frd (default), flu (ROS; bags' default)",
+    )  # fmt: skip
+    g.add_argument(
+        "--rate", type=positive, metavar="HZ",
+        help="the sampling rate: the times of a CSV without a time column; else the rate stated for the unit",
+    )  # fmt: skip
+    g.add_argument(
+        "--origin", metavar="LAT,LON,H",
+        help="where a bag's or EuRoC's local reference frame lies, degrees, degrees, metres "
+        "(default: a bag's first NavSatFix, else 0,0,0)",
+    )  # fmt: skip
+
+
+def recording_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of ``sins.io.read_recording_any`` from :func:`add_recording_options`'s flags."""
+    return {
+        "topic": args.topic,
+        "truth_topic": args.truth_topic,
+        "columns": args.columns,
+        "units": args.units,
+        "frame": args.frame,
+        "rate_hz": args.rate,
+        "origin": None if args.origin is None else _origin(args.origin),
+    }
+
+
+def _origin(text: str) -> tuple[float, float, float]:
+    """``(lat, lon, h)`` in rad, rad, m from ``"LAT,LON,H"`` in degrees, degrees, metres."""
+    parts = text.split(",")
+    try:
+        lat, lon, h = (float(p) for p in parts)
+    except ValueError:
+        raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
+    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= 1e5):
+        raise SinsInputError(f"--origin {text!r}: latitude within ±90°, longitude ±360°, height ±1e5 m")
+    return math.radians(lat), math.radians(lon), h
+
+
+def add_plot(p: argparse.ArgumentParser, what: str) -> None:
+    """``--plot OUT.png|.html``: a picture of ``what`` without a display (:mod:`sins.viz.plots`)."""
+    p.add_argument(
+        "--plot", type=Path, metavar="OUT.png|.html",
+        help=f"draw {what} as a PNG image, or an HTML page holding it (no display needed)",
+    )  # fmt: skip
+
+
+def dataset_inputs(name: str | None) -> list[Path]:
+    """The folder of the data root a ``--dataset`` is read from (``FOLDER/NAME``'s folder, a named
+    dataset's own), as an input no output may be inside: an output there must not be one of its files."""
+    if name is None:
+        return []
+    from sins.io.datasets.broad import BROAD_FOLDER
+    from sins.io.datasets.ferraris import FERRARIS_FOLDER
+    from sins.io.datasets.psins_lasergyro import PSINS_LASERGYRO_FOLDER
+    from sins.io.datasets.psins_vehicle import PSINS_VEHICLE_FOLDER
+    from sins.io.datasets.root import data_root
+
+    folders = {"broad_": BROAD_FOLDER, "ferraris": FERRARIS_FOLDER, "psins_lasergyro": PSINS_LASERGYRO_FOLDER,
+               "psins_vehicle": PSINS_VEHICLE_FOLDER}  # fmt: skip
+    folder = (
+        name.split("/")[0] if "/" in name else next((f for k, f in folders.items() if name.startswith(k)), "")
+    )
+    try:
+        return [data_root() / folder] if folder else []
+    except OSError:
+        return []
+
+
+__all__ = [
+    "add_dataset",
+    "add_npz_dataset",
+    "add_plot",
+    "add_recording_options",
+    "count",
+    "dataset_inputs",
+    "fraction",
+    "npz_dataset",
+    "positive",
+    "recording_options",
+    "seed",
+]

@@ -1,0 +1,329 @@
+"""A strategy fitted on what a recording holds, and what the fit says of itself.
+
+Three kinds of fit, one per kind of recording: a rig session's rows (:func:`fit_rig`: the strategy's own
+fit, its seed model's coefficients checked against the unit's class), a recording beside its reference
+trajectory (:func:`fit_referenced`: the seed model on intervals, then the strategy) and several recordings
+of one unit (:func:`fit_several`: a shared model, each recording's bias, the rule for a new one's). Each
+returns a :class:`FitOutcome`: the fitted strategy, the lines a command prints and the document it writes
+(``--json``). The library owns both, so a notebook gets what ``sins fit`` prints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from sins.compensation import coefficients
+from sins.core.text import fixed_width
+from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    from sins.compensation.base import Strategy
+    from sins.core.series import CalibrationData, ReferencedRecording
+
+#: A fit's progress: rows (or epochs) done of a total.
+Progress = Callable[[int, int], None]
+
+
+@dataclass
+class FitOutcome:
+    """A fitted strategy, the lines that say what was fitted, and its document.
+
+    Attributes
+    ----------
+    strategy : the fitted strategy, ready for :func:`sins.compensation.save`
+    lines : what the fit found, a line each (coefficients as tables)
+    document : the figures as plain JSON values (:meth:`to_dict`)
+    """
+
+    strategy: Strategy
+    lines: list[str] = field(default_factory=list)
+    document: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fit's figures as plain JSON values (``sins fit --json``)."""
+        return dict(self.document)
+
+
+def coefficient_lines(table: list[Any], title: str) -> list[str]:
+    """A coefficient table (:func:`coefficients.engineering`) under its title."""
+    return [title, fixed_width(["sensor", "term", "axis", "value", "unit"], coefficients.table_rows(table))]
+
+
+def progress_unit(name: str) -> str:
+    """What a rig fit of strategy ``name`` counts as it goes: a network's epochs, or its trainings."""
+    from sins import compensation
+    from sins.compensation.mlp import MLP
+
+    return "epochs" if isinstance(compensation.make(name), MLP) else "trainings"
+
+
+def fit_rig(
+    name: str,
+    data: CalibrationData,
+    *,
+    where: str,
+    sensor: str,
+    validation: float | None = None,
+    guard: bool = True,
+    grade: str = "consumer",
+    progress: Progress | None = None,
+) -> FitOutcome:
+    """Strategy ``name`` fitted on a rig recording's rows (the last ``validation`` of every phase held
+    back), its seed model's coefficients reviewed against a ``grade`` unit's before the model is written.
+    ``where`` names the recording in messages, ``sensor`` the unit in the model file."""
+    from sins import compensation
+    from sins.compensation.mlp import MLP
+    from sins.compensation.regression import Regression
+    from sins.compensation.residual import ResidualStrategy
+
+    if name == "bias_only":
+        raise SinsInputError(
+            f"--strategy bias_only: fits a trajectory's reference; {where} is a rig recording"
+        )
+    lines: list[str] = []
+    angles = any(p.angle_rad is not None for p in data.phases)
+    try:
+        strategy = compensation.make(name, **({} if guard else {"guard": False}))
+        if angles and isinstance(strategy, Regression) and strategy.g_sensitivity:
+            # Turns known by their angles alone cannot tell the gyro's g-sensitivity: it is left out.
+            strategy = compensation.make(name, g_sensitivity=False)
+            lines.append(
+                f"{where}: its turns give only their angles, which cannot tell the g-sensitivity: left out"
+            )
+        part = data.split(validation)[0] if validation else data
+        if isinstance(strategy, ResidualStrategy | MLP):  # the strategies whose fits take long
+            strategy.progress = progress
+        strategy.fit(part)
+    except ValueError as exc:
+        raise SinsInputError(f"{where}: {exc}") from None
+    held = f" (the last {validation:g} of each phase held back)" if validation else ""
+    lines.append(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
+    document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}
+    if isinstance(strategy, ResidualStrategy):
+        lines.append(
+            f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks: "
+            + "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
+        )
+        lines.append(strategy.guard_report())
+    checks = _rig_seed_review(strategy, part, where, grade, lines, document)
+    strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks}
+    return FitOutcome(strategy, lines, document)
+
+
+def _rig_seed_review(
+    strategy: Strategy,
+    part: CalibrationData,
+    where: str,
+    grade: str,
+    lines: list[str],
+    document: dict[str, Any],
+) -> dict[str, Any]:
+    """The seed model's coefficients with their standard errors (the strategy's own for regression, the
+    stage the learners start from for the others), reviewed against a ``grade`` unit's."""
+    from sins.compensation import identifiability
+    from sins.imu import calibration
+
+    try:
+        seed = calibration.fit_seed_model(part)
+        with_k = True
+    except ValueError:
+        try:  # a session whose turns give only their angles (Ferraris) cannot tell K
+            seed, with_k = calibration.fit_seed_model(part, g_sensitivity=False), False
+        except ValueError:
+            seed = None
+    if strategy.name == "none" or seed is None:
+        return {"grade": grade, "held": {}}
+    table = coefficients.engineering(seed, g_sensitivity=with_k)
+    lines += coefficient_lines(table, "least squares of the seed model on the rows (± 1σ)")
+    document["coefficients"] = [c.to_dict() for c in table]
+    bounds = identifiability.class_bounds(grade)
+    return identifiability.review(identifiability.seed_values(seed), bounds, where).to_dict()
+
+
+def fit_referenced(
+    name: str,
+    rec: ReferencedRecording,
+    *,
+    where: str,
+    validation: float | None = None,
+    interval_s: float = 1.0,
+    guard: bool = True,
+    grade: str = "consumer",
+    progress: Progress | None = None,
+) -> FitOutcome:
+    """Strategy ``name`` fitted on a recording beside its reference trajectory: the seed model on
+    intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back)."""
+    from sins.compensation import referenced
+
+    part = rec
+    if validation:
+        span = rec.imu.t[-1] - rec.imu.t[0]
+        part = referenced.between(rec, rec.imu.t[0], rec.imu.t[-1] - validation * span)
+    fitted = referenced.fit(
+        name,
+        part,
+        interval_s=interval_s,
+        params={} if guard else {"guard": False},
+        progress=progress,
+        grade=grade,
+    )
+    fit = fitted.intervals
+    back = f", the last {validation:g} of its span held back" if validation else ""
+    lines = [
+        f"fitted {fitted.strategy.label} on {where} ({rec.sensor or 'unit'} against {rec.reference_name}"
+        f"{back}): {fit.intervals} intervals of {fit.interval_s:g} s",
+        f"reference: {fit.quality.summary()}",
+    ]
+    table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    if name == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
+        table = [c for c in table if c.term == "bias"]
+    lines += coefficient_lines(table, "the seed model on the intervals (± 1σ; held: not determined, zero)")
+    held = _held_lines(fitted.review, grade, "the recording does", lines)
+    if fit.g_sensitivity_test is not None:
+        kept, gain, se = fit.g_sensitivity_test
+        verdict = "kept" if kept else "left out (zero)"
+        lines.append(
+            f"g-sensitivity {verdict}: it predicts held-back intervals by {gain:.3g} ± {se:.3g} rad²"
+        )
+    document: dict[str, Any] = {
+        "strategy": fitted.strategy.label,
+        "intervals": fit.intervals,
+        "interval_s": fit.interval_s,
+        "coefficients": [c.to_dict() for c in table],
+        "reference_quality": fit.quality.__dict__,
+        "g_sensitivity": fit.g_sensitivity,
+        "grade": grade,
+        "held": held,
+    }
+    if name != referenced.BIAS_ONLY:
+        document |= _offsets(fit, lines)
+    return FitOutcome(fitted.strategy, lines, document)
+
+
+def _held_lines(review: Any, grade: str, what: str, lines: list[str]) -> dict[str, Any]:
+    """The coefficients a review held at zero, said in ``lines``; returned for the document."""
+    held = review.held if review is not None else {}
+    if held:
+        lines.append(f"held at zero, as {what} not determine them for a {grade} unit:")
+        lines += [f"  {line}" for line in review.lines()]
+    return dict(held)
+
+
+def _offsets(fit: Any, lines: list[str]) -> dict[str, Any]:
+    """The time offsets and the lever arm an interval fit found."""
+    arm = np.asarray(fit.lever_arm_m) * 1e3
+
+    def offset(tau: float, se: float) -> str:
+        return f"{tau * 1e3:.3f} ± {se * 1e3:.3f} ms" if np.isfinite(se) else "0 (held)"
+
+    def finite(se: float) -> float | None:
+        return se * 1e3 if np.isfinite(se) else None
+
+    gyro = offset(fit.time_offset_s, fit.time_offset_se_s)
+    accel = offset(fit.accel_time_offset_s, fit.accel_time_offset_se_s)
+    lines.append(
+        f"time offsets (the readings lag the reference): gyro {gyro}, accelerometer {accel}; accelerometer "
+        f"{arm[0]:.1f}, {arm[1]:.1f}, {arm[2]:.1f} mm from the reference's point"
+    )
+    return {
+        "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
+        "time_offset_se_ms": {
+            "gyro": finite(fit.time_offset_se_s),
+            "accel": finite(fit.accel_time_offset_se_s),
+        },
+        "lever_arm_mm": arm.tolist(),
+    }
+
+
+def fit_several(
+    name: str,
+    recs: Sequence[ReferencedRecording],
+    names: Sequence[str],
+    *,
+    interval_s: float = 1.0,
+    guard: bool = True,
+    rule_mode: str | None = None,
+    grade: str = "consumer",
+    progress: Progress | None = None,
+    stage: Callable[[str], Any] | None = None,
+) -> FitOutcome:
+    """Strategy ``name`` fitted on several recordings of one unit (``names`` name them): one shared model,
+    each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
+    that does best on held-back recordings)."""
+    from sins.compensation import referenced
+
+    fitted = referenced.fit_several(
+        name, list(recs), interval_s=interval_s, params={} if guard else {"guard": False}, progress=progress,
+        rule_mode=rule_mode, stage=stage, grade=grade,
+    )  # fmt: skip
+    lines: list[str] = []
+    document = _several_document(fitted, list(names), lines)
+    held = _held_lines(fitted.review, grade, "the recordings do", lines)
+    document |= {"grade": grade, "held": held}
+    return FitOutcome(fitted.strategy, lines, document)
+
+
+def _several_document(fitted: Any, names: list[str], lines: list[str]) -> dict[str, Any]:
+    """What a fit on several recordings found, said in ``lines`` and returned as its document."""
+    fit = fitted.several
+    lines.append(
+        f"fitted {fitted.strategy.label} on {len(names)} recordings of one unit: "
+        f"{sum(fit.intervals)} intervals of {fit.interval_s:g} s"
+    )
+    table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    lines += coefficient_lines(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
+    per_hour = np.degrees(1.0) * 3600.0
+    rows, biases = [], []
+    for rec_name, b, se, a, n in zip(
+        names, fit.gyro_bias, fit.gyro_bias_se, fit.accel_bias, fit.intervals, strict=True
+    ):
+        rows.append(
+            [
+                rec_name,
+                str(n),
+                *(f"{x * per_hour:.1f} ± {e * per_hour:.1f}" for x, e in zip(b, se, strict=True)),
+            ]
+        )
+        biases.append({
+            "recording": rec_name, "intervals": n, "gyro_bias_deg_h": (b * per_hour).tolist(),
+            "gyro_bias_se_deg_h": (se * per_hour).tolist(), "accel_bias_m_s2": a.tolist(),
+        })  # fmt: skip
+    spread = fit.bias_spread() * per_hour
+    lines += [
+        "each recording's own gyro bias, °/h (± 1σ)",
+        fixed_width(["recording", "intervals", "x", "y", "z"], rows),
+        f"spread of the bias between recordings: {spread[0]:.1f}, {spread[1]:.1f}, {spread[2]:.1f} °/h",
+    ]
+    document: dict[str, Any] = {
+        "strategy": fitted.strategy.label, "recordings": names, "intervals": list(fit.intervals),
+        "interval_s": fit.interval_s, "coefficients": [c.to_dict() for c in table],
+        "recording_biases": biases,
+        "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
+    }  # fmt: skip
+    if fitted.rule is not None:
+        rule = fitted.rule
+        held = "; ".join(f"{m} {v:.2f}°" for m, v in rule.held_back_deg.items())
+        judged = f" (open-loop attitude on held-back recordings: {held})" if held else ""
+        lines.append(f"a new recording's bias: {rule.mode}{judged}")
+        document["bias_rule"] = rule.to_dict()
+    return document
+
+
+def _settings(config: dict[str, Any]) -> str:
+    """A learner's chosen configuration as ``key value, key value``."""
+    return ", ".join(f"{k} {v}" for k, v in config.items())
+
+
+__all__ = [
+    "FitOutcome",
+    "Progress",
+    "coefficient_lines",
+    "fit_referenced",
+    "fit_rig",
+    "fit_several",
+    "progress_unit",
+]
