@@ -372,7 +372,7 @@ def test_cli_refusals(tmp_path, capsys):
         assert err.count("\n") == 0 and fragment in err, err
     with pytest.raises(SystemExit) as info:
         cli.main(["characterise", str(rec), "--static", "--out", str(out), "--seed", "-1"])
-    assert info.value.code == 2 and "--seed: must be 0 or more" in capsys.readouterr().err
+    assert info.value.code == 2 and "--seed: must be in [0, 2**63 - 1], got -1" in capsys.readouterr().err
     assert not out.exists()
 
 

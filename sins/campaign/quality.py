@@ -56,7 +56,7 @@ from sins.io.documents import printable, short
 #: Absolute floors below which a change is not judged (metres, SI residual units).
 FLOORS = {"horizontal": 0.5, "residual": 1e-9}
 DEFAULT_TOLERANCES = {"horizontal": 0.02, "residual": 0.01}
-BASELINE_FORMAT = "sins.campaign.quality-baseline"
+BASELINE_FORMAT = "sins.quality-baseline"
 #: The largest relative tolerance a suite may give (a metric may grow 100-fold): beyond it no change
 #: is judged, and the gate tests nothing.
 MAX_TOLERANCE = 100.0
