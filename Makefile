@@ -23,21 +23,24 @@ run: $(STAMP)
 # the gap diagnosis four times slower (2.0 s -> 8.1 s a case). No CPU kernels pinned: the quality gate
 # judges its figures over seeds, so a network that another machine's kernels train differently is a
 # draw within the seeds' spread, not a regression (docs/development.md, "CPU kernels").
-# The suite runs as three pytest sessions, each on fresh workers: a worker keeps what it has imported and
+# The suite runs as four pytest sessions, each on fresh workers: a worker keeps what it has imported and
 # allocated (torch, numba's compiled code, the allocators' high-water marks), so one that ran a share of
 # every file climbed to 1.2-1.7 GB (docs/speed.md, "The test suite"). First the three files that train
 # networks on rigs, one worker each (the same wall time as two workers, and no worker runs two of them),
-# then the other files in two halves by name. Every session runs even when one fails; make fails after.
+# then the other files in three parts by name (test_gap.py, the longest file, alone with the g-o files).
+# Every session runs even when one fails; make fails after.
 HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
-FIRST_HALF = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-h]*.py))
-SECOND_HALF = $(filter-out $(HEAVY_TESTS) $(FIRST_HALF),$(wildcard tests/test_*.py))
+PART_1 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-f]*.py))
+PART_2 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-o]*.py))
+PART_3 = $(filter-out $(HEAVY_TESTS) $(PART_1) $(PART_2),$(wildcard tests/test_*.py))
 PYTEST = OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
 	$(VENV)/bin/python -m pytest -q --dist loadfile
 test: lint
 	@status=0; \
-	echo "tests 1/3: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
-	echo "tests 2/3: test_a* to test_h*"; $(PYTEST) -n 2 $(FIRST_HALF) || status=1; \
-	echo "tests 3/3: test_i* to test_z*"; $(PYTEST) -n 2 $(SECOND_HALF) || status=1; \
+	echo "tests 1/4: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
+	echo "tests 2/4: test_a* to test_f*"; $(PYTEST) -n 2 $(PART_1) || status=1; \
+	echo "tests 3/4: test_g* to test_o*"; $(PYTEST) -n 2 $(PART_2) || status=1; \
+	echo "tests 4/4: test_p* to test_z*"; $(PYTEST) -n 2 $(PART_3) || status=1; \
 	exit $$status
 
 lint: $(STAMP)
