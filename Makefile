@@ -27,11 +27,12 @@ run: $(STAMP)
 # allocated (torch, numba's compiled code, the allocators' high-water marks), so one that ran a share of
 # every file climbed to 1.2-1.7 GB (docs/speed.md, "The test suite"). First the three files that train
 # networks on rigs, one worker each (the same wall time as two workers, and no worker runs two of them),
-# then the other files in three parts by name (test_gap.py, the longest file, alone with the g-o files).
+# then the other files in three parts by name (test_gap.py, the longest file, takes one worker of the
+# g-r part while the other runs the rest of it).
 # Every session runs even when one fails; make fails after.
 HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
 PART_1 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-f]*.py))
-PART_2 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-o]*.py))
+PART_2 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-r]*.py))
 PART_3 = $(filter-out $(HEAVY_TESTS) $(PART_1) $(PART_2),$(wildcard tests/test_*.py))
 PYTEST = OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
 	$(VENV)/bin/python -m pytest -q --dist loadfile
@@ -39,8 +40,8 @@ test: lint
 	@status=0; \
 	echo "tests 1/4: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
 	echo "tests 2/4: test_a* to test_f*"; $(PYTEST) -n 2 $(PART_1) || status=1; \
-	echo "tests 3/4: test_g* to test_o*"; $(PYTEST) -n 2 $(PART_2) || status=1; \
-	echo "tests 4/4: test_p* to test_z*"; $(PYTEST) -n 2 $(PART_3) || status=1; \
+	echo "tests 3/4: test_g* to test_r*"; $(PYTEST) -n 2 $(PART_2) || status=1; \
+	echo "tests 4/4: test_s* to test_z*"; $(PYTEST) -n 2 $(PART_3) || status=1; \
 	exit $$status
 
 lint: $(STAMP)

@@ -86,7 +86,11 @@ def _check_image(path: Path, panels: int, cols: int = 1) -> None:
     height = round((plots.PANEL_HEIGHT_IN * panels + 0.6) * plots.DPI)
     width = plots.WIDTH_IN if cols == 1 else plots.COLUMN_WIDTH_IN * cols
     assert rgb.shape[:2] == (height, round(width * plots.DPI)), (path, rgb.shape)
-    assert len(np.unique(rgb.reshape(-1, 3), axis=0)) > 50  # not one colour: lines, text, fills
+    # Not one colour: lines, text, fills. A PNG's channels are 8-bit, so each colour packs into one integer
+    # exactly (np.unique over rows of floats sorts them lexically: seconds on a 3-column figure).
+    rgba = np.zeros((rgb.shape[0] * rgb.shape[1], 4), dtype=np.uint8)
+    rgba[:, :3] = np.round(rgb.reshape(-1, 3) * 255.0)
+    assert len(np.unique(rgba.view(np.uint32))) > 50
     coloured = np.ptp(rgb, axis=2) > 0.2  # far from grey: white, black and the grid are grey
     band = (height - round(0.6 * plots.DPI)) // panels
     top = round(0.6 * plots.DPI)
