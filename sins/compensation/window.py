@@ -51,7 +51,31 @@ RIDGE = (1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0)
 GUARD_SE = 2.0
 
 
-class WindowRegression(Regression):
+class GyroWindow(Regression):
+    """The seed model, then a gyro correction from a window of past readings: what
+    :class:`WindowRegression` (a ridge) and :class:`~sins.compensation.window_net.WindowNet` (networks) share.
+    A subclass gives :meth:`window_error`; the readings are corrected in order, the window read from the
+    seed-corrected readings."""
+
+    def window_error(self, omega_ib_b: Array, f_ib_b: Array, dt: float) -> Array:
+        """The gyro error (n, 3), rad/s, the window predicts in seed-corrected readings (every ``dt`` s)."""
+        raise NotImplementedError
+
+    def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
+        """The seed model, then the window's gyro correction."""
+        out = super().correct_rates(rates, temp)
+        error = self.window_error(out.omega_ib_b, out.f_ib_b, float(np.median(np.diff(rates.t))))
+        return ImuRates(t=out.t, omega_ib_b=out.omega_ib_b - error, f_ib_b=out.f_ib_b)
+
+    def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
+        """The seed model, then the window's gyro correction on the mean rates."""
+        out = super().correct_increments(imu, temp)
+        dt = np.diff(imu.t)
+        error = self.window_error(out.dtheta_b / dt[:, None], out.dv_b / dt[:, None], float(np.median(dt)))
+        return ImuIncrements(t=out.t, dtheta_b=out.dtheta_b - error * dt[:, None], dv_b=out.dv_b)
+
+
+class WindowRegression(GyroWindow):
     """The seed model, then a ridge correction of each gyro axis from a window of past readings (see
     the module docstring)."""
 
@@ -99,20 +123,6 @@ class WindowRegression(Regression):
         """The gyro error (n, 3), rad/s, the window predicts in seed-corrected readings (every ``dt`` s)."""
         z = (window_features(omega_ib_b, f_ib_b, dt) - self.feature_mean_) / self.feature_scale_
         return np.asarray(z @ self.coef_[1:] + self.coef_[0])
-
-    def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
-        """The seed model, then the window's gyro correction (module docstring)."""
-        out = super().correct_rates(rates, temp)
-        dt = float(np.median(np.diff(rates.t)))
-        error = self.window_error(out.omega_ib_b, out.f_ib_b, dt)
-        return ImuRates(t=out.t, omega_ib_b=out.omega_ib_b - error, f_ib_b=out.f_ib_b)
-
-    def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
-        """The seed model, then the window's gyro correction on the mean rates (module docstring)."""
-        out = super().correct_increments(imu, temp)
-        dt = np.diff(imu.t)
-        error = self.window_error(out.dtheta_b / dt[:, None], out.dv_b / dt[:, None], float(np.median(dt)))
-        return ImuIncrements(t=out.t, dtheta_b=out.dtheta_b - error * dt[:, None], dv_b=out.dv_b)
 
     def check_state(self, state: dict[str, Any]) -> None:
         """The seed model's arrays, then the window's: ``coef_`` ({FEATURES}+1, 3), ``feature_mean_`` and
@@ -182,6 +192,7 @@ __all__ = [
     "PER_BLOCK",
     "RIDGE",
     "WINDOW_S",
+    "GyroWindow",
     "WindowRegression",
     "window_features",
 ]

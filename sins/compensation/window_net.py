@@ -42,7 +42,8 @@ from numpy.typing import NDArray
 
 from sins.compensation.base import checked_array, state_array
 from sins.compensation.regression import Regression
-from sins.core.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
+from sins.compensation.window import GyroWindow
+from sins.core.series import CalibrationData, ImuIncrements, ReferencedRecording
 
 Array = NDArray[np.float64]
 
@@ -63,7 +64,7 @@ MAX_LAYERS, MAX_WIDTH = 3, 128
 _INIT_LOCK = threading.Lock()
 
 
-class WindowNet(Regression):
+class WindowNet(GyroWindow):
     """The seed model, then a network of the gyro's error from a window of past readings (module
     docstring)."""
 
@@ -151,11 +152,11 @@ class WindowNet(Regression):
         against the seed model's and theirs."""
         from sins.compensation import unit_bias
 
-        seed = super().correct_increments(rec.imu)
+        seed = Regression.correct_increments(self, rec.imu)  # the seed model alone, not the window
         dt = np.diff(seed.t)
-        rows, x = window_inputs(seed.dtheta_b / dt[:, None], seed.dv_b / dt[:, None], float(np.median(dt)))
-        held = np.repeat(np.arange(len(rows)), np.diff(np.r_[rows, len(dt)]))
-        error = _mean_prediction(nets, x)[held]
+        error = _held_prediction(
+            nets, seed.dtheta_b / dt[:, None], seed.dv_b / dt[:, None], float(np.median(dt))
+        )
         with_net = ImuIncrements(t=seed.t, dtheta_b=seed.dtheta_b - error * dt[:, None], dv_b=seed.dv_b)
         return unit_bias.open_loop_deg(seed, rec) - unit_bias.open_loop_deg(with_net, rec)
 
@@ -170,23 +171,7 @@ class WindowNet(Regression):
         nets = getattr(self, "networks_", [])
         if not nets:
             return np.zeros_like(omega_ib_b)
-        rows, x = window_inputs(omega_ib_b, f_ib_b, dt)
-        pred = _mean_prediction(nets, x) * self.axes_
-        held = np.repeat(np.arange(len(rows)), np.diff(np.r_[rows, len(omega_ib_b)]))
-        return np.asarray(pred[held], dtype=float)
-
-    def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
-        """The seed model, then the networks' gyro correction (module docstring)."""
-        out = super().correct_rates(rates, temp)
-        error = self.window_error(out.omega_ib_b, out.f_ib_b, float(np.median(np.diff(rates.t))))
-        return ImuRates(t=out.t, omega_ib_b=out.omega_ib_b - error, f_ib_b=out.f_ib_b)
-
-    def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
-        """The seed model, then the networks' gyro correction on the mean rates (module docstring)."""
-        out = super().correct_increments(imu, temp)
-        dt = np.diff(imu.t)
-        error = self.window_error(out.dtheta_b / dt[:, None], out.dv_b / dt[:, None], float(np.median(dt)))
-        return ImuIncrements(t=out.t, dtheta_b=out.dtheta_b - error * dt[:, None], dv_b=out.dv_b)
+        return np.asarray(_held_prediction(nets, omega_ib_b, f_ib_b, dt) * self.axes_, dtype=float)
 
     def check_state(self, state: dict[str, Any]) -> None:
         """The seed model's arrays, then the networks': ``axes_`` (3,), ``networks_`` a list of at most
@@ -305,6 +290,14 @@ def _network(n_in: int, hidden: tuple[int, ...]) -> Any:
         width = h
     layers.append(nn.Linear(width, 3))
     return nn.Sequential(*layers).to(torch.float32)
+
+
+def _held_prediction(nets: list[dict[str, Array]], omega_ib_b: Array, f_ib_b: Array, dt: float) -> Array:
+    """The networks' mean gyro error (n, 3) at every reading: predicted every :data:`STRIDE` readings from
+    the window before, and held until the next."""
+    rows, x = window_inputs(omega_ib_b, f_ib_b, dt)
+    held = np.repeat(np.arange(len(rows)), np.diff(np.r_[rows, len(omega_ib_b)]))
+    return _mean_prediction(nets, x)[held]
 
 
 def _mean_prediction(nets: list[dict[str, Array]], x: Array) -> Array:
