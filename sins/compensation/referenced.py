@@ -30,7 +30,7 @@ from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
-from sins.io.recording import Recording
+from sins.io.recording import Recording, readings_beside
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
 from sins.nav.metrics import nav_errors
@@ -551,22 +551,7 @@ def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str)
     SinsInputError
         when the reference does not overlap the readings in time.
     """
-    if isinstance(imu, ImuRates):
-        dt = np.diff(imu.t)[:, None]
-        imu = ImuIncrements(
-            t=imu.t,
-            dtheta_b=0.5 * (imu.omega_ib_b[:-1] + imu.omega_ib_b[1:]) * dt,
-            dv_b=0.5 * (imu.f_ib_b[:-1] + imu.f_ib_b[1:]) * dt,
-        )
-    inside = np.flatnonzero((truth.t >= imu.t[0]) & (truth.t <= imu.t[-1]))
-    if len(inside) < 2:
-        raise SinsInputError(
-            f"{source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the readings "
-            f"({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
-        )
-    return ReferencedRecording(
-        imu=imu, reference=truth.at(inside), judged=None, reference_name="truth", source=source
-    )
+    return readings_beside(imu, truth, source)
 
 
 def read_inputs(

@@ -16,6 +16,7 @@ import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -138,6 +139,29 @@ def beside_reference(
     truth = rec.truth if truth is None else truth
     if truth is None:
         raise SinsInputError(f"{rec.source}: no reference trajectory (give one with --truth TRUTH.csv)")
+    return readings_beside(
+        imu, truth, rec.source, sensor=sensor,
+        reference_name="truth" if not own else f"its own reference ({rec.kind})",
+        heading_known=rec.heading_known or not own, latitude_known=rec.latitude_known or not own,
+    )  # fmt: skip
+
+
+def readings_beside(
+    imu: ImuRates | ImuIncrements,
+    truth: NavSeries,
+    source: str,
+    reference_name: str = "truth",
+    **fields: Any,
+) -> ReferencedRecording:
+    """Readings beside a reference trajectory as a :class:`~sins.core.series.ReferencedRecording` (its
+    other ``fields`` as given): rate-form readings
+    integrated between samples by the trapezoid rule, the reference cut to the readings' span.
+
+    Raises
+    ------
+    SinsInputError
+        naming ``source`` when the reference does not overlap the readings in time.
+    """
     if isinstance(imu, ImuRates):
         dt = np.diff(imu.t)[:, None]
         imu = ImuIncrements(
@@ -148,14 +172,16 @@ def beside_reference(
     inside = np.flatnonzero((truth.t >= imu.t[0]) & (truth.t <= imu.t[-1]))
     if len(inside) < 2:
         raise SinsInputError(
-            f"{rec.source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the "
+            f"{source}: the reference ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the "
             f"readings ({imu.t[0]:.6g}..{imu.t[-1]:.6g} s)"
         )
     return ReferencedRecording(
-        imu=imu, reference=truth.at(inside), judged=None, sensor=sensor,
-        reference_name="truth" if not own else f"its own reference ({rec.kind})", source=rec.source,
-        heading_known=rec.heading_known or not own, latitude_known=rec.latitude_known or not own,
-    )  # fmt: skip
+        imu=imu,
+        reference=truth.at(inside),
+        judged=None,
+        source=source,
+        **{"reference_name": "truth", **fields},
+    )
 
 
 def recording_kind(path: Path) -> str:
@@ -376,5 +402,6 @@ __all__ = [
     "beside_reference",
     "missing_reference",
     "read_recording_any",
+    "readings_beside",
     "recording_kind",
 ]
