@@ -242,9 +242,8 @@ def test_bias_of_the_psins_ring_laser_dataset() -> None:
     gyro's biases below 1 °/h."""
     dataset_folder("psins_lasergyro_static")
     from sins.characterise.bias import dataset_bias
-    from sins.io import datasets
 
-    est = dataset_bias(datasets.load("psins_lasergyro"), "psins_lasergyro")
+    est = dataset_bias(io.read(dataset="psins_lasergyro").reference_inputs()[0], "psins_lasergyro")
     assert math.degrees(est.lat) == pytest.approx(34.246048, abs=1e-6)
     assert np.linalg.norm(est.vector("gyro", "expected")) / DPH == pytest.approx(15.041, abs=1e-3)
     assert np.all(np.abs(est.vector("gyro")) < 1.0 * DPH)

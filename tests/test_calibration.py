@@ -188,7 +188,7 @@ def test_ferraris_session_calibrates_to_gravity_and_full_turns():
     nine gyro scale/misalignment coefficients exactly, so they come out at 360°.
     """
     try:
-        data = datasets.read_ferraris()
+        data = datasets._read_ferraris()
     except SinsInputError as exc:
         pytest.skip(f"Ferraris session not available: {exc}")
     fit = calibration.fit_seed_model(data, g_sensitivity=False)

@@ -485,7 +485,7 @@ def test_moving_unit_with_its_truth(tmp_path, capsys):
     assert (
         cli.main(["simulate", str(scen), "--imu", str(imu_csv), "--truth", str(truth), "--form", "rate"]) == 0
     )
-    samples, _ = io.read_imu(imu_csv)
+    samples = io.read(imu_csv).imu
     assert isinstance(samples, ImuRates)
     rng = np.random.default_rng(9)
     density = np.r_[1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3]  # rad/√s, m/s/√s
@@ -508,11 +508,11 @@ def test_moving_unit_with_its_truth(tmp_path, capsys):
 
 
 def _real(name: str, folder: str) -> tuple[analysis.Characterisation, check.ClosingCheck, check.ClosingCheck]:
-    from sins.io import datasets
 
     if not dataset_folder(folder).is_dir():
         pytest.skip(f"dataset {folder} not found under the data root")
-    result = analysis.characterise(reference.reference_residual(datasets.load(name), name))
+    data = io.read(dataset=name).reference_inputs()[0]
+    result = analysis.characterise(reference.reference_residual(data, name))
     model = model_file.imu_model(result)
     return result, check.closing_check(result, model, seed=1), check.closing_check(result, model, seed=2)
 
@@ -563,10 +563,9 @@ def test_ferraris_round_trip(capsys):
 def _broad_rest(name: str, trial: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """BROAD's own rest phases (its ``movement`` flags, read here with scipy): rows of the reader's trial
     (True at rest), the gyro readings and the sample step."""
-    from sins.io import datasets
 
     mat = scipy.io.loadmat(str(dataset_folder("broad_mocap") / f"{trial}.mat"), squeeze_me=True)
-    data = datasets.load(name)
+    data = io.read(dataset=name).reference_inputs()[0]
     dt = 7.0 / 2000.0
     rest = ~np.asarray(mat["movement"]).astype(bool)[np.round(data.t / dt).astype(int)]
     return rest, data.gyro, np.array(dt)
@@ -587,9 +586,8 @@ def test_broad_reference_noisier_than_the_sensor(name, trial):
     ``σ(τ)·√τ`` at the octave of least slope error, 0.1-0.5 s)."""
     if not dataset_folder("broad_mocap").is_dir():
         pytest.skip("dataset broad_mocap not found under the data root")
-    from sins.io import datasets
 
-    data = datasets.load(name)
+    data = io.read(dataset=name).reference_inputs()[0]
     res = reference.reference_residual(data, name)
     assert any("limited by the reference" in note for note in res.notes), res.notes
     rest, gyro, dt = _broad_rest(name, trial)
@@ -625,9 +623,7 @@ def _rocking_hz(name: str) -> tuple[float, float]:
     that coherence: the base rocking about the x axis turns the gyro and tilts gravity into the y axis."""
     from scipy import signal
 
-    from sins.io import datasets
-
-    data = datasets.load(name)
+    data = io.read(dataset=name).reference_inputs()[0]
     fs = 1.0 / float(np.median(np.diff(data.t)))
     f, c = signal.coherence(data.gyro[:, 0], data.accel[:, 1], fs=fs, nperseg=4096)
     band = (f > 1.0) & (f < 4.0)

@@ -218,7 +218,7 @@ def test_round_trip_rate_form(round_trips: dict[str, dict[str, float]]) -> None:
 def test_simulate_writes_readable_files(
     short_files: dict[str, Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
-    samples, table = io.read_imu(short_files["imu"])
+    samples, table = io.read(short_files["imu"]).imu, io.read_table(short_files["imu"])
     truth = io.read_truth(short_files["truth"])
     assert len(truth.t) == 301 and len(samples) == 300
     assert np.array_equal(table.column("t"), truth.t[1:])  # row k ends at the truth's (k+1)-th time
@@ -231,7 +231,7 @@ def test_simulate_reports_the_rows_it_wrote(tmp_path: Path, capsys: pytest.Captu
     imu, truth = tmp_path / "imu.csv", tmp_path / "truth.csv"
     assert main(["simulate", str(scenario), "--imu", str(imu), "--truth", str(truth), "--form", "rate"]) == 0
     reported = [int(n) for n in re.findall(r"(\d+) rows", capsys.readouterr().out)]
-    assert reported == [len(io.read_imu(imu)[0]), len(io.read_truth(truth).t)]
+    assert reported == [len(io.read(imu).imu), len(io.read_truth(truth).t)]
 
 
 # --------------------------------------------------------------------------- bad input
@@ -434,7 +434,7 @@ def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.Capt
         rc = main(["calibrate", str(tmp_path / "rig.toml"), "--imu", str(tmp_path / "imu.toml"),
                    "--out", str(tmp_path / name), "--seed", seed])  # fmt: skip
         assert rc == 0
-        outs.append(io.read_recording(tmp_path / name))
+        outs.append(io.read(tmp_path / name).rig)
     a, b, c = outs
     # Six positions; two table runs of four rates, each rate a ramp and a dwell, then a ramp to rest.
     assert sum(p.kind == "static" for p in a.phases) == 6

@@ -94,14 +94,14 @@ def test_simulate_writes_the_units_readings_that_run_integrates(folder: Path, ca
         assert integrated[key] == pytest.approx(ran[key], rel=1e-9, abs=1e-12), key
     # The tactical unit drifts: metres in 30 s, where the ideal IMU leaves well under a millimetre.
     assert _summary("r.json")["final_horizontal_m"] > 0.1
-    _, table = io.read_imu("imu.csv")
+    table = io.read_table("imu.csv")
     assert table.columns[-1] == "temp" and np.all(table.column("temp") == 20.0)  # the cabin's default
 
     # --ideal: the exact ideal readings, the same as the scenario without its unit.
     assert main(["simulate", "drive.toml", "--imu", "ideal.csv", "--truth", "t2.csv", "--ideal"]) == 0
     (folder / "plain.toml").write_text(SCENARIO.replace('model = "tactical"\nseed = 3\n', ""))
     assert main(["simulate", "plain.toml", "--imu", "plain.csv", "--truth", "t3.csv"]) == 0
-    ideal, plain = io.read_imu("ideal.csv")[1], io.read_imu("plain.csv")[1]
+    ideal, plain = io.read_table("ideal.csv"), io.read_table("plain.csv")
     assert ideal.columns == plain.columns == io.INCREMENT_COLUMNS
     assert np.array_equal(ideal.data, plain.data)
     assert not np.array_equal(ideal.data, table.data[:, :7])
@@ -128,7 +128,7 @@ def test_the_readings_carry_the_units_errors(folder: Path, capsys) -> None:
     for form in ("increment", "rate"):
         args = ["simulate", "still.toml", "--truth", "t.csv", "--form", form]
         assert main([*args, "--imu", "unit.csv"]) == 0 and main([*args, "--imu", "ideal.csv", "--ideal"]) == 0
-        read, ideal = io.read_imu("unit.csv")[1], io.read_imu("ideal.csv")[1]
+        read, ideal = io.read_table("unit.csv"), io.read_table("ideal.csv")
         error = read.data[:, 1:7] - ideal.data[:, 1:7]
         if form == "increment":
             error = error / np.diff(np.r_[0.0, read.column("t")])[:, None]
@@ -275,7 +275,7 @@ def test_gap_gives_the_same_answer_on_either_imu_form(folder: Path, capsys) -> N
     for form in ("rate", "increment"):
         args = ["simulate", "turns.toml", "--imu", f"{form}.csv", "--truth", "truth.csv", "--form", form]
         assert main([*args, "--ideal"]) == 0
-        table = io.read_imu(f"{form}.csv")[1]
+        table = io.read_table(f"{form}.csv")
         t = table.column("t")
         dt = np.diff(np.r_[0.0, t])[:, None] if form == "increment" else 1.0
         u = table.data[:, 1:7] / dt  # the true input: a sample, or an interval's mean

@@ -1,4 +1,4 @@
-"""BROAD (../shared/data/broad_mocap): an IMU beside optical motion capture, read by :func:`read_broad`.
+"""BROAD (../shared/data/broad_mocap): an IMU beside optical motion capture, read by :func:`_read_broad`.
 
 Two parts. A synthetic trial, written as a MAT file like BROAD's, with known rates, specific force,
 clock offset and gaps, checks the reader's arithmetic without the real data. The real trials (skipped
@@ -25,7 +25,7 @@ from sins.io.datasets.broad import (
     BROAD_GRAVITY,
     BROAD_RATE_HZ,
     BROAD_TRIALS,
-    read_broad,
+    _read_broad,
 )
 
 FOLDER = dataset_folder(BROAD_FOLDER)
@@ -86,7 +86,7 @@ def _write_trial(root: Path, stem: str = BROAD_TRIALS[0], **override: object) ->
 
 def test_synthetic_trial_recovers_the_truth(tmp_path: Path) -> None:
     path = _write_trial(tmp_path)
-    data = read_broad("05", root=tmp_path)
+    data = _read_broad("05", root=tmp_path)
     assert data.source == str(path)
     rows = np.round(data.t * BROAD_RATE_HZ).astype(int)
     assert np.allclose(data.t, rows / BROAD_RATE_HZ, rtol=0, atol=1e-12)
@@ -111,7 +111,7 @@ def test_synthetic_trial_recovers_the_truth(tmp_path: Path) -> None:
     # With no delay in the file, no shift and only the filters' half-window trimmed.
     _write_trial(tmp_path, imu_gyr=_truth(np.arange(N_ROWS) / BROAD_RATE_HZ)[0])
     # (accel still delayed: the clock offset is found from the rate alone)
-    same = read_broad("5", root=tmp_path)
+    same = _read_broad("5", root=tmp_path)
     rows = np.round(same.t * BROAD_RATE_HZ).astype(int)
     assert (rows[0], rows[-1] + 1) == (64 + 15, 5900 - 15)
     rate_now = _truth(rows / BROAD_RATE_HZ)[0]
@@ -121,7 +121,7 @@ def test_synthetic_trial_recovers_the_truth(tmp_path: Path) -> None:
 def test_trial_names(tmp_path: Path) -> None:
     path = _write_trial(tmp_path, stem=BROAD_TRIALS[1])
     for name in (BROAD_TRIALS[1], "18", " 18 "):
-        assert read_broad(name, root=tmp_path).source == str(path)
+        assert _read_broad(name, root=tmp_path).source == str(path)
     assert BROAD_TRIALS == (
         "05_undisturbed_slow_rotation_with_breaks_B",
         "18_undisturbed_fast_translation_with_breaks_B",
@@ -130,41 +130,41 @@ def test_trial_names(tmp_path: Path) -> None:
 
 def test_refusals(tmp_path: Path) -> None:
     for trial in ("99", "abc", "", "05_undisturbed", "../05_undisturbed_slow_rotation_with_breaks_B"):
-        refusal(partial(read_broad, trial, root=tmp_path), repr(trial), "unknown BROAD trial", "05")
+        refusal(partial(_read_broad, trial, root=tmp_path), repr(trial), "unknown BROAD trial", "05")
     refusal(
-        lambda: read_broad("05", root=tmp_path),
+        lambda: _read_broad("05", root=tmp_path),
         str(tmp_path / BROAD_FOLDER),
         "no such data folder",
         "SINS_DATA",
     )
     (tmp_path / BROAD_FOLDER).mkdir()
     path = tmp_path / BROAD_FOLDER / f"{BROAD_TRIALS[0]}.mat"
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "no such file", "SINS_DATA")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "no such file", "SINS_DATA")
     good = _write_trial(tmp_path).read_bytes()
     for damaged in (b"", b"hello, not a MAT file\n", good[: len(good) // 3], bytes(range(256)) * 40):
         path.write_bytes(damaged)
-        refusal(lambda: read_broad("05", root=tmp_path), str(path), "not a readable MATLAB MAT file")
+        refusal(lambda: _read_broad("05", root=tmp_path), str(path), "not a readable MATLAB MAT file")
     _write_trial(tmp_path, opt_pos=None)
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "no variable 'opt_pos'")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "no variable 'opt_pos'")
     _write_trial(tmp_path, imu_acc=np.zeros((N_ROWS, 2)))
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "'imu_acc'", "N × 3", f"({N_ROWS}, 2)")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "'imu_acc'", "N × 3", f"({N_ROWS}, 2)")
     _write_trial(tmp_path, imu_mag=None, opt_quat=np.zeros((10, 4)))
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "rows")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "rows")
     _write_trial(tmp_path, sampling_rate=100.0)
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "sampling_rate", "285.714")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "sampling_rate", "285.714")
     _write_trial(tmp_path, opt_pos=np.full((N_ROWS, 3), np.nan))
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "longest stretch", "0 rows")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "longest stretch", "0 rows")
     noise = np.random.default_rng(1).normal(0.0, 1.0, (N_ROWS, 3))
     _write_trial(tmp_path, imu_gyr=noise)
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "do not match", "cannot align")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "do not match", "cannot align")
     quat = np.tile([2.0, 0.0, 0.0, 0.0], (N_ROWS, 1))
     _write_trial(tmp_path, opt_quat=quat)
-    refusal(lambda: read_broad("05", root=tmp_path), str(path), "'opt_quat'", "not a unit quaternion")
+    refusal(lambda: _read_broad("05", root=tmp_path), str(path), "'opt_quat'", "not a unit quaternion")
 
 
 # --------------------------------------------------------------------------- the real trials
 
-#: Per trial: rows kept of the file (see read_broad's docstring), the file's rows, and SOURCE.md's
+#: Per trial: rows kept of the file (see _read_broad's docstring), the file's rows, and SOURCE.md's
 #: gyro bias at rest (deg/s).
 REAL = {
     "05": ((1206, 58355), 59212, (0.198, 0.119, -0.227)),
@@ -181,7 +181,7 @@ def trial(request: pytest.FixtureRequest) -> tuple[str, CalibrationData]:
             f"BROAD data not found: no {stem}.mat in {FOLDER}; set SINS_DATA to the folder that holds "
             f"{BROAD_FOLDER}/ (the project's ../shared/data)"
         )
-    return number, read_broad(number)
+    return number, _read_broad(number)
 
 
 def _still(data: CalibrationData) -> np.ndarray:

@@ -1,5 +1,5 @@
 """The PSINS static ring-laser-gyro record (../shared/data/psins_lasergyro_static), read by
-:func:`sins.io.datasets.psins_lasergyro.read_psins_lasergyro`.
+:func:`sins.io.datasets.psins_lasergyro._read_psins_lasergyro`.
 
 The figures checked against the real record are those of the folder's SOURCE.md (an independent numpy
 script) measured again through the reader; those tests skip when the data are absent. The refusals and
@@ -21,7 +21,7 @@ from sins.core.series import CalibrationData
 from sins.io.datasets.psins_lasergyro import (
     PSINS_LASERGYRO_FILE,
     PSINS_LASERGYRO_FOLDER,
-    read_psins_lasergyro,
+    _read_psins_lasergyro,
 )
 
 FOLDER = dataset_folder(PSINS_LASERGYRO_FOLDER)
@@ -42,7 +42,7 @@ def record() -> CalibrationData:
             f"PSINS laser-gyro data not found: no {PATH}; set SINS_DATA to the folder that holds "
             f"{PSINS_LASERGYRO_FOLDER}/ (the project's ../shared/data)"
         )
-    return read_psins_lasergyro()
+    return _read_psins_lasergyro()
 
 
 def _rows(data: CalibrationData, start_s: float, stop_s: float) -> slice:
@@ -181,7 +181,7 @@ def _static_rows(n: int = 4) -> str:
 
 def test_synthetic_east_facing_unit(tmp_path: Path) -> None:
     path = _write(tmp_path, _static_rows())
-    data = read_psins_lasergyro(tmp_path)
+    data = _read_psins_lasergyro(tmp_path)
     assert data.source == str(path)
     assert np.allclose(data.t, [10.5, 11.5, 12.5, 13.5])  # t0 = 10 s, 1 s rows, midpoints
     # FRD: forward = east, right = south; Earth's rate north = −right, f up = −down.
@@ -193,15 +193,15 @@ def test_synthetic_east_facing_unit(tmp_path: Path) -> None:
     assert np.allclose(data.ref_accel, [0.0, 0.0, -_G0], rtol=1e-15, atol=1e-15)
     # Header heading −90° is PSINS's counter-clockwise yaw; +90° (west) would flip the reference.
     _write(tmp_path, _static_rows(), att="0 0 90 0 0 0")
-    assert np.allclose(read_psins_lasergyro(tmp_path).ref_gyro, [0.0, earth.OMEGA_IE, 0.0], atol=1e-20)
+    assert np.allclose(_read_psins_lasergyro(tmp_path).ref_gyro, [0.0, earth.OMEGA_IE, 0.0], atol=1e-20)
 
 
 def test_missing_data_refused(tmp_path: Path) -> None:
     folder = tmp_path / PSINS_LASERGYRO_FOLDER
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(folder), "no such data folder", "SINS_DATA", "root=")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(folder), "no such data folder", "SINS_DATA", "root=")
     folder.mkdir()
     path = folder / PSINS_LASERGYRO_FILE
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(path), "no such file", "SINS_DATA")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(path), "no such file", "SINS_DATA")
 
 
 def test_corrupt_file_refused(tmp_path: Path) -> None:
@@ -209,13 +209,13 @@ def test_corrupt_file_refused(tmp_path: Path) -> None:
     folder.mkdir()
     path = folder / PSINS_LASERGYRO_FILE
     path.write_bytes(b"0 0 2 0 0 80\n")  # not compressed
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(path), "not a readable xz file")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(path), "not a readable xz file")
     good = lzma.compress((_HEADER.format(att="0 0 -90 0 0 0", pos="0 0 0 0 1000 9.78", scales="1 1 1 1 1 1")
                           + _static_rows(200)).encode())  # fmt: skip
     path.write_bytes(good[: len(good) // 2])  # truncated
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(path), "not a readable xz file")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(path), "not a readable xz file")
     path.write_bytes(lzma.compress(b"% PSINS SIMU\n\xff\xfe\n"))
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(path), "not ASCII text")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(path), "not ASCII text")
 
 
 @pytest.mark.parametrize(
@@ -243,13 +243,13 @@ def test_malformed_file_refused(
     tmp_path: Path, kwargs: dict[str, str], rows: str, fragments: tuple[str, ...]
 ) -> None:
     path = _write(tmp_path, rows, **kwargs)
-    refusal(lambda: read_psins_lasergyro(tmp_path), str(path), *fragments)
+    refusal(lambda: _read_psins_lasergyro(tmp_path), str(path), *fragments)
 
 
 def test_not_a_psins_file_refused(tmp_path: Path) -> None:
     path = _write(tmp_path, _static_rows())
     text = lzma.decompress(path.read_bytes()).decode().replace("PSINS-format", "Some")
     path.write_bytes(lzma.compress(text.encode()))
-    refusal(lambda: read_psins_lasergyro(tmp_path), f"{path}:1:", "not a PSINS SIMU text file")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), f"{path}:1:", "not a PSINS SIMU text file")
     path.write_bytes(lzma.compress(b""))
-    refusal(lambda: read_psins_lasergyro(tmp_path), f"{path}:1:", "not a PSINS SIMU text file")
+    refusal(lambda: _read_psins_lasergyro(tmp_path), f"{path}:1:", "not a PSINS SIMU text file")

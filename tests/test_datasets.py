@@ -1,7 +1,7 @@
 """Real datasets beside the project: the imucal Ferraris session (../shared/data/imucal_ferraris).
 
 The figures checked here are those of the folder's SOURCE.md (an independent numpy script), measured
-again through :func:`sins.io.datasets.read_ferraris`.
+again through :func:`sins.io.datasets._read_ferraris`.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ ROTATIONS = ("x_rot", "y_rot", "z_rot")
 
 @pytest.fixture(scope="module")
 def session() -> CalibrationData:
-    return datasets.read_ferraris()
+    return datasets._read_ferraris()
 
 
 def _rows(data: CalibrationData, name: str) -> slice:
@@ -134,7 +134,7 @@ def test_rotation_angles(session: CalibrationData) -> None:
 def test_round_trip_through_a_rig_recording(session: CalibrationData, tmp_path: Path) -> None:
     path = tmp_path / "ferraris.csv"
     io.write_recording(path, session, comment="imucal example Ferraris session (MIT, MaD Lab)")
-    back = io.read_recording(path)
+    back = io.read(path).rig
     for name in ("t", "gyro", "accel", "ref_gyro", "ref_accel"):
         assert np.array_equal(getattr(back, name), getattr(session, name), equal_nan=True), name
     assert back.phases == session.phases
@@ -160,12 +160,12 @@ def test_data_root_order(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Non
 
 
 def test_missing_data_is_refused_with_a_hint(tmp_path: Path) -> None:
-    refusal(lambda: datasets.read_ferraris(tmp_path), str(tmp_path / "imucal_ferraris"), "SINS_DATA", "root")
+    refusal(lambda: datasets._read_ferraris(tmp_path), str(tmp_path / "imucal_ferraris"), "SINS_DATA", "root")
     folder = tmp_path / "imucal_ferraris"
     folder.mkdir()
     (folder / FILES[0]).write_text("n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z\n0,0,0,0,0,0,9.8\n")
-    refusal(lambda: datasets.read_ferraris(tmp_path), str(folder / FILES[1]), "no such file", "SINS_DATA")
-    refusal(lambda: datasets.read_ferraris(tmp_path, session="../x"), "session")
+    refusal(lambda: datasets._read_ferraris(tmp_path), str(folder / FILES[1]), "no such file", "SINS_DATA")
+    refusal(lambda: datasets._read_ferraris(tmp_path, session="../x"), "session")
 
 
 def test_bad_section_lists_are_refused(tmp_path: Path) -> None:
@@ -175,7 +175,7 @@ def test_bad_section_lists_are_refused(tmp_path: Path) -> None:
     (folder / FILES[0]).write_text(f"n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z\n{rows}\n")
     good = {name: {"start": 10 * k, "end": 10 * k + 5} for k, name in enumerate(datasets.FERRARIS_SECTIONS)}
     (folder / FILES[1]).write_text(json.dumps(good))
-    assert len(datasets.read_ferraris(tmp_path).phases) == 9
+    assert len(datasets._read_ferraris(tmp_path).phases) == 9
     cases = [
         ({**good, "y_a": {"start": 2, "end": 12}}, "overlap"),
         ({**good, "z_rot": {"start": 95, "end": 101}}, "beyond the 100 rows"),
@@ -186,6 +186,6 @@ def test_bad_section_lists_are_refused(tmp_path: Path) -> None:
     ]
     for sections, fragment in cases:
         (folder / FILES[1]).write_text(json.dumps(sections))
-        refusal(lambda: datasets.read_ferraris(tmp_path), str(folder / FILES[1]), fragment)
+        refusal(lambda: datasets._read_ferraris(tmp_path), str(folder / FILES[1]), fragment)
     (folder / FILES[1]).write_text('{"x_p": ')
-    refusal(lambda: datasets.read_ferraris(tmp_path), f"{folder / FILES[1]}:1:", "not JSON")
+    refusal(lambda: datasets._read_ferraris(tmp_path), f"{folder / FILES[1]}:1:", "not JSON")

@@ -19,7 +19,7 @@ import pytest
 from conftest import dataset_folder, refusal
 from scipy.spatial.transform import Rotation
 
-from sins import compensation
+from sins import compensation, io
 from sins.compensation.ferraris import HOLDS, TURNS, Ferraris, check_session, compare_with_imucal, to_imucal
 from sins.core.series import CalibrationData, RigPhase
 from sins.io import datasets
@@ -347,7 +347,7 @@ def _annotated_counts() -> tuple[np.ndarray, np.ndarray]:
 @needs_annotated
 def test_annotated_session_rows_units_and_references() -> None:
     parts, counts = _annotated_counts()
-    data = datasets.load("ferraris_annotated")
+    data = io.read(dataset="ferraris_annotated").reference_inputs()[0]
     order = np.argsort(counts[:, 0])
     assert len(data) == 9414 and np.array_equal(counts[order, 0], np.arange(9414))
     np.testing.assert_array_equal(data.t, np.arange(9414) / 204.8)
@@ -375,7 +375,7 @@ def test_annotated_files_are_refused_in_one_line(tmp_path: Path) -> None:
     folder = tmp_path / datasets.FERRARIS_FOLDER
     folder.mkdir()
     path = folder / "annotated_session.csv"
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), str(path), "no such file", "SINS_DATA")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), str(path), "no such file", "SINS_DATA")
     head = "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n"
     good = [(name, k) for k, name in enumerate(datasets.FERRARIS_SECTIONS) for _ in range(3)]
 
@@ -383,21 +383,21 @@ def test_annotated_files_are_refused_in_one_line(tmp_path: Path) -> None:
         path.write_text(head + "".join(f"{n},{i},0,0,2000,1,2,3\n" for i, (n, _) in enumerate(rows)))
 
     write(good)
-    assert len(datasets.read_ferraris_annotated(tmp_path).phases) == 9
+    assert len(datasets._read_ferraris_annotated(tmp_path).phases) == 9
     write([("w_p", 0), *good[1:]])
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), f"{path}:2:", "unknown section 'w_p'")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), f"{path}:2:", "unknown section 'w_p'")
     write([r for r in good if r[0] != "y_rot"])
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), str(path), "missing section 'y_rot'")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), str(path), "missing section 'y_rot'")
     write([*good[3:6], *good[:3], *good[6:]])  # x_a's rows first: fine, `samples` orders them
     swapped = good[:1] + good[3:4] + good[2:3] + good[1:2] + good[4:]  # x_p, x_a, x_p, x_a, ...
     write(swapped)
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), "section 'x_p' is not one run")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), "section 'x_p' is not one run")
     path.write_text(head + "".join(f"{n},{2 * i},0,0,2000,1,2,3\n" for i, (n, _) in enumerate(good)))
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), "column 'samples'", "each once")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), "column 'samples'", "each once")
     path.write_text(head.replace("part,", "section,") + "x_p,0,0,0,0,0,0,0\n")
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), "missing required column 'part'")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), "missing required column 'part'")
     path.write_text(head + "x_p,0,1e9,0,0,0,0,0\n")
-    refusal(lambda: datasets.read_ferraris_annotated(tmp_path), f"{path}:2:", "column 'acc_x'", "outside")
+    refusal(lambda: datasets._read_ferraris_annotated(tmp_path), f"{path}:2:", "column 'acc_x'", "outside")
 
 
 # --------------------------------------------------------------------------- against imucal
@@ -421,7 +421,7 @@ UNITS = {"accel_unit_mps2": 9.81 / 2048, "gyro_unit_dps": 2000 / 32768}
 def annotated_fit() -> tuple[CalibrationData, Ferraris]:
     if not ANNOTATED.is_file():
         pytest.skip(f"imucal's annotated session not found at {ANNOTATED}: set SINS_DATA")
-    data = datasets.read_ferraris_annotated()
+    data = datasets._read_ferraris_annotated()
     return data, Ferraris().fit(data)
 
 
@@ -518,7 +518,7 @@ def test_against_imucals_stored_snapshot(annotated_fit) -> None:
 def example() -> CalibrationData:
     if not (FOLDER / "example_ferraris_session.csv").is_file():
         pytest.skip(f"imucal's example session not found in {FOLDER}: set SINS_DATA")
-    return datasets.load("ferraris")
+    return io.read(dataset="ferraris").reference_inputs()[0]
 
 
 @needs_example
@@ -566,7 +566,7 @@ def test_fit_and_evaluate_through_the_library(example: CalibrationData, tmp_path
     the gyros the noise: an RMS within 5 % of the holds' own spread about their means, a mean within 5
     standard errors of 0.
     """
-    fitted = compensation.make("ferraris").fit(datasets.load("ferraris"))
+    fitted = compensation.make("ferraris").fit(io.read(dataset="ferraris").reference_inputs()[0])
     compensation.save(fitted, tmp_path / "m.json")
     channels = compensation.residual_rms(compensation.load(tmp_path / "m.json"), example)
     holds = [p for p in example.phases if p.name in HOLDS]

@@ -773,6 +773,7 @@ def _mutate_array(a: np.ndarray, data: st.DataObject) -> np.ndarray:
 
 def target_datasets(b: Base, data: st.DataObject) -> None:
     """The dataset readers on mutated synthetic files (text, xz, MAT: bytes and values)."""
+    from sins import io
     from sins.io import datasets
     from sins.io.datasets.broad import BROAD_FOLDER, BROAD_TRIALS
     from sins.io.datasets.psins_lasergyro import PSINS_LASERGYRO_FILE, PSINS_LASERGYRO_FOLDER
@@ -812,7 +813,7 @@ def target_datasets(b: Base, data: st.DataObject) -> None:
                 scipy.io.savemat(path, content)
                 path.write_bytes(mutate_bytes(path.read_bytes(), data))
             files = [path]
-        _assert_read(lambda: datasets.load_with_truth(name, root), [*files, root])
+        _assert_read(lambda: io.read(dataset=name, root=root).reference_inputs(), [*files, root])
 
 
 # --------------------------------------------------------------------------- registry and CI tests

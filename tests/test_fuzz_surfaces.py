@@ -103,8 +103,7 @@ class Surfaces:
 
 def make_surfaces(folder: Path) -> Surfaces:
     """Write, fit, run and simulate the base files in ``folder`` (a campaign's cluster included)."""
-    from sins import compensation
-    from sins.io import read_recording
+    from sins import compensation, io
 
     for name, doc in NAMED.items():
         _write(folder / name, to_toml(doc))
@@ -128,7 +127,7 @@ def make_surfaces(folder: Path) -> Surfaces:
             "5",
         ]
     )
-    data = read_recording(rec)
+    data = io.read(rec).rig
     models = {}
     for name, params in FITS.items():
         compensation.save(compensation.make(name, **params).fit(data), folder / f"m_{name}.json")

@@ -378,10 +378,12 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path: Path):
     refusal(lambda: gap.diagnose(data.rows(slice(0, 50))), "too short to split")
     refusal(lambda: gap.diagnose(data, model=("gyro.wobble",)), "unknown effect")
     imu_only = tmp_path / "imu.csv"
-    imu_only.write_text("t,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n")
+    imu_only.write_text(
+        "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n"
+    )
     from sins.runs import pipeline
 
-    refusal(lambda: pipeline.gap_data(imu_only), "no ref_ columns", "trajectory")
+    refusal(lambda: pipeline.gap_data(io.read(imu_only)), "no ref_ columns", "trajectory")
 
 
 def test_the_cli_names_the_flag_the_library_leaves_out(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
@@ -411,7 +413,7 @@ def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
     from sins.io import datasets
 
     try:
-        session = datasets.read_ferraris()
+        session = datasets._read_ferraris()
     except SinsInputError as exc:  # the data root is absent: say where it was looked for
         pytest.skip(f"Ferraris session unavailable: {exc}")
     report = gap.diagnose(session)
@@ -470,7 +472,7 @@ def test_a_recording_by_another_tool_on_another_procedure_is_diagnosed(
     reported a periodic disturbance outside the library instead."""
     path = tmp_path / "tumble.csv"
     _tumbling_table_csv(path, 0.0)
-    report = gap.diagnose(io.read_recording(path))
+    report = gap.diagnose(io.read(path).rig)
     assert report.diagnosis == [] and report.unexplained == []
     _tumbling_table_csv(path, -1e-4)
     out = tmp_path / "gap.json"
@@ -498,7 +500,7 @@ def _drive_recording(tmp_path: Path, seed: int = 2) -> tuple[calibration.Calibra
     model = imu_spec.draw_unit("tactical", seed).only(*imu.BASELINE)
     io.write_imu(tmp_path / "imu.csv", model.corrupt_rates(rates, seed=seed))
     io.write_truth(tmp_path / "truth.csv", truth)
-    data, at_samples = pipeline.gap_data(tmp_path / "imu.csv", tmp_path / "truth.csv")
+    data, at_samples = pipeline.gap_data(io.read(tmp_path / "imu.csv", truth=tmp_path / "truth.csv"))
     assert at_samples is not None and np.array_equal(at_samples.t, data.t)
     return data, truth, rates
 
@@ -518,7 +520,7 @@ def test_an_imu_recording_with_its_truth_gets_the_exact_ideal_imu_as_reference(t
     assert gap.diagnose(data).diagnosis == []
     late = tmp_path / "late.csv"
     io.write_truth(late, truth.at(slice(0, 4000)))
-    refusal(lambda: pipeline.gap_data(tmp_path / "imu.csv", late), "outside the truth")
+    refusal(lambda: pipeline.gap_data(io.read(tmp_path / "imu.csv", truth=late)), "outside the truth")
 
 
 def test_a_random_bias_may_gain_what_the_current_coefficients_misfit_on_the_withheld_rows(tmp_path: Path):

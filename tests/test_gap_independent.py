@@ -111,7 +111,7 @@ def test_saturation_clips_and_quantised_readings_are_integer_counts_after_the_cs
     assert (~below).sum() >= 10
 
     case = ng.quantized_case(0, 100.0, 2.0)
-    data = io.read_recording(ng.write(ng.build(case), tmp_path / "quantised.csv"))
+    data = io.read(ng.write(ng.build(case), tmp_path / "quantised.csv")).rig
     step = 0.06 * nr.DEG
     counts = data.gyro / step
     assert np.abs(counts - np.round(counts)).max() < 1e-6
@@ -210,7 +210,7 @@ def test_a_gyro_clipped_only_in_the_tail_is_diagnosed_saturated(diagnosed: Diagn
 def test_an_effect_only_the_withheld_rows_excite_is_named_not_silently_absent(tmp_path: Path) -> None:
     """The same recording given one phase over all of it: the phase's end, withheld, holds every
     clipped reading, so no saturation can be fitted, and the report says so by name."""
-    data = io.read_recording(ng.write(ng.build(CASES["clipped tail"]), tmp_path / "clipped.csv"))
+    data = io.read(ng.write(ng.build(CASES["clipped tail"]), tmp_path / "clipped.csv")).rig
     one_phase = dataclasses.replace(data, phases=(RigPhase("all", 0, len(data), "rotation"),))
     report = gap.diagnose(one_phase)
     assert "gyro.saturation" not in [e.name for e in report.effects]
@@ -265,7 +265,7 @@ def test_an_accelerometer_delay_on_a_rig_that_turns_fast_is_found_and_closes_the
         v = report["channels"][ch]
         assert v["rms_after"] / v["noise_floor"] <= gap.SIGNIFICANT_RATIO, (ch, _summary(report))
     s = built.proc.session
-    data = io.read_recording(report["recording"])
+    data = io.read(report["recording"]).rig
     fit = ~data.held_back(ng.HOLDOUT, like_input=True)
     turning = np.linalg.norm(np.diff(s.ref_accel, axis=0), axis=1) > 1e-4
     assert turning[fit[1:]].any() and turning[~fit[1:]].any()  # both portions see the force turn

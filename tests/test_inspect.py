@@ -274,9 +274,9 @@ LASERGYRO = dataset_folder("psins_lasergyro_static") / "lasergyro.imu.xz"
 def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
     """PSINS's static ring-laser INS (31 min at 100 Hz, read and turned into FRD by its dataset reader):
     it resolves Earth's rate, so it is silent read right, and its rate read as deg/s is named."""
-    from sins.io.datasets import read_psins_lasergyro
+    from sins.io.datasets import _read_psins_lasergyro
 
-    data = read_psins_lasergyro()
+    data = _read_psins_lasergyro()
     units = {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
     rec = io.Recording(ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel), "lasergyro", "sins csv",
                        units=units)  # fmt: skip

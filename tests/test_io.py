@@ -86,18 +86,18 @@ def test_rate_imu_round_trip_with_extra_columns(tmp_path: Path) -> None:
         omega_ib_b=rng.normal(0.0, 0.3, (n, 3)),
         f_ib_b=rng.normal(0.0, 9.8, (n, 3)),
     )
-    extra = {"temp": rng.uniform(-20.0, 60.0, n), "ref_gyro_x": rng.normal(0.0, 1e-3, n)}
+    extra = {"temp": rng.uniform(-20.0, 60.0, n), "odometer_m": rng.normal(0.0, 1e-3, n)}
     path = tmp_path / "imu.csv"
     io.write_imu(path, imu, extra=extra, comment="rate form")
-    samples, table = io.read_imu(path)
+    samples, table = io.read(path).imu, io.read_table(path)
     assert isinstance(samples, ImuRates)
     # %.17g round-trips every float64: exact equality.
     assert np.array_equal(samples.t, imu.t)
     assert np.array_equal(samples.omega_ib_b, imu.omega_ib_b)
     assert np.array_equal(samples.f_ib_b, imu.f_ib_b)
-    assert table.columns == (*io.RATE_COLUMNS, "temp", "ref_gyro_x")
+    assert table.columns == (*io.RATE_COLUMNS, "temp", "odometer_m")
     assert np.array_equal(table.column("temp"), extra["temp"])
-    assert np.array_equal(table.column("ref_gyro_x"), extra["ref_gyro_x"])
+    assert np.array_equal(table.column("odometer_m"), extra["odometer_m"])
 
 
 def test_increment_imu_round_trip_with_extra_columns(tmp_path: Path) -> None:
@@ -105,14 +105,14 @@ def test_increment_imu_round_trip_with_extra_columns(tmp_path: Path) -> None:
     n = 199
     t = 3.0 + np.concatenate([[0.0], np.cumsum(rng.uniform(1e-3, 2e-2, n))])
     imu = ImuIncrements(t=t, dtheta_b=rng.normal(0.0, 1e-3, (n, 3)), dv_b=rng.normal(0.0, 0.1, (n, 3)))
-    extra = {"temp": rng.uniform(-20.0, 60.0, n), "ref_dv_z": rng.normal(0.0, 1e-4, n)}
+    extra = {"temp": rng.uniform(-20.0, 60.0, n), "odometer_m": rng.normal(0.0, 1e-4, n)}
     path = tmp_path / "imu.csv"
     io.write_imu(path, imu, extra=extra)
-    samples, table = io.read_imu(path)
+    samples, table = io.read(path).imu, io.read_table(path)
     assert isinstance(samples, ImuIncrements)
     assert np.array_equal(samples.dtheta_b, imu.dtheta_b)
     assert np.array_equal(samples.dv_b, imu.dv_b)
-    # Without a known start, read_imu extrapolates the first interval from the next one.
+    # Without a known start, the reader extrapolates the first interval from the next one.
     assert np.array_equal(samples.t[1:], imu.t[1:])
     assert samples.t[0] == imu.t[1] - (imu.t[2] - imu.t[1])
     # With the start known (the truth's first time), the time base comes back exactly.
@@ -121,7 +121,7 @@ def test_increment_imu_round_trip_with_extra_columns(tmp_path: Path) -> None:
     assert np.array_equal(exact.dtheta_b, imu.dtheta_b)
     assert np.array_equal(exact.dv_b, imu.dv_b)
     assert np.array_equal(table.column("temp"), extra["temp"])
-    assert np.array_equal(table.column("ref_dv_z"), extra["ref_dv_z"])
+    assert np.array_equal(table.column("odometer_m"), extra["odometer_m"])
 
 
 def test_comment_is_written_as_hash_lines_before_the_header(tmp_path: Path) -> None:
@@ -162,7 +162,7 @@ def test_missing_required_column(tmp_path: Path) -> None:
     header = RATE_HEADER.replace(",gyro_y", "")
     path = _write(tmp_path / "imu.csv", COMMENTS + header + "\n" + "\n".join(_rows(3, 6)) + "\n")
     refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:3:", "'gyro_y'")
-    refusal(lambda: io.read_imu(path), f"{path}:3:", "'gyro_y'")
+    refusal(lambda: io.read(path), f"{path}:3:", "'gyro_y'")
 
 
 def test_truth_read_with_the_names_before_and_after_they_carried_units(tmp_path: Path) -> None:
@@ -200,7 +200,7 @@ def test_non_numeric_cell(tmp_path: Path, comments: str) -> None:
     path = _write(tmp_path / "imu.csv", comments + RATE_HEADER + "\n" + "\n".join(rows) + "\n")
     line = comments.count("\n") + 1 + 4
     refusal(lambda: io.read_table(path, required=io.RATE_COLUMNS), f"{path}:{line}:", "'accel_x'", "abc")
-    refusal(lambda: io.read_imu(path), f"{path}:{line}:", "'accel_x'", "abc")
+    refusal(lambda: io.read(path), f"{path}:{line}:", "'accel_x'", "abc")
 
 
 @pytest.mark.parametrize("bad", ["nan", "NaN", "inf", "-inf", "1e999"])
@@ -211,7 +211,7 @@ def test_non_finite_value(tmp_path: Path, bad: str) -> None:
     rows[2] = ",".join(cells)
     path = _write(tmp_path / "imu.csv", COMMENTS + RATE_HEADER + "\n" + "\n".join(rows) + "\n")
     refusal(lambda: io.read_table(path), f"{path}:6:", "'gyro_z'", "non-finite")
-    refusal(lambda: io.read_imu(path), f"{path}:6:", "'gyro_z'")
+    refusal(lambda: io.read(path), f"{path}:6:", "'gyro_z'")
 
 
 @pytest.mark.parametrize("bad_t", ["0.02", "0.01"], ids=["equal", "decreasing"])
@@ -220,7 +220,7 @@ def test_non_increasing_time(tmp_path: Path, bad_t: str) -> None:
     rows[2] = bad_t + rows[2][rows[2].index(",") :]  # data row 3 goes back to (or stays at) row 2's time
     path = _write(tmp_path / "imu.csv", COMMENTS + INC_HEADER + "\n" + "\n".join(rows) + "\n")
     refusal(lambda: io.read_table(path), f"{path}:6:", "'t'", "does not increase")
-    refusal(lambda: io.read_imu(path), f"{path}:6:", "'t'")
+    refusal(lambda: io.read(path), f"{path}:6:", "'t'")
 
 
 @pytest.mark.parametrize("width", [6, 8], ids=["too-few", "too-many"])
@@ -235,14 +235,14 @@ def test_wrong_number_of_values(tmp_path: Path, width: int) -> None:
 def test_empty_file(tmp_path: Path, text: str) -> None:
     path = _write(tmp_path / "imu.csv", text)
     refusal(lambda: io.read_table(path), str(path), "empty")
-    refusal(lambda: io.read_imu(path), str(path), "empty")
+    refusal(lambda: io.read(path), str(path), "empty")
     refusal(lambda: io.read_truth(path), str(path), "empty")
 
 
 def test_header_only(tmp_path: Path) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + INC_HEADER + "\n")
     refusal(lambda: io.read_table(path), str(path), "no data rows")
-    refusal(lambda: io.read_imu(path), str(path), "no data rows")
+    refusal(lambda: io.read(path), str(path), "no data rows")
 
 
 def test_duplicate_column(tmp_path: Path) -> None:
@@ -255,13 +255,13 @@ def test_duplicate_column(tmp_path: Path) -> None:
 def test_mixed_imu_forms(tmp_path: Path) -> None:
     header = "t,gyro_x,gyro_y,gyro_z,dv_x,dv_y,dv_z"
     path = _write(tmp_path / "imu.csv", COMMENTS + header + "\n" + "\n".join(_rows(3, 7)) + "\n")
-    refusal(lambda: io.read_imu(path), f"{path}:3:", "mixes", "gyro_x", "dv_x")
+    refusal(lambda: io.read(path), f"{path}:3:", "mixes", "gyro_x", "dv_x")
     refusal(lambda: io.imu_form(tuple(header.split(",")), path, 3), f"{path}:3:", "mixes")
 
 
 def test_neither_imu_form(tmp_path: Path) -> None:
     path = _write(tmp_path / "imu.csv", COMMENTS + "t,a,b\n" + "\n".join(_rows(3, 3)) + "\n")
-    refusal(lambda: io.read_imu(path), f"{path}:3:", "not an IMU file")
+    refusal(lambda: io.read(path), f"{path}:3:", "not an IMU file")
     assert io.imu_form(io.RATE_COLUMNS, path) == "rate"
     assert io.imu_form(io.INCREMENT_COLUMNS, path) == "increment"
 
@@ -269,13 +269,13 @@ def test_neither_imu_form(tmp_path: Path) -> None:
 def test_nonexistent_file(tmp_path: Path) -> None:
     path = tmp_path / "missing" / "imu.csv"
     refusal(lambda: io.read_table(path), str(path), "no such file")
-    refusal(lambda: io.read_imu(path), str(path), "no such file")
+    refusal(lambda: io.read(path), str(path), "no such file")
     refusal(lambda: io.read_truth(path), str(path), "no such file")
 
 
 def test_directory_instead_of_file(tmp_path: Path) -> None:
     refusal(lambda: io.read_table(tmp_path), str(tmp_path), "is a directory")
-    refusal(lambda: io.read_imu(tmp_path), str(tmp_path), "is a directory")
+    refusal(lambda: io.read(tmp_path), str(tmp_path), "a folder")
 
 
 def test_not_utf8(tmp_path: Path) -> None:
@@ -306,7 +306,7 @@ def test_line_numbers_skip_blank_and_comment_rows_in_the_body(tmp_path: Path) ->
 def test_utf8_bom_is_accepted(tmp_path: Path) -> None:
     path = tmp_path / "imu.csv"
     path.write_bytes(b"\xef\xbb\xbf" + (INC_HEADER + "\n" + "\n".join(_rows(3, 7)) + "\n").encode())
-    samples, _ = io.read_imu(path)
+    samples = io.read(path).imu
     assert len(samples) == 3
 
 

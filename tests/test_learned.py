@@ -116,7 +116,7 @@ def test_on_broad_the_rows_of_an_interval_are_counted_as_the_draws_they_repeat()
     from sins.compensation import referenced
     from sins.io.datasets import broad_reference
 
-    rec = broad_reference.read_broad_reference("05")
+    rec = broad_reference._read_broad_reference("05")
     runs = {}
     for interval_s in (1.0, 0.2):
         fitted = referenced.fit("kohonen", rec, interval_s=interval_s, params={"sizes": (5,), "folds": 2})

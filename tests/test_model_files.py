@@ -21,10 +21,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from sins import compensation
+from sins import compensation, io
 from sins.cli import main
 from sins.errors import SinsInputError
-from sins.io import read_recording
 
 #: Small fits of every strategy a model file may hold: quick, and with the guard off so that the learners
 #: correct (a probe of the loaded file runs through them).
@@ -64,7 +63,7 @@ def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     rec = folder / "rec.csv"
     argv = ["calibrate", str(folder / "rig.toml"), "--imu", str(folder / "imu.toml"), "--out", str(rec)]
     assert main([*argv, "--seed", "5"]) == 0
-    data = read_recording(rec)
+    data = io.read(rec).rig
     out = {"rec": rec}
     for name, (variant, params) in FITS.items():
         out[name] = folder / f"{name}.json"
@@ -73,7 +72,7 @@ def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 
 def test_every_strategy_saved_loads_and_corrects_as_it_did(models: dict[str, Path]) -> None:
-    data = read_recording(models["rec"])
+    data = io.read(models["rec"]).rig
     for name in FITS:
         loaded = compensation.load(models[name])
         w, f = loaded.correct(data.gyro, data.accel, data.temp)
@@ -208,7 +207,7 @@ def test_any_edit_of_any_model_file_loads_soundly_or_is_one_line(
     except SinsInputError as exc:
         assert "\n" not in str(exc) and str(path) in str(exc), str(exc)
         return
-    rec = read_recording(models["rec"])
+    rec = io.read(models["rec"]).rig
     w, f = strategy.correct(rec.gyro[:50], rec.accel[:50], None if rec.temp is None else rec.temp[:50])
     assert np.isfinite(w).all() and np.isfinite(f).all()
 

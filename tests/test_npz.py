@@ -44,7 +44,7 @@ def _write(path: Path, n: int = 400, seed: int = 3, **changes: object) -> dict[s
 def test_readings_and_reference_read_back(tmp_path: Path) -> None:
     path = tmp_path / "rec.npz"
     arrays = _write(path)
-    rec = io.read_recording_any(path)
+    rec = io.read(path)
     assert rec.kind == "npz" and not rec.heading_known and not rec.latitude_known
     np.testing.assert_allclose(rec.imu.t, arrays["t_s"] - arrays["t_s"][0], atol=1e-6)
     np.testing.assert_array_equal(rec.imu.omega_ib_b, arrays["gyro_rad_s"].astype(float))
@@ -60,7 +60,7 @@ def test_readings_and_reference_read_back(tmp_path: Path) -> None:
 def test_readings_alone(tmp_path: Path) -> None:
     path = tmp_path / "imu.npz"
     _write(path, q_wxyz=None, v_m_s=None, p_m=None)
-    rec = io.read_recording_any(path)
+    rec = io.read(path)
     assert rec.truth is None and len(rec.imu) == 400
 
 
@@ -89,24 +89,24 @@ def test_bad_files_are_refused_naming_the_file_and_key(
 ) -> None:
     path = tmp_path / "bad.npz"
     _write(path, **changes)
-    refusal(lambda: io.read_recording_any(path), str(path), *fragments)
+    refusal(lambda: io.read(path), str(path), *fragments)
 
 
 def test_not_an_archive(tmp_path: Path) -> None:
     path = tmp_path / "x.npz"
     path.write_bytes(b"PK\x03\x04 not really a zip")
     # Not a zip archive: the .npz reader does not claim it; the CSV reader refuses it in one line.
-    refusal(lambda: io.read_recording_any(path), str(path))
+    refusal(lambda: io.read(path), str(path))
 
 
 def test_dataset_names_and_a_missing_one(tmp_path: Path) -> None:
     (tmp_path / "unit").mkdir()
     _write(tmp_path / "unit" / "a.npz")
     assert "unit/a" in datasets.names(tmp_path)
-    rec = datasets.load_reference("unit/a", root=tmp_path)
+    rec = io.read(dataset="unit/a", root=tmp_path).beside_reference()
     assert rec.sensor == "unit" and not rec.latitude_known
-    refusal(lambda: datasets.load_reference("unit/b", root=tmp_path), "unit/b.npz", "no such file")
-    refusal(lambda: datasets.load_reference("unit/../x", root=tmp_path), "expected FOLDER/NAME")
+    refusal(lambda: io.read(dataset="unit/b", root=tmp_path).beside_reference(), "unit/b.npz", "no such file")
+    refusal(lambda: io.read(dataset="unit/../x", root=tmp_path).beside_reference(), "expected FOLDER/NAME")
 
 
 def test_earth_rate_is_left_out_where_the_latitude_is_unknown(tmp_path: Path) -> None:
@@ -121,7 +121,7 @@ def test_earth_rate_is_left_out_where_the_latitude_is_unknown(tmp_path: Path) ->
         accel_m_s2=np.tile([0.0, 0.0, 9.81], (n, 1)), q_wxyz=q.as_quat(scalar_first=True),
         v_m_s=np.zeros((n, 3)), p_m=np.zeros((n, 3)),
     )  # fmt: skip
-    rec = datasets.load_reference("unit/exact", root=tmp_path)
+    rec = io.read(dataset="unit/exact", root=tmp_path).beside_reference()
     # Earth's rate (7.3e-5 rad/s) over 10 s would leave 0.04°; the exact readings leave rounding.
     assert referenced.open_loop_attitude(None, rec).total_deg < 1e-6
 
@@ -131,7 +131,7 @@ def test_earth_rate_is_left_out_where_the_latitude_is_unknown(tmp_path: Path) ->
 def test_raw_open_loop_matches_source_md(name: str, published: float) -> None:
     """SOURCE.md's raw figures come from an independent scipy integration (rectangle rule, nothing
     fitted); sins integrates the trapezoid increments: the same within 1 %."""
-    rec = datasets.load_reference(f"euroc/{name}")
+    rec = io.read(dataset=f"euroc/{name}").beside_reference()
     assert referenced.open_loop_attitude(None, rec).total_deg == pytest.approx(published, rel=0.01)
 
 

@@ -87,7 +87,7 @@ def test_its_files_read_back_in_sins(tmp_path: Path):
     gyro, accel = nr.baseline_unit(rng).read(s.ref_gyro, s.ref_accel, s.temp, s.rate_hz, rng)
     path = tmp_path / "other_tool.csv"
     nr.write_csv(path, s, gyro, accel)
-    data = io.read_recording(path)
+    data = io.read(path).rig
     assert data.phases == () and data.temp is not None
     for got, want in ((data.t, s.t), (data.gyro, gyro), (data.accel, accel), (data.ref_gyro, s.ref_gyro),
                       (data.ref_accel, s.ref_accel), (data.temp, s.temp)):  # fmt: skip

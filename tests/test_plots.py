@@ -126,7 +126,7 @@ def test_evaluate_plot(folder: Path, capsys: pytest.CaptureFixture[str]) -> None
     capsys.readouterr()
     _check_image(folder / "ev.png", 2)
     # Two panels, three channels each, before and after: the library call behind it says so too.
-    channels = compensation.residual_rms(compensation.load("model.json"), io.read_recording("rig.csv"))
+    channels = compensation.residual_rms(compensation.load("model.json"), io.read("rig.csv").rig)
     fig = plots.evaluate_figure(channels, "t")
     assert len(fig.axes) == 2 and [len(ax.patches) for ax in fig.axes] == [6, 6]
     # On a log scale: the corrected bars stay readable beside the raw ones a hundred times taller.
@@ -289,7 +289,7 @@ def test_integrate_plots_errors_with_a_truth_and_the_solution_without(
     from sins.core.series import ImuRates
     from sins.runs import replay
 
-    rec = sins_io.read_recording_any(folder / "still.csv")
+    rec = sins_io.read(folder / "still.csv")
     assert isinstance(rec.imu, ImuRates)
     imu = rec.imu.to_increments()
     start = replay.free_start(imu, (np.radians(45.0), 0.0, 0.0), align_s=20.0, heading=0.0)
@@ -331,7 +331,7 @@ def test_the_allan_plot_draws_each_resolved_term_with_its_value(
 
 
 def sins_io_rates(path: Path):  # type: ignore[no-untyped-def]
-    return io.read_recording_any(path).mean_rates()
+    return io.read(path).mean_rates()
 
 
 def test_the_bias_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -361,7 +361,7 @@ def test_the_bias_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     from sins.characterise.bias import recording_bias
 
     est = recording_bias(
-        io.read_recording_any(tmp_path / "still.csv"),
+        io.read(tmp_path / "still.csv"),
         np.radians(45.0),
         0.0,
         tuple(np.radians([2.0, -1.0, 30.0])),

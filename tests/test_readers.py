@@ -183,7 +183,7 @@ def test_a_bag_reads_back_the_floats_written_turned_from_flu_into_frd(
     bags: dict[str, Path], kind: str
 ) -> None:
     d = _bag_data()
-    rec = io.read_recording_any(bags[kind])
+    rec = io.read(bags[kind])
     assert rec.kind == {"ros2": "ros2 bag", "ros2-mcap": "ros2 bag", "ros1": "ros1 bag", "mcap": "mcap"}[kind]
     # Exact: the conversion only negates y and z.
     np.testing.assert_array_equal(rec.imu.omega_ib_b, d["w"] * FLU)
@@ -200,7 +200,7 @@ def test_a_bags_odometry_is_the_truth_in_ned_and_frd_placed_at_the_first_valid_f
     bags: dict[str, Path], kind: str
 ) -> None:
     d = _bag_data()
-    rec = io.read_recording_any(bags[kind])
+    rec = io.read(bags[kind])
     truth = rec.truth
     assert truth is not None and len(truth.t) == 100
     # The first fix has no fix (status -1) and is left out, said in the notes; the origin is the second.
@@ -227,7 +227,7 @@ def test_a_bags_odometry_is_the_truth_in_ned_and_frd_placed_at_the_first_valid_f
 @pytest.mark.parametrize("pose", ["pose", "transform"])
 def test_poses_and_transforms_are_a_truth_with_differentiated_velocity(tmp_path: Path, pose: str) -> None:
     d = _bag_data()
-    rec = io.read_recording_any(_write_bag(tmp_path / pose, "ros2", d, pose=pose), origin=(0.8, 0.1, 50.0))
+    rec = io.read(_write_bag(tmp_path / pose, "ros2", d, pose=pose), origin=(0.8, 0.1, 50.0))
     assert rec.truth is not None and any("as given" in note for note in rec.notes)
     ned = local_ned(rec.truth.lat, rec.truth.lon, rec.truth.h, 0.8, 0.1, 50.0)
     p = d["p"][::4]
@@ -247,10 +247,10 @@ def test_an_imu_topic_is_chosen_when_there_are_several(tmp_path: Path) -> None:
         tmp_path / "two", "ros2", d, imu_topics=("/imu/a", "/imu/b"), odometry=False, fixes=False
     )
     with pytest.raises(MissingInputError) as info:
-        io.read_recording_any(bag)
+        io.read(bag)
     assert info.value.needs == "topic" and "/imu/a, /imu/b" in str(info.value)
-    assert io.read_recording_any(bag, topic="/imu/b").imu.omega_ib_b[0, 0] == d["w"][0, 0]
-    refusal(lambda: io.read_recording_any(bag, topic="/nope"), "no topic '/nope'", "/imu/a (sensor_msgs/Imu)")
+    assert io.read(bag, topic="/imu/b").imu.omega_ib_b[0, 0] == d["w"][0, 0]
+    refusal(lambda: io.read(bag, topic="/nope"), "no topic '/nope'", "/imu/a (sensor_msgs/Imu)")
     rc = main(["inspect", str(bag)])
     assert rc == 2
 
@@ -266,23 +266,23 @@ def test_bag_refusals_are_one_line(tmp_path: Path, bags: dict[str, Path]) -> Non
     back = d["ns"].copy()
     back[7] = back[5]
     bag = _write_bag(tmp_path / "back", "ros2", d, odometry=False, fixes=False, stamps=back)
-    refusal(lambda: io.read_recording_any(bag), "topic /imu: message 8's header stamp", "does not increase")
+    refusal(lambda: io.read(bag), "topic /imu: message 8's header stamp", "does not increase")
     # Every stamp zero (a driver that never sets them): the recorder's times, said in the notes.
     zero = _write_bag(
         tmp_path / "zero.bag", "ros1", d, odometry=False, fixes=False, stamps=np.zeros(30, np.int64)
     )
-    rec = io.read_recording_any(zero)
+    rec = io.read(zero)
     assert any("recorder's times" in note for note in rec.notes)
     np.testing.assert_allclose(rec.imu.t, np.arange(30) / 100.0, atol=1e-12)
     damaged = tmp_path / "damaged.bag"
     damaged.write_bytes((bags["ros1"]).read_bytes()[:3000])
-    refusal(lambda: io.read_recording_any(damaged), str(damaged), "cannot read it as a bag")
-    refusal(lambda: io.read_recording_any(bags["ros1"], columns="t=time"), "columns: does not apply")
-    refusal(lambda: io.read_recording_any(bags["ros1"], truth_topic="/imu"), "holds sensor_msgs/msg/Imu")
-    refusal(lambda: io.read_recording_any(bags["ros1"], units="t=ms"), "t does not apply")
-    refusal(lambda: io.read_recording_any(tmp_path), "neither a ROS 2 bag", "EuRoC")
+    refusal(lambda: io.read(damaged), str(damaged), "cannot read it as a bag")
+    refusal(lambda: io.read(bags["ros1"], columns="t=time"), "columns: does not apply")
+    refusal(lambda: io.read(bags["ros1"], truth_topic="/imu"), "holds sensor_msgs/msg/Imu")
+    refusal(lambda: io.read(bags["ros1"], units="t=ms"), "t does not apply")
+    refusal(lambda: io.read(tmp_path), "neither a ROS 2 bag", "EuRoC")
     renamed = Path(shutil.copy(bags["ros1"], tmp_path / "drive.data"))
-    refusal(lambda: io.read_recording_any(renamed), "ros1 bag file", "name ending .bag")
+    refusal(lambda: io.read(renamed), "ros1 bag file", "name ending .bag")
 
 
 def _static_flu_bag(
@@ -387,7 +387,7 @@ def _euroc(root: Path, reference: str = "state_groundtruth_estimate0") -> dict[s
 def test_euroc_layout_reads_back_exactly_with_its_reference(tmp_path: Path, reference: str) -> None:
     d = _euroc(tmp_path / "MH_01", reference)
     origin = (np.radians(47.37), np.radians(8.55), 400.0)
-    rec = io.read_recording_any(tmp_path / "MH_01", origin=origin)
+    rec = io.read(tmp_path / "MH_01", origin=origin)
     assert rec.kind == "euroc" and rec.t0_ns == d["ns"][0] and rec.stated_rate_hz == 200.0
     # The readings are the file's floats on S as they are (repr round-trips every float).
     np.testing.assert_array_equal(rec.imu.omega_ib_b, d["w"])
@@ -414,10 +414,10 @@ def test_euroc_refusals_name_the_line(tmp_path: Path, capsys: pytest.CaptureFixt
     lines = data.read_text(encoding="utf-8").splitlines()
     lines[5] = lines[5].replace(lines[5].split(",")[3], "x1")
     data.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    refusal(lambda: io.read_recording_any(tmp_path / "bad"), f"{data}:6: column 'w_RS_S_z [rad s^-1]'")
+    refusal(lambda: io.read(tmp_path / "bad"), f"{data}:6: column 'w_RS_S_z [rad s^-1]'")
     lines[5] = f"{int(lines[4].split(',')[0])}," + ",".join(["0.0"] * 6)
     data.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    refusal(lambda: io.read_recording_any(data), f"{data}:6:", "does not increase")
+    refusal(lambda: io.read(data), f"{data}:6:", "does not increase")
     _assert_one_line_error(main(["inspect", str(tmp_path / "bad")]), capsys.readouterr().err, ":6:")
 
 
@@ -444,7 +444,7 @@ UNITS = "t=ms,gyro=deg/s,accel=g,temp=degF"
 
 def test_a_csv_with_its_own_columns_and_units(tmp_path: Path) -> None:
     d = _own_csv(tmp_path / "log.csv")
-    rec = io.read_recording_any(tmp_path / "log.csv", columns=COLUMNS, units=UNITS)
+    rec = io.read(tmp_path / "log.csv", columns=COLUMNS, units=UNITS)
     # Each value times its unit's factor (one rounding: the file's floats are read exactly).
     np.testing.assert_array_equal(rec.imu.t, d["ms"] * 1e-3)
     np.testing.assert_array_equal(rec.imu.omega_ib_b, d["dps"] * (np.pi / 180.0))
@@ -452,20 +452,18 @@ def test_a_csv_with_its_own_columns_and_units(tmp_path: Path) -> None:
     np.testing.assert_allclose(rec.temp, (d["temp_f"] - 32.0) * 5.0 / 9.0, rtol=1e-14)
     assert rec.units == {"t": "ms", "gyro": "deg/s", "accel": "g", "temp": "degF"}
     # The same file on FLU axes: y and z negated, exactly.
-    flu = io.read_recording_any(tmp_path / "log.csv", columns=COLUMNS, units=UNITS, frame="flu")
+    flu = io.read(tmp_path / "log.csv", columns=COLUMNS, units=UNITS, frame="flu")
     np.testing.assert_array_equal(flu.imu.f_ib_b, rec.imu.f_ib_b * FLU)
 
 
 def test_a_csv_without_time_takes_the_rate_and_increments_map_too(tmp_path: Path) -> None:
     d = _own_csv(tmp_path / "log.csv", 100)
-    rec = io.read_recording_any(tmp_path / "log.csv", columns=COLUMNS.replace("t=time_ms,", ""),
+    rec = io.read(tmp_path / "log.csv", columns=COLUMNS.replace("t=time_ms,", ""),
                                 units=UNITS.replace("t=ms,", ""), rate_hz=200.0)  # fmt: skip
     np.testing.assert_array_equal(rec.imu.t, np.arange(100) / 200.0)
     assert rec.time_from_rate and rec.stated_rate_hz == 200.0
     inc = COLUMNS.replace("gyro_", "dtheta_").replace("accel_", "dv_")
-    rec = io.read_recording_any(
-        tmp_path / "log.csv", columns=inc, units="t=ms,dtheta=deg,dv=g*s", t_start=0.995
-    )
+    rec = io.read(tmp_path / "log.csv", columns=inc, units="t=ms,dtheta=deg,dv=g*s", t_start=0.995)
     assert rec.form == "increment" and rec.imu.t[0] == 0.995
     np.testing.assert_array_equal(rec.imu.dtheta_b, d["dps"] * (np.pi / 180.0))
 
@@ -521,7 +519,7 @@ def test_the_cli_reads_a_sins_csv_as_before_and_refuses_options_that_do_not_appl
     path = tmp_path / "imu.csv"
     np.savetxt(path, np.column_stack([np.arange(50) / 100.0, np.zeros((50, 6))]), delimiter=",",
                header=",".join(io.RATE_COLUMNS), comments="")  # fmt: skip
-    rec = io.read_recording_any(path)
+    rec = io.read(path)
     assert rec.kind == "sins csv" and rec.units == {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
     _assert_one_line_error(main(["inspect", str(path), "--topic", "/imu"]), capsys.readouterr().err,
                            "topic: does not apply", "a CSV file")  # fmt: skip
@@ -531,7 +529,7 @@ def test_the_cli_reads_a_sins_csv_as_before_and_refuses_options_that_do_not_appl
     _assert_one_line_error(main(["inspect", str(tmp_path / "none.bag")]), capsys.readouterr().err,
                            "no such file or folder")  # fmt: skip
     with pytest.raises(SinsInputError):
-        io.read_recording_any(path, units="gyro=deg/s", frame="frd", columns="dv_x=gyro_x")
+        io.read(path, units="gyro=deg/s", frame="frd", columns="dv_x=gyro_x")
 
 
 def test_the_formats_guide_lists_every_unit_and_spelling() -> None:

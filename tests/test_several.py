@@ -17,7 +17,7 @@ from conftest import dataset_folder, refusal
 from numpy_units import recordings, write_npz
 from scipy.spatial.transform import Rotation
 
-from sins import compensation
+from sins import compensation, io
 from sins.cli import main
 from sins.compensation import referenced, several, unit_bias
 from sins.core.series import ImuIncrements
@@ -237,9 +237,8 @@ def test_euroc_training_recordings_each_keep_their_own_bias() -> None:
     """The six sequences Brossard et al. fit on: a day apart, the gyro bias moves by ~4e-3 rad/s
     (SOURCE.md: up to 0.08 rad/s between first seconds, most of it motion); each recording's own bias is
     determined to better than 1e-3 rad/s, and they differ between days by more than that."""
-    from sins.io import datasets
 
     names = ["MH_01_easy", "MH_05_difficult", "V2_01_easy"]
-    fit = several.fit_several([datasets.load_reference(f"euroc/{n}") for n in names])
+    fit = several.fit_several([io.read(dataset=f"euroc/{n}").beside_reference() for n in names])
     assert np.all(fit.gyro_bias_se < 1e-3)
     assert np.abs(fit.gyro_bias[2] - fit.gyro_bias[0]).max() > 2e-3

@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
 
+from sins import io
 from sins.core.series import ReferencedRecording
-from sins.io import datasets
 
 #: NED to ENU (and back): east and north swapped, down turned up.
 _NED_TO_ENU = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     folder = root / "broad_b"
     folder.mkdir(parents=True, exist_ok=True)
     for trial in ("05", "18"):
-        write_parts(datasets.load_reference(f"broad_{trial}"), trial, args.parts, folder)
+        write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, args.parts, folder)
     bench = ["--root", str(root), "--folder", "broad_b", "--train", *args.train, "--judge", *args.judge,
              "--strategies", *args.strategies]  # fmt: skip
     if args.json:

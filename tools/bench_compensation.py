@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy_rigs
 
-from sins import compensation
+from sins import compensation, io
 from sins.core.series import CalibrationData
 
 STRATEGIES = ("regression", "regression_robust", "regression_extended", "mlp", "kohonen", "mlp_pure",
@@ -125,14 +125,13 @@ def real(strategies: list[str]) -> None:
     """Fit and judge on BROAD (05 -> 18) and on the PSINS drive (first 70 s -> last 30 s)."""
     from sins.compensation import referenced
     from sins.errors import SinsInputError
-    from sins.io.datasets import broad_reference, psins_reference
 
     try:
         fit_on, judge_on = (
-            broad_reference.read_broad_reference("05"),
-            broad_reference.read_broad_reference("18"),
+            io.read(dataset="broad_05").beside_reference(),
+            io.read(dataset="broad_18").beside_reference(),
         )
-        drive = psins_reference.read_psins_vehicle_reference()
+        drive = io.read(dataset="psins_vehicle").beside_reference()
     except (SinsInputError, OSError) as exc:
         sys.exit(f"bench_compensation: the real recordings are not there ({exc})")
     print(f"BROAD 05: {len(fit_on.imu.t) - 1} steps; PSINS drive: {len(drive.imu.t) - 1} steps")

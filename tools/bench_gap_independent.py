@@ -70,7 +70,7 @@ FORMAT = "sins-bench-gap-independent"
 def _diagnosed(built: ng.Built, folder: Path) -> tuple[gap.GapReport, float]:
     """``sins gap`` on the case's file: written as numpy_rigs prints, read as the CLI reads it."""
     path = ng.write(built, folder / "recording.csv")
-    data, _ = pipeline.gap_data(path)
+    data, _ = pipeline.gap_data(io.read(path))
     started = time.perf_counter()
     report = gap.diagnose(data, holdout=ng.HOLDOUT)
     return report, time.perf_counter() - started

@@ -1,5 +1,5 @@
 """How fast the recording readers go: a ROS 2 bag, a ROS 1 bag and a EuRoC folder of N readings, written
-here, read with ``sins.io.read_recording_any``; and ``sins.io.inspection.inspect`` on the result.
+here, read with ``sins.io.read``; and ``sins.io.inspection.inspect`` on the result.
 
     .venv/bin/python tools/bench_readers.py [--rows 200000]
 
@@ -88,9 +88,9 @@ def main() -> None:
         }
         print(f"{rows} readings at 200 Hz ({rows / 200 / 60:.1f} min); median of 3 reads")
         for name, path in paths.items():
-            seconds = timed(lambda path=path: io.read_recording_any(path))
+            seconds = timed(lambda path=path: io.read(path))
             print(f"{name:20s} {seconds:7.2f} s  {rows / seconds / 1e3:8.1f} k readings/s")
-        rec = io.read_recording_any(paths["ROS 1 bag"])
+        rec = io.read(paths["ROS 1 bag"])
         seconds = timed(lambda: inspection.inspect(rec))
         print(f"{'inspect':20s} {seconds:7.2f} s  {rows / seconds / 1e3:8.1f} k readings/s")
 

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from imucal import FerrarisCalibration, ferraris_regions_from_df
 
-from sins import compensation
+from sins import compensation, io
 from sins.compensation.base import NoCompensation, Strategy
 from sins.compensation.ferraris import Ferraris, ImucalCalibration, check_session, compare_with_imucal
 from sins.core.series import CalibrationData
@@ -187,7 +187,7 @@ def axes_table(data: CalibrationData) -> None:
 
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
-    data = datasets.read_ferraris_annotated()
+    data = io.read(dataset="ferraris_annotated").reference_inputs()[0]
     fitted = Ferraris().fit(data)
     g = float(np.abs(data.ref_accel[data.phases[0].start, 0]))
     here = imucal_run(g, reader.ANNOTATED_TURN_DEG)
@@ -203,8 +203,8 @@ def main() -> None:
     print(f"imucal run here, mapped to the snapshot's g and sign, against it: largest |Δ| {again:.2g}")
     print(f"sins, mapped the same way, against the snapshot: {worst_mapped(fitted, snap, g)}")
     for name in ("ferraris", "ferraris_annotated"):
-        session_table(name, datasets.load(name))
-        axes_table(datasets.load(name))
+        session_table(name, io.read(dataset=name).reference_inputs()[0])
+        axes_table(io.read(dataset=name).reference_inputs()[0])
 
 
 def worst_mapped(fitted: Ferraris, snap: ImucalCalibration, g: float) -> str:

@@ -153,13 +153,13 @@ def oracle_nats(root: Path, clean: str, name: str, case: str) -> float:
     clean recording's noise (the diagnosis's own interval geometry, :mod:`sins.unit_gap`: an oracle of
     observability, not an independent check). Below ``gap.SIGNIFICANT_NATS`` + ``gap.TIE_NATS`` (9) no
     diagnosis could name it with evidence to spare."""
-    from sins.io.datasets import read_npz_reference
+    from sins import io
     from sins.unit_gap.fitter import SensorFit
     from sins.unit_gap.intervals import interval_residuals
     from sins.unit_gap.search import baseline_fit, withheld_intervals
 
-    base_rec = read_npz_reference(f"cases/{clean}", root)
-    rec = read_npz_reference(f"cases/{name}", root)
+    base_rec = io.read(dataset=f"cases/{clean}", root=root).beside_reference()
+    rec = io.read(dataset=f"cases/{name}", root=root).beside_reference()
     fitted = baseline_fit(base_rec, 1.0)
     a, b = interval_residuals(base_rec, fitted.seed, 1.0), interval_residuals(rec, fitted.seed, 1.0)
     held = withheld_intervals(a.t_mid, 0.3)

@@ -32,10 +32,10 @@ from typing import Any
 
 import numpy as np
 
+from sins import io
 from sins.compensation import Regression, referenced
 from sins.errors import SinsInputError
 from sins.imu.calibration import SeedModelFit
-from sins.io import datasets
 from sins.io.formats import write_json
 
 STRATEGIES = (
@@ -45,7 +45,7 @@ STRATEGIES = (
 
 
 def broad(strategies: tuple[str, ...], interval_s: float) -> dict[str, Any]:
-    trials = {n: datasets.load_reference(f"broad_{n}") for n in ("05", "18")}
+    trials = {n: io.read(dataset=f"broad_{n}").beside_reference() for n in ("05", "18")}
     out: dict[str, Any] = {}
     print("BROAD, unit B: fitted on one trial, judged on the other; total / heading / inclination RMSE, deg")
     columns = ("05 → 18", "18 → 05", "05 → 18, rest bias", "18 → 05, rest bias")
@@ -85,7 +85,7 @@ def _cell(r: dict[str, Any] | None) -> str:
 def psins(strategies: tuple[str, ...], interval_s: float) -> dict[str, Any]:
     from sins.io.datasets.psins_reference import psins_file_biases
 
-    rec = datasets.load_reference("psins_vehicle")
+    rec = io.read(dataset="psins_vehicle").beside_reference()
     assert rec is not None
     train = referenced.between(rec, rec.imu.t[0], 70.0)
     eb0, db0 = psins_file_biases()

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from sins.cli.common import Subparsers, check_outputs, check_plot, fixed_width, save_plot
-from sins.cli.options import add_dataset, add_plot, add_recording_options, dataset_inputs, recording_options
+from sins.cli.options import add_dataset, add_plot, add_recording_options, dataset_inputs, read_recording
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
@@ -40,7 +40,6 @@ def _cmd_bias(args: argparse.Namespace) -> int:
 def _estimate(
     args: argparse.Namespace, lat: float | None, attitude: tuple[float, float, float] | None
 ) -> BiasEstimate:
-    from sins import io
     from sins.characterise import bias
 
     if args.dataset is not None:
@@ -48,14 +47,12 @@ def _estimate(
             raise SinsInputError(
                 "bias: --lat, --height and --attitude go with a RECORDING; a dataset has its own"
             )
-        from sins.io import datasets
-
         with progress_bar(f"reading {args.dataset}", "") as bar:
-            data, _ = datasets.load_with_truth(args.dataset)
+            inputs = read_recording(args, None, args.dataset).reference_inputs()
             bar.set_description("fitting the noise")
-            return bias.dataset_bias(data, args.dataset, progress=row_progress(bar))
+            return bias.dataset_bias(inputs[0], args.dataset, progress=row_progress(bar))
     with progress_bar("reading", "messages") as bar:
-        rec = io.read_recording_any(args.recording, **recording_options(args), progress=row_progress(bar))
+        rec = read_recording(args, args.recording, None, progress=row_progress(bar))
     with progress_bar("fitting the noise", "channels") as bar:
         return bias.recording_bias(rec, lat, args.height, attitude, args.seconds, progress=row_progress(bar))
 

@@ -13,7 +13,7 @@ from sins.cli.options import (
     add_plot,
     add_recording_options,
     dataset_inputs,
-    recording_options,
+    read_recording,
     seed,
 )
 from sins.cli.progress import progress_bar, row_progress
@@ -30,9 +30,8 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     is the noisier), or a static unit's readings as they are (refused if they move)."""
     import numpy as np
 
-    from sins import characterise, io
+    from sins import characterise
     from sins.characterise import reference, still
-    from sins.io import npz
     from sins.runs import pipeline
 
     if (args.recording is None) == (args.dataset is None):
@@ -40,29 +39,27 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     if args.static and args.truth is not None:
         raise SinsInputError("characterise: --static and --truth exclude each other")
     if args.dataset is not None:
-        from sins.io import datasets
-
         if args.truth is not None or args.static:
             raise SinsInputError(
                 "characterise: --truth and --static go with a RECORDING.csv, not with --dataset"
             )
-        data, _ = datasets.load_with_truth(args.dataset)
-        return reference.reference_residual(data, args.dataset)
-    if args.truth is not None or _rig_recording(args):
-        data, _ = pipeline.gap_data(args.recording, args.truth)
+        inputs = read_recording(args, None, args.dataset).reference_inputs()
+        return reference.reference_residual(inputs[0], args.dataset)
+    rec = read_recording(args, args.recording, None, args.truth)
+    if args.truth is not None or rec.rig is not None:
+        data, _ = pipeline.gap_data(rec)
         return reference.reference_residual(data, str(args.recording))
-    if not args.static and npz.is_npz(Path(args.recording)):  # an .npz with its own reference
+    if not args.static and rec.truth is not None:  # a recording with its own reference (.npz, EuRoC, a bag)
         from sins.io.datasets import npz_folders
 
-        data, truth = npz_folders.with_truth(io.read_recording_any(args.recording, **recording_options(args)))
-        if truth is not None:
-            return reference.reference_residual(data, str(args.recording))
+        data, _ = npz_folders.with_truth(rec)
+        return reference.reference_residual(data, str(args.recording))
     if not args.static:
         raise MissingInputError(
             f"{args.recording}: no ref_ columns; a moving unit needs its trajectory, a static one --static",
             needs="truth",
         )
-    t, omega, force = io.read_recording_any(args.recording, **recording_options(args)).mean_rates()
+    t, omega, force = rec.mean_rates()
     readings = np.hstack([omega, force])
     del omega, force
     moved = still.motion(t, readings)
@@ -72,16 +69,6 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
             "a recording with ref_ columns"
         )
     return characterise.residual(t, readings, None, str(args.recording))
-
-
-def _rig_recording(args: argparse.Namespace) -> bool:
-    """A sins CSV with ``ref_`` columns: a rig recording, read as such unless reader options are given."""
-    from sins import io
-
-    options = [v for k, v in recording_options(args).items() if k != "rate_hz"]
-    if any(v is not None for v in options) or io.recording.recording_kind(args.recording) != "sins csv":
-        return False
-    return any(c.startswith("ref_") for c in io.read_columns(args.recording))
 
 
 def _cmd_characterise(args: argparse.Namespace) -> int:

@@ -15,6 +15,7 @@ from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
+    from sins.io.recording import Recording
     from sins.runs.pipeline import ScenarioRun
     from sins.scenario import Scenario
 
@@ -151,17 +152,12 @@ def check_outputs(
     check(outputs, inputs, folders)
 
 
-def unit_of(recording: str | os.PathLike[str] | None, dataset: str | None, inputs: Any) -> str:
-    """The unit a recording or dataset was read from ("" where it does not say): a dataset's named
-    sensor, else its name; a recording's own (a sins CSV's ``# sensor:`` line, :mod:`sins.io.provenance`)."""
-    named = str(getattr(inputs, "sensor", "") or "")
-    if dataset is not None:
-        return named or f"the {dataset} dataset's unit"
-    if named or recording is None:
-        return named
-    from sins.io import provenance
-
-    return provenance.read_provenance(recording).sensor
+def unit_of(rec: Recording) -> str:
+    """The unit a recording or dataset was read from ("" where it does not say): its named sensor (a
+    dataset's, a sins CSV's ``# sensor:`` line, :mod:`sins.io.provenance`), else a dataset's name."""
+    if rec.sensor or not rec.dataset:
+        return rec.sensor
+    return f"the {rec.dataset} dataset's unit"
 
 
 def simulated_unit(imu_file: Path | None) -> str:

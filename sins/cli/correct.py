@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import Subparsers, check_outputs, unit_of
-from sins.cli.options import add_dataset, add_recording_options, dataset_inputs, recording_options
+from sins.cli.options import add_dataset, add_recording_options, dataset_inputs, read_recording
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
@@ -17,13 +17,13 @@ if TYPE_CHECKING:
 
     from sins.compensation import Strategy
     from sins.core.series import ImuIncrements, ImuRates
+    from sins.io.recording import Recording
 
     Array = NDArray[np.float64]
 
 
 def _cmd_correct(args: argparse.Namespace) -> int:
     from sins import __version__, compensation, io
-    from sins.compensation import referenced
     from sins.core.series import ImuRates
     from sins.io import provenance
 
@@ -37,10 +37,10 @@ def _cmd_correct(args: argparse.Namespace) -> int:
             "give the raw recording, or --again if that is meant"
         )
     with progress_bar(f"reading {where}", "") as bar:
-        inputs = referenced.read_inputs(args.recording, dataset=args.dataset, options=recording_options(args))
-        unit = unit_of(args.recording, args.dataset, inputs)
+        rec = read_recording(args, args.recording, args.dataset)
+        unit = unit_of(rec)
         bar.set_description(f"correcting {where}")
-        out, extra = _corrected(args, strategy, inputs, where, unit)
+        out, extra = _corrected(args, strategy, rec, where, unit)
     fitted_on = getattr(strategy, "fitted_on_", {}) or {}
     lines = [
         f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})",
@@ -56,14 +56,14 @@ def _cmd_correct(args: argparse.Namespace) -> int:
 
 
 def _corrected(
-    args: argparse.Namespace, strategy: Strategy, inputs: Any, where: str, unit: str
+    args: argparse.Namespace, strategy: Strategy, rec: Recording, where: str, unit: str
 ) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
     """The readings corrected in the form sins holds them in, and the temperature column to keep (the
     model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
     from sins.compensation import referenced
 
-    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=unit)
-    imu, temp, rows_temp = _readings(inputs)
+    referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit)
+    imu, temp, rows_temp = _readings(rec)
     try:
         out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too
     except ValueError as exc:
@@ -71,25 +71,22 @@ def _corrected(
     return out, None if rows_temp is None else {"temp": rows_temp}
 
 
-def _readings(inputs: Any) -> tuple[ImuRates | ImuIncrements, Array | None, Array | None]:
+def _readings(rec: Recording) -> tuple[ImuRates | ImuIncrements, Array | None, Array | None]:
     """The readings to correct, their temperature at the readings' times (increments: at each step's
-    boundaries, the first step's own taken at its start) and per written row (None without one)."""
+    boundaries, the first step's own taken at its start) and per written row (None without one): a rig
+    recording's rates; a recording beside its reference trajectory as the increments it is fitted and
+    judged in."""
     import numpy as np
 
-    from sins.core.series import CalibrationData, ImuRates, ReferencedRecording
-    from sins.io.recording import Recording
+    from sins.core.series import ImuRates
 
-    if isinstance(inputs, ReferencedRecording):
-        return inputs.imu, None, None
-    if isinstance(inputs, CalibrationData):
-        rates = ImuRates(t=inputs.t, omega_ib_b=inputs.gyro, f_ib_b=inputs.accel)
-        return rates, inputs.temp, inputs.temp
-    assert isinstance(inputs, Recording)
-    temp = inputs.temp
-    if temp is None or isinstance(inputs.imu, ImuRates):
-        return inputs.imu, temp, temp
+    if rec.rig is None and rec.has_trajectory:
+        return rec.beside_reference().imu, None, None
+    temp = rec.temp
+    if temp is None or isinstance(rec.imu, ImuRates):
+        return rec.imu, temp, temp
     # Increments: one temperature per row (the step it ends); at the boundaries the first step's own.
-    return inputs.imu, np.concatenate([temp[:1], temp]), temp
+    return rec.imu, np.concatenate([temp[:1], temp]), temp
 
 
 def add(sub: Subparsers) -> None:

@@ -24,7 +24,7 @@ from sins.cli.options import (
     add_recording_options,
     dataset_inputs,
     fraction,
-    recording_options,
+    read_recording,
 )
 from sins.cli.progress import progress_bar
 from sins.errors import SinsInputError
@@ -37,7 +37,6 @@ if TYPE_CHECKING:
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins import compensation, io
     from sins.compensation import referenced
-    from sins.core.series import CalibrationData, ReferencedRecording
 
     check_plot(args)
     if args.rerun:
@@ -49,17 +48,14 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     strategy = compensation.load(args.model)
     where = args.dataset or str(args.recording)
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        inputs = referenced.read_inputs(
-            args.recording, dataset=args.dataset, truth=args.truth, options=recording_options(args)
-        )
-    sensor = unit_of(args.recording, args.dataset, inputs)
-    referenced.check_fitted_on(strategy, inputs, f"{args.model} on {where}", sensor=sensor)
-    if isinstance(inputs, ReferencedRecording):
-        document = _evaluate_referenced(args, strategy, inputs, where)
-    elif isinstance(inputs, CalibrationData):
-        document = _evaluate_rig(args, strategy, inputs, where)
+        rec = read_recording(args, args.recording, args.dataset, args.truth)
+    referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
+    if rec.rig is not None:
+        document = _evaluate_rig(args, strategy, rec.rig, where)
+    elif rec.has_trajectory:
+        document = _evaluate_referenced(args, strategy, rec.beside_reference(), where)
     else:
-        missing = io.recording.missing_reference(inputs)
+        missing = io.recording.missing_reference(rec)
         if missing.needs == "truth_topic":  # a bag with several pose topics: name one
             raise missing
         raise SinsInputError(

@@ -13,7 +13,7 @@ from sins.cli.options import (
     dataset_inputs,
     fraction,
     positive,
-    recording_options,
+    read_recording,
 )
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
@@ -54,8 +54,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 def _fit_several(args: argparse.Namespace) -> FitOutcome:
     """Several recordings of one unit: each read with its own reference, then one fit on all of them."""
-    from sins.compensation import fitting, referenced
-    from sins.core.series import ReferencedRecording
+    from sins.compensation import fitting
 
     if args.truth is not None:
         raise SinsInputError(
@@ -72,16 +71,13 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
     with progress_bar(f"fitting {args.strategy}", "") as bar:
         for kind, name in named:
             bar.set_description(f"reading {name}")
-            got = referenced.read_inputs(
-                name if kind == "path" else None, dataset=name if kind == "dataset" else None,
-                options=recording_options(args) if kind == "path" else None,
-            )  # fmt: skip
-            if not isinstance(got, ReferencedRecording):
+            got = read_recording(args, name if kind == "path" else None, name if kind == "dataset" else None)
+            if got.rig is not None or not got.has_trajectory:
                 raise SinsInputError(
                     f"{name}: a fit on several recordings needs each beside its reference trajectory (a "
                     "rig recording or a recording without a reference cannot be one of them)"
                 )
-            recs.append(got)
+            recs.append(got.beside_reference())
         return fitting.fit_several(
             args.strategy, recs, [n for _, n in named], interval_s=args.interval_s, guard=not args.no_guard,
             rule_mode=args.bias_rule, grade=args.grade, progress=row_progress(bar), stage=bar.set_description,
@@ -110,27 +106,25 @@ def _check_args(args: argparse.Namespace) -> None:
 def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | None, where: str) -> FitOutcome:
     """One recording: a rig session's rows, or a recording beside its reference trajectory."""
     from sins import io
-    from sins.compensation import fitting, referenced
-    from sins.core.series import CalibrationData, ReferencedRecording
+    from sins.compensation import fitting
 
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        inputs = referenced.read_inputs(
-            recording, dataset=dataset, truth=args.truth, options=recording_options(args)
-        )
-    if isinstance(inputs, ReferencedRecording):
-        with progress_bar(f"fitting {args.strategy}", "training") as bar:
-            return fitting.fit_referenced(
-                args.strategy, inputs, where=where, validation=args.validation, interval_s=args.interval_s,
-                guard=not args.no_guard, grade=args.grade, progress=row_progress(bar),
-            )  # fmt: skip
-    if isinstance(inputs, CalibrationData):
+        rec = read_recording(args, recording, dataset, args.truth)
+    if rec.rig is not None:
         with progress_bar(f"fitting {args.strategy}", fitting.progress_unit(args.strategy)) as bar:
             return fitting.fit_rig(
-                args.strategy, inputs, where=where, sensor=unit_of(recording, dataset, inputs),
+                args.strategy, rec.rig, where=where, sensor=unit_of(rec),
                 validation=args.validation, guard=not args.no_guard, grade=args.grade,
                 progress=row_progress(bar),
             )  # fmt: skip
-    missing = io.recording.missing_reference(inputs)
+    if rec.has_trajectory:
+        with progress_bar(f"fitting {args.strategy}", "training") as bar:
+            return fitting.fit_referenced(
+                args.strategy, rec.beside_reference(), where=where, validation=args.validation,
+                interval_s=args.interval_s, guard=not args.no_guard, grade=args.grade,
+                progress=row_progress(bar),
+            )  # fmt: skip
+    missing = io.recording.missing_reference(rec)
     if missing.needs == "truth_topic":  # a bag with several pose topics: name one
         raise missing
     raise SinsInputError(

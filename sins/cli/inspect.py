@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from sins.cli.common import Subparsers, check_outputs
-from sins.cli.options import add_npz_dataset, add_recording_options, npz_dataset, recording_options
+from sins.cli.options import add_dataset, add_recording_options, dataset_inputs, read_recording
 from sins.cli.progress import progress_bar, row_progress
 
 if TYPE_CHECKING:
@@ -22,11 +22,9 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     from sins import io
     from sins.io import inspection
 
-    npz_dataset(args, "recording")
-    options = recording_options(args)
-    check_outputs({"--json": args.json}, [args.recording])
+    check_outputs({"--json": args.json}, [args.recording, *dataset_inputs(args.dataset)])
     with progress_bar("reading", "messages") as bar:
-        rec = io.read_recording_any(args.recording, **options, progress=row_progress(bar))
+        rec = read_recording(args, args.recording, args.dataset, progress=row_progress(bar))
     result = inspection.inspect(rec)
     print(format_inspection(rec, result))
     if args.json:
@@ -74,7 +72,7 @@ def add(sub: Subparsers) -> None:
         help="a recording's rate, gaps, clipping and likely unit and frame mistakes, found from its data",
     )
     p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING")
-    add_npz_dataset(p, "recording")
+    add_dataset(p)
     p.add_argument("--json", type=Path, metavar="OUT.json", help="write the figures and findings (SI units)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_inspect)

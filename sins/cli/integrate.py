@@ -11,11 +11,12 @@ from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import Subparsers, check_finite, check_outputs, check_plot, format_table, save_plot
 from sins.cli.options import (
-    add_npz_dataset,
+    add_dataset,
     add_plot,
     add_recording_options,
-    npz_dataset,
+    dataset_inputs,
     positive,
+    read_recording,
     recording_options,
 )
 from sins.cli.progress import progress_bar, row_progress
@@ -41,45 +42,46 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins.io import solution
     from sins.runs import pipeline
 
-    npz_dataset(args, "imu")
     if args.out:
         solution.check_solution_path(args.out)  # before the work, not after
     check_plot(args)
-    check_outputs({"--out": args.out, "--json": args.json, "--plot": args.plot}, [args.imu, args.truth])
+    inputs = [args.imu, args.truth, *dataset_inputs(args.dataset)]
+    check_outputs({"--out": args.out, "--json": args.json, "--plot": args.plot}, inputs)
     if args.attitude is not None or args.align is not None:
         return _integrate_free(args)
     for flag, given in (("--heading", args.heading), ("--grade", args.grade)):
         if given is not None:
             raise SinsInputError(f"{flag} goes with --align SECONDS")
     with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
-        reading = {**recording_options(args), "progress": row_progress(bar)}
         try:
-            rec = pipeline.load_recording(args.imu, args.truth, args.within_truth, reading)
+            read = read_recording(args, args.imu, args.dataset, args.truth, row_progress(bar))
+            rec = pipeline.run_inputs(read, args.within_truth)
         except MissingInputError as exc:
             if exc.needs != "truth":  # a bag with several pose topics: the one to read, named
                 raise
             raise SinsInputError(f"{exc}; {NO_REFERENCE}") from None
         bar.set_description("integrating")
         run = pipeline.navigate(rec.imu, rec.truth, args.vertical, args.vertical_tau_s)
+    where = read.name
     summary = run.summary.to_dict()
     against = args.truth or "its own reference"
-    check_finite(summary, f"{args.imu}: against {against}")
+    check_finite(summary, f"{where}: against {against}")
     if len(rec.imu) < rec.intervals:
         print(
-            f"sins: note: {args.imu}: integrating the first {len(rec.imu)} of {rec.intervals} intervals, "
+            f"sins: note: {where}: integrating the first {len(rec.imu)} of {rec.intervals} intervals, "
             f"to {rec.imu.t[-1]:g} s where {against} ends (--within-truth)",
             file=sys.stderr,
         )
-    print(f"{args.imu}: {len(rec.imu)} intervals against {against}; errors are estimate - truth")
+    print(f"{where}: {len(rec.imu)} intervals against {against}; errors are estimate - truth")
     print(format_table({"none": summary}))
     if args.json:
         truth = None if args.truth is None else str(args.truth)
-        io.write_json(args.json, {"imu": str(args.imu), "truth": truth, **summary})
-    _write_solution(args, run.solution, f"solution of {args.imu} from {against}")
+        io.write_json(args.json, {"imu": where, "truth": truth, **summary})
+    _write_solution(args, run.solution, f"solution of {where} from {against}")
     if args.plot:
         from sins.viz import plots
 
-        title = f"sins integrate {args.imu} against {against}"
+        title = f"sins integrate {where} against {against}"
         save_plot(args.plot, lambda: plots.errors_figure({"none": run.errors}, title), title)
     return 0
 
@@ -102,10 +104,11 @@ def _integrate_free(args: argparse.Namespace) -> int:
 
     _check_free(args)
     with progress_bar("reading", "messages") as bar:
-        rec = io.read_recording_any(args.imu, **_free_options(args), progress=row_progress(bar))
-    if rec.truth is not None:
+        rec = read_recording(args, args.imu, args.dataset, None, row_progress(bar), _free_options(args))
+    where = rec.name
+    if rec.has_trajectory:
         raise SinsInputError(
-            f"{args.imu}: the recording has its own reference; integrate it against that (without "
+            f"{where}: the recording has its own reference; integrate it against that (without "
             "--attitude or --align)"
         )
     origin = free_report.start_position(rec, recording_options(args)["origin"])
@@ -115,20 +118,20 @@ def _integrate_free(args: argparse.Namespace) -> int:
     with progress_bar("aligning" if args.align else "integrating", "") as bar:
         levels = free_report.grade_levels(args.grade)
         start = replay.free_start(imu, origin, attitude=attitude, align_s=args.align, heading=heading,
-                                  levels=levels, source=str(args.imu))  # fmt: skip
+                                  levels=levels, source=where)  # fmt: skip
         bar.set_description("integrating")
         sol = replay.navigate_free(imu, start, args.vertical, args.vertical_tau_s)
     report = free_report.free_report(
-        str(args.imu), start, sol, args.align, args.grade, heading_given=args.heading is not None
+        where, start, sol, args.align, args.grade, heading_given=args.heading is not None
     )
     print("\n".join(report.lines))
     if args.json:
         io.write_json(args.json, report.to_dict())
-    _write_solution(args, sol, f"solution of {args.imu} from {start.how} start")
+    _write_solution(args, sol, f"solution of {where} from {start.how} start")
     if args.plot:
         from sins.viz import plots
 
-        title = f"sins integrate {args.imu}: no reference, {start.how} start"
+        title = f"sins integrate {where}: no reference, {start.how} start"
         save_plot(
             args.plot,
             lambda: plots.solution_figure(sol, title, free_report.expected_growth(start, sol)),
@@ -157,7 +160,7 @@ def _free_options(args: argparse.Namespace) -> dict[str, Any]:
     from sins.io.recording import recording_kind
 
     options = recording_options(args)
-    if recording_kind(Path(args.imu)) in ("sins csv",):
+    if args.imu is not None and recording_kind(Path(args.imu)) in ("sins csv",):
         options["origin"] = None
     return options
 
@@ -174,7 +177,7 @@ def add(sub: Subparsers) -> None:
         "integrate", help="integrate a recorded IMU against its truth, or from a given or aligned start"
     )
     p.add_argument("imu", type=Path, nargs="?", metavar="RECORDING")
-    add_npz_dataset(p, "imu")
+    add_dataset(p)
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv", help="the truth (default: the recording's own reference)"
     )

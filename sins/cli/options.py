@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    from sins.io.recording import Recording
 
 
 def positive(text: str) -> float:
@@ -60,39 +65,8 @@ def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
     )  # fmt: skip
 
 
-def add_npz_dataset(p: argparse.ArgumentParser, positional: str) -> None:
-    """``--dataset FOLDER/NAME`` for a command that reads a recording file: any ``NAME.npz`` in a folder
-    of the data root, in place of the ``positional`` argument (:func:`npz_dataset` resolves it)."""
-    p.add_argument(
-        "--dataset", metavar="FOLDER/NAME",
-        help=f"instead of {positional}: NAME.npz in a folder of the data root (euroc/V1_01_easy)",
-    )  # fmt: skip
-
-
-def npz_dataset(args: argparse.Namespace, positional: str) -> None:
-    """Set ``args.<positional>`` to the file ``--dataset FOLDER/NAME`` names (one of them must be given).
-
-    Raises
-    ------
-    SinsInputError
-        for both or neither, or a name that is not ``FOLDER/NAME`` of an ``.npz`` in the data root.
-    """
-    given = getattr(args, positional)
-    if (given is None) == (args.dataset is None):
-        raise SinsInputError(f"give a {positional.upper()} or --dataset FOLDER/NAME (one of them)")
-    if args.dataset is not None:
-        from sins.io.datasets import npz_folders
-
-        if not npz_folders.is_folder_name(args.dataset):
-            raise SinsInputError(
-                f"--dataset {args.dataset}: this command reads recordings as files; name an .npz one as "
-                "FOLDER/NAME (the datasets by name go with fit, evaluate, correct, gap and characterise)"
-            )
-        setattr(args, positional, npz_folders.npz_path(args.dataset))
-
-
 def add_recording_options(p: argparse.ArgumentParser) -> None:
-    """The options that say how to read a recording that is not a sins CSV (``sins.io.read_recording_any``;
+    """The options that say how to read a recording that is not a sins CSV (:func:`sins.io.read`;
     the formats guide lists them): every command that takes a recording path adds them, and passes
     :func:`recording_options` on."""
     g = p.add_argument_group(
@@ -127,8 +101,31 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
+def read_recording(
+    args: argparse.Namespace,
+    recording: str | os.PathLike[str] | None,
+    dataset: str | None,
+    truth: str | os.PathLike[str] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    options: dict[str, Any] | None = None,
+) -> Recording:
+    """A command's recording through :func:`sins.io.read`: a path with :func:`add_recording_options`'s
+    flags (or the reader ``options`` given), or a dataset's name (the refusals said in the command's own
+    flags)."""
+    from sins import io
+
+    if (recording is None) == (dataset is None):
+        raise SinsInputError("give a RECORDING or --dataset NAME (one of them)")
+    if dataset is not None:
+        if truth is not None:
+            raise SinsInputError("--truth goes with a RECORDING, not with --dataset")
+        return io.read(dataset=dataset)
+    chosen = recording_options(args) if options is None else options
+    return io.read(recording, truth=truth, **chosen, progress=progress)
+
+
 def recording_options(args: argparse.Namespace) -> dict[str, Any]:
-    """The keyword arguments of ``sins.io.read_recording_any`` from :func:`add_recording_options`'s flags."""
+    """The keyword arguments of :func:`sins.io.read` from :func:`add_recording_options`'s flags."""
     return {
         "topic": args.topic,
         "truth_topic": args.truth_topic,
@@ -184,14 +181,13 @@ def dataset_inputs(name: str | None) -> list[Path]:
 
 __all__ = [
     "add_dataset",
-    "add_npz_dataset",
     "add_plot",
     "add_recording_options",
     "count",
     "dataset_inputs",
     "fraction",
-    "npz_dataset",
     "positive",
+    "read_recording",
     "recording_options",
     "seed",
 ]

@@ -24,7 +24,6 @@ from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
-    from sins.runs.pipeline import ScenarioRun
     from sins.scenario import AidingSpec, Scenario
 
 
@@ -68,19 +67,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
         report.append("\nresidual sensor error on the rig data held back from the fit (RMS per sample)")
         report.append(format_residuals(residuals))
         report += guard_notes(unit.strategies if unit is not None else {})
-    aided, outages = _aided_json(result, path)
+    aided, outages = result.aided_dicts()
+    for name, summary in aided.items():
+        check_finite(summary, f"{path}: aided strategy {name}")
     if aided:
         grade = next(iter(result.aided.values())).filter_grade
         report.append(_aided_report(sc, aided, outages, grade))
     print("\n".join(report))
-    for name, run in result.runs.items():
-        if run.residual_rms is not None:
-            summaries[name]["residual_rms"] = run.residual_rms
     if args.json:
-        document: dict[str, Any] = {"scenario": _scenario_json(sc, path, n), "strategies": summaries}
-        if aided:
-            document |= {"aided": aided, "outages": outages}
-        io.write_json(args.json, document)
+        io.write_json(args.json, result.to_dict(str(path)))
     if args.plot:
         save_plot(args.plot, lambda: plots.run_figure(result), f"sins run {sc.name}")
     show(args, result, "\n".join(report))
@@ -120,39 +115,6 @@ def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
         ratio = sum(ratios) / len(ratios) if ratios else float("nan")
         rows.append([name, *cells, f"{ratio:.3f}"])
     return fixed_width(head, rows)
-
-
-def _aided_json(
-    result: ScenarioRun, path: Path
-) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, float]]]]:
-    """The aided runs' summaries (with their fix counts) and their errors per outage, as JSON objects."""
-    aided: dict[str, dict[str, Any]] = {}
-    outages: dict[str, list[dict[str, float]]] = {}
-    aiding = result.scenario.aiding
-    if aiding is None:
-        return aided, outages
-    for name, run in result.aided.items():
-        aided[name] = {**run.summary.to_dict(), "fixes": run.fixes, "rejected_fixes": run.rejected}
-        if aiding.sigma_vel_mps is not None:
-            aided[name]["rejected_velocity_fixes"] = run.velocity_rejected
-        aided[name] |= {"alignment": run.alignment, "alignment_start_s": run.start_s}
-        if run.alignment == "static":
-            aided[name]["alignment_static_s"] = run.static_s
-        if run.heading_sigma_deg is not None:
-            aided[name]["alignment_heading_sigma_deg"] = run.heading_sigma_deg
-        if run.restarts:
-            aided[name]["filter_restarts_s"] = list(run.restarts)
-        check_finite(aided[name], f"{path}: aided strategy {name}")
-        outages[name] = [
-            {
-                "start_s": o.start_s,
-                "end_s": o.end_s,
-                "final_horizontal_m": o.final_m,
-                "max_horizontal_m": o.max_m,
-            }
-            for o in run.outages
-        ]
-    return aided, outages
 
 
 def _aided_report(
@@ -200,17 +162,6 @@ def _alignment_text(a: AidingSpec, run: dict[str, Any]) -> str:
             f"(1σ {run['alignment_heading_sigma_deg']:.2f}°); errors from then"
         )
     return "from the truth's first state"
-
-
-def _scenario_json(sc: Scenario, path: Path, n: int) -> dict[str, Any]:
-    return {
-        "name": sc.name,
-        "file": str(path),
-        "rate_hz": sc.rate_hz,
-        "samples": n,
-        "duration_s": n / sc.rate_hz,
-        "vertical": sc.vertical,
-    }
 
 
 def add(sub: Subparsers) -> None:

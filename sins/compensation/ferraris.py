@@ -45,7 +45,7 @@ class Ferraris(Strategy):
 
     ``fit(data)`` needs the nine named phases: the six holds (static, with a reference specific force
     along their own axis, ``+`` for ``*_p``) and the three turns (rotation phases with ``angle_rad``
-    about their own axis); a :func:`~sins.io.datasets.read_ferraris` session has them.
+    about their own axis); a :func:`~sins.io.datasets._read_ferraris` session has them.
 
     Estimators, per pair ``k`` (holds ``k_p``, ``k_a`` with mean readings ``U_p``, ``U_a`` and reference
     specific forces ``F_p ≈ +g e_k``, ``F_a ≈ −g e_k``):

@@ -11,10 +11,8 @@ inertial from the reference's state, attitude and velocity errors over a window.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,7 +28,7 @@ from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
-from sins.io.recording import Recording, readings_beside
+from sins.io.recording import Recording, beside_trajectory
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
 from sins.nav.metrics import nav_errors
@@ -551,59 +549,7 @@ def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str)
     SinsInputError
         when the reference does not overlap the readings in time.
     """
-    return readings_beside(imu, truth, source)
-
-
-def read_inputs(
-    recording: str | os.PathLike[str] | None,
-    *,
-    dataset: str | None = None,
-    truth: str | os.PathLike[str] | None = None,
-    options: dict[str, Any] | None = None,
-) -> CalibrationData | ReferencedRecording | Recording:
-    """What ``sins fit``, ``evaluate`` and ``correct`` work on, from a dataset name or a recording:
-
-    * a dataset whose reference is a trajectory (BROAD, the PSINS drive): a :class:`ReferencedRecording`;
-      another dataset (the Ferraris session, the still ring-laser unit): its :class:`CalibrationData`;
-    * a sins rig recording (``ref_*`` columns): its :class:`CalibrationData`;
-    * any other recording (:func:`sins.io.read_recording_any`: a CSV, a bag, a EuRoC folder) with a
-      reference (``truth``, or the recording's own): a :class:`ReferencedRecording`; without one, the
-      :class:`~sins.io.Recording` itself (what ``correct`` needs, and ``fit`` refuses).
-
-    Raises
-    ------
-    SinsInputError
-        for both or neither of a recording and a dataset, ``truth`` beside a dataset, and as the readers do.
-    """
-    from sins import io
-    from sins.io import datasets
-
-    if (recording is None) == (dataset is None):
-        raise SinsInputError("give a RECORDING or --dataset NAME (one of them)")
-    if dataset is not None:
-        if truth is not None:
-            raise SinsInputError("--truth goes with a RECORDING, not with --dataset")
-        referenced = datasets.load_reference(dataset)
-        return referenced if referenced is not None else datasets.load(dataset)
-    path = Path(recording)  # type: ignore[arg-type]
-    if (
-        path.is_file()
-        and path.suffix.lower() == ".csv"
-        and any(c.startswith("ref_") for c in io.read_columns(path))
-    ):
-        if truth is not None:
-            raise SinsInputError(
-                f"{path}: a rig recording carries its reference (ref_ columns); drop --truth"
-            )
-        data = io.read_recording(path)
-        io.check_recording_range(path, data)
-        return data
-    reference = None if truth is None else io.read_truth(truth)
-    start = None if reference is None else float(reference.t[0])
-    rec = io.read_recording_any(path, **(options or {}), t_start=start)
-    if reference is None and rec.truth is None:
-        return rec
-    return io.beside_reference(rec, reference, sensor=rec.sensor)
+    return beside_trajectory(imu, truth, source)
 
 
 def check_fitted_on(
@@ -659,5 +605,4 @@ __all__ = [
     "open_loop",
     "open_loop_attitude",
     "opening_rest",
-    "read_inputs",
 ]

@@ -1,10 +1,11 @@
 """Files: sins's CSV formats (:mod:`~sins.io.formats`: IMU and truth files; :mod:`~sins.io.rig`: rig
 recordings; :mod:`~sins.io.tables`: the numeric tables under them), its JSON files
-(:mod:`~sins.io.json_files`), writes that never leave half a file (:mod:`~sins.io.atomic`), recordings in
-other formats (:func:`~sins.io.recording.read_recording_any`: ROS bags, MCAP, EuRoC/TUM-VI, CSVs with their
-own columns), and readers of real recordings (:mod:`~sins.io.datasets`).
+(:mod:`~sins.io.json_files`), writes that never leave half a file (:mod:`~sins.io.atomic`), and the one way to
+read an IMU recording, :func:`~sins.io.reader.read` (any format: sins's CSVs, rig recordings, ROS bags,
+MCAP, EuRoC/TUM-VI, ``.npz``, CSVs with their own columns; or a real dataset by name,
+:mod:`~sins.io.datasets`).
 
-Those modules' main names are importable from here (``from sins import io; io.read_imu(path)``).
+Those modules' main names are importable from here (``from sins import io; io.read(path)``).
 """
 
 from sins.io.atomic import atomic_path
@@ -16,20 +17,19 @@ from sins.io.formats import (
     imu_form,
     increments_from_table,
     rates_from_table,
-    read_imu,
     read_truth,
     write_imu,
     write_truth,
 )
 from sins.io.json_files import read_json_document, write_json
-from sins.io.recording import KINDS, Recording, beside_reference, read_recording_any
+from sins.io.reader import read
+from sins.io.recording import KINDS, Recording
 from sins.io.rig import (
     PHASE_KINDS,
     RECORDING_COLUMNS,
     REF_COLUMNS,
     STATIC_RATE_TOL,
     check_recording_range,
-    read_recording,
     write_recording,
 )
 from sins.io.tables import Table, format_number, line_of_row, read_columns, read_table, write_table
@@ -46,7 +46,6 @@ __all__ = [
     "Recording",
     "Table",
     "atomic_path",
-    "beside_reference",
     "check_range",
     "check_recording_range",
     "format_number",
@@ -54,11 +53,9 @@ __all__ = [
     "increments_from_table",
     "line_of_row",
     "rates_from_table",
+    "read",
     "read_columns",
-    "read_imu",
     "read_json_document",
-    "read_recording",
-    "read_recording_any",
     "read_table",
     "read_truth",
     "write_imu",

@@ -58,7 +58,7 @@ class GeodeticFixes:
 
 @dataclass(frozen=True)
 class BagRead:
-    """What :func:`read_bag` read. ``imu`` in SI on FRD axes (after ``frame``); ``receive_t`` the recorder's
+    """What :func:`_read_bag` read. ``imu`` in SI on FRD axes (after ``frame``); ``receive_t`` the recorder's
     time of each reading, s from the same ``t0_ns``; ``truth`` and ``fixes`` None where the bag has none."""
 
     imu: ImuRates
@@ -89,7 +89,7 @@ def bag_kind(path: Path) -> str | None:
     return None
 
 
-def read_bag(
+def _read_bag(
     path: str | os.PathLike[str],
     topic: str | None = None,
     truth_topic: str | None = None,
@@ -395,5 +395,4 @@ __all__ = [
     "BagRead",
     "GeodeticFixes",
     "bag_kind",
-    "read_bag",
 ]

@@ -31,7 +31,7 @@ KNOWN = (*formats.RATE_COLUMNS, *formats.INCREMENT_COLUMNS[1:], "temp")
 
 @dataclass(frozen=True)
 class ColumnsRead:
-    """What :func:`read_columns_csv` read: the samples (SI, the file's axes), the temperature (°C) or
+    """What :func:`_read_columns_csv` read: the samples (SI, the file's axes), the temperature (°C) or
     None, the mapping used (sins name → file column), the units (every key of the form), the form."""
 
     imu: ImuRates | ImuIncrements
@@ -67,7 +67,7 @@ def parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
     return out
 
 
-def read_columns_csv(
+def _read_columns_csv(
     path: str | os.PathLike[str],
     columns: str | Mapping[str, str] | None = None,
     units_spec: str | Mapping[str, str] | None = None,
@@ -86,7 +86,7 @@ def read_columns_csv(
     -------
     ColumnsRead
         rate-form samples as :class:`ImuRates`; increment-form ones as :class:`ImuIncrements` whose
-        ``t[0]`` is the first row's time less the first step (as :func:`sins.io.read_imu`).
+        ``t[0]`` is the first row's time less the first step (as :func:`sins.io._read_imu`).
 
     Raises
     ------
@@ -230,5 +230,4 @@ __all__ = [
     "KNOWN",
     "ColumnsRead",
     "parse_columns",
-    "read_columns_csv",
 ]

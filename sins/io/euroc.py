@@ -38,7 +38,7 @@ REFERENCES = {"state_groundtruth_estimate0": 16, "mocap0": 7, "vicon0": 7}
 
 @dataclass(frozen=True)
 class EurocRead:
-    """What :func:`read_euroc` read: readings (SI, FRD after ``frame``), the first stamp, the nominal
+    """What :func:`_read_euroc` read: readings (SI, FRD after ``frame``), the first stamp, the nominal
     rate (None without ``sensor.yaml``), the reference (None without one), notes."""
 
     imu: ImuRates
@@ -66,7 +66,7 @@ def locate(path: Path) -> tuple[Path, Path | None] | None:
     return path, path.parent.parent if path.parent.name == "imu0" else None
 
 
-def read_euroc(
+def _read_euroc(
     path: str | os.PathLike[str],
     *,
     frame: str = axes.FRD,
@@ -92,7 +92,7 @@ def read_euroc(
         raise SinsInputError(f"{path}: not a EuRoC/TUM-VI recording (no mav0/imu0/data.csv)")
     csv, mav = found
     m = axes.frame_matrix(frame)
-    stamps, values = read_asl_csv(csv, 6)
+    stamps, values = _read_asl_csv(csv, 6)
     t0 = int(stamps[0])
     _check_readings(csv, values)
     imu = ImuRates(t=(stamps - t0) / 1e9, omega_ib_b=axes.to_frd(values[:, :3], m),
@@ -111,7 +111,7 @@ def read_euroc(
     return EurocRead(imu, t0, _rate(csv.parent / "sensor.yaml"), truth, tuple(notes))
 
 
-def read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
+def _read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
     """An ASL CSV: integer nanosecond stamps (n,) and ``width`` float columns (n, width).
 
     Raises
@@ -202,7 +202,7 @@ def _check_readings(path: Path, values: Array) -> None:
 
 def _reference(path: Path, width: int, t0: int, origin: tuple[float, float, float], m: Array) -> NavSeries:
     """The poses of S in R (ENU) as a geodetic trajectory of the body on the axes ``m`` names."""
-    stamps, a = read_asl_csv(path, width)
+    stamps, a = _read_asl_csv(path, width)
     q_xyzw = np.column_stack([a[:, 4:7], a[:, 3]])
     norm = np.linalg.norm(q_xyzw, axis=1)
     if (np.abs(norm - 1.0) > 1e-3).any():
@@ -235,6 +235,4 @@ __all__ = [
     "REFERENCES",
     "EurocRead",
     "locate",
-    "read_asl_csv",
-    "read_euroc",
 ]

@@ -80,7 +80,7 @@ def imu_form(columns: tuple[str, ...], path: Path, header_line: int = 1) -> str:
     return "rate" if has_rate else "increment"
 
 
-def read_imu(path: str | os.PathLike[str]) -> tuple[ImuRates | ImuIncrements, Table]:
+def _read_imu(path: str | os.PathLike[str]) -> tuple[ImuRates | ImuIncrements, Table]:
     """Read an IMU recording in either form.
 
     Returns the samples and the whole table (for extra columns such as
@@ -300,7 +300,6 @@ __all__ = [
     "imu_form",
     "increments_from_table",
     "rates_from_table",
-    "read_imu",
     "read_truth",
     "write_imu",
     "write_truth",

@@ -145,7 +145,7 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
 
     Parameters
     ----------
-    rec : the recording as read (:func:`sins.io.read_recording_any`): its ``units``, ``frame`` and
+    rec : the recording as read (:func:`sins.io.read`): its ``units``, ``frame`` and
         ``column_map`` say how it was read, so that a finding names what to pass instead
     rate_hz : the unit's stated sampling rate, Hz (overrides the recording's own ``stated_rate_hz``)
 

@@ -60,7 +60,7 @@ def is_npz(path: Path) -> bool:
         return False
 
 
-def read_npz(
+def _read_npz(
     path: str | os.PathLike[str], *, frame: str = axes.FRD
 ) -> tuple[ImuRates, NavSeries | None, float, tuple[str, ...]]:
     """An ``.npz`` recording (see the module docstring): readings in rate form, the reference as a
@@ -188,5 +188,4 @@ __all__ = [
     "REFERENCE_KEYS",
     "WIDTH",
     "is_npz",
-    "read_npz",
 ]

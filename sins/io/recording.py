@@ -1,18 +1,20 @@
-"""One entry point for an IMU recording in any format sins reads: :func:`read_recording_any`.
+"""An IMU recording in sins's terms (:class:`Recording`), and the readers of a path by its kind
+(:func:`_read_path`, :func:`_rig_recording`) behind :func:`sins.io.read`.
 
-It picks the reader by what the path is: a folder with ``metadata.yaml`` (a ROS 2 bag), a ROS 1 bag or
-an MCAP file (by their first bytes, :mod:`sins.io.bags`), a EuRoC/TUM-VI folder or ASL file
-(:mod:`sins.io.euroc`), an ``.npz`` recording (:mod:`sins.io.npz`), else a CSV: sins's own IMU forms
-(:func:`sins.io.read_imu`) or, with ``columns`` or ``units``, one with its own columns and units
-(:mod:`sins.io.columns`). Every reader
-returns a :class:`Recording`: readings in SI on FRD axes, and the reference trajectory where the
-recording has one.
+A recording is named by its path or by a dataset's name (:mod:`sins.io.datasets`: ``broad_05``,
+``ferraris``, ``euroc/V1_01_easy``). For a path, the reader is picked by what the path is: a folder with
+``metadata.yaml`` (a ROS 2 bag), a ROS 1 bag or an MCAP file (by their first bytes, :mod:`sins.io.bags`),
+a EuRoC/TUM-VI folder or ASL file (:mod:`sins.io.euroc`), an ``.npz`` recording (:mod:`sins.io.npz`), a
+rig CSV (``ref_`` columns, :mod:`sins.io.rig`), else a CSV: sins's own IMU forms
+(:mod:`sins.io.formats`) or, with ``columns`` or ``units``, one with its own columns and units
+(:mod:`sins.io.columns`). Every recording comes back as a :class:`Recording`: readings in SI on FRD
+axes, and its reference where it has one: a trajectory (its own, or a truth file given beside it) or
+per-sample reference inputs (a rig's).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,9 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.core.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
+from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
-from sins.io import axes, bags, euroc, formats, npz, provenance
+from sins.io import axes, bags, euroc, formats, npz, provenance, rig
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.io.paths import check_input
@@ -34,7 +36,7 @@ Array = NDArray[np.float64]
 #: beyond any IMU's (a scenario's ``[imu] rate_hz`` takes 1 Hz to 100 kHz).
 RATE_HZ_RANGE = (0.1, 1e5)
 #: What :attr:`Recording.kind` may be.
-KINDS = ("sins csv", "csv columns", "ros1 bag", "ros2 bag", "mcap", "euroc", "npz")
+KINDS = ("sins csv", "csv columns", "rig csv", "ros1 bag", "ros2 bag", "mcap", "euroc", "npz", "dataset")
 
 
 @dataclass(frozen=True)
@@ -44,10 +46,11 @@ class Recording:
     Attributes
     ----------
     imu : the readings, SI, FRD body axes: :class:`ImuRates`, or :class:`ImuIncrements` (sins's
-        increment form; ``t[0]`` as :func:`read_recording_any`'s ``t_start`` says)
-    source : the path, for messages
+        increment form; ``t[0]`` as :func:`read`'s ``t_start`` says)
+    source : the path, for messages (a dataset's: the file it was read from)
     kind : one of :data:`KINDS`
-    truth : the reference trajectory (a bag's poses, a EuRoC reference) at its own times, or None
+    truth : the reference trajectory at its own times (a bag's poses, a EuRoC reference, a dataset's, or
+        the truth file given beside the readings: ``truth_from``), or None
     units : ``{key: unit}`` the file's readings were taken to be in (:mod:`sins.io.units`), every key of
         the form; what :func:`sins.io.inspection.inspect` reasons from
     frame : the axes the readings were taken to be on (:mod:`sins.io.axes`) before the turn into FRD
@@ -66,6 +69,14 @@ class Recording:
     heading_known : whether the reference's north is true north (False for a room frame: EuRoC, .npz)
     latitude_known : whether the reference's latitude is the recording's own (False where the frame was
         placed at a nominal origin: Earth's rate then cannot be placed in it and is left out)
+    rig : the readings beside per-sample reference inputs where the recording has them (a rig CSV's
+        ``ref_`` columns; the Ferraris and ring-laser datasets), else None
+    truth_from : the truth file ``truth`` was read from, "" where it is the recording's own
+    dataset : the dataset's name where the recording was read by it, else ""
+    on_reference : a dataset's readings beside its trajectory as the dataset gives them (the phases it
+        is judged in, its unit), else None: :meth:`beside_reference` makes them from ``truth``
+    inputs_reader : how a dataset with a trajectory gives its readings beside per-sample reference
+        inputs (read only when asked for, :meth:`reference_inputs`), else None
     """
 
     imu: ImuRates | ImuIncrements
@@ -87,6 +98,62 @@ class Recording:
     corrected_by: str = ""
     heading_known: bool = True
     latitude_known: bool = True
+    rig: CalibrationData | None = None
+    truth_from: str = ""
+    dataset: str = ""
+    on_reference: ReferencedRecording | None = field(default=None, repr=False)
+    inputs_reader: Callable[[], tuple[CalibrationData, NavSeries | None]] | None = field(
+        default=None, repr=False, compare=False
+    )
+
+    @property
+    def name(self) -> str:
+        """What the user named the recording: the dataset's name, else the path."""
+        return self.dataset or self.source
+
+    @property
+    def has_trajectory(self) -> bool:
+        """Whether the recording has a reference trajectory (its own, a dataset's or a given truth)."""
+        return self.truth is not None or self.on_reference is not None
+
+    def beside_reference(self) -> ReferencedRecording:
+        """The readings beside the reference trajectory, at its epochs (what interval fits and open loops
+        work on): rate-form readings integrated between samples by the trapezoid rule; the reference cut
+        to the readings' span.
+
+        Raises
+        ------
+        MissingInputError
+            without a reference trajectory (``needs`` says what would give one).
+        SinsInputError
+            a reference that does not overlap the readings in time.
+        """
+        if self.on_reference is not None:
+            return self.on_reference
+        if self.truth is None:
+            raise missing_reference(self)
+        own = not self.truth_from
+        return beside_trajectory(
+            self.imu, self.truth, self.source, sensor=self.sensor,
+            reference_name=f"its own reference ({self.kind})" if own else "truth",
+            heading_known=self.heading_known, latitude_known=self.latitude_known,
+        )  # fmt: skip
+
+    def reference_inputs(self) -> tuple[CalibrationData, NavSeries | None]:
+        """The readings beside per-sample reference inputs (a rig's, a dataset's), and the reference
+        trajectory at their times where there is one.
+
+        Raises
+        ------
+        MissingInputError
+            a recording that holds none (a trajectory's per-sample form is the exact ideal IMU through
+            it, made where it is needed: :mod:`sins.unit_gap`, :mod:`sins.runs.readings`).
+        """
+        if self.rig is not None:
+            return self.rig, None
+        if self.inputs_reader is not None:
+            return self.inputs_reader()
+        raise MissingInputError(f"{self.name}: no ref_ columns (per-sample reference inputs)", needs="truth")
 
     @property
     def form(self) -> str:
@@ -121,32 +188,7 @@ def missing_reference(rec: Recording) -> MissingInputError:
     return MissingInputError(f"{rec.source}: the recording has no reference trajectory", needs="truth")
 
 
-def beside_reference(
-    rec: Recording, truth: NavSeries | None = None, *, sensor: str = ""
-) -> ReferencedRecording:
-    """``rec``'s readings beside a reference trajectory (``truth``, else the recording's own) as a
-    :class:`~sins.core.series.ReferencedRecording`: rate-form readings integrated between samples by the
-    trapezoid rule; the reference cut to the readings' span. A given ``truth`` is geodetic (its north and
-    latitude known); the recording's own keeps what the recording says of its frame.
-
-    Raises
-    ------
-    SinsInputError
-        when there is no reference, or it does not overlap the readings in time.
-    """
-    imu = rec.imu
-    own = truth is None
-    truth = rec.truth if truth is None else truth
-    if truth is None:
-        raise SinsInputError(f"{rec.source}: no reference trajectory (give one with --truth TRUTH.csv)")
-    return readings_beside(
-        imu, truth, rec.source, sensor=sensor,
-        reference_name="truth" if not own else f"its own reference ({rec.kind})",
-        heading_known=rec.heading_known or not own, latitude_known=rec.latitude_known or not own,
-    )  # fmt: skip
-
-
-def readings_beside(
+def beside_trajectory(
     imu: ImuRates | ImuIncrements,
     truth: NavSeries,
     source: str,
@@ -213,8 +255,19 @@ def recording_kind(path: Path) -> str:
     return "sins csv"
 
 
-def read_recording_any(
-    path: str | os.PathLike[str],
+def _rig_recording(path: Path) -> Recording:
+    """A rig recording: its readings beside the rig's per-sample reference inputs (``ref_`` columns)."""
+    data = rig._read_rig(path)
+    rig.check_recording_range(path, data)
+    said = provenance.read_provenance(path)
+    imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
+    return Recording(imu, str(path), "rig csv", units=_si("rate"), temp=data.temp, rig=data,
+                     column_map={n: n for n in rig.RECORDING_COLUMNS}, sensor=said.sensor,
+                     corrected_by=said.corrected_by)  # fmt: skip
+
+
+def _read_path(
+    path: Path,
     topic: str | None = None,
     columns: str | Mapping[str, str] | None = None,
     units: str | Mapping[str, str] | None = None,
@@ -226,36 +279,7 @@ def read_recording_any(
     t_start: float | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Recording:
-    """Read an IMU recording in any format sins knows (see the module docstring).
-
-    Parameters
-    ----------
-    path : a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file, or a
-        EuRoC/TUM-VI folder
-    topic : a bag's IMU topic, where it has several ``sensor_msgs/Imu`` topics
-    columns : a CSV's own columns, ``"t=time,gyro_x=wx,..."`` (:mod:`sins.io.columns`)
-    units : the readings' units, ``"t=ms,gyro=deg/s,accel=g"`` (:mod:`sins.io.units`); for a bag or
-        EuRoC (SI by their definitions) a unit rescales what they hold
-    frame : the readings' axes (:mod:`sins.io.axes`); None: ``flu`` for bags (REP 103), ``frd`` otherwise
-        (EuRoC's S taken as it is)
-    rate_hz : the sampling rate, Hz (within :data:`RATE_HZ_RANGE`): the times of a CSV without a time
-        column; elsewhere the stated rate :func:`sins.io.inspection.inspect` checks the stamps against
-    truth_topic : a bag's reference topic, where it has several
-    origin : ``(lat, lon, h)`` in rad, rad, m, where a local reference frame starts (bags: default the
-        first fix, else 0°, 0°, 0 m; EuRoC: default 0°, 0°, 0 m)
-    t_start : increment form: where the first interval starts (a truth's first time); None: the first
-        row's time less the first step
-    progress : ``progress(done, total)`` while a bag is read
-
-    Raises
-    ------
-    SinsInputError
-        one line naming the path, and the line, column, topic or message where it applies; also an
-        option that does not apply to the path's kind (``columns`` for a bag, ``topic`` for a CSV).
-    MissingInputError
-        a bag with several IMU topics and no ``topic`` (``needs="topic"``), or a ``truth_topic`` the
-        bag lacks (``needs="truth_topic"``).
-    """
+    """A recording's path read by the reader its kind needs (:func:`read`'s parameters)."""
     path = Path(path)
     if rate_hz is not None and not RATE_HZ_RANGE[0] <= rate_hz <= RATE_HZ_RANGE[1]:
         low, high = RATE_HZ_RANGE
@@ -270,16 +294,16 @@ def read_recording_any(
     elif kind == "sins csv":
         rec = _read_sins(path, frame or axes.FRD, t_start)
     elif kind == "euroc":
-        got = euroc.read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
+        got = euroc._read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
         rec = Recording(got.imu, str(path), kind, got.truth, _si("rate"), frame or axes.FRD, got.notes,
                         got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "",
                         heading_known=False, latitude_known=origin is not None)  # fmt: skip
     elif kind == "npz":
-        imu, truth, t0_s, notes = npz.read_npz(path, frame=frame or axes.FRD)
+        imu, truth, t0_s, notes = npz._read_npz(path, frame=frame or axes.FRD)
         rec = Recording(imu, str(path), kind, truth, _si("rate"), frame or axes.FRD, notes, round(t0_s * 1e9),
                         heading_known=False, latitude_known=False)  # fmt: skip
     else:
-        read = bags.read_bag(
+        read = bags._read_bag(
             path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
         )
         rec = Recording(read.imu, str(path), kind, read.truth, _si("rate"), frame or axes.FLU, read.notes,
@@ -318,7 +342,7 @@ def _described(kind: str) -> str:
 
 def _read_sins(path: Path, frame: str, t_start: float | None) -> Recording:
     """sins's own IMU CSV (either form), turned from ``frame`` into FRD."""
-    samples, table = formats.read_imu(path)
+    samples, table = formats._read_imu(path)
     if isinstance(samples, ImuIncrements) and t_start is not None:
         samples = formats.increments_from_table(table, float(t_start))
     temp = table.column("temp").copy() if table.has("temp") else None
@@ -336,7 +360,7 @@ def _read_columns(
     frame: str, t_start: float | None,
 ) -> Recording:  # fmt: skip
     """A CSV through :mod:`sins.io.columns`, turned from ``frame`` into FRD."""
-    got = column_reader.read_columns_csv(path, columns, chosen, rate_hz)
+    got = column_reader._read_columns_csv(path, columns, chosen, rate_hz)
     imu = got.imu
     if isinstance(imu, ImuIncrements) and t_start is not None:
         if not t_start < imu.t[1]:
@@ -399,9 +423,7 @@ __all__ = [
     "KINDS",
     "RATE_HZ_RANGE",
     "Recording",
-    "beside_reference",
+    "beside_trajectory",
     "missing_reference",
-    "read_recording_any",
-    "readings_beside",
     "recording_kind",
 ]

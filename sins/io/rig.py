@@ -35,7 +35,16 @@ import numpy as np
 from sins.core.series import CalibrationData, RigPhase
 from sins.errors import SinsInputError
 from sins.io.formats import RATE_COLUMNS, check_readings, imu_form
-from sins.io.tables import Table, format_number, line_of_row, open_text, read_header, read_table, write_table
+from sins.io.tables import (
+    Table,
+    format_number,
+    line_of_row,
+    open_text,
+    read_columns,
+    read_header,
+    read_table,
+    write_table,
+)
 
 REF_COLUMNS = ("ref_gyro_x", "ref_gyro_y", "ref_gyro_z", "ref_accel_x", "ref_accel_y", "ref_accel_z")
 RECORDING_COLUMNS = RATE_COLUMNS + REF_COLUMNS
@@ -83,7 +92,7 @@ def write_recording(
 
     Notes
     -----
-    Every float comes back bit for bit from :func:`read_recording`, except that a NaN comes back as
+    Every float comes back bit for bit from :func:`_read_rig`, except that a NaN comes back as
     the canonical quiet NaN (``numpy.nan``) whatever its sign and payload.
     """
     _check_recording(data)
@@ -108,7 +117,14 @@ def write_recording(
     write_table(path, columns, np.column_stack(values), "\n".join(lines), progress)
 
 
-def read_recording(path: str | os.PathLike[str]) -> CalibrationData:
+def is_rig_csv(path: Path) -> bool:
+    """Whether ``path`` is a CSV file whose header has ``ref_`` columns (a rig recording's)."""
+    if not path.is_file() or path.suffix.lower() != ".csv":
+        return False
+    return any(c.startswith("ref_") for c in read_columns(path))
+
+
+def _read_rig(path: str | os.PathLike[str]) -> CalibrationData:
     """Read a rig recording (the module's format) into :class:`~sins.core.series.CalibrationData`.
 
     Returns
@@ -169,12 +185,12 @@ def read_recording(path: str | os.PathLike[str]) -> CalibrationData:
 
 
 def check_recording_range(path: str | os.PathLike[str], data: CalibrationData) -> None:
-    """Refuse a recording read by :func:`read_recording` whose readings or references lie beyond the
+    """Refuse a recording read by :func:`_read_rig` whose readings or references lie beyond the
     physical ranges of IMU files (:data:`~sins.io.formats.MAX_RATE_RADPS`,
     :data:`~sins.io.formats.MAX_FORCE_MPS2`, :data:`~sins.io.formats.TEMP_DEGC`,
     :data:`~sins.io.formats.MAX_TIME_S`), naming the line and column.
 
-    :func:`read_recording` itself reads any finite value back (the format round-trips every float);
+    :func:`_read_rig` itself reads any finite value back (the format round-trips every float);
     the commands that compute with a recording (``sins fit``, ``evaluate``, ``gap``) call this.
     """
     path = Path(path)
@@ -187,7 +203,7 @@ def check_recording_range(path: str | os.PathLike[str], data: CalibrationData) -
 
 
 def _check_recording(data: CalibrationData) -> None:
-    """Refuse (ValueError) what :func:`read_recording` would refuse, before anything is written."""
+    """Refuse (ValueError) what :func:`_read_rig` would refuse, before anything is written."""
     t = np.asarray(data.t, dtype=float)
     n = len(t)
     if t.ndim != 1 or n == 0:
@@ -358,6 +374,6 @@ __all__ = [
     "REF_COLUMNS",
     "STATIC_RATE_TOL",
     "check_recording_range",
-    "read_recording",
+    "is_rig_csv",
     "write_recording",
 ]

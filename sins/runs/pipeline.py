@@ -44,12 +44,12 @@ from sins.nav.metrics import (
     summarize,
     thinned_indices,
 )
-from sins.runs.readings import Recording as Recording
+from sins.runs.readings import RunInputs as RunInputs
 from sins.runs.readings import SimulatedReadings as SimulatedReadings
 from sins.runs.readings import cabin_temperature as _cabin
 from sins.runs.readings import gap_data as gap_data
 from sins.runs.readings import input_errors
-from sins.runs.readings import load_recording as load_recording
+from sins.runs.readings import run_inputs as run_inputs
 from sins.runs.readings import simulate as simulate
 from sins.runs.readings import simulate_readings as simulate_readings
 from sins.runs.readings import with_unit as with_unit

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -122,11 +121,12 @@ def cabin_temperature(sc: Scenario, t: NDArray[np.float64]) -> NDArray[np.float6
 
 
 @dataclass(frozen=True)
-class Recording:
-    """A recorded IMU file as increments beside its truth (:func:`load_recording`).
+class RunInputs:
+    """A recording's readings as increments beside the truth they are integrated against
+    (:func:`run_inputs`).
 
-    ``intervals`` is how many the file holds; ``imu`` may hold fewer (``within_truth``: those inside
-    the truth's span).
+    ``intervals`` is how many the recording holds; ``imu`` may hold fewer (``within_truth``: those
+    inside the truth's span).
     """
 
     imu: ImuIncrements
@@ -140,132 +140,126 @@ class Recording:
 OWN_TAIL_S, OWN_TAIL_FRACTION = 1.0, 0.01
 
 
-def load_recording(
-    imu_path: str | os.PathLike[str],
-    truth_path: str | os.PathLike[str] | None = None,
-    within_truth: bool = False,
-    reading: Mapping[str, Any] | None = None,
-) -> Recording:
-    """A recorded IMU (any recording :func:`sins.io.read_recording_any` reads, with ``reading`` its
-    options; either form) as increments, and its truth (``truth_path``, or the recording's own reference:
-    a bag's poses, a EuRoC ground truth).
+def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
+    """A recording (:func:`sins.io.read`, either form) as increments, beside its truth (a truth file given
+    to the reader, or the recording's own reference: a bag's poses, a EuRoC ground truth, a dataset's).
 
-    Increment form: the first row's interval starts at the truth's first time. Rate form: the
-    samples are integrated to increments between rows, and the run starts at the first row's time,
-    which must lie within the truth.
+    Increment form: the first row's interval starts where the reader was told (a truth file's first
+    time). Rate form: the samples are integrated to increments between rows, and the run starts at the
+    first row's time, which must lie within the truth.
 
     Raises
     ------
     SinsInputError
-        as the readers; a rate-form file starting outside the truth; an IMU running past the truth's
-        end, unless ``within_truth`` (then the intervals inside it are kept, and ``intervals`` says how
-        many the file held): nothing is cut without being asked for, except against the recording's
-        own reference, whose last pose commonly comes a few samples before the last reading: a tail of
-        up to :data:`OWN_TAIL_S` or :data:`OWN_TAIL_FRACTION` of the span is cut (the caller says so:
-        ``intervals`` against ``len(imu)``), a longer one refused as a truth file's is.
+        a rate-form recording starting outside the truth; readings running past the truth's end,
+        unless ``within_truth`` (then the intervals inside it are kept, and ``intervals`` says how
+        many the recording held): nothing is cut without being asked for, except against the
+        recording's own reference, whose last pose commonly comes a few samples before the last
+        reading: a tail of up to :data:`OWN_TAIL_S` or :data:`OWN_TAIL_FRACTION` of the span is cut
+        (the caller says so: ``intervals`` against ``len(imu)``), a longer one refused as a truth
+        file's is.
     MissingInputError
-        without ``truth_path`` when the recording has no reference of its own.
+        a recording without a reference trajectory.
     """
-    truth = io.read_truth(truth_path) if truth_path is not None else None
-    t_start = None if truth is None else float(truth.t[0])
-    rec = io.read_recording_any(imu_path, t_start=t_start, **(reading or {}))
-    if truth is None:
-        if rec.truth is None:
-            raise io.recording.missing_reference(rec)
-        truth = rec.truth
-    truth_name = truth_path if truth_path is not None else "its own reference"
-    samples = rec.imu
+    if not rec.has_trajectory:
+        raise io.recording.missing_reference(rec)
+    where = rec.name
+    if rec.on_reference is not None:  # a dataset's own increments beside its reference
+        samples: ImuIncrements | ImuRates = rec.on_reference.imu
+        truth = rec.on_reference.reference
+    else:
+        assert rec.truth is not None
+        samples, truth = rec.imu, rec.truth
+    truth_name = rec.truth_from or "its own reference"
     imu: ImuIncrements
     if isinstance(samples, ImuRates):
         if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
             raise SinsInputError(
-                f"{imu_path}: first sample at {samples.t[0]:g} s is outside the truth's "
+                f"{where}: first sample at {samples.t[0]:g} s is outside the truth's "
                 f"{truth.t[0]:g}..{truth.t[-1]:g} s"
             )
         if len(samples) < 2:
-            raise SinsInputError(f"{imu_path}: need at least two rate samples")
+            raise SinsInputError(f"{where}: need at least two rate samples")
         imu = samples.to_increments()
     else:
         imu = samples
         if not imu.t[0] >= truth.t[0]:
             raise SinsInputError(
-                f"{imu_path}: the first interval starts at {imu.t[0]:g} s, before the truth's first "
+                f"{where}: the first interval starts at {imu.t[0]:g} s, before the truth's first "
                 f"time {truth.t[0]:g} s"
             )
     intervals = len(imu)
     if imu.t[-1] > truth.t[-1] + 1e-9:
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
         tail = imu.t[-1] - truth.t[-1]
-        short = truth_path is None and tail <= max(OWN_TAIL_S, OWN_TAIL_FRACTION * (imu.t[-1] - imu.t[0]))
+        own = not rec.truth_from
+        short = own and tail <= max(OWN_TAIL_S, OWN_TAIL_FRACTION * (imu.t[-1] - imu.t[0]))
         if not within_truth and not short:
             raise SinsInputError(
-                f"{imu_path}: the IMU runs to {imu.t[-1]:g} s but the truth ({truth_name}) ends at "
+                f"{where}: the IMU runs to {imu.t[-1]:g} s but the truth ({truth_name}) ends at "
                 f"{truth.t[-1]:g} s ({inside - 1} of {intervals} intervals inside it); give the whole "
                 "truth, or --within-truth to integrate only those intervals"
             )
         if inside < 2:
-            raise SinsInputError(f"{imu_path}: no IMU interval ends within the truth's time span")
+            raise SinsInputError(f"{where}: no IMU interval ends within the truth's time span")
         imu = ImuIncrements(
             t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
         )
-    return Recording(imu, truth, intervals)
+    return RunInputs(imu, truth, intervals)
 
 
-def gap_data(
-    recording: str | os.PathLike[str], truth: str | os.PathLike[str] | None = None
-) -> tuple[CalibrationData, NavSeries | None]:
+def gap_data(rec: io.Recording) -> tuple[CalibrationData, NavSeries | None]:
     """Readings beside reference inputs for :func:`sins.gap.diagnose`, and the truth at their times.
 
-    Without ``truth``: a rig recording with ``ref_`` columns (the truth returned is None). With it:
-    an IMU recording in either form whose reference inputs come from the truth trajectory through the
-    exact ideal-IMU path (splines through the truth, then the strapdown equations backwards). Rate
-    form: the readings at their times beside the ideal rates there. Increment form (the first row's
-    interval starts at the truth's first time): each interval's mean rate (increment / its length) at
-    its mid-time beside the ideal rate's mean over the same interval (Simpson's rule on the splines),
-    so that every error linear in the input (bias, scale, misalignment, g-sensitivity) compares
-    exactly; one quadratic in it (``k2·u²``) differs from its value at the mean input by ``k2`` times
-    the input's variance over the interval (``(dt·u̇)²/12`` for a steady change), and white noise keeps
-    its density.
+    A rig recording (``ref_`` columns): its own (the truth returned is None). A recording read beside a
+    truth trajectory (:func:`sins.io.read` with ``truth``), in either form: its reference inputs come
+    from the truth through the exact ideal-IMU path (splines through the truth, then the strapdown
+    equations backwards). Rate form: the readings at their times beside the ideal rates there.
+    Increment form (the first row's interval starts at the truth's first time): each interval's mean
+    rate (increment / its length) at its mid-time beside the ideal rate's mean over the same interval
+    (Simpson's rule on the splines), so that every error linear in the input (bias, scale,
+    misalignment, g-sensitivity) compares exactly; one quadratic in it (``k2·u²``) differs from its
+    value at the mean input by ``k2`` times the input's variance over the interval (``(dt·u̇)²/12`` for a
+    steady change), and white noise keeps its density.
 
     Raises
     ------
     MissingInputError
-        no ``truth`` and no ``ref_`` columns.
+        neither ``ref_`` columns nor a truth.
     SinsInputError
-        as the readers; a truth of fewer than 4 rows; rows outside the truth's span.
+        a truth of fewer than 4 rows; rows outside the truth's span.
     """
-    if truth is None:
-        if not any(c.startswith("ref_") for c in io.read_columns(recording)):
-            raise MissingInputError(
-                f"{recording}: no ref_ columns (a rig recording has them); an IMU recording needs its "
-                "trajectory (a truth file)",
-                needs="truth",
-            )
-        return io.read_recording(recording), None
-    samples, table = io.read_imu(recording)
-    path = io.read_truth(truth)
+    if rec.rig is not None:
+        return rec.rig, None
+    if rec.truth is None:
+        raise MissingInputError(
+            f"{rec.source}: no ref_ columns (a rig recording has them); an IMU recording needs its "
+            "trajectory (a truth file)",
+            needs="truth",
+        )
+    path, truth_name = rec.truth, rec.truth_from or f"{rec.source}'s own reference"
     if len(path.t) < 4:
-        raise SinsInputError(f"{truth}: a truth trajectory needs at least 4 rows")
+        raise SinsInputError(f"{truth_name}: a truth trajectory needs at least 4 rows")
+    samples = rec.imu
     row_t = samples.t if isinstance(samples, ImuRates) else samples.t[1:]
     inside = (row_t >= path.t[0]) & (row_t <= path.t[-1])
     if inside.sum() < len(row_t):
         raise SinsInputError(
-            f"{recording}: rows from t={row_t[~inside][0]:g} s lie outside the truth's "
-            f"{path.t[0]:g}..{path.t[-1]:g} s in {truth}"
+            f"{rec.source}: rows from t={row_t[~inside][0]:g} s lie outside the truth's "
+            f"{path.t[0]:g}..{path.t[-1]:g} s in {truth_name}"
         )
-    temp = table.data[:, table.columns.index("temp")] if "temp" in table.columns else None
+    temp = rec.temp
     if isinstance(samples, ImuRates):
         at_samples = path.interpolate(samples.t)
         reference = _ideal_rates_at(path, at_samples)
         readings = samples
     else:
-        increments = io.increments_from_table(table, float(path.t[0]))
-        readings, reference, at_samples = _interval_means(increments, path)
+        readings, reference, at_samples = _interval_means(samples, path)
         if temp is not None:
-            temp = np.interp(readings.t, increments.t[1:], temp)
+            temp = np.interp(readings.t, samples.t[1:], temp)
     data = CalibrationData(
         t=readings.t, gyro=readings.omega_ib_b, accel=readings.f_ib_b, ref_gyro=reference.omega_ib_b,
-        ref_accel=reference.f_ib_b, temp=temp, source=str(recording),
+        ref_accel=reference.f_ib_b, temp=temp, source=rec.source,
     )  # fmt: skip
     return data, at_samples
 
@@ -301,12 +295,12 @@ def _interval_means(increments: ImuIncrements, path: NavSeries) -> tuple[ImuRate
 __all__ = [
     "OWN_TAIL_FRACTION",
     "OWN_TAIL_S",
-    "Recording",
+    "RunInputs",
     "SimulatedReadings",
     "cabin_temperature",
     "gap_data",
     "input_errors",
-    "load_recording",
+    "run_inputs",
     "simulate",
     "simulate_readings",
     "with_unit",

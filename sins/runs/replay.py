@@ -2,7 +2,7 @@
 truth, from a given start or a still unit's own coarse alignment.
 
 :func:`navigate` integrates increments from the truth's state at their first time and compares the
-solution with the truth; :func:`integrate_recording` does so for a file (any format sins reads);
+solution with the truth; :func:`integrate_recording` does so for a recording (:func:`sins.io.read`);
 (The gap diagnosis's drift check is :func:`sins.gap.navigation.gap_navigation`.) Without a truth,
 :func:`free_start` starts a unit at rest at a given position, in a given attitude or in the one its
 opening rest implies (levelling and gyrocompassing, :mod:`sins.aiding.alignment`, its accuracy from the
@@ -14,10 +14,8 @@ rest would cause (:func:`sins.nav.budget.bias_error_ned`), what a still recordin
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,11 +26,12 @@ from sins.errors import SinsInputError
 from sins.nav import budget, strapdown
 from sins.nav.metrics import nav_errors, summarize
 from sins.nav.vertical import VerticalMode
-from sins.runs.readings import load_recording
+from sins.runs.readings import run_inputs
 from sins.runs.results import StrategyRun
 
 if TYPE_CHECKING:
     from sins.characterise.bias import BiasEstimate
+    from sins.io.recording import Recording
 
 
 def navigate(
@@ -56,21 +55,19 @@ def navigate(
 
 
 def integrate_recording(
-    imu_path: str | os.PathLike[str],
-    truth_path: str | os.PathLike[str] | None,
+    rec: Recording,
     vertical: VerticalMode = "free",
     vertical_tau_s: float = 10.0,
     within_truth: bool = False,
-    reading: Mapping[str, Any] | None = None,
 ) -> StrategyRun:
-    """Integrate a recorded IMU from its truth's first state; errors against the truth.
+    """Integrate a recording (:func:`sins.io.read`, with its own reference or a truth file beside it) from
+    its truth's first state; errors against the truth.
 
-    :func:`sins.runs.readings.load_recording` (any format sins reads, ``reading`` its options; without
-    ``truth_path`` the recording's own reference; an IMU running past the truth refused unless
-    ``within_truth``), then :func:`navigate`.
+    :func:`sins.runs.readings.run_inputs` (an IMU running past the truth refused unless ``within_truth``),
+    then :func:`navigate`.
     """
-    rec = load_recording(imu_path, truth_path, within_truth, reading)
-    return navigate(rec.imu, rec.truth, vertical, vertical_tau_s)
+    inputs = run_inputs(rec, within_truth)
+    return navigate(inputs.imu, inputs.truth, vertical, vertical_tau_s)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ Summaries cover every sample; the series are thinned for display (:data:`sins.ru
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -89,6 +90,52 @@ class ScenarioRun:
     runs: dict[str, StrategyRun]
     sensor_t: NDArray[np.float64] | None = None
     aided: dict[str, AidedRun] = field(default_factory=dict)
+
+    def to_dict(self, source: str | None = None) -> dict[str, Any]:
+        """The run as ``sins run --json`` writes it: ``scenario`` (its name, file ``source`` or the
+        scenario's own, rate, samples, duration, vertical channel), ``strategies`` (each run's summary,
+        :meth:`sins.nav.metrics.DriftSummary.to_dict`, with its ``residual_rms`` where it has one) and, for
+        an aided scenario, ``aided`` and ``outages`` (:meth:`aided_dicts`)."""
+        sc, n = self.scenario, self.samples
+        strategies: dict[str, dict[str, Any]] = {}
+        for name, run in self.runs.items():
+            strategies[name] = run.summary.to_dict()
+            if run.residual_rms is not None:
+                strategies[name]["residual_rms"] = run.residual_rms
+        file = source if source is not None else str(sc.source or "")
+        scenario = {"name": sc.name, "file": file, "rate_hz": sc.rate_hz, "samples": n,
+                    "duration_s": n / sc.rate_hz, "vertical": sc.vertical}  # fmt: skip
+        document: dict[str, Any] = {"scenario": scenario, "strategies": strategies}
+        aided, outages = self.aided_dicts()
+        if aided:
+            document |= {"aided": aided, "outages": outages}
+        return document
+
+    def aided_dicts(self) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, float]]]]:
+        """The aided runs' summaries (with their fix counts and how they started) and their errors per
+        outage, as JSON objects; both empty for a scenario without aiding."""
+        aided: dict[str, dict[str, Any]] = {}
+        outages: dict[str, list[dict[str, float]]] = {}
+        aiding = self.scenario.aiding
+        if aiding is None:
+            return aided, outages
+        for name, run in self.aided.items():
+            aided[name] = {**run.summary.to_dict(), "fixes": run.fixes, "rejected_fixes": run.rejected}
+            if aiding.sigma_vel_mps is not None:
+                aided[name]["rejected_velocity_fixes"] = run.velocity_rejected
+            aided[name] |= {"alignment": run.alignment, "alignment_start_s": run.start_s}
+            if run.alignment == "static":
+                aided[name]["alignment_static_s"] = run.static_s
+            if run.heading_sigma_deg is not None:
+                aided[name]["alignment_heading_sigma_deg"] = run.heading_sigma_deg
+            if run.restarts:
+                aided[name]["filter_restarts_s"] = list(run.restarts)
+            outages[name] = [
+                {"start_s": o.start_s, "end_s": o.end_s, "final_horizontal_m": o.final_m,
+                 "max_horizontal_m": o.max_m}
+                for o in run.outages
+            ]  # fmt: skip
+        return aided, outages
 
 
 __all__ = ["AidedRun", "ScenarioRun", "StrategyRun"]

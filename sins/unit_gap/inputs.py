@@ -1,4 +1,5 @@
-"""What ``sins gap`` reads: every recording ``sins fit`` reads, each with its own reference.
+"""What ``sins gap`` reads: every recording ``sins fit`` reads (:func:`sins.io.read`), each with its own
+reference.
 
 A recording comes as a dataset's name (``--dataset broad_05``, ``--dataset euroc/V1_01_easy``) or a path:
 a sins rig CSV (``ref_`` columns: per-sample reference inputs), a recording in any format sins reads (a
@@ -50,31 +51,33 @@ def read_gap_input(
     truth: str | os.PathLike[str] | None = None,
     options: dict[str, Any] | None = None,
 ) -> GapInput:
-    """A recording by dataset name or path, as ``sins fit`` reads it
-    (:func:`sins.compensation.referenced.read_inputs`).
+    """A recording by dataset name or path, read by :func:`sins.io.read` (as ``sins fit`` reads it).
 
     Raises
     ------
     SinsInputError
         one line naming the recording: both or neither of a path and a dataset, ``truth`` beside a
-        dataset, a recording without any reference, and as the readers do.
+        dataset, a recording without any reference, and as the reader does.
     """
-    from sins.compensation import referenced
-    from sins.runs import pipeline
+    from sins import io
+    from sins.runs import readings
 
-    if dataset is not None:
-        return _dataset(dataset, truth)
-    name = str(recording)
-    _check_csv(Path(name), truth, options)
-    inputs = referenced.read_inputs(recording, truth=truth, options=options)
-    if isinstance(inputs, CalibrationData):
-        return GapInput(name, None, lambda: (inputs, None))
-    if isinstance(inputs, Recording):
+    if dataset is not None and truth is not None:
+        raise SinsInputError("gap: --truth goes with a RECORDING, not with --dataset")
+    if recording is not None:
+        _check_csv(Path(recording), truth, options)
+    rec = io.read(recording, dataset=dataset, truth=truth, **(options or {}))
+    name = rec.name
+    if rec.rig is not None:
+        rig = rec.rig
+        return GapInput(name, None, lambda: (rig, None))
+    if not rec.has_trajectory:
         raise MissingInputError(f"{name}: the recording has no reference trajectory", needs="truth")
-    if truth is not None:  # a sins IMU file and its truth: the exact ideal IMU, in either form
-        return GapInput(name, inputs, lambda: pipeline.gap_data(Path(str(recording)), truth))
-    opts = dict(options or {})
-    return GapInput(name, inputs, lambda: _own_reference_samples(name, opts))
+    if rec.inputs_reader is not None:  # a dataset's own per-sample form
+        return GapInput(name, rec.beside_reference(), rec.inputs_reader)
+    if truth is not None:  # readings and a truth file: the exact ideal IMU, in either form
+        return GapInput(name, rec.beside_reference(), lambda: readings.gap_data(rec))
+    return GapInput(name, rec.beside_reference(), lambda: _own_reference_samples(rec))
 
 
 def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:
@@ -97,33 +100,22 @@ def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[s
         )
 
 
-def _dataset(name: str, truth: str | os.PathLike[str] | None) -> GapInput:
-    from sins.io import datasets
-
-    if truth is not None:
-        raise SinsInputError("gap: --truth goes with a RECORDING, not with --dataset")
-    trajectory = datasets.load_reference(name)
-    return GapInput(name, trajectory, lambda: datasets.load_with_truth(name))
-
-
-def _own_reference_samples(path: str, options: dict[str, Any]) -> Samples:
-    """A recording read again with its own reference, as readings beside the exact ideal IMU of the
-    motion through that reference (splines, then the strapdown equations backwards), at the readings'
-    times (mean rates at their middles for increments); rows outside the reference are left out."""
-    from sins import io
+def _own_reference_samples(rec: Recording) -> Samples:
+    """A recording with its own reference, as readings beside the exact ideal IMU of the motion through
+    that reference (splines, then the strapdown equations backwards), at the readings' times (mean
+    rates at their middles for increments); rows outside the reference are left out."""
     from sins.nav import motion, trajectory
 
-    rec = io.read_recording_any(path, **options)
-    assert rec.truth is not None  # read once already, with its reference
+    assert rec.truth is not None  # read with its reference
     t, gyro, accel = rec.mean_rates()
     inside = (t >= rec.truth.t[0]) & (t <= rec.truth.t[-1])
     t, gyro, accel = t[inside], gyro[inside], accel[inside]
     if len(t) < 4:
-        raise SinsInputError(f"{path}: fewer than 4 readings within the reference's time span")
+        raise SinsInputError(f"{rec.source}: fewer than 4 readings within the reference's time span")
     at = rec.truth.interpolate(t)
     ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
     data = CalibrationData(
-        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=path
+        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
     )
     return data, at
 

@@ -3,8 +3,9 @@
 Each dataset lives in a folder under the data root (see :func:`data_root`) with
 a SOURCE.md giving its origin, licence, units and columns. Each reader, one
 module per dataset, converts to the package's conventions (SI, radians) and
-returns the package's types; :func:`load` gives any of them by name as
-readings beside reference inputs, what ``sins gap --dataset NAME`` diagnoses.
+returns the package's types; :func:`_read_dataset` gives any of them by name as a
+:class:`~sins.io.Recording`, which is what :func:`sins.io.read` (``dataset=NAME``) returns:
+the one public way in.
 """
 
 from __future__ import annotations
@@ -13,28 +14,29 @@ import os
 
 import numpy as np
 
-from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
+from sins.core.series import CalibrationData, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
-from sins.io.datasets.broad import BROAD_TRIALS, read_broad
+from sins.io import units
+from sins.io.datasets.broad import BROAD_TRIALS, _read_broad
 from sins.io.datasets.ferraris import (
     FERRARIS_FOLDER,
     FERRARIS_RATE_HZ,
     FERRARIS_SECTIONS,
-    read_ferraris,
-    read_ferraris_annotated,
+    _read_ferraris,
+    _read_ferraris_annotated,
 )
 from sins.io.datasets.npz_folders import (
+    _read_npz_reference,
+    _read_npz_with_truth,
     is_folder_name,
     npz_names,
-    read_npz_recording,
-    read_npz_reference,
-    read_npz_with_truth,
 )
-from sins.io.datasets.psins_lasergyro import read_psins_lasergyro
-from sins.io.datasets.psins_vehicle import read_psins_vehicle
+from sins.io.datasets.psins_lasergyro import _read_psins_lasergyro
+from sins.io.datasets.psins_vehicle import _read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
+from sins.io.recording import Recording
 
-#: Dataset names for :func:`load`, and what each is.
+#: Dataset names for :func:`_read_dataset`, and what each is.
 NAMES = {
     "ferraris": "imucal's hand-made Ferraris session of a MEMS IMU (static holds only have a reference)",
     "ferraris_annotated": "imucal's annotated Ferraris session (raw counts, 204.8 Hz, its nine sections)",
@@ -45,7 +47,7 @@ NAMES = {
 
 
 #: The datasets whose reference is a trajectory (attitude and velocity at its own epochs) rather than
-#: per-sample inputs: :func:`load_reference` gives them; a BROAD trial's name is any ``broad_NN``.
+#: per-sample inputs: :func:`_load_reference` gives them; a BROAD trial's name is any ``broad_NN``.
 TRAJECTORY_REFERENCES = ("psins_vehicle", "broad_NN")
 
 
@@ -62,7 +64,7 @@ def names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     return {**{k: v for k, v in NAMES.items() if not k.startswith("broad_")}, **found, **npz_names(root)}
 
 
-def load_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording | None:
+def _load_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording | None:
     """A dataset by name as readings beside its reference trajectory, or None where its reference is not a
     trajectory (``ferraris``: static holds and turns of known angle; ``psins_lasergyro``: a still unit).
 
@@ -72,58 +74,81 @@ def load_reference(name: str, root: str | os.PathLike[str] | None = None) -> Ref
         for an unknown name (listing the known ones), or as the readers do.
     """
     if is_folder_name(name):
-        return read_npz_reference(name, root)
+        return _read_npz_reference(name, root)
     known = names(root)
     if name not in known:
         raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(known)})")
     if name == "psins_vehicle":
-        from sins.io.datasets.psins_reference import read_psins_vehicle_reference
+        from sins.io.datasets.psins_reference import _read_psins_vehicle_reference
 
-        return read_psins_vehicle_reference(root)
+        return _read_psins_vehicle_reference(root)
     if name.startswith("broad_"):
-        from sins.io.datasets.broad_reference import read_broad_reference
+        from sins.io.datasets.broad_reference import _read_broad_reference
 
-        return read_broad_reference(name.removeprefix("broad_"), root)
+        return _read_broad_reference(name.removeprefix("broad_"), root)
     return None
 
 
-def load(name: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
-    """A dataset by name (see :data:`NAMES`) as readings beside reference inputs."""
-    return load_with_truth(name, root)[0]
+def _read_dataset(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
+    """A dataset by name as a :class:`~sins.io.Recording` (what :func:`sins.io.read` gives for
+    ``dataset=name``): beside its reference trajectory where it has one (its per-sample form read only
+    when asked for, :meth:`~sins.io.Recording.reference_inputs`), else beside its per-sample reference
+    inputs (``rig``).
+
+    Raises
+    ------
+    SinsInputError
+        for an unknown name (listing the known ones), or as the readers do.
+    """
+    trajectory = _load_reference(name, root)
+    if trajectory is not None:
+        return Recording(
+            trajectory.imu, trajectory.source, "dataset", trajectory.reference, _si("increment"),
+            sensor=trajectory.sensor, heading_known=trajectory.heading_known,
+            latitude_known=trajectory.latitude_known, dataset=name, on_reference=trajectory,
+            inputs_reader=lambda: _load_with_truth(name, root),
+        )  # fmt: skip
+    data = _load_with_truth(name, root)[0]
+    imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
+    return Recording(imu, data.source, "dataset", None, _si("rate"), temp=data.temp, rig=data, dataset=name)
 
 
-def load_with_truth(
+def _si(form: str) -> dict[str, str]:
+    return {k: units.SI[k] for k in units.FORM_KEYS[form] if k != "temp"}
+
+
+def _load_with_truth(
     name: str, root: str | os.PathLike[str] | None = None
 ) -> tuple[CalibrationData, NavSeries | None]:
     """A dataset by name, and its reference trajectory at the readings' times where it has one.
 
     ``psins_vehicle`` has one (the FOG-INS's solution; its first and last rows, which the solution does
     not span, are left out), and every ``FOLDER/NAME`` with a reference
-    (:func:`~sins.io.datasets.npz_folders.read_npz_with_truth`).
+    (:func:`~sins.io.datasets.npz_folders._read_npz_with_truth`).
     """
     if is_folder_name(name):
-        return read_npz_with_truth(name, root)
+        return _read_npz_with_truth(name, root)
     if name == "psins_vehicle":
         # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
         # vibration the MEMS sees, which would pass for a sensor gap.
-        data, nav = read_psins_vehicle(root, rate="fog")
+        data, nav = _read_psins_vehicle(root, rate="fog")
         if nav is None:
             return data, None
         inside = np.flatnonzero((data.t >= nav.t[0]) & (data.t <= nav.t[-1]))
         data = data.rows(inside) if len(inside) < len(data) else data
         return data, nav.interpolate(data.t)
-    return _load(name, root), None
+    return _load_rig(name, root), None
 
 
-def _load(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
+def _load_rig(name: str, root: str | os.PathLike[str] | None) -> CalibrationData:
     if name == "ferraris":
-        return read_ferraris(root)
+        return _read_ferraris(root)
     if name == "ferraris_annotated":
-        return read_ferraris_annotated(root)
+        return _read_ferraris_annotated(root)
     if name == "psins_lasergyro":
-        return read_psins_lasergyro(root)
+        return _read_psins_lasergyro(root)
     if name.startswith("broad_") and name in names(root):
-        return read_broad(name.removeprefix("broad_"), root)
+        return _read_broad(name.removeprefix("broad_"), root)
     raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(names(root))})")
 
 
@@ -136,16 +161,5 @@ __all__ = [
     "NAMES",
     "TRAJECTORY_REFERENCES",
     "data_root",
-    "load",
-    "load_reference",
-    "load_with_truth",
     "names",
-    "read_broad",
-    "read_ferraris",
-    "read_ferraris_annotated",
-    "read_npz_recording",
-    "read_npz_reference",
-    "read_npz_with_truth",
-    "read_psins_lasergyro",
-    "read_psins_vehicle",
 ]

@@ -2,7 +2,7 @@
 D. Laidig, M. Caruso, A. Cereatti, T. Seel, Data 6(7), 2021, doi:10.3390/data6070072;
 github.com/dlaidig/broad)
     A hand-moved MEMS IMU (myon aktos-t) with optical motion capture (OptiTrack, eight Flex13 cameras)
-    of its orientation and position, both on one 285.714 Hz sample grid. :func:`read_broad` returns a
+    of its orientation and position, both on one 285.714 Hz sample grid. :func:`_read_broad` returns a
     trial as :class:`~sins.core.series.CalibrationData`, the reference rate and specific force derived from
     the optical data.
 """
@@ -72,7 +72,7 @@ _MAX_DELAY_S = 0.1
 _MIN_CORRELATION = 0.5
 
 
-def read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
+def _read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> CalibrationData:
     """One BROAD trial, ``broad_mocap/<stem>.mat``, with its reference from the optical data.
 
     ``trial`` is a trial's file stem or its number (``"05"``, ``"5"``, ``"18"``; see :func:`trials`).
@@ -326,7 +326,6 @@ __all__ = [
     "BROAD_LAT_DEG",
     "BROAD_RATE_HZ",
     "BROAD_TRIALS",
-    "read_broad",
     "sensor_of",
     "trials",
 ]

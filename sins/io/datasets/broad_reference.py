@@ -1,7 +1,7 @@
 """A BROAD trial as a :class:`~sins.core.series.ReferencedRecording`: the IMU's readings beside the optical
 motion capture's orientation and position at every sample where the markers were seen.
 
-Unlike :func:`~sins.io.datasets.broad.read_broad`, nothing is differentiated: the optical data are the
+Unlike :func:`~sins.io.datasets.broad._read_broad`, nothing is differentiated: the optical data are the
 reference as they are (their orientation and the velocity of their position), so compensation is fitted
 on the angle and velocity changes between optical epochs (:mod:`sins.compensation.interval_fit`), where the
 optical noise does not grow with the sample rate. The judged rows are BROAD's own ``movement`` phases, on
@@ -46,7 +46,7 @@ _VELOCITY_HALF_WINDOW = 3
 _VELOCITY_POLYORDER = 2
 
 
-def read_broad_reference(trial: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
+def _read_broad_reference(trial: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
     """One BROAD trial's readings beside its optical reference, nothing differentiated but the position.
 
     Readings: the longest stretch of rows with finite gyro and accelerometer readings, as increments by
@@ -62,7 +62,7 @@ def read_broad_reference(trial: str, root: str | os.PathLike[str] | None = None)
     Raises
     ------
     SinsInputError
-        one line: as :func:`~sins.io.datasets.broad.read_broad`, or a file without ``movement``, or too
+        one line: as :func:`~sins.io.datasets.broad._read_broad`, or a file without ``movement``, or too
         few rows with a reference.
     """
     stem = _stem(trial, root)
@@ -132,5 +132,4 @@ def _velocity(pos: Array, valid: NDArray[np.bool_]) -> tuple[NDArray[np.intp], A
 
 __all__ = [
     "BROAD_LON_DEG",
-    "read_broad_reference",
 ]

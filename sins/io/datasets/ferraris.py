@@ -2,8 +2,8 @@
 github.com/mad-lab-fau/imucal)
     Hand-performed Ferraris calibrations of unnamed MEMS IMUs: six static
     holds with each axis up and down, then one turn about each axis.
-    :func:`read_ferraris` returns the example session (physical units, a
-    continuous recording with a section list) and :func:`read_ferraris_annotated`
+    :func:`_read_ferraris` returns the example session (physical units, a
+    continuous recording with a section list) and :func:`_read_ferraris_annotated`
     the annotated session (raw counts, only the sections) as
     :class:`~sins.core.series.CalibrationData`.
 """
@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins import io
 from sins.core import earth
 from sins.core.series import CalibrationData, RigPhase
 from sins.errors import SinsInputError
+from sins.io import formats, tables
 from sins.io.datasets.root import dataset_file
 from sins.io.documents import read_json
 from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
@@ -55,12 +55,14 @@ ANNOTATED_ACCEL_MPS2_PER_COUNT = 9.81 / 2048.0
 #: One gyro count of the annotated session, °/s: 2000/2¹⁵, a 16-bit reading over ±2000 °/s; again the
 #: conversion behind the example session (its gyro readings are whole multiples, to 2e-12).
 ANNOTATED_GYRO_DPS_PER_COUNT = 2000.0 / 32768.0
-#: The annotated session's turns, deg: +360 about each axis (see :func:`read_ferraris_annotated`).
+#: The annotated session's turns, deg: +360 about each axis (see :func:`_read_ferraris_annotated`).
 ANNOTATED_TURN_DEG = 360.0
 _ANNOTATED_COLUMNS = ("samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 
 
-def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = "example") -> CalibrationData:
+def _read_ferraris(
+    root: str | os.PathLike[str] | None = None, *, session: str = "example"
+) -> CalibrationData:
     """The imucal Ferraris session ``<session>_ferraris_session.csv`` with its section list.
 
     Readings: the CSV's gyro (deg/s) converted to rad/s, its accelerometer
@@ -110,7 +112,7 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
     csv_path = dataset_file(FERRARIS_FOLDER, f"{session}_ferraris_session.csv", root)
     json_path = dataset_file(FERRARIS_FOLDER, f"{session}_ferraris_session_list.json", root)
 
-    table = io.read_table(csv_path, required=_FERRARIS_COLUMNS, select=_FERRARIS_COLUMNS)
+    table = tables.read_table(csv_path, required=_FERRARIS_COLUMNS, select=_FERRARIS_COLUMNS)
     d = table.data
     n = len(d)
     samples = d[:, 0]
@@ -118,13 +120,13 @@ def read_ferraris(root: str | os.PathLike[str] | None = None, *, session: str = 
     if bad.any():
         r = int(np.argmax(bad))
         raise SinsInputError(
-            f"{csv_path}:{io.line_of_row(csv_path, table.first_data_line - 1, r)}: column 'n_samples': "
-            f"{io.format_number(samples[r])} is not an integer sample index greater than the previous one"
+            f"{csv_path}:{tables.line_of_row(csv_path, table.first_data_line - 1, r)}: column 'n_samples': "
+            f"{tables.format_number(samples[r])} is not an integer sample index greater than the previous one"
         )
     sections = _ferraris_sections(json_path, n)
     for i, name in enumerate(_FERRARIS_COLUMNS[1:]):
         limit = np.degrees(MAX_RATE_RADPS) if name.startswith("gyr") else MAX_FORCE_MPS2
-        io.check_range(table, name, d[:, i + 1], -limit, limit, "reading", "°/s" if i < 3 else "m/s²")
+        formats.check_range(table, name, d[:, i + 1], -limit, limit, "reading", "°/s" if i < 3 else "m/s²")
 
     return _session(
         samples / FERRARIS_RATE_HZ, np.radians(d[:, 1:4]), d[:, 4:7].copy(), sections, -360.0, str(csv_path)
@@ -135,7 +137,7 @@ def _session(
     t: Array, gyro: Array, accel: Array, sections: dict[str, tuple[int, int]], turn_deg: float, source: str
 ) -> CalibrationData:
     """The readings with the Ferraris references: ``±g`` and rate 0 in the holds, a turn of ``turn_deg``
-    about each rotation section's own axis, NaN elsewhere (see :func:`read_ferraris`)."""
+    about each rotation section's own axis, NaN elsewhere (see :func:`_read_ferraris`)."""
     n = len(t)
     g = float(earth.normal_gravity(math.radians(FERRARIS_LAT_DEG), FERRARIS_HEIGHT_M))
     ref_gyro = np.full((n, 3), np.nan)
@@ -158,7 +160,7 @@ def _session(
     )  # fmt: skip
 
 
-def read_ferraris_annotated(
+def _read_ferraris_annotated(
     root: str | os.PathLike[str] | None = None, *, turn_deg: float = ANNOTATED_TURN_DEG
 ) -> CalibrationData:
     """imucal's annotated Ferraris session ``annotated_session.csv``: raw counts, sections named per row.
@@ -172,7 +174,7 @@ def read_ferraris_annotated(
     and ±2000 °/s: :data:`ANNOTATED_ACCEL_MPS2_PER_COUNT`, :data:`ANNOTATED_GYRO_DPS_PER_COUNT`), so
     that a calibration finds percent-sized errors, not a unit conversion; uncalibrated. No temperature.
 
-    Reference: as :func:`read_ferraris`'s, except the turns' angle, ``turn_deg`` about each rotation's
+    Reference: as :func:`_read_ferraris`'s, except the turns' angle, ``turn_deg`` about each rotation's
     axis. imucal's convention is −360° (clockwise seen from the axis's tip), but this session's turns
     read +367°, +354° and +355°: taken as −360°, the gyro's scale-and-misalignment matrix has
     determinant −1 (imucal's own snapshot calibration of this file has ``R_g`` ≈ −I), a gyro triad
@@ -188,7 +190,7 @@ def read_ferraris_annotated(
     -------
     CalibrationData
         ``t`` (n,) s, ``gyro`` (n, 3) rad/s, ``accel`` (n, 3) m/s², references as in
-        :func:`read_ferraris`, nine phases; ``source`` the CSV path.
+        :func:`_read_ferraris`, nine phases; ``source`` the CSV path.
 
     Raises
     ------
@@ -197,7 +199,7 @@ def read_ferraris_annotated(
         a section whose rows are not contiguous in ``samples``, ``samples`` not 0, 1, … n−1.
     """
     csv_path = dataset_file(FERRARIS_FOLDER, "annotated_session.csv", root)
-    table = io.read_table(csv_path, required=("part", *_ANNOTATED_COLUMNS), select=_ANNOTATED_COLUMNS)
+    table = tables.read_table(csv_path, required=("part", *_ANNOTATED_COLUMNS), select=_ANNOTATED_COLUMNS)
     parts = _read_parts(csv_path, table)
     d = table.data
     n = len(d)
@@ -207,23 +209,24 @@ def read_ferraris_annotated(
     if not np.array_equal(samples[order], expected):
         r = int(order[np.argmax(samples[order] != expected)])
         raise SinsInputError(
-            f"{csv_path}:{io.line_of_row(csv_path, table.first_data_line - 1, r)}: column 'samples': "
-            f"{io.format_number(samples[r])}: the samples must number the {n} rows 0, 1, … {n - 1}, each once"
+            f"{csv_path}:{tables.line_of_row(csv_path, table.first_data_line - 1, r)}: column 'samples': "
+            f"{tables.format_number(samples[r])}: the samples must number the {n} rows 0, 1, … {n - 1}, "
+            "each once"
         )
     accel = d[:, 1:4] * ANNOTATED_ACCEL_MPS2_PER_COUNT
     gyro = np.radians(d[:, 4:7] * ANNOTATED_GYRO_DPS_PER_COUNT)
     for i, name in enumerate(_ANNOTATED_COLUMNS[1:]):
         limit, unit = (MAX_FORCE_MPS2, "m/s²") if i < 3 else (MAX_RATE_RADPS, "rad/s")
         values = accel[:, i] if i < 3 else gyro[:, i - 3]
-        io.check_range(table, name, values, -limit, limit, "reading (converted)", unit)
+        formats.check_range(table, name, values, -limit, limit, "reading (converted)", unit)
     sections = _annotated_sections(csv_path, table, parts, order)
     t = expected / ANNOTATED_RATE_HZ
     return _session(t, gyro[order], accel[order], sections, turn_deg, str(csv_path))
 
 
-def _read_parts(path: Path, table: io.Table) -> list[str]:
+def _read_parts(path: Path, table: tables.Table) -> list[str]:
     """The ``part`` cell of every data row of ``table`` (blank and ``#`` lines skipped, as read_table)."""
-    column = io.read_columns(path).index("part")
+    column = tables.read_columns(path).index("part")
     parts: list[str] = []
     with open(path, encoding="utf-8-sig") as fh:
         for number, text in enumerate(fh, start=1):
@@ -236,12 +239,12 @@ def _read_parts(path: Path, table: io.Table) -> list[str]:
 
 
 def _annotated_sections(
-    path: Path, table: io.Table, parts: list[str], order: NDArray[np.intp]
+    path: Path, table: tables.Table, parts: list[str], order: NDArray[np.intp]
 ) -> dict[str, tuple[int, int]]:
     """``{section: (start, stop)}`` rows, in ``samples`` order, of the annotated file's ``part`` column."""
 
     def where(row: int) -> str:
-        return f"{path}:{io.line_of_row(path, table.first_data_line - 1, row)}"
+        return f"{path}:{tables.line_of_row(path, table.first_data_line - 1, row)}"
 
     known = set(FERRARIS_SECTIONS)
     for r, name in enumerate(parts):
@@ -319,6 +322,4 @@ __all__ = [
     "FERRARIS_LAT_DEG",
     "FERRARIS_RATE_HZ",
     "FERRARIS_SECTIONS",
-    "read_ferraris",
-    "read_ferraris_annotated",
 ]

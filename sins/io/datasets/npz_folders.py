@@ -8,6 +8,7 @@ folder's recordings as fitted on another unit.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io import npz
 from sins.io.datasets.root import data_root, dataset_file
-from sins.io.recording import Recording, beside_reference, read_recording_any
+from sins.io.recording import Recording, _read_path
 
 
 def is_folder_name(name: str) -> bool:
@@ -53,42 +54,42 @@ def npz_path(name: str, root: str | os.PathLike[str] | None = None) -> Path:
     return dataset_file(folder, f"{stem}.npz", root)
 
 
-def read_npz_recording(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
-    """``FOLDER/NAME`` as the :class:`~sins.io.Recording` :func:`~sins.io.read_recording_any` reads.
+def _read_npz_recording(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
+    """``FOLDER/NAME`` as the :class:`~sins.io.Recording` :func:`~sins.io.read` reads from its path.
 
     Raises
     ------
     SinsInputError
-        as :func:`npz_path` and :func:`sins.io.npz.read_npz`.
+        as :func:`npz_path` and :func:`sins.io.npz._read_npz`.
     """
     path = npz_path(name, root)
     if not npz.is_npz(path):
         raise SinsInputError(f"{path}: not an .npz archive")
-    return read_recording_any(path)
+    return _read_path(path)
 
 
-def read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
+def _read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
     """``FOLDER/NAME``'s readings beside its reference; the unit is the folder.
 
     Raises
     ------
     SinsInputError
-        as :func:`read_npz_recording`, or a recording without the reference keys.
+        as :func:`_read_npz_recording`, or a recording without the reference keys.
     """
-    rec = read_npz_recording(name, root)
+    rec = _read_npz_recording(name, root)
     if rec.truth is None:
         raise SinsInputError(
             f"{rec.source}: no reference (keys {', '.join(npz.REFERENCE_KEYS)}): it cannot be fitted or "
             "judged against"
         )
-    return beside_reference(rec, sensor=name.partition("/")[0])
+    return dataclasses.replace(rec, sensor=name.partition("/")[0]).beside_reference()
 
 
-def read_npz_with_truth(
+def _read_npz_with_truth(
     name: str, root: str | os.PathLike[str] | None = None
 ) -> tuple[CalibrationData, NavSeries | None]:
     """``FOLDER/NAME`` as :func:`with_truth` gives it."""
-    return with_truth(read_npz_recording(name, root))
+    return with_truth(_read_npz_recording(name, root))
 
 
 def with_truth(rec: Recording) -> tuple[CalibrationData, NavSeries | None]:
@@ -115,8 +116,5 @@ __all__ = [
     "is_folder_name",
     "npz_names",
     "npz_path",
-    "read_npz_recording",
-    "read_npz_reference",
-    "read_npz_with_truth",
     "with_truth",
 ]

@@ -2,7 +2,7 @@
 NWPU Xi'an, from the PSINS toolbox's ``data/lasergyro.imu``)
     31 min of a ring-laser-gyro strapdown INS standing still at 34.246°N, 380 m,
     100 Hz angle and velocity increments in the toolbox's compact SIMU text,
-    kept xz-compressed. :func:`read_psins_lasergyro` returns it as
+    kept xz-compressed. :func:`_read_psins_lasergyro` returns it as
     :class:`~sins.core.series.CalibrationData` with Earth rate and normal gravity as
     the reference.
 
@@ -46,7 +46,7 @@ _MAGIC = ("PSINS", "SIMU")
 _ARCSEC_RAD = math.pi / (180.0 * 3600.0)
 
 
-def read_psins_lasergyro(root: str | os.PathLike[str] | None = None) -> CalibrationData:
+def _read_psins_lasergyro(root: str | os.PathLike[str] | None = None) -> CalibrationData:
     """The static ring-laser-gyro record ``psins_lasergyro_static/lasergyro.imu.xz``.
 
     Readings: the file's angle and velocity increments (LSB × the header's
@@ -217,5 +217,4 @@ __all__ = [
     "PSINS_LASERGYRO_FILE",
     "PSINS_LASERGYRO_FOLDER",
     "PSINS_TO_FRD",
-    "read_psins_lasergyro",
 ]
