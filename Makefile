@@ -35,7 +35,7 @@ PART_1 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-f]*.py))
 PART_2 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-r]*.py))
 PART_3 = $(filter-out $(HEAVY_TESTS) $(PART_1) $(PART_2),$(wildcard tests/test_*.py))
 PYTEST = OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-	$(VENV)/bin/python -m pytest -q --dist loadfile
+	$(VENV)/bin/python -m pytest -q --dist loadfile --durations=8
 test: lint
 	@status=0; \
 	echo "tests 1/4: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
