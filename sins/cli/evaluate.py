@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from sins.cli.common import (
     Subparsers,
     check_finite,
     check_outputs,
     check_plot,
-    display_unit,
-    fixed_width,
     save_plot,
     unit_of,
 )
@@ -31,6 +29,7 @@ from sins.errors import SinsInputError
 
 if TYPE_CHECKING:
     from sins.compensation import Strategy
+    from sins.compensation.evaluation import Evaluation
     from sins.core.series import CalibrationData, ReferencedRecording
 
 
@@ -50,142 +49,80 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
         rec = read_recording(args, args.recording, args.dataset, args.truth)
     referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
-    if rec.rig is not None:
-        document = _evaluate_rig(args, strategy, rec.rig, where)
-    elif rec.has_trajectory:
-        document = _evaluate_referenced(args, strategy, rec.beside_reference(), where)
-    else:
+    if rec.rig is None and not rec.has_trajectory:
         missing = io.recording.missing_reference(rec)
         if missing.needs == "truth_topic":  # a bag with several pose topics: name one
             raise missing
         raise SinsInputError(
             f"{where}: no reference to judge against; give the recording's trajectory with --truth TRUTH.csv"
         )
+    title = f"{args.model} ({strategy.label}) on {where}"
+    if rec.rig is not None:
+        result = _evaluate_rig(args, strategy, rec.rig, where, title)
+    else:
+        result = _evaluate_referenced(args, strategy, rec.beside_reference(), title)
     if args.json:
-        io.write_json(
-            args.json, {"model": str(args.model), "strategy": strategy.label, "recording": where, **document}
-        )
+        document = {"model": str(args.model), "strategy": strategy.label, "recording": where}
+        io.write_json(args.json, {**document, **result.to_dict()})
     return 0
 
 
 def _evaluate_rig(
-    args: argparse.Namespace, strategy: Strategy, data: CalibrationData, where: str
-) -> dict[str, Any]:
+    args: argparse.Namespace, strategy: Strategy, data: CalibrationData, where: str, title: str
+) -> Evaluation:
     """Per channel: RMS before and after, the bias left, and what is left beyond the white noise."""
-    from sins import compensation
+    from sins.compensation import evaluation
 
     if args.bias_from_rest or args.drive:
         raise SinsInputError(
             f"--bias-from-rest and --drive judge against a trajectory; {where} is a rig recording"
         )
-    if args.last:
-        try:
-            _, data = data.split(args.last)
-        except ValueError as exc:
-            raise SinsInputError(f"{where}: {exc}") from None
     with progress_bar("judging", ""):
-        channels = compensation.residual_rms(strategy, data)
-    for name, v in channels.items():
+        result = evaluation.evaluate_rig(strategy, data, title, last=args.last)
+    assert result.channels is not None  # a rig's judgement is by channel
+    for name, v in result.channels.items():
         check_finite(v, f"{args.model} on {where}: {name}")
-    scope = f"the last {args.last:g} of each phase" if args.last else "the whole recording"
-    print(f"{args.model} ({strategy.label}) on {where}, {scope}: reading - reference")
-    rows = []
-    for name, v in channels.items():
-        size, unit = display_unit(name)
-        rows.append([
-            name, unit, f"{v['rms_before'] / size:.4f}", f"{v['rms_after'] / size:.4f}",
-            f"{v['mean_after'] / size:+.4f}", f"{v['beyond_noise'] / size:.4f}",
-        ])  # fmt: skip
-    print(fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows))
-    print("beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)")
+    print("\n".join(result.lines))
     if args.plot:
         from sins.viz import plots
 
-        title = f"{args.model} ({strategy.label}) on {where}, {scope}"
-        save_plot(args.plot, lambda: plots.evaluate_figure(channels, title), title)
-    return {"channels": channels}
+        channels = result.channels
+        plot_title = f"{title}, {result.scope}"
+        save_plot(args.plot, lambda: plots.evaluate_figure(channels, plot_title), plot_title)
+    return result
 
 
 def _evaluate_referenced(
-    args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecording, where: str
-) -> dict[str, Any]:
+    args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecording, title: str
+) -> Evaluation:
     """Open-loop attitude of the corrected gyro (and of the raw one, and with the bias from the opening
     rest), and with ``--drive`` the corrected unit's free-inertial drift over a window."""
-    from sins.compensation import referenced
+    from sins.compensation import evaluation
 
-    if args.last:
-        span = rec.imu.t[-1] - rec.imu.t[0]
-        rec = referenced.between(rec, rec.imu.t[-1] - args.last * span, rec.imu.t[-1])
-    rows, attitude, runs = [], {}, {}
-    variants: list[tuple[str, Strategy | None, bool]] = [
-        ("none (raw readings)", None, False),
-        (strategy.label, strategy, False),
-    ]
-    if args.bias_from_rest:
-        variants.append((f"{strategy.label}, gyro bias from the opening rest", strategy, True))
-    for label, s, rest in variants:
-        with progress_bar(f"open loop: {label}", ""):
-            runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
-        r = runs[label].rmse()
-        aoe = runs[label].aoe_deg()
-        attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
-        rows.append(
-            [label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}", f"{aoe:.3f}"]
-        )
-    judged = "the judged rows (movement phases)" if rec.judged is not None else "every reference epoch"
-    print(
-        f"{args.model} ({strategy.label}) on {where}: the gyro integrated alone from the reference's first "
-        f"attitude, RMS error against {rec.reference_name} over {judged}, degrees (AOE: over every epoch)"
-    )
-    if not rec.latitude_known:
-        print("the reference's frame has no known latitude or heading: Earth's rate is left out")
-    elif not rec.heading_known:
-        print("the reference's frame has no known north: only the vertical part of Earth's rate is put in")
-    print(fixed_width(["readings", "total", "heading", "inclination", "AOE"], rows))
-    document: dict[str, Any] = {
-        "open_loop_attitude": attitude[strategy.label],
-        "open_loop_attitude_raw": attitude["none (raw readings)"],
-    }
-    if args.bias_from_rest:
-        document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
+    drive = None
     if args.drive:
-        document["drive"] = _drive(args, strategy, rec)
+        try:
+            start, end = (float(x) for x in args.drive.split(":"))
+        except ValueError:
+            raise SinsInputError(f"--drive {args.drive!r}: expected START:END in seconds") from None
+        drive = (start, end)
+    with progress_bar("open loop", "") as bar:
+        result = evaluation.evaluate_referenced(
+            strategy, rec, title, last=args.last, bias_from_rest=args.bias_from_rest, drive=drive,
+            stage=bar.set_description,
+        )  # fmt: skip
+    print("\n".join(result.lines))
     if args.rerun:
         from sins.viz import viewer as viz
 
-        summary = f"{args.model} ({strategy.label}) on {where}\n\n" + fixed_width(
-            ["readings", "total", "heading", "inclination", "AOE"], rows
-        )
-        viz.save_open_loop(runs, args.rerun, summary=summary)
+        viz.save_open_loop(result.runs, args.rerun, summary=f"{title}\n\n{result.table}")
         print(f"wrote {args.rerun} (open it with: rerun {args.rerun})")
     if args.plot:
         from sins.viz import plots
 
-        title = f"{args.model} ({strategy.label}) on {where}: open-loop attitude error"
-        save_plot(args.plot, lambda: plots.open_loop_figure(runs, title), title)
-    return document
-
-
-def _drive(args: argparse.Namespace, strategy: Strategy, rec: ReferencedRecording) -> dict[str, Any]:
-    from sins.compensation import referenced
-
-    try:
-        start, end = (float(x) for x in args.drive.split(":"))
-    except ValueError:
-        raise SinsInputError(f"--drive {args.drive!r}: expected START:END in seconds") from None
-    out, rows = {}, []
-    for label, s in (("none (raw readings)", None), (strategy.label, strategy)):
-        with progress_bar(f"free inertial: {label}", ""):
-            d = referenced.drive_errors(s, rec, start, end)
-        out[label] = d.to_dict()
-        figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
-        rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])
-    print(
-        f"\nfree inertial from the reference's state at {start:g} s to {end:g} s (vertical held), RMS errors"
-    )
-    head = ["readings", "roll °", "pitch °", "yaw °", "vN m/s", "vE m/s", "vD m/s", "hor end m"]
-    print(fixed_width(head, rows))
-    return out
+        plot_title = f"{title}: open-loop attitude error"
+        save_plot(args.plot, lambda: plots.open_loop_figure(result.runs, plot_title), plot_title)
+    return result
 
 
 def add(sub: Subparsers) -> None:

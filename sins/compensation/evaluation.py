@@ -1,0 +1,179 @@
+"""A fitted model judged on a recording, as ``sins evaluate`` prints and writes it.
+
+Two kinds of judgement, by the reference the recording has: against a rig's per-sample reference inputs,
+channel by channel (:func:`evaluate_rig`: RMS before and after, the bias left, what is left beyond the
+white noise); against a reference trajectory, by the attitude the corrected gyro holds open loop and,
+over a window, the corrected unit's free-inertial drift (:func:`evaluate_referenced`). Each gives an
+:class:`Evaluation`: the report's lines, the JSON document (:meth:`Evaluation.to_dict`) and what the
+pictures are drawn from.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from sins.core.text import fixed_width
+from sins.errors import SinsInputError
+
+if TYPE_CHECKING:
+    from sins.compensation.base import Strategy
+    from sins.compensation.referenced import OpenLoop
+    from sins.core.series import CalibrationData, ReferencedRecording
+
+#: The open-loop table's columns.
+OPEN_LOOP_HEAD = ["readings", "total", "heading", "inclination", "AOE"]
+#: The label of the raw readings' row.
+RAW = "none (raw readings)"
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One judgement: ``lines`` (the report), ``document`` (the JSON object, :meth:`to_dict`), and for
+    the pictures ``channels`` (a rig's per-channel figures) or ``runs`` (each open loop by its label) with
+    ``table`` (the open-loop table as text); ``scope`` what part of the recording was judged."""
+
+    lines: list[str]
+    document: dict[str, Any]
+    channels: dict[str, dict[str, float]] | None = None
+    runs: dict[str, OpenLoop] = field(default_factory=dict)
+    table: str = ""
+    scope: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The figures as ``sins evaluate --json`` writes them (beside the model, strategy and recording)."""
+        return self.document
+
+
+def evaluate_rig(
+    strategy: Strategy, data: CalibrationData, where: str, last: float | None = None
+) -> Evaluation:
+    """Per channel of a rig recording: RMS before and after, the bias left, and what is left beyond the
+    white noise; over ``last`` of each phase (a fraction) or the whole recording.
+
+    Raises
+    ------
+    SinsInputError
+        naming ``where``: a ``last`` the phases cannot be split at.
+    """
+    from sins.compensation.base import residual_rms
+    from sins.imu import display_unit
+
+    if last:
+        try:
+            _, data = data.split(last)
+        except ValueError as exc:
+            raise SinsInputError(f"{where}: {exc}") from None
+    channels = residual_rms(strategy, data)
+    scope = f"the last {last:g} of each phase" if last else "the whole recording"
+    rows = []
+    for name, v in channels.items():
+        size, unit = display_unit(name)
+        rows.append([
+            name, unit, f"{v['rms_before'] / size:.4f}", f"{v['rms_after'] / size:.4f}",
+            f"{v['mean_after'] / size:+.4f}", f"{v['beyond_noise'] / size:.4f}",
+        ])  # fmt: skip
+    lines = [
+        f"{where}, {scope}: reading - reference",
+        fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows),
+        "beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)",
+    ]
+    return Evaluation(lines, {"channels": channels}, channels=channels, scope=scope)
+
+
+def evaluate_referenced(
+    strategy: Strategy,
+    rec: ReferencedRecording,
+    where: str,
+    *,
+    last: float | None = None,
+    bias_from_rest: bool = False,
+    drive: tuple[float, float] | None = None,
+    stage: Callable[[str], None] | None = None,
+) -> Evaluation:
+    """The gyro integrated alone from the reference's first attitude (the raw readings, the corrected
+    ones and, with ``bias_from_rest``, the corrected ones less the opening rest's bias), RMS and AOE
+    against the reference; over the ``last`` fraction of the recording or all of it; with ``drive``
+    (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
+    ``stage(text)`` is told each open loop as it starts."""
+    from sins.compensation import referenced
+
+    if last:
+        span = rec.imu.t[-1] - rec.imu.t[0]
+        rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
+    rows, attitude, runs = [], {}, {}
+    variants: list[tuple[str, Strategy | None, bool]] = [
+        (RAW, None, False),
+        (strategy.label, strategy, False),
+    ]
+    if bias_from_rest:
+        variants.append((f"{strategy.label}, gyro bias from the opening rest", strategy, True))
+    for label, s, rest in variants:
+        if stage is not None:
+            stage(f"open loop: {label}")
+        runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
+        r = runs[label].rmse()
+        aoe = runs[label].aoe_deg()
+        attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
+        rows.append(
+            [label, f"{r.total_deg:.3f}", f"{r.heading_deg:.3f}", f"{r.inclination_deg:.3f}", f"{aoe:.3f}"]
+        )
+    judged = "the judged rows (movement phases)" if rec.judged is not None else "every reference epoch"
+    lines = [
+        f"{where}: the gyro integrated alone from the reference's first attitude, RMS error against "
+        f"{rec.reference_name} over {judged}, degrees (AOE: over every epoch)"
+    ]
+    if not rec.latitude_known:
+        lines.append("the reference's frame has no known latitude or heading: Earth's rate is left out")
+    elif not rec.heading_known:
+        lines.append(
+            "the reference's frame has no known north: only the vertical part of Earth's rate is put in"
+        )
+    table = fixed_width(OPEN_LOOP_HEAD, rows)
+    lines.append(table)
+    document: dict[str, Any] = {
+        "open_loop_attitude": attitude[strategy.label],
+        "open_loop_attitude_raw": attitude[RAW],
+    }
+    if bias_from_rest:
+        document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
+    if drive is not None:
+        document["drive"] = _drive(strategy, rec, drive, lines, stage)
+    return Evaluation(lines, document, runs=runs, table=table)
+
+
+def _drive(
+    strategy: Strategy,
+    rec: ReferencedRecording,
+    window: tuple[float, float],
+    lines: list[str],
+    stage: Callable[[str], None] | None,
+) -> dict[str, Any]:
+    """The raw and corrected units' free-inertial drift over ``window``; its table added to ``lines``."""
+    from sins.compensation import referenced
+
+    start, end = window
+    out, rows = {}, []
+    for label, s in ((RAW, None), (strategy.label, strategy)):
+        if stage is not None:
+            stage(f"free inertial: {label}")
+        d = referenced.drive_errors(s, rec, start, end)
+        out[label] = d.to_dict()
+        figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
+        rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])
+    lines.append(
+        f"\nfree inertial from the reference's state at {start:g} s to {end:g} s (vertical held), RMS errors"
+    )
+    head = ["readings", "roll °", "pitch °", "yaw °", "vN m/s", "vE m/s", "vD m/s", "hor end m"]
+    lines.append(fixed_width(head, rows))
+    return out
+
+
+__all__ = [
+    "OPEN_LOOP_HEAD",
+    "RAW",
+    "Evaluation",
+    "evaluate_referenced",
+    "evaluate_rig",
+]
