@@ -274,9 +274,7 @@ LASERGYRO = dataset_folder("psins_lasergyro_static") / "lasergyro.imu.xz"
 def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
     """PSINS's static ring-laser INS (31 min at 100 Hz, read and turned into FRD by its dataset reader):
     it resolves Earth's rate, so it is silent read right, and its rate read as deg/s is named."""
-    from sins.io.datasets import _read_psins_lasergyro
-
-    data = _read_psins_lasergyro()
+    data = io.read(dataset="psins_lasergyro").reference_inputs()[0]
     units = {"t": "s", "gyro": "rad/s", "accel": "m/s^2"}
     rec = io.Recording(ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel), "lasergyro", "sins csv",
                        units=units)  # fmt: skip
@@ -292,3 +290,21 @@ def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
     assert [(f.code, f.value) for f in inspection.inspect(in_degrees).findings] == [
         ("gyro_unit", "gyro=deg/s")
     ]
+
+
+BROAD = dataset_folder("broad_mocap")
+
+
+@pytest.mark.skipif(not BROAD.is_dir(), reason=f"real data absent: {BROAD}")
+def test_a_dataset_is_inspected_by_name_and_no_reader_option_is_offered(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``sins inspect --dataset broad_05``: BROAD's unit reads gravity along +z at rest (its own axes, as
+    the dataset's reader keeps them); the finding says so, but offers no --frame to pass, which a
+    dataset refuses."""
+    assert main(["inspect", "--dataset", "broad_05"]) == 0
+    out = capsys.readouterr().out
+    assert "dataset, increment form" in out and "lies along +z" in out, out
+    assert "no reader option applies" in out and "--frame" not in out, out
+    assert main(["inspect", "--dataset", "broad_05", "--frame", "flu"]) == 2
+    assert "frame does not apply to a dataset" in capsys.readouterr().err

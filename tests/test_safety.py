@@ -366,10 +366,11 @@ def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: P
 def _still_bag(
     path: Path, *, pose_topics: tuple[str, ...] = ("/pose",), zero_quaternion_at: int | None = None,
     nan_reading_at: int | None = None, seconds: float = 60.0, poses_end_s: float | None = None,
-    quaternion: np.ndarray | None = None,
+    quaternion: np.ndarray | None = None, poses_start_s: float = 0.0,
 ) -> Path:  # fmt: skip
     """A ROS 1 bag of a unit at rest heading east at 45° N (FLU: Earth's rate and gravity with white
-    noise), with its own constant pose on each topic of ``pose_topics`` at 20 Hz (until ``poses_end_s``)."""
+    noise), with its own constant pose on each topic of ``pose_topics`` at 20 Hz (from ``poses_start_s``
+    until ``poses_end_s``)."""
     from rosbags.rosbag1 import Writer
     from test_readers import T0_NS, _imu_msg, _pose_msg, _typestore
 
@@ -388,7 +389,7 @@ def _still_bag(
         for k in range(n):
             ns = T0_NS + 10_000_000 * k
             writer.write(imu, ns, ts.serialize_ros1(_imu_msg(ts, ns, w[k], f[k], k), "sensor_msgs/msg/Imu"))
-            if k % 5 == 0 and (poses_end_s is None or k / 100 <= poses_end_s):
+            if k % 5 == 0 and k / 100 >= poses_start_s and (poses_end_s is None or k / 100 <= poses_end_s):
                 q = np.zeros(4) if k // 5 == zero_quaternion_at else np.array([0.0, 0.0, 0.0, 1.0])
                 if quaternion is not None and k // 5 == 3:
                     q = quaternion
@@ -446,6 +447,19 @@ def test_bag_messages_name_the_topic_and_the_option(tmp_path: Path) -> None:
     (tmp_path / "empty.bag").write_bytes(b"")
     rc, _, err = run_cli(["inspect", str(tmp_path / "empty.bag")])
     assert rc == 2 and "named as a ROS 1 bag, but it is empty" in err, err
+
+
+def test_readings_before_the_recordings_own_reference_begins_are_left_out_with_a_note(
+    tmp_path: Path,
+) -> None:
+    """A motion capture starts seconds after the IMU (BROAD's does, 4 s): against the recording's own
+    reference the readings before it are left out, said so, and the run starts at the reference's first
+    pose (3 s) and ends at its last (19.95 s, the readings' last 0.04 s cut as a short tail)."""
+    late = _still_bag(tmp_path / "late.bag", seconds=20.0, poses_start_s=3.0)
+    out = tmp_path / "late.json"
+    rc, _, err = run_cli(["integrate", str(late), "--json", str(out)])
+    assert rc == 0 and "the first 300 intervals come before its own reference begins at 3 s" in err, err
+    assert json.loads(out.read_text())["duration_s"] == pytest.approx(19.95 - 3.0, abs=1e-9)
 
 
 def test_a_parquet_solution_reads_back_as_a_truth(files: Path, tmp_path: Path) -> None:

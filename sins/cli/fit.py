@@ -71,7 +71,10 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
     with progress_bar(f"fitting {args.strategy}", "") as bar:
         for kind, name in named:
             bar.set_description(f"reading {name}")
-            got = read_recording(args, name if kind == "path" else None, name if kind == "dataset" else None)
+            if kind == "path":
+                got = read_recording(args, name, None)
+            else:  # the format options given are for the paths beside it
+                got = read_recording(args, None, name, options={})
             if got.rig is not None or not got.has_trajectory:
                 raise SinsInputError(
                     f"{name}: a fit on several recordings needs each beside its reference trajectory (a "

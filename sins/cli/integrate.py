@@ -66,9 +66,12 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     summary = run.summary.to_dict()
     against = args.truth or "its own reference"
     check_finite(summary, f"{where}: against {against}")
-    if len(rec.imu) < rec.intervals:
+    if rec.before_truth:
+        print(f"sins: note: {where}: the first {rec.before_truth} intervals come before {against} begins "
+              f"at {rec.imu.t[0]:g} s; integrating from there", file=sys.stderr)  # fmt: skip
+    if len(rec.imu) + rec.before_truth < rec.intervals:
         print(
-            f"sins: note: {where}: integrating the first {len(rec.imu)} of {rec.intervals} intervals, "
+            f"sins: note: {where}: integrating {len(rec.imu)} of {rec.intervals} intervals, "
             f"to {rec.imu.t[-1]:g} s where {against} ends (--within-truth)",
             file=sys.stderr,
         )
@@ -192,7 +195,8 @@ def add(sub: Subparsers) -> None:
         "--within-truth", action="store_true",
         help="integrate only the IMU intervals inside the truth's span (without it, an IMU that runs past "
         "a truth file's end is refused; past the recording's own reference, a tail of up to 1 s or 1 %% of "
-        "the recording is cut with a note, a longer one refused)",
+        "the recording is cut with a note, a longer one refused; readings before the recording's own "
+        "reference begins are left out with a note)",
     )  # fmt: skip
     p.add_argument(
         "--vertical",

@@ -116,11 +116,11 @@ def read_recording(
 
     if (recording is None) == (dataset is None):
         raise SinsInputError("give a RECORDING or --dataset NAME (one of them)")
+    chosen = recording_options(args) if options is None else options
     if dataset is not None:
         if truth is not None:
             raise SinsInputError("--truth goes with a RECORDING, not with --dataset")
-        return io.read(dataset=dataset)
-    chosen = recording_options(args) if options is None else options
+        return io.read(dataset=dataset, **chosen)  # a format option given is refused: none applies
     return io.read(recording, truth=truth, **chosen, progress=progress)
 
 

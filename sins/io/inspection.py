@@ -18,6 +18,7 @@ unit), the axes are not judged.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -179,10 +180,24 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     findings += _range_findings(rec, w)
     clipping = _clipping(rec)
     findings += [_clip_finding(c) for c in clipping]
+    if rec.kind == "dataset":  # no reader option applies: the dataset's reader fixes units and axes
+        findings = [_as_read(f) for f in findings]
     return Inspection(
         source=rec.source, form=rec.form, rows=len(rec.imu), span_s=float(stamps[-1] - stamps[0]),
         rate_hz=1.0 / med, jitter=jitter, stated_rate_hz=stated, gaps=gaps, rest=rest, clipping=clipping,
         axes=frame, findings=tuple(findings),
+    )  # fmt: skip
+
+
+def _as_read(finding: Finding) -> Finding:
+    """A finding on a dataset: what the data show, without a reader option to pass (a dataset's reader
+    gives its readings in the units and axes its SOURCE.md states; fits and judgements on it are in
+    those)."""
+    if finding.option is None:
+        return finding
+    return dataclasses.replace(
+        finding, option=None, value=None,
+        advice="a dataset is read as its reader gives it (its SOURCE.md): no reader option applies",
     )  # fmt: skip
 
 

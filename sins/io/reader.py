@@ -85,7 +85,8 @@ def read(
         extra = [k for k, v in {**given, "truth": truth}.items() if v is not None]
         if extra:
             raise SinsInputError(
-                f"{dataset}: {', '.join(extra)} does not apply to a dataset (it carries its own reference)"
+                f"{dataset}: {', '.join(extra)} does not apply to a dataset (its reader fixes its units, "
+                "axes and reference)"
             )
         return _read_dataset(dataset, root)
     path = Path(source)  # type: ignore[arg-type]

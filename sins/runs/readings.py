@@ -126,12 +126,14 @@ class RunInputs:
     (:func:`run_inputs`).
 
     ``intervals`` is how many the recording holds; ``imu`` may hold fewer (``within_truth``: those
-    inside the truth's span).
+    inside the truth's span); ``before_truth`` how many of them were left out at the start because they
+    begin before the recording's own reference does.
     """
 
     imu: ImuIncrements
     truth: NavSeries
     intervals: int
+    before_truth: int = 0
 
 
 #: Readings past the recording's own reference's last pose that are cut without ``within_truth``: at
@@ -146,7 +148,9 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
 
     Increment form: the first row's interval starts where the reader was told (a truth file's first
     time). Rate form: the samples are integrated to increments between rows, and the run starts at the
-    first row's time, which must lie within the truth.
+    first row's time, which must lie within the truth. Against the recording's own reference (a motion
+    capture that starts seconds after the IMU), the readings before its first time are left out
+    (``before_truth`` says how many intervals); against a truth file that is refused, as a mistake.
 
     Raises
     ------
@@ -171,7 +175,14 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
         assert rec.truth is not None
         samples, truth = rec.imu, rec.truth
     truth_name = rec.truth_from or "its own reference"
+    own = not rec.truth_from
     imu: ImuIncrements
+    before = 0
+    if own and samples.t[0] < truth.t[0]:
+        before = int(np.searchsorted(samples.t, truth.t[0]))  # the first edge at or after the reference
+        if before >= len(samples.t) - 1:
+            raise SinsInputError(f"{where}: no reading lies within its own reference's time span")
+        samples = _from(samples, before)
     if isinstance(samples, ImuRates):
         if samples.t[0] < truth.t[0] or samples.t[0] > truth.t[-1]:
             raise SinsInputError(
@@ -192,7 +203,6 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
     if imu.t[-1] > truth.t[-1] + 1e-9:
         inside = int(np.searchsorted(imu.t, truth.t[-1] + 1e-9, side="right"))
         tail = imu.t[-1] - truth.t[-1]
-        own = not rec.truth_from
         short = own and tail <= max(OWN_TAIL_S, OWN_TAIL_FRACTION * (imu.t[-1] - imu.t[0]))
         if not within_truth and not short:
             raise SinsInputError(
@@ -205,7 +215,14 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
         imu = ImuIncrements(
             t=imu.t[:inside], dtheta_b=imu.dtheta_b[: inside - 1], dv_b=imu.dv_b[: inside - 1]
         )
-    return RunInputs(imu, truth, intervals)
+    return RunInputs(imu, truth, intervals + before, before)
+
+
+def _from(samples: ImuIncrements | ImuRates, k: int) -> ImuIncrements | ImuRates:
+    """The readings from row ``k`` (increments: from the interval starting at edge ``k``)."""
+    if isinstance(samples, ImuRates):
+        return ImuRates(t=samples.t[k:], omega_ib_b=samples.omega_ib_b[k:], f_ib_b=samples.f_ib_b[k:])
+    return ImuIncrements(t=samples.t[k:], dtheta_b=samples.dtheta_b[k:], dv_b=samples.dv_b[k:])
 
 
 def gap_data(rec: io.Recording) -> tuple[CalibrationData, NavSeries | None]:
