@@ -55,6 +55,9 @@ def test_readings_and_reference_read_back(tmp_path: Path) -> None:
     np.testing.assert_allclose(up_in_ned, np.tile([0.0, 0.0, -1.0], (len(up_in_ned), 1)), atol=1e-6)
     turned = Rotation.from_quat(rec.truth.q_nb[-1]) * Rotation.from_quat(rec.truth.q_nb[0]).inv()
     assert turned.magnitude() == pytest.approx(0.3 * (arrays["t_s"][-1] - arrays["t_s"][0]), rel=1e-5)
+    # Beside its own reference the report names it so, and keeps the room frame's unknown latitude.
+    beside = rec.beside_reference()
+    assert beside.reference_name == "its own reference (npz)" and not beside.latitude_known
 
 
 def test_readings_alone(tmp_path: Path) -> None:

@@ -222,7 +222,8 @@ def beside_trajectory(
         reference=truth.at(inside),
         judged=None,
         source=source,
-        **{"reference_name": "truth", **fields},
+        reference_name=reference_name,
+        **fields,
     )
 
 
