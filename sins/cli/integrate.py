@@ -71,7 +71,8 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
               f"at {rec.imu.t[0]:g} s; integrating from there", file=sys.stderr)  # fmt: skip
     if len(rec.imu) + rec.before_truth < rec.intervals:
         print(
-            f"sins: note: {where}: integrating {len(rec.imu)} of {rec.intervals} intervals, "
+            f"sins: note: {where}: integrating {'' if rec.before_truth else 'the first '}{len(rec.imu)} of "
+            f"{rec.intervals} intervals, "
             f"to {rec.imu.t[-1]:g} s where {against} ends (--within-truth)",
             file=sys.stderr,
         )
