@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from sins import imu
+from sins import imu, io
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData
 from sins.errors import SinsInputError
@@ -188,7 +188,7 @@ def test_ferraris_session_calibrates_to_gravity_and_full_turns():
     nine gyro scale/misalignment coefficients exactly, so they come out at 360°.
     """
     try:
-        data = datasets._read_ferraris()
+        data = io.read(dataset="ferraris").rig
     except SinsInputError as exc:
         pytest.skip(f"Ferraris session not available: {exc}")
     fit = calibration.fit_seed_model(data, g_sensitivity=False)

@@ -4,6 +4,9 @@ Two parts. A synthetic trial, written as a MAT file like BROAD's, with known rat
 clock offset and gaps, checks the reader's arithmetic without the real data. The real trials (skipped
 when the folder is absent) are checked against physics and against the figures of the folder's
 SOURCE.md (an independent numpy script).
+
+The dataset module's own reader is private (``sins.io.read(dataset=...)`` is the public way in); these
+tests call it to give it a data root of their own files and options the public call does not take.
 """
 
 from __future__ import annotations

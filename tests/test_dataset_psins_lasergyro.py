@@ -4,6 +4,9 @@
 The figures checked against the real record are those of the folder's SOURCE.md (an independent numpy
 script) measured again through the reader; those tests skip when the data are absent. The refusals and
 the conventions (axes, units, time, heading) are also checked on small synthetic files, which need no data.
+
+The dataset module's own reader is private (``sins.io.read(dataset=...)`` is the public way in); these
+tests call it to give it a data root of their own files and options the public call does not take.
 """
 
 from __future__ import annotations

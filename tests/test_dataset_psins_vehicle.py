@@ -6,6 +6,9 @@ need a still unit (|f| = g, |ω| = Earth rate) are done on the quietest stretch 
 not possible for Earth rate (road motion, ≈ 0.1 °/s, is 25 times Earth rate); the frames are
 checked instead against the independent sensor (the MEMS), the file's own bias estimates and the
 course over ground. The refusals build their own files under tmp_path and need no data.
+
+The dataset module's own reader is private (``sins.io.read(dataset=...)`` is the public way in); these
+tests call it to give it a data root of their own files and options the public call does not take.
 """
 
 from __future__ import annotations

@@ -2,6 +2,9 @@
 
 The figures checked here are those of the folder's SOURCE.md (an independent numpy script), measured
 again through :func:`sins.io.datasets._read_ferraris`.
+
+The dataset module's own reader is private (``sins.io.read(dataset=...)`` is the public way in); these
+tests call it to give it a data root of their own files and options the public call does not take.
 """
 
 from __future__ import annotations

@@ -410,10 +410,9 @@ def test_the_ferraris_session_hand_held_orientations_limit_the_verdict():
     five to seven values. Rounding leaves the RMS as it was; the readings' probability tells.
     """
     from sins.errors import SinsInputError
-    from sins.io import datasets
 
     try:
-        session = datasets._read_ferraris()
+        session = io.read(dataset="ferraris").rig
     except SinsInputError as exc:  # the data root is absent: say where it was looked for
         pytest.skip(f"Ferraris session unavailable: {exc}")
     report = gap.diagnose(session)

@@ -114,9 +114,8 @@ def test_on_broad_the_rows_of_an_interval_are_counted_as_the_draws_they_repeat()
     runs of the rows that repeat one (``repeats_``), at most an interval's rows and more for longer
     intervals (measured: 69 and 71 rows for 1 s, 286 rows; about 40 for 0.2 s, 57 rows)."""
     from sins.compensation import referenced
-    from sins.io.datasets import broad_reference
 
-    rec = broad_reference._read_broad_reference("05")
+    rec = io.read(dataset="broad_05").beside_reference()
     runs = {}
     for interval_s in (1.0, 0.2):
         fitted = referenced.fit("kohonen", rec, interval_s=interval_s, params={"sizes": (5,), "folds": 2})

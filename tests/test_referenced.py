@@ -298,9 +298,10 @@ def test_psins_drive_fitted_on_70_s_and_judged_on_the_last_30() -> None:
     """The PSINS drive: the gyro biases fitted on the first 70 s against the FOG-INS agree with the file's
     own ``eb0`` (the demo's reference value, not used by the fit) within 0.005 °/s; the corrected MEMS
     navigating free from the FOG-INS state over the last 30 s ends nearer than the raw one by ten times."""
-    from sins.io.datasets.psins_reference import _read_psins_vehicle_reference, psins_file_biases
+    from sins import io
+    from sins.io.datasets.psins_reference import psins_file_biases
 
-    rec = _read_psins_vehicle_reference()
+    rec = io.read(dataset="psins_vehicle").beside_reference()
     fitted = referenced.fit("regression", referenced.between(rec, rec.imu.t[0], 70.0))
     eb0, _ = psins_file_biases()
     assert np.all(np.abs(np.degrees(fitted.intervals.seed.B0 - eb0)) < 0.005)

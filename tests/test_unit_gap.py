@@ -18,13 +18,12 @@ import numpy as np
 import numpy_unit_gap as nu
 import pytest
 
-from sins import imu
+from sins import imu, io
 from sins.cli import main
 from sins.compensation.intervals import shift_increments
 from sins.core.series import CalibrationData, ImuIncrements
 from sins.gap.floor import noise_floor, noise_level
 from sins.io import datasets
-from sins.io.datasets import _read_npz_reference
 from sins.unit_gap import statistic
 from sins.unit_gap.inputs import read_gap_input
 from sins.unit_gap.intervals import interval_residuals
@@ -72,7 +71,7 @@ def test_the_interval_columns_are_the_residuals_derivatives(room: Path) -> None:
     """A bias moved by δ moves every interval's residual by −δ times the bias's column, and the readings
     read 1 ms later by −1 ms times the delay's column (the residual is linear in both to first order:
     measured against the whole pipeline run again, not against the columns' own formula)."""
-    rec = _read_npz_reference("unit/clean", room)
+    rec = io.read(dataset="unit/clean", root=room).beside_reference()
     seed = baseline_fit(rec, 1.0).seed
     res = interval_residuals(rec, seed, 1.0)
     for sensor, field, col, delta in (("gyro", "B0", 7, 1e-3), ("accel", "A0", 4, 1e-2)):
