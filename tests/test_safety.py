@@ -462,6 +462,19 @@ def test_readings_before_the_recordings_own_reference_begins_are_left_out_with_a
     assert json.loads(out.read_text())["duration_s"] == pytest.approx(19.95 - 3.0, abs=1e-9)
 
 
+def test_a_recording_is_characterised_against_its_own_reference_over_that_references_span(
+    tmp_path: Path,
+) -> None:
+    """A bag whose poses start 2 s after its readings and end 3 s before them: ``sins characterise``
+    takes the readings within the poses' span (2 s to 27 s at 100 Hz: 2,501 rows), where it took every
+    reading and failed outside the span."""
+    bag = _still_bag(tmp_path / "span.bag", seconds=30.0, poses_start_s=2.0, poses_end_s=27.0)
+    out = tmp_path / "span.json"
+    rc, _, err = run_cli(["characterise", str(bag), "--json", str(out)])
+    assert rc == 0, err
+    assert json.loads(out.read_text())["rows"] == 2501
+
+
 def test_a_parquet_solution_reads_back_as_a_truth(files: Path, tmp_path: Path) -> None:
     """The formats guide says a solution reads back as a truth file; before, a Parquet one did not. The
     integration against the solution it wrote is exact (every error zero)."""

@@ -50,9 +50,9 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
         data, _ = pipeline.gap_data(rec)
         return reference.reference_residual(data, str(args.recording))
     if not args.static and rec.truth is not None:  # a recording with its own reference (.npz, EuRoC, a bag)
-        from sins.io.datasets import npz_folders
+        from sins.io.recording import ideal_inputs
 
-        data, _ = npz_folders.with_truth(rec)
+        data, _ = ideal_inputs(rec)
         return reference.reference_residual(data, str(args.recording))
     if not args.static:
         raise MissingInputError(

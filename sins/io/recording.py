@@ -227,6 +227,35 @@ def beside_trajectory(
     )
 
 
+def ideal_inputs(rec: Recording) -> tuple[CalibrationData, NavSeries]:
+    """A recording beside its own reference trajectory as readings beside per-sample reference inputs:
+    the exact ideal IMU of the motion through the trajectory (splines, then the strapdown equations
+    backwards) at the readings' times (mean rates at their middles for increments), and the trajectory
+    there. Readings outside the trajectory's span are left out (a motion capture commonly starts and
+    ends a little inside the IMU's recording).
+
+    Raises
+    ------
+    SinsInputError
+        without a reference trajectory, or with fewer than 4 readings within its span.
+    """
+    from sins.nav import motion, trajectory
+
+    if rec.truth is None:
+        raise SinsInputError(f"{rec.name}: the recording has no reference trajectory")
+    t, gyro, accel = rec.mean_rates()
+    inside = (t >= rec.truth.t[0]) & (t <= rec.truth.t[-1])
+    t, gyro, accel = t[inside], gyro[inside], accel[inside]
+    if len(t) < 4:
+        raise SinsInputError(f"{rec.source}: fewer than 4 readings within the reference's time span")
+    at = rec.truth.interpolate(t)
+    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
+    data = CalibrationData(
+        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
+    )
+    return data, at
+
+
 def recording_kind(path: Path) -> str:
     """The :data:`KINDS` entry a path reads as (``"sins csv"`` standing for any CSV).
 
@@ -425,6 +454,7 @@ __all__ = [
     "RATE_HZ_RANGE",
     "Recording",
     "beside_trajectory",
+    "ideal_inputs",
     "missing_reference",
     "recording_kind",
 ]

@@ -21,7 +21,7 @@ from typing import Any
 
 from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
-from sins.io.recording import Recording
+from sins.io.recording import ideal_inputs
 
 Samples = tuple[CalibrationData, NavSeries | None]
 
@@ -77,47 +77,22 @@ def read_gap_input(
         return GapInput(name, rec.beside_reference(), rec.inputs_reader)
     if truth is not None:  # readings and a truth file: the exact ideal IMU, in either form
         return GapInput(name, rec.beside_reference(), lambda: readings.gap_data(rec))
-    return GapInput(name, rec.beside_reference(), lambda: _own_reference_samples(rec))
+    return GapInput(name, rec.beside_reference(), lambda: ideal_inputs(rec))
 
 
 def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:
     """A CSV of sins's or its own columns, without a trajectory and without ``ref_`` columns: the
     trajectory is what is missing (said before its columns are read as some other form)."""
-    from sins import io
+    from sins.io import rig
 
-    if (
-        truth is not None
-        or not path.is_file()
-        or path.suffix.lower() != ".csv"
-        or (options or {}).get("columns")
-    ):
+    if truth is not None or path.suffix.lower() != ".csv" or (options or {}).get("columns"):
         return
-    if not any(c.startswith("ref_") for c in io.read_columns(path)):
+    if path.is_file() and not rig.is_rig_csv(path):
         raise MissingInputError(
             f"{path}: no ref_ columns (a rig recording has them); an IMU recording needs its trajectory "
             "(a truth file)",
             needs="truth",
         )
-
-
-def _own_reference_samples(rec: Recording) -> Samples:
-    """A recording with its own reference, as readings beside the exact ideal IMU of the motion through
-    that reference (splines, then the strapdown equations backwards), at the readings' times (mean
-    rates at their middles for increments); rows outside the reference are left out."""
-    from sins.nav import motion, trajectory
-
-    assert rec.truth is not None  # read with its reference
-    t, gyro, accel = rec.mean_rates()
-    inside = (t >= rec.truth.t[0]) & (t <= rec.truth.t[-1])
-    t, gyro, accel = t[inside], gyro[inside], accel[inside]
-    if len(t) < 4:
-        raise SinsInputError(f"{rec.source}: fewer than 4 readings within the reference's time span")
-    at = rec.truth.interpolate(t)
-    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
-    data = CalibrationData(
-        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
-    )
-    return data, at
 
 
 def check_names(names: list[str]) -> None:

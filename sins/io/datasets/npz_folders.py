@@ -18,7 +18,7 @@ from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
 from sins.io import npz
 from sins.io.datasets.root import data_root, dataset_file
-from sins.io.recording import Recording, _read_path
+from sins.io.recording import Recording, _read_path, ideal_inputs
 
 
 def is_folder_name(name: str) -> bool:
@@ -93,23 +93,15 @@ def _read_npz_with_truth(
 
 
 def with_truth(rec: Recording) -> tuple[CalibrationData, NavSeries | None]:
-    """A recording as readings beside per-sample reference inputs (the exact ideal IMU of a motion
-    through its own reference: splines, then the strapdown equations backwards; NaN without a
-    reference), and the reference at the readings' times."""
-    from sins.nav import motion, trajectory
-
-    t, gyro, accel = rec.mean_rates()
+    """A recording as readings beside per-sample reference inputs and its reference at their times:
+    :func:`sins.io.recording.ideal_inputs`; without a reference, NaN inputs and None."""
     if rec.truth is None:
+        t, gyro, accel = rec.mean_rates()
         nan = np.full_like(gyro, np.nan)
         return CalibrationData(
             t=t, gyro=gyro, accel=accel, ref_gyro=nan, ref_accel=nan, source=rec.source
         ), None
-    at = rec.truth.interpolate(rec.imu.t)
-    ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
-    data = CalibrationData(
-        t=t, gyro=gyro, accel=accel, ref_gyro=ideal.omega_ib_b, ref_accel=ideal.f_ib_b, source=rec.source
-    )
-    return data, at
+    return ideal_inputs(rec)
 
 
 __all__ = [
