@@ -19,6 +19,7 @@ is offered too), of one of four kinds (how the channel model holds and fits each
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from functools import partial
@@ -151,37 +152,80 @@ class ReferenceInputs:
             whole=self.whole or self,
         )
 
-    def lag(self, sensor: str, axis: int, delay_s: float, central: Array | None = None) -> Array:
+    def lag(self, sensor: str, axis: int, delay_s: float) -> Array:
         """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows
-        (:func:`kinked_hermite`), held at the ends. ``central``: the axis's :meth:`rate`, if the
-        caller has it (a search over τ asks for many lags).
+        (:func:`kinked_hermite`), held at the ends. A search over τ builds the curve once
+        (:meth:`curve`) and asks it each lag."""
+        return self.curve(sensor, axis).lag(delay_s)
 
-        Evaluated a chunk of rows at a time on that chunk's pieces of the curve (the same
-        coefficients as the whole curve's, so the same values to the last bit), never the whole
-        curve at once: its coefficients are four floats a row. A scipy ``PPoly``, not
-        :func:`sins.imu.numerics.cubic_hermite`, which delays the simulated inputs: the two agree to
-        the last few bits only where both take the central slopes.
-        """
-        assert self.whole is None, "the lag of the whole recording's rows"
+    def curve(self, sensor: str, axis: int) -> HermiteCurve:
+        """The cubic Hermite curve of one axis of ``sensor``'s reference through the rows
+        (:func:`kinked_hermite`'s: the same coefficients to the last bit), built a chunk of rows at a
+        time (each row's slope the whole recording's :meth:`rate`: its neighbours either side are
+        taken in)."""
+        assert self.whole is None, "the curve of the whole recording's rows"
         t, u, kinks = self.t, self.of(sensor)[:, axis], self.kinks[sensor, axis]
-        n, out = len(t), np.empty(len(t))
+        n = len(t)
+        coef = np.empty((4, max(n - 1, 0)))
+        for lo, hi in spans(n - 1):
+            piece = slice(lo, hi + 1)  # the intervals lo … hi − 1 and the rows that bound them
+            right = self.rows(lo, hi + 1).rate(sensor, axis)
+            left = right.copy()
+            at = slice(*np.searchsorted(kinks.rows, [lo, hi + 1]))
+            right[kinks.rows[at] - lo], left[kinks.rows[at] - lo] = kinks.right[at], kinks.left[at]
+            coef[:, lo:hi] = _hermite_coefficients(t[piece], u[piece], right, left)
+        return HermiteCurve(t, u, coef, self.step_s)
+
+
+@dataclass(frozen=True, eq=False)
+class HermiteCurve:
+    """A cubic Hermite curve through the rows ``(t, u)`` in power form, ``coef`` (4, n − 1) as scipy's
+    ``PPoly`` holds it (highest power first): a reference axis's (:meth:`ReferenceInputs.curve`).
+    Held whole, four floats a row of one axis; evaluated a chunk of rows at a time."""
+
+    t: Array
+    u: Array
+    coef: Array
+    step_s: float
+
+    def lag(self, delay_s: float) -> Array:
+        """``u(t − τ) − u(t)`` at every row, the curve held at its ends: ``PPoly``'s values to the last
+        bit (its interval for each time and its sum of powers, in its order), without its search of
+        the breakpoints for each time (a row's interval is found from its neighbour's by the delay in
+        rows, then stepped to the right one)."""
+        t, n = self.t, len(self.t)
+        out = np.empty(n)
+        if n < 2:
+            out[:] = 0.0
+            return out
+        shift = math.ceil(delay_s / self.step_s)  # a row's interval where the rows are evenly spaced
         for lo, hi in spans(n):
             when = np.clip(t[lo:hi] - delay_s, t[0], t[-1])
-            first = int(np.clip(np.searchsorted(t, when[0], side="right") - 1, 0, n - 2))
-            last = int(np.clip(np.searchsorted(t, when[-1], side="right") - 1, 0, n - 2))
-            # One breakpoint beyond the last interval used, so that a time on a breakpoint falls in
-            # the interval the whole curve would take (the one it starts).
-            piece = slice(first, min(last + 3, n))
-            if central is None:
-                slopes = self.rows(piece.start, piece.stop).rate(sensor, axis)
-            else:
-                slopes = central[piece]
-            right, left = slopes.copy(), slopes.copy()
-            at = slice(*np.searchsorted(kinks.rows, [piece.start, piece.stop]))
-            right[kinks.rows[at] - first], left[kinks.rows[at] - first] = kinks.right[at], kinks.left[at]
-            curve = PPoly(_hermite_coefficients(t[piece], u[piece], right, left), t[piece])
-            out[lo:hi] = np.asarray(curve(when)) - u[lo:hi]
+            i = _intervals(t, when, np.arange(lo, hi) - shift)
+            s = when - t[i]
+            c = self.coef
+            value = c[3, i] + c[2, i] * s
+            s2 = s * s
+            value += c[1, i] * s2
+            value += c[0, i] * (s2 * s)
+            out[lo:hi] = value - self.u[lo:hi]
         return out
+
+
+def _intervals(t: Array, when: Array, guess: NDArray[np.intp]) -> NDArray[np.intp]:
+    """For each time of ``when`` (within ``t[0] … t[-1]``), the interval ``i`` of the increasing
+    breakpoints ``t`` with ``t[i] ≤ when < t[i + 1]`` (the last for ``t[-1]``): ``PPoly``'s, and
+    ``searchsorted``'s less one. Stepped from ``guess`` while a few steps settle it (sampling
+    jitter), else searched."""
+    last = len(t) - 2
+    i = np.clip(guess, 0, last)
+    for _ in range(4):
+        up = (i < last) & (t[np.minimum(i + 1, last + 1)] <= when)
+        down = (i > 0) & (t[i] > when)
+        if not (up.any() or down.any()):
+            return i
+        i = i + up - down
+    return np.clip(np.searchsorted(t, when, side="right") - 1, 0, last)
 
 
 def central_differences(a: Array, t: Array) -> Array:
@@ -326,6 +370,7 @@ __all__ = [
     "CANDIDATES",
     "CHUNK_ROWS",
     "Candidate",
+    "HermiteCurve",
     "Kinks",
     "ReferenceInputs",
     "baseline_columns",

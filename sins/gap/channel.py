@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from sins.gap import lattice, randombias
-from sins.gap.candidates import Candidate, ReferenceInputs, spans
+from sins.gap.candidates import Candidate, ReferenceInputs
 from sins.gap.design import Design, Maker, Projection
 from sins.gap.floor import TINY, noise_floor
 from sins.gap.lattice import Printed
@@ -366,12 +366,10 @@ def _fit_delay(
     both = design.with_makers(slope).factor(rows, error, scale_rows=fit)
     first = float(dataclasses.replace(both, scale=np.append(both.scale[:k], 1.0)).solve()[-1])
     projection = Projection.of(design, rows, both.leading(k))
-    # The axis's rate of change a chunk of rows at a time (each row's the whole recording's, to the
-    # bit: its neighbours either side are taken in), without the whole-array differences' temporaries.
-    central = np.concatenate([x.rows(lo, hi).rate(sensor, axis) for lo, hi in spans(len(x.t))])
+    curve = x.curve(sensor, axis)  # built once: each step of the search asks it one lag
 
     def left(tau: float) -> float:
-        return projection.residual(error - x.lag(sensor, axis, tau, central))
+        return projection.residual(error - curve.lag(tau))
 
     # What is left is not unimodal over two steps where the reference steps within a row (a rig that
     # turns faster than a row): a bounded search over the whole span had settled in another valley

@@ -14,7 +14,7 @@ each chunk as it comes:
 - the same with the columns and the target whitened by a first-order filter, run over every row in
   time order (:meth:`Design.whitened_lstsq`, generalised least squares beside a random bias);
 - the projection of any number of series off the columns (:class:`Projection`), from the factor's
-  singular values and the products ``Aᵀb``;
+  singular values and the products ``Aᵀb`` (the columns kept between series where they are small);
 - predictions ``A c`` (:meth:`Design.predict`) and Gram matrices over chosen rows (:meth:`Design.gram`).
 """
 
@@ -23,6 +23,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import dataclasses
+import functools
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -39,6 +40,10 @@ Rows = NDArray[np.bool_]
 #: Builds a block of columns, (m, k), from the reference inputs of m consecutive rows
 #: (:meth:`~sins.gap.candidates.ReferenceInputs.rows`).
 Maker = Callable[[ReferenceInputs], Array]
+
+#: The most a :class:`Projection` keeps of its columns between the series it is asked about (a search
+#: over a delay asks it of dozens): 32 MB, ten columns of 400,000 rows (over half an hour at 200 Hz).
+KEPT_BYTES = 1 << 25
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,9 +65,9 @@ class Design:
         """The rows."""
         return len(self.x.t)
 
-    @property
+    @functools.cached_property
     def width(self) -> int:
-        """The columns."""
+        """The columns (of a row's block, built once: every pass over the rows asks)."""
         return int(self.block(0, 1).shape[1])
 
     def block(self, start: int, stop: int) -> Array:
@@ -313,13 +318,33 @@ class Projection:
         return self.basis.T @ self.design.products(self.rows, b)
 
     def residual(self, y: Array) -> float:
-        """``min_c ‖y − A c‖²`` over the rows, of a series ``y`` (n,) of every row."""
+        """``min_c ‖y − A c‖²`` over the rows, of a series ``y`` (n,) of every row. A search asks it
+        of many series: the columns are built on the first call and kept where they take at most
+        :data:`KEPT_BYTES` (the same products as :meth:`Design.masked_products`, to the last bit)."""
         taken = y[self.rows]
-        on = self.basis.T @ self.design.masked_products(self.rows, y[:, None])
+        blocks = self._blocks()
+        if blocks is None:
+            products = self.design.masked_products(self.rows, y[:, None])
+        else:
+            products = np.zeros((self.design.width, 1))
+            for (lo, hi), a in zip(spans(self.design.n), blocks, strict=True):
+                products += a.T @ np.where(self.rows[lo:hi, None], y[lo:hi, None], 0.0)
+        on = self.basis.T @ products
         return float(taken @ taken - np.sum(on**2))
+
+    def _blocks(self) -> list[Array] | None:
+        """The design's columns a chunk at a time, built once, or None where they would take more
+        than :data:`KEPT_BYTES`."""
+        if "_kept" not in self.__dict__:
+            design = self.design
+            small = 8 * design.n * design.width <= KEPT_BYTES
+            kept = [design.block(lo, hi) for lo, hi in spans(design.n)] if small else None
+            object.__setattr__(self, "_kept", kept)
+        return self.__dict__["_kept"]
 
 
 __all__ = [
+    "KEPT_BYTES",
     "Design",
     "Factor",
     "Projection",
