@@ -30,12 +30,21 @@ run: $(STAMP)
 # then the other files in three parts by name (test_gap.py, the longest file, takes one worker of the
 # g-r part while the other runs the rest of it).
 # Every session runs even when one fails; make fails after.
+# Within a session the longest files go first (LONG_TESTS, longest first, from --durations), dealt
+# in that order (--no-loadscope-reorder: xdist's own order is by the number of tests in a file, which
+# dealt test_quality.py (93 s, ten tests) and test_tour.py (34 s, two) late, where each ran alone while
+# the other worker idled).
 HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
-PART_1 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-f]*.py))
-PART_2 = $(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-r]*.py))
-PART_3 = $(filter-out $(HEAVY_TESTS) $(PART_1) $(PART_2),$(wildcard tests/test_*.py))
+LONG_TESTS = tests/test_gap.py tests/test_quality.py tests/test_campaign.py tests/test_campaign_gate.py \
+	tests/test_examples.py tests/test_unit_gap.py tests/test_characterise.py tests/test_fuzz.py \
+	tests/test_tour.py tests/test_campaign_folder.py tests/test_plots.py tests/test_bias.py \
+	tests/test_gap_independent.py tests/test_vocabulary.py
+longest_first = $(filter $(1),$(LONG_TESTS)) $(filter-out $(LONG_TESTS),$(1))
+PART_1 = $(call longest_first,$(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[a-f]*.py)))
+PART_2 = $(call longest_first,$(filter-out $(HEAVY_TESTS),$(wildcard tests/test_[g-r]*.py)))
+PART_3 = $(call longest_first,$(filter-out $(HEAVY_TESTS) $(PART_1) $(PART_2),$(wildcard tests/test_*.py)))
 PYTEST = OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-	$(VENV)/bin/python -m pytest -q --dist loadfile --durations=8
+	$(VENV)/bin/python -m pytest -q --dist loadfile --no-loadscope-reorder --durations=8
 test: lint
 	@status=0; \
 	echo "tests 1/4: the files that train networks on rigs"; $(PYTEST) -n 3 $(HEAVY_TESTS) || status=1; \
