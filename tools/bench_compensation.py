@@ -6,6 +6,7 @@ Usage::
     .venv/bin/python tools/bench_compensation.py [--repeat 3] [--threads N] [--strategies ...]
     .venv/bin/python tools/bench_compensation.py --scaling [--rows 50000 150000 500000] [--strategies mlp]
     .venv/bin/python tools/bench_compensation.py --real [--strategies mlp kohonen ...]
+    .venv/bin/python tools/bench_compensation.py --jobs 1 2 [--repeat 3] [--strategies mlp kohonen]
 
 The fitting session is another tool's procedure (``tests/numpy_rigs.py``, numpy alone):
 46 random orientations and a table to 250 °/s in seven mounts, 10 -> 40 °C, 100 Hz,
@@ -19,6 +20,10 @@ form, with temperature), over ``--repeat`` runs.
 that every size is made alike; per size the median fit time (wall, and this process's CPU time, which a
 busy machine inflates far less) and the exponent of a least-squares line through log time against log
 rows (1: time linear in the rows).
+
+``--jobs``: the learned residual strategies' fit on the fitting session with each number of
+cross-validation threads (``n_jobs``), alternated, ``--repeat`` times: median wall and CPU time per
+setting (what the default is chosen by), and whether the fitted models are the same.
 
 ``--real``: each strategy fitted by :func:`sins.compensation.referenced.fit` (intervals of 1 s) on BROAD
 trial 05 and
@@ -98,6 +103,27 @@ def cost(strategies: list[str], repeat: int) -> None:
         )
 
 
+def jobs(strategies: list[str], settings: list[int], repeat: int) -> None:
+    """Median fit time, wall and CPU, of each strategy with each number of cross-validation threads."""
+    import json
+
+    data, _ = session()
+    print(f"{len(data)} fitting rows; n_jobs {settings}, alternated, {repeat} times")
+    for name in strategies:
+        runs: dict[int, list[tuple[float, float, str]]] = {n: [] for n in settings}
+        for _ in range(repeat):
+            for n in settings:
+                strategy = compensation.make(name, n_jobs=n)
+                wall, cpu, fitted = timed(lambda st=strategy: st.fit(data))
+                state = {k: v for k, v in fitted.get_state().items() if k != "fit_seconds_"}
+                runs[n].append((wall, cpu, json.dumps(state, sort_keys=True, default=str)))
+        same = len({r[2] for rs in runs.values() for r in rs}) == 1
+        for n, rs in runs.items():
+            wall, cpu = statistics.median(r[0] for r in rs), statistics.median(r[1] for r in rs)
+            print(f"{name:<12} n_jobs {n}: fit median {wall:6.2f} s wall, {cpu:6.2f} s CPU")
+        print(f"{name:<12} the models of every setting the same: {same}")
+
+
 def scaling(strategies: list[str], rows: list[int], repeat: int) -> None:
     """Fit time against the rows, and the log-log exponent."""
     one = len(session(_SCALING_HOLDS)[0])
@@ -157,6 +183,7 @@ def main() -> None:
     parser.add_argument("--scaling", action="store_true", help="fit time against the rows")
     parser.add_argument("--rows", nargs="+", type=int, default=[50_000, 150_000, 500_000])
     parser.add_argument("--real", action="store_true", help="fit and judge on BROAD and the PSINS drive")
+    parser.add_argument("--jobs", nargs="+", type=int, help="compare these numbers of fitting threads")
     args = parser.parse_args()
     import torch
 
@@ -166,6 +193,8 @@ def main() -> None:
         scaling(args.strategies or ["mlp", "kohonen"], args.rows, args.repeat)
     elif args.real:
         real(args.strategies or list(REAL))
+    elif args.jobs:
+        jobs(args.strategies or ["mlp", "kohonen"], args.jobs, args.repeat)
     else:
         cost(args.strategies or list(STRATEGIES), args.repeat)
 

@@ -178,7 +178,7 @@ class LocalLinearMap(ResidualStrategy):
         guard: bool = True,
         guard_z: float = 2.0,
         seed: int = 0,
-        n_jobs: int = 2,
+        n_jobs: int | None = None,
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)

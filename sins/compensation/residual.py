@@ -82,6 +82,13 @@ _MIN_TEMP_SPAN = 2.0
 EDGE_STEP = 1e-3
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
+#: The points a fold trains on from which the cross-validation's candidates train on two threads by
+#: default (``n_jobs=None``). The trainings' Python steps hold the GIL between small torch and numpy
+#: calls, so two threads pay off only where each call has enough rows to work on: ``mlp`` on a rig
+#: (``tools/bench_compensation.py --jobs 2 1``, medians, 2 cores) with about 2,300 points a fold took the
+#: same wall time on two threads for 1.5× the CPU; with 4,800, 30 % less wall time for 1.2× the CPU;
+#: with 7,100, 37 % less for 1.05×.
+THREADED_POINTS = 4_000
 #: A candidate's cross-validation stops after this many stages of training in a row that did not lower
 #: its held-back loss (see ``_cross_validate``).
 PATIENCE = 2
@@ -150,8 +157,9 @@ class ResidualStrategy(Strategy):
     seed : fold assignment and the learner's own randomness
     physics : first fit each channel the physics terms (:mod:`sins.compensation.terms`) that earn their
         place on the held-back blocks, and learn what they leave
-    n_jobs : threads that train the cross-validation's candidates side by side; the results do not depend
-        on it (each training is sequential and seeded on its own), so it is not saved with the model
+    n_jobs : threads that train the cross-validation's candidates side by side; None: two where a fold
+        trains on :data:`THREADED_POINTS` points or more, else one. The results do not depend on it (each
+        training is sequential and seeded on its own), so it is not saved with the model
     """
 
     def __init__(
@@ -160,13 +168,13 @@ class ResidualStrategy(Strategy):
         guard: bool = True,
         guard_z: float = 2.0,
         seed: int = 0,
-        n_jobs: int = 2,
+        n_jobs: int | None = None,
         physics: bool = True,
     ) -> None:
         if folds < 2:
             raise ValueError(f"folds must be 2 or more, got {folds}")
-        if n_jobs < 1:
-            raise ValueError(f"n_jobs must be 1 or more, got {n_jobs}")
+        if n_jobs is not None and n_jobs < 1:
+            raise ValueError(f"n_jobs must be 1 or more (or None), got {n_jobs}")
         self.folds = folds
         self.guard = guard
         self.guard_z = guard_z
@@ -317,7 +325,9 @@ class ResidualStrategy(Strategy):
             for config in self._candidates(sensor, scaled[sensor].shape[1]):
                 jobs.append(_Job(sensor, config, fold_points, self.sigma_[cols]))
         results: list[list[tuple[dict[str, Any], list[Array]]]] = []
-        with ThreadPoolExecutor(self.n_jobs) as pool:
+        largest = max((len(train.n) for job in jobs for train, _, _ in job.folds), default=0)
+        threads = self.n_jobs or (2 if largest >= THREADED_POINTS else 1)
+        with ThreadPoolExecutor(threads) as pool:
             for result in pool.map(self._run_job, jobs):
                 results.append(result)
                 if self.progress is not None:
@@ -580,6 +590,7 @@ __all__ = [
     "EDGE_STEP",
     "MIN_REPEATS",
     "PATIENCE",
+    "THREADED_POINTS",
     "Points",
     "ResidualStrategy",
     "aggregate",
