@@ -10,11 +10,17 @@ Prints, for each command, the median and spread of the wall time of fresh proces
 ``sins --help`` by cumulative time and whether numpy, scipy, torch, numba or matplotlib were loaded.
 The target is 1 s for ``--version`` and ``--help`` (docs/speed.md); timings on a shared machine are
 noisy, so compare figures within one run of this script.
+
+Then, per command, what its handler imports before its work (:data:`WORK`), timed in fresh
+interpreters (median), and which heavy libraries came in with it: every command, every dask worker of a
+campaign and every test that runs a command as a process pays these first, and for a small recording
+they are most of the command's time. Each heavy library should come in only where it is used.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import subprocess
 import sys
@@ -25,6 +31,22 @@ ROOT = Path(__file__).resolve().parent.parent
 SINS = Path(sys.executable).with_name("sins")
 COMMANDS = (["--version"], ["--help"], ["run", "--help"], ["bias", "--help"])
 HEAVY = ("numpy", "scipy", "torch", "numba", "matplotlib", "rerun")
+#: What each command's handler imports before its work (its first imports).
+WORK = {
+    "inspect": ["sins.cli", "sins.io.reader"],
+    "run": ["sins.cli", "sins.io", "sins.scenario", "sins.runs.pipeline", "sins.scenario.budget"],
+    "fit": ["sins.cli", "sins.io.reader", "sins.compensation.registry"],
+    "gap": ["sins.cli", "sins.io.reader", "sins.unit_gap.inputs"],
+    "campaign worker": ["sins.campaign.unit"],
+}
+WORK_HEAVY = ("torch", "matplotlib", "pandas", "scipy.signal", "scipy.stats", "scipy.interpolate")
+_PROBE = """
+import json, sys, time
+start = time.perf_counter()
+for name in {modules!r}:
+    __import__(name)
+print(json.dumps([time.perf_counter() - start, [m for m in {heavy!r} if m in sys.modules]]))
+"""
 
 
 def _wall(args: list[str]) -> float:
@@ -49,6 +71,20 @@ def _imports() -> tuple[list[tuple[int, str]], list[str]]:
     return sorted(rows, reverse=True), loaded
 
 
+def _work(modules: list[str], repeat: int) -> tuple[list[float], list[str]]:
+    """Seconds to import ``modules`` in each of ``repeat`` fresh interpreters, and the heavy libraries
+    of :data:`WORK_HEAVY` they brought."""
+    times, brought = [], []
+    for _ in range(repeat):
+        code = _PROBE.format(modules=modules, heavy=WORK_HEAVY)
+        done = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+        )
+        seconds, brought = json.loads(done.stdout)
+        times.append(seconds)
+    return times, brought
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=9)
@@ -65,6 +101,14 @@ def main() -> None:
     print("slowest imports (cumulative):")
     for cumulative, name in rows[:10]:
         print(f"  {cumulative / 1000:8.1f} ms  {name}")
+    print("\nwhat each command imports before its work (fresh interpreters):")
+    for command, modules in WORK.items():
+        times, brought = _work(modules, args.repeat)
+        print(
+            f"  {command:<16} median {statistics.median(times):.3f} s "
+            f"(spread {min(times):.3f}-{max(times):.3f} s)"
+            f"   brings {', '.join(brought) or 'none of ' + ', '.join(WORK_HEAVY)}"
+        )
 
 
 if __name__ == "__main__":

@@ -33,7 +33,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from sins import io, scenario
     from sins.runs import pipeline
     from sins.scenario.budget import check_scenario_size
-    from sins.viz import plots
 
     path = pipeline.resolve_scenario(args.scenario)
     sc = pipeline.with_unit(scenario.load(path), args.imu, args.seed)
@@ -77,6 +76,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         io.write_json(args.json, result.to_dict(str(path)))
     if args.plot:
+        from sins.viz import plots  # matplotlib, only for a plot
+
         save_plot(args.plot, lambda: plots.run_figure(result), f"sins run {sc.name}")
     show(args, result, "\n".join(report))
     return 0

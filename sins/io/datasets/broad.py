@@ -14,11 +14,10 @@ import os
 import re
 from pathlib import Path
 
+# scipy's io, signal and interpolate modules are imported in the functions that use them: ~0.6 s at
+# import, which every command paid for any recording (tools/bench_startup.py).
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
-from scipy.signal import savgol_filter
 
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData
@@ -130,6 +129,9 @@ def _read_broad(trial: str, root: str | os.PathLike[str] | None = None) -> Calib
         that is not a MATLAB v5 MAT file or lacks a variable, too few rows with an optical reference,
         or optical and inertial data that do not correlate.
     """
+    from scipy.interpolate import CubicSpline
+    from scipy.signal import savgol_filter
+
     stem = _stem(trial, root)
     path = dataset_file(BROAD_FOLDER, f"{stem}.mat", root)
     gyr, acc, quat, pos = _load(str(path))
@@ -233,6 +235,8 @@ def _stem(trial: str, root: str | os.PathLike[str] | None = None) -> str:
 
 def _load(path: str) -> tuple[Array, Array, Array, Array]:
     """``imu_gyr, imu_acc, opt_quat, opt_pos`` of a BROAD MAT file, shapes checked, rate checked."""
+    import scipy.io
+
     try:
         raw = Path(path).read_bytes()
     except OSError as exc:

@@ -13,10 +13,10 @@ from __future__ import annotations
 import math
 import os
 
+# scipy's io, signal and interpolate modules are imported in the functions that use them: ~0.6 s at
+# import, which every command paid for any recording (tools/bench_startup.py).
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
-from scipy.signal import savgol_filter
 
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, NavSeries, ReferencedRecording
@@ -108,6 +108,8 @@ def _read_broad_reference(trial: str, root: str | os.PathLike[str] | None = None
 
 def _movement(path: str, n: int) -> NDArray[np.bool_]:
     """BROAD's ``movement`` flag (n,): 1 in the movement phases its benchmark scores, 0 at rest."""
+    import scipy.io
+
     mat = scipy.io.loadmat(path, squeeze_me=True, variable_names=["movement"])
     flag = np.asarray(mat.get("movement", np.empty(0)), dtype=float).reshape(-1)
     if flag.shape != (n,) or not np.isin(flag, (0.0, 1.0)).all():
@@ -117,6 +119,8 @@ def _movement(path: str, n: int) -> NDArray[np.bool_]:
 
 def _velocity(pos: Array, valid: NDArray[np.bool_]) -> tuple[NDArray[np.intp], Array]:
     """The rows with a velocity (valid runs at least a window long) and that velocity, ENU, m/s."""
+    from scipy.signal import savgol_filter
+
     n_window = 2 * _VELOCITY_HALF_WINDOW + 1
     edges = np.diff(np.r_[0, valid.astype(np.int8), 0])
     keep, velocity = [], []

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import os
 
+# scipy's io, signal and interpolate modules are imported in the functions that use them: ~0.6 s at
+# import, which every command paid for any recording (tools/bench_startup.py).
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation, RotationSpline
 
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, NavSeries, ReferencedRecording
@@ -55,6 +55,8 @@ def _read_psins_vehicle_reference(root: str | os.PathLike[str] | None = None) ->
 def _at_mems(nav: NavSeries, arm: Array) -> NavSeries:
     """The FOG-INS's solution moved to the MEMS at ``arm`` (MEMS axes, m): position by ``C_nb r``,
     velocity by ``C_nb (ω_nb × r)`` with ``ω_nb`` the rate of a rotation spline through the attitudes."""
+    from scipy.spatial.transform import Rotation, RotationSpline
+
     c_nb = rotation.dcm_from_quat(nav.q_nb)
     omega = RotationSpline(nav.t, Rotation.from_quat(nav.q_nb))(nav.t, 1)  # body rate, rad/s, body axes
     offset = c_nb @ arm
@@ -78,6 +80,8 @@ def psins_file_biases(root: str | os.PathLike[str] | None = None) -> tuple[Array
     SinsInputError
         when the file lacks either variable or it is not three numbers.
     """
+    import scipy.io
+
     path = _path(root)
     content = scipy.io.loadmat(path, squeeze_me=True, variable_names=["eb0", "db0"])
     out = []

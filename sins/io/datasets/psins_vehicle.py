@@ -16,10 +16,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+# scipy's io, signal and interpolate modules are imported in the functions that use them: ~0.6 s at
+# import, which every command paid for any recording (tools/bench_startup.py).
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from sins.core import earth, rotation
@@ -210,6 +210,8 @@ def _path(root: str | os.PathLike[str] | None) -> Path:
 
 def _load(path: Path) -> tuple[_Mems, NavSeries]:
     """The two tables, checked, in the package's axes and units (the FOG-INS on its own clock)."""
+    import scipy.io
+
     try:
         raw = path.read_bytes()
         head = raw[:128]
@@ -305,6 +307,8 @@ class _Reference:
     """The FOG-INS body's ``omega_ib_b`` and ``f_ib_b`` (FRD) in its span, on its clock."""
 
     def __init__(self, nav: NavSeries) -> None:
+        from scipy.interpolate import CubicSpline
+
         self.nav = nav
         self.attitude = RotationSpline(nav.t, Rotation.from_quat(nav.q_nb))
         self.velocity = CubicSpline(nav.t, nav.v_n, axis=0)
