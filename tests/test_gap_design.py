@@ -126,6 +126,27 @@ def test_the_delayed_reference_is_the_whole_curve_to_the_last_bit(small_chunks: 
             np.testing.assert_array_equal(x.lag("gyro", axis, tau), expected)
 
 
+def test_the_delayed_reference_on_uneven_times_is_scipys_to_the_last_bit(small_chunks: int):
+    """The same on a recording whose rows are unevenly spaced (a jitter of ±30 % of a step, and a gap of
+    two seconds where rows were lost): each row's interval is stepped from its neighbour's where a few
+    steps settle it and searched where they do not (across the gap), and the values are still the whole
+    curve's (scipy's ``PPoly``) bit for bit, for delays within a row, of many rows, across the gap and
+    negative."""
+    rng = np.random.default_rng(7)
+    step = np.full(3_000, 0.02) * (1.0 + 0.3 * rng.uniform(-1.0, 1.0, 3_000))
+    step[1_500] = 2.0  # rows lost
+    t = np.cumsum(step)
+    ref = np.column_stack([np.sin(0.7 * t), np.cos(1.3 * t) + 0.1 * t, rng.standard_normal(3_000)])
+    data = CalibrationData(t=t, gyro=ref, accel=ref, ref_gyro=ref, ref_accel=ref)
+    x = candidates.reference_inputs(data)
+    for axis in range(3):
+        whole = candidates.kinked_hermite(t, ref[:, axis], x.rate("gyro")[:, axis])
+        curve = x.curve("gyro", axis)
+        for tau in (3e-3, 0.0173, 0.9, 2.5, -0.041, -1.7):
+            expected = whole(np.clip(t - tau, t[0], t[-1])) - ref[:, axis]
+            np.testing.assert_array_equal(curve.lag(tau), expected)
+
+
 def test_a_step_and_a_hum_are_found_alike_in_chunks(small_chunks: int):
     """A bias step's time and size and an oscillation's period and amplitude, from chunked suffix sums
     and eight transforms of the unpadded series, against the same from whole arrays with one chunk:
