@@ -200,11 +200,11 @@ class HermiteCurve:
             out[:] = 0.0
             return out
         shift = math.ceil(delay_s / self.step_s)  # a row's interval where the rows are evenly spaced
+        c = self.coef
         for lo, hi in spans(n):
             when = np.clip(t[lo:hi] - delay_s, t[0], t[-1])
             i = _intervals(t, when, np.arange(lo, hi) - shift)
             s = when - t[i]
-            c = self.coef
             value = c[3, i] + c[2, i] * s
             s2 = s * s
             value += c[1, i] * s2

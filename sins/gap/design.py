@@ -117,12 +117,14 @@ class Design:
             out += a.T @ a
         return out
 
-    def masked_products(self, rows: Rows, b: Array) -> Array:
+    def masked_products(self, rows: Rows, b: Array, blocks: list[Array] | None = None) -> Array:
         """``Aᵀb`` over ``rows``, where ``b`` (n, p) holds every row's values: the other rows' are
-        zeroed, not the columns' rows gathered (a copy of ``A`` saved per chunk)."""
+        zeroed, not the columns' rows gathered (a copy of ``A`` saved per chunk). ``blocks``: the
+        columns a chunk at a time, if the caller keeps them (else built as they are asked for)."""
         out = np.zeros((self.width, b.shape[1]))
-        for lo, hi in spans(self.n):
-            out += self.block(lo, hi).T @ np.where(rows[lo:hi, None], b[lo:hi], 0.0)
+        for k, (lo, hi) in enumerate(spans(self.n)):
+            a = self.block(lo, hi) if blocks is None else blocks[k]
+            out += a.T @ np.where(rows[lo:hi, None], b[lo:hi], 0.0)
         return out
 
     def products(self, rows: Rows, b: Array) -> Array:
@@ -320,27 +322,19 @@ class Projection:
     def residual(self, y: Array) -> float:
         """``min_c ‖y − A c‖²`` over the rows, of a series ``y`` (n,) of every row. A search asks it
         of many series: the columns are built on the first call and kept where they take at most
-        :data:`KEPT_BYTES` (the same products as :meth:`Design.masked_products`, to the last bit)."""
+        :data:`KEPT_BYTES` (:meth:`Design.masked_products` over them)."""
         taken = y[self.rows]
-        blocks = self._blocks()
-        if blocks is None:
-            products = self.design.masked_products(self.rows, y[:, None])
-        else:
-            products = np.zeros((self.design.width, 1))
-            for (lo, hi), a in zip(spans(self.design.n), blocks, strict=True):
-                products += a.T @ np.where(self.rows[lo:hi, None], y[lo:hi, None], 0.0)
-        on = self.basis.T @ products
+        on = self.basis.T @ self.design.masked_products(self.rows, y[:, None], self._kept)
         return float(taken @ taken - np.sum(on**2))
 
-    def _blocks(self) -> list[Array] | None:
+    @functools.cached_property
+    def _kept(self) -> list[Array] | None:
         """The design's columns a chunk at a time, built once, or None where they would take more
         than :data:`KEPT_BYTES`."""
-        if "_kept" not in self.__dict__:
-            design = self.design
-            small = 8 * design.n * design.width <= KEPT_BYTES
-            kept = [design.block(lo, hi) for lo, hi in spans(design.n)] if small else None
-            object.__setattr__(self, "_kept", kept)
-        return self.__dict__["_kept"]
+        design = self.design
+        if 8 * design.n * design.width > KEPT_BYTES:
+            return None
+        return [design.block(lo, hi) for lo, hi in spans(design.n)]
 
 
 __all__ = [
