@@ -270,8 +270,8 @@ class LocalLinearMap(ResidualStrategy):
             at += k * (d + 1)
         return _MapLearner(maps, sigma)
 
-    def _predict(self, learner: Any, x: Array) -> Array:
-        return learner.predict(x)
+    def _predict(self, learner: Any, x: Array, memo: dict[str, Any] | None = None) -> Array:
+        return learner.predict(x, memo)
 
     def _learner_state(self, learner: Any) -> Any:
         return {
@@ -483,6 +483,13 @@ def _local_design(x: Array, centres: Array, blend: Array, winners: NDArray[np.in
     )
 
 
+#: Rows a fitted map predicts at a time.
+_PREDICT_ROWS = 65_536
+#: What a row's winner margin leaves for the rounding of the distances it is made of: the scaled inputs
+#: and the nodes lie within a few units of the origin, where a distance rounds by ~1e-15.
+_MARGIN_SLACK = 1e-9
+
+
 class _Map:
     """One fitted map: the columns it picks its winner by and those its planes span, prototypes (k, w),
     blending weights (k, k) and planes (k, d+1, 3) in units of the learner's ``sigma``."""
@@ -506,17 +513,61 @@ class _Map:
         the tree a twentieth of that (``tools/bench_correction.py``, ``docs/speed.md``)."""
         if self.codebook.shape[1] == 1:
             return _nearest(x, self.codebook)
+        _, win = self._search().query(x)
+        return np.asarray(win, dtype=np.intp)
+
+    def _search(self) -> Any:
+        """The prototypes' k-d tree, built on first use."""
         if self._tree is None:
             from scipy.spatial import cKDTree
 
             self._tree = cKDTree(self.codebook)
-        _, win = self._tree.query(x)
-        return np.asarray(win, dtype=np.intp)
+        return self._tree
 
-    def predict(self, x: Array) -> Array:
-        win = self.winners(x[:, self.win_cols])
-        out: Array = self._offset[win] + np.einsum("nd,ndc->nc", x[:, self.plane_cols], self._slope[win])
-        return out
+    def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
+        """The map's output at ``x``; ``memo`` kept between calls on the same rows (:meth:`_kept`)."""
+        if memo is None or self.codebook.shape[1] == 1:
+            win = self.winners(x[:, self.win_cols])
+            out: Array = self._offset[win] + np.einsum("nd,ndc->nc", x[:, self.plane_cols], self._slope[win])
+            return out
+        offset, slope = self._kept(x[:, self.win_cols], memo)
+        kept: Array = offset + np.einsum("nd,ndc->nc", x[:, self.plane_cols], slope)
+        return kept
+
+    def _kept(self, x: Array, memo: dict[str, Any]) -> tuple[Array, Array]:
+        """Each row's winner's offset and slope, found again only for the rows that may have a new one.
+
+        A correction's passes move a row's input by about the residual, far less than the nodes lie
+        apart. Where a row's winner was found at ``a`` with distances ``d1 < d2`` to its nearest two
+        nodes, any input within ``(d2 − d1)/2`` of ``a`` has the same winner (the triangle inequality:
+        its distance to the winner is below ``d1 + δ``, to any other node above ``d2 − δ``); a row that
+        moved that far or more from where its winner was found is searched again. The same winners as a
+        search each pass, so the same output to the last bit (``tests/test_learned.py``), for one search
+        in place of three (``tools/bench_correction.py``)."""
+        if memo.get("anchor") is None or memo["anchor"].shape != x.shape:
+            win, margin = self._winners_and_margins(x)
+            memo.update(
+                anchor=x.copy(), win=win, margin=margin, offset=self._offset[win], slope=self._slope[win]
+            )
+            return memo["offset"], memo["slope"]
+        moved = np.sqrt(((x - memo["anchor"]) ** 2).sum(axis=1))
+        again = np.flatnonzero(~(moved < memo["margin"]))  # NaN searched again
+        if again.size:
+            win, margin = self._winners_and_margins(x[again])
+            memo["anchor"][again], memo["win"][again], memo["margin"][again] = x[again], win, margin
+            memo["offset"][again], memo["slope"][again] = self._offset[win], self._slope[win]
+        return memo["offset"], memo["slope"]
+
+    def _winners_and_margins(self, x: Array) -> tuple[NDArray[np.intp], Array]:
+        """:meth:`winners`, and how far each row may move and keep its winner (half the gap between its
+        nearest two nodes' distances, less :data:`_MARGIN_SLACK` for the distances' rounding)."""
+        dist, near = self._search().query(x, k=2)
+        win = np.asarray(near[:, 0], dtype=np.intp)
+        margin = 0.5 * (dist[:, 1] - dist[:, 0]) - _MARGIN_SLACK
+        tied = np.flatnonzero(~(margin > 0.0))
+        if tied.size:  # equally near nodes: the winner a search of the nearest alone gives, every pass
+            win[tied] = self.winners(x[tied])
+        return win, margin
 
 
 class _MapLearner:
@@ -525,11 +576,17 @@ class _MapLearner:
     def __init__(self, maps: list[_Map], sigma: Array) -> None:
         self.maps, self.sigma = maps, sigma
 
-    def predict(self, x: Array) -> Array:
+    def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
+        """The maps' sum at ``x``; ``memo`` (one dict for the same rows on each call) lets each map keep
+        its rows' winners (:meth:`_Map._kept`) where ``x`` is one chunk."""
         out = np.zeros((len(x), 3))
-        for start in range(0, len(x), 65536):  # bounded memory for the distance matrices
-            part = x[start : start + 65536]
-            out[start : start + len(part)] = sum(m.predict(part) for m in self.maps)
+        keep = memo if memo is not None and len(x) <= _PREDICT_ROWS else None
+        for start in range(0, len(x), _PREDICT_ROWS):  # bounded memory for the distance matrices
+            part = x[start : start + _PREDICT_ROWS]
+            out[start : start + len(part)] = sum(
+                m.predict(part, None if keep is None else keep.setdefault(f"map{i}", {}))
+                for i, m in enumerate(self.maps)
+            )
         return out * self.sigma
 
 

@@ -466,7 +466,7 @@ class ResidualMLP(ResidualStrategy):
             for length, weights in learner["snapshots"].items()
         ]
 
-    def _predict(self, learner: Any, x: Array) -> Array:
+    def _predict(self, learner: Any, x: Array, memo: dict[str, Any] | None = None) -> Array:
         return learner.predict(x)
 
     def _learner_state(self, learner: Any) -> Any:

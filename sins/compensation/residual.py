@@ -82,6 +82,13 @@ _MIN_TEMP_SPAN = 2.0
 EDGE_STEP = 1e-3
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
+#: Rows a correction solves at a time: its passes run chunk by chunk, each row's arithmetic the same as
+#: on the whole array (every step is row by row), in a few MB a chunk whatever the recording's length.
+CORRECT_ROWS = 65_536
+#: The rows from which a correction solves its chunks on two threads by default (``n_jobs=None``): numpy,
+#: scipy's k-d tree and torch let go of the GIL for a chunk's work; below a few chunks a thread pool
+#: costs more than it brings.
+THREADED_ROWS = 4 * CORRECT_ROWS
 #: The points a fold trains on from which the cross-validation's candidates train on two threads by
 #: default (``n_jobs=None``). The trainings' Python steps hold the GIL between small torch and numpy
 #: calls, so two threads pay off only where each call has enough rows to work on: ``mlp`` on a rig
@@ -157,9 +164,11 @@ class ResidualStrategy(Strategy):
     seed : fold assignment and the learner's own randomness
     physics : first fit each channel the physics terms (:mod:`sins.compensation.terms`) that earn their
         place on the held-back blocks, and learn what they leave
-    n_jobs : threads that train the cross-validation's candidates side by side; None: two where a fold
-        trains on :data:`THREADED_POINTS` points or more, else one. The results do not depend on it (each
-        training is sequential and seeded on its own), so it is not saved with the model
+    n_jobs : threads that train the cross-validation's candidates side by side, and that correct a
+        recording's chunks of :data:`CORRECT_ROWS` rows; None: two where a fold trains on
+        :data:`THREADED_POINTS` points or more, or a recording has :data:`THREADED_ROWS` rows or more,
+        else one. The results do not depend on it (each training is sequential and seeded on its own,
+        each row corrected alone), so it is not saved with the model
     """
 
     def __init__(
@@ -196,8 +205,11 @@ class ResidualStrategy(Strategy):
         """A learner fitted to ``points`` (residuals in units of ``sigma`` per channel, weights ``n``)."""
 
     @abstractmethod
-    def _predict(self, learner: Any, x: Array) -> Array:
-        """Residual predictions (m, 3) at scaled inputs ``x`` (m, d), in the data's units."""
+    def _predict(self, learner: Any, x: Array, memo: dict[str, Any] | None = None) -> Array:
+        """Residual predictions (m, 3) at scaled inputs ``x`` (m, d), in the data's units. ``memo``, where
+        given, is the same dict on each pass of a correction over the same rows: a learner may keep there
+        what a row's next input, close to its last, lets it reuse (it must predict the same to the last
+        bit as without)."""
 
     def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
         """Settings derived from one training run (training lengths, say) with their learners."""
@@ -415,17 +427,18 @@ class ResidualStrategy(Strategy):
         ]
         return terms.predict(groups, coef, x, channels)
 
-    def _residual(self, sensor: str, x: Array) -> Array:
+    def _residual(self, sensor: str, x: Array, memo: dict[str, Any] | None = None) -> Array:
         """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
         goes on along its edge slope (a one-sided difference over the last 0.1 % of the range) for up
         to a quarter of the range, and holds from there: a scale factor's curve that the rig followed
-        to 250 °/s is better continued to 300 than cut flat, and guessed no further."""
+        to 250 °/s is better continued to 300 than cut flat, and guessed no further. ``memo``: what the
+        learner may keep between the passes of one correction over the same rows (:meth:`_predict`)."""
         lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
         width = np.maximum(hi - lo, 1e-12)
         reach = np.clip(x, lo - 0.25 * width, hi + 0.25 * width)
         inside = np.clip(reach, lo, hi)
         learner = self._learner(sensor)
-        pred: Array = self._predict(learner, inside)
+        pred: Array = self._predict(learner, inside, memo)
         beyond = np.flatnonzero((reach != inside).any(axis=1))
         for d in range(x.shape[1]):
             rows = beyond[reach[beyond, d] != inside[beyond, d]]
@@ -444,19 +457,45 @@ class ResidualStrategy(Strategy):
         """Regression's correction ``x̂``, less the learned residual at the inputs, solved for by
         fixed-point iteration ``x ← x̂ − r(x)``: where regression is far off (a scale nonlinearity it
         folded into a scale factor) ``x̂`` itself is off by the residual, and ``r(x̂)`` by its slope times
-        that; each pass multiplies what is left by the slope (2e-2 for 3 °/s at 300 °/s)."""
+        that; each pass multiplies what is left by the slope (2e-2 for 3 °/s at 300 °/s). Solved
+        :data:`CORRECT_ROWS` rows at a time, on two threads from :data:`THREADED_ROWS` rows (``n_jobs``):
+        every row's figures are those of the whole array at once."""
         w_hat, f_hat = self._base_strategy().correct(gyro, accel)
+        if not (self.terms_ or self.used_.any()) or len(w_hat) == 0:
+            return w_hat, f_hat
+        temp_arr = None if temp is None else np.asarray(temp, dtype=float)
+        chunks = [slice(s, s + CORRECT_ROWS) for s in range(0, len(w_hat), CORRECT_ROWS)]
+
+        def solve(rows: slice) -> tuple[Array, Array]:
+            return self._solve(w_hat[rows], f_hat[rows], None if temp_arr is None else temp_arr[rows])
+
+        threads = self.n_jobs or (2 if len(w_hat) >= THREADED_ROWS else 1)
+        # The first chunk alone: the learners restore what they build on first use (a network, a k-d
+        # tree) before threads share them.
+        parts = [solve(chunks[0])]
+        if threads == 1:
+            parts += [solve(rows) for rows in chunks[1:]]
+        else:
+            with ThreadPoolExecutor(threads) as pool:
+                parts += pool.map(solve, chunks[1:])
+        if len(parts) == 1:
+            return parts[0]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+    def _solve(self, w_hat: Array, f_hat: Array, temp: Array | None) -> tuple[Array, Array]:
+        """:meth:`correct`'s fixed point on some rows, from regression's correction of them."""
         hat = (w_hat, f_hat)
         w, f = w_hat, f_hat
         with_terms = bool(self.terms_)
-        if not (with_terms or self.used_.any()):
-            return w, f
+        memos: dict[str, dict[str, Any]] = {sensor: {} for sensor in SENSORS}
         for _ in range(1 + _PASSES):
             out = []
             x = self._scaled(w, f, temp)  # once a pass, for the terms and both sensors' learners
             for si, sensor in enumerate(SENSORS):
                 mask = self.used_[3 * si : 3 * si + 3]
-                pred = self._residual(sensor, _columns(sensor, x)) * mask if mask.any() else 0.0
+                pred: Array | float = 0.0
+                if mask.any():
+                    pred = self._residual(sensor, _columns(sensor, x), memos[sensor]) * mask
                 if with_terms:
                     pred = pred + self._terms(x, range(3 * si, 3 * si + 3))
                 out.append(hat[si] - pred)
@@ -587,10 +626,12 @@ def _key(config: dict[str, Any]) -> str:
 
 
 __all__ = [
+    "CORRECT_ROWS",
     "EDGE_STEP",
     "MIN_REPEATS",
     "PATIENCE",
     "THREADED_POINTS",
+    "THREADED_ROWS",
     "Points",
     "ResidualStrategy",
     "aggregate",
