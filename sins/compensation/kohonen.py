@@ -542,8 +542,8 @@ class _Map:
         nodes, any input within ``(d2 − d1)/2`` of ``a`` has the same winner (the triangle inequality:
         its distance to the winner is below ``d1 + δ``, to any other node above ``d2 − δ``); a row that
         moved that far or more from where its winner was found is searched again. The same winners as a
-        search each pass, so the same output to the last bit (``tests/test_learned.py``), for one search
-        in place of three (``tools/bench_correction.py``)."""
+        search each pass, so the same output to the last bit (``tests/test_threaded_correction.py``), for
+        one search in place of three (``tools/bench_correction.py``)."""
         if memo.get("anchor") is None or memo["anchor"].shape != x.shape:
             win, margin = self._winners_and_margins(x)
             memo.update(

@@ -82,8 +82,8 @@ _MIN_TEMP_SPAN = 2.0
 EDGE_STEP = 1e-3
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
-#: Rows a correction solves at a time: its passes run chunk by chunk, each row's arithmetic the same as
-#: on the whole array (every step is row by row), in a few MB a chunk whatever the recording's length.
+#: Rows a correction solves at a time: its passes run chunk by chunk (every step is row by row), in a few
+#: MB a chunk whatever the recording's length.
 CORRECT_ROWS = 65_536
 #: The rows from which a correction solves its chunks on two threads by default (``n_jobs=None``): numpy,
 #: scipy's k-d tree and torch let go of the GIL for a chunk's work; below a few chunks a thread pool
@@ -459,7 +459,9 @@ class ResidualStrategy(Strategy):
         folded into a scale factor) ``x̂`` itself is off by the residual, and ``r(x̂)`` by its slope times
         that; each pass multiplies what is left by the slope (2e-2 for 3 °/s at 300 °/s). Solved
         :data:`CORRECT_ROWS` rows at a time, on two threads from :data:`THREADED_ROWS` rows (``n_jobs``):
-        every row's figures are those of the whole array at once."""
+        the whole array's figures, a map's to the last bit; a network's within its rounding where torch
+        picks another kernel for the rows it is given (a handful extrapolated beyond the box), and on one
+        thread or two the same to the last bit."""
         w_hat, f_hat = self._base_strategy().correct(gyro, accel)
         if not (self.terms_ or self.used_.any()) or len(w_hat) == 0:
             return w_hat, f_hat
