@@ -146,7 +146,7 @@ def add(sub: Subparsers) -> None:
         help="a rig CSV, or a recording with --truth or its own reference; several recordings of one unit "
         "(each with its own reference) are fitted together",
     )  # fmt: skip
-    add_dataset(p, repeat=True)
+    add_dataset(p, repeat="to fit on several recordings of one unit")
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv",
         help="the recording's reference trajectory (attitude and velocity): the fit is made on intervals",

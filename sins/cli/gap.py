@@ -201,7 +201,7 @@ def add(sub: Subparsers) -> None:
         help="a rig CSV, a recording with --truth, or one with its own reference (.npz, EuRoC/TUM-VI "
         "folder, bag)",
     )  # fmt: skip
-    add_dataset(p, repeat=True)
+    add_dataset(p, repeat="to diagnose several recordings of one unit and set their verdicts side by side")
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the trajectory of an IMU recording")
     p.add_argument(
         "--statistic", choices=("auto", "samples", "intervals"), default="auto",

@@ -53,15 +53,15 @@ def fraction(text: str) -> float:
     return value
 
 
-def add_dataset(p: argparse.ArgumentParser, *, repeat: bool = False) -> None:
+def add_dataset(p: argparse.ArgumentParser, *, repeat: str = "") -> None:
     """``--dataset NAME`` (sins.io.datasets.NAMES, written out: importing the readers would slow every
-    command's start); with ``repeat``, given once per recording."""
+    command's start); with ``repeat`` (what several do, for the help), given once per recording."""
     p.add_argument(
         "--dataset", metavar="NAME", action="append" if repeat else "store",
         help="a real dataset from the data root instead of a file: ferraris, ferraris_annotated, "
         "psins_vehicle, psins_lasergyro, broad_05, broad_18 (and broad_NN for every NN_*.mat in the data "
         "root's broad_mocap/), or FOLDER/NAME for any NAME.npz in a folder of the data root "
-        "(euroc/V1_01_easy)" + ("; repeat it to fit on several recordings of one unit" if repeat else ""),
+        "(euroc/V1_01_easy)" + (f"; repeat it {repeat}" if repeat else ""),
     )  # fmt: skip
 
 
