@@ -247,7 +247,7 @@ def ideal_inputs(rec: Recording) -> tuple[CalibrationData, NavSeries]:
     inside = (t >= rec.truth.t[0]) & (t <= rec.truth.t[-1])
     t, gyro, accel = t[inside], gyro[inside], accel[inside]
     if len(t) < 4:
-        raise SinsInputError(f"{rec.source}: fewer than 4 readings within the reference's time span")
+        raise SinsInputError(f"{rec.name}: fewer than 4 readings within the reference's time span")
     at = rec.truth.interpolate(t)
     ideal = trajectory.ideal_rates(motion.RecordedMotion.from_series(rec.truth), at)
     data = CalibrationData(
