@@ -13,7 +13,7 @@ import numpy_gap as ng
 import pytest
 
 from sins.core.series import CalibrationData
-from sins.gap import candidates, channel, diagnose, disturbance, lattice, randombias
+from sins.gap import candidates, channel, design, diagnose, disturbance, lattice, randombias
 from sins.gap.design import Design, Projection
 from sins.imu.numerics import hermite_slopes
 
@@ -230,3 +230,33 @@ def test_the_baseline_block_of_a_chunk_is_the_baseline_columns():
         np.testing.assert_array_equal(
             channel._baseline_block(sensor, part), candidates.baseline_columns(sensor, w[123:456], f[123:456])
         )
+
+
+def test_free_memory_is_handed_back_once_the_heap_holds_more_than_its_threshold(monkeypatch):
+    """``release_free_memory`` trims glibc's heap only past ``TRIM_ABOVE_BYTES`` free (what trimming
+    after every fit cost is the next arrays' pages again), and trims as before where ``mallinfo2`` is
+    missing (glibc before 2.33); on this machine's glibc the heap's own figure is read."""
+    trims: list[int] = []
+
+    class Libc:
+        def malloc_trim(self, pad: int) -> int:
+            trims.append(pad)
+            return 1
+
+    class Info:
+        fordblks = design.TRIM_ABOVE_BYTES - 1
+
+    monkeypatch.setattr(design, "_LIBC", Libc())
+    monkeypatch.setattr(design, "_MALLINFO2", Info)
+    design.release_free_memory()
+    assert trims == []
+    Info.fordblks = design.TRIM_ABOVE_BYTES + 1
+    design.release_free_memory()
+    assert trims == [0]
+    monkeypatch.setattr(design, "_MALLINFO2", None)
+    design.release_free_memory()
+    assert trims == [0, 0]
+    monkeypatch.undo()
+    if design._MALLINFO2 is not None:  # glibc 2.33 or later: the struct reads as glibc fills it
+        info = design._MALLINFO2()
+        assert 0 < info.uordblks <= info.arena and info.fordblks <= info.arena

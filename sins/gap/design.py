@@ -204,14 +204,36 @@ class Design:
             yield lo, hi, self.block(lo, hi)[rows[lo:hi]]
 
 
+#: The free memory glibc's heap may keep before :func:`release_free_memory` hands it back, bytes. Handing
+#: back costs the next arrays their pages again (the kernel's time, ~6 % of a short diagnosis when done
+#: between every fit); below this, what is kept is not worth it.
+TRIM_ABOVE_BYTES = 64 << 20
+
+
+class _MallInfo2(ctypes.Structure):
+    """glibc's ``struct mallinfo2`` (2.33 and later): the heap's figures, ``size_t`` each."""
+
+    _fields_ = [
+        (name, ctypes.c_size_t)
+        for name in (
+            "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks",
+            "keepcost",
+        )
+    ]  # fmt: skip
+
+
 def release_free_memory() -> None:
     """Hand the C allocator's free pages back to the system, where it is glibc's (``malloc_trim``;
-    elsewhere nothing). numpy takes a chunk's arrays (a few MB each) from glibc's heap, and glibc
-    keeps what is freed there resident for the next: over a long diagnosis hundreds of MB that no
-    array holds. Called between the stages that build and drop a recording's worth of chunks."""
+    elsewhere nothing), once its heap holds more than :data:`TRIM_ABOVE_BYTES` free. numpy takes a
+    chunk's arrays (a few MB each) from glibc's heap, and glibc keeps what is freed there resident for
+    the next: over a long diagnosis hundreds of MB that no array holds. Called between the stages that
+    build and drop a recording's worth of chunks."""
     trim = getattr(_LIBC, "malloc_trim", None)
-    if trim is not None:
-        trim(0)
+    if trim is None:
+        return
+    if _MALLINFO2 is not None and _MALLINFO2().fordblks < TRIM_ABOVE_BYTES:
+        return
+    trim(0)
 
 
 def _libc() -> ctypes.CDLL | None:
@@ -222,6 +244,19 @@ def _libc() -> ctypes.CDLL | None:
 
 
 _LIBC = _libc() if sys.platform.startswith("linux") else None
+
+
+def _mallinfo2() -> Callable[[], _MallInfo2] | None:
+    """glibc's ``mallinfo2`` (the heap's free bytes without walking it), or None before glibc 2.33."""
+    function = getattr(_LIBC, "mallinfo2", None)
+    if function is None:
+        return None
+    function.restype = _MallInfo2
+    function.argtypes = []
+    return function
+
+
+_MALLINFO2 = _mallinfo2()
 
 
 @dataclass(frozen=True, eq=False)
@@ -339,6 +374,7 @@ class Projection:
 
 __all__ = [
     "KEPT_BYTES",
+    "TRIM_ABOVE_BYTES",
     "Design",
     "Factor",
     "Projection",
