@@ -61,11 +61,12 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
         assert trees > 0 and 2 * trees * len(gyro) < searched["rows"] < 1.2 * 2 * trees * len(gyro)
 
     monkeypatch.setattr(residual, "CORRECT_ROWS", 10**9)
-    monkeypatch.setattr(
-        kohonen._Map,
-        "_kept",
-        lambda self, x, memo: (self._offset[self.winners(x)], self._slope[self.winners(x)]),
-    )
+
+    def searched_each_pass(self, x, memo):
+        win = self.winners(x)
+        return self._offset[win], self._slope[win]
+
+    monkeypatch.setattr(kohonen._Map, "_kept", searched_each_pass)
     whole = model.correct(gyro, accel, temp)
     base = model._base_strategy().correct(gyro, accel)
     for a, b, c in zip(one_thread, whole, base, strict=True):

@@ -528,11 +528,11 @@ class _Map:
         """The map's output at ``x``; ``memo`` kept between calls on the same rows (:meth:`_kept`)."""
         if memo is None or self.codebook.shape[1] == 1:
             win = self.winners(x[:, self.win_cols])
-            out: Array = self._offset[win] + np.einsum("nd,ndc->nc", x[:, self.plane_cols], self._slope[win])
-            return out
-        offset, slope = self._kept(x[:, self.win_cols], memo)
-        kept: Array = offset + np.einsum("nd,ndc->nc", x[:, self.plane_cols], slope)
-        return kept
+            offset, slope = self._offset[win], self._slope[win]
+        else:
+            offset, slope = self._kept(x[:, self.win_cols], memo)
+        out: Array = offset + np.einsum("nd,ndc->nc", x[:, self.plane_cols], slope)
+        return out
 
     def _kept(self, x: Array, memo: dict[str, Any]) -> tuple[Array, Array]:
         """Each row's winner's offset and slope, found again only for the rows that may have a new one.
@@ -546,15 +546,13 @@ class _Map:
         one search in place of three (``tools/bench_correction.py``)."""
         if memo.get("anchor") is None or memo["anchor"].shape != x.shape:
             win, margin = self._winners_and_margins(x)
-            memo.update(
-                anchor=x.copy(), win=win, margin=margin, offset=self._offset[win], slope=self._slope[win]
-            )
+            memo.update(anchor=x.copy(), margin=margin, offset=self._offset[win], slope=self._slope[win])
             return memo["offset"], memo["slope"]
         moved = np.sqrt(((x - memo["anchor"]) ** 2).sum(axis=1))
         again = np.flatnonzero(~(moved < memo["margin"]))  # NaN searched again
         if again.size:
             win, margin = self._winners_and_margins(x[again])
-            memo["anchor"][again], memo["win"][again], memo["margin"][again] = x[again], win, margin
+            memo["anchor"][again], memo["margin"][again] = x[again], margin
             memo["offset"][again], memo["slope"][again] = self._offset[win], self._slope[win]
         return memo["offset"], memo["slope"]
 
