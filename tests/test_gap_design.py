@@ -145,6 +145,48 @@ def test_the_delayed_reference_on_uneven_times_is_scipys_to_the_last_bit(small_c
         for tau in (3e-3, 0.0173, 0.9, 2.5, -0.041, -1.7):
             expected = whole(np.clip(t - tau, t[0], t[-1])) - ref[:, axis]
             np.testing.assert_array_equal(curve.lag(tau), expected)
+            np.testing.assert_array_equal(x.lag("gyro", axis, tau), expected)
+
+
+@pytest.mark.parametrize("made", ["a chunk at a time", "whole"])
+def test_the_delayed_inputs_of_a_chunk_are_the_whole_delayed_inputs_to_the_last_bit(
+    small_chunks: int, made: str
+):
+    """The inputs at ``t − τ`` a delayed channel's columns are built from
+    (:class:`candidates.DelayedInputs`), made a chunk of rows at a time (what a model keeps) and whole
+    (for one fit's passes), against the same made whole here: the reference plus scipy's ``PPoly``
+    lag of every axis, and their rates of change ``central_differences`` of those whole arrays (and
+    numpy's ``gradient``, whose formulas it writes out, to rounding), on uneven rows with a
+    temperature; chunks that start and end anywhere, one of a single row at each end. Equal, bit for
+    bit."""
+    rng = np.random.default_rng(11)
+    n = 2_023  # 6 × 337 + 1: the last chunk of the diagnosis's own spans is one row
+    t = np.cumsum(np.full(n, 0.01) * (1.0 + 0.2 * rng.uniform(-1.0, 1.0, n)))
+    omega = np.column_stack([np.sin(0.9 * t), np.cos(2.1 * t), 0.3 * rng.standard_normal(n)])
+    force = np.column_stack([9.8 * np.cos(0.4 * t), rng.standard_normal(n), np.sin(3.0 * t)])
+    temp = 20.0 + 0.01 * t
+    data = CalibrationData(t=t, gyro=omega, accel=force, ref_gyro=omega, ref_accel=force, temp=temp)
+    x = candidates.reference_inputs(data)
+    tau = 0.0237
+    late = channel.delayed_inputs(x, tau)
+    late = late.whole() if made == "whole" else late
+    whole = {}
+    for sensor, u in (("gyro", omega), ("accel", force)):
+        curves = [candidates.kinked_hermite(t, u[:, j], x.rate(sensor)[:, j]) for j in range(3)]
+        # the reference plus its lag, as the diagnosis forms them (not the curve's value alone)
+        lagged = u + np.column_stack(
+            [c(np.clip(t - tau, t[0], t[-1])) - u[:, j] for j, c in enumerate(curves)]
+        )
+        whole[sensor] = lagged, candidates.central_differences(lagged, t), np.gradient(lagged, t, axis=0)
+    for lo, hi in [(0, 1), (0, 337), (336, 1_000), (1_000, 2_022), (2_022, 2_023), (5, 6), (0, n)]:
+        part = late.rows(lo, hi)
+        np.testing.assert_array_equal(part.t, t[lo:hi])
+        np.testing.assert_array_equal(part.temp, temp[lo:hi])
+        for sensor in ("gyro", "accel"):
+            lagged, rate, numpys = whole[sensor]
+            np.testing.assert_array_equal(part.of(sensor), lagged[lo:hi])
+            np.testing.assert_array_equal(part.rate(sensor), rate[lo:hi])
+            np.testing.assert_allclose(part.rate(sensor), numpys[lo:hi], rtol=1e-9, atol=1e-9)
 
 
 def test_a_step_and_a_hum_are_found_alike_in_chunks(small_chunks: int):

@@ -153,10 +153,32 @@ class ReferenceInputs:
         )
 
     def lag(self, sensor: str, axis: int, delay_s: float) -> Array:
-        """``u(t − τ) − u(t)`` of the reference ``u`` of one axis: cubic Hermite between the rows
-        (:func:`kinked_hermite`), held at the ends. A search over τ builds the curve once
-        (:meth:`curve`) and asks it each lag."""
-        return self.curve(sensor, axis).lag(delay_s)
+        """``u(t − τ) − u(t)`` of the reference ``u`` of one axis at every row: cubic Hermite between
+        the rows (:func:`kinked_hermite`), held at the ends; made a chunk of rows at a time
+        (:meth:`lag_rows`). A search over τ builds the curve once (:meth:`curve`) and asks it each
+        lag: the same values to the last bit."""
+        n = len(self.t)
+        out = np.empty(n)
+        for lo, hi in spans(n):
+            out[lo:hi] = self.lag_rows(sensor, axis, delay_s, lo, hi)
+        return out
+
+    def lag_rows(self, sensor: str, axis: int | None, delay_s: float, start: int, stop: int) -> Array:
+        """:meth:`lag` of rows ``start … stop`` alone, (m,) of one ``axis`` or (m, 3) of every axis
+        (None: the rows' intervals found once for the three), from the curve's pieces those rows
+        reach back into (built for them: the whole curve is four floats a row)."""
+        assert self.whole is None, "the lag of the whole recording's rows"
+        t = self.t
+        u = self.of(sensor) if axis is None else self.of(sensor)[:, axis : axis + 1]
+        if len(t) < 2:
+            out = np.zeros((stop - start, u.shape[1]))
+        else:
+            when, i = _reached(t, delay_s, self.step_s, start, stop)
+            first = int(i.min()) if len(i) else 0
+            last = int(i.max()) + 1 if len(i) else 0
+            coef = self._coefficients(sensor, axis, first, last)
+            out = _hermite_values(coef, i - first, (when - t[i])[:, None]) - u[start:stop]
+        return out if axis is None else out[:, 0]
 
     def curve(self, sensor: str, axis: int) -> HermiteCurve:
         """The cubic Hermite curve of one axis of ``sensor``'s reference through the rows
@@ -164,17 +186,69 @@ class ReferenceInputs:
         time (each row's slope the whole recording's :meth:`rate`: its neighbours either side are
         taken in)."""
         assert self.whole is None, "the curve of the whole recording's rows"
-        t, u, kinks = self.t, self.of(sensor)[:, axis], self.kinks[sensor, axis]
-        n = len(t)
+        n = len(self.t)
         coef = np.empty((4, max(n - 1, 0)))
         for lo, hi in spans(n - 1):
-            piece = slice(lo, hi + 1)  # the intervals lo … hi − 1 and the rows that bound them
-            right = self.rows(lo, hi + 1).rate(sensor, axis)
-            left = right.copy()
-            at = slice(*np.searchsorted(kinks.rows, [lo, hi + 1]))
-            right[kinks.rows[at] - lo], left[kinks.rows[at] - lo] = kinks.right[at], kinks.left[at]
-            coef[:, lo:hi] = _hermite_coefficients(t[piece], u[piece], right, left)
-        return HermiteCurve(t, u, coef, self.step_s)
+            coef[:, lo:hi] = self._coefficients(sensor, axis, lo, hi)[:, :, 0]
+        return HermiteCurve(self.t, self.of(sensor)[:, axis], coef, self.step_s)
+
+    def _coefficients(self, sensor: str, axis: int | None, start: int, stop: int) -> Array:
+        """(4, stop − start, k) the curve's coefficients of the intervals ``start … stop − 1`` of one
+        ``axis`` (k = 1) or of every axis (None, k = 3); each interval's alone: the same bits whichever
+        intervals and axes are built together."""
+        axes = range(3) if axis is None else [axis]
+        u = self.of(sensor) if axis is None else self.of(sensor)[:, axis : axis + 1]
+        if stop <= start:
+            return np.empty((4, 0, len(axes)))
+        piece = slice(start, stop + 1)  # the intervals and the rows that bound them
+        right = self.rows(start, stop + 1).rate(sensor, axis).reshape(stop + 1 - start, -1)
+        left = right.copy()
+        for j, a in enumerate(axes):
+            kinks = self.kinks[sensor, a]
+            at = slice(*np.searchsorted(kinks.rows, [start, stop + 1]))
+            right[kinks.rows[at] - start, j], left[kinks.rows[at] - start, j] = (
+                kinks.right[at],
+                kinks.left[at],
+            )
+        return _hermite_coefficients(self.t[piece], u[piece], right, left)
+
+
+@dataclass(frozen=True, eq=False)
+class DelayedInputs:
+    """The reference inputs at ``t − τ`` (the rate and the force of every axis along their Hermite
+    curves, :meth:`ReferenceInputs.lag`), made a chunk of rows at a time when asked for (:meth:`rows`)
+    or whole for the passes of one fit (:meth:`whole`): a model that keeps them keeps only how to make
+    them (whole, they were two more (n, 3) arrays per delayed channel, 171 MB each at 3.57 M rows).
+    Their rates of change are those of the delayed inputs themselves. Either way the same values to
+    the last bit."""
+
+    x: ReferenceInputs
+    delay_s: float
+
+    @property
+    def t(self) -> Array:
+        """(n,) s, the rows' times (the undelayed reference's)."""
+        return self.x.t
+
+    def whole(self) -> ReferenceInputs:
+        """The delayed inputs of every row, made a chunk at a time (the curve's pieces of one chunk at
+        a time): for the many passes over the rows of one fit, which would make them again each pass."""
+        x, n = self.x, len(self.x.t)
+        omega, force = np.empty((n, 3)), np.empty((n, 3))
+        for lo, hi in spans(n):
+            omega[lo:hi] = x.omega_ib_b[lo:hi] + x.lag_rows("gyro", None, self.delay_s, lo, hi)
+            force[lo:hi] = x.f_ib_b[lo:hi] + x.lag_rows("accel", None, self.delay_s, lo, hi)
+        return dataclasses.replace(x, omega_ib_b=omega, f_ib_b=force)
+
+    def rows(self, start: int, stop: int) -> ReferenceInputs:
+        """Rows ``start … stop`` of the delayed inputs, made with two rows either side (a row's rate of
+        change takes its neighbours, and a recording of three rows or more gives three here)."""
+        x, tau = self.x, self.delay_s
+        a, b = max(start - 2, 0), min(stop + 2, len(x.t))
+        omega = x.omega_ib_b[a:b] + x.lag_rows("gyro", None, tau, a, b)
+        force = x.f_ib_b[a:b] + x.lag_rows("accel", None, tau, a, b)
+        near = dataclasses.replace(x.rows(a, b), omega_ib_b=omega, f_ib_b=force, start=0, whole=None)
+        return near.rows(start - a, stop - a)
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,18 +273,31 @@ class HermiteCurve:
         if n < 2:
             out[:] = 0.0
             return out
-        shift = math.ceil(delay_s / self.step_s)  # a row's interval where the rows are evenly spaced
-        c = self.coef
         for lo, hi in spans(n):
-            when = np.clip(t[lo:hi] - delay_s, t[0], t[-1])
-            i = _intervals(t, when, np.arange(lo, hi) - shift)
-            s = when - t[i]
-            value = c[3, i] + c[2, i] * s
-            s2 = s * s
-            value += c[1, i] * s2
-            value += c[0, i] * (s2 * s)
-            out[lo:hi] = value - self.u[lo:hi]
+            when, i = _reached(t, delay_s, self.step_s, lo, hi)
+            out[lo:hi] = _hermite_values(self.coef, i, when - t[i]) - self.u[lo:hi]
         return out
+
+
+def _reached(
+    t: Array, delay_s: float, step_s: float, start: int, stop: int
+) -> tuple[Array, NDArray[np.intp]]:
+    """The times ``t − τ`` of rows ``start … stop`` (held within ``t[0] … t[-1]``) and the interval
+    of the curve each falls in (a row's found from its own by the delay in rows where the rows are
+    evenly spaced, then stepped to the right one: ``PPoly``'s search without its cost)."""
+    when = np.clip(t[start:stop] - delay_s, t[0], t[-1])
+    shift = math.ceil(delay_s / step_s)
+    return when, _intervals(t, when, np.arange(start, stop) - shift)
+
+
+def _hermite_values(c: Array, i: NDArray[np.intp], s: Array) -> Array:
+    """The power form ``c`` of intervals ``i`` at ``s`` past each interval's start: ``PPoly``'s sum of
+    powers, in its order (the same bits)."""
+    value = c[3, i] + c[2, i] * s
+    s2 = s * s
+    value += c[1, i] * s2
+    value += c[0, i] * (s2 * s)
+    return value
 
 
 def _intervals(t: Array, when: Array, guess: NDArray[np.intp]) -> NDArray[np.intp]:
@@ -287,11 +374,11 @@ def reference_inputs(data: CalibrationData) -> ReferenceInputs:
 def _hermite_coefficients(t: Array, u: Array, right: Array, left: Array) -> Array:
     """The power-form coefficients (4, n − 1) of the cubic Hermite curve through ``(t, u)`` that
     leaves each row with slope ``right`` and enters it with ``left``, as scipy's
-    ``CubicHermiteSpline`` builds them with one slope a row."""
-    dx = np.diff(t)
-    slope = np.diff(u) / dx
+    ``CubicHermiteSpline`` builds them with one slope a row; (4, n − 1, k) for k axes side by side."""
+    dx = np.diff(t) if u.ndim == 1 else np.diff(t)[:, None]
+    slope = np.diff(u, axis=0) / dx
     tt = (right[:-1] + left[1:] - 2 * slope) / dx
-    c = np.empty((4, len(t) - 1))
+    c = np.empty((4, *slope.shape))
     c[0] = tt / dx
     c[1] = (slope - right[:-1]) / dx - tt
     c[2] = right[:-1]
@@ -371,6 +458,7 @@ __all__ = [
     "CANDIDATES",
     "CHUNK_ROWS",
     "Candidate",
+    "DelayedInputs",
     "HermiteCurve",
     "Kinks",
     "ReferenceInputs",

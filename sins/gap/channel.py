@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from sins.gap import lattice, randombias
-from sins.gap.candidates import Candidate, ReferenceInputs
+from sins.gap.candidates import Candidate, DelayedInputs, ReferenceInputs
 from sins.gap.design import Design, Maker, Projection
 from sins.gap.floor import TINY, noise_floor
 from sins.gap.lattice import Printed
@@ -84,7 +84,7 @@ class ChannelModel:
     fit_loglik : the process's innovations' log-likelihood on the fit rows, once fitted
     coefficients : the regressors' coefficients, of the unscaled columns in :attr:`columns`' order, once
         fitted (beside a random bias, its generalised least squares')
-    late : with a delay, once fitted, the inputs at ``t − τ`` (:func:`delayed_inputs`), which the
+    late : with a delay, once fitted, how to make the inputs at ``t − τ`` (:func:`delayed_inputs`), which the
         columns are built from: a sensor that reads its input late forms every error of it from what
         it read (a scale factor scales the delayed input), so beside a large lag (a rig that steps
         its orientation within a row: a 3 ms delay at 20 Hz lags the force by 2.3 m/s² there) the
@@ -109,7 +109,7 @@ class ChannelModel:
     loglik_rows: Array | None = None
     fit_loglik: float = np.nan
     coefficients: Array | None = None
-    late: ReferenceInputs | None = None
+    late: DelayedInputs | None = None
 
     @classmethod
     def baseline(
@@ -209,11 +209,12 @@ class ChannelModel:
                 # First beside the columns of the inputs at t, then beside those at t − τ (the
                 # channel's errors are those of the input it reads late): a second search from there.
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
-                late = delayed_inputs(self.x, delay_s)
-                design = Design(late, self.columns)
+                design = Design(delayed_inputs(self.x, delay_s).whole(), self.columns)
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
                 late = delayed_inputs(self.x, delay_s)
-            design = Design(late or self.x, self.columns)
+            assert late is not None
+            # Made whole for this fit's passes over the rows, and let go with it: the model keeps how.
+            design = Design(late.whole(), self.columns)
             lag = self.x.lag(self.sensor, self.axis, delay_s)
             error = error - lag
         # The columns scaled on the fit rows, whichever rows fit them.
@@ -226,7 +227,9 @@ class ChannelModel:
             del pred  # what least squares leave is all the random bias's fit needs of them
             process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
-                return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
+                return dataclasses.replace(
+                    self, delay_s=delay_s, late=late, predicted=np.full_like(error, np.nan)
+                )
             pred, fit_loglik, coef = process
         if lag is not None:
             pred = pred + lag
@@ -313,14 +316,13 @@ class ChannelModel:
         return expected * grid.step + grid.offset - reference, quantizer, loglik_rows
 
 
-def delayed_inputs(x: ReferenceInputs, delay_s: float) -> ReferenceInputs:
+def delayed_inputs(x: ReferenceInputs, delay_s: float) -> DelayedInputs:
     """The reference inputs at ``t − τ`` (the rate and the force of every axis along their Hermite
     curves, :meth:`~sins.gap.candidates.ReferenceInputs.lag`): what a sensor reading its input
-    ``delay_s`` late forms its errors from. The simulator delays the whole input alike
+    ``delay_s`` late forms its errors from, made a chunk of rows at a time as the columns ask
+    (:class:`~sins.gap.candidates.DelayedInputs`). The simulator delays the whole input alike
     (:func:`sins.imu.effect_set.shift_samples`)."""
-    omega = np.column_stack([x.omega_ib_b[:, j] + x.lag("gyro", j, delay_s) for j in range(3)])
-    force = np.column_stack([x.f_ib_b[:, j] + x.lag("accel", j, delay_s) for j in range(3)])
-    return dataclasses.replace(x, omega_ib_b=omega, f_ib_b=force)
+    return DelayedInputs(x, delay_s)
 
 
 def _baseline_block(sensor: str, x: ReferenceInputs) -> Array:

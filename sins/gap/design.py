@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
-from sins.gap.candidates import ReferenceInputs, spans
+from sins.gap.candidates import DelayedInputs, ReferenceInputs, spans
 
 Array = NDArray[np.float64]
 Rows = NDArray[np.bool_]
@@ -51,7 +51,7 @@ class Design:
     """The columns ``A`` (n, k) of a channel's least squares, built per chunk of rows from ``makers``
     (each a block of columns, side by side), each column divided by ``scale`` where given."""
 
-    x: ReferenceInputs
+    x: ReferenceInputs | DelayedInputs
     makers: tuple[Maker, ...]
     scale: Array | None = None
 
