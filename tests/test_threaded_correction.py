@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from sins import compensation, imu
 from sins.compensation import kohonen, residual
@@ -75,3 +76,26 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
             np.testing.assert_array_equal(a, b)
         else:
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.abs(b - c).max())
+
+
+def test_a_correction_holds_blas_to_one_thread_beside_its_own(monkeypatch: pytest.MonkeyPatch):
+    """The chunks' threads are the correction's parallelism: numpy's BLAS inside each learner's
+    prediction runs on one thread whatever the caller set (two here, as an unset environment gives on
+    two cores), and the caller's setting is back afterwards."""
+    fit = calibration.simulate_rig(FAST, imu_spec.draw_unit("tactical", 3, 103).only(*imu.BASELINE), seed=3)
+    small = fit.rows(slice(0, len(fit), 8))
+    model = compensation.make("kohonen", guard=False, n_jobs=2, sizes=(5, 8)).fit(small)
+    seen: list[int] = []
+    predict = kohonen._Map.predict
+
+    def counted(self, *args, **kwargs):
+        seen.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+        return predict(self, *args, **kwargs)
+
+    monkeypatch.setattr(kohonen._Map, "predict", counted)
+    monkeypatch.setattr(residual, "CORRECT_ROWS", 1_000)
+    with threadpool_limits(limits=2, user_api="blas"):
+        model.correct(fit.gyro, fit.accel, fit.temp)
+        after = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert seen and set(seen) == {1}
+    assert set(after) == {2}

@@ -54,6 +54,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from sins.compensation import terms
 from sins.compensation.base import Strategy, state_array
@@ -472,14 +473,18 @@ class ResidualStrategy(Strategy):
             return self._solve(w_hat[rows], f_hat[rows], None if temp_arr is None else temp_arr[rows])
 
         threads = self.n_jobs or (2 if len(w_hat) >= THREADED_ROWS else 1)
-        # The first chunk alone: the learners restore what they build on first use (a network, a k-d
-        # tree) before threads share them.
-        parts = [solve(chunks[0])]
-        if threads == 1:
-            parts += [solve(rows) for rows in chunks[1:]]
-        else:
-            with ThreadPoolExecutor(threads) as pool:
-                parts += pool.map(solve, chunks[1:])
+        # BLAS on one thread (numpy's products of a chunk are small): its own threads beside the
+        # chunks' had four threads on two cores, 17-20 % slower; and one thread or two, whatever the
+        # environment, the same sums.
+        with threadpool_limits(limits=1, user_api="blas"):
+            # The first chunk alone: the learners restore what they build on first use (a network, a
+            # k-d tree) before threads share them.
+            parts = [solve(chunks[0])]
+            if threads == 1:
+                parts += [solve(rows) for rows in chunks[1:]]
+            else:
+                with ThreadPoolExecutor(threads) as pool:
+                    parts += pool.map(solve, chunks[1:])
         if len(parts) == 1:
             return parts[0]
         return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
