@@ -99,3 +99,28 @@ def test_a_correction_holds_blas_to_one_thread_beside_its_own(monkeypatch: pytes
         after = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
     assert seen and set(seen) == {1}
     assert set(after) == {2}
+
+
+def test_a_maps_two_nearest_nodes_are_scipys():
+    """The compiled scan of every node (a correction's search up to ``_SCANNED_NODES`` nodes) against
+    scipy's k-d tree: the same two nearest nodes and the same distances to the last bit, on 3 and 5
+    inputs; where two nodes tie (a node given twice) the winner is the tree's own choice and the row is
+    never kept (its margin below zero); a map of one node keeps every row."""
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(5)
+    for inputs in (3, 5):
+        codebook = rng.normal(size=(144, inputs))
+        x = 1.5 * rng.normal(size=(20_000, inputs))
+        near, dist = kohonen._two_nearest(x, codebook)
+        d, n = cKDTree(codebook).query(x, k=2)
+        np.testing.assert_array_equal(near, n)
+        np.testing.assert_array_equal(dist, d)
+    codebook = np.vstack([codebook, codebook[:1]])  # node 144 ties with node 0
+    one = kohonen._Map([0, 1, 2, 3, 4], [0], codebook, np.eye(len(codebook)), np.zeros((len(codebook), 2, 3)))
+    x = codebook[:1] + 1e-3
+    win, margin = one._winners_and_margins(x)
+    assert win[0] == one.winners(x)[0] and margin[0] < 0.0
+    single = kohonen._Map([0, 1], [0], np.zeros((1, 2)), np.eye(1), np.zeros((1, 2, 3)))
+    win, margin = single._winners_and_margins(rng.normal(size=(10, 2)))
+    assert np.all(win == 0) and np.all(np.isinf(margin))
