@@ -503,8 +503,8 @@ class _Map:
         centres = _centres(codebook, win_cols, plane_cols)
         # Won by node w: Σ_j h_wj (a_j + B_j (x − c_j)) = Σ_j h_wj (a_j − B_j c_j) + (Σ_j h_wj B_j) x.
         offsets = planes[:, 0, :] - np.einsum("kdc,kd->kc", planes[:, 1:, :], centres)
-        self._offset = blend @ offsets  # (k, 3)
-        self._slope = np.einsum("wk,kdc->wdc", blend, planes[:, 1:, :])  # (k, d, 3)
+        self._offset = np.ascontiguousarray(blend @ offsets)  # (k, 3)
+        self._slope = np.ascontiguousarray(np.einsum("wk,kdc->wdc", blend, planes[:, 1:, :]))  # (k, d, 3)
         self._tree: Any = None
 
     def winners(self, x: Array) -> NDArray[np.intp]:
@@ -526,17 +526,16 @@ class _Map:
         return self._tree
 
     def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
-        """The map's output at ``x``; ``memo`` kept between calls on the same rows (:meth:`_kept`)."""
+        """The map's output at ``x``, each row's winner's plane (:func:`_planes`); ``memo`` kept between
+        calls on the same rows (:meth:`_kept`)."""
         if memo is None or self.codebook.shape[1] == 1:
             win = self.winners(x[:, self.win_cols])
-            offset, slope = self._offset[win], self._slope[win]
         else:
-            offset, slope = self._kept(x[:, self.win_cols], memo)
-        out: Array = offset + np.einsum("nd,ndc->nc", x[:, self.plane_cols], slope)
-        return out
+            win = self._kept(x[:, self.win_cols], memo)
+        return _planes(np.ascontiguousarray(x[:, self.plane_cols]), win, self._offset, self._slope)
 
-    def _kept(self, x: Array, memo: dict[str, Any]) -> tuple[Array, Array]:
-        """Each row's winner's offset and slope, found again only for the rows that may have a new one.
+    def _kept(self, x: Array, memo: dict[str, Any]) -> NDArray[np.intp]:
+        """Each row's winner, found again only for the rows that may have a new one.
 
         A correction's passes move a row's input by about the residual, far less than the nodes lie
         apart. Where a row's winner was found at ``a`` with distances ``d1 < d2`` to its nearest two
@@ -547,15 +546,14 @@ class _Map:
         one search in place of three (``tools/bench_correction.py``)."""
         if memo.get("anchor") is None or memo["anchor"].shape != x.shape:
             win, margin = self._winners_and_margins(x)
-            memo.update(anchor=x.copy(), margin=margin, offset=self._offset[win], slope=self._slope[win])
-            return memo["offset"], memo["slope"]
+            memo.update(anchor=x.copy(), margin=margin, win=win)
+            return win
         moved = np.sqrt(((x - memo["anchor"]) ** 2).sum(axis=1))
         again = np.flatnonzero(~(moved < memo["margin"]))  # NaN searched again
         if again.size:
             win, margin = self._winners_and_margins(x[again])
-            memo["anchor"][again], memo["margin"][again] = x[again], margin
-            memo["offset"][again], memo["slope"][again] = self._offset[win], self._slope[win]
-        return memo["offset"], memo["slope"]
+            memo["anchor"][again], memo["margin"][again], memo["win"][again] = x[again], margin, win
+        return memo["win"]
 
     def _winners_and_margins(self, x: Array) -> tuple[NDArray[np.intp], Array]:
         """:meth:`winners`, and how far each row may move and keep its winner (half the gap between its
@@ -600,14 +598,35 @@ def _two_nearest(x: Array, codebook: Array) -> tuple[NDArray[np.intp], Array]:  
                 d[j] += e * e
         d1, d2, j1, j2 = np.inf, np.inf, 0, 0
         for j in range(k):
-            if d[j] < d1:
-                d2, j2 = d1, j1
-                d1, j1 = d[j], j
-            elif d[j] < d2:
-                d2, j2 = d[j], j
+            dj = d[j]
+            if dj < d2:  # few are: one test for most nodes
+                if dj < d1:
+                    d2, j2 = d1, j1
+                    d1, j1 = dj, j
+                else:
+                    d2, j2 = dj, j
         near[i, 0], near[i, 1] = j1, j2
         dist[i, 0], dist[i, 1] = np.sqrt(d1), np.sqrt(d2)
     return near, dist
+
+
+@numba.njit(cache=True, nogil=True)
+def _planes(
+    x: Array, win: NDArray[np.intp], offset: Array, slope: Array
+) -> Array:  # pragma: no cover  (compiled)
+    """Each row's winner's plane at its inputs, ``offset[w] + Σ_j x_j slope[w, j]``: numpy's
+    ``offset[win] + einsum("nd,ndc->nc", x, slope[win])`` to the last bit (the products summed from
+    zero in the inputs' order, then added to the offset), without gathering each row's (d, 3) slope."""
+    n, d, c = x.shape[0], x.shape[1], offset.shape[1]
+    out = np.empty((n, c))
+    for i in range(n):
+        w = win[i]
+        for k in range(c):
+            acc = 0.0
+            for j in range(d):
+                acc += x[i, j] * slope[w, j, k]
+            out[i, k] = offset[w, k] + acc
+    return out
 
 
 class _MapLearner:

@@ -477,14 +477,14 @@ class ResidualStrategy(Strategy):
         # chunks' had four threads on two cores, 17-20 % slower; and one thread or two, whatever the
         # environment, the same sums.
         with threadpool_limits(limits=1, user_api="blas"):
-            # The first chunk alone: the learners restore what they build on first use (a network, a
-            # k-d tree) before threads share them.
-            parts = [solve(chunks[0])]
-            if threads == 1:
-                parts += [solve(rows) for rows in chunks[1:]]
+            if threads == 1 or len(chunks) == 1:
+                parts = [solve(rows) for rows in chunks]
             else:
+                # Two rows alone first, their correction let go: the learners build what they make on
+                # first use (a network, a k-d tree) before threads share them.
+                solve(slice(0, 2))
                 with ThreadPoolExecutor(threads) as pool:
-                    parts += pool.map(solve, chunks[1:])
+                    parts = list(pool.map(solve, chunks))
         if len(parts) == 1:
             return parts[0]
         return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
