@@ -3,12 +3,15 @@ row's winner between the fixed point's passes: the whole array's figures (``Resi
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from sins import compensation, imu
 from sins.compensation import kohonen, residual
+from sins.core.series import CalibrationData
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 
@@ -20,9 +23,21 @@ FAST = calibration.RigProcedure(
 )
 
 
+@pytest.fixture(scope="module")
+def fitted() -> dict[str, tuple[CalibrationData, Any]]:
+    """A rig session of a tactical unit, and a map and a network fitted on an eighth of its rows."""
+    fit = calibration.simulate_rig(FAST, imu_spec.draw_unit("tactical", 3, 103).only(*imu.BASELINE), seed=3)
+    small = fit.rows(slice(0, len(fit), 8))
+    options: dict[str, dict[str, Any]] = {"mlp": {"hidden_sizes": ((8, 8),)}, "kohonen": {"sizes": (5, 8)}}
+    return {
+        name: (fit, compensation.make(name, guard=False, n_jobs=1, **kwargs).fit(small))
+        for name, kwargs in options.items()
+    }
+
+
 @pytest.mark.parametrize("name", ["kohonen", "mlp"])
 def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass(
-    name: str, monkeypatch: pytest.MonkeyPatch
+    name: str, fitted: dict[str, tuple[CalibrationData, Any]], monkeypatch: pytest.MonkeyPatch
 ):
     """A correction solves its fixed point a chunk of rows at a time, on two threads from a size on, and
     a map keeps each row's winner between passes while the row stays within half the gap between its
@@ -32,10 +47,8 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
     (one row, a few, many round differently), and the rows extrapolated beyond the box are evaluated a
     handful at a time: within 1e-10 of the learned correction's size (measured 3e-13); one thread and two
     to the last bit."""
-    fit = calibration.simulate_rig(FAST, imu_spec.draw_unit("tactical", 3, 103).only(*imu.BASELINE), seed=3)
-    small = fit.rows(slice(0, len(fit), 8))
-    options = {"hidden_sizes": ((8, 8),)} if name == "mlp" else {"sizes": (5, 8)}
-    model = compensation.make(name, guard=False, n_jobs=1, **options).fit(small)
+    fit, model = fitted[name]
+    model.n_jobs = 1
     gyro = np.vstack([fit.gyro, 1.3 * fit.gyro])
     accel = np.vstack([fit.accel, fit.accel])
     temp = None if fit.temp is None else np.concatenate([fit.temp, fit.temp])
@@ -77,13 +90,14 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.abs(b - c).max())
 
 
-def test_a_correction_holds_blas_to_one_thread_beside_its_own(monkeypatch: pytest.MonkeyPatch):
+def test_a_correction_holds_blas_to_one_thread_beside_its_own(
+    fitted: dict[str, tuple[CalibrationData, Any]], monkeypatch: pytest.MonkeyPatch
+):
     """The chunks' threads are the correction's parallelism: numpy's BLAS inside each learner's
     prediction runs on one thread whatever the caller set (two here, as an unset environment gives on
     two cores), and the caller's setting is back afterwards."""
-    fit = calibration.simulate_rig(FAST, imu_spec.draw_unit("tactical", 3, 103).only(*imu.BASELINE), seed=3)
-    small = fit.rows(slice(0, len(fit), 8))
-    model = compensation.make("kohonen", guard=False, n_jobs=2, sizes=(5, 8)).fit(small)
+    fit, model = fitted["kohonen"]
+    model.n_jobs = 2
     seen: list[int] = []
     predict = kohonen._Map.predict
 

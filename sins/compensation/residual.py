@@ -474,8 +474,8 @@ class ResidualStrategy(Strategy):
 
         threads = self.n_jobs or (2 if len(w_hat) >= THREADED_ROWS else 1)
         # BLAS on one thread (numpy's products of a chunk are small): its own threads beside the
-        # chunks' had four threads on two cores, 17-20 % slower; and one thread or two, whatever the
-        # environment, the same sums.
+        # chunks' made four on two cores, and two chunks at a time were hardly faster than one
+        # (docs/speed.md); and one thread or two, whatever the environment, the same sums.
         with threadpool_limits(limits=1, user_api="blas"):
             if threads == 1 or len(chunks) == 1:
                 parts = [solve(rows) for rows in chunks]
