@@ -43,10 +43,10 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
     a map keeps each row's winner between passes while the row stays within half the gap between its
     nearest two nodes' distances. Readings beyond the rig's box (×1.3) take the edge extrapolation too.
     The maps (numpy alone): every reading equal to the whole array's with every winner searched on every
-    pass. The networks: torch's matrix product picks its kernel by the number of rows
-    (one row, a few, many round differently), and the rows extrapolated beyond the box are evaluated a
-    handful at a time: within 1e-10 of the learned correction's size (measured 3e-13); one thread and two
-    to the last bit."""
+    pass. The networks: numpy's matrix product (OpenBLAS) picks its kernel by the number of rows (one
+    row, a few, many round differently), and the rows extrapolated beyond the box are evaluated a
+    handful at a time: within 1e-10 of the learned correction's size; one thread and two to the last
+    bit."""
     fit, model = fitted[name]
     model.n_jobs = 1
     gyro = np.vstack([fit.gyro, 1.3 * fit.gyro])

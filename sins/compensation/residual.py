@@ -87,8 +87,8 @@ _PASSES = 2
 #: MB a chunk whatever the recording's length.
 CORRECT_ROWS = 65_536
 #: The rows from which a correction solves its chunks on two threads by default (``n_jobs=None``): numpy,
-#: scipy's k-d tree and torch let go of the GIL for a chunk's work; below a few chunks a thread pool
-#: costs more than it brings.
+#: the maps' compiled kernels and scipy's k-d tree let go of the GIL for a chunk's work; below a few
+#: chunks a thread pool costs more than it brings.
 THREADED_ROWS = 4 * CORRECT_ROWS
 #: The points a fold trains on from which the cross-validation's candidates train on two threads by
 #: default (``n_jobs=None``). The trainings' Python steps hold the GIL between small torch and numpy
@@ -460,9 +460,9 @@ class ResidualStrategy(Strategy):
         folded into a scale factor) ``x̂`` itself is off by the residual, and ``r(x̂)`` by its slope times
         that; each pass multiplies what is left by the slope (2e-2 for 3 °/s at 300 °/s). Solved
         :data:`CORRECT_ROWS` rows at a time, on two threads from :data:`THREADED_ROWS` rows (``n_jobs``):
-        the whole array's figures, a map's to the last bit; a network's within its rounding where torch
-        picks another kernel for the rows it is given (a handful extrapolated beyond the box), and on one
-        thread or two the same to the last bit."""
+        the whole array's figures, a map's to the last bit; a network's within its rounding (numpy's
+        matrix product picks its kernel by the rows it is given: a chunk, a handful extrapolated beyond
+        the box), and on one thread or two the same to the last bit."""
         w_hat, f_hat = self._base_strategy().correct(gyro, accel)
         if not (self.terms_ or self.used_.any()) or len(w_hat) == 0:
             return w_hat, f_hat
