@@ -484,8 +484,6 @@ def _local_design(x: Array, centres: Array, blend: Array, winners: NDArray[np.in
     )
 
 
-#: Rows a fitted map predicts at a time.
-_PREDICT_ROWS = 65_536
 #: What a row's winner margin leaves for the rounding of the distances it is made of: the scaled inputs
 #: and the nodes lie within a few units of the origin, where a distance rounds by ~1e-15.
 _MARGIN_SLACK = 1e-9
@@ -637,15 +635,12 @@ class _MapLearner:
 
     def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
         """The maps' sum at ``x``; ``memo`` (one dict for the same rows on each call) lets each map keep
-        its rows' winners (:meth:`_Map._kept`) where ``x`` is one chunk."""
+        its rows' winners (:meth:`_Map._kept`). Every step is row by row and forms nothing larger than
+        a few columns of the rows (the winners by a scan, a k-d tree or bisection), so ``x`` is taken
+        whole."""
         out = np.zeros((len(x), 3))
-        keep = memo if memo is not None and len(x) <= _PREDICT_ROWS else None
-        for start in range(0, len(x), _PREDICT_ROWS):  # bounded memory for the distance matrices
-            part = x[start : start + _PREDICT_ROWS]
-            out[start : start + len(part)] = sum(
-                m.predict(part, None if keep is None else keep.setdefault(f"map{i}", {}))
-                for i, m in enumerate(self.maps)
-            )
+        for i, m in enumerate(self.maps):
+            out += m.predict(x, None if memo is None else memo.setdefault(f"map{i}", {}))
         return out * self.sigma
 
 
