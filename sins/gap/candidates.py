@@ -233,22 +233,27 @@ class DelayedInputs:
     def whole(self) -> ReferenceInputs:
         """The delayed inputs of every row, made a chunk at a time (the curve's pieces of one chunk at
         a time): for the many passes over the rows of one fit, which would make them again each pass."""
-        x, n = self.x, len(self.x.t)
+        n = len(self.x.t)
         omega, force = np.empty((n, 3)), np.empty((n, 3))
         for lo, hi in spans(n):
-            omega[lo:hi] = x.omega_ib_b[lo:hi] + x.lag_rows("gyro", None, self.delay_s, lo, hi)
-            force[lo:hi] = x.f_ib_b[lo:hi] + x.lag_rows("accel", None, self.delay_s, lo, hi)
-        return dataclasses.replace(x, omega_ib_b=omega, f_ib_b=force)
+            omega[lo:hi], force[lo:hi] = self._made(lo, hi)
+        return dataclasses.replace(self.x, omega_ib_b=omega, f_ib_b=force)
 
     def rows(self, start: int, stop: int) -> ReferenceInputs:
         """Rows ``start … stop`` of the delayed inputs, made with two rows either side (a row's rate of
         change takes its neighbours, and a recording of three rows or more gives three here)."""
-        x, tau = self.x, self.delay_s
-        a, b = max(start - 2, 0), min(stop + 2, len(x.t))
-        omega = x.omega_ib_b[a:b] + x.lag_rows("gyro", None, tau, a, b)
-        force = x.f_ib_b[a:b] + x.lag_rows("accel", None, tau, a, b)
-        near = dataclasses.replace(x.rows(a, b), omega_ib_b=omega, f_ib_b=force, start=0, whole=None)
+        a, b = max(start - 2, 0), min(stop + 2, len(self.x.t))
+        omega, force = self._made(a, b)
+        near = dataclasses.replace(self.x.rows(a, b), omega_ib_b=omega, f_ib_b=force, start=0, whole=None)
         return near.rows(start - a, stop - a)
+
+    def _made(self, start: int, stop: int) -> tuple[Array, Array]:
+        """The rate and the force at ``t − τ`` of rows ``start … stop``, (m, 3) each: the reference plus
+        its lag (:meth:`ReferenceInputs.lag_rows`)."""
+        x, tau = self.x, self.delay_s
+        omega = x.omega_ib_b[start:stop] + x.lag_rows("gyro", None, tau, start, stop)
+        force = x.f_ib_b[start:stop] + x.lag_rows("accel", None, tau, start, stop)
+        return omega, force
 
 
 @dataclass(frozen=True, eq=False)
