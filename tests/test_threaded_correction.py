@@ -69,15 +69,15 @@ def test_a_correction_in_chunks_on_threads_is_the_whole_array_searched_each_pass
     for a, b in zip(one_thread, two_threads, strict=True):
         np.testing.assert_array_equal(a, b)
     if name == "kohonen":
-        # On each of the two corrections every row searched once a map over several inputs (a chain over
-        # one is bisected each pass), on the first pass, and a few again after: winners were kept.
-        trees = sum(m.codebook.shape[1] > 1 for s in ("gyro", "accel") for m in model._learner(s).maps)
-        assert trees > 0 and 2 * trees * len(gyro) < searched["rows"] < 1.2 * 2 * trees * len(gyro)
+        # On each of the two corrections every row searched once a map (a chain over one input as a map
+        # over several), on the first pass, and a few again after: winners were kept.
+        maps = sum(len(model._learner(s).maps) for s in ("gyro", "accel"))
+        assert maps > 0 and 2 * maps * len(gyro) < searched["rows"] < 1.2 * 2 * maps * len(gyro)
 
     monkeypatch.setattr(residual, "CORRECT_ROWS", 10**9)
 
     def searched_each_pass(self, x, memo):
-        return self.winners(x)
+        return self.winners(x[:, self.win_cols])
 
     monkeypatch.setattr(kohonen._Map, "_kept", searched_each_pass)
     whole = model.correct(gyro, accel, temp)
@@ -99,13 +99,13 @@ def test_a_correction_holds_blas_to_one_thread_beside_its_own(
     fit, model = fitted["kohonen"]
     model.n_jobs = 2
     seen: list[int] = []
-    predict = kohonen._Map.predict
+    add_to = kohonen._Map.add_to
 
     def counted(self, *args, **kwargs):
         seen.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
-        return predict(self, *args, **kwargs)
+        return add_to(self, *args, **kwargs)
 
-    monkeypatch.setattr(kohonen._Map, "predict", counted)
+    monkeypatch.setattr(kohonen._Map, "add_to", counted)
     monkeypatch.setattr(residual, "CORRECT_ROWS", 1_000)
     with threadpool_limits(limits=2, user_api="blas"):
         model.correct(fit.gyro, fit.accel, fit.temp)
@@ -137,3 +137,20 @@ def test_a_maps_two_nearest_nodes_are_scipys():
     single = kohonen._Map([0, 1], [0], np.zeros((1, 2)), np.eye(1), np.zeros((1, 2, 3)))
     win, margin = single._winners_and_margins(rng.normal(size=(10, 2)))
     assert np.all(win == 0) and np.all(np.isinf(margin))
+
+
+def test_the_compiled_box_is_numpys_clip():
+    """``residual._boxed``: numpy's two clips (to the reach beyond the rig's box, then to the box) and
+    the rows where they differ, to the last bit; a NaN stays NaN and its row counts as beyond."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(0.0, 2.0, (5_000, 4))
+    x[7, 1], x[9, 3], x[11, 0] = np.nan, np.inf, -np.inf
+    lo, hi = np.array([-1.0, -2.0, 0.0, -0.5]), np.array([1.0, 0.5, 3.0, 0.5])
+    width = hi - lo
+    reach, inside, beyond = residual._boxed(x, lo - 0.25 * width, hi + 0.25 * width, lo, hi)
+    want_reach = np.clip(x, lo - 0.25 * width, hi + 0.25 * width)
+    want_inside = np.clip(want_reach, lo, hi)
+    np.testing.assert_array_equal(reach, want_reach)
+    np.testing.assert_array_equal(inside, want_inside)
+    np.testing.assert_array_equal(beyond, np.flatnonzero((want_reach != want_inside).any(axis=1)))
+    assert 7 in beyond and 0 < len(beyond) < len(x)

@@ -91,7 +91,7 @@ def _compare_nearest(path: Path, imu: ImuIncrements, repeat: int) -> None:
     tree, kept = kohonen._Map.winners, kohonen._Map._kept
 
     def each_pass(self: Any, x: Any, memo: Any) -> Any:
-        return self.winners(x)
+        return self.winners(x[:, self.win_cols])
 
     def matrix(self: Any, x: Any) -> Any:
         return kohonen._nearest(x, self.codebook)

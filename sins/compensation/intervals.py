@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -93,16 +94,44 @@ def shifted(t: Array, d: Array, tau_s: float) -> Array:
     """One sensor's increments ``d`` (n, 3) over steps ``t`` (n+1,) read ``tau_s`` later (see
     :func:`shift_increments`)."""
     total = np.vstack([np.zeros((1, 3)), np.cumsum(d, axis=0)])
-    at = t + tau_s
-    # Linear in the running integral, extended past both ends at the end steps' rates.
     rate_first, rate_last = d[0] / (t[1] - t[0]), d[-1] / (t[-1] - t[-2])
-    out = np.empty_like(total)
-    for i in range(3):
-        out[:, i] = np.interp(at, t, total[:, i])
-        before, after = at < t[0], at > t[-1]
-        out[before, i] = (at[before] - t[0]) * rate_first[i]
-        out[after, i] = total[-1, i] + (at[after] - t[-1]) * rate_last[i]
-    return np.diff(out, axis=0)
+    return np.diff(_running_at(np.ascontiguousarray(t), total, tau_s, rate_first, rate_last), axis=0)
+
+
+@numba.njit(cache=True, nogil=True)
+def _running_at(
+    t: Array, total: Array, tau_s: float, rate_first: Array, rate_last: Array
+) -> Array:  # pragma: no cover  (compiled)
+    """The running integral ``total`` (n+1, 3) at ``t + tau_s``: linear between boundaries (numpy's
+    ``interp``, its arithmetic and its cases, to the last bit), extended past both ends at the end
+    steps' rates. One pass: the shifted times rise with ``t``, so each one's step follows the last's
+    (numpy's ``interp`` searched for it once a column)."""
+    n1 = t.shape[0]
+    out = np.empty((n1, 3))
+    j = 0
+    for i in range(n1):
+        x = t[i] + tau_s
+        if x < t[0]:
+            for c in range(3):
+                out[i, c] = (x - t[0]) * rate_first[c]
+        elif x > t[n1 - 1]:
+            for c in range(3):
+                out[i, c] = total[n1 - 1, c] + (x - t[n1 - 1]) * rate_last[c]
+        else:
+            while j < n1 - 1 and t[j + 1] <= x:
+                j += 1
+            for c in range(3):
+                if j == n1 - 1 or t[j] == x:
+                    out[i, c] = total[j, c]
+                    continue
+                slope = (total[j + 1, c] - total[j, c]) / (t[j + 1] - t[j])
+                v = slope * (x - t[j]) + total[j, c]
+                if np.isnan(v):  # numpy's interp: from the other end, then a flat step's value
+                    v = slope * (x - t[j + 1]) + total[j + 1, c]
+                    if np.isnan(v) and total[j, c] == total[j + 1, c]:
+                        v = total[j, c]
+                out[i, c] = v
+    return out
 
 
 def shift_derivative(t: Array, d: Array, tau_s: float) -> Array:

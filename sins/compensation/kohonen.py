@@ -444,8 +444,8 @@ def neighbourhood_weights(grid: Array, sigma: float, codebook: Array | None = No
 
 def _nearest(x: Array, codebook: Array) -> NDArray[np.intp]:
     """Index of each row's nearest prototype (Euclidean). Chains over one input (rate, temperature) are
-    searched by bisection, not through the (n, k) distance matrix: an hour's correction asks this of
-    360,000 rows × 3 passes × every map."""
+    searched by bisection, not through the (n, k) distance matrix: the training asks this of every row
+    on every epoch."""
     if codebook.shape[1] == 1 and len(codebook) > 1:
         order = np.argsort(codebook[:, 0], kind="stable")
         values = codebook[order, 0]
@@ -503,6 +503,8 @@ class _Map:
         offsets = planes[:, 0, :] - np.einsum("kdc,kd->kc", planes[:, 1:, :], centres)
         self._offset = np.ascontiguousarray(blend @ offsets)  # (k, 3)
         self._slope = np.ascontiguousarray(np.einsum("wk,kdc->wdc", blend, planes[:, 1:, :]))  # (k, d, 3)
+        self._win_idx = np.asarray(win_cols, dtype=np.intp)
+        self._plane_idx = np.asarray(plane_cols, dtype=np.intp)
         self._tree: Any = None
 
     def winners(self, x: Array) -> NDArray[np.intp]:
@@ -526,31 +528,38 @@ class _Map:
     def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
         """The map's output at ``x``, each row's winner's plane (:func:`_planes`); ``memo`` kept between
         calls on the same rows (:meth:`_kept`)."""
-        if memo is None or self.codebook.shape[1] == 1:
-            win = self.winners(x[:, self.win_cols])
-        else:
-            win = self._kept(x[:, self.win_cols], memo)
+        win = self.winners(x[:, self.win_cols]) if memo is None else self._kept(x, memo)
         return _planes(np.ascontiguousarray(x[:, self.plane_cols]), win, self._offset, self._slope)
 
+    def add_to(self, out: Array, x: Array, memo: dict[str, Any] | None = None) -> None:
+        """``out += predict(x, memo)``, the planes read from ``x``'s columns where they lie and added in
+        place (:func:`_add_planes`): the same sums, without copying the columns or the output."""
+        win = self.winners(x[:, self.win_cols]) if memo is None else self._kept(x, memo)
+        _add_planes(np.ascontiguousarray(x), self._plane_idx, win, self._offset, self._slope, out)
+
     def _kept(self, x: Array, memo: dict[str, Any]) -> NDArray[np.intp]:
-        """Each row's winner, found again only for the rows that may have a new one.
+        """Each row's winner, found again only for the rows that may have a new one (``x`` holds every
+        input column; the map's are :attr:`win_cols`).
 
         A correction's passes move a row's input by about the residual, far less than the nodes lie
         apart. Where a row's winner was found at ``a`` with distances ``d1 < d2`` to its nearest two
         nodes, any input within ``(d2 − d1)/2`` of ``a`` has the same winner (the triangle inequality:
         its distance to the winner is below ``d1 + δ``, to any other node above ``d2 − δ``); a row that
-        moved that far or more from where its winner was found is searched again. The same winners as a
-        search each pass, so the same output to the last bit (``tests/test_threaded_correction.py``), for
-        one search in place of three (``tools/bench_correction.py``)."""
-        if memo.get("anchor") is None or memo["anchor"].shape != x.shape:
-            win, margin = self._winners_and_margins(x)
-            memo.update(anchor=x.copy(), margin=margin, win=win)
+        moved that far or more from where its winner was found is searched again (:func:`_moved`). The
+        same winners as a search each pass, so the same output to the last bit
+        (``tests/test_threaded_correction.py``), for one search in place of three
+        (``tools/bench_correction.py``). A chain over one input keeps its winners the same way: the
+        margin holds on a line as anywhere, and a row near a tie takes the bisection's choice."""
+        if memo.get("anchor") is None or len(memo["anchor"]) != len(x):
+            at = np.ascontiguousarray(x[:, self.win_cols])
+            win, margin = self._winners_and_margins(at)
+            memo.update(anchor=at, margin=margin, win=win)
             return win
-        moved = np.sqrt(((x - memo["anchor"]) ** 2).sum(axis=1))
-        again = np.flatnonzero(~(moved < memo["margin"]))  # NaN searched again
+        again = _moved(np.ascontiguousarray(x), self._win_idx, memo["anchor"], memo["margin"])
         if again.size:
-            win, margin = self._winners_and_margins(x[again])
-            memo["anchor"][again], memo["margin"][again], memo["win"][again] = x[again], margin, win
+            at = np.ascontiguousarray(x[again][:, self.win_cols])
+            win, margin = self._winners_and_margins(at)
+            memo["anchor"][again], memo["margin"][again], memo["win"][again] = at, margin, win
         return memo["win"]
 
     def _winners_and_margins(self, x: Array) -> tuple[NDArray[np.intp], Array]:
@@ -627,6 +636,39 @@ def _planes(
     return out
 
 
+@numba.njit(cache=True, nogil=True)
+def _add_planes(
+    x: Array, cols: NDArray[np.intp], win: NDArray[np.intp], offset: Array, slope: Array, out: Array
+) -> None:  # pragma: no cover  (compiled)
+    """``out += _planes(x[:, cols], win, offset, slope)``, each row's plane summed as :func:`_planes`
+    sums it and then added: the same floats."""
+    n, d, c = x.shape[0], cols.shape[0], offset.shape[1]
+    for i in range(n):
+        w = win[i]
+        for k in range(c):
+            acc = 0.0
+            for j in range(d):
+                acc += x[i, cols[j]] * slope[w, j, k]
+            out[i, k] += offset[w, k] + acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _moved(
+    x: Array, cols: NDArray[np.intp], anchor: Array, margin: Array
+) -> NDArray[np.intp]:  # pragma: no cover  (compiled)
+    """The rows of ``x`` whose columns ``cols`` lie ``margin`` or farther from ``anchor`` (Euclidean), or
+    are not numbers: those :meth:`_Map._kept` searches again."""
+    n, w = anchor.shape
+    far = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        s = 0.0
+        for c in range(w):
+            e = x[i, cols[c]] - anchor[i, c]
+            s += e * e
+        far[i] = not (np.sqrt(s) < margin[i])
+    return np.flatnonzero(far)
+
+
 class _MapLearner:
     """Fitted maps whose predictions add up, in units of ``sigma`` (3,)."""
 
@@ -640,7 +682,7 @@ class _MapLearner:
         whole."""
         out = np.zeros((len(x), 3))
         for i, m in enumerate(self.maps):
-            out += m.predict(x, None if memo is None else memo.setdefault(f"map{i}", {}))
+            m.add_to(out, x, None if memo is None else memo.setdefault(f"map{i}", {}))
         return out * self.sigma
 
 

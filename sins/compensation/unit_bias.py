@@ -144,10 +144,10 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
     from the readings before it only."""
     dt = np.diff(imu.t)
-    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
     prior, sigma = rule.prior, rule.spread
     track = np.tile(prior, (len(dt), 1))
     if rule.mode in ("rest", "rest+online"):
+        omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
         rest = opening_rest(omega, force, float(np.median(dt)))
         if rest:
             # Before the rest has ended nothing better than the prior is known; after, its mean.
@@ -155,7 +155,7 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
             sigma = rule.rest_spread
             track[rest:] = prior
     if rule.mode in ("online", "rest+online"):
-        track = _online(imu, omega, force, track, prior, sigma, rule)
+        track = _online(imu, track, prior, sigma, rule)
     return track
 
 
@@ -165,9 +165,7 @@ def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
     return ImuIncrements(t=imu.t, dtheta_b=imu.dtheta_b - bias_track(rule, imu) * dt[:, None], dv_b=imu.dv_b)
 
 
-def _online(
-    imu: ImuIncrements, omega: Array, force: Array, track: Array, prior: Array, sigma: Array, rule: BiasRule
-) -> Array:
+def _online(imu: ImuIncrements, track: Array, prior: Array, sigma: Array, rule: BiasRule) -> Array:
     """The velocity-bounded estimate (module docstring), every :data:`UPDATE_S`, from the readings
     before each update; ``track`` holds what is used before the first."""
     dt = np.diff(imu.t)
@@ -175,7 +173,8 @@ def _online(
     at = np.arange(step, len(imu.t), step)
     if not len(at):
         return track
-    c0 = attitude_dcm(_levelled(force)[None, :])[0]
+    first = slice(0, _LEVELLING_ROWS)  # all that levelling reads of the specific force
+    c0 = attitude_dcm(_levelled(imu.dv_b[first] / dt[first, None])[None, :])[0]
     v, s, i_s = _velocity_terms(imu.dtheta_b - prior * dt[:, None], imu.dv_b, dt, c0, at)
     t = (imu.t - imu.t[0])[at]
     zero, one = np.zeros(len(at)), np.ones(len(at))
@@ -195,8 +194,7 @@ def _online(
     thetas = np.linalg.solve(grams, rhss[:, :, None])[:, :, 0]
     out = track.copy()
     ends = np.r_[at[1:], len(out)]
-    for k, end, theta in zip(at, ends, thetas, strict=True):
-        out[k:end] = prior + theta[4:7]
+    out[at[0] :] = np.repeat(prior + thetas[:, 4:7], ends - at, axis=0)
     return out
 
 
@@ -263,10 +261,14 @@ def _velocity_terms(
     return v_at, s_at, is_at
 
 
+#: The rows of specific force the online rule levels its frame by.
+_LEVELLING_ROWS = 20
+
+
 def _levelled(force: Array) -> Array:
-    """A scalar-last quaternion of the body in a frame with z up, levelled by the first 0.1 s of specific
-    force (its heading arbitrary)."""
-    up = force[: max(1, min(len(force), 20))].mean(axis=0)
+    """A scalar-last quaternion of the body in a frame with z up, levelled by the mean of the first
+    :data:`_LEVELLING_ROWS` readings of specific force (0.1 s at 200 Hz; its heading arbitrary)."""
+    up = force[: max(1, min(len(force), _LEVELLING_ROWS))].mean(axis=0)
     z = up / np.linalg.norm(up)
     helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = np.cross(helper, z)
