@@ -525,15 +525,9 @@ class _Map:
             self._tree = cKDTree(self.codebook)
         return self._tree
 
-    def predict(self, x: Array, memo: dict[str, Any] | None = None) -> Array:
-        """The map's output at ``x``, each row's winner's plane (:func:`_planes`); ``memo`` kept between
-        calls on the same rows (:meth:`_kept`)."""
-        win = self.winners(x[:, self.win_cols]) if memo is None else self._kept(x, memo)
-        return _planes(np.ascontiguousarray(x[:, self.plane_cols]), win, self._offset, self._slope)
-
     def add_to(self, out: Array, x: Array, memo: dict[str, Any] | None = None) -> None:
-        """``out += predict(x, memo)``, the planes read from ``x``'s columns where they lie and added in
-        place (:func:`_add_planes`): the same sums, without copying the columns or the output."""
+        """The map's output at ``x`` (each row's winner's plane, :func:`_add_planes`) added to ``out``;
+        ``memo`` kept between calls on the same rows (:meth:`_kept`)."""
         win = self.winners(x[:, self.win_cols]) if memo is None else self._kept(x, memo)
         _add_planes(np.ascontiguousarray(x), self._plane_idx, win, self._offset, self._slope, out)
 
@@ -618,30 +612,12 @@ def _two_nearest(x: Array, codebook: Array) -> tuple[NDArray[np.intp], Array]:  
 
 
 @numba.njit(cache=True, nogil=True)
-def _planes(
-    x: Array, win: NDArray[np.intp], offset: Array, slope: Array
-) -> Array:  # pragma: no cover  (compiled)
-    """Each row's winner's plane at its inputs, ``offset[w] + Σ_j x_j slope[w, j]``: numpy's
-    ``offset[win] + einsum("nd,ndc->nc", x, slope[win])`` to the last bit (the products summed from
-    zero in the inputs' order, then added to the offset), without gathering each row's (d, 3) slope."""
-    n, d, c = x.shape[0], x.shape[1], offset.shape[1]
-    out = np.empty((n, c))
-    for i in range(n):
-        w = win[i]
-        for k in range(c):
-            acc = 0.0
-            for j in range(d):
-                acc += x[i, j] * slope[w, j, k]
-            out[i, k] = offset[w, k] + acc
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
 def _add_planes(
     x: Array, cols: NDArray[np.intp], win: NDArray[np.intp], offset: Array, slope: Array, out: Array
 ) -> None:  # pragma: no cover  (compiled)
-    """``out += _planes(x[:, cols], win, offset, slope)``, each row's plane summed as :func:`_planes`
-    sums it and then added: the same floats."""
+    """``out += offset[win] + einsum("nd,ndc->nc", x[:, cols], slope[win])``, numpy's sums to the last bit
+    (each row's products summed from zero in the inputs' order, then added to its offset), without
+    gathering the columns or each row's (d, 3) slope."""
     n, d, c = x.shape[0], cols.shape[0], offset.shape[1]
     for i in range(n):
         w = win[i]
