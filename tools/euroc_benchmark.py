@@ -2,7 +2,7 @@
 
 Usage::
 
-    .venv/bin/python tools/euroc_benchmark.py [--strategies none regression ...] [--root DATA_ROOT]
+    .venv/bin/python tools/euroc_benchmark.py [--strategies regression mlp ...] [--root DATA_ROOT]
         [--folder euroc] [--train A B ...] [--judge X Y ...] [--json OUT.json] [--models DIR]
 
 The protocol of Brossard et al. 2020 (``shared/data/euroc/SOURCE.md``): every strategy fitted with
@@ -10,7 +10,7 @@ The protocol of Brossard et al. 2020 (``shared/data/euroc/SOURCE.md``): every st
 then judged with ``sins evaluate M --dataset euroc/X --json OUT`` on the five others by its absolute
 orientation error (AOE: the corrected gyro integrated alone from the reference's first attitude, RMS of
 the angle over every sample, no Earth rate). Nothing of a judged sequence is read by a fit. Prints one
-row per judged sequence (raw, every strategy, Brossard 2020 as SOURCE.md cites it) and the mean, each
+row per judged sequence (raw, every strategy once, Brossard 2020 as SOURCE.md cites it) and the mean, each
 fit's wall time, and checks the raw row against SOURCE.md's independent scipy integration (within 1 %).
 
 ``--folder``, ``--train`` and ``--judge`` run the same commands on another unit's ``.npz`` recordings
@@ -78,7 +78,8 @@ def main_(argv: list[str] | None = None) -> int:
     models = args.models or work
     models.mkdir(parents=True, exist_ok=True)
     results: dict[str, Any] = {"train": args.train, "judge": args.judge, "fits": {}, "aoe_deg": {}}
-    for strategy in args.strategies:
+    strategies = list(dict.fromkeys(args.strategies))  # each once: a column and its mean
+    for strategy in strategies:
         model = models / f"{strategy}.json"
         fit_json = work / f"{strategy}.fit.json"
         argv_fit = ["fit", *(a for n in args.train for a in ("--dataset", f"{args.folder}/{n}")),
@@ -95,7 +96,7 @@ def main_(argv: list[str] | None = None) -> int:
             judged = _evaluate(model, args.folder, name, work / f"{strategy}.{name}.json")
             results["aoe_deg"].setdefault(name, {})["none"] = judged["open_loop_attitude_raw"]["aoe_deg"]
             results["aoe_deg"][name][strategy] = judged["open_loop_attitude"]["aoe_deg"]
-    _table(results, args.strategies, published)
+    _table(results, [s for s in strategies if s != "none"], published)  # the raw column is "none"
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))
     return 0
