@@ -93,9 +93,10 @@ def shift_increments(
 def shifted(t: Array, d: Array, tau_s: float) -> Array:
     """One sensor's increments ``d`` (n, 3) over steps ``t`` (n+1,) read ``tau_s`` later (see
     :func:`shift_increments`)."""
+    t, d = np.ascontiguousarray(t, dtype=float), np.asarray(d, dtype=float)  # interp's doubles
     total = np.vstack([np.zeros((1, 3)), np.cumsum(d, axis=0)])
     rate_first, rate_last = d[0] / (t[1] - t[0]), d[-1] / (t[-1] - t[-2])
-    return np.diff(_running_at(np.ascontiguousarray(t), total, tau_s, rate_first, rate_last), axis=0)
+    return np.diff(_running_at(t, total, float(tau_s), rate_first, rate_last), axis=0)
 
 
 @numba.njit(cache=True, nogil=True)
