@@ -84,12 +84,6 @@ class ChannelModel:
     fit_loglik : the process's innovations' log-likelihood on the fit rows, once fitted
     coefficients : the regressors' coefficients, of the unscaled columns in :attr:`columns`' order, once
         fitted (beside a random bias, its generalised least squares')
-    late : with a delay, once fitted, how to make the inputs at ``t − τ`` (:func:`delayed_inputs`), which the
-        columns are built from: a sensor that reads its input late forms every error of it from what
-        it read (a scale factor scales the delayed input), so beside a large lag (a rig that steps
-        its orientation within a row: a 3 ms delay at 20 Hz lags the force by 2.3 m/s² there) the
-        scale and misalignment of the lag itself are not the noise's (they had left the accelerometers
-        at 1.07-1.08 of their floor, and the delay 17 % long)
     """
 
     x: ReferenceInputs
@@ -109,7 +103,16 @@ class ChannelModel:
     loglik_rows: Array | None = None
     fit_loglik: float = np.nan
     coefficients: Array | None = None
-    late: DelayedInputs | None = None
+
+    @property
+    def late(self) -> DelayedInputs | None:
+        """With a delay, once fitted: how to make the inputs at ``t − τ`` (:func:`delayed_inputs`),
+        which the columns are built from. A sensor that reads its input late forms every error of it
+        from what it read (a scale factor scales the delayed input), so beside a large lag (a rig that
+        steps its orientation within a row: a 3 ms delay at 20 Hz lags the force by 2.3 m/s² there) the
+        scale and misalignment of the lag itself are not the noise's (they had left the accelerometers
+        at 1.07-1.08 of their floor, and the delay 17 % long)."""
+        return None if self.delay_s is None else delayed_inputs(self.x, self.delay_s)
 
     @classmethod
     def baseline(
@@ -202,7 +205,7 @@ class ChannelModel:
             # excite (an axis that is only ever clipped when it sees gravity) is left at zero.
             seen = self.reading[self.fit]
             rows, rcond = self.fit & (self.reading < seen.max()) & (self.reading > seen.min()), 1e-3
-        delay_s, error, late = self.delay_s, self.error, self.late
+        delay_s, error = self.delay_s, self.error
         lag: Array | None = None  # what a delay adds to the error: the reference at t − τ less at t
         if self.delayed:
             if delay_s is None:
@@ -211,10 +214,8 @@ class ChannelModel:
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
                 design = Design(delayed_inputs(self.x, delay_s).whole(), self.columns)
                 delay_s = _fit_delay(self.x, self.sensor, self.axis, error, design, rows, self.fit)
-                late = delayed_inputs(self.x, delay_s)
-            assert late is not None
-            # Made whole for this fit's passes over the rows, and let go with it: the model keeps how.
-            design = Design(late.whole(), self.columns)
+            # Made whole for this fit's passes over the rows, and let go with it: the model keeps τ.
+            design = Design(delayed_inputs(self.x, delay_s).whole(), self.columns)
             lag = self.x.lag(self.sensor, self.axis, delay_s)
             error = error - lag
         # The columns scaled on the fit rows, whichever rows fit them.
@@ -227,9 +228,7 @@ class ChannelModel:
             del pred  # what least squares leave is all the random bias's fit needs of them
             process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
-                return dataclasses.replace(
-                    self, delay_s=delay_s, late=late, predicted=np.full_like(error, np.nan)
-                )
+                return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
             pred, fit_loglik, coef = process
         if lag is not None:
             pred = pred + lag
@@ -243,7 +242,6 @@ class ChannelModel:
         return dataclasses.replace(
             self,
             delay_s=delay_s,
-            late=late,
             quantizer=quantizer,
             predicted=pred,
             loglik_rows=loglik_rows,
