@@ -13,6 +13,7 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy_unit_gap as nu
@@ -23,6 +24,7 @@ from sins.cli import main
 from sins.compensation.intervals import shift_increments
 from sins.core.series import CalibrationData, ImuIncrements
 from sins.gap.floor import noise_floor, noise_level
+from sins.imu import CHANNELS
 from sins.io import datasets
 from sins.unit_gap import statistic
 from sins.unit_gap.inputs import read_gap_input
@@ -211,6 +213,22 @@ def test_gap_reads_an_npz_path_a_euroc_folder_and_refuses_bad_input_in_one_line(
         assert err.count("\n") == 1 and what in err, err
 
 
+def _rrd_entities(path: Path) -> dict[str, Any]:
+    """A ``.rrd`` file's entities: rows logged on a timeline, or a static text document's text."""
+    import rerun as rr
+
+    out: dict[str, Any] = {}
+    for chunk in rr.chunk.RrdReader(path).stream():
+        batch = chunk.to_record_batch()
+        if chunk.is_static:
+            texts = [c for c in batch.schema.names if c.endswith("TextDocument:text")]
+            if texts:
+                out[chunk.entity_path] = str(batch.column(texts[0])[0][0])
+        else:
+            out[chunk.entity_path] = out.get(chunk.entity_path, 0) + batch.num_rows
+    return out
+
+
 def test_verdicts_across_recordings_and_the_shrink_on_the_other_in_degrees(
     room: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -227,6 +245,8 @@ def test_verdicts_across_recordings_and_the_shrink_on_the_other_in_degrees(
         "unit/other_motion_bias",
         "--json",
         str(out),
+        "--rerun",
+        str(tmp_path / "both.rrd"),
     ]
     assert main(args) == 0
     printed = capsys.readouterr().out
@@ -238,6 +258,16 @@ def test_verdicts_across_recordings_and_the_shrink_on_the_other_in_degrees(
         "unit/gyro.motion_bias",
         "unit/other_motion_bias",
     }
+    # In the viewer, each recording under its own name: its withheld residuals and its own report.
+    from sins.viz.viewer import imu_entity
+
+    logged = _rrd_entities(tmp_path / "both.rrd")
+    for recording in doc["recordings"]:
+        prefix = recording["recording"].replace("/", "_").replace(".", "_")
+        for channel in CHANNELS:
+            for label in ("before", "after"):
+                assert logged[f"/{prefix}/gap/{imu_entity(channel)}/{label}"] > 0
+        assert f"diagnosis: {', '.join(recording['diagnosis'])}" in logged[f"/{prefix}/gap/report"]
     for judged in doc["shrink"]:
         assert judged["effects"] == ["gyro.motion_bias"]
         with_deg = judged["with_effects"]["open_loop_attitude_deg"]["total"]

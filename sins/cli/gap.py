@@ -37,14 +37,12 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     ]
     check_outputs({"--json": args.json, "--rerun": args.rerun}, read)
     inputs, model = _gap_inputs(args)
-    if args.rerun and len(inputs) > 1:
-        raise SinsInputError("gap: --rerun goes with one recording")
     results = [_diagnose(args, inp, model) for inp in inputs]
     document = _one_document(results[0]) if len(results) == 1 else _several_document(args, inputs, results)
     if args.json:
         io.write_json(args.json, document)
     if args.rerun:
-        viz.save_gap(results[0].report, args.rerun)
+        viz.save_gap({r.name: r.report for r in results}, args.rerun)
         print(f"wrote {args.rerun}")
     return 0
 
@@ -224,7 +222,8 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--rerun", type=Path, metavar="OUT.rrd",
-        help="log the residuals before and after, their Allan deviations and the excess by input quartile",
+        help="log the residuals before and after, their Allan deviations and the excess by input quartile "
+        "(several recordings: a tab each)",
     )  # fmt: skip
     p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
     add_recording_options(p)

@@ -470,38 +470,66 @@ def _slug(name: str) -> str:
     )
 
 
-def save_gap(report: GapReport, path: str | os.PathLike[str]) -> Path:
-    """Write a gap diagnosis to a ``.rrd`` file (through a temporary name)."""
+def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[str]) -> Path:
+    """Write a gap diagnosis to a ``.rrd`` file (through a temporary name). Several recordings' diagnoses
+    (``{name: report}``, as ``sins gap --dataset A --dataset B``) go side by side, a tab each, every entity
+    under the recording's name (``<name>/gap/...``); one report, or a dict of one, under ``gap/...``."""
+    named = reports if isinstance(reports, dict) else {"": reports}
+    if not named:
+        raise ValueError("save_gap: no report to write")
+    prefixes: dict[str, str] = {}
+    for name in named:  # names that make one path (``a/b`` and ``a_b``) are told apart by their place
+        slug = _slug(name) or "recording"
+        prefixes[name] = (
+            ""
+            if len(named) == 1
+            else slug
+            if slug not in prefixes.values()
+            else f"{slug}_{len(prefixes) + 1}"
+        )
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
+    panels = [_gap_panel(report, prefixes[name], name) for name, report in named.items()]
+    bp = rrb.Blueprint(panels[0] if len(panels) == 1 else rrb.Tabs(*panels))
+
+    def log() -> None:
+        for name, report in named.items():
+            log_gap(rec, report, prefix=prefixes[name])
+
+    return _write(path, rec, bp, log)
+
+
+def _gap_panel(report: GapReport, prefix: str, name: str) -> Any:
+    """One diagnosis's views: its residuals, Allan deviations and quartiles as tabs, beside its report."""
     axis = _whole_run()
+    root = _join(prefix, "gap")
     views = [
-        rrb.TimeSeriesView(origin=f"gap/{imu_entity(ch)}", name=f"{ch} residual", axis_x=axis)
+        rrb.TimeSeriesView(origin=_join(root, imu_entity(ch)), name=f"{ch} residual", axis_x=axis)
         for ch in CHANNELS
     ]
     allan = [
         rrb.TimeSeriesView(
-            origin=f"gap/allan/{imu_entity(ch)}",
+            origin=_join(root, "allan", imu_entity(ch)),
             name=f"{ch} Allan deviation (log10; τ = {report.allan[ch]['tau_s'][0]:.3g} s · 2^k)",
         )
         for ch in CHANNELS
         if ch in report.allan
     ]
     quartiles = [
-        rrb.BarChartView(origin=f"gap/quartiles/{imu_entity(ch)}/{_slug(feature)}", name=f"{ch}: {feature}")
+        rrb.BarChartView(
+            origin=_join(root, "quartiles", imu_entity(ch), _slug(feature)), name=f"{ch}: {feature}"
+        )
         for ch in CHANNELS
         for feature in report.quartiles.get(ch, {})
     ]
     tabs = [rrb.Grid(*views, name="withheld residuals")]
     tabs += [rrb.Grid(*allan, name="Allan deviation")] if allan else []
     tabs += [rrb.Grid(*quartiles, name="excess by input quartile")] if quartiles else []
-    bp = rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.Tabs(*tabs),
-            rrb.TextDocumentView(origin="gap/report", name="report"),
-            column_shares=[3, 1],
-        )
+    return rrb.Horizontal(
+        rrb.Tabs(*tabs),
+        rrb.TextDocumentView(origin=_join(root, "report"), name="report"),
+        column_shares=[3, 1],
+        name=name or None,
     )
-    return _write(path, rec, bp, lambda: log_gap(rec, report))
 
 
 def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, summary: str = "") -> Path:
