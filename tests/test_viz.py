@@ -303,6 +303,31 @@ def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_pat
     assert sum(report.quartiles["gyro.x"]["time"]) == pytest.approx(1.0)
 
 
+def test_several_gap_diagnoses_go_side_by_side_under_their_names(tmp_path: Path) -> None:
+    """Reports made up here: each recording's residuals under its own name, two names that make one
+    path told apart by their place, nothing of one logged under the other."""
+    from sins.gap import GapReport
+
+    rng = np.random.default_rng(3)
+    t = np.arange(50) * 0.5
+    floor = {ch: {"noise_floor": 1e-4, "rms_before": 2e-4, "rms_after": 1e-4} for ch in CHANNELS}
+    reports = {
+        name: GapReport(
+            channels=floor, where=[], effects=[], diagnosis=[], unexplained=[], t_withheld=t,
+            residual_before=rng.normal(0, 1e-4, (50, 6)), residual_after=rng.normal(0, 1e-4, (50, 6)),
+        )
+        for name in ("unit/a", "unit_a", "other")
+    }  # fmt: skip
+    logged = _read(sins.viz.viewer.save_gap(reports, tmp_path / "gaps.rrd"))
+    for prefix, name in (("unit_a", "unit/a"), ("unit_a_2", "unit_a"), ("other", "other")):
+        np.testing.assert_array_equal(
+            logged[f"/{prefix}/gap/gyro_y_deg_per_h/before"]["scalars"],
+            reports[name].residual_before[:, 1] / DEG_PER_H,
+        )
+        assert len(logged[f"/{prefix}/gap/accel_z_mg/after"]["t"]) == 50
+    assert not any(entity.startswith("/gap/") for entity in logged)
+
+
 def test_a_campaign_logs_its_percentile_bands_and_each_units_final_error(tmp_path: Path) -> None:
     """Rows made up here (units' error series that grow at known rates): the logged bands are numpy's
     percentiles across units at each time, and the points each unit's final error."""

@@ -477,16 +477,14 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
     named = reports if isinstance(reports, dict) else {"": reports}
     if not named:
         raise ValueError("save_gap: no report to write")
-    prefixes: dict[str, str] = {}
-    for name in named:  # names that make one path (``a/b`` and ``a_b``) are told apart by their place
-        slug = _slug(name) or "recording"
-        prefixes[name] = (
-            ""
-            if len(named) == 1
-            else slug
-            if slug not in prefixes.values()
-            else f"{slug}_{len(prefixes) + 1}"
-        )
+    prefixes = {name: "" for name in named}
+    if len(named) > 1:
+        taken: set[str] = set()
+        for place, name in enumerate(named, 1):
+            slug = _slug(name) or "recording"
+            # Names that make one path (``a/b`` and ``a_b``) are told apart by their place.
+            prefixes[name] = slug if slug not in taken else f"{slug}_{place}"
+            taken.add(prefixes[name])
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
     panels = [_gap_panel(report, prefixes[name], name) for name, report in named.items()]
     bp = rrb.Blueprint(panels[0] if len(panels) == 1 else rrb.Tabs(*panels))
