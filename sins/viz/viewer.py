@@ -475,16 +475,12 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
     (``{name: report}``, as ``sins gap --dataset A --dataset B``) go side by side, a tab each, every entity
     under the recording's name (``<name>/gap/...``); one report, or a dict of one, under ``gap/...``."""
     named = reports if isinstance(reports, dict) else {"": reports}
-    if not named:
-        raise ValueError("save_gap: no report to write")
+    assert named, "save_gap: no report to write"
     prefixes = {name: "" for name in named}
-    if len(named) > 1:
-        taken: set[str] = set()
+    if len(named) > 1:  # names that make one path (``a/b`` and ``a_b``) are told apart by their place
         for place, name in enumerate(named, 1):
             slug = _slug(name) or "recording"
-            # Names that make one path (``a/b`` and ``a_b``) are told apart by their place.
-            prefixes[name] = slug if slug not in taken else f"{slug}_{place}"
-            taken.add(prefixes[name])
+            prefixes[name] = slug if slug not in prefixes.values() else f"{slug}_{place}"
     rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
     panels = [_gap_panel(report, prefixes[name], name) for name, report in named.items()]
     bp = rrb.Blueprint(panels[0] if len(panels) == 1 else rrb.Tabs(*panels))
@@ -498,10 +494,9 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
 
 def _gap_panel(report: GapReport, prefix: str, name: str) -> Any:
     """One diagnosis's views: its residuals, Allan deviations and quartiles as tabs, beside its report."""
-    axis = _whole_run()
     root = _join(prefix, "gap")
     views = [
-        rrb.TimeSeriesView(origin=_join(root, imu_entity(ch)), name=f"{ch} residual", axis_x=axis)
+        rrb.TimeSeriesView(origin=_join(root, imu_entity(ch)), name=f"{ch} residual", axis_x=_whole_run())
         for ch in CHANNELS
     ]
     allan = [
