@@ -165,7 +165,7 @@ def test_strategies_lists_the_registry_one_name_a_line(capsys: pytest.CaptureFix
 
 
 def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     recs, _, _ = recordings(9)
     (tmp_path / "unit").mkdir()
@@ -197,6 +197,24 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main(["evaluate", str(model), "--dataset", "unit/r2", "--json", str(out)]) == 0
     online = json.loads(out.read_text())["open_loop_attitude"]["aoe_deg"]
     assert online < pooled < raw, (online, pooled, raw)
+    # Several judged in one command: each recording's document as its own command writes it, and the
+    # means numpy takes of theirs.
+    singles = {}
+    for name in ("unit/r2", "unit/r0"):
+        assert main(["evaluate", str(model), "--dataset", name, "--json", str(out)]) == 0
+        singles[name] = {
+            k: v for k, v in json.loads(out.read_text()).items() if k not in ("model", "strategy")
+        }
+    several = ["evaluate", str(model), "--dataset", "unit/r2", "--dataset", "unit/r0"]
+    assert main([*several, "--json", str(tmp_path / "several.json")]) == 0
+    both = json.loads((tmp_path / "several.json").read_text())
+    assert both["recordings"] == [singles["unit/r2"], singles["unit/r0"]]
+    for key in ("open_loop_attitude", "open_loop_attitude_raw"):
+        assert both["mean"][key]["aoe_deg"] == np.mean([d[key]["aoe_deg"] for d in singles.values()])
+    capsys.readouterr()
+    assert main([*several, "--plot", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--plot" in err and "several --dataset" in err, err
     # A model fitted on this folder's unit is refused on a recording of another folder (another unit).
     (tmp_path / "other").mkdir()
     write_npz(tmp_path / "other", "x", recs[2])

@@ -43,11 +43,16 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
         viz.check_rrd_path(args.rerun)
     outputs = {"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}
-    check_outputs(outputs, [args.model, args.recording, args.truth, *dataset_inputs(args.dataset)])
+    names = args.dataset or []
+    check_outputs(
+        outputs, [args.model, args.recording, args.truth, *(p for d in names for p in dataset_inputs(d))]
+    )
     strategy = compensation.load(args.model)
-    where = args.dataset or str(args.recording)
+    if len(names) > 1:
+        return _evaluate_several(args, strategy, names)
+    where = names[0] if names else str(args.recording)
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        rec = read_recording(args, args.recording, args.dataset, args.truth)
+        rec = read_recording(args, args.recording, names[0] if names else None, args.truth)
     referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
     if rec.rig is None and not rec.has_trajectory:
         missing = io.recording.missing_reference(rec)
@@ -64,6 +69,39 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         document = {"model": str(args.model), "strategy": strategy.label, "recording": where}
         io.write_json(args.json, {**document, **result.to_dict()})
+    return 0
+
+
+def _evaluate_several(args: argparse.Namespace, strategy: Strategy, names: list[str]) -> int:
+    """Several datasets, each judged open loop as one would be, then each one's AOE and the mean. Every
+    recording is read and checked before any is judged: a bad one is refused before minutes of work."""
+    from sins import io
+    from sins.compensation import evaluation, referenced
+
+    one_only = {"RECORDING": args.recording, "--truth": args.truth, "--plot": args.plot,
+                "--rerun": args.rerun, "--drive": args.drive}  # fmt: skip
+    given = [flag for flag, value in one_only.items() if value]
+    if given:
+        raise SinsInputError(f"evaluate: {', '.join(given)}: for one recording, not for several --dataset")
+    recordings = {}
+    for name in names:
+        with progress_bar(f"reading {name}", ""):
+            rec = read_recording(args, None, name)
+        referenced.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))
+        if not rec.has_trajectory:
+            raise SinsInputError(
+                f"{name}: several recordings are judged open loop against their trajectories, and this one "
+                "has none (judge a rig recording alone)"
+            )
+        recordings[name] = rec.beside_reference()
+    judged = {
+        name: _evaluate_referenced(args, strategy, rec, f"{args.model} ({strategy.label}) on {name}")
+        for name, rec in recordings.items()
+    }
+    result = evaluation.across(judged, strategy.label)
+    print("\n".join(result.lines))
+    if args.json:
+        io.write_json(args.json, {"model": str(args.model), "strategy": strategy.label, **result.to_dict()})
     return 0
 
 
@@ -133,7 +171,7 @@ def add(sub: Subparsers) -> None:
     )
     p.add_argument("model", type=Path, metavar="MODEL.json")
     p.add_argument("recording", nargs="?", metavar="RECORDING", help="a rig CSV, or a recording with --truth")
-    add_dataset(p)
+    add_dataset(p, repeat="to judge several recordings open loop, then their mean AOE")
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the recording's reference trajectory")
     p.add_argument(
         "--last", type=fraction, metavar="FRACTION",

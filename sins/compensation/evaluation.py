@@ -5,7 +5,8 @@ channel by channel (:func:`evaluate_rig`: RMS before and after, the bias left, w
 white noise); against a reference trajectory, by the attitude the corrected gyro holds open loop and,
 over a window, the corrected unit's free-inertial drift (:func:`evaluate_referenced`). Each gives an
 :class:`Evaluation`: the report's lines, the JSON document (:meth:`Evaluation.to_dict`) and what the
-pictures are drawn from.
+pictures are drawn from. Several recordings judged open loop by one model are summed up by
+:func:`across` (each one's AOE and the mean: the published benchmarks' figure).
 """
 
 from __future__ import annotations
@@ -143,6 +144,30 @@ def evaluate_referenced(
     return Evaluation(lines, document, runs=runs, table=table)
 
 
+def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
+    """Several recordings judged open loop by one model (``label``, as :func:`evaluate_referenced` names
+    its row): each one's AOE, raw and corrected, and their means over the recordings, each recording
+    weighing the same (as Brossard et al. 2020 average their judged sequences). The document holds every
+    recording's own document and ``mean`` in their keys (``mean.open_loop_attitude.aoe_deg``)."""
+    import numpy as np
+
+    if not judged:
+        raise ValueError("across: no recording judged")
+    raw = [e.document["open_loop_attitude_raw"]["aoe_deg"] for e in judged.values()]
+    corrected = [e.document["open_loop_attitude"]["aoe_deg"] for e in judged.values()]
+    mean_raw, mean = float(np.mean(raw)), float(np.mean(corrected))
+    rows = [[name, f"{r:.3f}", f"{c:.3f}"] for name, r, c in zip(judged, raw, corrected, strict=True)]
+    table = fixed_width(
+        ["recording", f"{RAW}: AOE", f"{label}: AOE"], [*rows, ["mean", f"{mean_raw:.3f}", f"{mean:.3f}"]]
+    )
+    lines = [f"\nacross {len(judged)} recordings: the gyro's open-loop AOE, degrees", table]
+    document = {
+        "recordings": [{"recording": name, **e.to_dict()} for name, e in judged.items()],
+        "mean": {"open_loop_attitude": {"aoe_deg": mean}, "open_loop_attitude_raw": {"aoe_deg": mean_raw}},
+    }
+    return Evaluation(lines, document, table=table)
+
+
 def _drive(
     strategy: Strategy,
     rec: ReferencedRecording,
@@ -174,6 +199,7 @@ __all__ = [
     "OPEN_LOOP_HEAD",
     "RAW",
     "Evaluation",
+    "across",
     "evaluate_referenced",
     "evaluate_rig",
 ]
