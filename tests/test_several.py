@@ -211,10 +211,15 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert both["recordings"] == [singles["unit/r2"], singles["unit/r0"]]
     for key in ("open_loop_attitude", "open_loop_attitude_raw"):
         assert both["mean"][key]["aoe_deg"] == np.mean([d[key]["aoe_deg"] for d in singles.values()])
+    # A file and a dataset mixed: the same readings, the same figures.
+    mixed = ["evaluate", str(model), str(tmp_path / "unit" / "r2.npz"), "--dataset", "unit/r0"]
+    assert main([*mixed, "--json", str(tmp_path / "mixed.json")]) == 0
+    assert json.loads((tmp_path / "mixed.json").read_text())["mean"] == both["mean"]
     capsys.readouterr()
-    assert main([*several, "--plot", str(tmp_path / "x.png")]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "--plot" in err and "several --dataset" in err, err
+    for extra, what in ((["--plot", str(tmp_path / "x.png")], "--plot"), (["--dataset", "unit/r2"], "twice")):
+        assert main([*several, *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and what in err, err
     # A model fitted on this folder's unit is refused on a recording of another folder (another unit).
     (tmp_path / "other").mkdir()
     write_npz(tmp_path / "other", "x", recs[2])

@@ -43,16 +43,17 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
         viz.check_rrd_path(args.rerun)
     outputs = {"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}
-    names = args.dataset or []
-    check_outputs(
-        outputs, [args.model, args.recording, args.truth, *(p for d in names for p in dataset_inputs(d))]
-    )
+    paths, names = list(args.recording or []), list(args.dataset or [])
+    check_outputs(outputs, [args.model, *paths, args.truth, *(p for d in names for p in dataset_inputs(d))])
     strategy = compensation.load(args.model)
-    if len(names) > 1:
-        return _evaluate_several(args, strategy, names)
-    where = names[0] if names else str(args.recording)
+    if len(paths) + len(names) > 1:
+        return _evaluate_several(
+            args, strategy, [*((p, p, None) for p in paths), *((n, None, n) for n in names)]
+        )
+    recording, dataset = (paths or [None])[0], (names or [None])[0]
+    where = dataset or str(recording)
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        rec = read_recording(args, args.recording, names[0] if names else None, args.truth)
+        rec = read_recording(args, recording, dataset, args.truth)
     referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
     if rec.rig is None and not rec.has_trajectory:
         missing = io.recording.missing_reference(rec)
@@ -72,21 +73,25 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _evaluate_several(args: argparse.Namespace, strategy: Strategy, names: list[str]) -> int:
-    """Several datasets, each judged open loop as one would be, then each one's AOE and the mean. Every
-    recording is read and checked before any is judged: a bad one is refused before minutes of work."""
+def _evaluate_several(
+    args: argparse.Namespace, strategy: Strategy, inputs: list[tuple[str, str | None, str | None]]
+) -> int:
+    """Several recordings (``(name, path, dataset)``), each judged open loop as one would be, then each
+    one's AOE and the mean. Every recording is read and checked before any is judged: a bad one is
+    refused before minutes of work."""
     from sins import io
     from sins.compensation import evaluation, referenced
 
-    one_only = {"RECORDING": args.recording, "--truth": args.truth, "--plot": args.plot,
-                "--rerun": args.rerun, "--drive": args.drive}  # fmt: skip
+    one_only = {"--truth": args.truth, "--plot": args.plot, "--rerun": args.rerun, "--drive": args.drive}
     given = [flag for flag, value in one_only.items() if value]
     if given:
-        raise SinsInputError(f"evaluate: {', '.join(given)}: for one recording, not for several --dataset")
+        raise SinsInputError(f"evaluate: {', '.join(given)}: for one recording, not for several")
     recordings = {}
-    for name in names:
+    for name, path, dataset in inputs:
+        if name in recordings:
+            raise SinsInputError(f"evaluate: {name} is given twice")
         with progress_bar(f"reading {name}", ""):
-            rec = read_recording(args, None, name)
+            rec = read_recording(args, path, dataset)
         referenced.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))
         if not rec.has_trajectory:
             raise SinsInputError(
@@ -170,7 +175,11 @@ def add(sub: Subparsers) -> None:
         help="judge a fitted model: per channel on a rig recording, open loop against a trajectory",
     )
     p.add_argument("model", type=Path, metavar="MODEL.json")
-    p.add_argument("recording", nargs="?", metavar="RECORDING", help="a rig CSV, or a recording with --truth")
+    p.add_argument(
+        "recording", nargs="*", metavar="RECORDING",
+        help="a rig CSV, or a recording with --truth; several (each with its own reference, or beside "
+        "--dataset): each judged open loop, then their mean AOE",
+    )  # fmt: skip
     add_dataset(p, repeat="to judge several recordings open loop, then their mean AOE")
     p.add_argument("--truth", type=Path, metavar="TRUTH.csv", help="the recording's reference trajectory")
     p.add_argument(
