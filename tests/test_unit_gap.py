@@ -211,6 +211,10 @@ def test_gap_reads_an_npz_path_a_euroc_folder_and_refuses_bad_input_in_one_line(
         assert main(["gap", str(bad)]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and what in err, err
+    # One recording given twice, refused before either is read: its verdicts would agree with themselves.
+    assert main(["gap", str(path), str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"gap: {path} is given twice" in err, err
 
 
 def _rrd_entities(path: Path) -> dict[str, Any]:

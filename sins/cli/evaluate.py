@@ -20,6 +20,7 @@ from sins.cli.options import (
     add_dataset,
     add_plot,
     add_recording_options,
+    check_distinct,
     dataset_inputs,
     fraction,
     read_recording,
@@ -86,10 +87,9 @@ def _evaluate_several(
     given = [flag for flag, value in one_only.items() if value]
     if given:
         raise SinsInputError(f"evaluate: {', '.join(given)}: for one recording, not for several")
+    check_distinct([name for name, _, _ in inputs], "evaluate")
     recordings = {}
     for name, path, dataset in inputs:
-        if name in recordings:
-            raise SinsInputError(f"evaluate: {name} is given twice")
         with progress_bar(f"reading {name}", ""):
             rec = read_recording(args, path, dataset)
         referenced.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))

@@ -10,6 +10,7 @@ from sins.cli.common import Subparsers, check_outputs, display_unit, fixed_width
 from sins.cli.options import (
     add_dataset,
     add_recording_options,
+    check_distinct,
     dataset_inputs,
     fraction,
     positive,
@@ -102,7 +103,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
     """``sins gap``'s recordings (files, datasets by name, or both), each with its reference, and the
     model's effects."""
     from sins import imu, scenario
-    from sins.unit_gap.inputs import check_names, read_gap_input
+    from sins.unit_gap.inputs import read_gap_input
 
     paths, names = list(args.recording or []), list(args.dataset or [])
     if not paths and not names:
@@ -111,7 +112,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
         raise SinsInputError(f"--holdout must be in (0, 1), got {args.holdout}")
     if args.truth is not None and (names or len(paths) != 1):
         raise SinsInputError("gap: --truth goes with one RECORDING, not with --dataset or several")
-    check_names([str(p) for p in paths] + names)
+    check_distinct([str(p) for p in paths] + names, "gap")
     options = recording_options(args)
     inputs = [read_gap_input(p, truth=args.truth, options=options) for p in paths]
     inputs += [read_gap_input(None, dataset=n) for n in names]

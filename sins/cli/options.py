@@ -124,6 +124,16 @@ def read_recording(
     return io.read(recording, truth=truth, **chosen, progress=progress)
 
 
+def check_distinct(names: list[str], command: str) -> None:
+    """Refuse a recording given twice to a command that takes several (``gap``: its verdicts would agree
+    with themselves; ``evaluate``: its mean would count it twice), before any is read."""
+    seen = set()
+    for name in names:
+        if name in seen:
+            raise SinsInputError(f"{command}: {name} is given twice")
+        seen.add(name)
+
+
 def recording_options(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of :func:`sins.io.read` from :func:`add_recording_options`'s flags."""
     return {
@@ -183,6 +193,7 @@ __all__ = [
     "add_dataset",
     "add_plot",
     "add_recording_options",
+    "check_distinct",
     "count",
     "dataset_inputs",
     "fraction",

@@ -95,17 +95,7 @@ def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[s
         )
 
 
-def check_names(names: list[str]) -> None:
-    """Refuse a recording named twice (its verdicts would agree with themselves)."""
-    seen = set()
-    for n in names:
-        if n in seen:
-            raise SinsInputError(f"gap: {n} is given twice")
-        seen.add(n)
-
-
 __all__ = [
     "GapInput",
-    "check_names",
     "read_gap_input",
 ]
