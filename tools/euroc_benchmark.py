@@ -7,11 +7,12 @@ Usage::
 
 The protocol of Brossard et al. 2020 (``shared/data/euroc/SOURCE.md``): every strategy fitted with
 ``sins fit --dataset euroc/A --dataset euroc/B ... --strategy S --out M`` on the six training sequences,
-then judged with ``sins evaluate M --dataset euroc/X --json OUT`` on the five others by its absolute
-orientation error (AOE: the corrected gyro integrated alone from the reference's first attitude, RMS of
-the angle over every sample, no Earth rate). Nothing of a judged sequence is read by a fit. Prints one
-row per judged sequence (raw, every strategy once, Brossard 2020 as SOURCE.md cites it) and the mean, each
-fit's wall time, and checks the raw row against SOURCE.md's independent scipy integration (within 1 %).
+then judged with ``sins evaluate M --dataset euroc/X --dataset euroc/Y ... --json OUT`` on the five
+others by its absolute orientation error (AOE: the corrected gyro integrated alone from the reference's
+first attitude, RMS of the angle over every sample, no Earth rate). Nothing of a judged sequence is read
+by a fit. Prints one row per judged sequence (raw, every strategy once, Brossard 2020 as SOURCE.md cites
+it) and the mean, each fit's wall time, and checks the raw row against SOURCE.md's independent scipy
+integration (within 1 %).
 
 ``--folder``, ``--train`` and ``--judge`` run the same commands on another unit's ``.npz`` recordings
 (``--folder myunit --train a b c --judge d e f``); the published columns are then left out.
@@ -54,11 +55,18 @@ def _run(argv: list[str], quiet: bool = True) -> int:
     return code
 
 
-def _evaluate(model: Path, folder: str, name: str, out: Path) -> dict[str, Any]:
-    code = _run(["evaluate", str(model), "--dataset", f"{folder}/{name}", "--json", str(out)])
+def _evaluate(model: Path, folder: str, names: list[str], out: Path) -> dict[str, dict[str, Any]]:
+    """Every judged recording's document by its name: one ``sins evaluate`` of them all (several
+    ``--dataset``: each judged as alone, the documents under ``recordings``)."""
+    datasets = [f"{folder}/{n}" for n in names]
+    code = _run(
+        ["evaluate", str(model), *(a for d in datasets for a in ("--dataset", d)), "--json", str(out)]
+    )
     if code:
-        raise SystemExit(f"sins evaluate {model} on {folder}/{name} failed ({code})")
-    return dict(json.loads(out.read_text()))
+        raise SystemExit(f"sins evaluate {model} on {', '.join(datasets)} failed ({code})")
+    doc = json.loads(out.read_text())
+    judged = doc["recordings"] if len(names) > 1 else [doc]
+    return {name: judged[i] for i, name in enumerate(names)}
 
 
 def main_(argv: list[str] | None = None) -> int:
@@ -92,8 +100,9 @@ def main_(argv: list[str] | None = None) -> int:
         results["fits"][strategy] = {"seconds": seconds, "bias_rule": doc.get("bias_rule", {})}
         mode = doc.get("bias_rule", {}).get("mode", "-")
         print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {mode})", file=sys.stderr)
-        for name in args.judge:
-            judged = _evaluate(model, args.folder, name, work / f"{strategy}.{name}.json")
+        for name, judged in _evaluate(
+            model, args.folder, args.judge, work / f"{strategy}.judged.json"
+        ).items():
             results["aoe_deg"].setdefault(name, {})["none"] = judged["open_loop_attitude_raw"]["aoe_deg"]
             results["aoe_deg"][name][strategy] = judged["open_loop_attitude"]["aoe_deg"]
     _table(results, [s for s in strategies if s != "none"], published)  # the raw column is "none"
