@@ -187,6 +187,13 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main([*args, "--json", str(fit_json), "--bias-rule", "pooled"]) == 0
     doc = json.loads(fit_json.read_text())
     assert doc["recordings"] == ["unit/r0", "unit/r1"] and doc["bias_rule"]["mode"] == "pooled"
+    # A recording given twice would weigh twice and be held back against a copy of itself: refused
+    # before anything is read or written.
+    capsys.readouterr()
+    twice = [*args[:-1], str(tmp_path / "twice.json"), "--dataset", "unit/r0"]
+    assert main(twice) == 2 and not (tmp_path / "twice.json").exists()
+    err = capsys.readouterr().err.strip()
+    assert err == "sins: error: fit: unit/r0 is given twice", err
     assert main(["evaluate", str(model), "--dataset", "unit/r2", "--json", str(out)]) == 0
     judged = json.loads(out.read_text())
     raw, pooled = judged["open_loop_attitude_raw"]["aoe_deg"], judged["open_loop_attitude"]["aoe_deg"]

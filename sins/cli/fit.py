@@ -10,6 +10,7 @@ from sins.cli.common import Subparsers, check_outputs, unit_of
 from sins.cli.options import (
     add_dataset,
     add_recording_options,
+    check_distinct,
     dataset_inputs,
     fraction,
     positive,
@@ -68,6 +69,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
         )
     recs = []
     named = [("path", r) for r in args.recording] + [("dataset", d) for d in args.dataset or []]
+    check_distinct([name for _, name in named], "fit")
     with progress_bar(f"fitting {args.strategy}", "") as bar:
         for kind, name in named:
             bar.set_description(f"reading {name}")

@@ -126,7 +126,9 @@ def read_recording(
 
 def check_distinct(names: list[str], command: str) -> None:
     """Refuse a recording given twice to a command that takes several (``gap``: its verdicts would agree
-    with themselves; ``evaluate``: its mean would count it twice), before any is read."""
+    with themselves; ``evaluate``: its mean would count it twice; ``fit``: it would weigh twice, and the
+    guard holding recordings back would judge the fit on a copy of a recording it was fitted on), before
+    any is read."""
     seen = set()
     for name in names:
         if name in seen:
