@@ -211,6 +211,14 @@ def test_gap_reads_an_npz_path_a_euroc_folder_and_refuses_bad_input_in_one_line(
         assert main(["gap", str(bad)]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and what in err, err
+    # Too short for the intervals the statistic asks for (12 s: 11 intervals of 1 s, 20 needed): one line
+    # naming the file and the way on, not an assertion's traceback.
+    with np.load(path) as z:
+        keep = z["t_s"] <= z["t_s"][0] + 12.0
+        short = nu.write(tmp_path / "twelve.npz", {k: z[k][keep] for k in z.files})
+    assert main(["gap", str(short), "--statistic", "intervals"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "twelve.npz" in err and "--statistic samples" in err, err
     # One recording given twice, refused before either is read: its verdicts would agree with themselves.
     assert main(["gap", str(path), str(path)]) == 2
     err = capsys.readouterr().err

@@ -52,7 +52,7 @@ def diagnose_one(
         raise SinsInputError(
             f"{inp.name}: --statistic intervals needs a reference trajectory; this one is per-sample inputs"
         )
-    baseline = _baseline(inp, interval_s) if inp.referenced is not None else None
+    baseline, unfitted = _baseline(inp, interval_s) if inp.referenced is not None else (None, "")
     data = _samples(inp, asked)
     trajectory = inp.referenced.reference if inp.referenced is not None else None
     chosen = statistic.choose(
@@ -66,7 +66,11 @@ def diagnose_one(
         return Diagnosed(inp.name, report, len(data[0]), data)
     if tuple(model) != tuple(BASELINE):
         raise SinsInputError(f"{inp.name}: --model goes with the per-sample statistic (--statistic samples)")
-    assert inp.referenced is not None and baseline is not None
+    assert inp.referenced is not None
+    if baseline is None:
+        # The reference calls for intervals (or they were asked for), and they cannot be fitted.
+        where = unfitted if inp.name in unfitted else f"{inp.name}: {unfitted}"
+        raise SinsInputError(f"{where}; --statistic samples diagnoses it per sample without them")
     try:
         d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
     except ValueError as exc:
@@ -74,13 +78,14 @@ def diagnose_one(
     return Diagnosed(inp.name, interval_report(d, holdout, chosen.to_dict()), len(inp.referenced.imu.t) - 1)
 
 
-def _baseline(inp: GapInput, interval_s: float) -> IntervalFit | None:
-    """The interval fit of the baseline, or None where the recording's intervals cannot be fitted."""
+def _baseline(inp: GapInput, interval_s: float) -> tuple[IntervalFit | None, str]:
+    """The interval fit of the baseline, or None and why where the recording's intervals cannot be
+    fitted (too few, too little turning)."""
     assert inp.referenced is not None
     try:
-        return baseline_fit(inp.referenced, interval_s)
-    except ValueError:
-        return None
+        return baseline_fit(inp.referenced, interval_s), ""
+    except ValueError as exc:
+        return None, str(exc)
 
 
 def _samples(inp: GapInput, asked: str) -> tuple[CalibrationData, NavSeries | None] | None:
