@@ -82,7 +82,8 @@ def _read_npz(
     if bad.size:
         k = int(bad[0]) + 1
         raise SinsInputError(
-            f"{path}: t_s: row {k + 1}: {t_abs[k]!r} s does not increase (row {k}: {t_abs[k - 1]!r} s)"
+            f"{path}: t_s: row {k + 1}: {float(t_abs[k])!r} s does not increase "
+            f"(row {k}: {float(t_abs[k - 1])!r} s)"
         )
     t = t_abs - t_abs[0]
     _check_range(path, "gyro_rad_s", arrays["gyro_rad_s"], formats.MAX_RATE_RADPS, "rad/s")
@@ -139,6 +140,8 @@ def _load(path: Path) -> dict[str, Array]:
                     f"{', '.join(REFERENCE_KEYS)}"
                 )
             out = {k: _array(path, archive, k) for k in (*READING_KEYS, *have_ref)}
+    except SinsInputError:
+        raise  # already one line naming the file and the key (it is a ValueError too)
     except (OSError, ValueError, zipfile.BadZipFile) as exc:
         raise SinsInputError(f"{path}: not a readable .npz archive ({exc})") from None
     n = len(out["t_s"])
