@@ -300,11 +300,12 @@ def test_a_dataset_is_inspected_by_name_and_no_reader_option_is_offered(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """``sins inspect --dataset broad_05``: BROAD's unit reads gravity along +z at rest (its own axes, as
-    the dataset's reader keeps them); the finding says so, but offers no --frame to pass, which a
-    dataset refuses."""
+    the dataset's reader keeps them, ``__u``), and beside its reference those are the body's axes: the
+    reference's attitude agrees with them, so no finding, and no --frame to pass, which a dataset
+    refuses. (Before a reference judged them, FRD's convention did, and called them a likely mistake.)"""
     assert main(["inspect", "--dataset", "broad_05"]) == 0
     out = capsys.readouterr().out
-    assert "dataset, increment form" in out and "lies along +z" in out, out
-    assert "no reader option applies" in out and "--frame" not in out, out
+    assert "dataset, increment form" in out and "): __u" in out, out
+    assert "no likely mistakes found" in out and "--frame" not in out, out
     assert main(["inspect", "--dataset", "broad_05", "--frame", "flu"]) == 2
     assert "frame does not apply to a dataset" in capsys.readouterr().err

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.compensation import referenced
-from sins.io import datasets
+from sins.io import datasets, inspection
 
 EUROC = dataset_folder("euroc")
 needs_euroc = pytest.mark.skipif(not (EUROC / "V1_01_easy.npz").is_file(), reason=f"no EuRoC data in {EUROC}")
@@ -58,6 +58,49 @@ def test_readings_and_reference_read_back(tmp_path: Path) -> None:
     # Beside its own reference the report names it so, and keeps the room frame's unknown latitude.
     beside = rec.beside_reference()
     assert beside.reference_name == "its own reference (npz)" and not beside.latitude_known
+
+
+def _swinging(path: Path, order: str = "wxyz", inverse: bool = False) -> None:
+    """Ten seconds of a unit swinging about a tilted axis (angle 0.8 sin(2π t / 3) rad), its readings
+    exact: the rate along the axis, gravity's reaction (9.81 m/s² up in the world) in the sensor's axes;
+    the reference's quaternion written in ``order``, or the other way round (the world in the sensor)."""
+    t = np.arange(2000) / 200.0
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    angle, rate = 0.8 * np.sin(2 * np.pi * t / 3.0), 0.8 * 2 * np.pi / 3.0 * np.cos(2 * np.pi * t / 3.0)
+    q = Rotation.from_rotvec(np.outer(angle, axis)) * Rotation.from_euler("x", 0.3)
+    written = q.inv() if inverse else q
+    _write(
+        path, n=2000, t_s=t, gyro_rad_s=np.outer(rate, Rotation.from_euler("x", 0.3).inv().apply(axis)),
+        accel_m_s2=q.inv().apply([0.0, 0.0, 9.81]),
+        q_wxyz=written.as_quat(scalar_first=order == "wxyz"), v_m_s=np.zeros((2000, 3)),
+        p_m=np.zeros((2000, 3)),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("order", "inverse", "seen"),
+    [("wxyz", False, None), ("xyzw", False, "correlate -0.48"), ("wxyz", True, "correlate -0.96"),
+     ("steady xyzw", False, "17° from up")],
+)  # fmt: skip
+def test_inspect_judges_the_axes_by_the_reference_attitude(
+    tmp_path: Path, order: str, inverse: bool, seen: str | None
+) -> None:
+    """Beside a reference, the readings' axes are its body's whatever they are called: a reference of
+    these axes gives no finding (gravity along a tilted axis, which FRD's convention would call a
+    mistake; and the swing's still moments, where the readings barely change, are not taken for rest);
+    a quaternion of the other order or the other way round shows in the turns, and where the unit turns
+    steadily (which a gyro bias could explain), the other order shows in gravity."""
+    path = tmp_path / "swing.npz"
+    if order == "steady xyzw":  # the steady turn about the vertical, its quaternion scalar last
+        steady = _write(path)
+        _write(path, q_wxyz=np.roll(steady["q_wxyz"], -1, axis=1))
+    else:
+        _swinging(path, order, inverse)
+    findings = inspection.inspect(io.read(path)).findings
+    if seen is None:
+        assert not findings, findings
+    else:
+        assert [f.code for f in findings] == ["reference_attitude"] and seen in findings[0].what, findings
 
 
 def test_readings_alone(tmp_path: Path) -> None:

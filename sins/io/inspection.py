@@ -6,12 +6,15 @@ Earth's, 7.292e-5 rad/s: a size off by a unit's factor names the unit (g read as
 rad/s), a size of gravity × the sample interval names increments read as rates, and gravity along +z
 names a z axis pointing up (FLU, or axes named after ENU) where FRD's points down. In motion, a land
 vehicle's lateral specific force follows its yaw rate (``v · r``, the vehicle driving forward), which
-names the axis pointing right. The time stamps give the rate, its jitter and the gaps; runs of equal
-readings at a channel's extreme give clipping. Each finding names the reader option (and its value)
-that mends it, or says what to do where no option does; a clean recording gives none.
+names the axis pointing right. Beside a reference attitude, the readings' axes are its body's
+whatever they are called, and the reference judges them instead (:mod:`sins.io.frame_check`). The time
+stamps give the rate, its jitter and the gaps; runs of equal readings at a channel's extreme give
+clipping. Each finding names the reader option (and its value) that mends it, or says what to do where
+no option does; a clean recording gives none.
 
-Rest is found from the data alone: among the one-second windows whose readings vary least (within 3×
-the quietest 5 %), the largest group whose means agree (within 6 standard errors), two seconds at least.
+Rest is found from the data: among the one-second windows whose readings vary least (within 3× the
+quietest 5 %), the largest group whose means agree (within 6 standard errors), two seconds at least;
+beside a reference, none where it turns (a steady turn reads as a still unit with a large bias).
 Where a fifth of the quiet windows hold gravity 20° or more away from it (a rig session, a hand-held
 unit), the axes are not judged.
 """
@@ -19,17 +22,17 @@ unit), the axes are not judged.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import asdict, dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.core import rotation
 from sins.core.earth import OMEGA_IE
 from sins.core.series import ImuRates
 from sins.errors import SinsInputError
-from sins.io import axes
+from sins.io import frame_check
 from sins.io import units as unitdefs
+from sins.io.findings import Clipping, Finding, Gap, Inspection, Rest, Windows
 from sins.io.recording import Recording
 
 Array = NDArray[np.float64]
@@ -49,96 +52,11 @@ PLAUSIBLE_HZ = (10.0, 10_000.0)
 RATE_TOL = 0.005
 #: Jitter of the sample interval (RMS, fraction of it) worth a word.
 JITTER_TOL = 0.05
-#: The common full-scale ranges, for naming a clipping level (°/s, g).
 FULL_SCALES = {"gyro": (125, 250, 300, 500, 1000, 2000, 4000), "accel": (2, 4, 5, 8, 10, 16, 30, 50, 200)}
 
 #: Rate units and the increment units that go with them (for "increments read as rates").
 _INCREMENT_UNIT = {"rad/s": "rad", "mrad/s": "mrad", "deg/s": "deg", "m/s^2": "m/s", "cm/s^2": "cm/s",
                    "ft/s^2": "ft/s", "g": "g*s", "mg": "mg*s", "ug": "ug*s"}  # fmt: skip
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One likely mistake: ``code`` (stable), ``what`` the data show (one line, with figures), the reader
-    option that mends it and its ``value`` (``option="units", value="accel=g"``: ``--units accel=g``),
-    or ``advice`` where no option does."""
-
-    code: str
-    what: str
-    option: str | None = None
-    value: str | None = None
-    advice: str = ""
-
-
-@dataclass(frozen=True)
-class Gap:
-    """A stretch without samples: from ``start_s`` for ``length_s``, about ``missing`` samples."""
-
-    start_s: float
-    length_s: float
-    missing: int
-
-
-@dataclass(frozen=True)
-class Clipping:
-    """Readings stuck at a channel's extreme ``level`` (SI): ``samples`` in ``runs``, the first at
-    ``first_s``."""
-
-    channel: str
-    level: float
-    samples: int
-    runs: int
-    first_s: float
-
-
-@dataclass(frozen=True)
-class Rest:
-    """The readings at rest: how long, the mean specific force and rate (SI, FRD as read), their sizes
-    against normal gravity and Earth's rate, whether the rate's mean is resolved (its standard error
-    below a tenth of it, the windows agreeing), and ``orientations``: 2 where a fifth or more of the
-    quiet windows hold gravity 20° or more away (a rig session, a hand-held unit), whose axes the rest
-    then does not show."""
-
-    seconds: float
-    specific_force: tuple[float, float, float]
-    rate: tuple[float, float, float]
-    gravity_ratio: float
-    earth_rate_ratio: float
-    rate_resolved: bool
-    orientations: int = 1
-
-
-@dataclass(frozen=True)
-class Inspection:
-    """What :func:`inspect` found: the figures, and the :class:`Finding` list (empty when clean)."""
-
-    source: str
-    form: str
-    rows: int
-    span_s: float
-    rate_hz: float
-    jitter: float
-    stated_rate_hz: float | None
-    gaps: tuple[Gap, ...]
-    rest: Rest | None
-    clipping: tuple[Clipping, ...]
-    axes: str | None
-    findings: tuple[Finding, ...] = field(default=())
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain types for JSON (SI units)."""
-        return asdict(self)
-
-
-@dataclass(frozen=True)
-class _Windows:
-    """One-second windows of the mean rates: per window the mean and the spread of ω and f."""
-
-    length: int
-    mean_w: Array
-    mean_f: Array
-    spread_w: Array
-    spread_f: Array
 
 
 def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
@@ -173,10 +91,17 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     findings: list[Finding] = []
     findings += _time_findings(rec, med, jitter, gaps, stated, rate_hz is not None)
     windows = _windows(w, f, med)
-    rest = _rest(windows, med) if windows is not None else None
+    turning = _turning(rec, t, windows) if windows is not None and rec.truth is not None else None
+    rest = _rest(windows, med, turning) if windows is not None else None
     findings += _rest_findings(rec, rest, med)
-    frame = _axes(windows, rest, f)
-    findings += _frame_findings(rec, frame)
+    frame = frame_check.seen_axes(windows, rest, f)
+    # Beside a reference attitude, the readings' axes are its body's, whatever they are called: the
+    # reference judges them, not FRD's convention.
+    findings += (
+        frame_check.frame_findings(rec, frame)
+        if rec.truth is None
+        else frame_check.reference_findings(rec, t, w, f)
+    )
     findings += _range_findings(rec, w)
     clipping = _clipping(rec)
     findings += [_clip_finding(c) for c in clipping]
@@ -193,7 +118,7 @@ def _as_read(finding: Finding) -> Finding:
     """A finding on a dataset: what the data show, without a reader option to pass (a dataset's reader
     gives its readings in the units and axes its SOURCE.md states; fits and judgements on it are in
     those)."""
-    if finding.option is None:
+    if finding.option is None and "--" not in finding.advice:
         return finding
     return dataclasses.replace(
         finding, option=None, value=None,
@@ -293,7 +218,7 @@ def _units_with(rec: Recording, **changes: str) -> str:
 # --------------------------------------------------------------------------- rest
 
 
-def _windows(w: Array, f: Array, med: float) -> _Windows | None:
+def _windows(w: Array, f: Array, med: float) -> Windows | None:
     """One-second windows (at least 8 samples, and 8 windows), or None for a recording too short."""
     length = max(8, round(1.0 / med)) if np.isfinite(med) and med > 0 else 8
     count = len(w) // length
@@ -301,17 +226,22 @@ def _windows(w: Array, f: Array, med: float) -> _Windows | None:
         return None
     cut = count * length
     ww, ff = w[:cut].reshape(count, length, 3), f[:cut].reshape(count, length, 3)
-    return _Windows(
+    return Windows(
         length=length, mean_w=ww.mean(axis=1), mean_f=ff.mean(axis=1),
         spread_w=np.linalg.norm(ww.std(axis=1), axis=1), spread_f=np.linalg.norm(ff.std(axis=1), axis=1),
     )  # fmt: skip
 
 
-def _rest(win: _Windows, med: float) -> Rest | None:
-    """The windows at rest (see the module docstring) and their means, or None (less than two seconds)."""
-    quiet = np.ones(len(win.mean_w), dtype=bool)
+def _rest(win: Windows, med: float, turning: NDArray[np.bool_] | None = None) -> Rest | None:
+    """The windows at rest (see the module docstring) and their means, or None (less than two seconds).
+    ``turning``: windows a reference shows turning, never at rest (a steady turn reads as a still unit
+    with a large bias)."""
+    candidate = np.ones(len(win.mean_w), dtype=bool) if turning is None else ~turning
+    if candidate.sum() < 2:
+        return None
+    quiet = candidate.copy()
     for spread in (win.spread_w, win.spread_f):
-        floor = float(np.percentile(spread, 5))
+        floor = float(np.percentile(spread[candidate], 5))
         quiet &= spread <= 3.0 * floor + 1e-12 * float(np.median(spread) + 1e-300)
     if quiet.sum() < 2:
         return None
@@ -344,7 +274,28 @@ def _rest(win: _Windows, med: float) -> Rest | None:
     )
 
 
-def _largest_cluster(win: _Windows, quiet: NDArray[np.intp], tol: tuple[float, float]) -> int:
+#: A window a reference shows turning faster than this, °/s, is not at rest, whatever its readings say.
+REST_TURN_DPS = 0.5
+
+
+def _turning(rec: Recording, t: Array, win: Windows) -> NDArray[np.bool_]:
+    """The windows whose reference turns faster than :data:`REST_TURN_DPS` between their first and last
+    readings (those outside the reference's span are not judged)."""
+    truth = rec.truth
+    assert truth is not None
+    first = np.arange(len(win.mean_w)) * win.length
+    last = first + win.length - 1
+    out = np.zeros(len(first), dtype=bool)
+    inside = (t[first] >= truth.t[0]) & (t[last] <= truth.t[-1]) & (t[last] > t[first])
+    if inside.any():
+        q0, q1 = truth.interpolate(t[first[inside]]).q_nb, truth.interpolate(t[last[inside]]).q_nb
+        turn = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q0), q1))
+        rate = np.linalg.norm(turn, axis=1) / (t[last[inside]] - t[first[inside]])
+        out[inside] = rate > np.radians(REST_TURN_DPS)
+    return out
+
+
+def _largest_cluster(win: Windows, quiet: NDArray[np.intp], tol: tuple[float, float]) -> int:
     """The quiet window whose means the most other quiet windows agree with (a still unit's one
     orientation; a rig's or a drive's longest), among at most 400 of them spread over the recording."""
     candidates = quiet if len(quiet) <= 400 else quiet[np.linspace(0, len(quiet) - 1, 400).astype(int)]
@@ -472,88 +423,6 @@ def _range_findings(rec: Recording, w: Array) -> list[Finding]:
     return [Finding(f"{key}_range", what, advice="check the gyro columns and their units")]
 
 
-# --------------------------------------------------------------------------- axes
-
-
-def _axes(win: _Windows | None, rest: Rest | None, f: Array) -> str | None:
-    """The readings' axes as far as the data show them, in :mod:`sins.io.axes` letters with ``_`` for an
-    axis they do not fix: the vertical from gravity, the lateral from the turns. None: no axis points
-    down (within 25°), no gravity is seen, or the unit rested in several orientations."""
-    if rest is not None and rest.orientations > 1:
-        return None
-    up = np.asarray(rest.specific_force) if rest is not None else f.mean(axis=0)
-    if not np.linalg.norm(up) > 0:
-        return None
-    down = -up / np.linalg.norm(up)
-    k = int(np.argmax(np.abs(down)))
-    if abs(down[k]) < 0.9:
-        return None
-    letters = ["_", "_", "_"]
-    letters[k] = "d" if down[k] > 0 else "u"
-    lateral = _lateral(win, down, k) if win is not None else None
-    if lateral is not None:
-        j, right = lateral
-        letters[j] = "r" if right else "l"
-        d_vec, r_vec = np.zeros(3), np.zeros(3)
-        d_vec[k], r_vec[j] = np.sign(down[k]), 1.0 if right else -1.0
-        forward = np.cross(r_vec, d_vec)  # x = y × z in FRD: forward = right × down
-        i = 3 - j - k
-        letters[i] = "f" if forward[i] > 0 else "b"
-    return "".join(letters)
-
-
-def _lateral(win: _Windows, down: Array, k: int) -> tuple[int, bool] | None:
-    """The horizontal axis whose specific force follows the yaw rate (``v · r``, driving forward) and
-    whether it points right; None without turns enough to tell (the correlation under 0.6, or the other
-    axis's over half of it)."""
-    yaw = win.mean_w @ down
-    if np.std(yaw) <= 5.0 * float(np.median(win.spread_w)) / np.sqrt(win.length):
-        return None
-    corr = {}
-    for j in (a for a in range(3) if a != k):
-        x = win.mean_f[:, j]
-        corr[j] = float(np.corrcoef(x, yaw)[0, 1]) if np.std(x) > 0 else 0.0
-    best = max(corr, key=lambda a: abs(corr[a]))
-    other = next(a for a in corr if a != best)
-    if abs(corr[best]) < 0.6 or abs(corr[other]) > 0.5 * abs(corr[best]):
-        return None
-    return best, corr[best] > 0
-
-
-def _frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
-    """The file's axes when the data show they are not FRD: letters to pass as the frame."""
-    if seen is None:
-        return []
-    current = axes.frame_matrix(rec.frame)
-    if "_" not in seen:
-        if seen == axes.FRD:
-            return []
-        file_axes = axes.frame_letters(axes.frame_matrix(seen) @ current)
-        return [Finding("axes", f"the data show the readings' axes are {seen} (gravity at rest, the lateral "
-                        "force in turns), not FRD", option="frame", value=file_axes)]  # fmt: skip
-    k = next(i for i, c in enumerate(seen) if c != "_")
-    if seen[k] == "d" and k == 2:
-        return []
-    fits = [a for a in axes.right_handed_frames() if a[k] == seen[k]]
-    files = sorted(
-        (axes.frame_letters(axes.frame_matrix(a) @ current) for a in fits),
-        key=lambda a: (a not in _PREFERRED, _PREFERRED.index(a) if a in _PREFERRED else 0, a),
-    )
-    listed = ", ".join(f"{a} ({_NAMED[a]})" if a in _NAMED else a for a in files)
-    where = "xyz"[k]
-    sign, way = ("-", "down") if seen[k] == "d" else ("+", "up")
-    what = (f"at rest the specific force (which points up) lies along {sign}{where} as read: {where} points "
-            f"{way}, where FRD's z points down; likely axes of the file: {listed}")  # fmt: skip
-    if files[0] in _PREFERRED:
-        return [Finding("axes", what, option="frame", value=files[0])]
-    return [Finding("axes", what, advice="pass --frame with the letters of the file's axes (one of these)")]
-
-
-#: Frames named first, and what they are.
-_PREFERRED = ("frd", "flu", "rfu")
-_NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward: axes named after ENU"}
-
-
 # --------------------------------------------------------------------------- clipping
 
 
@@ -620,6 +489,7 @@ __all__ = [
     "MAX_GYRO_RADPS",
     "PLAUSIBLE_HZ",
     "RATE_TOL",
+    "REST_TURN_DPS",
     "UNIT_TOL",
     "Clipping",
     "Finding",

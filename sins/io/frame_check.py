@@ -1,0 +1,180 @@
+"""What a recording's axes are, as far as its data show them: beside a reference attitude, whether that
+attitude is of the readings' axes (its turns are the gyro's, gravity's reaction in it points up); without
+one, the readings' axes against FRD's, from gravity at rest and the lateral force in a land vehicle's turns.
+Part of :func:`sins.io.inspection.inspect`."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.core import rotation
+from sins.core.series import NavSeries
+from sins.io import axes
+from sins.io.findings import Finding, Rest, Windows
+from sins.io.recording import Recording
+
+Array = NDArray[np.float64]
+
+#: Beside a reference attitude, the specific force it rotates into the world, less the acceleration its
+#: velocity gives, points up within this, °: a 1 m/s² accelerometer bias tilts it 6°.
+REFERENCE_TILT_DEG = 10.0
+#: Beside a reference attitude, its turns and the gyro's correlate at least this much (EuRoC and
+#: BROAD: 0.997 and more; the gyro's noise and a reference's lag take little off).
+REFERENCE_TURNS_AGREE = 0.9
+#: The intervals the turns are compared over, s (two of the reference's steps at least): short enough
+#: that a hand-held unit's turn over one is its integrated rate (over 1 s, BROAD's fast turns of 60-90°
+#: about changing axes took the correlation down to 0.78), long beside the noise.
+TURN_INTERVAL_S = 0.1
+
+
+def seen_axes(win: Windows | None, rest: Rest | None, f: Array) -> str | None:
+    """The readings' axes as far as the data show them, in :mod:`sins.io.axes` letters with ``_`` for an
+    axis they do not fix: the vertical from gravity, the lateral from the turns. None: no axis points
+    down (within 25°), no gravity is seen, or the unit rested in several orientations."""
+    if rest is not None and rest.orientations > 1:
+        return None
+    up = np.asarray(rest.specific_force) if rest is not None else f.mean(axis=0)
+    if not np.linalg.norm(up) > 0:
+        return None
+    down = -up / np.linalg.norm(up)
+    k = int(np.argmax(np.abs(down)))
+    if abs(down[k]) < 0.9:
+        return None
+    letters = ["_", "_", "_"]
+    letters[k] = "d" if down[k] > 0 else "u"
+    lateral = _lateral(win, down, k) if win is not None else None
+    if lateral is not None:
+        j, right = lateral
+        letters[j] = "r" if right else "l"
+        d_vec, r_vec = np.zeros(3), np.zeros(3)
+        d_vec[k], r_vec[j] = np.sign(down[k]), 1.0 if right else -1.0
+        forward = np.cross(r_vec, d_vec)  # x = y × z in FRD: forward = right × down
+        i = 3 - j - k
+        letters[i] = "f" if forward[i] > 0 else "b"
+    return "".join(letters)
+
+
+def _lateral(win: Windows, down: Array, k: int) -> tuple[int, bool] | None:
+    """The horizontal axis whose specific force follows the yaw rate (``v · r``, driving forward) and
+    whether it points right; None without turns enough to tell (the correlation under 0.6, or the other
+    axis's over half of it)."""
+    yaw = win.mean_w @ down
+    if np.std(yaw) <= 5.0 * float(np.median(win.spread_w)) / np.sqrt(win.length):
+        return None
+    corr = {}
+    for j in (a for a in range(3) if a != k):
+        x = win.mean_f[:, j]
+        corr[j] = float(np.corrcoef(x, yaw)[0, 1]) if np.std(x) > 0 else 0.0
+    best = max(corr, key=lambda a: abs(corr[a]))
+    other = next(a for a in corr if a != best)
+    if abs(corr[best]) < 0.6 or abs(corr[other]) > 0.5 * abs(corr[best]):
+        return None
+    return best, corr[best] > 0
+
+
+def frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
+    """The file's axes when the data show they are not FRD: letters to pass as the frame."""
+    if seen is None:
+        return []
+    current = axes.frame_matrix(rec.frame)
+    if "_" not in seen:
+        if seen == axes.FRD:
+            return []
+        file_axes = axes.frame_letters(axes.frame_matrix(seen) @ current)
+        return [Finding("axes", f"the data show the readings' axes are {seen} (gravity at rest, the lateral "
+                        "force in turns), not FRD", option="frame", value=file_axes)]  # fmt: skip
+    k = next(i for i, c in enumerate(seen) if c != "_")
+    if seen[k] == "d" and k == 2:
+        return []
+    fits = [a for a in axes.right_handed_frames() if a[k] == seen[k]]
+    files = sorted(
+        (axes.frame_letters(axes.frame_matrix(a) @ current) for a in fits),
+        key=lambda a: (a not in _PREFERRED, _PREFERRED.index(a) if a in _PREFERRED else 0, a),
+    )
+    listed = ", ".join(f"{a} ({_NAMED[a]})" if a in _NAMED else a for a in files)
+    where = "xyz"[k]
+    sign, way = ("-", "down") if seen[k] == "d" else ("+", "up")
+    what = (f"at rest the specific force (which points up) lies along {sign}{where} as read: {where} points "
+            f"{way}, where FRD's z points down; likely axes of the file: {listed}")  # fmt: skip
+    if files[0] in _PREFERRED:
+        return [Finding("axes", what, option="frame", value=files[0])]
+    return [Finding("axes", what, advice="pass --frame with the letters of the file's axes (one of these)")]
+
+
+def reference_findings(rec: Recording, t: Array, w: Array, f: Array) -> list[Finding]:
+    """Whether the reference's attitude is that of the readings' axes. Its turns over short intervals
+    (:data:`TURN_INTERVAL_S`), in the body, are the gyro's integral over them (less a bias's constant
+    part: their correlation about their means near 1). And the specific force rotated by it into the
+    world, averaged over the reference's span, less the mean acceleration its velocity gives (the
+    velocity's change over the span), is gravity's reaction, pointing up. Elsewhere, the attitude is
+    not of these axes: a quaternion of another order (x, y, z, w for w, x, y, z), the other way round
+    (the world's in the body), or readings in other axes than the reference's body."""
+    truth = rec.truth
+    assert truth is not None
+    inside = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
+    if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
+        return []
+    advice = ("check the reference's quaternion order (w, x, y, z or x, y, z, w), its direction (the "
+              "sensor's attitude in the world, not the world's in the sensor) and the readings' "
+              "axes")  # fmt: skip
+    agreement = _turns_agreement(truth, t, w, inside)
+    if agreement is not None and agreement < REFERENCE_TURNS_AGREE:
+        what = (f"the reference's turns over {TURN_INTERVAL_S:g} s intervals, in the body, correlate "
+                f"{agreement:.2f} with the gyro's (1 where its attitude is of the readings' axes): the "
+                "attitude is not of the readings' axes")  # fmt: skip
+        return [Finding("reference_attitude", what, advice=advice)]
+    inside = inside[:: max(1, len(inside) // 200_000)]  # the mean of a long recording from 200,000 rows
+    ts = t[inside]
+    ref = truth.interpolate(ts)
+    f_n = rotation.rotate(ref.q_nb, f[inside])
+    weights = np.gradient(ts)  # each reading's share of the span, for uneven stamps
+    mean_f_n = weights @ f_n / float(np.sum(weights))
+    reaction = mean_f_n - (ref.v_n[-1] - ref.v_n[0]) / float(ts[-1] - ts[0])  # −g: up, in NED
+    size = float(np.linalg.norm(reaction))
+    if not size > 0:
+        return []
+    tilt = float(np.degrees(np.arccos(np.clip(-reaction[2] / size, -1.0, 1.0))))
+    if tilt <= REFERENCE_TILT_DEG:
+        return []
+    what = (f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
+            "from up (its mean over the reference's span, the reference's acceleration taken out): the "
+            "attitude is not of the readings' axes")  # fmt: skip
+    return [Finding("reference_attitude", what, advice=advice)]
+
+
+def _turns_agreement(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]) -> float | None:
+    """The correlation, about their means, of the reference's turns over short intervals (the
+    rotation vector of ``q(t_k)⁻¹ q(t_k+1)``, in the body) with the gyro's integral over the same
+    intervals; None where the gyro turns too little to tell (under 1 °/s RMS about its mean)."""
+    length_s = max(TURN_INTERVAL_S, 2.0 * float(np.median(np.diff(truth.t))))
+    step = max(1, round(length_s / float(np.median(np.diff(t[inside])))))
+    ends = inside[::step]
+    if len(ends) < 10:
+        return None
+    q = truth.interpolate(t[ends]).q_nb
+    turns = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q[:-1]), q[1:]))
+    within = np.arange(ends[0], ends[-1] + 1)
+    steps = np.diff(t[within])[:, None] * 0.5 * (w[within][1:] + w[within][:-1])  # trapezoids
+    summed = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+    gyro = np.diff(summed[ends - ends[0]], axis=0)
+    a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
+    spread = float(np.sqrt(np.mean(np.sum(b * b, axis=1)) / np.mean(np.diff(t[ends]) ** 2)))
+    if spread < np.radians(1.0):
+        return None
+    return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
+
+
+#: Frames named first, and what they are.
+_PREFERRED = ("frd", "flu", "rfu")
+_NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward: axes named after ENU"}
+
+
+__all__ = [
+    "REFERENCE_TILT_DEG",
+    "REFERENCE_TURNS_AGREE",
+    "TURN_INTERVAL_S",
+    "frame_findings",
+    "reference_findings",
+    "seen_axes",
+]
