@@ -227,6 +227,10 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
         assert main([*several, *extra]) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and what in err, err
+    # The model's matrices are in the axes its readings were read on: readings read on others are refused.
+    assert main(["evaluate", str(model), str(tmp_path / "unit" / "r2.npz"), "--frame", "flu"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "as frd; this recording is read as flu (read it with --frame frd" in err, err
     # A model fitted on this folder's unit is refused on a recording of another folder (another unit).
     (tmp_path / "other").mkdir()
     write_npz(tmp_path / "other", "x", recs[2])

@@ -327,8 +327,10 @@ def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecordi
 
 
 def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
-    """What a model file records of the recording it was fitted on: the unit, its rate, the reference."""
-    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name}
+    """What a model file records of the recording it was fitted on: the unit, its rate, the reference,
+    and the file's axes the readings were read on (where said)."""
+    said = {"frame": rec.frame} if rec.frame else {}
+    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name, **said}
 
 
 def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitted:
@@ -558,14 +560,15 @@ def check_fitted_on(
     where: str,
     sensor: str | None = None,
 ) -> None:
-    """Refuse a model fitted on another unit (both named: ``sensor``, else the recording's own) or,
-    when it reads the sensors at time offsets or tracks rests (both set in samples' terms), at another
-    rate (more than 5 % apart).
+    """Refuse a model fitted on another unit (both named: ``sensor``, else the recording's own), on
+    readings read on other axes (``--frame``: its matrices are in the axes it was fitted on; both
+    said) or, when it reads the sensors at time offsets or tracks rests (both set in samples' terms), at
+    another rate (more than 5 % apart).
 
     Raises
     ------
     SinsInputError
-        naming both units or both rates.
+        naming both units, both axes or both rates.
     """
     fitted = getattr(strategy, "fitted_on_", None)
     if not isinstance(fitted, dict):
@@ -574,6 +577,12 @@ def check_fitted_on(
     if fitted.get("sensor") and sensor and fitted["sensor"] != sensor:
         raise SinsInputError(
             f"{where}: the model was fitted on {fitted['sensor']}; this recording is {sensor}"
+        )
+    frame = getattr(rec, "frame", "")
+    if fitted.get("frame") and frame and fitted["frame"] != frame:
+        raise SinsInputError(
+            f"{where}: the model was fitted on readings taken on the file's axes as {fitted['frame']}; this "
+            f"recording is read as {frame} (read it with --frame {fitted['frame']}, or fit again)"
         )
     rate = fitted.get("rate_hz")
     t = rec.imu.t if isinstance(rec, ReferencedRecording | Recording) else rec.t

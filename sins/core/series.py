@@ -373,6 +373,8 @@ class ReferencedRecording:
         room frame), only the vertical part of Earth's rate is known in its axes
     latitude_known : whether the reference's latitude is where the unit was; where it is not (a room
         frame placed at a nominal origin), Earth's rate is not known in its axes at all and is left out
+    frame : the file's axes the readings were read on (:mod:`sins.io.axes` letters, ``frd``: taken as
+        they are), "" where not said: a model fitted on one reading of the axes is refused on another
     """
 
     imu: ImuIncrements
@@ -383,6 +385,7 @@ class ReferencedRecording:
     source: str = ""
     heading_known: bool = True
     latitude_known: bool = True
+    frame: str = ""
 
     @property
     def rate_hz(self) -> float:

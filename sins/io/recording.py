@@ -129,14 +129,14 @@ class Recording:
             a reference that does not overlap the readings in time.
         """
         if self.on_reference is not None:
-            return self.on_reference
+            return dataclasses.replace(self.on_reference, frame=self.frame)
         if self.truth is None:
             raise missing_reference(self)
         own = not self.truth_from
         return beside_trajectory(
             self.imu, self.truth, self.source, sensor=self.sensor,
             reference_name=f"its own reference ({self.kind})" if own else "truth",
-            heading_known=self.heading_known, latitude_known=self.latitude_known,
+            heading_known=self.heading_known, latitude_known=self.latitude_known, frame=self.frame,
         )  # fmt: skip
 
     def reference_inputs(self) -> tuple[CalibrationData, NavSeries | None]:
