@@ -26,9 +26,9 @@ import numpy as np
 from numpy_referenced import _right_jacobian
 from scipy.spatial.transform import Rotation
 
-#: Normal gravity at the ``.npz`` form's nominal origin (0°, 0°, 0 m: sins places a room there):
-#: WGS84's equatorial γ_e, Somigliana's formula at the equator.
-G = 9.7803253359
+#: Normal gravity at the ``.npz`` form's nominal origin (45° N, 0° E, 0 m: sins places a room whose place
+#: is not given there): Somigliana's formula with WGS84's γ_e, k and e², sin²φ = ½.
+G = 9.7803253359 * (1.0 + 0.00193185265241 * 0.5) / np.sqrt(1.0 - 0.00669437999013 * 0.5)
 DEG = np.pi / 180.0
 DPH = DEG / 3600.0
 #: The room's frame (ENU, z up) from the NED the motion is written in.

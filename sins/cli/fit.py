@@ -76,7 +76,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
             if kind == "path":
                 got = read_recording(args, name, None)
             else:  # the format options given are for the paths beside it
-                got = read_recording(args, None, name, options={})
+                got = read_recording(args, None, name)  # a reader option not applying: refused
             if got.rig is not None or not got.has_trajectory:
                 raise SinsInputError(
                     f"{name}: a fit on several recordings needs each beside its reference trajectory (a "

@@ -115,7 +115,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
     check_distinct([str(p) for p in paths] + names, "gap")
     options = recording_options(args)
     inputs = [read_gap_input(p, truth=args.truth, options=options) for p in paths]
-    inputs += [read_gap_input(None, dataset=n) for n in names]
+    inputs += [read_gap_input(None, dataset=n, options=options) for n in names]  # one not applying: refused
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
         spec = scenario.load_imu(scenario.resolve_preset(args.model, "imu"))

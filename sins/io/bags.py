@@ -18,7 +18,7 @@ the reference trajectory, ``sensor_msgs/NavSatFix`` as geodetic fixes.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -107,7 +107,7 @@ def _read_bag(
     truth_topic : the reference topic; None: the bag's only pose topic (none, or a note, when several)
     frame : the readings' axes (:mod:`sins.io.axes`), FLU by ROS's convention
     origin : ``(lat, lon, h)`` (rad, rad, m) of the poses' local frame; None: the first valid fix, else
-        0°, 0°, 0 m (said in the notes)
+        :data:`sins.io.local.NOMINAL_ORIGIN` (said in the notes)
     progress : called as ``progress(messages_read, messages)``
 
     Raises
@@ -375,16 +375,14 @@ def _origin(
     origin: tuple[float, float, float] | None, fixes: GeodeticFixes | None
 ) -> tuple[tuple[float, float, float], str]:
     if origin is not None:
-        return origin, f"origin {_where(origin)} as given"
+        return origin, f"origin {local.describe_origin(origin)} as given"
     if fixes is not None:
         first = (float(fixes.lat[0]), float(fixes.lon[0]), float(fixes.h[0]))
-        return first, f"origin at the first fix, {_where(first)}"
-    return (0.0, 0.0, 0.0), "origin at 0°N 0°E 0 m (no fix in the bag: give the origin for the place)"
-
-
-def _where(origin: Iterable[float]) -> str:
-    lat, lon, h = origin
-    return f"{np.degrees(lat):.7f}°, {np.degrees(lon):.7f}°, {h:.2f} m"
+        return first, f"origin at the first fix, {local.describe_origin(first)}"
+    return (
+        local.NOMINAL_ORIGIN,
+        f"origin at {local.NOMINAL_PLACE} (no fix in the bag: give the origin for the place)",
+    )
 
 
 __all__ = [

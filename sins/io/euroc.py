@@ -70,7 +70,7 @@ def _read_euroc(
     path: str | os.PathLike[str],
     *,
     frame: str = axes.FRD,
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    origin: tuple[float, float, float] = local.NOMINAL_ORIGIN,
 ) -> EurocRead:
     """Read a EuRoC/TUM-VI recording (see the module docstring).
 
@@ -105,7 +105,7 @@ def _read_euroc(
             truth = _reference(ref, width, t0, origin, m)
             notes.append(
                 f"reference {ref}: {len(truth.t)} poses, room frame R taken as ENU at "
-                f"{np.degrees(origin[0]):.7f}°, {np.degrees(origin[1]):.7f}°, {origin[2]:.2f} m"
+                + (local.NOMINAL_PLACE if origin == local.NOMINAL_ORIGIN else local.describe_origin(origin))
             )
             break
     return EurocRead(imu, t0, _rate(csv.parent / "sensor.yaml"), truth, tuple(notes))

@@ -18,6 +18,15 @@ from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.io.axes import ENU_TO_NED
 
+#: Where a recording's local frame is placed when its place is not known (a room frame, a bag without a
+#: fix; rad, rad, m): 45° N at sea level, whose normal gravity (9.8062 m/s²) is within 0.026 m/s² of any
+#: site's at sea level (9.780 at the equator, 9.832 at the poles). 0° N, taken before, was up to 0.052
+#: m/s² off (0.027 in Zurich, where EuRoC was recorded): a hand-held unit's fit or diagnosis then read
+#: the difference, which scales gravity and not the unit's own acceleration, as an effect.
+NOMINAL_ORIGIN = (float(np.radians(45.0)), 0.0, 0.0)
+#: How :data:`NOMINAL_ORIGIN` is said in notes.
+NOMINAL_PLACE = "45° N, 0° E, 0 m (gravity 9.806 m/s², within 0.026 of any site's at sea level)"
+
 Array = NDArray[np.float64]
 
 
@@ -46,6 +55,12 @@ def ecef_to_lla(x: Array, y: Array, z: Array) -> tuple[Array, Array, Array]:
     h = np.where(np.abs(c) > np.abs(s), p / np.where(c == 0, 1.0, c) - r_n,
                  z / np.where(s == 0, 1.0, s) - r_n * (1.0 - E2))  # fmt: skip
     return lat, np.arctan2(y, x), h
+
+
+def describe_origin(origin: tuple[float, float, float]) -> str:
+    """``(lat, lon, h)`` (rad, rad, m) as degrees and metres, for notes."""
+    lat, lon, h = origin
+    return f"{np.degrees(lat):.7f}°, {np.degrees(lon):.7f}°, {h:.2f} m"
 
 
 def enu_track(
@@ -102,6 +117,9 @@ def enu_track(
 
 
 __all__ = [
+    "NOMINAL_ORIGIN",
+    "NOMINAL_PLACE",
+    "describe_origin",
     "ecef_to_lla",
     "enu_track",
     "ned_to_ecef_matrix",

@@ -15,11 +15,12 @@ p_m        (n, 3) reference position, world frame, m
 
 The reference keys are all present or all absent (readings alone). The world frame is gravity-aligned
 with z up; where north lies in it and at what latitude it was recorded are not known. sins takes it as
-ENU at 0°, 0°, 0 m (:func:`sins.io.local.enu_track`) and says so: the recording's
-:attr:`~sins.io.Recording.heading_known` and :attr:`~sins.io.Recording.latitude_known` are False, so that
-Earth's rate, which cannot be placed in such a frame, is left out of what is judged against it (the
-published open-loop figures leave it out too). Times are made relative to the first reading (``t0_ns``
-keeps the absolute stamp).
+ENU at 45° N, 0° E, 0 m (:data:`sins.io.local.NOMINAL_ORIGIN`: its normal gravity is within 0.026
+m/s² of any site's), or at the origin given for the place (``--origin``), and says so: the recording's
+:attr:`~sins.io.Recording.heading_known` is False, and :attr:`~sins.io.Recording.latitude_known` too
+without an origin, so that Earth's rate, which cannot be placed in such a frame, is left out of what is
+judged against it (the published open-loop figures leave it out too). Times are made relative to the
+first reading (``t0_ns`` keeps the absolute stamp).
 """
 
 from __future__ import annotations
@@ -61,12 +62,16 @@ def is_npz(path: Path) -> bool:
 
 
 def _read_npz(
-    path: str | os.PathLike[str], *, frame: str = axes.FRD
+    path: str | os.PathLike[str],
+    *,
+    frame: str = axes.FRD,
+    origin: tuple[float, float, float] | None = None,
 ) -> tuple[ImuRates, NavSeries | None, float, tuple[str, ...]]:
     """An ``.npz`` recording (see the module docstring): readings in rate form, the reference as a
     trajectory on the ellipsoid (None without one), the absolute time of ``t = 0`` in s, and notes for
     the user. ``frame`` names the sensor's axes in body terms (:mod:`sins.io.axes`); the default takes
-    them as they are, and the reference's attitude is of the same axes.
+    them as they are, and the reference's attitude is of the same axes. ``origin``: ``(lat, lon, h)``
+    (rad, rad, m) of the world frame's origin; None: :data:`sins.io.local.NOMINAL_ORIGIN`.
 
     Raises
     ------
@@ -108,16 +113,20 @@ def _read_npz(
         truth = local.enu_track(
             t,
             arrays["p_m"],
-            (0.0, 0.0, 0.0),
+            local.NOMINAL_ORIGIN if origin is None else origin,
             q_enu_body=q_xyzw,
             v_enu=arrays["v_m_s"],
             body_to_frd=m,
             source=str(path),
         )
-        notes.append(
-            "reference at every reading; its world frame (z up) taken as ENU at 0°, 0°, 0 m: its heading and "
-            "latitude are not known, so Earth's rate is left out of what is judged against it"
+        placed = (
+            f"taken as ENU at {local.NOMINAL_PLACE}: its heading and latitude are not known, so Earth's rate "
+            "is left out of what is judged against it (give --origin for the place)"
+            if origin is None
+            else f"taken as ENU at the given origin ({local.describe_origin(origin)}): its heading is not "
+            "known, so only the vertical part of Earth's rate is placed in it"
         )
+        notes.append(f"reference at every reading; its world frame (z up) {placed}")
     return imu, truth, float(t_abs[0]), tuple(notes)
 
 

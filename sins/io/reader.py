@@ -20,6 +20,7 @@ from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.io import rig
 from sins.io.datasets import _read_dataset
+from sins.io.datasets.npz_folders import is_folder_name
 from sins.io.formats import read_truth
 from sins.io.recording import Recording, _read_path, _rig_recording
 
@@ -62,7 +63,8 @@ def read(
         stamps against
     truth_topic : a bag's reference topic, where it has several
     origin : ``(lat, lon, h)`` in rad, rad, m, where a local reference frame starts (bags: default the
-        first fix, else 0°, 0°, 0 m; EuRoC: default 0°, 0°, 0 m)
+        first fix, else :data:`sins.io.local.NOMINAL_ORIGIN`; EuRoC, ``.npz`` and a ``FOLDER/NAME``
+        dataset: default :data:`~sins.io.local.NOMINAL_ORIGIN`)
     t_start : increment form: where the first interval starts; None: the truth's first time where one
         is given, else the first row's time less the first step
     progress : ``progress(done, total)`` while a bag is read
@@ -82,13 +84,18 @@ def read(
     given = {"topic": topic, "columns": columns, "units": units, "frame": frame, "rate_hz": rate_hz,
              "truth_topic": truth_topic, "origin": origin, "t_start": t_start}  # fmt: skip
     if dataset is not None:
-        extra = [k for k, v in {**given, "truth": truth}.items() if v is not None]
+        own = is_folder_name(dataset)  # a FOLDER/NAME .npz: where its room frame lies may be given
+        extra = [
+            k for k, v in {**given, "truth": truth}.items() if v is not None and (k != "origin" or not own)
+        ]
         if extra:
-            raise SinsInputError(
-                f"{dataset}: {', '.join(extra)} does not apply to a dataset (its reader fixes its units, "
-                "axes and reference)"
+            fixed = (
+                "the .npz form fixes its units, axes and reference; origin places its room frame"
+                if own
+                else "its reader fixes its units, axes and reference"
             )
-        return _read_dataset(dataset, root)
+            raise SinsInputError(f"{dataset}: {', '.join(extra)} does not apply to a dataset ({fixed})")
+        return _read_dataset(dataset, root, origin if own else None)
     path = Path(source)  # type: ignore[arg-type]
     if rig.is_rig_csv(path):
         extra = [k for k, v in {**given, "truth": truth}.items() if v is not None and k != "rate_hz"]

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
-from sins.io import axes, bags, euroc, formats, npz, provenance, rig
+from sins.io import axes, bags, euroc, formats, local, npz, provenance, rig
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.io.paths import check_input
@@ -324,14 +324,14 @@ def _read_path(
     elif kind == "sins csv":
         rec = _read_sins(path, frame or axes.FRD, t_start)
     elif kind == "euroc":
-        got = euroc._read_euroc(path, frame=frame or axes.FRD, origin=origin or (0.0, 0.0, 0.0))
+        got = euroc._read_euroc(path, frame=frame or axes.FRD, origin=origin or local.NOMINAL_ORIGIN)
         rec = Recording(got.imu, str(path), kind, got.truth, _si("rate"), frame or axes.FRD, got.notes,
                         got.t0_ns, got.rate_hz, "imu0/sensor.yaml" if got.rate_hz else "",
                         heading_known=False, latitude_known=origin is not None)  # fmt: skip
     elif kind == "npz":
-        imu, truth, t0_s, notes = npz._read_npz(path, frame=frame or axes.FRD)
+        imu, truth, t0_s, notes = npz._read_npz(path, frame=frame or axes.FRD, origin=origin)
         rec = Recording(imu, str(path), kind, truth, _si("rate"), frame or axes.FRD, notes, round(t0_s * 1e9),
-                        heading_known=False, latitude_known=False)  # fmt: skip
+                        heading_known=False, latitude_known=origin is not None)  # fmt: skip
     else:
         read = bags._read_bag(
             path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
@@ -359,7 +359,7 @@ def _check_options(path: Path, kind: str, **given: object) -> None:
         "topic": ("ros1 bag", "ros2 bag", "mcap"),
         "truth_topic": ("ros1 bag", "ros2 bag", "mcap"),
         "columns": ("sins csv",),
-        "origin": ("ros1 bag", "ros2 bag", "mcap", "euroc"),
+        "origin": ("ros1 bag", "ros2 bag", "mcap", "euroc", "npz"),
     }
     for name, value in given.items():
         if value is not None and kind not in applies[name]:

@@ -64,7 +64,9 @@ def names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     return {**{k: v for k, v in NAMES.items() if not k.startswith("broad_")}, **found, **npz_names(root)}
 
 
-def _load_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording | None:
+def _load_reference(
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
+) -> ReferencedRecording | None:
     """A dataset by name as readings beside its reference trajectory, or None where its reference is not a
     trajectory (``ferraris``: static holds and turns of known angle; ``psins_lasergyro``: a still unit).
 
@@ -74,7 +76,7 @@ def _load_reference(name: str, root: str | os.PathLike[str] | None = None) -> Re
         for an unknown name (listing the known ones), or as the readers do.
     """
     if is_folder_name(name):
-        return _read_npz_reference(name, root)
+        return _read_npz_reference(name, root, origin)
     known = names(root)
     if name not in known:
         raise SinsInputError(f"no dataset {name!r} (datasets: {', '.join(known)})")
@@ -89,24 +91,26 @@ def _load_reference(name: str, root: str | os.PathLike[str] | None = None) -> Re
     return None
 
 
-def _read_dataset(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
+def _read_dataset(
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
+) -> Recording:
     """A dataset by name as a :class:`~sins.io.Recording` (what :func:`sins.io.read` gives for
     ``dataset=name``): beside its reference trajectory where it has one (its per-sample form read only
     when asked for, :meth:`~sins.io.Recording.reference_inputs`), else beside its per-sample reference
-    inputs (``rig``).
+    inputs (``rig``). ``origin``: where a ``FOLDER/NAME``'s world frame lies (the named datasets know).
 
     Raises
     ------
     SinsInputError
         for an unknown name (listing the known ones), or as the readers do.
     """
-    trajectory = _load_reference(name, root)
+    trajectory = _load_reference(name, root, origin)
     if trajectory is not None:
         return Recording(
             trajectory.imu, trajectory.source, "dataset", trajectory.reference, _si("increment"),
             sensor=trajectory.sensor, heading_known=trajectory.heading_known,
             latitude_known=trajectory.latitude_known, dataset=name, on_reference=trajectory,
-            inputs_reader=lambda: _load_with_truth(name, root),
+            inputs_reader=lambda: _load_with_truth(name, root, origin),
         )  # fmt: skip
     data = _load_with_truth(name, root)[0]
     imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
@@ -118,7 +122,7 @@ def _si(form: str) -> dict[str, str]:
 
 
 def _load_with_truth(
-    name: str, root: str | os.PathLike[str] | None = None
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
 ) -> tuple[CalibrationData, NavSeries | None]:
     """A dataset by name, and its reference trajectory at the readings' times where it has one.
 
@@ -127,7 +131,7 @@ def _load_with_truth(
     (:func:`~sins.io.datasets.npz_folders._read_npz_with_truth`).
     """
     if is_folder_name(name):
-        return _read_npz_with_truth(name, root)
+        return _read_npz_with_truth(name, root, origin)
     if name == "psins_vehicle":
         # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
         # vibration the MEMS sees, which would pass for a sensor gap.

@@ -54,8 +54,11 @@ def npz_path(name: str, root: str | os.PathLike[str] | None = None) -> Path:
     return dataset_file(folder, f"{stem}.npz", root)
 
 
-def _read_npz_recording(name: str, root: str | os.PathLike[str] | None = None) -> Recording:
-    """``FOLDER/NAME`` as the :class:`~sins.io.Recording` :func:`~sins.io.read` reads from its path.
+def _read_npz_recording(
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
+) -> Recording:
+    """``FOLDER/NAME`` as the :class:`~sins.io.Recording` :func:`~sins.io.read` reads from its path (its
+    world frame placed at ``origin``, if given).
 
     Raises
     ------
@@ -65,10 +68,12 @@ def _read_npz_recording(name: str, root: str | os.PathLike[str] | None = None) -
     path = npz_path(name, root)
     if not npz.is_npz(path):
         raise SinsInputError(f"{path}: not an .npz archive")
-    return _read_path(path)
+    return _read_path(path, origin=origin)
 
 
-def _read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -> ReferencedRecording:
+def _read_npz_reference(
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
+) -> ReferencedRecording:
     """``FOLDER/NAME``'s readings beside its reference; the unit is the folder.
 
     Raises
@@ -76,7 +81,7 @@ def _read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -
     SinsInputError
         as :func:`_read_npz_recording`, or a recording without the reference keys.
     """
-    rec = _read_npz_recording(name, root)
+    rec = _read_npz_recording(name, root, origin)
     if rec.truth is None:
         raise SinsInputError(
             f"{rec.source}: no reference (keys {', '.join(npz.REFERENCE_KEYS)}): it cannot be fitted or "
@@ -86,10 +91,10 @@ def _read_npz_reference(name: str, root: str | os.PathLike[str] | None = None) -
 
 
 def _read_npz_with_truth(
-    name: str, root: str | os.PathLike[str] | None = None
+    name: str, root: str | os.PathLike[str] | None = None, origin: tuple[float, float, float] | None = None
 ) -> tuple[CalibrationData, NavSeries | None]:
     """``FOLDER/NAME`` as :func:`with_truth` gives it."""
-    return with_truth(_read_npz_recording(name, root))
+    return with_truth(_read_npz_recording(name, root, origin))
 
 
 def with_truth(rec: Recording) -> tuple[CalibrationData, NavSeries | None]:
