@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.compensation import referenced
+from sins.core import earth
 from sins.io import datasets, inspection
 
 EUROC = dataset_folder("euroc")
@@ -155,6 +156,24 @@ def test_dataset_names_and_a_missing_one(tmp_path: Path) -> None:
     assert rec.sensor == "unit" and not rec.latitude_known
     refusal(lambda: io.read(dataset="unit/b", root=tmp_path).beside_reference(), "unit/b.npz", "no such file")
     refusal(lambda: io.read(dataset="unit/../x", root=tmp_path).beside_reference(), "expected FOLDER/NAME")
+
+
+def test_the_room_is_placed_at_45_degrees_or_where_given(tmp_path: Path) -> None:
+    """Without a place, the room lies at 45° N, 0 m: normal gravity 9.8062 m/s² there (Somigliana's
+    formula, WGS84), within 0.026 m/s² of any site's at sea level. ``origin`` places it, by path and as
+    ``FOLDER/NAME`` alike; a named dataset, whose reader knows its place, refuses it."""
+    (tmp_path / "unit").mkdir()
+    path = tmp_path / "unit" / "a.npz"
+    _write(path)
+    nominal = io.read(path).truth
+    assert np.degrees(nominal.lat[0]) == pytest.approx(45.0) and nominal.h[0] == pytest.approx(0.0, abs=1e-6)
+    gamma = 9.7803253359 * (1 + 0.00193185265241 * 0.5) / np.sqrt(1 - 0.00669437999013 * 0.5)
+    assert earth.normal_gravity(nominal.lat[0], nominal.h[0]) == pytest.approx(gamma, abs=1e-9)
+    zurich = (np.radians(47.37), np.radians(8.55), 400.0)
+    for rec in (io.read(path, origin=zurich), io.read(dataset="unit/a", root=tmp_path, origin=zurich)):
+        assert rec.latitude_known and not rec.heading_known
+        assert np.degrees(rec.truth.lat[0]) == pytest.approx(47.37) and rec.truth.h[0] == pytest.approx(400.0)
+    refusal(lambda: io.read(dataset="unit/a", root=tmp_path, frame="flu"), "frame does not apply", "origin")
 
 
 def test_earth_rate_is_left_out_where_the_latitude_is_unknown(tmp_path: Path) -> None:
