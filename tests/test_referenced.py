@@ -336,6 +336,7 @@ def test_a_model_is_refused_on_readings_at_another_rate(
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert "Hz" in err and "fitted on readings at" in err and err.count("\n") == 1, err
+        assert "(fit a model on readings at its rate)" in err, err
     assert not out.exists()
 
 

@@ -590,7 +590,7 @@ def check_fitted_on(
     if isinstance(rate, float) and abs(here - rate) > 0.05 * rate:
         raise SinsInputError(
             f"{where}: the model was fitted on readings at {rate:.6g} Hz, its time offsets in those terms; "
-            f"this recording is at {here:.6g} Hz"
+            f"this recording is at {here:.6g} Hz (fit a model on readings at its rate)"
         )
 
 
