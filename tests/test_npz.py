@@ -90,7 +90,8 @@ def test_inspect_judges_the_axes_by_the_reference_attitude(
     these axes gives no finding (gravity along a tilted axis, which FRD's convention would call a
     mistake; and the swing's still moments, where the readings barely change, are not taken for rest);
     a quaternion of the other order or the other way round shows in the turns, and where the unit turns
-    steadily (which a gyro bias could explain), the other order shows in gravity."""
+    steadily (which a gyro bias could explain), the other order shows in gravity; what judges against
+    the reference refuses it."""
     path = tmp_path / "swing.npz"
     if order == "steady xyzw":  # the steady turn about the vertical, its quaternion scalar last
         steady = _write(path)
@@ -100,8 +101,11 @@ def test_inspect_judges_the_axes_by_the_reference_attitude(
     findings = inspection.inspect(io.read(path)).findings
     if seen is None:
         assert not findings, findings
+        assert io.read(path).beside_reference().reference.t[-1] == pytest.approx(9.995)
     else:
         assert [f.code for f in findings] == ["reference_attitude"] and seen in findings[0].what, findings
+        # What judges against the reference (fit, evaluate, gap) refuses it: every figure would be wrong.
+        refusal(lambda: io.read(path).beside_reference(), str(path), seen, "quaternion order")
 
 
 def test_readings_alone(tmp_path: Path) -> None:

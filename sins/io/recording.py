@@ -126,12 +126,19 @@ class Recording:
         MissingInputError
             without a reference trajectory (``needs`` says what would give one).
         SinsInputError
-            a reference that does not overlap the readings in time.
+            a reference that does not overlap the readings in time, or whose attitude is not of the
+            readings' axes (:func:`sins.io.frame_check.reference_findings`: everything judged against it
+            would be wrong).
         """
         if self.on_reference is not None:
             return dataclasses.replace(self.on_reference, frame=self.frame)
         if self.truth is None:
             raise missing_reference(self)
+        from sins.io import frame_check  # it reads a Recording: imported here, not above
+
+        t, w, f = self.mean_rates()
+        for finding in frame_check.reference_findings(self, t, w, f):
+            raise SinsInputError(f"{self.source}: {finding.what}; {finding.advice}")
         own = not self.truth_from
         return beside_trajectory(
             self.imu, self.truth, self.source, sensor=self.sensor,
