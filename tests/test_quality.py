@@ -295,7 +295,7 @@ def test_a_case_that_cannot_run_and_an_unwritable_baseline_are_refused_before_th
     small_suite: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A second case without compensation failed only after the first had run; ``--update-baseline``
-    into a missing folder only after all of them."""
+    into a missing folder only after all of them; into a file a case reads, it replaced that file."""
     monkeypatch.setattr(quality, "measure", _no_runs)
     bare = small_suite.parent / "bare.toml"
     bare.write_text('name = "bare"\n[imu]\nrate_hz = 10\n[initial]\nlat_deg = 45\n'
@@ -312,3 +312,11 @@ def test_a_case_that_cannot_run_and_an_unwritable_baseline_are_refused_before_th
     assert main(["check", str(small_suite), "--baseline", str(missing), "--update-baseline"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(missing) in err, err
+    # A file a case reads (its scenario, IMU, rig) is an input, as the suite file is: never the baseline.
+    for read in ("linear.toml", "imu_linear.toml", "rig.toml"):
+        before = (small_suite.parent / read).read_bytes()
+        argv = ["check", str(small_suite), "--baseline", str(small_suite.parent / read), "--update-baseline"]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "is an input" in err, err
+        assert (small_suite.parent / read).read_bytes() == before

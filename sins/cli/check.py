@@ -29,7 +29,12 @@ def _cmd_check(args: argparse.Namespace) -> int:
     suite = quality.load_suite(path)
     baseline = None
     if args.update_baseline:
-        check_outputs({"--baseline": args.baseline}, [path])  # before the runs, not after them
+        # Before the runs, not after them; every file the cases read is an input (their scenarios, IMU
+        # and rig files), not the suite file alone.
+        inputs: list[Path | None] = [path]
+        for case in suite.cases:
+            inputs += scenario_inputs(scenario.load(case.scenario))
+        check_outputs({"--baseline": args.baseline}, inputs)
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     else:
