@@ -421,6 +421,26 @@ def test_euroc_refusals_name_the_line(tmp_path: Path, capsys: pytest.CaptureFixt
     _assert_one_line_error(main(["inspect", str(tmp_path / "bad")]), capsys.readouterr().err, ":6:")
 
 
+def test_an_asl_file_given_by_path_keeps_the_files_read_beside_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``mav0/imu0/data.csv`` given alone is read with its ``mav0``'s reference and ``sensor.yaml``: those
+    are inputs too. Before, ``--out`` over the reference wrote the solution there and ``--json`` over
+    ``sensor.yaml`` replaced it, both exiting 0; a new file beside them is still allowed."""
+    _euroc(tmp_path / "MH_01")
+    mav = tmp_path / "MH_01" / "mav0"
+    data, truth, yaml = (
+        mav / "imu0" / "data.csv",
+        mav / "state_groundtruth_estimate0" / "data.csv",
+        mav / "imu0" / "sensor.yaml",
+    )
+    before = {p: p.read_bytes() for p in (truth, yaml)}
+    for argv in (["integrate", str(data), "--out", str(truth)], ["inspect", str(data), "--json", str(yaml)]):
+        _assert_one_line_error(main(argv), capsys.readouterr().err, "is inside an input of this command")
+    assert {p: p.read_bytes() for p in before} == before
+    assert main(["inspect", str(data), "--json", str(mav / "imu0" / "new.json")]) == 0
+
+
 # --------------------------------------------------------------------------- CSV with its own columns
 
 

@@ -147,9 +147,12 @@ def check_outputs(
     """The one check of a command's outputs, before the work (:func:`sins.io.paths.check_outputs`):
     each can be written, none is an input (``inputs``: every file and folder the command reads) or
     another output. ``outputs`` and ``folders`` map each flag to its path (None: not asked for)."""
+    from sins.io.euroc import read_beside
     from sins.io.paths import check_outputs as check
 
-    check(outputs, inputs, folders)
+    read = [p for p in inputs if p is not None]
+    read += [beside for p in read if (beside := read_beside(p)) is not None]  # an ASL file's mav0
+    check(outputs, read, folders)
 
 
 def unit_of(rec: Recording) -> str:

@@ -48,6 +48,14 @@ class EurocRead:
     notes: tuple[str, ...]
 
 
+def read_beside(path: str | os.PathLike[str]) -> Path | None:
+    """The ``mav0`` folder whose files an ASL IMU file's reader also reads (its reference folders and
+    ``imu0/sensor.yaml``), where ``path`` is ``mav0/imu0/data.csv``; else None. Those files are inputs
+    too: no output may replace them."""
+    path = Path(path)
+    return path.parent.parent if path.name == "data.csv" and path.parent.name == "imu0" else None
+
+
 def locate(path: Path) -> tuple[Path, Path | None] | None:
     """``(imu0/data.csv, mav0)`` of a EuRoC/TUM-VI recording at ``path`` (the folder above ``mav0``,
     ``mav0`` itself, or an ASL IMU file: ``mav0`` is then None unless the file sits in ``mav0/imu0``),
@@ -235,4 +243,5 @@ __all__ = [
     "REFERENCES",
     "EurocRead",
     "locate",
+    "read_beside",
 ]
