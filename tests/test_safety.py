@@ -189,8 +189,8 @@ def test_a_symbolic_link_is_followed_and_stays_a_link(files: Path, tmp_path: Pat
 
 
 def test_a_campaign_does_not_take_over_a_folder_of_the_users(tmp_path: Path) -> None:
-    """A folder with files of its own and no ``campaign.json``: before, the campaign wrote its
-    ``summary.json`` over the user's."""
+    """A folder with files of its own and no ``campaign.json`` (or one that is not sins's): before, the
+    campaign wrote its ``summary.json`` (and ``campaign.json``) over the user's."""
     out = tmp_path / "mine"
     out.mkdir()
     (out / "summary.json").write_text('{"mine": true}\n')
@@ -198,6 +198,12 @@ def test_a_campaign_does_not_take_over_a_folder_of_the_users(tmp_path: Path) -> 
     assert rc == 2 and "no campaign.json" in err and str(out) in err, err
     assert (out / "summary.json").read_text() == '{"mine": true}\n'
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+    # A campaign.json of the user's own is no campaign's: before, it and summary.json were replaced.
+    (out / "campaign.json").write_text('{"my": "notes"}\n')
+    rc, _, err = run_cli(["campaign", "tactical_drives", "--out", str(out)])
+    assert rc == 2 and "campaign.json: not a sins campaign" in err and err.count("\n") == 1, err
+    assert (out / "campaign.json").read_text() == '{"my": "notes"}\n'
+    assert (out / "summary.json").read_text() == '{"mine": true}\n'
 
 
 # --------------------------------------------------------------------------- inputs

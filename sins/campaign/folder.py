@@ -114,15 +114,19 @@ def locked(out: Path, spec: CampaignSpec) -> Iterator[None]:
 
 def check_owned(out: Path) -> None:
     """Refuse a results folder that holds files of its own and is not a campaign's (no
-    ``campaign.json``): a campaign writes ``summary.json`` and ``results.parquet`` there, and would
+    ``campaign.json`` that is a sins campaign's, by its ``format``: a file of that name is not enough):
+    a campaign writes ``campaign.json``, ``summary.json`` and ``results.parquet`` there, and would
     replace a user's files of those names.
 
     Raises
     ------
     SinsInputError
-        naming the folder and one of the files it holds.
+        naming the folder and one of the files it holds, or its ``campaign.json`` that is not sins's.
     """
-    if not out.is_dir() or (out / "campaign.json").exists():
+    if not out.is_dir():
+        return
+    if (out / "campaign.json").exists():
+        io.read_json_document(out / "campaign.json", "campaign results folder", FORMAT)  # sins's, or refused
         return
     others = sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME)
     if others:
