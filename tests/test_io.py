@@ -497,10 +497,20 @@ def test_to_increments_needs_two_samples() -> None:
 
 def test_written_files_get_the_permissions_open_would_give_not_a_temporary_files(tmp_path: Path) -> None:
     """Written through a temporary file (owner-only by default), the result has 0o666 less the umask,
-    as a plain ``open`` gives: a baseline or a recording is readable by the group as any other file."""
+    as a plain ``open`` gives: a baseline or a recording is readable by the group as any other file; a
+    file replaced keeps its mode, and a read-only one is refused."""
     umask = os.umask(0o022)
     os.umask(umask)
     path = tmp_path / "t.csv"
     io.write_table(path, ["t"], np.zeros((2, 1)))
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]
+    # A file replaced keeps its own permissions: a private one stays private (it became 0644 before).
+    path.chmod(0o600)
+    io.write_table(path, ["t"], np.array([[1.0], [2.0]]))
+    assert path.stat().st_mode & 0o777 == 0o600 and io.read_table(path).data[0, 0] == 1.0
+    # One marked read-only is not replaced (a rename needs only the folder's permission): refused.
+    path.chmod(0o444)
+    refusal(lambda: io.write_table(path, ["t"], np.zeros((2, 1))), str(path), "is read-only (mode 0444)")
+    assert path.stat().st_mode & 0o777 == 0o444 and io.read_table(path).data[0, 0] == 1.0
     assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]

@@ -95,6 +95,27 @@ def writes_in_place(path: str | os.PathLike[str]) -> bool:
         return False
 
 
+def read_only(path: Path, shown: str) -> None:
+    """Refuse to replace an existing file that no one may write (no write bit in its mode): whoever
+    marked it so meant it kept, and a rename over it needs only the folder's permission (root's
+    writes pass any permission; the mode still says what was meant).
+
+    Raises
+    ------
+    SinsInputError
+        ``shown: is read-only ...``.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if stat.S_ISREG(mode) and not mode & 0o222:
+        raise SinsInputError(
+            f"{shown}: is read-only (mode {stat.S_IMODE(mode):04o}); sins does not replace a file marked so: "
+            "make it writable or write elsewhere"
+        )
+
+
 def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str = "") -> None:
     """Refuse, before the work, an output that could not be written after it (see the module
     docstring): a file whose folder is missing or not writable, a file name that is a folder, a FIFO,
@@ -128,6 +149,7 @@ def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str
             return  # written in place (/dev/null); opening it is the writer's test
         if not stat.S_ISREG(mode):
             raise SinsInputError(f"{shown}: is {_kind(mode)}; sins writes regular files (or /dev/null)")
+        read_only(real, shown)
         probe = real.parent
         if not probe.is_dir():
             raise SinsInputError(f"{shown}: directory {probe} does not exist")
@@ -210,6 +232,7 @@ __all__ = [
     "check_input",
     "check_outputs",
     "check_writable",
+    "read_only",
     "target",
     "writes_in_place",
 ]
