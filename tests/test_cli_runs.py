@@ -195,6 +195,16 @@ def test_integrate_writes_the_solution(folder: Path, capsys) -> None:
     )
     assert main([*args, "--out", "sol.txt"]) == 2
     _one_line_error(capsys, "sol.txt", ".csv or .parquet")
+    # Readings with a hole: integrated across it as one interval, and said so (it was silent before).
+    assert "gap(s)" not in capsys.readouterr().err
+    lines = Path("imu.csv").read_text(encoding="utf-8").splitlines()
+    first = next(k for k, line in enumerate(lines) if line[:1].isdigit())
+    Path("holed.csv").write_text(
+        "\n".join(lines[: first + 1000] + lines[first + 1050 :]) + "\n", encoding="utf-8"
+    )
+    assert main(["integrate", "holed.csv", "--truth", "truth.csv"]) == 0
+    err = capsys.readouterr().err
+    assert "sins: note: holed.csv: 1 gap(s) in the readings (the longest 0.51 s at 10 s)" in err, err
 
 
 def test_a_truth_shorter_than_the_imu_is_refused_or_cut_when_asked(folder: Path, capsys) -> None:

@@ -40,6 +40,7 @@ NO_REFERENCE = (
 def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins import io
     from sins.io import solution
+    from sins.io.inspection import gaps_note
     from sins.runs import pipeline
 
     if args.out:
@@ -63,6 +64,8 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
         bar.set_description("integrating")
         run = pipeline.navigate(rec.imu, rec.truth, args.vertical, args.vertical_tau_s)
     where = read.name
+    if note := gaps_note(rec.imu.t):
+        print(f"sins: note: {where}: {note}", file=sys.stderr)
     summary = run.summary.to_dict()
     against = args.truth or "its own reference"
     check_finite(summary, f"{where}: against {against}")
@@ -104,6 +107,7 @@ def _write_solution(args: argparse.Namespace, sol: NavSeries, comment: str) -> N
 def _integrate_free(args: argparse.Namespace) -> int:
     """No reference: from ``--origin`` in ``--attitude``, or aligned on the opening rest (``--align``)."""
     from sins import io
+    from sins.io.inspection import gaps_note
     from sins.runs import free_report, replay
 
     _check_free(args)
@@ -115,6 +119,8 @@ def _integrate_free(args: argparse.Namespace) -> int:
             f"{where}: the recording has its own reference; integrate it against that (without "
             "--attitude or --align)"
         )
+    if note := gaps_note(rec.imu.t):
+        print(f"sins: note: {where}: {note}", file=sys.stderr)
     origin = free_report.start_position(rec, recording_options(args)["origin"])
     imu = free_report.increments(rec)
     attitude = None if args.attitude is None else _angles(args.attitude, "--attitude")
@@ -200,12 +206,10 @@ def add(sub: Subparsers) -> None:
         "reference begins are left out with a note)",
     )  # fmt: skip
     p.add_argument(
-        "--vertical",
-        choices=VERTICAL_MODES,
-        default="free",
+        "--vertical", choices=VERTICAL_MODES, default="free",
         help="vertical channel: free inertial, held to, or damped towards the truth height (the start's "
         "without a truth)",
-    )
+    )  # fmt: skip
     p.add_argument(
         "--vertical-tau-s", type=positive, default=10.0, help="time constant of 'damp', s (default 10)"
     )

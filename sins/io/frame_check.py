@@ -12,7 +12,6 @@ from sins.core import rotation
 from sins.core.series import NavSeries
 from sins.io import axes
 from sins.io.findings import Finding, Rest, Windows
-from sins.io.recording import Recording
 
 Array = NDArray[np.float64]
 
@@ -73,11 +72,11 @@ def _lateral(win: Windows, down: Array, k: int) -> tuple[int, bool] | None:
     return best, corr[best] > 0
 
 
-def frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
+def frame_findings(frame: str, seen: str | None) -> list[Finding]:
     """The file's axes when the data show they are not FRD: letters to pass as the frame."""
     if seen is None:
         return []
-    current = axes.frame_matrix(rec.frame)
+    current = axes.frame_matrix(frame)
     if "_" not in seen:
         if seen == axes.FRD:
             return []
@@ -102,7 +101,7 @@ def frame_findings(rec: Recording, seen: str | None) -> list[Finding]:
     return [Finding("axes", what, advice="pass --frame with the letters of the file's axes (one of these)")]
 
 
-def reference_findings(rec: Recording, t: Array, w: Array, f: Array) -> list[Finding]:
+def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[Finding]:
     """Whether the reference's attitude is that of the readings' axes. Its turns over short intervals
     (:data:`TURN_INTERVAL_S`), in the body, are the gyro's integral over them (less a bias's constant
     part: their correlation about their means near 1). And the specific force rotated by it into the
@@ -110,8 +109,6 @@ def reference_findings(rec: Recording, t: Array, w: Array, f: Array) -> list[Fin
     velocity's change over the span), is gravity's reaction, pointing up. Elsewhere, the attitude is
     not of these axes: a quaternion of another order (x, y, z, w for w, x, y, z), the other way round
     (the world's in the body), or readings in other axes than the reference's body."""
-    truth = rec.truth
-    assert truth is not None
     inside = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
     if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
         return []

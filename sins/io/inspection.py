@@ -98,9 +98,9 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     # Beside a reference attitude, the readings' axes are its body's, whatever they are called: the
     # reference judges them, not FRD's convention.
     findings += (
-        frame_check.frame_findings(rec, frame)
+        frame_check.frame_findings(rec.frame, frame)
         if rec.truth is None
-        else frame_check.reference_findings(rec, t, w, f)
+        else frame_check.reference_findings(rec.truth, t, w, f)
     )
     findings += _range_findings(rec, w)
     clipping = _clipping(rec)
@@ -127,6 +127,23 @@ def _as_read(finding: Finding) -> Finding:
 
 
 # --------------------------------------------------------------------------- time
+
+
+def gaps_note(t: Array) -> str:
+    """The stretches without readings in the stamps ``t`` (s, increasing), as :func:`inspect` finds them,
+    in a sentence: how many, the longest, and that an integration crosses each as one interval ("" for
+    none: ``sins integrate`` says it, which crossed a 5 s gap without a word)."""
+    dt = np.diff(t)
+    if not len(dt):
+        return ""
+    med = float(np.median(dt))
+    steady = dt[(dt > 0.5 * med) & (dt < 1.5 * med)]
+    found = _gaps(t, dt, med, float(np.std(steady) / med) if steady.size > 1 else 0.0)
+    if not found:
+        return ""
+    g = max(found, key=lambda g: g.length_s)
+    return (f"{len(found)} gap(s) in the readings (the longest {g.length_s:.3g} s at {g.start_s:.6g} s), "
+            "each integrated across as one interval (sins inspect lists them)")  # fmt: skip
 
 
 def _gaps(t: Array, dt: Array, med: float, jitter: float) -> tuple[Gap, ...]:
@@ -496,5 +513,6 @@ __all__ = [
     "Gap",
     "Inspection",
     "Rest",
+    "gaps_note",
     "inspect",
 ]

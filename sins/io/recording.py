@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
-from sins.io import axes, bags, euroc, formats, local, npz, provenance, rig
+from sins.io import axes, bags, euroc, formats, frame_check, local, npz, provenance, rig
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
 from sins.io.paths import check_input
@@ -134,10 +134,8 @@ class Recording:
             return dataclasses.replace(self.on_reference, frame=self.frame)
         if self.truth is None:
             raise missing_reference(self)
-        from sins.io import frame_check  # it reads a Recording: imported here, not above
-
         t, w, f = self.mean_rates()
-        for finding in frame_check.reference_findings(self, t, w, f):
+        for finding in frame_check.reference_findings(self.truth, t, w, f):
             raise SinsInputError(f"{self.source}: {finding.what}; {finding.advice}")
         own = not self.truth_from
         return beside_trajectory(
