@@ -239,14 +239,18 @@ def unit_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
     ids=lambda a: " ".join(a[:2]),
 )
 def test_every_command_reads_an_npz_recording(
-    argv: list[str], unit_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """By its path and, where a command takes one, as --dataset FOLDER/NAME; each writes what it says."""
+    argv: list[str], unit_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """By its path and, where a command takes one, as --dataset FOLDER/NAME; each writes what it says
+    (``correct``: the readings only, and that its reference is not in them)."""
     from sins.cli import main
 
     monkeypatch.setenv("SINS_DATA", str(unit_root))
     fill = {"npz": str(unit_root / "unit" / "r2.npz"), "root": str(unit_root), "out": str(tmp_path)}
     assert main([a.format(**fill) for a in argv]) == 0
+    if argv[0] == "correct":
+        assert "; the readings only, not its reference" in capsys.readouterr().out
     for a in argv:
         if "{out}" in a:
             assert Path(a.format(**fill)).is_file()

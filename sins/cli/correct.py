@@ -51,7 +51,16 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     with progress_bar(f"writing {args.out}", "row") as bar:
         io.write_imu(args.out, out, extra=extra, comment="\n".join(lines), progress=row_progress(bar))
     form = "rate" if isinstance(out, ImuRates) else "increment"
-    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}")
+    # What the corrected file does not hold, said: a user must not take it for the whole recording.
+    left = (
+        "the rig's reference and phases"
+        if rec.rig is not None
+        else "its reference"
+        if rec.has_trajectory
+        else ""
+    )
+    dropped = f"; the readings only, not {left} (judge the model on the original)" if left else ""
+    print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}{dropped}")
     return 0
 
 
