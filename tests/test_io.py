@@ -495,6 +495,34 @@ def test_to_increments_needs_two_samples() -> None:
     assert np.array_equal(inc.dv_b, np.full((1, 3), 1.0))
 
 
+def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: Path) -> None:
+    """A SIGKILL leaves ``.NAME.PID.XXXX.tmp`` beside the output (full size, hidden). The next write of
+    the same file removes it once its process no longer runs and it has not been written for
+    ``STALE_S``; a live writer's file, a recent one and a file of another name are left alone."""
+    import subprocess
+    import time
+
+    from sins.io import atomic
+
+    dead = subprocess.Popen(["true"])
+    dead.wait()  # a process id that no process has now
+    path = tmp_path / "t.csv"
+    old = time.time() - 2 * atomic.STALE_S
+    files = {
+        "killed": tmp_path / f".t.csv.{dead.pid}.abc123.tmp",
+        "recent": tmp_path / f".t.csv.{dead.pid}.def456.tmp",
+        "alive": tmp_path / f".t.csv.{os.getpid()}.ghi789.tmp",
+        "other": tmp_path / f".u.csv.{dead.pid}.jkl012.tmp",
+    }
+    for name, f in files.items():
+        f.write_text("x")
+        if name != "recent":
+            os.utime(f, (old, old))
+    io.write_table(path, ["t"], np.array([[0.0], [1.0]]))
+    assert {n for n, f in files.items() if f.exists()} == {"recent", "alive", "other"}
+    assert io.read_table(path).data.shape == (2, 1)
+
+
 def test_written_files_get_the_permissions_open_would_give_not_a_temporary_files(tmp_path: Path) -> None:
     """Written through a temporary file (owner-only by default), the result has 0o666 less the umask,
     as a plain ``open`` gives: a baseline or a recording is readable by the group as any other file; a

@@ -1,15 +1,19 @@
 """Writes that never leave half a file: a temporary name in the target's folder, renamed when complete.
 
 Every file sins writes goes through :func:`atomic_path` (or :func:`atomic_text` for text): a reader never
-sees a partly written file, and a run stopped by an error or an interrupt leaves none behind.
+sees a partly written file, and a run stopped by an error or an interrupt leaves none behind. A run
+killed outright (SIGKILL) leaves its temporary file; the next write of the same file removes it once its
+writer no longer runs (:data:`STALE_S`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import stat
 import tempfile
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TextIO
@@ -55,8 +59,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         mode = stat.S_IMODE(os.stat(path).st_mode)  # a file replaced keeps its permissions
     except OSError:
         mode = 0o666 & ~_UMASK
+    _sweep_stale(path)
     try:
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=directory)
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
     os.close(fd)
@@ -72,6 +77,41 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise
 
 
+#: A temporary file of a writer that no longer runs is removed when this old, s: a writer on another
+#: machine sharing the folder (whose process id means nothing here) writes into its file as it goes.
+STALE_S = 600.0
+
+
+def _sweep_stale(path: Path) -> None:
+    """Remove the temporary files a killed writer of ``path`` left beside it (``.NAME.PID.XXXX.tmp``, full
+    size and hidden: a SIGKILL, which no ``finally`` sees): those whose process no longer runs and which
+    have not been written for :data:`STALE_S`. Others' files, and a live writer's, are left alone."""
+    pattern = re.compile(rf"\.{re.escape(path.name)}\.(\d+)\.[A-Za-z0-9_]+\.tmp")
+    try:
+        names = [e.name for e in os.scandir(path.parent) if e.name.startswith(f".{path.name}.")]
+    except OSError:
+        return
+    for name in names:
+        m = pattern.fullmatch(name)
+        if m is None or _running(int(m.group(1))):
+            continue
+        stale = path.parent / name
+        with contextlib.suppress(OSError):
+            if time.time() - stale.stat().st_mtime > STALE_S:
+                stale.unlink()
+
+
+def _running(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # another user's: running; a number no process can have: leave its file alone
+    return True
+
+
 @contextlib.contextmanager
 def atomic_text(path: str | os.PathLike[str]) -> Iterator[TextIO]:
     """:func:`atomic_path` opened for writing UTF-8 text: the file handle to write into."""
@@ -79,4 +119,4 @@ def atomic_text(path: str | os.PathLike[str]) -> Iterator[TextIO]:
         yield fh
 
 
-__all__ = ["atomic_path", "atomic_text"]
+__all__ = ["STALE_S", "atomic_path", "atomic_text"]
