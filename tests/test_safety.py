@@ -188,6 +188,23 @@ def test_a_symbolic_link_is_followed_and_stays_a_link(files: Path, tmp_path: Pat
     assert _digests([rig]) == before
 
 
+def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
+    """``sins simulate --imu A --truth B``: where the second write fails (``/dev/full``: no space), the
+    first is not left replaced beside it; before, the new IMU file stood beside another run's truth (or
+    an old one). The refusal says which outputs were kept as they were; the pair written when both can
+    be is complete."""
+    imu = tmp_path / "i.csv"
+    imu.write_text("OLD\n")
+    rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", "/dev/full"])
+    assert rc == 2 and "No space left on device" in err, err
+    assert f"none of its outputs written ({imu}: as they were)" in err, err
+    assert imu.read_text() == "OLD\n" and sorted(p.name for p in tmp_path.iterdir()) == ["i.csv"]
+    truth = tmp_path / "t.csv"
+    rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", str(truth)])
+    assert rc == 0 and imu.read_text() != "OLD\n" and truth.is_file(), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["i.csv", "t.csv"]
+
+
 def test_a_campaign_does_not_take_over_a_folder_of_the_users(tmp_path: Path) -> None:
     """A folder with files of its own and no ``campaign.json`` (or one that is not sins's): before, the
     campaign wrote its ``summary.json`` (and ``campaign.json``) over the user's."""
