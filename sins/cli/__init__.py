@@ -59,7 +59,7 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
 )
 
 #: Commands whose outputs land as each is done, not together at the end (a campaign's parts: a resume
-#: needs them; ``check`` runs campaigns), and those that write nothing (``sins.io`` not imported: 0.4 s).
+#: needs them; ``check`` runs campaigns), and those that write nothing.
 _AS_DONE = ("campaign", "check", "scenarios", "effects", "strategies")
 #: The flag that gives what a :class:`MissingInputError` says is missing.
 _FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topic": "--truth-topic TOPIC"}
@@ -100,11 +100,11 @@ def terminated_as_exception() -> Iterator[None]:
 
 
 def _together(command: str, discarded: list[Path]) -> contextlib.AbstractContextManager[None]:
-    """A command's outputs land together or not at all (:func:`sins.io.atomic.all_or_nothing`), but for
-    :data:`_AS_DONE`."""
+    """A command's outputs land together or not at all (:func:`sins.core.deferred.all_or_nothing`), but
+    for :data:`_AS_DONE`."""
     if command in _AS_DONE:
         return contextlib.nullcontext()
-    from sins.io.atomic import all_or_nothing
+    from sins.core.deferred import all_or_nothing  # plain os: nothing numerical before the work
 
     return all_or_nothing(discarded)
 

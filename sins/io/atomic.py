@@ -15,10 +15,10 @@ import stat
 import tempfile
 import time
 from collections.abc import Iterator
-from contextvars import ContextVar
 from pathlib import Path
 from typing import TextIO
 
+from sins.core import deferred
 from sins.errors import SinsInputError
 from sins.io.paths import read_only, target, writes_in_place
 
@@ -70,48 +70,16 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     try:
         yield tmp
         os.chmod(tmp, mode)
-        pending = _PENDING.get()
+        pending = deferred.pending()
         if pending is None:
             os.replace(tmp, path)
         else:
-            pending.append((tmp, path))  # renamed with the command's other outputs (all_or_nothing)
+            pending.append((tmp, path))  # renamed with the command's other outputs (sins.core.deferred)
     except BaseException as exc:
         tmp.unlink(missing_ok=True)
         if isinstance(exc, OSError):  # a full disk, say: the target named, not the temporary file
             raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
         raise
-
-
-#: The renames deferred to the end of an :func:`all_or_nothing` block (temporary file, target), or None.
-_PENDING: ContextVar[list[tuple[Path, Path]] | None] = ContextVar("sins_pending_renames", default=None)
-
-
-@contextlib.contextmanager
-def all_or_nothing(discarded: list[Path] | None = None) -> Iterator[None]:
-    """Within the block, each :func:`atomic_path` in this thread keeps its complete temporary file and
-    defers its rename to the block's end: a command's outputs land together, or none does where a later
-    write or the work after it fails or is interrupted (a model file beside a stale ``--json``, a new
-    IMU file beside the truth file of another run, before). Each temporary file is then removed, and
-    the targets it would have replaced are added to ``discarded``, for the message."""
-    pending: list[tuple[Path, Path]] = []
-    token = _PENDING.set(pending)
-    try:
-        yield
-    except BaseException:
-        for tmp, path in pending:
-            tmp.unlink(missing_ok=True)
-            if discarded is not None:
-                discarded.append(path)
-        raise
-    finally:
-        _PENDING.reset(token)
-    for k, (tmp, path) in enumerate(pending):
-        try:
-            os.replace(tmp, path)
-        except OSError as exc:
-            for later, _ in pending[k + 1 :]:
-                later.unlink(missing_ok=True)
-            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
 
 
 #: A temporary file of a writer that no longer runs is removed when this old, s: a writer on another
@@ -156,4 +124,4 @@ def atomic_text(path: str | os.PathLike[str]) -> Iterator[TextIO]:
         yield fh
 
 
-__all__ = ["STALE_S", "all_or_nothing", "atomic_path", "atomic_text"]
+__all__ = ["STALE_S", "atomic_path", "atomic_text"]
