@@ -148,7 +148,16 @@ def test_bad_files_are_refused_naming_the_file_and_key(
 def test_not_an_archive(tmp_path: Path) -> None:
     path = tmp_path / "x.npz"
     path.write_bytes(b"PK\x03\x04 not really a zip")
-    # Not a zip archive: the .npz reader does not claim it; the CSV reader refuses it in one line.
+    # A zip's first bytes, then nothing a zip holds: refused as the damaged archive it is, in one line.
+    refusal(lambda: io.read(path), str(path), "not a readable .npz archive")
+    # Cut short (an interrupted copy): the same, not read as a CSV that is "not UTF-8" (before).
+    good = tmp_path / "good.npz"
+    _write(good)
+    path.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    message = refusal(lambda: io.read(path), str(path), "not a readable .npz archive")
+    assert "UTF-8" not in message
+    # Not a zip at all, whatever its name: the CSV reader's refusal.
+    path.write_bytes(b"\x00\x01 binary")
     refusal(lambda: io.read(path), str(path))
 
 

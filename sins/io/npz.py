@@ -52,11 +52,13 @@ MAX_SPEED_MPS = 1e3
 
 
 def is_npz(path: Path) -> bool:
-    """Whether ``path`` is a file that reads as an ``.npz`` (its name, then a zip archive's first bytes)."""
+    """Whether ``path`` is a file that reads as an ``.npz`` (its name, then a zip archive's first bytes: a
+    cut or damaged archive is then refused as one, not read as a CSV that is "not UTF-8")."""
     if path.suffix.lower() != ".npz" or not path.is_file():
         return False
     try:
-        return zipfile.is_zipfile(path)
+        with open(path, "rb") as fh:
+            return fh.read(4) in (b"PK\x03\x04", b"PK\x05\x06")
     except OSError:
         return False
 
