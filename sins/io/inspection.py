@@ -82,11 +82,7 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
         raise SinsInputError(f"{rec.source}: {len(rec.imu)} reading(s); inspecting needs two or more")
     t, w, f = rec.mean_rates()
     stamps = rec.imu.t if rec.form == "increment" else t
-    dt = np.diff(stamps)
-    med = float(np.median(dt)) if len(dt) else float("nan")
-    steady = dt[(dt > 0.5 * med) & (dt < 1.5 * med)]
-    jitter = float(np.std(steady) / med) if steady.size > 1 else 0.0
-    gaps = _gaps(stamps, dt, med, jitter)
+    med, jitter, gaps = _stamps(stamps)
     stated = rate_hz if rate_hz is not None else rec.stated_rate_hz
     findings: list[Finding] = []
     findings += _time_findings(rec, med, jitter, gaps, stated, rate_hz is not None)
@@ -133,17 +129,21 @@ def gaps_note(t: Array) -> str:
     """The stretches without readings in the stamps ``t`` (s, increasing), as :func:`inspect` finds them,
     in a sentence: how many, the longest, and that an integration crosses each as one interval ("" for
     none: ``sins integrate`` says it, which crossed a 5 s gap without a word)."""
-    dt = np.diff(t)
-    if not len(dt):
-        return ""
-    med = float(np.median(dt))
-    steady = dt[(dt > 0.5 * med) & (dt < 1.5 * med)]
-    found = _gaps(t, dt, med, float(np.std(steady) / med) if steady.size > 1 else 0.0)
+    found = _stamps(t)[2]
     if not found:
         return ""
     g = max(found, key=lambda g: g.length_s)
     return (f"{len(found)} gap(s) in the readings (the longest {g.length_s:.3g} s at {g.start_s:.6g} s), "
             "each integrated across as one interval (sins inspect lists them)")  # fmt: skip
+
+
+def _stamps(t: Array) -> tuple[float, float, tuple[Gap, ...]]:
+    """The stamps' median step, its RMS jitter (a fraction of it, over the steady steps) and the gaps."""
+    dt = np.diff(t)
+    med = float(np.median(dt)) if len(dt) else float("nan")
+    steady = dt[(dt > 0.5 * med) & (dt < 1.5 * med)]
+    jitter = float(np.std(steady) / med) if steady.size > 1 else 0.0
+    return med, jitter, _gaps(t, dt, med, jitter)
 
 
 def _gaps(t: Array, dt: Array, med: float, jitter: float) -> tuple[Gap, ...]:
