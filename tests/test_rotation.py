@@ -222,6 +222,19 @@ def test_rotvec_from_quat_matches_scipy(r: np.ndarray) -> None:
 
 
 @SETTINGS
+@given(rotvecs, rotvecs)
+def test_turn_between_matches_scipy(r0: np.ndarray, r1: np.ndarray) -> None:
+    """The turn from q0 to q1 in q0's axes: scipy's (R0⁻¹ R1).as_rotvec(), to the rotation vector's own
+    precision (its angle is at most π, so 16 ulp of π)."""
+    q0, q1 = Rotation.from_rotvec(r0).as_quat(), Rotation.from_rotvec(r1).as_quat()
+    got = rotation.turn_between(q0, q1)
+    expected = (Rotation.from_quat(q0).inv() * Rotation.from_quat(q1)).as_rotvec()
+    if np.linalg.norm(expected) > np.pi - 1e-6:  # a half turn: either sign of the axis is the same turn
+        return
+    assert np.linalg.norm(got - expected) <= 64 * EPS * np.pi
+
+
+@SETTINGS
 @given(rotvecs)
 def test_rotvec_round_trip(r: np.ndarray) -> None:
     # Relative to |r|, including tiny angles: the Taylor branches of both functions.

@@ -201,9 +201,7 @@ def simulate(truth: NavSeries, config: GnssConfig, seed: int) -> GnssFixes:
         dt = 1e-3
         t0 = np.clip(t - config.latency_s - dt, truth.t[0], truth.t[-1] - 2 * dt)
         q0, q1 = truth.interpolate(t0).q_nb, truth.interpolate(t0 + 2 * dt).q_nb
-        omega_nb_b = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q0), q1)) / (
-            2 * dt
-        )
+        omega_nb_b = rotation.turn_between(q0, q1) / (2 * dt)
         arm_rate_n = np.einsum("kij,kj->ki", C_nb, np.cross(omega_nb_b, config.lever_arm_b))
         v_n = at.v_n + arm_rate_n + config.sigma_vel_mps * rng.standard_normal((len(t), 3))
     fixes = GnssFixes(

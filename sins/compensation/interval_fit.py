@@ -585,7 +585,7 @@ def quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -
 
 def _quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -> ReferenceQuality:
     """The residuals of still and moving intervals, and the sensor's own spread where still."""
-    turn = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(iv.q_start), iv.q_stop))
+    turn = rotation.turn_between(iv.q_start, iv.q_stop)
     speed = np.maximum(np.linalg.norm(iv.v_start, axis=1), np.linalg.norm(iv.v_stop, axis=1))
     still = (np.linalg.norm(turn, axis=1) < np.radians(0.5)) & (speed < 0.02)
     rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731

@@ -112,6 +112,12 @@ def rotvec_from_quat(q: ArrayLike) -> Array:
     return k * v
 
 
+def turn_between(q0: ArrayLike, q1: ArrayLike) -> Array:
+    """Rotation vector of ``q0⁻¹ ⊗ q1``: the turn from attitude ``q0`` to ``q1``, in ``q0``'s body axes
+    (radians), shape (..., 3)."""
+    return rotvec_from_quat(quat_multiply(quat_conjugate(q0), q1))
+
+
 def dcm_from_quat(q: ArrayLike) -> Array:
     """Direction cosine matrix of a unit quaternion: ``q_nb`` → ``C_nb``, shape (..., 3, 3)."""
     q = np.asarray(q, dtype=float)
@@ -311,5 +317,6 @@ __all__ = [
     "rotate",
     "rotvec_from_quat",
     "skew",
+    "turn_between",
     "wrap_angle",
 ]

@@ -150,7 +150,7 @@ def _turns_agreement(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.in
     if len(ends) < 10:
         return None
     q = truth.interpolate(t[ends]).q_nb
-    turns = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q[:-1]), q[1:]))
+    turns = rotation.turn_between(q[:-1], q[1:])
     within = np.arange(ends[0], ends[-1] + 1)
     steps = np.diff(t[within])[:, None] * 0.5 * (w[within][1:] + w[within][:-1])  # trapezoids
     summed = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])

@@ -306,7 +306,7 @@ def _turning(rec: Recording, t: Array, win: Windows) -> NDArray[np.bool_]:
     inside = (t[first] >= truth.t[0]) & (t[last] <= truth.t[-1]) & (t[last] > t[first])
     if inside.any():
         q0, q1 = truth.interpolate(t[first[inside]]).q_nb, truth.interpolate(t[last[inside]]).q_nb
-        turn = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q0), q1))
+        turn = rotation.turn_between(q0, q1)
         rate = np.linalg.norm(turn, axis=1) / (t[last[inside]] - t[first[inside]])
         out[inside] = rate > np.radians(REST_TURN_DPS)
     return out

@@ -329,7 +329,7 @@ class _Reference:
         mid = 0.5 * (nav.t[1:] + nav.t[:-1])
         q = nav.q_nb
         # The attitude increment C_b(k) b(k+1) over the interval, as a rotation vector.
-        step = rotation.rotvec_from_quat(rotation.quat_multiply(rotation.quat_conjugate(q[:-1]), q[1:]))
+        step = rotation.turn_between(q[:-1], q[1:])
         v = 0.5 * (nav.v_n[1:] + nav.v_n[:-1])
         a = np.diff(nav.v_n, axis=0) / dt[:, None]
         c_bn = self.attitude(mid).inv()
