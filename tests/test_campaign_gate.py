@@ -54,6 +54,34 @@ def test_an_unchanged_strategy_fails_a_reseeded_gate_at_most_at_its_false_alarm_
     )
 
 
+def test_each_figures_p_value_is_scipys_test_of_that_figure_alone() -> None:
+    """The gate tests a campaign's figures in batches (scipy's ``axis``); each p-value must be the one
+    scipy gives that figure's samples alone: paired and reseeded, with tied values and with groups
+    whose unit counts differ (three batch sizes), to the last bit."""
+    from scipy import stats
+
+    rng = np.random.default_rng(13)
+    for paired in (True, False):
+        base_values, now_values = _draw(rng, 40), _draw(rng, 40)
+        for values in (base_values, now_values):  # tied values, and tied and zero differences
+            values["a/x"] = {f: np.round(v, 1) for f, v in values["a/x"].items()}
+        base_values["a/y"] = {f: v[:25] for f, v in base_values["a/y"].items()}
+        now_values["a/y"] = {f: v[: 25 if paired else 31] for f, v in now_values["a/y"].items()}
+        base = _summary(base_values, list(range(40)))
+        base["groups"]["a/y"]["values"]["unit_seed"] = list(range(25))
+        now = _summary(now_values, list(range(40)) if paired else list(range(40, 80)))
+        now["groups"]["a/y"]["values"]["unit_seed"] = list(range(25)) if paired else list(range(40, 71))
+        checks = gate.compare(base, now)
+        assert {c.test for c in checks} == {"paired" if paired else "two-sample"}
+        for c in checks:
+            b, n = np.asarray(base_values[c.group][c.figure]), np.asarray(now_values[c.group][c.figure])
+            if paired:
+                alone = stats.wilcoxon(n - b, alternative="greater", zero_method="zsplit").pvalue
+            else:
+                alone = stats.mannwhitneyu(n, b, alternative="greater").pvalue
+            assert c.p_value == float(alone), (c.group, c.figure)
+
+
 def test_a_doubled_error_fails_the_reseeded_gate_and_a_missing_group_is_named() -> None:
     rng = np.random.default_rng(12)
     base_values = _draw(rng, 40)

@@ -18,7 +18,7 @@ drop a figure (null, NaN, an empty list), is refused before any work (:func:`che
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -58,34 +58,75 @@ def compare(baseline: dict[str, Any], summary: dict[str, Any], alpha: float = FA
     """Every figure of every group of ``baseline`` (a ``summary.json``, :func:`check_baseline`) against
     ``summary``: each one is tested, none dropped."""
     check_baseline(baseline, "baseline")
-    pairs = []
+    prepared = []
     for group, base in baseline["groups"].items():
         now = summary["groups"].get(group)
         for figure in [f for f in base["values"] if f != "unit_seed"]:
-            pairs.append((group, figure, base, now))
-    per_test = alpha / max(1, len(pairs))
-    return [_check(group, figure, base, now, per_test) for group, figure, base, now in pairs]
+            prepared.append(_prepare(group, figure, base, now))
+    per_test = alpha / max(1, len(prepared))
+    p_values = _p_values([samples for _, samples in prepared])
+    return [
+        check if p is None else replace(check, p_value=p, verdict="regressed" if p < per_test else "holds")
+        for (check, _), p in zip(prepared, p_values, strict=True)
+    ]
 
 
-def _check(group: str, figure: str, base: dict[str, Any], now: dict[str, Any] | None, level: float) -> Check:
+#: The samples a test compares: the values now and the baseline's (two-sample), or the differences and
+#: ``None`` (paired).
+_Samples = tuple[str, np.ndarray, np.ndarray | None]
+
+
+def _prepare(
+    group: str, figure: str, base: dict[str, Any], now: dict[str, Any] | None
+) -> tuple[Check, _Samples | None]:
+    """The check, and the samples its test compares (``None`` where its verdict needs no test)."""
     if now is None or figure not in now["values"]:
-        return Check(group, figure, "", float("nan"), float("nan"), "missing")
+        return Check(group, figure, "", float("nan"), float("nan"), "missing"), None
     b = np.asarray(base["values"][figure], dtype=float)
     n = np.asarray(now["values"][figure], dtype=float)
     if not np.isfinite(n).all():  # a unit's figure went NaN or infinite: worse than any number
-        return Check(group, figure, "non-finite", float("nan"), 0.0, "regressed")
-    ratio = float(np.nanmedian(n) / np.nanmedian(b)) if np.nanmedian(b) > 0 else float("nan")
+        return Check(group, figure, "non-finite", float("nan"), 0.0, "regressed"), None
+    median_b = np.nanmedian(b)
+    ratio = float(np.median(n) / median_b) if median_b > 0 else float("nan")  # n is finite here
     if base["values"]["unit_seed"] == now["values"]["unit_seed"]:
         ok = np.isfinite(b) & np.isfinite(n)
         d = n[ok] - b[ok]
         if not d.any():
-            return Check(group, figure, "identical", ratio, 1.0, "holds")
-        p = float(stats.wilcoxon(d, alternative="greater", zero_method="zsplit").pvalue)
-        test = "paired"
-    else:
-        p = float(stats.mannwhitneyu(n[np.isfinite(n)], b[np.isfinite(b)], alternative="greater").pvalue)
-        test = "two-sample"
-    return Check(group, figure, test, ratio, p, "regressed" if p < level else "holds")
+            return Check(group, figure, "identical", ratio, 1.0, "holds"), None
+        return Check(group, figure, "paired", ratio, float("nan"), "holds"), ("paired", d, None)
+    samples = ("two-sample", n[np.isfinite(n)], b[np.isfinite(b)])
+    return Check(group, figure, "two-sample", ratio, float("nan"), "holds"), samples
+
+
+def _p_values(samples: list[_Samples | None]) -> list[float | None]:
+    """Each test's one-sided p-value (``None`` where there is none to make): scipy's test called once for
+    all the tests of one kind, sample sizes and ties (its ``axis``), ~20 times faster on a campaign's few
+    dozen figures than a call per test, and the same p-values. Ties are in the key because scipy chooses
+    its method (exact or asymptotic) once per call, by whether any of its samples has them."""
+    batches: dict[tuple[str, int, int, bool], list[int]] = {}
+    for i, s in enumerate(samples):
+        if s is not None:
+            key = (s[0], len(s[1]), 0 if s[2] is None else len(s[2]), _tied(s))
+            batches.setdefault(key, []).append(i)
+    out: list[float | None] = [None] * len(samples)
+    for (test, *_), rows in batches.items():
+        now = np.array([samples[i][1] for i in rows])  # type: ignore[index]
+        if test == "paired":
+            p = stats.wilcoxon(now, alternative="greater", zero_method="zsplit", axis=1).pvalue
+        else:
+            base = np.array([samples[i][2] for i in rows])  # type: ignore[index]
+            p = stats.mannwhitneyu(now, base, alternative="greater", axis=1).pvalue
+        for i, value in zip(rows, np.atleast_1d(p).tolist(), strict=True):
+            out[i] = float(value)
+    return out
+
+
+def _tied(samples: _Samples) -> bool:
+    """Whether the test's ranks hold ties as scipy counts them: among the differences' sizes, or a zero
+    difference (paired); among both samples' values (two-sample)."""
+    _, now, base = samples
+    values = np.abs(now) if base is None else np.concatenate([now, base])
+    return len(np.unique(values)) < len(values) or (base is None and not now.all())
 
 
 #: What a summary keeps when it is written as a baseline: no machine's paths, the groups whole.
