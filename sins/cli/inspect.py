@@ -51,6 +51,13 @@ def format_inspection(rec: Recording, result: Inspection) -> str:
         )
     if result.axes is not None:
         lines.append(f"axes as the data show them (after the reading): {result.axes} (_: not shown)")
+    if result.reference_lag is not None:
+        lag = result.reference_lag
+        way = "behind" if lag.lag_s > 0 else "ahead of"
+        lines.append(
+            f"the reference's clock: {1e3 * abs(lag.lag_s):.1f} ms {way} the readings' (its turns agree best "
+            f"with the gyro's there, correlation {lag.agreement:.4f}; {lag.as_stamped:.4f} as stamped)"
+        )
     if not result.findings:
         lines.append("no likely mistakes found")
         return "\n".join(lines)

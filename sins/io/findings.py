@@ -65,6 +65,17 @@ class Rest:
 
 
 @dataclass(frozen=True)
+class ReferenceLag:
+    """How the reference's clock sits against the readings': its turns agree best with the gyro's when
+    it is read ``lag_s`` later than stamped (positive: the reference lags, its attitude at ``t`` the
+    body's at ``t - lag_s``); ``agreement`` the correlation of the turns there, ``as_stamped`` at none."""
+
+    lag_s: float
+    agreement: float
+    as_stamped: float
+
+
+@dataclass(frozen=True)
 class Inspection:
     """What :func:`inspect` found: the figures, and the :class:`Finding` list (empty when clean)."""
 
@@ -80,6 +91,7 @@ class Inspection:
     clipping: tuple[Clipping, ...]
     axes: str | None
     findings: tuple[Finding, ...] = field(default=())
+    reference_lag: ReferenceLag | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain types for JSON (SI units)."""
@@ -102,6 +114,7 @@ __all__ = [
     "Finding",
     "Gap",
     "Inspection",
+    "ReferenceLag",
     "Rest",
     "Windows",
 ]

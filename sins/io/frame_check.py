@@ -1,6 +1,7 @@
 """What a recording's axes are, as far as its data show them: beside a reference attitude, whether that
-attitude is of the readings' axes (its turns are the gyro's, gravity's reaction in it points up); without
-one, the readings' axes against FRD's, from gravity at rest and the lateral force in a land vehicle's turns.
+attitude is of the readings' axes (its turns are the gyro's, gravity's reaction in it points up) and how
+its clock sits against the readings' (the shift at which its turns agree best); without one, the
+readings' axes against FRD's, from gravity at rest and the lateral force in a land vehicle's turns.
 Part of :func:`sins.io.inspection.inspect`."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from numpy.typing import NDArray
 from sins.core import rotation
 from sins.core.series import NavSeries
 from sins.io import axes
-from sins.io.findings import Finding, Rest, Windows
+from sins.io.findings import Finding, ReferenceLag, Rest, Windows
 
 Array = NDArray[np.float64]
 
@@ -25,6 +26,14 @@ REFERENCE_TURNS_AGREE = 0.9
 #: that a hand-held unit's turn over one is its integrated rate (over 1 s, BROAD's fast turns of 60-90°
 #: about changing axes took the correlation down to 0.78), long beside the noise.
 TURN_INTERVAL_S = 0.1
+#: The shifts of the reference's clock tried, s, either way (a motion capture's latency is milliseconds
+#: to tens of them; a quarter second is a clock set wrongly, which the stamps' own check names).
+LAG_SEARCH_S = 0.25
+#: A reference whose clock sits this far from the readings', s, or more, is named: at 5 ms a hand-held
+#: unit's 2 rad/s turn reads 0.6° off its reference, and every interval a fit or a diagnosis compares
+#: is off by the rate's change over it times the lag (EuRoC's sequences: within 2.5 ms; BROAD's two
+#: trials: 4.2 and 4.3 ms early, said but not named).
+REFERENCE_LAG_S = 0.005
 
 
 def seen_axes(win: Windows | None, rest: Rest | None, f: Array) -> str | None:
@@ -144,21 +153,78 @@ def _turns_agreement(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.in
     """The correlation, about their means, of the reference's turns over short intervals (the
     rotation vector of ``q(t_k)⁻¹ q(t_k+1)``, in the body) with the gyro's integral over the same
     intervals; None where the gyro turns too little to tell (under 1 °/s RMS about its mean)."""
+    ends, gyro = _gyro_turns(truth, t, w, inside)
+    if gyro is None:
+        return None
+    return _agreement(truth, t[ends], gyro)
+
+
+def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
+    """The shift of the reference's clock against the readings' at which its turns over short intervals
+    agree best with the gyro's (:func:`_turns_agreement`'s correlation), tried every reading's interval
+    within :data:`LAG_SEARCH_S` either way and refined between them by a parabola through the best three.
+    None where the gyro turns too little to tell, the reference spans too little, or the best shift is
+    the last one tried (the clock sits further off than the search reaches)."""
+    inside = np.flatnonzero((t >= truth.t[0] + LAG_SEARCH_S) & (t <= truth.t[-1] - LAG_SEARCH_S))
+    if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
+        return None
+    ends, gyro = _gyro_turns(truth, t, w, inside)
+    if gyro is None:
+        return None
+    dt = float(np.median(np.diff(t[inside])))
+    count = max(1, round(LAG_SEARCH_S / dt))
+    shifts = np.arange(-count, count + 1) * dt
+    agreement = np.array([_agreement(truth, t[ends] + shift, gyro) for shift in shifts])
+    k = int(np.argmax(agreement))
+    if k in (0, len(shifts) - 1):
+        return None
+    before, best, after = agreement[k - 1 : k + 2]
+    curvature = before - 2.0 * best + after
+    offset = 0.5 * (before - after) / curvature if curvature < 0.0 else 0.0
+    return ReferenceLag(float(shifts[k] + offset * dt), float(best), float(agreement[count]))
+
+
+def lag_findings(lag: ReferenceLag | None) -> list[Finding]:
+    """A reference whose clock sits :data:`REFERENCE_LAG_S` or more from the readings'."""
+    if lag is None or abs(lag.lag_s) < REFERENCE_LAG_S:
+        return []
+    way = "later" if lag.lag_s > 0 else "earlier"
+    what = (f"the reference's turns agree best with the gyro's read {abs(lag.lag_s) * 1e3:.1f} ms {way} than "
+            f"stamped (correlation {lag.agreement:.4f}; {lag.as_stamped:.4f} as stamped): its clock "
+            f"{'lags' if lag.lag_s > 0 else 'leads'} the readings'")  # fmt: skip
+    advice = (
+        f"sins compares them as stamped: add {-lag.lag_s:+.4f} s to the reference's times, or "
+        "find why its clock sits so (a motion capture's latency, a stamp taken on arrival)"
+    )
+    return [Finding("reference_lag", what, advice=advice)]
+
+
+def _gyro_turns(
+    truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]
+) -> tuple[NDArray[np.intp], Array | None]:
+    """The readings at which the intervals of :data:`TURN_INTERVAL_S` (two of the reference's steps at
+    least) end, and the gyro's integral over each, trapezoids; None for the integrals where there are
+    fewer than ten intervals or the gyro turns too little to tell (under 1 °/s RMS about its mean)."""
     length_s = max(TURN_INTERVAL_S, 2.0 * float(np.median(np.diff(truth.t))))
     step = max(1, round(length_s / float(np.median(np.diff(t[inside])))))
     ends = inside[::step]
     if len(ends) < 10:
-        return None
-    q = truth.interpolate(t[ends]).q_nb
-    turns = rotation.turn_between(q[:-1], q[1:])
+        return ends, None
     within = np.arange(ends[0], ends[-1] + 1)
     steps = np.diff(t[within])[:, None] * 0.5 * (w[within][1:] + w[within][:-1])  # trapezoids
     summed = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
     gyro = np.diff(summed[ends - ends[0]], axis=0)
-    a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
+    b = gyro - gyro.mean(axis=0)
     spread = float(np.sqrt(np.mean(np.sum(b * b, axis=1)) / np.mean(np.diff(t[ends]) ** 2)))
-    if spread < np.radians(1.0):
-        return None
+    return ends, (gyro if spread >= np.radians(1.0) else None)
+
+
+def _agreement(truth: NavSeries, t_ends: Array, gyro: Array) -> float:
+    """The correlation, about their means, of the reference's turns between the times ``t_ends`` with
+    the gyro's ``gyro`` over the same intervals."""
+    q = truth.interpolate(t_ends).q_nb
+    turns = rotation.turn_between(q[:-1], q[1:])
+    a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
     return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
 
 
@@ -168,10 +234,14 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 
 
 __all__ = [
+    "LAG_SEARCH_S",
+    "REFERENCE_LAG_S",
     "REFERENCE_TILT_DEG",
     "REFERENCE_TURNS_AGREE",
     "TURN_INTERVAL_S",
     "frame_findings",
+    "lag_findings",
     "reference_findings",
+    "reference_lag",
     "seen_axes",
 ]

@@ -7,7 +7,9 @@ rad/s), a size of gravity × the sample interval names increments read as rates,
 names a z axis pointing up (FLU, or axes named after ENU) where FRD's points down. In motion, a land
 vehicle's lateral specific force follows its yaw rate (``v · r``, the vehicle driving forward), which
 names the axis pointing right. Beside a reference attitude, the readings' axes are its body's
-whatever they are called, and the reference judges them instead (:mod:`sins.io.frame_check`). The time
+whatever they are called, and the reference judges them instead (:mod:`sins.io.frame_check`), and the
+shift of its clock at which its turns agree best with the gyro's says how it sits against the
+readings' (named from 5 ms, :data:`~sins.io.frame_check.REFERENCE_LAG_S`). The time
 stamps give the rate, its jitter and the gaps; runs of equal readings at a channel's extreme give
 clipping. Each finding names the reader option (and its value) that mends it, or says what to do where
 no option does; a clean recording gives none.
@@ -93,11 +95,14 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     frame = frame_check.seen_axes(windows, rest, f)
     # Beside a reference attitude, the readings' axes are its body's, whatever they are called: the
     # reference judges them, not FRD's convention.
-    findings += (
-        frame_check.frame_findings(rec.frame, frame)
-        if rec.truth is None
-        else frame_check.reference_findings(rec.truth, t, w, f)
-    )
+    lag = None
+    if rec.truth is None:
+        findings += frame_check.frame_findings(rec.frame, frame)
+    else:
+        attitude = frame_check.reference_findings(rec.truth, t, w, f)
+        # Only a reference of the readings' axes has turns to time against the gyro's.
+        lag = None if attitude else frame_check.reference_lag(rec.truth, t, w)
+        findings += attitude + frame_check.lag_findings(lag)
     findings += _range_findings(rec, w)
     clipping = _clipping(rec)
     findings += [_clip_finding(c) for c in clipping]
@@ -106,7 +111,7 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     return Inspection(
         source=rec.source, form=rec.form, rows=len(rec.imu), span_s=float(stamps[-1] - stamps[0]),
         rate_hz=1.0 / med, jitter=jitter, stated_rate_hz=stated, gaps=gaps, rest=rest, clipping=clipping,
-        axes=frame, findings=tuple(findings),
+        axes=frame, findings=tuple(findings), reference_lag=lag,
     )  # fmt: skip
 
 
