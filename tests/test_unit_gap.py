@@ -26,7 +26,7 @@ from sins.core.series import CalibrationData, ImuIncrements
 from sins.gap.floor import noise_floor, noise_level
 from sins.imu import CHANNELS
 from sins.io import datasets
-from sins.unit_gap import statistic
+from sins.unit_gap import clock, statistic
 from sins.unit_gap.inputs import read_gap_input
 from sins.unit_gap.intervals import interval_residuals
 from sins.unit_gap.run import diagnose_one
@@ -314,7 +314,8 @@ def test_broad_trials_say_what_the_reference_limits_and_agree_or_are_labelled(
 ) -> None:
     """BROAD's two trials of unit B: intervals (the motion capture's differentiated noise is 7-11 times
     the gyro's at rest per sample), the reference's limits in the report, the time offsets found on both
-    (its clock: 4 ms), anything else labelled, and each one's shrink on the other in degrees."""
+    and the capture system's clock that explains the gyro's (4.2-4.3 ms ahead, measured from the
+    attitude's turns alone), anything else labelled, and each one's shrink on the other in degrees."""
     _needs("broad_05", "broad_18")
     out = tmp_path / "broad.json"
     assert main(["gap", "--dataset", "broad_05", "--dataset", "broad_18", "--json", str(out)]) == 0
@@ -324,6 +325,13 @@ def test_broad_trials_say_what_the_reference_limits_and_agree_or_are_labelled(
             r["statistic"]["kind"] == "intervals"
             and "resolves a mean rate error" in r["statistic"]["reference_limits"]
         )
+    # The capture system's clock, from the attitude's turns (not from the candidate effects): the same
+    # on both trials, and the gyro's time offset the diagnosis found is that clock's (within 1 ms).
+    clocks = [r["statistic"]["reference_clock"] for r in doc["recordings"]]
+    assert abs(clocks[0]["lag_s"] - clocks[1]["lag_s"]) < 5e-4 and all(
+        c["explained_by_clock"] for c in clocks
+    )
+    assert "gyro's time offset" in clocks[0]["says"] and "that clock's" in clocks[0]["says"]
     across = doc["across"]
     assert "gyro.time_offset" in across["on_all"]
     for v in across["effects"].values():
@@ -333,6 +341,31 @@ def test_broad_trials_say_what_the_reference_limits_and_agree_or_are_labelled(
     for judged in doc["shrink"]:
         assert np.isfinite(judged["with_effects"]["open_loop_attitude_deg"]["total"])
         assert judged["bias_from"] == "its opening rest"
+
+
+def test_a_gyro_delay_added_to_a_real_unit_reads_as_the_references_clock(tmp_path: Path) -> None:
+    """EuRoC's V1_02 with its gyro's readings 5 ms late (``tools/gap_real_cases.py``'s case): the
+    reference's clock, from the attitude's turns against the gyro's, then sits 5 ms further ahead than
+    on the recording as it is (within 0.3 ms): a sensor's delay and a reference ahead look alike, which
+    the report says beside a gyro time offset (:mod:`sins.unit_gap.clock`)."""
+    _needs("euroc/V1_02_medium")
+    sys.path.insert(0, str(ROOT / "tools"))
+    import gap_real_cases as cases
+
+    arrays = cases.base_arrays("euroc/V1_02_medium")
+    lags = {}
+    for case in ("clean", "gyro.time_offset"):
+        nu.write(tmp_path / f"{case}.npz", cases.added(case, arrays))
+        found = clock.reference_clock(io.read(tmp_path / f"{case}.npz").beside_reference(), {})
+        assert found is not None and "gyro_time_offset_s" not in found, case
+        lags[case] = found["lag_s"]
+    # The delay moves the clock by itself (measured -5.02 ms), from where the recording had it (0.43 ms).
+    assert lags["gyro.time_offset"] - lags["clean"] == pytest.approx(-0.005, abs=3e-4), lags
+    said = clock.reference_clock(
+        io.read(tmp_path / "gyro.time_offset.npz").beside_reference(),
+        {"gyro.time_offset": {"gyro.x": [0.005]}},
+    )
+    assert said is not None and said["explained_by_clock"] and "that clock's" in said["says"]
 
 
 def test_the_psins_drive_lands_near_its_floor() -> None:

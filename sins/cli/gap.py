@@ -123,6 +123,19 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
     return inputs, model
 
 
+def _print_statistic(statistic: dict[str, Any], intervals: bool) -> None:
+    """Which statistic the verdicts were reached on and why, and what the reference limits."""
+    if not statistic:
+        return
+    what = "integrated rotation and velocity change over intervals" if intervals else "per-sample residuals"
+    print(f"statistic: {what}; {statistic.get('why', '')}")
+    key = "reference_limits" if intervals else "interval_quality"
+    if key in statistic:
+        print(f"  reference: {statistic[key]}")
+    if "reference_clock" in statistic:
+        print(f"  reference: {statistic['reference_clock']['says']}")
+
+
 def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -> None:
     """The report as ``sins gap`` prints it: the rows, the statistic and why, the residuals against the
     floor, where the gap is, the candidates, the diagnosis and what is left unexplained."""
@@ -135,14 +148,7 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
     intervals = report.statistic.get("kind") == "intervals"
     held = f"{held_rows} intervals withheld" if intervals else f"{held_rows} withheld"
     print(f"{name}: {n_rows} rows{skipped}, {held}: {report.withholding}")
-    if report.statistic:
-        what = (
-            "integrated rotation and velocity change over intervals" if intervals else "per-sample residuals"
-        )
-        print(f"statistic: {what}; {report.statistic.get('why', '')}")
-        key = "reference_limits" if intervals else "interval_quality"
-        if key in report.statistic:
-            print(f"  reference: {report.statistic[key]}")
+    _print_statistic(report.statistic, intervals)
     print(f"model: {', '.join(report.model)}")
     head = ["channel", "unit", "before", "after", "noise floor", "before/floor", "after/floor"]
     rows = []

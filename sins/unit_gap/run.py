@@ -14,7 +14,7 @@ from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE
-from sins.unit_gap import across, shrink, statistic
+from sins.unit_gap import across, clock, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import baseline_fit, diagnose_intervals
@@ -62,7 +62,7 @@ def diagnose_one(
         if data is None:
             data = inp.samples()
         report = diagnose(data[0], holdout, model, progress)
-        report = _with_statistic(report, chosen.to_dict())
+        report = _with_clock(_with_statistic(report, chosen.to_dict()), inp)
         return Diagnosed(inp.name, report, len(data[0]), data)
     if tuple(model) != tuple(BASELINE):
         raise SinsInputError(f"{inp.name}: --model goes with the per-sample statistic (--statistic samples)")
@@ -75,7 +75,8 @@ def diagnose_one(
         d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
-    return Diagnosed(inp.name, interval_report(d, holdout, chosen.to_dict()), len(inp.referenced.imu.t) - 1)
+    report = _with_clock(interval_report(d, holdout, chosen.to_dict()), inp)
+    return Diagnosed(inp.name, report, len(inp.referenced.imu.t) - 1)
 
 
 def _baseline(inp: GapInput, interval_s: float) -> tuple[IntervalFit | None, str]:
@@ -103,6 +104,17 @@ def _samples(inp: GapInput, asked: str) -> tuple[CalibrationData, NavSeries | No
 
 def _with_statistic(report: GapReport, chosen: dict[str, Any]) -> GapReport:
     return dataclasses.replace(report, statistic=chosen)
+
+
+def _with_clock(report: GapReport, inp: GapInput) -> GapReport:
+    """The report with where the reference's clock sits (:mod:`sins.unit_gap.clock`), beside a
+    reference trajectory whose turns show it."""
+    if inp.referenced is None:
+        return report
+    found = clock.reference_clock(inp.referenced, report.sizes)
+    if found is None:
+        return report
+    return _with_statistic(report, {**report.statistic, "reference_clock": found})
 
 
 def shrinks(
