@@ -10,7 +10,8 @@ returns a :class:`FitOutcome`: the fitted strategy, the lines a command prints a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -19,10 +20,12 @@ import numpy as np
 from sins.compensation import coefficients
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
+from sins.io import frame_check
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
     from sins.core.series import CalibrationData, ReferencedRecording
+    from sins.io.findings import ReferenceLag
 
 #: A fit's progress: rows (or epochs) done of a total.
 Progress = Callable[[int, int], None]
@@ -163,14 +166,16 @@ def fit_referenced(
     if validation:
         span = rec.imu.t[-1] - rec.imu.t[0]
         part = referenced.between(rec, rec.imu.t[0], rec.imu.t[-1] - validation * span)
-    fitted = referenced.fit(
-        name,
-        part,
-        interval_s=interval_s,
-        params={} if guard else {"guard": False},
-        progress=progress,
-        grade=grade,
-    )
+    clock = frame_check.recording_lag(rec)
+    with _clock_named([(where, clock)]):
+        fitted = referenced.fit(
+            name,
+            part,
+            interval_s=interval_s,
+            params={} if guard else {"guard": False},
+            progress=progress,
+            grade=grade,
+        )
     fit = fitted.intervals
     back = f", the last {validation:g} of its span held back" if validation else ""
     lines = [
@@ -178,6 +183,8 @@ def fit_referenced(
         f"{back}): {fit.intervals} intervals of {fit.interval_s:g} s",
         f"reference: {fit.quality.summary()}",
     ]
+    if clock is not None:
+        lines.append(f"reference: {clock_words(clock.lag_s)}")
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
     if name == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
         table = [c for c in table if c.term == "bias"]
@@ -198,6 +205,7 @@ def fit_referenced(
         "g_sensitivity": fit.g_sensitivity,
         "grade": grade,
         "held": held,
+        "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
     }
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
@@ -256,19 +264,24 @@ def fit_several(
     that does best on held-back recordings)."""
     from sins.compensation import referenced
 
-    fitted = referenced.fit_several(
-        name, list(recs), interval_s=interval_s, params={} if guard else {"guard": False}, progress=progress,
-        rule_mode=rule_mode, stage=stage, grade=grade,
-    )  # fmt: skip
+    clocks = [frame_check.recording_lag(r) for r in recs]
+    with _clock_named(list(zip(names, clocks, strict=True))):
+        fitted = referenced.fit_several(
+            name, list(recs), interval_s=interval_s, params={} if guard else {"guard": False},
+            progress=progress, rule_mode=rule_mode, stage=stage, grade=grade,
+        )  # fmt: skip
     lines: list[str] = []
-    document = _several_document(fitted, list(names), lines)
+    document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)
 
 
-def _several_document(fitted: Any, names: list[str], lines: list[str]) -> dict[str, Any]:
-    """What a fit on several recordings found, said in ``lines`` and returned as its document."""
+def _several_document(
+    fitted: Any, names: list[str], clocks: list[float | None], lines: list[str]
+) -> dict[str, Any]:
+    """What a fit on several recordings found, said in ``lines`` and returned as its document;
+    ``clocks`` each recording's reference clock against its readings, s (None where not seen)."""
     fit = fitted.several
     lines.append(
         f"fitted {fitted.strategy.label} on {len(names)} recordings of one unit: "
@@ -278,25 +291,33 @@ def _several_document(fitted: Any, names: list[str], lines: list[str]) -> dict[s
     lines += coefficient_lines(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
     per_hour = np.degrees(1.0) * 3600.0
     rows, biases = [], []
-    for rec_name, b, se, a, n in zip(
-        names, fit.gyro_bias, fit.gyro_bias_se, fit.accel_bias, fit.intervals, strict=True
+    for rec_name, b, se, a, n, lag in zip(
+        names, fit.gyro_bias, fit.gyro_bias_se, fit.accel_bias, fit.intervals, clocks, strict=True
     ):
         rows.append(
             [
                 rec_name,
                 str(n),
                 *(f"{x * per_hour:.1f} ± {e * per_hour:.1f}" for x, e in zip(b, se, strict=True)),
+                "-" if lag is None else f"{1e3 * lag:+.1f}",
             ]
         )
         biases.append({
             "recording": rec_name, "intervals": n, "gyro_bias_deg_h": (b * per_hour).tolist(),
             "gyro_bias_se_deg_h": (se * per_hour).tolist(), "accel_bias_m_s2": a.tolist(),
+            "reference_clock_ms": None if lag is None else 1e3 * lag,
         })  # fmt: skip
     spread = fit.bias_spread() * per_hour
     lines += [
-        "each recording's own gyro bias, °/h (± 1σ)",
-        fixed_width(["recording", "intervals", "x", "y", "z"], rows),
+        "each recording's own gyro bias, °/h (± 1σ), and its reference's clock against its readings "
+        "(ms; + behind)",
+        fixed_width(["recording", "intervals", "x", "y", "z", "clock ms"], rows),
         f"spread of the bias between recordings: {spread[0]:.1f}, {spread[1]:.1f}, {spread[2]:.1f} °/h",
+    ]
+    lines += [
+        f"{rec_name}: " + clock_words(lag, "the reference's clock")
+        for rec_name, lag in zip(names, clocks, strict=True)
+        if lag is not None and abs(lag) >= frame_check.REFERENCE_LAG_S
     ]
     document: dict[str, Any] = {
         "strategy": fitted.strategy.label, "recordings": names, "intervals": list(fit.intervals),
@@ -313,6 +334,39 @@ def _several_document(fitted: Any, names: list[str], lines: list[str]) -> dict[s
     return document
 
 
+@contextmanager
+def _clock_named(clocks: list[tuple[str, ReferenceLag | None]]) -> Iterator[None]:
+    """A fit's refusal (the data do not determine a term) with each recording named whose reference's
+    clock sits :data:`~sins.io.frame_check.REFERENCE_LAG_S` or more off its readings': such a reference
+    makes every interval's residual large, which spoils the standard errors of every recording fitted
+    beside it, and the refusal alone would send the user looking at the excitation."""
+    try:
+        yield
+    except SinsInputError as exc:
+        off = [
+            f"{name}'s reference clock sits {1e3 * abs(c.lag_s):.1f} ms "
+            f"{'behind' if c.lag_s > 0 else 'ahead of'} its readings' (add {-c.lag_s:+.4f} s to its times)"
+            for name, c in clocks
+            if c is not None and abs(c.lag_s) >= frame_check.REFERENCE_LAG_S
+        ]
+        if not off:
+            raise
+        raise SinsInputError(f"{exc}; but first: {'; '.join(off)}, which alone spoils a fit") from None
+
+
+def clock_words(lag_s: float, subject: str = "its clock") -> str:
+    """Where a reference's clock sits against the readings' (:func:`sins.io.frame_check.reference_lag`),
+    in words; from :data:`~sins.io.frame_check.REFERENCE_LAG_S` on, what that does to a fit."""
+    way = "behind" if lag_s > 0 else "ahead of"
+    words = f"{subject} sits {1e3 * abs(lag_s):.1f} ms {way} the readings' (its turns against the gyro's)"
+    if abs(lag_s) >= frame_check.REFERENCE_LAG_S:
+        words += (
+            "; the intervals are compared as stamped, and every one is off by the rate's change over it "
+            f"times that: add {-lag_s:+.4f} s to the reference's times to align them"
+        )
+    return words
+
+
 def _settings(config: dict[str, Any]) -> str:
     """A learner's chosen configuration as ``key value, key value``."""
     return ", ".join(f"{k} {v}" for k, v in config.items())
@@ -321,6 +375,7 @@ def _settings(config: dict[str, Any]) -> str:
 __all__ = [
     "FitOutcome",
     "Progress",
+    "clock_words",
     "coefficient_lines",
     "fit_referenced",
     "fit_rig",

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import rotation
-from sins.core.series import NavSeries
+from sins.core.series import NavSeries, ReferencedRecording
 from sins.io import axes
 from sins.io.findings import Finding, ReferenceLag, Rest, Windows
 
@@ -184,6 +184,14 @@ def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
     return ReferenceLag(float(shifts[k] + offset * dt), float(best), float(agreement[count]))
 
 
+def recording_lag(rec: ReferencedRecording) -> ReferenceLag | None:
+    """:func:`reference_lag` of readings beside a reference trajectory at its epochs (what fits and
+    diagnoses compare): the increments' mean rates at their steps' middles."""
+    dt = np.diff(rec.imu.t)
+    t_mid = 0.5 * (rec.imu.t[:-1] + rec.imu.t[1:])
+    return reference_lag(rec.reference, t_mid, rec.imu.dtheta_b / dt[:, None])
+
+
 def lag_findings(lag: ReferenceLag | None) -> list[Finding]:
     """A reference whose clock sits :data:`REFERENCE_LAG_S` or more from the readings'."""
     if lag is None or abs(lag.lag_s) < REFERENCE_LAG_S:
@@ -241,6 +249,7 @@ __all__ = [
     "TURN_INTERVAL_S",
     "frame_findings",
     "lag_findings",
+    "recording_lag",
     "reference_findings",
     "reference_lag",
     "seen_axes",

@@ -32,9 +32,7 @@ def reference_clock(
     lags; the correlations of the turns there and as stamped) and, where the diagnosis sized a
     ``gyro.time_offset`` (``sizes``, the report's, SI), whether that offset is within :data:`AGREE_S` of the
     clock's lead; ``says``: one line for the report. None where the gyro turns too little to tell."""
-    dt = np.diff(rec.imu.t)
-    t_mid = 0.5 * (rec.imu.t[:-1] + rec.imu.t[1:])
-    lag = frame_check.reference_lag(rec.reference, t_mid, rec.imu.dtheta_b / dt[:, None])
+    lag = frame_check.recording_lag(rec)
     if lag is None:
         return None
     way = "behind" if lag.lag_s > 0 else "ahead of"
