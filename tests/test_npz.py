@@ -134,6 +134,25 @@ def test_inspect_says_how_the_references_clock_sits_and_names_it_from_5_ms(
         assert found.reference_lag.agreement > found.reference_lag.as_stamped
 
 
+def test_the_clock_search_stays_within_the_reference() -> None:
+    """Readings at the middles of a 50 Hz reference's steps (as fits and diagnoses compare them): their
+    interval's median is a hair under 20 ms, 0.25 s of it 12.5000000000003 steps, and rounding to 13
+    steps shifted the first interval to -0.01 s, before the reference, where ``sins fit`` ended in a
+    ValueError (found by tests/test_fuzz_safety.py). The swing's attitude is exact: no lag."""
+    from sins.core.series import NavSeries
+    from sins.io import frame_check
+
+    t_ref = np.arange(1101) * 0.02
+    t = 0.5 * (t_ref[:-1] + t_ref[1:])
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    q = Rotation.from_rotvec(np.outer(0.8 * np.sin(2 * np.pi * t_ref / 3.0), axis)).as_quat()
+    zeros = np.zeros(len(t_ref))
+    truth = NavSeries(t=t_ref, lat=zeros, lon=zeros, h=zeros, v_n=np.zeros((len(t_ref), 3)), q_nb=q)
+    rate = np.outer(0.8 * 2 * np.pi / 3.0 * np.cos(2 * np.pi * t / 3.0), axis)
+    lag = frame_check.reference_lag(truth, t, rate)
+    assert lag is not None and abs(lag.lag_s) < 1e-4, lag
+
+
 @needs_euroc
 def test_euroc_references_sit_on_the_readings_clock() -> None:
     """EuRoC's references are the dataset's ground-truth estimate (laser tracker or Vicon fused with

@@ -165,15 +165,21 @@ def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
     within :data:`LAG_SEARCH_S` either way and refined between them by a parabola through the best three.
     None where the gyro turns too little to tell, the reference spans too little, or the best shift is
     the last one tried (the clock sits further off than the search reaches)."""
-    inside = np.flatnonzero((t >= truth.t[0] + LAG_SEARCH_S) & (t <= truth.t[-1] - LAG_SEARCH_S))
+    if len(t) < 2:
+        return None
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0.0:
+        return None
+    # The shifts tried stay within the search (floor, not round: 0.25 s / 0.019999 s is 12.5, and 13
+    # steps would reach past the reference's ends), and the intervals shifted within the reference.
+    count = max(1, int(LAG_SEARCH_S // dt))
+    shifts = np.arange(-count, count + 1) * dt
+    inside = np.flatnonzero((t >= truth.t[0] + shifts[-1]) & (t <= truth.t[-1] - shifts[-1]))
     if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
         return None
     ends, gyro = _gyro_turns(truth, t, w, inside)
     if gyro is None:
         return None
-    dt = float(np.median(np.diff(t[inside])))
-    count = max(1, round(LAG_SEARCH_S / dt))
-    shifts = np.arange(-count, count + 1) * dt
     agreement = np.array([_agreement(truth, t[ends] + shift, gyro) for shift in shifts])
     k = int(np.argmax(agreement))
     if k in (0, len(shifts) - 1):

@@ -8,7 +8,7 @@ and the reference clock's lead, and this module says how much of it the referenc
 (:func:`sins.io.frame_check.reference_lag`, from the turns of the attitude, not from the candidate
 effects): where the two agree, the "delay" may be the reference's. Only the difference between the
 accelerometer's delay and the gyro's is the sensor's alone. BROAD's two trials: the gyro's time offset
-4.1-4.2 ms, the capture system's clock 4.2-4.3 ms ahead.
+3.8 and 4.2 ms (the axes' mean), the capture system's clock 4.3 and 4.2 ms ahead.
 """
 
 from __future__ import annotations
