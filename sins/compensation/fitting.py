@@ -351,7 +351,7 @@ def _clock_named(clocks: list[tuple[str, ReferenceLag | None]]) -> Iterator[None
         ]
         if not off:
             raise
-        raise SinsInputError(f"{exc}; but first: {'; '.join(off)}, which alone spoils a fit") from None
+        raise SinsInputError(f"{exc}; but first: {'; '.join(off)}, which alone can spoil a fit") from None
 
 
 def clock_words(lag_s: float, subject: str = "its clock") -> str:

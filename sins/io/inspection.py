@@ -7,7 +7,7 @@ rad/s), a size of gravity × the sample interval names increments read as rates,
 names a z axis pointing up (FLU, or axes named after ENU) where FRD's points down. In motion, a land
 vehicle's lateral specific force follows its yaw rate (``v · r``, the vehicle driving forward), which
 names the axis pointing right. Beside a reference attitude, the readings' axes are its body's
-whatever they are called, and the reference judges them instead (:mod:`sins.io.frame_check`), and the
+whatever they are called, and the reference judges them instead (:mod:`sins.io.frame_check`); the
 shift of its clock at which its turns agree best with the gyro's says how it sits against the
 readings' (named from 5 ms, :data:`~sins.io.frame_check.REFERENCE_LAG_S`). The time
 stamps give the rate, its jitter and the gaps; runs of equal readings at a channel's extreme give
