@@ -171,7 +171,8 @@ def test_fit_says_each_references_clock_and_names_one_that_lags(
     velocity interpolated, at ``t - 0.02``). Fitted with the first, its intervals' residuals spoil the
     standard errors of both: the refusal ("not determined") names the late reference's clock, 20 ms
     behind (within 0.5 ms), and the shift that aligns it, not the first's; nothing is written. Fitted
-    without it, the table gives each reference's clock, within 0.5 ms of its readings'."""
+    without it, the table gives each reference's clock, within 0.5 ms of its readings'; judged on it, the
+    evaluation says its figures are judged against a clock 20 ms behind."""
     from scipy.spatial.transform import Slerp
 
     recs, _, _ = recordings(9)
@@ -208,6 +209,12 @@ def test_fit_says_each_references_clock_and_names_one_that_lags(
     assert main([*args, "--dataset", "unit/r2", "--bias-rule", "pooled"]) == 0
     clocks = [r["reference_clock_ms"] for r in json.loads(fit_json.read_text())["recording_biases"]]
     assert all(abs(c) < 0.5 for c in clocks), clocks
+    # Judged on the late one, the evaluation says its figures are judged against that clock.
+    capsys.readouterr()
+    judged = tmp_path / "e.json"
+    assert main(["evaluate", str(model), "--dataset", "unit/r1", "--json", str(judged)]) == 0
+    assert json.loads(judged.read_text())["reference_clock_ms"] == pytest.approx(20.0, abs=0.5)
+    assert "judged against it as stamped" in capsys.readouterr().out
 
 
 def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
+from sins.io import frame_check
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -131,11 +132,20 @@ def evaluate_referenced(
         lines.append(
             "the reference's frame has no known north: only the vertical part of Earth's rate is put in"
         )
+    clock = frame_check.recording_lag(rec)
+    if clock is not None and abs(clock.lag_s) >= frame_check.REFERENCE_LAG_S:
+        way = "behind" if clock.lag_s > 0 else "ahead of"
+        lines.append(
+            f"the reference's clock sits {1e3 * abs(clock.lag_s):.1f} ms {way} the readings' (its turns "
+            "against the gyro's): every figure is judged against it as stamped, the rate times that "
+            f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
+        )
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
     document: dict[str, Any] = {
         "open_loop_attitude": attitude[strategy.label],
         "open_loop_attitude_raw": attitude[RAW],
+        "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
