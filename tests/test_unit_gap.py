@@ -366,6 +366,12 @@ def test_a_gyro_delay_added_to_a_real_unit_reads_as_the_references_clock(tmp_pat
         {"gyro.time_offset": {"gyro.x": [0.005]}},
     )
     assert said is not None and said["explained_by_clock"] and "that clock's" in said["says"]
+    # A gyro offset that the clock does not account for is the sensor's own, by the difference.
+    unexplained = clock.reference_clock(
+        io.read(tmp_path / "gyro.time_offset.npz").beside_reference(), {"gyro.time_offset": {"gyro.x": [0.0]}}
+    )
+    assert unexplained is not None and not unexplained["explained_by_clock"]
+    assert "ms beyond that clock's, the sensor's own delay" in unexplained["says"]
 
 
 def test_the_psins_drive_lands_near_its_floor() -> None:

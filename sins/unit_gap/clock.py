@@ -53,7 +53,10 @@ def reference_clock(
                 "tell (a delay of the sensor and a reference ahead look alike)"
             )
         else:
-            says += f": the gyro's time offset ({1e3 * delay:.2f} ms) is more than that clock's"
+            says += (
+                f": the gyro's time offset ({1e3 * delay:.2f} ms) is {1e3 * (delay + lag.lag_s):+.2f} ms "
+                "beyond that clock's, the sensor's own delay as far as these data tell"
+            )
     out["says"] = says
     return out
 
