@@ -52,11 +52,12 @@ def format_inspection(rec: Recording, result: Inspection) -> str:
     if result.axes is not None:
         lines.append(f"axes as the data show them (after the reading): {result.axes} (_: not shown)")
     if result.reference_lag is not None:
+        from sins.io import frame_check  # read by now: the recording was
+
         lag = result.reference_lag
-        way = "behind" if lag.lag_s > 0 else "ahead of"
         lines.append(
-            f"the reference's clock: {1e3 * abs(lag.lag_s):.1f} ms {way} the readings' (its turns agree best "
-            f"with the gyro's there, correlation {lag.agreement:.4f}; {lag.as_stamped:.4f} as stamped)"
+            f"the reference's clock: {frame_check.clock_sits(lag.lag_s)} (its turns agree best with the "
+            f"gyro's there, correlation {lag.agreement:.4f}; {lag.as_stamped:.4f} as stamped)"
         )
     if not result.findings:
         lines.append("no likely mistakes found")

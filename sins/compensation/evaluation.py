@@ -134,9 +134,8 @@ def evaluate_referenced(
         )
     clock = frame_check.recording_lag(rec)
     if clock is not None and abs(clock.lag_s) >= frame_check.REFERENCE_LAG_S:
-        way = "behind" if clock.lag_s > 0 else "ahead of"
         lines.append(
-            f"the reference's clock sits {1e3 * abs(clock.lag_s):.1f} ms {way} the readings' (its turns "
+            f"the reference's clock sits {frame_check.clock_sits(clock.lag_s)} (its turns "
             "against the gyro's): every figure is judged against it as stamped, the rate times that "
             f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
         )

@@ -343,9 +343,10 @@ def _clock_named(clocks: list[tuple[str, ReferenceLag | None]]) -> Iterator[None
     try:
         yield
     except SinsInputError as exc:
+        its = "its readings'"
         off = [
-            f"{name}'s reference clock sits {1e3 * abs(c.lag_s):.1f} ms "
-            f"{'behind' if c.lag_s > 0 else 'ahead of'} its readings' (add {-c.lag_s:+.4f} s to its times)"
+            f"{name}'s reference clock sits {frame_check.clock_sits(c.lag_s, its)} (add {-c.lag_s:+.4f} s "
+            "to its times)"
             for name, c in clocks
             if c is not None and abs(c.lag_s) >= frame_check.REFERENCE_LAG_S
         ]
@@ -357,8 +358,7 @@ def _clock_named(clocks: list[tuple[str, ReferenceLag | None]]) -> Iterator[None
 def clock_words(lag_s: float, subject: str = "its clock") -> str:
     """Where a reference's clock sits against the readings' (:func:`sins.io.frame_check.reference_lag`),
     in words; from :data:`~sins.io.frame_check.REFERENCE_LAG_S` on, what that does to a fit."""
-    way = "behind" if lag_s > 0 else "ahead of"
-    words = f"{subject} sits {1e3 * abs(lag_s):.1f} ms {way} the readings' (its turns against the gyro's)"
+    words = f"{subject} sits {frame_check.clock_sits(lag_s)} (its turns against the gyro's)"
     if abs(lag_s) >= frame_check.REFERENCE_LAG_S:
         words += (
             "; the intervals are compared as stamped, and every one is off by the rate's change over it "

@@ -198,6 +198,12 @@ def recording_lag(rec: ReferencedRecording) -> ReferenceLag | None:
     return reference_lag(rec.reference, t_mid, rec.imu.dtheta_b / dt[:, None])
 
 
+def clock_sits(lag_s: float, readings: str = "the readings'") -> str:
+    """Where a reference's clock sits (``lag_s``, :class:`ReferenceLag`'s sign), in the words every report
+    uses: "4.3 ms ahead of the readings'"."""
+    return f"{1e3 * abs(lag_s):.1f} ms {'behind' if lag_s > 0 else 'ahead of'} {readings}"
+
+
 def lag_findings(lag: ReferenceLag | None) -> list[Finding]:
     """A reference whose clock sits :data:`REFERENCE_LAG_S` or more from the readings'."""
     if lag is None or abs(lag.lag_s) < REFERENCE_LAG_S:
@@ -253,6 +259,7 @@ __all__ = [
     "REFERENCE_TILT_DEG",
     "REFERENCE_TURNS_AGREE",
     "TURN_INTERVAL_S",
+    "clock_sits",
     "frame_findings",
     "lag_findings",
     "recording_lag",

@@ -35,9 +35,8 @@ def reference_clock(
     lag = frame_check.recording_lag(rec)
     if lag is None:
         return None
-    way = "behind" if lag.lag_s > 0 else "ahead of"
     says = (
-        f"its clock sits {1e3 * abs(lag.lag_s):.1f} ms {way} the readings' (its turns against the gyro's, "
+        f"its clock sits {frame_check.clock_sits(lag.lag_s)} (its turns against the gyro's, "
         f"correlation {lag.agreement:.4f}; {lag.as_stamped:.4f} as stamped)"
     )
     out: dict[str, Any] = {"lag_s": lag.lag_s, "agreement": lag.agreement, "as_stamped": lag.as_stamped}
