@@ -153,6 +153,51 @@ def test_the_clock_search_stays_within_the_reference() -> None:
     assert lag is not None and abs(lag.lag_s) < 1e-4, lag
 
 
+@pytest.mark.parametrize(
+    ("key", "factor", "alone", "said"),
+    [("gyro_rad_s", np.degrees(1.0), "gyro_range", "57.3 × the reference's: readings in degrees"),
+     ("accel_m_s2", 1 / 9.81, None, "× gravity: readings in g read as m/s²"),
+     ("gyro_rad_s", 2.0, None, "2 × the reference's; check the gyro's unit"),
+     ("accel_m_s2", 1.6, None, "× gravity; check the accelerometer's unit"),
+     ("gyro_rad_s", 1.2, None, None), ("accel_m_s2", 0.8, None, None)],
+)  # fmt: skip
+def test_readings_of_another_size_than_the_reference_are_refused_by_what_judges_against_it(
+    tmp_path: Path, key: str, factor: float, alone: str | None, said: str | None
+) -> None:
+    """The swing's gyro or accelerometer readings multiplied by ``factor``: in degrees (57.3), in g
+    (1/9.81), or 2 and 1.6 times, which no unit's scale error reaches (50 % either way is the bound).
+    What judges against the reference refuses them in one line: the gyro's turns against the
+    reference's, the specific force's mean in the world against gravity's (before, a gyro in degrees
+    was fitted until "gyro bias x ... moved to 8.79e+04 °/h: the fit is unstable"). ``sins inspect``
+    names the mistake once: where the readings alone show it (a gyro beyond any range), theirs, which
+    says what to pass; the swing has no rest at which |f| would show the g. Scale errors of 20 % pass."""
+    path = tmp_path / "swing.npz"
+    _swinging(path)
+    doc = dict(np.load(path))
+    np.savez(path, **{**doc, key: doc[key] * factor})
+    codes = [f.code for f in inspection.inspect(io.read(path)).findings]
+    if said is None:
+        assert codes == []
+        io.read(path).beside_reference()
+        return
+    assert codes == [alone or ("reference_gyro_scale" if key.startswith("gyro") else "reference_accel_scale")]
+    refusal(lambda: io.read(path).beside_reference(), str(path), *said.split("; "))
+
+
+def test_a_time_column_in_nanoseconds_is_named_and_places_no_clock(tmp_path: Path) -> None:
+    """The swing's time written in ns, read as s: its readings 5e6 s apart. The time's unit is the
+    mistake named; the clock search (shifts within 0.25 s) has no shift to try, so no clock is said
+    (it said the reference's clock lagged 5,000,000,000 ms: a shift of one reading's interval, ten
+    thousand times the search's reach)."""
+    path = tmp_path / "swing.npz"
+    _swinging(path)
+    doc = dict(np.load(path))
+    np.savez(path, **{**doc, "t_s": doc["t_s"] * 1e9})
+    found = inspection.inspect(io.read(path))
+    assert found.reference_lag is None
+    assert [f.code for f in found.findings] == ["time_unit"], found.findings
+
+
 @needs_euroc
 def test_euroc_references_sit_on_the_readings_clock() -> None:
     """EuRoC's references are the dataset's ground-truth estimate (laser tracker or Vicon fused with

@@ -34,6 +34,13 @@ LAG_SEARCH_S = 0.25
 #: is off by the rate's change over it times the lag (EuRoC's sequences: within 2.5 ms; BROAD's two
 #: trials: 4.2 and 4.3 ms early, said but not named).
 REFERENCE_LAG_S = 0.005
+#: Beside a reference attitude, the gyro's turns over :data:`TURN_INTERVAL_S` are the reference's in
+#: size within this factor either way, and the specific force's mean in the world (the reference's
+#: acceleration taken out) is gravity's size within it: a unit's scale errors are percent, a unit read
+#: as another a factor of 57.3 (° and rad) or 9.8 (g and m/s²).
+REFERENCE_SCALE = 1.5
+#: Normal gravity's size for that comparison, m/s² (any site's within 0.3 %).
+_G = 9.806
 
 
 def seen_axes(win: Windows | None, rest: Rest | None, f: Array) -> str | None:
@@ -142,11 +149,50 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
         return []
     tilt = float(np.degrees(np.arccos(np.clip(-reaction[2] / size, -1.0, 1.0))))
     if tilt <= REFERENCE_TILT_DEG:
-        return []
+        return _scale_findings(truth, t, w, inside, size)
     what = (f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
             "from up (its mean over the reference's span, the reference's acceleration taken out): the "
             "attitude is not of the readings' axes")  # fmt: skip
     return [Finding("reference_attitude", what, advice=advice)]
+
+
+def _scale_findings(
+    truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp], reaction: float
+) -> list[Finding]:
+    """Readings whose size is not the reference's: the gyro's turns over short intervals against the
+    reference's (RMS about their means, as :func:`_turns_agreement` correlates them), and ``reaction``,
+    the specific force's mean size in the world less the reference's acceleration, against gravity's.
+    Beyond :data:`REFERENCE_SCALE` either way the readings' unit (or the time's) is not what was read,
+    and every figure judged against the reference would measure it."""
+    found = []
+    ends, gyro = _gyro_turns(truth, t, w, inside)
+    if gyro is not None:
+        q = truth.interpolate(t[ends]).q_nb
+        ratio = _rms_about_mean(gyro) / max(_rms_about_mean(rotation.turn_between(q[:-1], q[1:])), 1e-300)
+        if not 1.0 / REFERENCE_SCALE <= ratio <= REFERENCE_SCALE:
+            what = (f"the gyro's turns over {TURN_INTERVAL_S:g} s intervals are {ratio:.4g} × the "
+                    f"reference's{_read_as(ratio, np.degrees(1.0), 'degrees', 'radians')}")  # fmt: skip
+            found.append(Finding("reference_gyro_scale", what, advice="check the gyro's unit and the time's"))
+    ratio = reaction / _G
+    if not 1.0 / REFERENCE_SCALE <= ratio <= REFERENCE_SCALE:
+        what = (f"the specific force's mean in the world, the reference's acceleration taken out, is "
+                f"{reaction:.4g} m/s², {ratio:.4g} × gravity{_read_as(ratio, _G, 'm/s²', 'g')}")  # fmt: skip
+        found.append(Finding("reference_accel_scale", what, advice="check the accelerometer's unit"))
+    return found
+
+
+def _rms_about_mean(x: Array) -> float:
+    return float(np.sqrt(np.mean(np.sum((x - x.mean(axis=0)) ** 2, axis=1))))
+
+
+def _read_as(ratio: float, factor: float, large: str, small: str) -> str:
+    """ ": {large} read as {small}" where ``ratio`` is within 10 % of ``factor`` (57.3 for ° and rad,
+    9.8 for m/s² and g), the other way round near its inverse; else nothing."""
+    if abs(np.log(ratio / factor)) < 0.1:
+        return f": readings in {large} read as {small}"
+    if abs(np.log(ratio * factor)) < 0.1:
+        return f": readings in {small} read as {large}"
+    return ""
 
 
 def _turns_agreement(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]) -> float | None:
@@ -163,8 +209,9 @@ def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
     """The shift of the reference's clock against the readings' at which its turns over short intervals
     agree best with the gyro's (:func:`_turns_agreement`'s correlation), tried every reading's interval
     within :data:`LAG_SEARCH_S` either way and refined between them by a parabola through the best three.
-    None where the gyro turns too little to tell, the reference spans too little, or the best shift is
-    the last one tried (the clock sits further off than the search reaches)."""
+    None where the gyro turns too little to tell, the reference spans too little, the readings are
+    further apart than the search reaches, or the best shift is the last one tried (the clock sits
+    further off than the search reaches)."""
     if len(t) < 2:
         return None
     dt = float(np.median(np.diff(t)))
@@ -172,7 +219,10 @@ def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
         return None
     # The shifts tried stay within the search (floor, not round: 0.25 s / 0.019999 s is 12.5, and 13
     # steps would reach past the reference's ends), and the intervals shifted within the reference.
-    count = max(1, int(LAG_SEARCH_S // dt))
+    # Readings further apart than the search reaches (a time column in ns read as s) place no clock.
+    count = int(LAG_SEARCH_S // dt)
+    if count < 1:
+        return None
     shifts = np.arange(-count, count + 1) * dt
     inside = np.flatnonzero((t >= truth.t[0] + shifts[-1]) & (t <= truth.t[-1] - shifts[-1]))
     if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
@@ -256,6 +306,7 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 __all__ = [
     "LAG_SEARCH_S",
     "REFERENCE_LAG_S",
+    "REFERENCE_SCALE",
     "REFERENCE_TILT_DEG",
     "REFERENCE_TURNS_AGREE",
     "TURN_INTERVAL_S",

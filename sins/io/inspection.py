@@ -103,7 +103,7 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
         # Only a reference of the readings' axes has turns to time against the gyro's.
         lag = None if attitude else frame_check.reference_lag(rec.truth, t, w)
         findings += attitude + frame_check.lag_findings(lag)
-    findings += _range_findings(rec, w)
+    findings = _one_per_unit(findings + _range_findings(rec, w))
     clipping = _clipping(rec)
     findings += [_clip_finding(c) for c in clipping]
     if rec.kind == "dataset":  # no reader option applies: the dataset's reader fixes units and axes
@@ -113,6 +113,20 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
         rate_hz=1.0 / med, jitter=jitter, stated_rate_hz=stated, gaps=gaps, rest=rest, clipping=clipping,
         axes=frame, findings=tuple(findings), reference_lag=lag,
     )  # fmt: skip
+
+
+#: The reference's scale checks and the checks of the readings alone that name the same unit's mistake.
+_SAME_UNIT = {
+    "reference_gyro_scale": {"gyro_range", "dtheta_range", "gyro_unit", "dtheta_unit", "time_unit"},
+    "reference_accel_scale": {"accel_unit", "dv_unit", "gravity_size", "gravity_unknown", "time_unit"},
+}
+
+
+def _one_per_unit(findings: list[Finding]) -> list[Finding]:
+    """``findings`` less a reference's scale check where the readings alone name that unit's mistake
+    (theirs says which option to pass)."""
+    codes = {f.code for f in findings}
+    return [f for f in findings if not (_SAME_UNIT.get(f.code, set()) & codes)]
 
 
 def _as_read(finding: Finding) -> Finding:
