@@ -234,6 +234,11 @@ def test_readings_alone(tmp_path: Path) -> None:
         ({"gyro_rad_s": np.full((400, 3), 1e9)}, ("gyro_rad_s: row 1", "beyond")),
         ({"q_wxyz": np.tile([2.0, 0, 0, 0], (400, 1))}, ("q_wxyz: row 1 has norm 2",)),
         ({"t_s": np.array(["a"] * 400)}, ("t_s holds",)),
+        # Absolute stamps in float32 (as EuRoC's readings are): 128 s apart at 1.4e9 s.
+        (
+            {"t_s": (1.4e9 + np.arange(400) / 200.0).astype(np.float32)},
+            ("t_s is float32, whose steps at 1.4e+09 s are 128 s", "write t_s as float64"),
+        ),
     ],
 )
 def test_bad_files_are_refused_naming_the_file_and_key(
@@ -244,6 +249,16 @@ def test_bad_files_are_refused_naming_the_file_and_key(
     message = refusal(lambda: io.read(path), str(path), *fragments)
     # What is wrong with a key is said once, as it is: not as an unreadable archive, not in numpy's repr.
     assert "not a readable" not in message and "np.float64" not in message and message.count(str(path)) == 1
+
+
+def test_keys_not_of_the_form_are_said_not_read(tmp_path: Path) -> None:
+    """A magnetometer beside the form's keys: read as the form says, the rest named in the notes (nothing
+    is dropped silently)."""
+    path = tmp_path / "rec.npz"
+    _write(path, mag_uT=np.zeros((400, 3)), temp_c=np.zeros(400))
+    assert f"{path}: not read (not of the form): mag_uT, temp_c" in io.read(path).notes
+    _write(path)
+    assert not any("not read" in note for note in io.read(path).notes)
 
 
 def test_not_an_archive(tmp_path: Path) -> None:

@@ -83,7 +83,7 @@ def _read_npz(
         not increase, a quaternion that is not of unit length, more than :data:`MAX_ROWS` rows.
     """
     path = Path(path)
-    arrays = _load(path)
+    arrays, unread = _load(path)
     t_abs = arrays["t_s"].reshape(-1)
     bad = np.flatnonzero(np.diff(t_abs) <= 0.0)
     if bad.size:
@@ -100,6 +100,8 @@ def _read_npz(
         t=t, omega_ib_b=axes.to_frd(arrays["gyro_rad_s"], m), f_ib_b=axes.to_frd(arrays["accel_m_s2"], m)
     )
     notes = [f"{path}: {len(t)} readings on the sensor's axes, taken as {frame.lower()}"]
+    if unread:
+        notes.append(f"{path}: not read (not of the form): {', '.join(unread)}")
     truth = None
     if "q_wxyz" in arrays:
         _check_range(path, "p_m", arrays["p_m"], MAX_POSITION_M, "m")
@@ -132,8 +134,9 @@ def _read_npz(
     return imu, truth, float(t_abs[0]), tuple(notes)
 
 
-def _load(path: Path) -> dict[str, Array]:
-    """The arrays of ``path`` as float64, checked for presence, shape, length and finiteness."""
+def _load(path: Path) -> tuple[dict[str, Array], list[str]]:
+    """The arrays of ``path`` as float64, checked for presence, shape, length and finiteness; and the
+    keys that are not of the form (not read, said in the notes)."""
     try:
         with np.load(path, allow_pickle=False) as archive:
             names = set(archive.files)
@@ -151,6 +154,7 @@ def _load(path: Path) -> dict[str, Array]:
                     f"{', '.join(REFERENCE_KEYS)}"
                 )
             out = {k: _array(path, archive, k) for k in (*READING_KEYS, *have_ref)}
+            unread = sorted(names - set(WIDTH))
     except SinsInputError:
         raise  # already one line naming the file and the key (it is a ValueError too)
     except (OSError, ValueError, zipfile.BadZipFile) as exc:
@@ -161,7 +165,7 @@ def _load(path: Path) -> dict[str, Array]:
             raise SinsInputError(f"{path}: {key} has {len(value)} rows; t_s has {n}")
     if n < 2:
         raise SinsInputError(f"{path}: {n} reading(s); at least two are needed")
-    return out
+    return out, unread
 
 
 def _array(path: Path, archive: np.lib.npyio.NpzFile, key: str) -> Array:
@@ -181,6 +185,14 @@ def _array(path: Path, archive: np.lib.npyio.NpzFile, key: str) -> Array:
     if bad.any():
         r = int(np.argwhere(bad)[0][0])
         raise SinsInputError(f"{path}: {key}: row {r + 1} is not finite")
+    if key == "t_s" and raw.dtype.kind == "f" and raw.dtype.itemsize < 8 and np.any(np.diff(value) <= 0.0):
+        # Absolute stamps in float32 (EuRoC's readings are float32; its times must not be) collapse.
+        top = float(np.abs(value).max())
+        step = float(np.spacing(raw.dtype.type(top)))
+        raise SinsInputError(
+            f"{path}: t_s is {raw.dtype}, whose steps at {top:.4g} s are {step:.3g} s: its stamps do not "
+            "increase; write t_s as float64"
+        )
     return value
 
 
