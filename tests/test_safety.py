@@ -135,6 +135,113 @@ def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> 
     assert _digests([*inputs, tmp_path / "link.json"]) == before
 
 
+def _others(folder: Path) -> None:
+    """Files a user keeps beside the inputs, each written by its own library: an .npz recording (numpy),
+    a MATLAB recording (scipy), a Parquet table (pyarrow), a link to the .npz."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    import scipy.io
+
+    np.savez(folder / "rec.npz", t_s=np.arange(3.0), gyro_rad_s=np.zeros((3, 3)))
+    scipy.io.savemat(folder / "rec.mat", {"imu_gyr": np.zeros((3, 3))})
+    pq.write_table(pa.table({"t": [0.0, 1.0]}), folder / "table.parquet")
+    (folder / "link.npz").symlink_to(folder / "rec.npz")
+
+
+#: Each case: the files copied in, the command (as in :data:`ALIASES`), the output it must refuse to
+#: write (a file none of its inputs, holding what that output never is), and what the refusal says it holds.
+KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
+    "evaluate's report onto a recording": (
+        ("m.json", "rig.csv"), "evaluate {m.json} {rig.csv} --json rec.npz", "--json", "a zip archive",
+    ),
+    "a report through a link to a recording": (
+        ("inc.csv",), "inspect {inc.csv} --json link.npz", "--json", "a zip archive",
+    ),
+    "a report onto a model": (("inc.csv", "m.json"), "inspect {inc.csv} --json {m.json}", "--json",
+                              "a compensation model"),
+    "a corrected table onto a MATLAB recording": (
+        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out rec.mat", "--out", "a MATLAB file",
+    ),
+    "a model onto a CSV recording": (
+        ("rig.csv", "static.csv"), "fit {rig.csv} --strategy none --out {static.csv}", "--out",
+        "text that is not JSON",
+    ),
+    "a CSV solution onto a Parquet table": (
+        ("inc.csv", "truth.csv"), "integrate {inc.csv} --truth {truth.csv} --out table.csv", "--out",
+        "a Parquet table",
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(KEPT))
+def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
+    files: Path, tmp_path: Path, case: str
+) -> None:
+    """A mistyped or tab-completed output name that is a user's recording, model or table, not an input
+    of the command: refused in one line before the work, the file unchanged (before, ``sins evaluate M R
+    --json rec.npz`` put its report where the recording was, and ended 0)."""
+    names, argv, flag, holds = KEPT[case]
+    inputs = _copy(files, tmp_path, *names)
+    _others(tmp_path)
+    if case == "a CSV solution onto a Parquet table":
+        shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
+    kept = [*inputs, *(tmp_path / n for n in ("rec.npz", "rec.mat", "table.parquet", "table.csv"))]
+    before = _digests(kept)
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        rc, _, err = run_cli([_named(a, tmp_path, names) for a in argv.split()])
+    finally:
+        os.chdir(cwd)
+    assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
+    assert_one_line(err, [Path(flag)])
+    assert f"holds {holds}" in err and "does not replace it" in err, err
+    assert _digests(kept) == before and (tmp_path / "link.npz").is_symlink()
+
+
+def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) -> None:
+    """What an output is may be replaced: a model by a model, a report by a report, any JSON by a model,
+    an empty file by anything."""
+    rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
+    report = tmp_path / "report.json"
+    report.write_text('{"figures": [1, 2]}\n')
+    (tmp_path / "empty.csv").touch()
+    for argv in (
+        ["fit", str(rig), "--strategy", "none", "--out", str(model)],
+        ["fit", str(rig), "--strategy", "none", "--out", str(report)],
+        ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
+        ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
+        ["inspect", str(rig), "--json", str(tmp_path / "empty.csv")],
+    ):
+        rc, _, err = run_cli(argv)
+        assert rc == 0, (argv, err)
+    assert json.loads(report.read_text())["strategy"] == "none"
+    assert (tmp_path / "empty.csv").stat().st_size > 0
+
+
+def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_path: Path) -> None:
+    """A model and a quality baseline (the shipped one) are inputs of other commands: only a model
+    replaces a model, only a baseline a baseline; both replace plain JSON."""
+    from sins.errors import SinsInputError
+    from sins.io.paths import replaceable
+
+    model, baseline = files / "m.json", Path(__file__).parents[1] / "scenarios" / "suite" / "baseline.json"
+    plain = tmp_path / "plain.json"
+    plain.write_text("[1, 2]\n")
+    replaceable(model, "m", "sins.compensation")
+    replaceable(baseline, "b", "sins.quality-baseline")
+    for kind in ("sins.compensation", "sins.quality-baseline", "json", "text"):
+        replaceable(plain, "p", kind)
+    refused = [(model, "sins.quality-baseline", "a compensation model"),
+               (baseline, "sins.compensation", "a quality baseline"),
+               (model, "json", "a compensation model"), (baseline, "text", "a quality baseline")]  # fmt: skip
+    for path, kind, holds in refused:
+        with pytest.raises(SinsInputError, match=f"holds {holds}; sins writes"):
+            replaceable(path, "x", kind)
+    with pytest.raises(ValueError, match="output kind 'csv'"):
+        replaceable(plain, "p", "csv")
+
+
 def device(folder: Path, name: str) -> Path:
     """A character device to write to: as root, a node of our own in ``folder`` for the kernel's
     ``name`` (``null``, ``full``), so that a regression replaces that node and not the machine's

@@ -14,7 +14,9 @@ one constant bias that gives the least AOE, found by Nelder–Mead on the AOE it
 sequence's reference. The second is an oracle, not a method: it reads the judged sequence's reference,
 and says how far a perfect estimate of a constant bias would take the model. The gap between the two
 columns is the rule's share of the error; what is left in the second, the model's (and the bias's drift
-within the sequence).
+within the sequence). Two more columns split the rule's share by axis: the rule's estimate across
+gravity with the best constant's along it, and the other way round (gravity's direction in the body:
+the mean specific force over the sequence).
 """
 
 from __future__ import annotations
@@ -52,8 +54,9 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"{path}: not fitted on several recordings (no bias rule)")
         rule = unit_bias.BiasRule.from_dict(rule_doc)
         print(f"{path.name}: {model.label}, bias rule {rule.mode}")
-        print(f"  {'sequence':<18} {'rule':>7} {'best constant':>14}  best bias, mrad/s")
-        by_rule, best = [], []
+        print(f"  {'sequence':<18} {'rule':>7} {'best constant':>14} {'rule across':>12} {'rule along':>11}"
+              "  best bias, mrad/s")  # fmt: skip
+        by_rule, best, across, along = [], [], [], []
         for name in args.sequences:
             rec = io.read(dataset=f"{args.folder}/{name}").beside_reference()
             out = model.correct_increments(rec.imu)
@@ -66,8 +69,15 @@ def main(argv: list[str] | None = None) -> int:
                 options={"xatol": 1e-3, "fatol": 1e-3, "maxfev": 600},
             )
             best.append(float(found.fun))
-            print(f"  {name:<18} {by_rule[-1]:7.2f} {best[-1]:14.2f}  {np.round(found.x, 3).tolist()}")
-        print(f"  {'mean':<18} {statistics.fmean(by_rule):7.2f} {statistics.fmean(best):14.2f}")
+            up = out.dv_b.sum(axis=0) / np.linalg.norm(out.dv_b.sum(axis=0))  # gravity's reaction, body
+            oracle = np.asarray(found.x) * 1e-3
+            rule_along, oracle_along = np.outer(track @ up, up), np.outer(oracle @ up, up)
+            across.append(unit_bias.open_loop_deg(_without(out, track - rule_along + oracle @ up * up), rec))
+            along.append(unit_bias.open_loop_deg(_without(out, oracle - oracle_along + rule_along), rec))
+            print(f"  {name:<18} {by_rule[-1]:7.2f} {best[-1]:14.2f} {across[-1]:12.2f} {along[-1]:11.2f}"
+                  f"  {np.round(found.x, 3).tolist()}")  # fmt: skip
+        print(f"  {'mean':<18} {statistics.fmean(by_rule):7.2f} {statistics.fmean(best):14.2f} "
+              f"{statistics.fmean(across):12.2f} {statistics.fmean(along):11.2f}")  # fmt: skip
     return 0
 
 

@@ -34,7 +34,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         inputs: list[Path | None] = [path]
         for case in suite.cases:
             inputs += scenario_inputs(scenario.load(case.scenario))
-        check_outputs({"--baseline": args.baseline}, inputs)
+        check_outputs({"--baseline": args.baseline}, inputs, kinds={"--baseline": quality.BASELINE_FORMAT})
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such quality baseline; create it with --update-baseline")
     else:

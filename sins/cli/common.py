@@ -143,16 +143,33 @@ def check_outputs(
     outputs: dict[str, Path | None],
     inputs: Iterable[str | os.PathLike[str] | None] = (),
     folders: dict[str, Path | None] | None = None,
+    kinds: dict[str, str] | None = None,
 ) -> None:
     """The one check of a command's outputs, before the work (:func:`sins.io.paths.check_outputs`):
     each can be written, none is an input (``inputs``: every file and folder the command reads) or
-    another output. ``outputs`` and ``folders`` map each flag to its path (None: not asked for)."""
+    another output, and none replaces a file holding what it never is (a recording where JSON goes).
+    ``outputs`` and ``folders`` map each flag to its path (None: not asked for); ``kinds`` what a flag
+    writes where :func:`output_kind` would not tell (``sins fit --out``: JSON, whatever its name)."""
     from sins.io.euroc import read_beside
     from sins.io.paths import check_outputs as check
 
     read = [p for p in inputs if p is not None]
     read += [beside for p in read if (beside := read_beside(p)) is not None]  # an ASL file's mav0
-    check(outputs, read, folders)
+    told = kinds or {}
+    of = {
+        flag: told.get(flag) or output_kind(flag, path) for flag, path in outputs.items() if path is not None
+    }
+    check(outputs, read, folders, of)
+
+
+def output_kind(flag: str, path: Path) -> str:
+    """What a command's output flag writes (:data:`sins.io.paths.KINDS`): ``--json`` and ``--baseline``
+    JSON, ``--plot`` an image (or its HTML page), ``--rerun`` a Rerun recording; the others (``--out``,
+    ``--imu``, ``--truth``) a table by their suffix: Parquet, else text."""
+    fixed = {"--json": "json", "--baseline": "json", "--plot": "image", "--rerun": "rrd"}
+    if flag in fixed:
+        return fixed[flag]
+    return "parquet" if Path(path).suffix.lower() == ".parquet" else "text"
 
 
 def unit_of(rec: Recording) -> str:
@@ -213,6 +230,7 @@ __all__ = [
     "fixed_width",
     "format_table",
     "has_display",
+    "output_kind",
     "save_plot",
     "scenario_inputs",
     "show",

@@ -33,7 +33,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     _check_args(args)
     datasets = [*(args.dataset or [])]
     read = [*args.recording, args.truth, *(p for d in datasets for p in dataset_inputs(d))]
-    check_outputs({"--out": args.out, "--json": args.json}, read)  # before a fit that may take minutes
+    # Before a fit that may take minutes; the model is one whatever its name.
+    check_outputs({"--out": args.out, "--json": args.json}, read, kinds={"--out": "sins.compensation"})
     sources = [*args.recording, *datasets]
     if not sources:
         raise SinsInputError("give a RECORDING or --dataset NAME (once per recording to fit on several)")

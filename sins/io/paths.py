@@ -10,7 +10,9 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
 
 * the place: the folder exists and can be written (tried with a temporary file, not read off the
   permission bits, which bind neither root nor a read-only mount); the name is not a folder;
-* what is there: a regular file is replaced (:mod:`sins.io.atomic`: a temporary name, then a rename);
+* what is there: a regular file is replaced (:mod:`sins.io.atomic`: a temporary name, then a rename),
+  unless no one may write it (its mode) or it holds what the output never is (a recording, an archive
+  or an image where JSON or text is written: :func:`replaceable`);
   a character device (``/dev/null``, ``/dev/full``) is written in place, never replaced; a FIFO, a
   socket or a block device is refused; a symbolic link is followed to its target (which is written;
   the link stays);
@@ -23,6 +25,7 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
 from __future__ import annotations
 
 import os
+import re
 import stat
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -116,6 +119,92 @@ def read_only(path: Path, shown: str) -> None:
         )
 
 
+#: The kinds of file a command writes (:func:`check_writable`'s ``kind``), besides the formats of sins's
+#: own JSON documents that other commands read (:data:`_DOCUMENTS`).
+KINDS = ("json", "text", "image", "rrd", "parquet")
+#: sins's JSON documents that are inputs, by their ``format``: only an output of the same replaces one.
+_DOCUMENTS = {"sins.compensation": "a compensation model", "sins.quality-baseline": "a quality baseline"}
+#: The first bytes of the files that are not text which sins reads or writes, and what each is.
+_SIGNATURES = (
+    (b"PK\x03\x04", "a zip archive (an .npz recording?)"),
+    (b"PK\x05\x06", "a zip archive (an .npz recording?)"),
+    (b"\x89HDF\r\n\x1a\n", "an HDF5 file"),
+    (b"MATLAB 5.0 MAT-file", "a MATLAB file (a recording?)"),
+    (b"#ROSBAG", "a ROS 1 bag"),
+    (b"\x89MCAP", "an MCAP recording"),
+    (b"SQLite format 3\x00", "an SQLite database (a ROS 2 bag?)"),
+    (b"\x1f\x8b", "a gzip file"),
+    (b"\x89PNG", "a PNG image"),
+    (b"%PDF", "a PDF"),
+    (b"RRF", "a Rerun recording"),
+    (b"PAR1", "a Parquet table"),
+)
+#: What an output of each kind may replace, by what :func:`_holds` says a file is (and an empty file).
+_REPLACES = {
+    "json": ("JSON",),
+    "text": ("JSON", "text"),
+    "image": ("a PNG image", "text"),  # a plot's .png, or its .html page
+    "rrd": ("a Rerun recording",),
+    "parquet": ("a Parquet table",),
+}
+_WRITES = {"json": "JSON", "text": "text", "image": "an image", "rrd": "a Rerun recording",
+           "parquet": "a Parquet table", **_DOCUMENTS}  # fmt: skip
+#: A JSON document's ``format``, where it opens with it (as sins writes its documents).
+_FORMAT = re.compile(r'\A\ufeff?\s*\{\s*"format"\s*:\s*"([^"\\]*)"')
+
+
+def _holds(path: Path) -> str | None:
+    """What an existing file holds, by its first 4 KiB: "empty", one of :data:`_DOCUMENTS`' formats,
+    "JSON", "text", one of :data:`_SIGNATURES`' names, or "binary data"; None where it cannot be read."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return None
+    if not head:
+        return "empty"
+    for magic, what in _SIGNATURES:
+        if head.startswith(magic):
+            return what
+    if b"\x00" in head:
+        return "binary data"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 4:  # not a character cut at the 4 KiB boundary
+            return "binary data"
+        text = head[: exc.start].decode("utf-8")
+    document = _FORMAT.match(text)
+    if document is not None and document.group(1) in _DOCUMENTS:
+        return document.group(1)
+    return "JSON" if text.lstrip("\ufeff \t\r\n")[:1] in ("{", "[") else "text"
+
+
+def replaceable(path: Path, shown: str, kind: str) -> None:
+    """Refuse to replace an existing file that holds what an output of ``kind`` (:data:`KINDS`, or a
+    ``format`` of :data:`_DOCUMENTS`) never is: a recording, an archive or an image where JSON or text
+    is written, text where an image is, a model where anything but a model is. A mistyped or
+    tab-completed output name would otherwise put a result where a user's recording or model was (the
+    rename is atomic, and final). An empty file may be replaced by any.
+
+    Raises
+    ------
+    SinsInputError
+        ``shown: holds ...; sins writes ... there and does not replace it: ...``.
+    """
+    if kind not in _WRITES:
+        raise ValueError(f"output kind {kind!r} (known: {', '.join(_WRITES)})")
+    holds = _holds(path)
+    allowed = _REPLACES.get(kind, ("JSON", kind))  # a document replaces JSON and its own format
+    if holds is None or holds == "empty" or holds in allowed:
+        return
+    seen = {"text": "text that is not JSON", **_DOCUMENTS}.get(holds, holds)
+    raise SinsInputError(
+        f"{shown}: holds {seen}; sins writes {_WRITES[kind]} there and does not replace it: remove it "
+        "or write elsewhere"
+    )
+
+
 def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str = "") -> None:
     """Refuse, before the work, an output that could not be written after it (see the module
     docstring): a file whose folder is missing or not writable, a file name that is a folder, a FIFO,
@@ -178,6 +267,7 @@ def check_outputs(
     outputs: Mapping[str, str | os.PathLike[str] | None],
     inputs: Iterable[str | os.PathLike[str] | None] = (),
     folders: Mapping[str, str | os.PathLike[str] | None] | None = None,
+    kinds: Mapping[str, str] | None = None,
 ) -> None:
     """The one check of a command's outputs before its work (see the module docstring).
 
@@ -186,6 +276,8 @@ def check_outputs(
     outputs : ``{flag: path}`` of the files the command will write (None: not asked for)
     inputs : every file and folder it reads (None entries skipped)
     folders : ``{flag: path}`` of folders it writes into (a campaign's results)
+    kinds : ``{flag: kind}`` (:data:`KINDS`): what each output is, so that an existing file holding
+        what it never is (a recording where JSON goes) is refused (:func:`replaceable`)
 
     Raises
     ------
@@ -218,6 +310,9 @@ def check_outputs(
                     f"{flag} {path}: is also {other_flag} {other}; give each output its own file"
                 )
         seen.append((flag, path, ident, real))
+        kind = (kinds or {}).get(flag)
+        if kind is not None and os.path.isfile(real):  # after the inputs: "is an input" says more
+            replaceable(Path(real), f"{flag} {path}", kind)
     for flag, path in dirs.items():
         real = os.path.realpath(path)
         for source, _, source_real in read:
@@ -228,11 +323,13 @@ def check_outputs(
 
 
 __all__ = [
+    "KINDS",
     "READ_FACTOR",
     "check_input",
     "check_outputs",
     "check_writable",
     "read_only",
+    "replaceable",
     "target",
     "writes_in_place",
 ]
