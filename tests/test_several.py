@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -155,6 +156,17 @@ def test_recordings_of_two_units_or_rates_are_refused() -> None:
     other = replace(recs[1], sensor="another unit")
     first = replace(recs[0], sensor="a unit")
     refusal(lambda: referenced.fit_several("regression", [first, other]), "one unit", "another unit")
+
+
+def test_a_rest_strategy_on_recordings_without_rests_is_one_line_naming_them_once() -> None:
+    """The numpy unit turns all the time: ``regression_rest`` has no rest to learn from, and says so in
+    one line that names the recordings once (it named them twice, after two numpy warnings of an empty
+    slice's mean)."""
+    recs, _, _ = recordings(8, count=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy warning fails the test
+        message = refusal(lambda: referenced.fit_several("regression_rest", recs), "needs rests")
+    assert message.count(recs[0].source) == 1, message
 
 
 def test_strategies_lists_the_registry_one_name_a_line(capsys: pytest.CaptureFixture[str]) -> None:

@@ -102,7 +102,8 @@ def fit_rig(
             strategy.progress = progress
         strategy.fit(part)
     except ValueError as exc:
-        raise SinsInputError(f"{where}: {exc}") from None
+        text = str(exc)  # a strategy's own message may name the data already
+        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
     held = f" (the last {validation:g} of each phase held back)" if validation else ""
     lines.append(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
     document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}

@@ -179,7 +179,8 @@ def fit_several(
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
-        raise SinsInputError(f"{where}: {exc}") from None
+        text = str(exc)  # a strategy's own message may name the data already
+        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
     strategy.unit_bias_ = rule.to_dict()
     strategy.fitted_on_ = {
         **fitted_on(recs[0]), "recordings": [rec.source for rec in recs], "checks": review.to_dict(),

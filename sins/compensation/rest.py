@@ -62,9 +62,10 @@ class RestAware(Regression):
         force = np.linalg.norm(_smooth(data.ref_accel, dt), axis=1)
         shake = np.linalg.norm(_smooth(data.ref_accel, dt) - data.ref_accel, axis=1)
         calm = ok & (np.linalg.norm(_smooth(data.ref_gyro, dt), axis=1) < STILL_RATE)
-        calm &= (np.abs(force - np.median(force[calm])) < STILL_FORCE) & (
-            _smooth(shake[:, None], dt)[:, 0] < STILL_FORCE
-        )
+        if calm.any():  # (no rows hardly turning: no rest, refused below)
+            calm &= (np.abs(force - np.median(force[calm])) < STILL_FORCE) & (
+                _smooth(shake[:, None], dt)[:, 0] < STILL_FORCE
+            )
         still = _long_runs(calm, round(MIN_REST_S / dt))
         moving = ok & ~calm
         if still.sum() < round(MIN_REST_S / dt) or moving.sum() < round(MIN_REST_S / dt):
