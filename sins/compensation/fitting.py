@@ -264,6 +264,7 @@ def fit_several(
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
     that does best on held-back recordings)."""
     from sins.compensation import referenced
+    from sins.compensation.residual import ResidualStrategy
 
     clocks = [frame_check.recording_lag(r) for r in recs]
     with _clock_named(list(zip(names, clocks, strict=True))):
@@ -273,6 +274,15 @@ def fit_several(
         )  # fmt: skip
     lines: list[str] = []
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
+    strategy = fitted.strategy
+    if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):
+        lines.append(
+            f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole "
+            f"({strategy.blocks_} blocks): "
+            + "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
+        )
+        lines.append(strategy.guard_report())
+        document["guard"] = {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()}
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)

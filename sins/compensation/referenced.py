@@ -23,6 +23,7 @@ from sins.compensation import Strategy, identifiability, interval_fit
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
+from sins.compensation.residual import ResidualStrategy
 from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
@@ -235,13 +236,18 @@ def _learn_several(
         strategy.time_offset_s_ = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
         strategy.fit_recordings(parts, recs)
         return
-    data = _joined([interval_fit.interval_reference(rec, fit_all.for_recording(r)) for r, rec in
-                    enumerate(recs)])  # fmt: skip
+    parts = [_at_mean_bias(interval_fit.interval_reference(rec, fit_all.for_recording(r)), fit_all, r)
+             for r, rec in enumerate(recs)]  # fmt: skip
+    data = _joined(parts)
     if isinstance(strategy, Regression) and type(strategy).fit_beyond is not Regression.fit_beyond:
         strategy.set_fit(fit_all.seed).fit_beyond(data)
         return
     if progress is not None and hasattr(strategy, "progress"):
         strategy.progress = progress
+    if isinstance(strategy, ResidualStrategy):  # its guard judges recordings held back whole
+        say(f"training {name} (each recording held back in turn, then on all)")
+        strategy.fit(data, recordings=np.repeat(np.arange(len(parts)), [len(p) for p in parts]))
+        return
     say(f"training {name}")
     strategy.fit(data)
 
@@ -307,6 +313,20 @@ def _biases_only(seed: Any) -> Any:
     """``seed`` with every coefficient but the biases zero."""
     zeros = np.zeros((3, 3))
     return replace(seed, B=zeros, K=zeros, A=zeros)
+
+
+def _at_mean_bias(part: CalibrationData, fit_all: SeveralFit, r: int) -> CalibrationData:
+    """Recording ``r``'s per-sample references with its readings at the recordings' mean biases: each
+    reading less its own bias's difference from the mean (``gyro = ω + B0 + B ω + K n``, ``accel = n + A0
+    + A n``). What differs between recordings is the bias rule's, at correction time and from the
+    recording alone; a learner shown it would learn to tell the training recordings apart by their
+    motion and take each one's bias with it, which a new recording's motion does not carry (a numpy
+    MEMS unit's biases drawn anew: ``mlp`` worse than the raw readings on a judged recording)."""
+    return replace(
+        part,
+        gyro=part.gyro - (fit_all.gyro_bias[r] - fit_all.gyro_bias.mean(axis=0)),
+        accel=part.accel - (fit_all.accel_bias[r] - fit_all.accel_bias.mean(axis=0)),
+    )
 
 
 def _joined(parts: list[CalibrationData]) -> CalibrationData:

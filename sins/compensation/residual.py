@@ -23,17 +23,15 @@ reason for the design:
 * **Points, not rows.** The learners train on averaged points of the reference inputs and the
   residual, one per fine input cell and time block, and on runs of rows where the residual repeats
   one draw (:mod:`sins.compensation.points`).
-* **Capacity chosen by data.** The session is cut into blocks of like input
-  (a new block where the coarse reference input changes, at least 1 s and at
-  most 20 s long), dealt at random (``seed``) into ``folds`` folds. For each
-  fold the regression is refitted on the others, every candidate learner
-  trained on their residuals and scored on the fold's: the held-back blocks
-  are orientations, rates and temperatures the learner did not see. An
-  iterative learner is trained on all folds side by side and scored after
-  each training length; it stops once ``PATIENCE`` lengths in a row have not
-  lowered its held-back loss summed over the folds (longer training then fits
-  the training folds' noise closer: the lengths it would have gone on to are
-  not chosen unless the held-back loss turns down again after rising twice).
+* **Capacity chosen by data.** The session is cut into blocks of like input (a new block where the
+  coarse reference input changes, at least 1 s and at most 20 s long), dealt at random (``seed``) into
+  ``folds`` folds; several recordings fitted together are each a fold instead. For each fold the
+  regression is refitted on the others, every candidate learner trained on their residuals and scored
+  on the fold's: the held-back blocks are orientations, rates and temperatures (or a recording) the
+  learner did not see. An iterative learner is trained on all folds side by side and scored after each
+  training length; it stops once ``PATIENCE`` lengths in a row have not lowered its held-back loss
+  summed over the folds (longer training then fits the training folds' noise closer: the lengths it
+  would have gone on to are not chosen unless the held-back loss turns down again after rising twice).
 * **An honest guard.** Per channel, the chosen learner's held-back gain over
   regression and the terms (sum of squared residuals) is compared with its
   sampling error over the held-back blocks; a channel whose gain is not above
@@ -183,6 +181,13 @@ class _Trial:
         return out
 
 
+def _with_reference(recordings: NDArray[np.intp], data: CalibrationData) -> NDArray[np.intp]:
+    """The recording of each row of ``data`` that has a reference; ``ValueError`` for another length."""
+    if np.shape(recordings) != (len(data),):
+        raise ValueError(f"recordings: {len(recordings)} rows; the data have {len(data)}")
+    return np.asarray(recordings)[data.has_reference]
+
+
 class ResidualStrategy(Strategy):
     """Regression first, then a learner of what it leaves (see the module docstring).
 
@@ -263,10 +268,13 @@ class ResidualStrategy(Strategy):
 
     # ------------------------------------------------------------------ fit
 
-    def fit(self, data: CalibrationData) -> ResidualStrategy:
-        """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self."""
+    def fit(self, data: CalibrationData, recordings: NDArray[np.intp] | None = None) -> ResidualStrategy:
+        """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self.
+        ``recordings`` (one per row): each row's recording, where several are fitted together; the folds
+        are then the recordings: the guard judges a learner on recordings it was not trained on."""
         started = time.perf_counter()
         self.__dict__.pop("_restored", None)
+        kept = None if recordings is None else _with_reference(recordings, data)
         data = data.rows_with_reference()
         if len(data) < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
@@ -277,13 +285,12 @@ class ResidualStrategy(Strategy):
         x_terms = self._scaled(data.ref_gyro, data.ref_accel, data.temp)
         scaled = {s: _columns(s, x_terms) for s in SENSORS}
         block = segment(scaled["gyro"][:, :6], data.t)
-        n_blocks = int(block[-1]) + 1
-        fold = (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[block]
-        self.blocks_, self.cv_folds_ = n_blocks, self.folds
+        fold, n_folds = self._fold_of(block, kept, data.source)
+        self.blocks_, self.cv_folds_ = int(block[-1]) + 1, n_folds
         # Each fold's regression, refitted without the fold: the held-back residuals the terms and the
         # learners are chosen on.
         folds: list[tuple[int, NDArray[np.bool_], Array]] = []
-        for k in range(self.folds):
+        for k in range(n_folds):
             train = fold != k
             try:
                 fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
@@ -329,6 +336,20 @@ class ResidualStrategy(Strategy):
         self.used_ = used
         self.fit_seconds_ = time.perf_counter() - started
         return self
+
+    def _fold_of(
+        self, block: NDArray[np.intp], recordings: NDArray[np.intp] | None, source: str
+    ) -> tuple[NDArray[np.intp], int]:
+        """Each row's fold and how many: ``folds`` of blocks at random, or each of ``recordings``."""
+        if recordings is None:
+            n_blocks = int(block[-1]) + 1
+            return (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[
+                block
+            ], self.folds
+        kept, fold = np.unique(recordings, return_inverse=True)
+        if len(kept) < 2:
+            raise ValueError(f"{source or 'recording'}: recordings as folds need two or more")
+        return fold, len(kept)
 
     @staticmethod
     def _fold_terms(
