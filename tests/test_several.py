@@ -122,7 +122,10 @@ def test_a_rule_round_trips_through_a_model_file(tmp_path: Path) -> None:
     recs, _, _ = recordings(7)
     fitted = referenced.fit_several("regression", recs)
     assert fitted.rule is not None and fitted.rule.mode in unit_bias.MODES
-    assert set(fitted.rule.held_back_deg) == set(unit_bias.MODES)  # chosen on held-back recordings
+    # Chosen on held-back recordings, and beside them the raw readings': biases of 0.1 °/s drawn anew
+    # for each recording leave the raw readings far worse than the chosen rule.
+    held = fitted.rule.held_back_deg
+    assert set(held) == {*unit_bias.MODES, "raw"} and held[fitted.rule.mode] < 0.5 * held["raw"], held
     path = tmp_path / "m.json"
     compensation.save(fitted.strategy, path)
     back = compensation.load(path)

@@ -338,7 +338,9 @@ def _several_document(
     }  # fmt: skip
     if fitted.rule is not None:
         rule = fitted.rule
-        held = "; ".join(f"{m} {v:.2f}°" for m, v in rule.held_back_deg.items())
+        held = "; ".join(
+            f"{'the raw readings' if m == 'raw' else m} {v:.2f}°" for m, v in rule.held_back_deg.items()
+        )
         judged = f" (open-loop attitude on held-back recordings: {held})" if held else ""
         lines.append(f"a new recording's bias: {rule.mode}{judged}")
         document["bias_rule"] = rule.to_dict()

@@ -273,6 +273,7 @@ def choose_rule(
     held: dict[str, float] = {}
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
+        raw = []
         for k, rec in enumerate(recs):
             if stage is not None:
                 stage(f"the bias rule: recording {k + 1} of {len(recs)} held back")
@@ -283,12 +284,14 @@ def choose_rule(
             own = [seed.correct_increments(r.imu) for r in others]
             base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own)
             stream = seed.correct_increments(rec.imu)
+            raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
                 scores[m].append(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
         held = {m: float(np.mean(v)) for m, v in scores.items()}
         mode = min(held, key=held.__getitem__)
+        held["raw"] = float(np.mean(raw))  # the readings as they are, for scale
     return unit_bias.rule_from(left, streams, mode=mode or "pooled", held_back_deg=held)
 
 

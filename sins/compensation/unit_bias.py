@@ -70,7 +70,8 @@ class BiasRule:
     bias at the opening rest, averaged over the training recordings that open with one (zero where none
     does); ``rest_spread`` (3,): its spread; ``sigma_v_mps``: the true velocity's size in the online
     model; ``sigma_accel_mps2``: the accelerometer bias's prior size there; ``held_back_deg``: the
-    open-loop attitude error of each mode on the held-back training recordings (mean), what chose it.
+    open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
+    and (``raw``) of their readings as they are.
     """
 
     mode: str = "pooled"
