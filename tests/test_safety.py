@@ -240,6 +240,14 @@ def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_pat
             replaceable(path, "x", kind)
     with pytest.raises(ValueError, match="output kind 'csv'"):
         replaceable(plain, "p", "csv")
+    # A TOML file opens with a table's name in brackets, which is not JSON: a scenario or an IMU file is
+    # text that a JSON output does not replace.
+    for i, toml in enumerate(("[imu]\nmodel = 'tactical'\n", "[[case]]\nname = 'linear'\n")):
+        path = tmp_path / f"t{i}.toml"
+        path.write_text(toml)
+        with pytest.raises(SinsInputError, match="holds text that is not JSON; sins writes JSON"):
+            replaceable(path, "t", "json")
+        replaceable(path, "t", "text")
 
 
 def device(folder: Path, name: str) -> Path:

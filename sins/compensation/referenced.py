@@ -320,11 +320,11 @@ def _biases_only(seed: Any) -> Any:
 
 def _at_mean_bias(part: CalibrationData, fit_all: SeveralFit, r: int) -> CalibrationData:
     """Recording ``r``'s per-sample references with its readings at the recordings' mean biases: each
-    reading less its own bias's difference from the mean (``gyro = ω + B0 + B ω + K n``, ``accel = n + A0
-    + A n``). What differs between recordings is the bias rule's, at correction time and from the
-    recording alone; a learner shown it would learn to tell the training recordings apart by their
-    motion and take each one's bias with it, which a new recording's motion does not carry (a numpy
-    MEMS unit's biases drawn anew: ``mlp`` worse than the raw readings on a judged recording)."""
+    reading less its own bias's difference from the mean (``gyro = ω + B0 + B ω + K n``,
+    ``accel = n + A0 + A n``). What differs between recordings is the bias rule's, at correction time
+    and from the recording alone; a learner shown it would learn to tell the training recordings apart
+    by their motion and take each one's bias with it, which a new recording's motion does not carry (a
+    numpy MEMS unit's biases drawn anew: ``mlp`` worse than the raw readings on a judged recording)."""
     return replace(
         part,
         gyro=part.gyro - (fit_all.gyro_bias[r] - fit_all.gyro_bias.mean(axis=0)),

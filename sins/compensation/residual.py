@@ -342,10 +342,8 @@ class ResidualStrategy(Strategy):
     ) -> tuple[NDArray[np.intp], int]:
         """Each row's fold and how many: ``folds`` of blocks at random, or each of ``recordings``."""
         if recordings is None:
-            n_blocks = int(block[-1]) + 1
-            return (np.random.default_rng([self.seed, 17]).permutation(n_blocks) % self.folds)[
-                block
-            ], self.folds
+            dealt = np.random.default_rng([self.seed, 17]).permutation(int(block[-1]) + 1) % self.folds
+            return dealt[block], self.folds
         kept, fold = np.unique(recordings, return_inverse=True)
         if len(kept) < 2:
             raise ValueError(f"{source or 'recording'}: recordings as folds need two or more")

@@ -119,8 +119,8 @@ def read_only(path: Path, shown: str) -> None:
         )
 
 
-#: The kinds of file a command writes (:func:`check_writable`'s ``kind``), besides the formats of sins's
-#: own JSON documents that other commands read (:data:`_DOCUMENTS`).
+#: The kinds of file a command writes (:func:`check_outputs`' ``kinds``, :func:`replaceable`), besides
+#: the formats of sins's own JSON documents that other commands read (:data:`_DOCUMENTS`).
 KINDS = ("json", "text", "image", "rrd", "parquet")
 #: sins's JSON documents that are inputs, by their ``format``: only an output of the same replaces one.
 _DOCUMENTS = {"sins.compensation": "a compensation model", "sins.quality-baseline": "a quality baseline"}
@@ -151,6 +151,9 @@ _WRITES = {"json": "JSON", "text": "text", "image": "an image", "rrd": "a Rerun 
            "parquet": "a Parquet table", **_DOCUMENTS}  # fmt: skip
 #: A JSON document's ``format``, where it opens with it (as sins writes its documents).
 _FORMAT = re.compile(r'\A\ufeff?\s*\{\s*"format"\s*:\s*"([^"\\]*)"')
+#: How JSON opens: an object's first key (or its end), an array's first value (or its end); not a TOML
+#: table's ``[name]`` or ``[[name]]``.
+_JSON_START = re.compile(r'\A\ufeff?\s*(\{\s*["}]|(\[\s*)+(\]|[-0-9"{]|true\b|false\b|null\b))')
 
 
 def _holds(path: Path) -> str | None:
@@ -177,7 +180,7 @@ def _holds(path: Path) -> str | None:
     document = _FORMAT.match(text)
     if document is not None and document.group(1) in _DOCUMENTS:
         return document.group(1)
-    return "JSON" if text.lstrip("\ufeff \t\r\n")[:1] in ("{", "[") else "text"
+    return "JSON" if _JSON_START.match(text) else "text"
 
 
 def replaceable(path: Path, shown: str, kind: str) -> None:
