@@ -25,6 +25,7 @@ import contextlib
 import io
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -81,8 +82,16 @@ def main_(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.root is not None:
         os.environ["SINS_DATA"] = str(args.root)
-    published = args.folder == "euroc" and args.judge == JUDGE and args.train == TRAIN
     work = Path(tempfile.mkdtemp(prefix="sins-euroc-"))
+    try:
+        return _benchmark(args, work)
+    finally:  # the fits' documents and judged reports (and the models, without --models)
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _benchmark(args: argparse.Namespace, work: Path) -> int:
+    """Every strategy fitted and judged (see the module docstring), ``work`` the scratch folder."""
+    published = args.folder == "euroc" and args.judge == JUDGE and args.train == TRAIN
     models = args.models or work
     models.mkdir(parents=True, exist_ok=True)
     results: dict[str, Any] = {"train": args.train, "judge": args.judge, "fits": {}, "aoe_deg": {}}
@@ -93,7 +102,7 @@ def main_(argv: list[str] | None = None) -> int:
         argv_fit = ["fit", *(a for n in args.train for a in ("--dataset", f"{args.folder}/{n}")),
                     "--strategy", strategy, "--out", str(model), "--json", str(fit_json)]  # fmt: skip
         start = time.perf_counter()
-        if _run(argv_fit):  # refused (its one line printed above): a column of dashes, the others go on
+        if _run(argv_fit):  # refused (its one line printed above): its column left out, the others go on
             results["fits"][strategy] = {"refused": True}
             continue
         seconds = time.perf_counter() - start
