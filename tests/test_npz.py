@@ -111,6 +111,22 @@ def test_inspect_judges_the_axes_by_the_reference_attitude(
         refusal(lambda: io.read(path).beside_reference(), str(path), seen, "quaternion order")
 
 
+def test_a_reference_in_a_world_with_z_down_is_named_so(tmp_path: Path) -> None:
+    """The swing's reference written in a world with z down (NED: east and north swapped, up turned
+    down, by scipy's Rotation) where the form says z up: gravity's reaction points 180° from up, and the
+    finding says the world's z may be the cause as well as the quaternion's order or direction."""
+    path = tmp_path / "swing.npz"
+    _swinging(path)
+    doc = dict(np.load(path))
+    to_ned = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    q = to_ned * Rotation.from_quat(doc["q_wxyz"], scalar_first=True)
+    np.savez(path, **{**doc, "q_wxyz": q.as_quat(scalar_first=True), "v_m_s": to_ned.apply(doc["v_m_s"])})
+    findings = inspection.inspect(io.read(path)).findings
+    assert [f.code for f in findings] == ["reference_attitude"], findings
+    assert "180° from up" in findings[0].what and "NED written for ENU" in findings[0].what
+    refusal(lambda: io.read(path).beside_reference(), str(path), "z axis points down")
+
+
 @pytest.mark.parametrize("lag_s", [0.0, 0.0031, 0.020, -0.0125])
 def test_inspect_says_how_the_references_clock_sits_and_names_it_from_5_ms(
     tmp_path: Path, lag_s: float

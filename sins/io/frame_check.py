@@ -153,6 +153,8 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     what = (f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
             "from up (its mean over the reference's span, the reference's acceleration taken out): the "
             "attitude is not of the readings' axes")  # fmt: skip
+    if tilt >= 180.0 - REFERENCE_TILT_DEG:  # upside down: the world's z read the wrong way
+        what += ", or its world frame's z axis points down where it is read as up (NED written for ENU)"
     return [Finding("reference_attitude", what, advice=advice)]
 
 
