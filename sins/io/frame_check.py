@@ -131,7 +131,8 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     advice = ("check the reference's quaternion order (w, x, y, z or x, y, z, w), its direction (the "
               "sensor's attitude in the world, not the world's in the sensor) and the readings' "
               "axes")  # fmt: skip
-    agreement = _turns_agreement(truth, t, w, inside)
+    pairs = _turn_pairs(truth, t, w, inside)
+    agreement = None if pairs is None else _correlation(*pairs)
     if agreement is not None and agreement < REFERENCE_TURNS_AGREE:
         what = (f"the reference's turns over {TURN_INTERVAL_S:g} s intervals, in the body, correlate "
                 f"{agreement:.2f} with the gyro's (1 where its attitude is of the readings' axes): the "
@@ -149,7 +150,7 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
         return []
     tilt = float(np.degrees(np.arccos(np.clip(-reaction[2] / size, -1.0, 1.0))))
     if tilt <= REFERENCE_TILT_DEG:
-        return _scale_findings(truth, t, w, inside, size)
+        return _scale_findings(pairs, size)
     what = (f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
             "from up (its mean over the reference's span, the reference's acceleration taken out): the "
             "attitude is not of the readings' axes")  # fmt: skip
@@ -158,19 +159,16 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     return [Finding("reference_attitude", what, advice=advice)]
 
 
-def _scale_findings(
-    truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp], reaction: float
-) -> list[Finding]:
+def _scale_findings(pairs: tuple[Array, Array] | None, reaction: float) -> list[Finding]:
     """Readings whose size is not the reference's: the gyro's turns over short intervals against the
-    reference's (RMS about their means, as :func:`_turns_agreement` correlates them), and ``reaction``,
+    reference's (``pairs``, :func:`_turn_pairs`; RMS about their means), and ``reaction``,
     the specific force's mean size in the world less the reference's acceleration, against gravity's.
     Beyond :data:`REFERENCE_SCALE` either way the readings' unit (or the time's) is not what was read,
     and every figure judged against the reference would measure it."""
     found = []
-    ends, gyro = _gyro_turns(truth, t, w, inside)
-    if gyro is not None:
-        q = truth.interpolate(t[ends]).q_nb
-        ratio = _rms_about_mean(gyro) / max(_rms_about_mean(rotation.turn_between(q[:-1], q[1:])), 1e-300)
+    if pairs is not None:
+        gyro, turns = pairs
+        ratio = _rms_about_mean(gyro) / max(_rms_about_mean(turns), 1e-300)
         if not 1.0 / REFERENCE_SCALE <= ratio <= REFERENCE_SCALE:
             what = (f"the gyro's turns over {TURN_INTERVAL_S:g} s intervals are {ratio:.4g} × the "
                     f"reference's{_read_as(ratio, np.degrees(1.0), 'degrees', 'radians')}")  # fmt: skip
@@ -188,8 +186,8 @@ def _rms_about_mean(x: Array) -> float:
 
 
 def _read_as(ratio: float, factor: float, large: str, small: str) -> str:
-    """ ": {large} read as {small}" where ``ratio`` is within 10 % of ``factor`` (57.3 for ° and rad,
-    9.8 for m/s² and g), the other way round near its inverse; else nothing."""
+    """ ": readings in {large} read as {small}" where ``ratio`` is within 10 % of ``factor`` (57.3 for °
+    and rad, 9.8 for m/s² and g), the other way round near its inverse; else nothing."""
     if abs(np.log(ratio / factor)) < 0.1:
         return f": readings in {large} read as {small}"
     if abs(np.log(ratio * factor)) < 0.1:
@@ -197,19 +195,17 @@ def _read_as(ratio: float, factor: float, large: str, small: str) -> str:
     return ""
 
 
-def _turns_agreement(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]) -> float | None:
-    """The correlation, about their means, of the reference's turns over short intervals (the
-    rotation vector of ``q(t_k)⁻¹ q(t_k+1)``, in the body) with the gyro's integral over the same
-    intervals; None where the gyro turns too little to tell (under 1 °/s RMS about its mean)."""
+def _turn_pairs(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]) -> tuple[Array, Array] | None:
+    """The gyro's integral over short intervals and the reference's turns over the same (the rotation
+    vector of ``q(t_k)⁻¹ q(t_k+1)``, in the body), (m, 3) each; None where the gyro turns too little
+    to tell (under 1 °/s RMS about its mean)."""
     ends, gyro = _gyro_turns(truth, t, w, inside)
-    if gyro is None:
-        return None
-    return _agreement(truth, t[ends], gyro)
+    return None if gyro is None else (gyro, _reference_turns(truth, t[ends]))
 
 
 def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
     """The shift of the reference's clock against the readings' at which its turns over short intervals
-    agree best with the gyro's (:func:`_turns_agreement`'s correlation), tried every reading's interval
+    agree best with the gyro's (:func:`_turn_pairs`' correlation), tried every reading's interval
     within :data:`LAG_SEARCH_S` either way and refined between them by a parabola through the best three.
     None where the gyro turns too little to tell, the reference spans too little, the readings are
     further apart than the search reaches, or the best shift is the last one tried (the clock sits
@@ -294,8 +290,17 @@ def _gyro_turns(
 def _agreement(truth: NavSeries, t_ends: Array, gyro: Array) -> float:
     """The correlation, about their means, of the reference's turns between the times ``t_ends`` with
     the gyro's ``gyro`` over the same intervals."""
+    return _correlation(gyro, _reference_turns(truth, t_ends))
+
+
+def _reference_turns(truth: NavSeries, t_ends: Array) -> Array:
+    """The reference's turns between the times ``t_ends``, in the body, (m - 1, 3)."""
     q = truth.interpolate(t_ends).q_nb
-    turns = rotation.turn_between(q[:-1], q[1:])
+    return np.asarray(rotation.turn_between(q[:-1], q[1:]), dtype=float)
+
+
+def _correlation(gyro: Array, turns: Array) -> float:
+    """The correlation of two sets of turns about their means."""
     a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
     return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
 
