@@ -115,6 +115,18 @@ def _named(arg: str, folder: Path, names: tuple[str, ...]) -> str:
     return arg
 
 
+def _run_in(folder: Path, argv: str, names: tuple[str, ...]) -> tuple[int, str]:
+    """``sins ARGV`` (``{n}``: file n's path in ``folder``) run in ``folder``, where its relative names
+    resolve; its exit status and stderr."""
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        rc, _, err = run_cli([_named(a, folder, names) for a in argv.split()])
+    finally:
+        os.chdir(cwd)
+    return rc, err
+
+
 @pytest.mark.parametrize("case", sorted(ALIASES))
 def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> None:
     """Before, each of these wrote over its input and ended 0 ("wrote m.json", the model gone)."""
@@ -123,12 +135,7 @@ def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> 
     (tmp_path / "sub").mkdir()
     os.link(tmp_path / names[0], tmp_path / "link.json")
     before = _digests([*inputs, tmp_path / "link.json"])
-    cwd = os.getcwd()
-    os.chdir(tmp_path)  # the relative names resolve in the case's folder
-    try:
-        rc, _, err = run_cli([_named(a, tmp_path, names) for a in argv.split()])
-    finally:
-        os.chdir(cwd)
+    rc, err = _run_in(tmp_path, argv, names)
     assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
     assert_one_line(err, [Path(flag)])
     assert "input of this command" in err or "is also" in err, err
@@ -187,12 +194,7 @@ def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
         shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
     kept = [*inputs, *(tmp_path / n for n in ("rec.npz", "rec.mat", "table.parquet", "table.csv"))]
     before = _digests(kept)
-    cwd = os.getcwd()
-    os.chdir(tmp_path)
-    try:
-        rc, _, err = run_cli([_named(a, tmp_path, names) for a in argv.split()])
-    finally:
-        os.chdir(cwd)
+    rc, err = _run_in(tmp_path, argv, names)
     assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
     assert_one_line(err, [Path(flag)])
     assert f"holds {holds}" in err and "does not replace it" in err, err

@@ -17,9 +17,7 @@ open-loop table; what must hold is that no correction is worse than the raw read
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -74,20 +72,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
-    root = args.keep or Path(tempfile.mkdtemp(prefix="sins-broad-b-"))
-    try:
-        folder = root / "broad_b"
-        folder.mkdir(parents=True, exist_ok=True)
+
+    def write(folder: Path) -> None:
         for trial in ("05", "18"):
             write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, args.parts, folder)
-        bench = ["--root", str(root), "--folder", "broad_b", "--train", *args.train, "--judge", *args.judge,
-                 "--strategies", *args.strategies]  # fmt: skip
-        if args.json:
-            bench += ["--json", str(args.json)]
-        return euroc_benchmark.main_(bench)
-    finally:
-        if args.keep is None:  # the recordings written for the run (15 MB), not the user's
-            shutil.rmtree(root, ignore_errors=True)
+
+    return euroc_benchmark.run_on_unit(
+        write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep
+    )
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ import shutil
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -125,6 +126,24 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))
     return 0
+
+
+def run_on_unit(
+    write: Callable[[Path], None], folder: str, train: list[str], judge: list[str], strategies: list[str],
+    *, json_out: Path | None = None, keep: Path | None = None,
+) -> int:  # fmt: skip
+    """The benchmark on recordings of another unit: ``write`` puts them into ``ROOT/folder`` of a data root,
+    ``keep`` or a temporary one, removed after (the recordings written for the run, not the user's)."""
+    root = keep or Path(tempfile.mkdtemp(prefix=f"sins-{folder}-"))
+    try:
+        (root / folder).mkdir(parents=True, exist_ok=True)
+        write(root / folder)
+        bench = ["--root", str(root), "--folder", folder, "--train", *train, "--judge", *judge,
+                 "--strategies", *strategies, *(["--json", str(json_out)] if json_out else [])]  # fmt: skip
+        return main_(bench)
+    finally:
+        if keep is None:
+            shutil.rmtree(root, ignore_errors=True)
 
 
 def _table(results: dict[str, Any], strategies: list[str], published: bool) -> None:

@@ -19,9 +19,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import shutil
 import sys
-import tempfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -69,19 +67,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
-    root = args.keep or Path(tempfile.mkdtemp(prefix="sins-numpy-unit-"))
-    try:
-        folder = root / "numpy_unit"
-        folder.mkdir(parents=True, exist_ok=True)
-        write_unit(folder, args.grade, args.seed)
-        bench = ["--root", str(root), "--folder", "numpy_unit", "--train", "r0", "r1", "r2",
-                 "--judge", "r3", "r4", "r5", "--strategies", *args.strategies]  # fmt: skip
-        if args.json:
-            bench += ["--json", str(args.json)]
-        return euroc_benchmark.main_(bench)
-    finally:
-        if args.keep is None:
-            shutil.rmtree(root, ignore_errors=True)
+    return euroc_benchmark.run_on_unit(
+        lambda folder: write_unit(folder, args.grade, args.seed),
+        "numpy_unit",
+        ["r0", "r1", "r2"],
+        ["r3", "r4", "r5"],
+        args.strategies,
+        json_out=args.json,
+        keep=args.keep,
+    )
 
 
 if __name__ == "__main__":
