@@ -108,14 +108,18 @@ def fit_rig(
     lines.append(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
     document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}
     if isinstance(strategy, ResidualStrategy):
-        lines.append(
-            f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks: "
-            + "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
+        lines += _learner_lines(
+            strategy, f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks"
         )
-        lines.append(strategy.guard_report())
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
     strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks}
     return FitOutcome(strategy, lines, document)
+
+
+def _learner_lines(strategy: Any, how: str) -> list[str]:
+    """What a learned strategy chose (``how``: on what it was chosen), then its guard per channel."""
+    chosen = "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
+    return [f"{how}: {chosen}", strategy.guard_report()]
 
 
 def _rig_seed_review(
@@ -276,12 +280,8 @@ def fit_several(
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
     strategy = fitted.strategy
     if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):
-        lines.append(
-            f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole "
-            f"({strategy.blocks_} blocks): "
-            + "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
-        )
-        lines.append(strategy.guard_report())
+        how = f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole"
+        lines += _learner_lines(strategy, f"{how} ({strategy.blocks_} blocks)")
         document["guard"] = {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()}
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
