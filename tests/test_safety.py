@@ -143,31 +143,36 @@ def test_no_output_replaces_an_input(files: Path, tmp_path: Path, case: str) -> 
 
 
 def _others(folder: Path) -> None:
-    """Files a user keeps beside the inputs, each written by its own library: an .npz recording (numpy),
-    a MATLAB recording (scipy), a Parquet table (pyarrow), a link to the .npz."""
+    """Files a user keeps beside the inputs, each written by its own library, under names that do not say
+    what they hold (a name that does is refused before its file is looked at: see
+    :func:`test_an_output_named_for_another_format_is_refused`): an .npz recording (numpy) as
+    ``recording``, a MATLAB recording (scipy) as ``session.dat``, a Parquet table (pyarrow), a link named
+    ``link.json`` to the recording."""
     import pyarrow as pa
     import pyarrow.parquet as pq
     import scipy.io
 
     np.savez(folder / "rec.npz", t_s=np.arange(3.0), gyro_rad_s=np.zeros((3, 3)))
+    os.rename(folder / "rec.npz", folder / "recording")
     scipy.io.savemat(folder / "rec.mat", {"imu_gyr": np.zeros((3, 3))})
+    os.rename(folder / "rec.mat", folder / "session.dat")
     pq.write_table(pa.table({"t": [0.0, 1.0]}), folder / "table.parquet")
-    (folder / "link.npz").symlink_to(folder / "rec.npz")
+    (folder / "link.json").symlink_to(folder / "recording")
 
 
 #: Each case: the files copied in, the command (as in :data:`ALIASES`), the output it must refuse to
 #: write (a file none of its inputs, holding what that output never is), and what the refusal says it holds.
 KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
     "evaluate's report onto a recording": (
-        ("m.json", "rig.csv"), "evaluate {m.json} {rig.csv} --json rec.npz", "--json", "a zip archive",
+        ("m.json", "rig.csv"), "evaluate {m.json} {rig.csv} --json recording", "--json", "a zip archive",
     ),
     "a report through a link to a recording": (
-        ("inc.csv",), "inspect {inc.csv} --json link.npz", "--json", "a zip archive",
+        ("inc.csv",), "inspect {inc.csv} --json link.json", "--json", "a zip archive",
     ),
     "a report onto a model": (("inc.csv", "m.json"), "inspect {inc.csv} --json {m.json}", "--json",
                               "a compensation model"),
     "a corrected table onto a MATLAB recording": (
-        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out rec.mat", "--out", "a MATLAB file",
+        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out session.dat", "--out", "a MATLAB file",
     ),
     "a model onto a CSV recording": (
         ("rig.csv", "static.csv"), "fit {rig.csv} --strategy none --out {static.csv}", "--out",
@@ -192,13 +197,77 @@ def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
     _others(tmp_path)
     if case == "a CSV solution onto a Parquet table":
         shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
-    kept = [*inputs, *(tmp_path / n for n in ("rec.npz", "rec.mat", "table.parquet", "table.csv"))]
+    kept = [*inputs, *(tmp_path / n for n in ("recording", "session.dat", "table.parquet", "table.csv"))]
     before = _digests(kept)
     rc, err = _run_in(tmp_path, argv, names)
     assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
     assert_one_line(err, [Path(flag)])
     assert f"holds {holds}" in err and "does not replace it" in err, err
-    assert _digests(kept) == before and (tmp_path / "link.npz").is_symlink()
+    assert _digests(kept) == before and (tmp_path / "link.json").is_symlink()
+
+
+#: Each case: the files copied in, the command (as in :data:`ALIASES`), the output refused, the suffix
+#: and what the refusal says sins writes there.
+NAMED: dict[str, tuple[tuple[str, ...], str, str, str]] = {
+    "corrected readings as .npz": (
+        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out c.npz", "--out c.npz", "a CSV table",
+    ),
+    "corrected readings as .parquet": (
+        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out c.parquet", "--out c.parquet", "a CSV table",
+    ),
+    "simulated readings as .json": (
+        ("s.toml",), "simulate {s.toml} --imu i.json --truth t.csv", "--imu i.json", "a CSV table",
+    ),
+    "a rig session as .mat": (
+        ("rig.toml", "imu.toml"), "calibrate {rig.toml} --imu {imu.toml} --out r.mat", "--out r.mat",
+        "a CSV table",
+    ),
+    "a model as .csv": (("rig.csv",), "fit {rig.csv} --strategy none --out m.csv", "--out m.csv",
+                        "a compensation model"),
+    "a report as .csv": (
+        ("m.json", "rig.csv"), "evaluate {m.json} {rig.csv} --json e.csv", "--json e.csv", "JSON",
+    ),
+    "an IMU file as .csv": (
+        ("static.csv",), "characterise {static.csv} --static --out imu.csv", "--out imu.csv", "a TOML file",
+    ),
+    "a report as .parquet": (("inc.csv",), "inspect {inc.csv} --json i.parquet", "--json i.parquet", "JSON"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(NAMED))
+def test_an_output_named_for_another_format_is_refused(files: Path, tmp_path: Path, case: str) -> None:
+    """An output whose suffix names a format other than the one written: refused in one line before the
+    work, nothing written. Before, ``sins correct M R --out c.npz`` wrote CSV text under that name, which
+    every reader of .npz, sins's own included, then refused as a damaged archive."""
+    names, argv, shown, writes = NAMED[case]
+    _copy(files, tmp_path, *names)
+    rc, err = _run_in(tmp_path, argv, names)
+    suffix = Path(shown.split()[1]).suffix
+    assert rc == 2 and err.startswith(f"sins: error: {shown}: {suffix} names "), err
+    assert f"sins writes {writes} there" in err, err
+    assert_one_line(err, [Path(shown.split()[0])])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
+
+
+def test_the_library_writers_refuse_a_name_for_another_format(files: Path, tmp_path: Path) -> None:
+    """The check is the writers' own, not only the commands': a table, a JSON document or a model under
+    a name that says another format is refused, and names that say no format are written."""
+    from sins import compensation
+    from sins.core.series import ImuRates
+    from sins.errors import SinsInputError
+
+    readings = ImuRates(t=np.arange(3.0), omega_ib_b=np.zeros((3, 3)), f_ib_b=np.ones((3, 3)))
+    model = compensation.load(files / "m.json")
+    writers: list[tuple[Callable[[Path], None], str]] = [
+        (lambda p: io.write_imu(p, readings), "r.npz"),
+        (lambda p: io.write_json(p, [1]), "d.csv"),
+        (lambda p: compensation.save(model, p), "m.toml"),
+    ]
+    for write, name in writers:
+        with pytest.raises(SinsInputError, match=f"{name}: \\.{name.split('.')[1]} names "):
+            write(tmp_path / name)
+        write(tmp_path / f"{name}.txt")  # a suffix that names no format
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv.txt", "m.toml.txt", "r.npz.txt"]
 
 
 def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) -> None:
@@ -207,18 +276,18 @@ def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) ->
     rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
     report = tmp_path / "report.json"
     report.write_text('{"figures": [1, 2]}\n')
-    (tmp_path / "empty.csv").touch()
+    (tmp_path / "empty.out").touch()
     for argv in (
         ["fit", str(rig), "--strategy", "none", "--out", str(model)],
         ["fit", str(rig), "--strategy", "none", "--out", str(report)],
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
-        ["inspect", str(rig), "--json", str(tmp_path / "empty.csv")],
+        ["inspect", str(rig), "--json", str(tmp_path / "empty.out")],
     ):
         rc, _, err = run_cli(argv)
         assert rc == 0, (argv, err)
     assert json.loads(report.read_text())["strategy"] == "none"
-    assert (tmp_path / "empty.csv").stat().st_size > 0
+    assert (tmp_path / "empty.out").stat().st_size > 0
 
 
 def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_path: Path) -> None:
@@ -240,8 +309,8 @@ def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_pat
     for path, kind, holds in refused:
         with pytest.raises(SinsInputError, match=f"holds {holds}; sins writes"):
             replaceable(path, "x", kind)
-    with pytest.raises(ValueError, match="output kind 'csv'"):
-        replaceable(plain, "p", "csv")
+    with pytest.raises(ValueError, match="output kind 'table'"):
+        replaceable(plain, "p", "table")
     # A TOML file opens with a table's name in brackets, which is not JSON: a scenario or an IMU file is
     # text that a JSON output does not replace.
     for i, toml in enumerate(("[imu]\nmodel = 'tactical'\n", "[[case]]\nname = 'linear'\n")):

@@ -48,6 +48,7 @@ from sins.characterise.noise_terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG, MG, UG, ImuModel, spec
 from sins.io.atomic import atomic_text
+from sins.io.paths import check_named
 
 #: Per sensor, the effects written: (term, effect, parameter), the parameter in the file's unit.
 EFFECTS = {
@@ -230,6 +231,7 @@ def write_model(path: str | os.PathLike[str], result: Characterisation) -> Path:
         as :func:`imu_model`, before anything is written.
     """
     path = Path(path)
+    check_named(path, "toml")
     imu_model(result)
     text = model_toml(result)
     with atomic_text(path) as fh:  # links followed, devices written in place (sins.io.atomic)

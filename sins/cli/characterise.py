@@ -81,7 +81,8 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
         viz.check_rrd_path(args.rerun)
     check_plot(args)
     outputs = {"--out": args.out, "--json": args.json, "--rerun": args.rerun, "--plot": args.plot}
-    check_outputs(outputs, [args.recording, args.truth, *dataset_inputs(args.dataset)])
+    read = [args.recording, args.truth, *dataset_inputs(args.dataset)]
+    check_outputs(outputs, read, kinds={"--out": "toml"})
     with progress_bar("reading", "channels") as bar:
         res = _characterise_inputs(args)
         for line in res.warnings:

@@ -156,20 +156,17 @@ def check_outputs(
     read = [p for p in inputs if p is not None]
     read += [beside for p in read if (beside := read_beside(p)) is not None]  # an ASL file's mav0
     told = kinds or {}
-    of = {
-        flag: told.get(flag) or output_kind(flag, path) for flag, path in outputs.items() if path is not None
-    }
+    of = {flag: told.get(flag) or output_kind(flag) for flag, path in outputs.items() if path is not None}
     check(outputs, read, folders, of)
 
 
-def output_kind(flag: str, path: Path) -> str:
+def output_kind(flag: str) -> str:
     """What a command's output flag writes (:data:`sins.io.paths.KINDS`): ``--json`` and ``--baseline``
     JSON, ``--plot`` an image (or its HTML page), ``--rerun`` a Rerun recording; the others (``--out``,
-    ``--imu``, ``--truth``) a table by their suffix: Parquet, else text."""
+    ``--imu``, ``--truth``) a CSV table, unless the command says otherwise (``check_outputs``'
+    ``kinds``: ``sins integrate --out X.parquet``, ``sins characterise --out IMU.toml``)."""
     fixed = {"--json": "json", "--baseline": "json", "--plot": "image", "--rerun": "rrd"}
-    if flag in fixed:
-        return fixed[flag]
-    return "parquet" if Path(path).suffix.lower() == ".parquet" else "text"
+    return fixed.get(flag, "csv")
 
 
 def unit_of(rec: Recording) -> str:

@@ -43,11 +43,10 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins.io.inspection import gaps_note
     from sins.runs import pipeline
 
-    if args.out:
-        solution.check_solution_path(args.out)  # before the work, not after
+    kinds = {"--out": solution.check_solution_path(args.out)} if args.out else None  # before the work
     check_plot(args)
     inputs = [args.imu, args.truth, *dataset_inputs(args.dataset)]
-    check_outputs({"--out": args.out, "--json": args.json, "--plot": args.plot}, inputs)
+    check_outputs({"--out": args.out, "--json": args.json, "--plot": args.plot}, inputs, kinds=kinds)
     if args.attitude is not None or args.align is not None:
         return _integrate_free(args)
     for flag, given in (("--heading", args.heading), ("--grade", args.grade)):

@@ -16,10 +16,13 @@ from typing import Any
 from sins.errors import SinsInputError
 from sins.io import documents
 from sins.io.atomic import atomic_text
+from sins.io.paths import check_named
 
 
 def write_json(path: str | os.PathLike[str], obj: Any) -> None:
-    """Write JSON (indented, keys in insertion order) to a temporary name then rename."""
+    """Write JSON (indented, keys in insertion order) to a temporary name then rename; a name that says
+    another format (``m.csv``, ``m.npz``) is refused (:func:`sins.io.paths.check_named`)."""
+    check_named(path, "json")
     with atomic_text(path) as fh:
         json.dump(obj, fh, indent=2, allow_nan=True)
         fh.write("\n")

@@ -8,6 +8,8 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
 
 **Outputs** (:func:`check_outputs`), the one check every command that writes makes before its work:
 
+* the name: its suffix does not name another format than the one written (CSV text is not written
+  to ``corrected.npz``, nor a model to ``m.csv``: :func:`check_named`);
 * the place: the folder exists and can be written (tried with a temporary file, not read off the
   permission bits, which bind neither root nor a read-only mount); the name is not a folder;
 * what is there: a regular file is replaced (:mod:`sins.io.atomic`: a temporary name, then a rename),
@@ -119,9 +121,10 @@ def read_only(path: Path, shown: str) -> None:
         )
 
 
-#: The kinds of file a command writes (:func:`check_outputs`' ``kinds``, :func:`replaceable`), besides
-#: the formats of sins's own JSON documents that other commands read (:data:`_DOCUMENTS`).
-KINDS = ("json", "text", "image", "rrd", "parquet")
+#: The kinds of file a command writes (:func:`check_outputs`' ``kinds``, :func:`replaceable`,
+#: :func:`check_named`), besides the formats of sins's own JSON documents that other commands read
+#: (:data:`_DOCUMENTS`): ``csv`` a table as text, ``toml`` an IMU file, ``text`` any other text.
+KINDS = ("json", "csv", "toml", "text", "image", "rrd", "parquet")
 #: sins's JSON documents that are inputs, by their ``format``: only an output of the same replaces one.
 _DOCUMENTS = {"sins.compensation": "a compensation model", "sins.quality-baseline": "a quality baseline"}
 #: The first bytes of the files that are not text which sins reads or writes, and what each is.
@@ -142,13 +145,31 @@ _SIGNATURES = (
 #: What an output of each kind may replace, by what :func:`_holds` says a file is (and an empty file).
 _REPLACES = {
     "json": ("JSON",),
+    "csv": ("JSON", "text"),
+    "toml": ("JSON", "text"),
     "text": ("JSON", "text"),
     "image": ("a PNG image", "text"),  # a plot's .png, or its .html page
     "rrd": ("a Rerun recording",),
     "parquet": ("a Parquet table",),
 }
-_WRITES = {"json": "JSON", "text": "text", "image": "an image", "rrd": "a Rerun recording",
-           "parquet": "a Parquet table", **_DOCUMENTS}  # fmt: skip
+_WRITES = {"json": "JSON", "csv": "a CSV table", "toml": "a TOML file", "text": "text", "image": "an image",
+           "rrd": "a Rerun recording", "parquet": "a Parquet table", **_DOCUMENTS}  # fmt: skip
+#: The formats that common suffixes name. An output is never written under a suffix that names another
+#: format than its own: every reader, sins's own included, would take it for that format (CSV text in
+#: an ``.npz`` reads as a damaged archive, in a ``.parquet`` as a damaged table).
+_NAMED = {
+    ".npz": "a NumPy archive", ".npy": "a NumPy array", ".mat": "a MATLAB file", ".h5": "an HDF5 file",
+    ".hdf5": "an HDF5 file", ".bag": "a ROS 1 bag", ".mcap": "an MCAP recording", ".db3": "a ROS 2 bag",
+    ".parquet": "a Parquet table", ".feather": "an Arrow table", ".pkl": "a pickle", ".xlsx": "a spreadsheet",
+    ".png": "an image", ".jpg": "an image", ".pdf": "a PDF", ".svg": "an SVG image", ".html": "a web page",
+    ".rrd": "a Rerun recording", ".zip": "a zip archive", ".gz": "a gzip file", ".xz": "an xz file",
+    ".json": "JSON", ".toml": "TOML", ".yaml": "YAML", ".yml": "YAML", ".csv": "a CSV table",
+}  # fmt: skip
+#: The suffixes of :data:`_NAMED` under which an output of each kind is written (a document: as JSON).
+_OWN_SUFFIXES = {
+    "json": (".json",), "csv": (".csv",), "toml": (".toml",), "text": (".csv", ".json", ".toml"),
+    "image": (".png", ".html"), "rrd": (".rrd",), "parquet": (".parquet",),
+}  # fmt: skip
 #: A JSON document's ``format``, where it opens with it (as sins writes its documents).
 _FORMAT = re.compile(r'\A\ufeff?\s*\{\s*"format"\s*:\s*"([^"\\]*)"')
 #: How JSON opens: an object's first key (or its end), an array's first value (or its end); not a TOML
@@ -206,6 +227,25 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
         f"{shown}: holds {seen}; sins writes {_WRITES[kind]} there and does not replace it: remove it "
         "or write elsewhere"
     )
+
+
+def check_named(path: str | os.PathLike[str], kind: str, flag: str = "") -> None:
+    """Refuse an output of ``kind`` (:data:`KINDS`, or a document's ``format``) whose name ends in a
+    suffix that names another format (:data:`_NAMED`): ``corrected.npz`` for CSV text, ``m.csv`` for a
+    model. A suffix that names no format (``.txt``, ``.dat``, none) is the user's to choose.
+
+    Raises
+    ------
+    SinsInputError
+        ``[flag ]path: .npz names a NumPy archive; sins writes a CSV table there: name it .csv``.
+    """
+    own = _OWN_SUFFIXES.get(kind, _OWN_SUFFIXES["json"])  # a document is JSON
+    suffix = Path(path).suffix.lower()
+    if suffix in _NAMED and suffix not in own:
+        shown = f"{flag} {path}" if flag else f"{path}"
+        raise SinsInputError(
+            f"{shown}: {suffix} names {_NAMED[suffix]}; sins writes {_WRITES[kind]} there: name it {own[0]}"
+        )
 
 
 def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str = "") -> None:
@@ -279,8 +319,9 @@ def check_outputs(
     outputs : ``{flag: path}`` of the files the command will write (None: not asked for)
     inputs : every file and folder it reads (None entries skipped)
     folders : ``{flag: path}`` of folders it writes into (a campaign's results)
-    kinds : ``{flag: kind}`` (:data:`KINDS`): what each output is, so that an existing file holding
-        what it never is (a recording where JSON goes) is refused (:func:`replaceable`)
+    kinds : ``{flag: kind}`` (:data:`KINDS`): what each output is, so that a name whose suffix names
+        another format (:func:`check_named`) and an existing file holding what it never is (a recording
+        where JSON goes, :func:`replaceable`) are refused
 
     Raises
     ------
@@ -314,8 +355,10 @@ def check_outputs(
                 )
         seen.append((flag, path, ident, real))
         kind = (kinds or {}).get(flag)
-        if kind is not None and os.path.isfile(real):  # after the inputs: "is an input" says more
-            replaceable(Path(real), f"{flag} {path}", kind)
+        if kind is not None:  # after the inputs, and a file held before its name: each says more
+            if os.path.isfile(real):
+                replaceable(Path(real), f"{flag} {path}", kind)
+            check_named(path, kind, flag)
     for flag, path in dirs.items():
         real = os.path.realpath(path)
         for source, _, source_real in read:
@@ -329,6 +372,7 @@ __all__ = [
     "KINDS",
     "READ_FACTOR",
     "check_input",
+    "check_named",
     "check_outputs",
     "check_writable",
     "read_only",

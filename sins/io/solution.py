@@ -34,8 +34,9 @@ SOLUTION_UNITS = dict(
 SUFFIXES = (".csv", ".parquet")
 
 
-def check_solution_path(path: str | os.PathLike[str]) -> None:
-    """Refuse a solution path with a suffix other than :data:`SUFFIXES` (before any work is done).
+def check_solution_path(path: str | os.PathLike[str]) -> str:
+    """Refuse a solution path with a suffix other than :data:`SUFFIXES` (before any work is done); the
+    kind of file it names (:data:`sins.io.paths.KINDS`: ``"csv"`` or ``"parquet"``) where it is taken.
 
     Raises
     ------
@@ -47,6 +48,7 @@ def check_solution_path(path: str | os.PathLike[str]) -> None:
         raise SinsInputError(
             f"{path}: a solution is written as .csv or .parquet, not {suffix or 'a file without a suffix'}"
         )
+    return suffix[1:]
 
 
 def solution_columns(solution: NavSeries) -> dict[str, np.ndarray]:

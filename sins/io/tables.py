@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from sins.errors import SinsInputError
 from sins.io.atomic import atomic_text
-from sins.io.paths import check_input
+from sins.io.paths import check_input, check_named
 
 Array = NDArray[np.float64]
 
@@ -304,7 +304,13 @@ def write_table(
     """Write a CSV with a header, 17 significant digits, to a temporary name then rename.
 
     ``progress(rows_written, rows)`` is called after each block of :data:`WRITE_BLOCK_ROWS` rows.
+
+    Raises
+    ------
+    SinsInputError
+        a name that says another format (``x.npz``, ``x.parquet``: :func:`sins.io.paths.check_named`).
     """
+    check_named(path, "csv")
     header = "".join(f"# {line}\n" for line in comment.splitlines()) + ",".join(columns)
     n = len(data)
     with atomic_text(path) as fh:
