@@ -166,7 +166,14 @@ def test_fit_and_evaluate_on_a_recording(tmp_path: Path, capsys: pytest.CaptureF
     after = np.array([v["rms_after"] for v in channels.values()])
     # What is left is the white noise, divided by (1 + scale factor): consumer units have percent-level ones.
     np.testing.assert_allclose(after, floor, rtol=0.05)
+    # The last 0.3 of each phase is what the fit held back: a held-back judgement. The whole recording,
+    # or its last half, holds rows the model was fitted on, and is said to.
+    assert json.loads(out.read_text())["fitted_on_this_recording"] is False
     capsys.readouterr()
+    for last in ([], ["--last", "0.5"]):
+        assert main(["evaluate", str(model_path), str(rec), *last, "--json", str(out)]) == 0
+        assert json.loads(out.read_text())["fitted_on_this_recording"] is True
+        assert "the model was fitted on these readings" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

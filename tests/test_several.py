@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -310,12 +311,21 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main([*several, "--json", str(tmp_path / "several.json")]) == 0
     both = json.loads((tmp_path / "several.json").read_text())
     assert both["recordings"] == [singles["unit/r2"], singles["unit/r0"]]
+    # r0 is one the model was fitted on, by its readings: said of it, and of the mean.
+    assert [singles[n]["fitted_on_this_recording"] for n in ("unit/r2", "unit/r0")] == [False, True]
+    assert both["fitted_on"] == ["unit/r0"]
+    assert "the model was fitted on 1 of the 2 recordings judged (unit/r0)" in capsys.readouterr().out
     for key in ("open_loop_attitude", "open_loop_attitude_raw"):
         assert both["mean"][key]["aoe_deg"] == np.mean([d[key]["aoe_deg"] for d in singles.values()])
     # A file and a dataset mixed: the same readings, the same figures.
     mixed = ["evaluate", str(model), str(tmp_path / "unit" / "r2.npz"), "--dataset", "unit/r0"]
     assert main([*mixed, "--json", str(tmp_path / "mixed.json")]) == 0
     assert json.loads((tmp_path / "mixed.json").read_text())["mean"] == both["mean"]
+    # A copy of a training recording under another name and folder is still one it was fitted on.
+    (tmp_path / "copy").mkdir()
+    copy = Path(shutil.copy(tmp_path / "unit" / "r1.npz", tmp_path / "copy" / "renamed.npz"))
+    assert main(["evaluate", str(model), str(copy), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["fitted_on_this_recording"] is True
     capsys.readouterr()
     for extra, what in ((["--plot", str(tmp_path / "x.png")], "--plot"), (["--dataset", "unit/r2"], "twice")):
         assert main([*several, *extra]) == 2

@@ -28,6 +28,11 @@ if TYPE_CHECKING:
 OPEN_LOOP_HEAD = ["readings", "total", "heading", "inclination", "AOE"]
 #: The label of the raw readings' row.
 RAW = "none (raw readings)"
+#: Said of a judgement on readings the model was fitted on (:func:`_fitted_here`).
+FITTED_HERE = (
+    "the model was fitted on these readings: the figures say how it fits its own data, not how it does on "
+    "a recording it has not seen (judge it on another)"
+)
 
 
 @dataclass(frozen=True)
@@ -62,6 +67,10 @@ def evaluate_rig(
     from sins.compensation.base import residual_rms
     from sins.imu import display_unit
 
+    fitted_here = _fitted_here(strategy, data.t, data.gyro, data.accel)
+    held_back = float((getattr(strategy, "fitted_on_", None) or {}).get("held_back") or 0.0)
+    if fitted_here and last and last <= held_back:
+        fitted_here = False  # the part of each phase its fit held back: a held-back judgement
     if last:
         try:
             _, data = data.split(last)
@@ -80,8 +89,10 @@ def evaluate_rig(
         f"{where}, {scope}: reading - reference",
         fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows),
         "beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)",
+        *([FITTED_HERE] if fitted_here else []),
     ]
-    return Evaluation(lines, {"channels": channels}, channels=channels, scope=scope)
+    document = {"channels": channels, "fitted_on_this_recording": fitted_here}
+    return Evaluation(lines, document, channels=channels, scope=scope)
 
 
 def evaluate_referenced(
@@ -101,6 +112,7 @@ def evaluate_referenced(
     ``stage(text)`` is told each open loop as it starts."""
     from sins.compensation import referenced
 
+    fitted_here = _fitted_here(strategy, rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
     if last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
@@ -139,12 +151,15 @@ def evaluate_referenced(
             "against the gyro's): every figure is judged against it as stamped, the rate times that "
             f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
         )
+    if fitted_here:
+        lines.append(FITTED_HERE)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
     document: dict[str, Any] = {
         "open_loop_attitude": attitude[strategy.label],
         "open_loop_attitude_raw": attitude[RAW],
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
+        "fitted_on_this_recording": fitted_here,
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
@@ -170,11 +185,29 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
         ["recording", f"{RAW}: AOE", f"{label}: AOE"], [*rows, ["mean", f"{mean_raw:.3f}", f"{mean:.3f}"]]
     )
     lines = [f"\nacross {len(judged)} recordings: the gyro's open-loop AOE, degrees", table]
+    fitted = [name for name, e in judged.items() if e.document.get("fitted_on_this_recording")]
+    if fitted:
+        lines.append(
+            f"the model was fitted on {len(fitted)} of the {len(judged)} recordings judged "
+            f"({', '.join(fitted)}): the mean is not a held-back figure"
+        )
     document = {
         "recordings": [{"recording": name, **e.to_dict()} for name, e in judged.items()],
         "mean": {"open_loop_attitude": {"aoe_deg": mean}, "open_loop_attitude_raw": {"aoe_deg": mean_raw}},
+        "fitted_on": fitted,
     }
     return Evaluation(lines, document, table=table)
+
+
+def _fitted_here(strategy: Strategy, t: Any, *readings: Any) -> bool | None:
+    """Whether the model was fitted on these readings (their digest among ``fitted_on_["readings"]``;
+    None where the model file does not say: one written before it did)."""
+    from sins.io.provenance import readings_digest
+
+    said = (getattr(strategy, "fitted_on_", None) or {}).get("readings")
+    if not isinstance(said, list):
+        return None
+    return readings_digest(t, *readings) in said
 
 
 def _drive(
@@ -205,6 +238,7 @@ def _drive(
 
 
 __all__ = [
+    "FITTED_HERE",
     "OPEN_LOOP_HEAD",
     "RAW",
     "Evaluation",

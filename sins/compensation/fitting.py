@@ -21,6 +21,7 @@ from sins.compensation import coefficients
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 from sins.io import frame_check
+from sins.io.provenance import readings_digest
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -112,7 +113,9 @@ def fit_rig(
             strategy, f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks"
         )
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
-    strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks}
+    digest = readings_digest(data.t, data.gyro, data.accel)
+    strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
+                           "readings": [digest], "held_back": validation or 0.0}  # fmt: skip
     return FitOutcome(strategy, lines, document)
 
 

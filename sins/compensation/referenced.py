@@ -184,7 +184,8 @@ def fit_several(
         raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
     strategy.unit_bias_ = rule.to_dict()
     strategy.fitted_on_ = {
-        **fitted_on(recs[0]), "recordings": [rec.source for rec in recs], "checks": review.to_dict(),
+        **fitted_on(recs[0]), "recordings": [rec.source for rec in recs],
+        "readings": [readings_of(rec) for rec in recs], "checks": review.to_dict(),
     }  # fmt: skip
     return FittedSeveral(strategy, fit_all, rule, review)
 
@@ -352,9 +353,18 @@ def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecordi
 
 def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
     """What a model file records of the recording it was fitted on: the unit, its rate, the reference,
-    and the file's axes the readings were read on (where said)."""
+    the file's axes the readings were read on (where said), and the readings' digest
+    (:func:`readings_of`)."""
     said = {"frame": rec.frame} if rec.frame else {}
-    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name, **said}
+    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name, **said,
+            "readings": [readings_of(rec)]}  # fmt: skip
+
+
+def readings_of(rec: ReferencedRecording) -> str:
+    """The digest of ``rec``'s increments (:func:`sins.io.provenance.readings_digest`)."""
+    from sins.io.provenance import readings_digest
+
+    return readings_digest(rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
 
 
 def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitted:
@@ -638,4 +648,5 @@ __all__ = [
     "open_loop",
     "open_loop_attitude",
     "opening_rest",
+    "readings_of",
 ]

@@ -10,6 +10,10 @@ header; other readers skip them as comments)::
 ``sins simulate`` and ``sins calibrate`` write the first; ``sins correct`` keeps the recording's
 ``sensor`` line and adds the second, so that a corrected file says so, and by which model, and a second
 correction is refused unless asked for (``sins correct --again``). :func:`read_provenance` reads them back.
+
+A model file says which readings it was fitted on by their digest (:func:`readings_digest`, kept in
+``fitted_on_["readings"]``), so that a judgement on one of them is said to be no held-back judgement,
+whatever the file's name or path.
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from sins.io.documents import printable
 from sins.io.tables import open_text
@@ -72,6 +78,16 @@ def corrected_line(model: str | os.PathLike[str], label: str, fitted_on: str = "
     return f"{CORRECTED_KEY}: {label} model {model} (sha256 {digest}){on}"
 
 
+def readings_digest(t: np.ndarray, *readings: np.ndarray) -> str:
+    """The first 16 hex digits of the SHA-256 of the readings' times and values as float64 (a rig's
+    ``t, gyro, accel``; a recording's increments ``t, dtheta_b, dv_b``): the same readings read from any
+    copy, path or name of their file give the same digest."""
+    h = hashlib.sha256()
+    for a in (t, *readings):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return h.hexdigest()[:16]
+
+
 __all__ = [
     "CORRECTED_KEY",
     "MAX_COMMENT_LINES",
@@ -79,4 +95,5 @@ __all__ = [
     "Provenance",
     "corrected_line",
     "read_provenance",
+    "readings_digest",
 ]
