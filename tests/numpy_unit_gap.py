@@ -15,7 +15,8 @@ and differentiated per sample some 140 times.
 
 Effects (added to the readings from the true inputs, each sensor reading its own axes):
 ``gyro.scale_asymmetry`` ``ka |ω_i|``; ``gyro.motion_bias`` ``b |ω|² / (|ω|² + ω₀²)``, ω₀ = 5 °/s;
-``gyro.time_offset`` the gyro's input ``τ`` late; ``gyro.y step`` a bias step on gyro y half way.
+``gyro.time_offset`` the gyro's input ``τ`` late; ``gyro.y step`` a bias step on gyro y half way;
+``gyro.bias_instability`` a first-order Gauss-Markov bias on every gyro axis (τ = 10 s, 0.3 °/s).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 from numpy_referenced import _right_jacobian
+from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
 #: Normal gravity at the ``.npz`` form's nominal origin (45° N, 0° E, 0 m: sins places a room whose place
@@ -81,6 +83,10 @@ def recording(
         pass  # read late above
     elif effect == "gyro.y step":
         gyro[:, 1] += size * 0.3 * DEG * (t >= 0.5 * t[-1])
+    elif effect == "gyro.bias_instability":
+        phi = np.exp(-1.0 / (rate_hz * 10.0))
+        drive = size * 0.3 * DEG * np.sqrt(1.0 - phi * phi) * rng.normal(0.0, 1.0, gyro.shape)
+        gyro += lfilter([1.0], [1.0, -phi], drive, axis=0)
     elif effect != "clean":
         raise ValueError(f"unknown effect {effect!r}")
     noise = Rotation.from_rotvec(rng.normal(0.0, ref_angle_deg * DEG, (n + 1, 3)))

@@ -118,7 +118,8 @@ class IntervalDiagnosis:
     baseline: IntervalFit
     states: dict[str, SensorState]
     before: dict[str, Array]  # what the baseline leaves, (k, 3)
-    after: dict[str, Array]  # what the accepted effects leave
+    after: dict[str, Array]  # what the accepted effects leave: a random bias's one-step predictions too
+    left: dict[str, Array]  # what the accepted regressors leave (a random bias's path in it): the floor's
     effects: list[EffectScore]
     diagnosis: list[str]
     outside: list[Outside]
@@ -240,15 +241,26 @@ def diagnose_intervals(
             if c.name != taken.name and not (bias and c.phis is not None and c.sensor == taken.sensor)
         ]
     outside += _leftover(states, res)
-    after = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
+    left = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
+    after = {s: _predicted_away(st, left[s]) for s, st in states.items()}
     ordered = [scores[n] for n in accepted] + sorted(
         (e for n, e in scores.items() if n not in accepted), key=lambda e: -e.score
     )
     return IntervalDiagnosis(
-        res, baseline, states, before, after, ordered, accepted,
+        res, baseline, states, before, after, left, ordered, accepted,
         sorted(outside, key=lambda o: CHANNELS.index(o.channel)), _sizes(states, float(np.median(res.span))),
         fit, withheld,
     )  # fmt: skip
+
+
+def _predicted_away(st: SensorState, left: Array) -> Array:
+    """What a sensor's accepted effects leave of the intervals (k, 3): the regressors' residual ``left``
+    less, where a random bias was accepted, its one-step prediction from the intervals before (the
+    noise's innovations, in its units), as on samples (:mod:`sins.gap.channel`): what the bias was
+    accepted for. Without one, ``left`` itself."""
+    if not any(c.phis is not None for c in st.accepted):
+        return left
+    return st.fit.raw_innovations(left)
 
 
 def _names(sensor: str, aside: set[int]) -> tuple[str, ...]:
@@ -407,7 +419,7 @@ def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], 
         for a in range(3):
             ch = f"{sensor}.{'xyz'[a]}"
             before, after = d.before[sensor][:, a], d.after[sensor][:, a]
-            floor = max(interval_noise_level(after, d.residuals.joined), TINY) / span
+            floor = max(interval_noise_level(d.left[sensor][:, a], d.residuals.joined), TINY) / span
             rms_after = float(np.sqrt(np.mean(after[d.withheld] ** 2))) / span
             figures[ch] = {
                 "rms_before": float(np.sqrt(np.mean(before[d.withheld] ** 2))) / span,
