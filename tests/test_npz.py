@@ -288,9 +288,12 @@ def test_not_an_archive(tmp_path: Path) -> None:
     path.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
     message = refusal(lambda: io.read(path), str(path), "not a readable .npz archive")
     assert "UTF-8" not in message
-    # Not a zip at all, whatever its name: the CSV reader's refusal.
-    path.write_bytes(b"\x00\x01 binary")
-    refusal(lambda: io.read(path), str(path))
+    # Not a zip at all: named as an archive, and not read as a CSV (an empty file, or CSV text that an
+    # older sins correct wrote under an .npz name, which it read as a recording before).
+    not_zip = "its first bytes are not a zip archive's"
+    for content, why in ((b"\x00\x01 binary", not_zip), (b"", "it is empty"), (b"t,gyro_x\n0,1\n", not_zip)):
+        path.write_bytes(content)
+        refusal(lambda: io.read(path), str(path), f"named as a NumPy archive, but {why}; not read as a CSV")
 
 
 def test_dataset_names_and_a_missing_one(tmp_path: Path) -> None:

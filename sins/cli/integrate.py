@@ -43,7 +43,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     from sins.io.inspection import gaps_note
     from sins.runs import pipeline
 
-    kinds = {"--out": solution.check_solution_path(args.out)} if args.out else None  # before the work
+    kinds = {"--out": solution.check_solution_path(args.out, "--out")} if args.out else None  # before work
     check_plot(args)
     inputs = [args.imu, args.truth, *dataset_inputs(args.dataset)]
     check_outputs({"--out": args.out, "--json": args.json, "--plot": args.plot}, inputs, kinds=kinds)

@@ -175,12 +175,13 @@ class Recording:
         return mid, self.imu.dtheta_b / dt, self.imu.dv_b / dt
 
 
-#: Suffixes that name a bag format, with what its file starts with (a file that does not is refused,
-#: not read as a CSV).
+#: Suffixes that name a binary recording format (the bags, an ``.npz``), with what its file starts with
+#: (a file that does not is refused, not read as a CSV).
 _BAG_SUFFIXES = {
     ".bag": ("a ROS 1 bag", "'#ROSBAG V2.0'"),
     ".mcap": ("an MCAP file", "MCAP's magic"),
     ".db3": ("a ROS 2 bag", "SQLite's header"),
+    ".npz": ("a NumPy archive", "a zip archive's"),
 }
 
 
@@ -275,13 +276,13 @@ def recording_kind(path: Path) -> str:
         return kind
     if euroc.locate(path) is not None:
         return "euroc"
+    if npz.is_npz(path):
+        return "npz"
     named = _BAG_SUFFIXES.get(path.suffix.lower())
     if named is not None and path.is_file():
         size = path.stat().st_size
         why = "it is empty" if size == 0 else f"its first bytes are not {named[1]}"
         raise SinsInputError(f"{path}: named as {named[0]}, but {why}; not read as a CSV")
-    if npz.is_npz(path):
-        return "npz"
     if path.is_dir():
         raise SinsInputError(
             f"{path}: a folder, but neither a ROS 2 bag (metadata.yaml) nor a EuRoC/TUM-VI recording "

@@ -34,7 +34,7 @@ SOLUTION_UNITS = dict(
 SUFFIXES = (".csv", ".parquet")
 
 
-def check_solution_path(path: str | os.PathLike[str]) -> str:
+def check_solution_path(path: str | os.PathLike[str], flag: str = "") -> str:
     """Refuse a solution path with a suffix other than :data:`SUFFIXES` (before any work is done); the
     kind of file it names (:data:`sins.io.paths.KINDS`: ``"csv"`` or ``"parquet"``) where it is taken.
 
@@ -46,7 +46,8 @@ def check_solution_path(path: str | os.PathLike[str]) -> str:
     suffix = Path(path).suffix.lower()
     if suffix not in SUFFIXES:
         raise SinsInputError(
-            f"{path}: a solution is written as .csv or .parquet, not {suffix or 'a file without a suffix'}"
+            f"{flag + ' ' if flag else ''}{path}: a solution is written as .csv or .parquet, not "
+            f"{suffix or 'a file without a suffix'}"
         )
     return suffix[1:]
 
