@@ -282,6 +282,9 @@ def choose_rule(
             part = several.fit_several(others, interval_s=interval_s)
             seed = Regression(g_sensitivity=False).set_fit(part.seed)
             seed.time_offset_s_ = np.array([part.time_offset_s, part.accel_time_offset_s])
+            if getattr(strategy, "variant", None) == BIAS_ONLY:  # its own correction: the biases alone
+                seed = Regression(g_sensitivity=False).set_fit(_biases_only(part.seed))
+                seed.time_offset_s_ = np.zeros(2)
             own = [seed.correct_increments(r.imu) for r in others]
             base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own)
             stream = seed.correct_increments(rec.imu)
