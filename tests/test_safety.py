@@ -158,6 +158,8 @@ def _others(folder: Path) -> None:
     os.rename(folder / "rec.mat", folder / "session.dat")
     pq.write_table(pa.table({"t": [0.0, 1.0]}), folder / "table.parquet")
     (folder / "link.json").symlink_to(folder / "recording")
+    readings = np.column_stack([np.arange(3.0), np.zeros((3, 5)), np.full(3, 9.8)])
+    np.savetxt(folder / "logger.csv", readings, delimiter=",", header="t,gx,gy,gz,ax,ay,az", comments="")
 
 
 #: Each case: the files copied in, the command (as in :data:`ALIASES`), the output it must refuse to
@@ -178,6 +180,14 @@ KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
         ("rig.csv", "static.csv"), "fit {rig.csv} --strategy none --out {static.csv}", "--out",
         "text that is not JSON",
     ),
+    "corrected readings onto a logger's CSV recording": (
+        ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out logger.csv", "--out",
+        "text sins did not write (a recording or table of yours?)",
+    ),
+    "a simulated unit onto a logger's CSV recording": (
+        ("s.toml",), "simulate {s.toml} --imu logger.csv --truth t.csv", "--imu",
+        "text sins did not write (a recording or table of yours?)",
+    ),
     "a CSV solution onto a Parquet table": (
         ("inc.csv", "truth.csv"), "integrate {inc.csv} --truth {truth.csv} --out table.csv", "--out",
         "a Parquet table",
@@ -197,7 +207,8 @@ def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
     _others(tmp_path)
     if case == "a CSV solution onto a Parquet table":
         shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
-    kept = [*inputs, *(tmp_path / n for n in ("recording", "session.dat", "table.parquet", "table.csv"))]
+    others = ("recording", "session.dat", "table.parquet", "table.csv", "logger.csv")
+    kept = [*inputs, *(tmp_path / n for n in others)]
     before = _digests(kept)
     rc, err = _run_in(tmp_path, argv, names)
     assert rc == 2 and err.startswith(f"sins: error: {flag} "), err
@@ -272,14 +283,19 @@ def test_the_library_writers_refuse_a_name_for_another_format(files: Path, tmp_p
 
 def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) -> None:
     """What an output is may be replaced: a model by a model, a report by a report, any JSON by a model,
-    an empty file by anything."""
+    a table sins wrote by a table, an empty file by anything."""
     rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
     report = tmp_path / "report.json"
     report.write_text('{"figures": [1, 2]}\n')
     (tmp_path / "empty.out").touch()
+    inc, truth, scenario = _copy(files, tmp_path, "inc.csv", "truth.csv", "s.toml")
+    imu, solution = tmp_path / "imu2.csv", tmp_path / "solution.csv"
     for argv in (
         ["fit", str(rig), "--strategy", "none", "--out", str(model)],
         ["fit", str(rig), "--strategy", "none", "--out", str(report)],
+        # A table sins wrote (its first line "# sins VERSION: ..."), written again by the same command.
+        *[["simulate", str(scenario), "--imu", str(imu), "--truth", str(tmp_path / "t2.csv")]] * 2,
+        *[["integrate", str(inc), "--truth", str(truth), "--out", str(solution)]] * 2,
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
         ["inspect", str(rig), "--json", str(tmp_path / "empty.out")],
@@ -380,14 +396,15 @@ def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
     an old one). The refusal says which outputs were kept as they were; the pair written when both can
     be is complete."""
     imu = tmp_path / "i.csv"
-    imu.write_text("OLD\n")
+    old = "# sins 0.1.0: an earlier run's readings\nOLD\n"  # a table sins wrote: replaceable
+    imu.write_text(old)
     rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", "/dev/full"])
     assert rc == 2 and "No space left on device" in err, err
     assert f"none of its outputs written ({imu}: as they were)" in err, err
-    assert imu.read_text() == "OLD\n" and sorted(p.name for p in tmp_path.iterdir()) == ["i.csv"]
+    assert imu.read_text() == old and sorted(p.name for p in tmp_path.iterdir()) == ["i.csv"]
     truth = tmp_path / "t.csv"
     rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", str(truth)])
-    assert rc == 0 and imu.read_text() != "OLD\n" and truth.is_file(), err
+    assert rc == 0 and imu.read_text() != old and truth.is_file(), err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["i.csv", "t.csv"]
 
 

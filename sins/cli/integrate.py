@@ -93,12 +93,13 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
 
 
 def _write_solution(args: argparse.Namespace, sol: NavSeries, comment: str) -> None:
+    from sins import __version__
     from sins.io import solution
 
     if not args.out:
         return
     with progress_bar(f"writing {args.out}", "") as bar:  # 360,000 rows of text take tens of seconds
-        solution.write_solution(args.out, sol, comment=comment)
+        solution.write_solution(args.out, sol, comment=f"sins {__version__}: {comment}")
         bar.set_description(f"wrote {args.out}")
     print(f"wrote {args.out} ({len(sol.t)} rows)")
 
