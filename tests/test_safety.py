@@ -182,11 +182,15 @@ KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
     ),
     "corrected readings onto a logger's CSV recording": (
         ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out logger.csv", "--out",
-        "text sins did not write (a recording or table of yours?)",
+        "text sins did not write (a recording, table or scenario of yours?)",
     ),
     "a simulated unit onto a logger's CSV recording": (
         ("s.toml",), "simulate {s.toml} --imu logger.csv --truth t.csv", "--imu",
-        "text sins did not write (a recording or table of yours?)",
+        "text sins did not write (a recording, table or scenario of yours?)",
+    ),
+    "an IMU file onto a hand-written scenario": (
+        ("static.csv", "s.toml"), "characterise {static.csv} --static --out scenario.toml", "--out",
+        "text sins did not write (a recording, table or scenario of yours?)",
     ),
     "a CSV solution onto a Parquet table": (
         ("inc.csv", "truth.csv"), "integrate {inc.csv} --truth {truth.csv} --out table.csv", "--out",
@@ -207,7 +211,9 @@ def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
     _others(tmp_path)
     if case == "a CSV solution onto a Parquet table":
         shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
-    others = ("recording", "session.dat", "table.parquet", "table.csv", "logger.csv")
+    if case == "an IMU file onto a hand-written scenario":
+        shutil.copy(tmp_path / "s.toml", tmp_path / "scenario.toml")
+    others = ("recording", "session.dat", "table.parquet", "table.csv", "logger.csv", "scenario.toml")
     kept = [*inputs, *(tmp_path / n for n in others)]
     before = _digests(kept)
     rc, err = _run_in(tmp_path, argv, names)
@@ -283,12 +289,12 @@ def test_the_library_writers_refuse_a_name_for_another_format(files: Path, tmp_p
 
 def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) -> None:
     """What an output is may be replaced: a model by a model, a report by a report, any JSON by a model,
-    a table sins wrote by a table, an empty file by anything."""
+    a table or an IMU file sins wrote by another, an empty file by anything."""
     rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
     report = tmp_path / "report.json"
     report.write_text('{"figures": [1, 2]}\n')
     (tmp_path / "empty.out").touch()
-    inc, truth, scenario = _copy(files, tmp_path, "inc.csv", "truth.csv", "s.toml")
+    inc, truth, scenario, static = _copy(files, tmp_path, "inc.csv", "truth.csv", "s.toml", "static.csv")
     imu, solution = tmp_path / "imu2.csv", tmp_path / "solution.csv"
     for argv in (
         ["fit", str(rig), "--strategy", "none", "--out", str(model)],
@@ -296,6 +302,7 @@ def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) ->
         # A table sins wrote (its first line "# sins VERSION: ..."), written again by the same command.
         *[["simulate", str(scenario), "--imu", str(imu), "--truth", str(tmp_path / "t2.csv")]] * 2,
         *[["integrate", str(inc), "--truth", str(truth), "--out", str(solution)]] * 2,
+        *[["characterise", str(static), "--static", "--out", str(tmp_path / "imu.toml")]] * 2,
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
         ["inspect", str(rig), "--json", str(tmp_path / "inspected.json")],
         ["inspect", str(rig), "--json", str(tmp_path / "empty.out")],

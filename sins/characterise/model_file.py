@@ -170,8 +170,10 @@ def imu_model(result: Characterisation) -> ImuModel:
 
 def model_toml(result: Characterisation) -> str:
     """The IMU file's text for a characterisation (see the module's text)."""
+    from sins import __version__
+
     lines = [
-        f"# IMU noise model from `sins characterise` of {result.source}",
+        f"# sins {__version__}: IMU noise model from `sins characterise` of {result.source}",
         f"# {result.rows} rows at {1.0 / result.dt:.6g} Hz, longest stretch {duration(result.length_s)}.",
         "# Noise only: an Allan analysis does not see biases, scale factors or misalignments.",
         "# Unresolved terms are zero here (their upper bounds in the comments).",

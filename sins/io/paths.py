@@ -14,8 +14,8 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
   permission bits, which bind neither root nor a read-only mount); the name is not a folder;
 * what is there: a regular file is replaced (:mod:`sins.io.atomic`: a temporary name, then a rename),
   unless no one may write it (its mode) or it holds what the output never is (a recording, an archive
-  or an image where JSON or text is written; where a CSV table is, any text but a table sins wrote:
-  :func:`replaceable`);
+  or an image where JSON or text is written; where a CSV table or an IMU file is, any text but a file
+  sins wrote: :func:`replaceable`);
   a character device (``/dev/null``, ``/dev/full``) is written in place, never replaced; a FIFO, a
   socket or a block device is refused; a symbolic link is followed to its target (which is written;
   the link stays);
@@ -143,18 +143,19 @@ _SIGNATURES = (
     (b"RRF", "a Rerun recording"),
     (b"PAR1", "a Parquet table"),
 )
-#: What :func:`_holds` calls a CSV that sins wrote: its first line ``# sins VERSION: ...`` (every table a
-#: command writes opens so; ``# solution of ...``, a solution of sins before it did). A table that does
-#: not is a user's (a logger's recording, a reference), which a corrected, simulated or calibrated table
-#: does not replace; sins's own it does, run again.
-SINS_TABLE = "a table sins wrote"
-_SINS_LINE = re.compile(r"\A\ufeff?# (sins \d|solution of )")
+#: What :func:`_holds` calls a text file that sins wrote: its first line ``# sins VERSION: ...`` (every
+#: table and IMU file a command writes opens so; a solution of sins before it did opened ``# solution of``,
+#: an IMU file ``# IMU noise model from `sins characterise```). Text that does not is a user's (a logger's
+#: recording, a reference, a hand-written scenario), which a table or an IMU file does not replace; sins's
+#: own they do, run again.
+SINS_TEXT = "a file sins wrote"
+_SINS_LINE = re.compile(r"\A\ufeff?# (sins \d|solution of |IMU noise model from `sins characterise`)")
 #: What an output of each kind may replace, by what :func:`_holds` says a file is (and an empty file).
 _REPLACES = {
     "json": ("JSON",),
-    "csv": (SINS_TABLE,),
-    "toml": ("JSON", "text", SINS_TABLE),
-    "text": ("JSON", "text", SINS_TABLE),
+    "csv": (SINS_TEXT,),
+    "toml": (SINS_TEXT,),
+    "text": ("JSON", "text", SINS_TEXT),
     "image": ("a PNG image", "text"),  # a plot's .png, or its .html page
     "rrd": ("a Rerun recording",),
     "parquet": ("a Parquet table",),
@@ -186,7 +187,7 @@ _JSON_START = re.compile(r'\A\ufeff?\s*(\{\s*["}]|(\[\s*)+(\]|[-0-9"{]|true\b|fa
 
 def _holds(path: Path) -> str | None:
     """What an existing file holds, by its first 4 KiB: "empty", one of :data:`_DOCUMENTS`' formats,
-    :data:`SINS_TABLE`, "JSON", "text", one of :data:`_SIGNATURES`' names, or "binary data"; None where it
+    :data:`SINS_TEXT`, "JSON", "text", one of :data:`_SIGNATURES`' names, or "binary data"; None where it
     cannot be read."""
     try:
         with open(path, "rb") as fh:
@@ -210,17 +211,17 @@ def _holds(path: Path) -> str | None:
     if document is not None and document.group(1) in _DOCUMENTS:
         return document.group(1)
     if _SINS_LINE.match(text):
-        return SINS_TABLE
+        return SINS_TEXT
     return "JSON" if _JSON_START.match(text) else "text"
 
 
 def replaceable(path: Path, shown: str, kind: str) -> None:
     """Refuse to replace an existing file that holds what an output of ``kind`` (:data:`KINDS`, or a
     ``format`` of :data:`_DOCUMENTS`) never is: a recording, an archive or an image where JSON or text
-    is written, text where an image is, a model where anything but a model is, and where a CSV table is
-    written anything but a table sins wrote (:data:`SINS_TABLE`: a user's recording). A mistyped or
-    tab-completed output name would otherwise put a result where a user's recording or model was (the
-    rename is atomic, and final). An empty file may be replaced by any.
+    is written, text where an image is, a model where anything but a model is, and where a CSV table or
+    an IMU file is written anything but a file sins wrote (:data:`SINS_TEXT`: a user's recording or
+    scenario). A mistyped or tab-completed output name would otherwise put a result where a user's
+    recording or model was (the rename is atomic, and final). An empty file may be replaced by any.
 
     Raises
     ------
@@ -234,8 +235,8 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
     if holds is None or holds == "empty" or holds in allowed:
         return
     seen = {"text": "text that is not JSON", **_DOCUMENTS}.get(holds, holds)
-    if kind == "csv" and holds in ("text", "JSON"):
-        seen = "text sins did not write (a recording or table of yours?)"
+    if kind in ("csv", "toml") and holds in ("text", "JSON"):
+        seen = "text sins did not write (a recording, table or scenario of yours?)"
     raise SinsInputError(
         f"{shown}: holds {seen}; sins writes {_WRITES[kind]} there and does not replace it: remove it "
         "or write elsewhere"
@@ -384,7 +385,7 @@ def check_outputs(
 __all__ = [
     "KINDS",
     "READ_FACTOR",
-    "SINS_TABLE",
+    "SINS_TEXT",
     "check_input",
     "check_named",
     "check_outputs",
