@@ -148,7 +148,8 @@ def test_a_random_bias_accepted_on_intervals_leaves_what_it_was_accepted_for(roo
     assert report.statistic["kind"] == "intervals" and "gyro.bias_instability" in report.diagnosis
     gyro = [report.channels[f"gyro.{a}"] for a in "xyz"]
     assert all(v["rms_after"] < v["rms_before"] for v in gyro), gyro
-    # What is left is near the floor, not the wander's size (0.3 °/s against a floor of ~0.07 °/s).
+    # What is left is near the floor, not the wander's size: 0.3 °/s against a floor of 0.13-0.15 °/s
+    # (measured 1.6-1.9 times the floor before, 1.1-1.3 after).
     assert all(v["rms_after"] < 1.5 * v["noise_floor"] for v in gyro), gyro
 
 
