@@ -18,7 +18,15 @@ class MissingInputError(SinsInputError):
         self.needs = needs
 
 
+def naming(where: str, exc: Exception) -> SinsInputError:
+    """``exc``'s message as a :class:`SinsInputError` that names ``where``: prefixed with it, unless it
+    opens with it already (a strategy's own message may name the data)."""
+    text = str(exc)
+    return SinsInputError(text if text.startswith(where) else f"{where}: {text}")
+
+
 __all__ = [
     "MissingInputError",
     "SinsInputError",
+    "naming",
 ]

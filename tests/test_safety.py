@@ -162,6 +162,8 @@ def _others(folder: Path) -> None:
     np.savetxt(folder / "logger.csv", readings, delimiter=",", header="t,gx,gy,gz,ax,ay,az", comments="")
 
 
+#: What a refusal says a user's own text holds, where a table or an IMU file would go.
+NOT_SINS = "text sins did not write (a recording, table or scenario of yours?)"
 #: Each case: the files copied in, the command (as in :data:`ALIASES`), the output it must refuse to
 #: write (a file none of its inputs, holding what that output never is), and what the refusal says it holds.
 KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
@@ -182,15 +184,15 @@ KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
     ),
     "corrected readings onto a logger's CSV recording": (
         ("m.json", "inc.csv"), "correct {m.json} {inc.csv} --out logger.csv", "--out",
-        "text sins did not write (a recording, table or scenario of yours?)",
+        NOT_SINS,
     ),
     "a simulated unit onto a logger's CSV recording": (
         ("s.toml",), "simulate {s.toml} --imu logger.csv --truth t.csv", "--imu",
-        "text sins did not write (a recording, table or scenario of yours?)",
+        NOT_SINS,
     ),
     "an IMU file onto a hand-written scenario": (
         ("static.csv", "s.toml"), "characterise {static.csv} --static --out scenario.toml", "--out",
-        "text sins did not write (a recording, table or scenario of yours?)",
+        NOT_SINS,
     ),
     "a CSV solution onto a Parquet table": (
         ("inc.csv", "truth.csv"), "integrate {inc.csv} --truth {truth.csv} --out table.csv", "--out",

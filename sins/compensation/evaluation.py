@@ -65,9 +65,10 @@ def evaluate_rig(
         naming ``where``: a ``last`` the phases cannot be split at.
     """
     from sins.compensation.base import residual_rms
+    from sins.compensation.referenced import readings_of
     from sins.imu import display_unit
 
-    fitted_here = _fitted_here(strategy, data.t, data.gyro, data.accel)
+    fitted_here = _fitted_here(strategy, readings_of(data))
     held_back = float((getattr(strategy, "fitted_on_", None) or {}).get("held_back") or 0.0)
     if fitted_here and last and last <= held_back:
         fitted_here = False  # the part of each phase its fit held back: a held-back judgement
@@ -112,7 +113,7 @@ def evaluate_referenced(
     ``stage(text)`` is told each open loop as it starts."""
     from sins.compensation import referenced
 
-    fitted_here = _fitted_here(strategy, rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
+    fitted_here = _fitted_here(strategy, referenced.readings_of(rec))
     if last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
@@ -199,15 +200,13 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
     return Evaluation(lines, document, table=table)
 
 
-def _fitted_here(strategy: Strategy, t: Any, *readings: Any) -> bool | None:
-    """Whether the model was fitted on these readings (their digest among ``fitted_on_["readings"]``;
-    None where the model file does not say: one written before it did)."""
-    from sins.io.provenance import readings_digest
-
+def _fitted_here(strategy: Strategy, digest: str) -> bool | None:
+    """Whether the model was fitted on the readings of ``digest`` (among ``fitted_on_["readings"]``; None
+    where the model file does not say: one written before it did)."""
     said = (getattr(strategy, "fitted_on_", None) or {}).get("readings")
     if not isinstance(said, list):
         return None
-    return readings_digest(t, *readings) in said
+    return digest in said
 
 
 def _drive(

@@ -19,9 +19,8 @@ import numpy as np
 
 from sins.compensation import coefficients
 from sins.core.text import fixed_width
-from sins.errors import SinsInputError
+from sins.errors import SinsInputError, naming
 from sins.io import frame_check
-from sins.io.provenance import readings_digest
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -80,6 +79,7 @@ def fit_rig(
     back), its seed model's coefficients reviewed against a ``grade`` unit's before the model is written.
     ``where`` names the recording in messages, ``sensor`` the unit in the model file."""
     from sins import compensation
+    from sins.compensation import referenced
     from sins.compensation.mlp import MLP
     from sins.compensation.regression import Regression
     from sins.compensation.residual import ResidualStrategy
@@ -103,8 +103,7 @@ def fit_rig(
             strategy.progress = progress
         strategy.fit(part)
     except ValueError as exc:
-        text = str(exc)  # a strategy's own message may name the data already
-        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
+        raise naming(where, exc) from None
     held = f" (the last {validation:g} of each phase held back)" if validation else ""
     lines.append(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
     document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}
@@ -113,9 +112,10 @@ def fit_rig(
             strategy, f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks"
         )
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
-    digest = readings_digest(data.t, data.gyro, data.accel)
-    strategy.fitted_on_ = {"sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
-                           "readings": [digest], "held_back": validation or 0.0}  # fmt: skip
+    strategy.fitted_on_ = {
+        "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
+        "readings": [referenced.readings_of(data)], "held_back": validation or 0.0,
+    }  # fmt: skip
     return FitOutcome(strategy, lines, document)
 
 

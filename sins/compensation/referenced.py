@@ -28,7 +28,7 @@ from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
-from sins.errors import SinsInputError
+from sins.errors import SinsInputError, naming
 from sins.io.recording import Recording, beside_trajectory
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
@@ -107,8 +107,7 @@ def fit(
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
-        text = str(exc)
-        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
+        raise naming(where, exc) from None
     strategy.time_offset_s_ = np.array([fitted.time_offset_s, fitted.accel_time_offset_s])
     strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
     return Fitted(strategy, fitted, review)
@@ -180,8 +179,7 @@ def fit_several(
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
-        text = str(exc)  # a strategy's own message may name the data already
-        raise SinsInputError(text if text.startswith(where) else f"{where}: {text}") from None
+        raise naming(where, exc) from None
     strategy.unit_bias_ = rule.to_dict()
     strategy.fitted_on_ = {
         **fitted_on(recs[0]), "recordings": [rec.source for rec in recs],
@@ -363,10 +361,13 @@ def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
             "readings": [readings_of(rec)]}  # fmt: skip
 
 
-def readings_of(rec: ReferencedRecording) -> str:
-    """The digest of ``rec``'s increments (:func:`sins.io.provenance.readings_digest`)."""
+def readings_of(rec: ReferencedRecording | CalibrationData) -> str:
+    """The digest of the readings a fit takes (:func:`sins.io.provenance.readings_digest`): a recording's
+    increments, a rig's rates and forces."""
     from sins.io.provenance import readings_digest
 
+    if isinstance(rec, CalibrationData):
+        return readings_digest(rec.t, rec.gyro, rec.accel)
     return readings_digest(rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
 
 

@@ -177,7 +177,7 @@ class Recording:
 
 #: Suffixes that name a binary recording format (the bags, an ``.npz``), with what its file starts with
 #: (a file that does not is refused, not read as a CSV).
-_BAG_SUFFIXES = {
+_BINARY_SUFFIXES = {
     ".bag": ("a ROS 1 bag", "'#ROSBAG V2.0'"),
     ".mcap": ("an MCAP file", "MCAP's magic"),
     ".db3": ("a ROS 2 bag", "SQLite's header"),
@@ -278,7 +278,7 @@ def recording_kind(path: Path) -> str:
         return "euroc"
     if npz.is_npz(path):
         return "npz"
-    named = _BAG_SUFFIXES.get(path.suffix.lower())
+    named = _BINARY_SUFFIXES.get(path.suffix.lower())
     if named is not None and path.is_file():
         size = path.stat().st_size
         why = "it is empty" if size == 0 else f"its first bytes are not {named[1]}"
