@@ -44,7 +44,7 @@ from sins.unit_gap.fitter import (
     refit_allowance,
 )
 from sins.unit_gap.intervals import IntervalResiduals, interval_residuals
-from sins.unit_gap.outside import Tried, explains_as_well, try_disturbances
+from sins.unit_gap.outside import Tried, beside_wander, explains_as_well, try_disturbances
 
 Array = NDArray[np.float64]
 Rows = NDArray[np.bool_]
@@ -305,6 +305,8 @@ def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Out
         tried = try_disturbances(st.fit, res, best.candidate.sensor, axis, current, left)
         fit_score = None if best.fit_scores is None else float(best.fit_scores[axis])
         disturbance = explains_as_well(tried, float(best.gains[axis]), fit_score)
+        if disturbance is None and fit_score is not None and best.candidate.phis is not None:
+            disturbance = beside_wander(st.fit, current, tried, axis, best.candidate.phis, fit_score)
         if disturbance is not None:
             found.append(disturbance)
             st.aside.add(axis)
