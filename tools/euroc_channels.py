@@ -64,21 +64,25 @@ def main_(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.root is not None:
         os.environ["SINS_DATA"] = str(args.root)
-    models = {m.stem: compensation.load(m) for m in args.models}
-    labels = ["raw", *models]
-    rms, demeaned = {n: [] for n in labels}, {n: [] for n in labels}
+    # The raw readings first, then each model under its file's name (its path where that is ambiguous).
+    stems = [m.stem for m in args.models]
+    names = [m.stem if stems.count(m.stem) == 1 and m.stem != "raw" else str(m) for m in args.models]
+    rows = [("raw", None), *((n, compensation.load(m)) for n, m in zip(names, args.models, strict=True))]
+    labels = [label for label, _ in rows]
+    rms: dict[str, list[np.ndarray]] = {n: [] for n in labels}
+    demeaned: dict[str, list[np.ndarray]] = {n: [] for n in labels}
     print("RMS over the intervals (less the recording's own mean in brackets); gyro mdeg, accel mm/s")
     for name in args.judge:
         rec = io.read(dataset=f"{args.folder}/{name}").beside_reference()
         print(f"{name}:")
-        for label in labels:
-            r = residuals(models.get(label), rec) * SCALE
+        for label, model in rows:
+            r = residuals(model, rec) * SCALE
             rms[label].append(np.sqrt(np.mean(r * r, axis=0)))
             demeaned[label].append(np.std(r, axis=0))
             both = zip(CHANNELS, rms[label][-1], demeaned[label][-1], strict=True)
             cells = "  ".join(f"{c} {a:7.1f} ({b:5.1f})" for c, a, b in both)
             print(f"  {label:<16} {cells}", flush=True)
-    first = next(iter(models))
+    first = labels[1]
     print(f"\nmean over the {len(args.judge)} recordings, less each one's mean; ratio to {first}")
     base = np.mean(demeaned[first], axis=0)
     for label in labels:

@@ -144,7 +144,7 @@ def beside_wander(
 
     A bias that wanders takes a step or a hum into its path when its noise is estimated with them in
     the residual: its driving noise grows to follow them, and the disturbance, tried beside the wander
-    so estimated, gains nothing (a 10 mg hum on EuRoC's V1_02 went to ``accel.bias_instability``). So
+    so estimated, gains nothing (a 0.3 °/s gyro step on EuRoC's V2_01 went to ``gyro.bias_instability``). So
     the noise is estimated again with the disturbance's columns fitted, and the pair is judged on the fit
     intervals against the wander alone: above :data:`~sins.gap.scoring.SIGNIFICANT_NATS` after BIC's
     penalty for every parameter (φ, and a step's size and time or a hum's two amplitudes and period).
