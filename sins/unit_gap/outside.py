@@ -5,7 +5,8 @@ bias step or a hum would, or the channel goes to ``outside`` and ``unexplained``
 columns like any effect's (:meth:`~sins.unit_gap.intervals.IntervalResiduals.columns`): a step at an
 interval boundary is the channel's bias column from that interval on; an oscillation is a cosine and a
 sine of the step's time, of a period between 2.5 intervals (shorter ones average out within an interval)
-and half the recording, chosen on the fit intervals.
+and half the recording, chosen on the fit intervals. Where the best candidate is a random bias, a
+disturbance is also tried beside it (:func:`beside_wander`): a wander and a step can both be there.
 """
 
 from __future__ import annotations

@@ -11,7 +11,8 @@ candidate is fitted on the others and scored by its withheld gain less
 :data:`~sins.gap.scoring.SIGNIFICANT_NATS` (:class:`~sins.unit_gap.fitter.SensorFit`: the noise that
 shared epochs give the intervals whitened), and the one of greatest gain among those above it is
 accepted, until none is. A bias step or an oscillation that explains a channel as well as the best
-candidate takes the channel (:mod:`sins.unit_gap.outside`); candidates within
+candidate, or that a random bias, the best, needs beside it, takes the channel
+(:mod:`sins.unit_gap.outside`); candidates within
 :data:`~sins.gap.scoring.TIE_NATS` of the accepted one are listed as indistinguishable.
 
 Random biases and output maps (quantization, saturation) are effects of single readings: the intervals
