@@ -41,8 +41,11 @@ def platform() -> dict[str, Any]:
 
 
 def normalised(document: dict[str, Any]) -> dict[str, Any]:
-    """A ``sins run --json`` document with the scenario's file named by its name alone (checkouts differ)."""
+    """A ``sins run --json`` document with the scenario's file named by its name alone (checkouts differ)
+    and without the version of the sins that wrote it (its first key, ``"sins"``: a release's, not a
+    result)."""
     out = json.loads(json.dumps(document))
+    out.pop("sins", None)
     out["scenario"]["file"] = Path(out["scenario"]["file"]).name
     return out
 

@@ -290,11 +290,12 @@ def test_the_library_writers_refuse_a_name_for_another_format(files: Path, tmp_p
 
 
 def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) -> None:
-    """What an output is may be replaced: a model by a model, a report by a report, any JSON by a model,
+    """What an output is may be replaced: a model by a model, a report sins wrote by a report or a model,
     a table or an IMU file sins wrote by another, an empty file by anything."""
     rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
     report = tmp_path / "report.json"
-    report.write_text('{"figures": [1, 2]}\n')
+    assert run_cli(["inspect", str(rig), "--json", str(report)])[0] == 0  # a report: "sins" its first key
+    assert next(iter(json.loads(report.read_text()))) == "sins"
     (tmp_path / "empty.out").touch()
     inc, truth, scenario, static = _copy(files, tmp_path, "inc.csv", "truth.csv", "s.toml", "static.csv")
     imu, solution = tmp_path / "imu2.csv", tmp_path / "solution.csv"
@@ -315,24 +316,52 @@ def test_an_output_replaces_what_it_wrote_before(files: Path, tmp_path: Path) ->
     assert (tmp_path / "empty.out").stat().st_size > 0
 
 
+def test_a_users_own_json_is_not_replaced_by_a_report_or_a_model(files: Path, tmp_path: Path) -> None:
+    """A JSON file that sins did not write (a user's settings, another tool's results, a dataset's
+    metadata) is refused by every command that writes JSON there, in one line and before the work, and is
+    left as it was: ``sins fit --out``, ``--json`` of fit, evaluate, inspect and gap. Before, any JSON
+    could be replaced by any report or model; a report now opens with ``"sins": VERSION``."""
+    rig, model = _copy(files, tmp_path, "rig.csv", "m.json")
+    mine = tmp_path / "settings.json"
+    mine.write_text('{"editor.fontSize": 14, "figures": [1, 2]}\n')
+    digest = hashlib.sha256(mine.read_bytes()).hexdigest()
+    for argv in (
+        ["fit", str(rig), "--strategy", "none", "--out", str(mine)],
+        ["fit", str(rig), "--strategy", "none", "--out", str(tmp_path / "m2.json"), "--json", str(mine)],
+        ["evaluate", str(model), str(rig), "--json", str(mine)],
+        ["inspect", str(rig), "--json", str(mine)],
+        ["gap", str(rig), "--json", str(mine)],
+    ):
+        rc, _, err = run_cli(argv)
+        assert rc == 2 and len(err.strip().splitlines()) == 1, (argv, err)
+        assert f"{mine}: holds JSON sins did not write" in err, err
+        assert hashlib.sha256(mine.read_bytes()).hexdigest() == digest
+    assert not (tmp_path / "m2.json").exists()
+
+
 def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_path: Path) -> None:
     """A model and a quality baseline (the shipped one) are inputs of other commands: only a model
-    replaces a model, only a baseline a baseline; both replace plain JSON."""
+    replaces a model, only a baseline a baseline; both replace a report sins wrote, and neither, nor a
+    report, replaces JSON sins did not write (a user's own)."""
     from sins.errors import SinsInputError
     from sins.io.paths import replaceable
 
     model, baseline = files / "m.json", Path(__file__).parents[1] / "scenarios" / "suite" / "baseline.json"
-    plain = tmp_path / "plain.json"
+    plain, report = tmp_path / "plain.json", tmp_path / "report.json"
     plain.write_text("[1, 2]\n")
+    report.write_text('{"sins": "0.1.0", "figures": [1, 2]}\n')
     replaceable(model, "m", "sins.compensation")
     replaceable(baseline, "b", "sins.quality-baseline")
     for kind in ("sins.compensation", "sins.quality-baseline", "json", "text"):
-        replaceable(plain, "p", kind)
+        replaceable(report, "r", kind)
+    replaceable(plain, "p", "text")
     refused = [(model, "sins.quality-baseline", "a compensation model"),
                (baseline, "sins.compensation", "a quality baseline"),
-               (model, "json", "a compensation model"), (baseline, "text", "a quality baseline")]  # fmt: skip
+               (model, "json", "a compensation model"), (baseline, "text", "a quality baseline"),
+               *((plain, kind, "JSON sins did not write") for kind in
+                 ("sins.compensation", "sins.quality-baseline", "json"))]  # fmt: skip
     for path, kind, holds in refused:
-        with pytest.raises(SinsInputError, match=f"holds {holds}; sins writes"):
+        with pytest.raises(SinsInputError, match=f"holds {holds}[ ;]"):
             replaceable(path, "x", kind)
     with pytest.raises(ValueError, match="output kind 'table'"):
         replaceable(plain, "p", "table")

@@ -29,7 +29,7 @@ def _cmd_bias(args: argparse.Namespace) -> int:
     estimate = _estimate(args, lat, attitude)
     print(format_bias(estimate))
     if args.json:
-        io.write_json(args.json, estimate.to_dict())
+        io.write_report(args.json, estimate.to_dict())
     if args.plot:
         from sins.viz import plots
 

@@ -100,7 +100,7 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
         model_file.write_model(args.out, result)
         print(f"\nwrote {args.out} (noise only; sins run and sins calibrate --imu read it)")
     if args.json:
-        io.write_json(args.json, document)
+        io.write_report(args.json, document)
     if args.rerun:
         viz.save_characterisation(result, closing, args.rerun)
         print(f"wrote {args.rerun}")

@@ -70,7 +70,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         result = _evaluate_referenced(args, strategy, rec.beside_reference(), title)
     if args.json:
         document = {"model": str(args.model), "strategy": strategy.label, "recording": where}
-        io.write_json(args.json, {**document, **result.to_dict()})
+        io.write_report(args.json, {**document, **result.to_dict()})
     return 0
 
 
@@ -106,7 +106,7 @@ def _evaluate_several(
     result = evaluation.across(judged, strategy.label)
     print("\n".join(result.lines))
     if args.json:
-        io.write_json(args.json, {"model": str(args.model), "strategy": strategy.label, **result.to_dict()})
+        io.write_report(args.json, {"model": str(args.model), "strategy": strategy.label, **result.to_dict()})
     return 0
 
 

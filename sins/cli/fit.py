@@ -49,7 +49,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     print("\n".join(outcome.lines))
     compensation.save(outcome.strategy, args.out)
     if args.json:
-        io.write_json(args.json, {"model": str(args.out), "recording": where, **outcome.to_dict()})
+        io.write_report(args.json, {"model": str(args.out), "recording": where, **outcome.to_dict()})
     print(f"wrote {args.out}")
     return 0
 

@@ -41,7 +41,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     results = [_diagnose(args, inp, model) for inp in inputs]
     document = _one_document(results[0]) if len(results) == 1 else _several_document(args, inputs, results)
     if args.json:
-        io.write_json(args.json, document)
+        io.write_report(args.json, document)
     if args.rerun:
         viz.save_gap({r.name: r.report for r in results}, args.rerun)
         print(f"wrote {args.rerun}")

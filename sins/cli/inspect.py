@@ -28,7 +28,9 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     result = inspection.inspect(rec)
     print(format_inspection(rec, result))
     if args.json:
-        io.write_json(args.json, {"format": "sins-inspection", **result.to_dict(), "notes": list(rec.notes)})
+        io.write_report(
+            args.json, {"format": "sins-inspection", **result.to_dict(), "notes": list(rec.notes)}
+        )
     return 0
 
 

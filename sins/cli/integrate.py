@@ -82,7 +82,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     print(format_table({"none": summary}))
     if args.json:
         truth = None if args.truth is None else str(args.truth)
-        io.write_json(args.json, {"imu": where, "truth": truth, **summary})
+        io.write_report(args.json, {"imu": where, "truth": truth, **summary})
     _write_solution(args, run.solution, f"solution of {where} from {against}")
     if args.plot:
         from sins.viz import plots
@@ -136,7 +136,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
     )
     print("\n".join(report.lines))
     if args.json:
-        io.write_json(args.json, report.to_dict())
+        io.write_report(args.json, report.to_dict())
     _write_solution(args, sol, f"solution of {where} from {start.how} start")
     if args.plot:
         from sins.viz import plots

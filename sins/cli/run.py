@@ -74,7 +74,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         report.append(_aided_report(sc, aided, outages, grade))
     print("\n".join(report))
     if args.json:
-        io.write_json(args.json, result.to_dict(str(path)))
+        io.write_report(args.json, result.to_dict(str(path)))
     if args.plot:
         from sins.viz import plots  # matplotlib, only for a plot
 

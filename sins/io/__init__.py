@@ -21,7 +21,7 @@ from sins.io.formats import (
     write_imu,
     write_truth,
 )
-from sins.io.json_files import read_json_document, write_json
+from sins.io.json_files import read_json_document, write_json, write_report
 from sins.io.reader import read
 from sins.io.recording import KINDS, Recording
 from sins.io.rig import (
@@ -61,6 +61,7 @@ __all__ = [
     "write_imu",
     "write_json",
     "write_recording",
+    "write_report",
     "write_table",
     "write_truth",
 ]

@@ -3,13 +3,16 @@
 Model files, quality baselines, campaign summaries and folders are JSON objects with a ``"format"`` key
 naming the kind; :func:`read_json_document` refuses any other file in one line (through
 :func:`sins.io.documents.read_json`, the one reader of every JSON file), and :func:`write_json` writes
-through :func:`sins.io.atomic.atomic_text`.
+through :func:`sins.io.atomic.atomic_text`. A command's JSON report (``--json``) opens with the key
+``"sins"`` (:func:`write_report`): the mark by which a later report knows a file sins wrote, which it may
+replace, from a user's own JSON, which it does not (:func:`sins.io.paths.replaceable`).
 """
 
 from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +29,19 @@ def write_json(path: str | os.PathLike[str], obj: Any) -> None:
     with atomic_text(path) as fh:
         json.dump(obj, fh, indent=2, allow_nan=True)
         fh.write("\n")
+
+
+#: The first key of every report a command writes: the version of the sins that wrote it.
+REPORT_KEY = "sins"
+
+
+def write_report(path: str | os.PathLike[str], doc: Mapping[str, Any]) -> None:
+    """A command's JSON report: ``doc`` after a first key :data:`REPORT_KEY` (``"sins": VERSION``), written
+    as :func:`write_json` writes. The key is what marks the file as sins's: a report run again replaces
+    it, and no report replaces a JSON file that lacks it (a user's own)."""
+    from sins import __version__  # here, not at import: sins's package imports io lazily
+
+    write_json(path, {REPORT_KEY: __version__, **{k: v for k, v in doc.items() if k != REPORT_KEY}})
 
 
 def read_json_document(
@@ -50,4 +66,4 @@ def read_json_document(
     return doc
 
 
-__all__ = ["read_json_document", "write_json"]
+__all__ = ["REPORT_KEY", "read_json_document", "write_json", "write_report"]

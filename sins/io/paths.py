@@ -149,13 +149,17 @@ _SIGNATURES = (
 #: recording, a reference, a hand-written scenario), which a table or an IMU file does not replace; sins's
 #: own they do, run again.
 SINS_TEXT = "a file sins wrote"
+#: What :func:`_holds` calls a JSON report sins wrote: an object whose first key is ``"sins"``, its version
+#: (:func:`sins.io.json_files.write_report`). Other JSON is a user's, which a report does not replace.
+SINS_REPORT = "a report sins wrote"
+_SINS_REPORT = re.compile(r'\A\ufeff?\s*\{\s*"sins"\s*:\s*"')
 _SINS_LINE = re.compile(r"\A\ufeff?# (sins \d|solution of |IMU noise model from `sins characterise`)")
 #: What an output of each kind may replace, by what :func:`_holds` says a file is (and an empty file).
 _REPLACES = {
-    "json": ("JSON",),
+    "json": (SINS_REPORT,),
     "csv": (SINS_TEXT,),
     "toml": (SINS_TEXT,),
-    "text": ("JSON", "text", SINS_TEXT),
+    "text": ("JSON", "text", SINS_TEXT, SINS_REPORT),
     "image": ("a PNG image", "text"),  # a plot's .png, or its .html page
     "rrd": ("a Rerun recording",),
     "parquet": ("a Parquet table",),
@@ -212,6 +216,8 @@ def _holds(path: Path) -> str | None:
         return document.group(1)
     if _SINS_LINE.match(text):
         return SINS_TEXT
+    if _SINS_REPORT.match(text):
+        return SINS_REPORT
     return "JSON" if _JSON_START.match(text) else "text"
 
 
@@ -231,12 +237,14 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
     if kind not in _WRITES:
         raise ValueError(f"output kind {kind!r} (known: {', '.join(_WRITES)})")
     holds = _holds(path)
-    allowed = _REPLACES.get(kind, ("JSON", kind))  # a document replaces JSON and its own format
+    allowed = _REPLACES.get(kind, (SINS_REPORT, kind))  # a document: a report or its own format
     if holds is None or holds == "empty" or holds in allowed:
         return
     seen = {"text": "text that is not JSON", **_DOCUMENTS}.get(holds, holds)
     if kind in ("csv", "toml") and holds in ("text", "JSON"):
         seen = "text sins did not write (a recording, table or scenario of yours?)"
+    elif holds == "JSON":  # where a report or a model goes
+        seen = 'JSON sins did not write (a file of yours? a report of an older sins, without "sins" first?)'
     raise SinsInputError(
         f"{shown}: holds {seen}; sins writes {_WRITES[kind]} there and does not replace it: remove it "
         "or write elsewhere"
@@ -385,6 +393,7 @@ def check_outputs(
 __all__ = [
     "KINDS",
     "READ_FACTOR",
+    "SINS_REPORT",
     "SINS_TEXT",
     "check_input",
     "check_named",
