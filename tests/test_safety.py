@@ -350,6 +350,9 @@ def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_pat
     plain, report = tmp_path / "plain.json", tmp_path / "report.json"
     plain.write_text("[1, 2]\n")
     report.write_text('{"sins": "0.1.0", "figures": [1, 2]}\n')
+    inspection = tmp_path / "inspection.json"  # as `sins inspect --json` wrote it before the mark
+    inspection.write_text('{"format": "sins-inspection", "rows": 10}\n')
+    replaceable(inspection, "i", "json")
     replaceable(model, "m", "sins.compensation")
     replaceable(baseline, "b", "sins.quality-baseline")
     for kind in ("sins.compensation", "sins.quality-baseline", "json", "text"):

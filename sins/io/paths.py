@@ -150,7 +150,8 @@ _SIGNATURES = (
 #: own they do, run again.
 SINS_TEXT = "a file sins wrote"
 #: What :func:`_holds` calls a JSON report sins wrote: an object whose first key is ``"sins"``, its version
-#: (:func:`sins.io.json_files.write_report`). Other JSON is a user's, which a report does not replace.
+#: (:func:`sins.io.json_files.write_report`), or whose ``"format"`` names a sins kind that is no input
+#: (``sins inspect --json`` before the mark). Other JSON is a user's, which a report does not replace.
 SINS_REPORT = "a report sins wrote"
 _SINS_REPORT = re.compile(r'\A\ufeff?\s*\{\s*"sins"\s*:\s*"')
 _SINS_LINE = re.compile(r"\A\ufeff?# (sins \d|solution of |IMU noise model from `sins characterise`)")
@@ -214,6 +215,8 @@ def _holds(path: Path) -> str | None:
     document = _FORMAT.match(text)
     if document is not None and document.group(1) in _DOCUMENTS:
         return document.group(1)
+    if document is not None and document.group(1).startswith("sins"):  # an inspection before the mark
+        return SINS_REPORT
     if _SINS_LINE.match(text):
         return SINS_TEXT
     if _SINS_REPORT.match(text):
