@@ -192,8 +192,8 @@ _JSON_START = re.compile(r'\A\ufeff?\s*(\{\s*["}]|(\[\s*)+(\]|[-0-9"{]|true\b|fa
 
 def _holds(path: Path) -> str | None:
     """What an existing file holds, by its first 4 KiB: "empty", one of :data:`_DOCUMENTS`' formats,
-    :data:`SINS_TEXT`, "JSON", "text", one of :data:`_SIGNATURES`' names, or "binary data"; None where it
-    cannot be read."""
+    :data:`SINS_TEXT`, :data:`SINS_REPORT`, "JSON", "text", one of :data:`_SIGNATURES`' names, or "binary
+    data"; None where it cannot be read."""
     try:
         with open(path, "rb") as fh:
             head = fh.read(4096)
@@ -229,8 +229,9 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
     ``format`` of :data:`_DOCUMENTS`) never is: a recording, an archive or an image where JSON or text
     is written, text where an image is, a model where anything but a model is, and where a CSV table or
     an IMU file is written anything but a file sins wrote (:data:`SINS_TEXT`: a user's recording or
-    scenario). A mistyped or tab-completed output name would otherwise put a result where a user's
-    recording or model was (the rename is atomic, and final). An empty file may be replaced by any.
+    scenario), and where a report or a model is written JSON sins did not write (:data:`SINS_REPORT`: a
+    user's own). A mistyped or tab-completed output name would otherwise put a result where a user's
+    recording, model or file was (the rename is atomic, and final). An empty file may be replaced by any.
 
     Raises
     ------
