@@ -402,22 +402,30 @@ def test_the_psins_drive_lands_near_its_floor() -> None:
         assert 0.9 <= v["rms_before"] / v["noise_floor"] <= 1.15, ch
 
 
+def _real_cases(tmp_path: Path, base: str, names: tuple[str, ...]) -> tuple[dict[str, np.ndarray], dict]:
+    """The real recording ``base`` with each of ``names`` (``tools/gap_real_cases.py``'s cases) added by
+    numpy, written as ``cases/NAME.npz`` under ``tmp_path`` and diagnosed as ``sins gap --dataset`` does:
+    the base's arrays and each case's report (skipped where the data root lacks the base)."""
+    _needs(base)
+    sys.path.insert(0, str(ROOT / "tools"))
+    import gap_real_cases as cases
+
+    arrays = cases.base_arrays(base)
+    reports = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(datasets.ENV_VAR, str(tmp_path))
+        for case in names:
+            name = case.replace(" ", "_")
+            nu.write(tmp_path / "cases" / f"{name}.npz", cases.added(case, arrays))
+            reports[case] = diagnose_one(read_gap_input(None, dataset=f"cases/{name}")).report
+    return arrays, reports
+
+
 def test_a_real_unit_with_an_effect_added_is_diagnosed_beyond_its_own_verdict(tmp_path: Path) -> None:
     """A fixed subset of ``tools/gap_real_cases.py``: EuRoC's V1_02_medium (83 s) as it is, with a gyro
     scale asymmetry of 5000 ppm added (named, and not in the clean diagnosis), and with a 0.3 °/s bias
     step on gyro y (flagged on its channel)."""
-    _needs("euroc/V1_02_medium")
-    sys.path.insert(0, str(ROOT / "tools"))
-    import gap_real_cases as cases
-
-    arrays = cases.base_arrays("euroc/V1_02_medium")
-    reports = {}
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv(datasets.ENV_VAR, str(tmp_path))
-        for case in ("clean", "gyro.scale_asymmetry", "gyro.y step"):
-            name = case.replace(" ", "_")
-            nu.write(tmp_path / "cases" / f"{name}.npz", cases.added(case, arrays))
-            reports[case] = diagnose_one(read_gap_input(None, dataset=f"cases/{name}")).report
+    _, reports = _real_cases(tmp_path, "euroc/V1_02_medium", ("clean", "gyro.scale_asymmetry", "gyro.y step"))
     assert "gyro.scale_asymmetry" not in reports["clean"].diagnosis
     assert "gyro.scale_asymmetry" in reports["gyro.scale_asymmetry"].diagnosis
     assert any(o.channel == "gyro.y" for o in reports["gyro.y step"].outside)
@@ -429,18 +437,7 @@ def test_a_bias_step_beside_a_real_units_wandering_bias_is_flagged(tmp_path: Pat
     on its channel, at its size and time, beside the wander. Before, a wander estimated with the step in
     its residual grew to follow it, and the step tried beside that wander gained nothing: the diagnosis
     took the random bias and said nothing of the step (:func:`sins.unit_gap.outside.beside_wander`)."""
-    _needs("euroc/V2_01_easy")
-    sys.path.insert(0, str(ROOT / "tools"))
-    import gap_real_cases as cases
-
-    arrays = cases.base_arrays("euroc/V2_01_easy")
-    reports = {}
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv(datasets.ENV_VAR, str(tmp_path))
-        for case in ("clean", "gyro.y step"):
-            name = case.replace(" ", "_")
-            nu.write(tmp_path / "cases" / f"{name}.npz", cases.added(case, arrays))
-            reports[case] = diagnose_one(read_gap_input(None, dataset=f"cases/{name}")).report
+    arrays, reports = _real_cases(tmp_path, "euroc/V2_01_easy", ("clean", "gyro.y step"))
     clean, step = reports["clean"], reports["gyro.y step"]
     assert "gyro.bias_instability" in clean.diagnosis
     assert not [o for o in clean.outside if o.channel == "gyro.y"]
@@ -459,14 +456,6 @@ def test_a_hum_on_one_sensor_flags_that_channel_alone_beside_a_real_units_wander
     wander must predict the withheld intervals too: on the fit intervals alone the gyro bias's own
     wander took the shape of a 90 s hum on gyro z (0.016 °/s; 7.5 nats there, 5.3 withheld) and was
     flagged (:func:`sins.unit_gap.outside.beside_wander`)."""
-    _needs("euroc/MH_01_easy")
-    sys.path.insert(0, str(ROOT / "tools"))
-    import gap_real_cases as cases
-
-    arrays = cases.base_arrays("euroc/MH_01_easy")
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv(datasets.ENV_VAR, str(tmp_path))
-        nu.write(tmp_path / "cases" / "hum.npz", cases.added("accel.y sinusoid", arrays))
-        report = diagnose_one(read_gap_input(None, dataset="cases/hum")).report
+    report = _real_cases(tmp_path, "euroc/MH_01_easy", ("accel.y sinusoid",))[1]["accel.y sinusoid"]
     assert [(o.channel, o.kind) for o in report.outside] == [("accel.y", "periodic")], report.outside
     assert report.outside[0].period_s == pytest.approx(37.0, rel=0.05)
