@@ -273,16 +273,18 @@ def choose_rule(
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
         raw = []
+        biases_alone = getattr(strategy, "variant", None) == BIAS_ONLY  # its own correction, held back too
         for k, rec in enumerate(recs):
             if stage is not None:
                 stage(f"the bias rule: recording {k + 1} of {len(recs)} held back")
             others = [r for i, r in enumerate(recs) if i != k]
             part = several.fit_several(others, interval_s=interval_s)
-            seed = Regression(g_sensitivity=False).set_fit(part.seed)
-            seed.time_offset_s_ = np.array([part.time_offset_s, part.accel_time_offset_s])
-            if getattr(strategy, "variant", None) == BIAS_ONLY:  # its own correction: the biases alone
-                seed = Regression(g_sensitivity=False).set_fit(_biases_only(part.seed))
-                seed.time_offset_s_ = np.zeros(2)
+            seed = Regression(g_sensitivity=False).set_fit(
+                _biases_only(part.seed) if biases_alone else part.seed
+            )
+            seed.time_offset_s_ = (
+                np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
+            )
             own = [seed.correct_increments(r.imu) for r in others]
             base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own)
             stream = seed.correct_increments(rec.imu)
