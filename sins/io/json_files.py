@@ -19,7 +19,7 @@ from typing import Any
 from sins.errors import SinsInputError
 from sins.io import documents
 from sins.io.atomic import atomic_text
-from sins.io.paths import check_named
+from sins.io.paths import REPORT_KEY, check_named
 
 
 def write_json(path: str | os.PathLike[str], obj: Any) -> None:
@@ -29,10 +29,6 @@ def write_json(path: str | os.PathLike[str], obj: Any) -> None:
     with atomic_text(path) as fh:
         json.dump(obj, fh, indent=2, allow_nan=True)
         fh.write("\n")
-
-
-#: The first key of every report a command writes: the version of the sins that wrote it.
-REPORT_KEY = "sins"
 
 
 def write_report(path: str | os.PathLike[str], doc: Mapping[str, Any]) -> None:

@@ -153,7 +153,9 @@ SINS_TEXT = "a file sins wrote"
 #: (:func:`sins.io.json_files.write_report`), or whose ``"format"`` names a sins kind that is no input
 #: (``sins inspect --json`` before the mark). Other JSON is a user's, which a report does not replace.
 SINS_REPORT = "a report sins wrote"
-_SINS_REPORT = re.compile(r'\A\ufeff?\s*\{\s*"sins"\s*:\s*"')
+#: The first key of every report a command writes: the version of the sins that wrote it.
+REPORT_KEY = "sins"
+_SINS_REPORT = re.compile(r'\A\ufeff?\s*\{\s*"' + REPORT_KEY + r'"\s*:\s*"')
 _SINS_LINE = re.compile(r"\A\ufeff?# (sins \d|solution of |IMU noise model from `sins characterise`)")
 #: What an output of each kind may replace, by what :func:`_holds` says a file is (and an empty file).
 _REPLACES = {
@@ -397,6 +399,7 @@ def check_outputs(
 __all__ = [
     "KINDS",
     "READ_FACTOR",
+    "REPORT_KEY",
     "SINS_REPORT",
     "SINS_TEXT",
     "check_input",
