@@ -111,20 +111,62 @@ def test_inspect_judges_the_axes_by_the_reference_attitude(
         refusal(lambda: io.read(path).beside_reference(), str(path), seen, "quaternion order")
 
 
-def test_a_reference_in_a_world_with_z_down_is_named_so(tmp_path: Path) -> None:
+def _world_turned(path: Path, turn: Rotation) -> None:
+    """The recording at ``path`` written again with its world frame turned by ``turn`` (its attitude,
+    velocity and position: the readings and the turns they make are the same)."""
+    doc = {k: np.asarray(v, dtype=float) if k != "t_s" else v for k, v in np.load(path).items()}
+    q = turn * Rotation.from_quat(doc["q_wxyz"], scalar_first=True)
+    np.savez(
+        path, **{**doc, "q_wxyz": q.as_quat(scalar_first=True), "v_m_s": turn.apply(doc["v_m_s"]),
+                 "p_m": turn.apply(doc["p_m"])},
+    )  # fmt: skip
+
+
+def test_a_reference_in_a_world_with_z_down_is_read_turned_and_said_so(tmp_path: Path) -> None:
     """The swing's reference written in a world with z down (NED: east and north swapped, up turned
-    down, by scipy's Rotation) where the form says z up: gravity's reaction points 180° from up, and the
-    finding says the world's z may be the cause as well as the quaternion's order or direction."""
+    down, by scipy's Rotation) where the form says z up: gravity's reaction points along -z, so it is
+    read turned by 180° and said so, and its turns, in the body, are those of the file as written with
+    z up (the attitude is of the readings' axes; only the world was turned)."""
+    upright, down = tmp_path / "swing.npz", tmp_path / "down.npz"
+    _swinging(upright)
+    _swinging(down)
+    _world_turned(down, Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]]))
+    rec = io.read(down)
+    assert any("up lies along -z" in note and "turned by 180°" in note for note in rec.notes), rec.notes
+    assert not inspection.inspect(rec).findings
+    a, b = (Rotation.from_quat(io.read(p).beside_reference().reference.q_nb) for p in (upright, down))
+    np.testing.assert_allclose((a[0].inv() * a).as_rotvec(), (b[0].inv() * b).as_rotvec(), atol=1e-9)
+    np.testing.assert_allclose(b.apply([0.0, 0.0, 1.0])[:, 2], a.apply([0.0, 0.0, 1.0])[:, 2], atol=1e-9)
+
+
+def test_a_world_tilted_off_its_axes_is_refused_and_the_turns_that_agree_are_said(tmp_path: Path) -> None:
+    """A world frame turned 30° about x: no axis of it is up, so it is not turned; the refusal says the
+    attitude is of the readings' axes (its turns agree with the gyro's) and where its up lies."""
     path = tmp_path / "swing.npz"
     _swinging(path)
-    doc = dict(np.load(path))
-    to_ned = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-    q = to_ned * Rotation.from_quat(doc["q_wxyz"], scalar_first=True)
-    np.savez(path, **{**doc, "q_wxyz": q.as_quat(scalar_first=True), "v_m_s": to_ned.apply(doc["v_m_s"])})
+    _world_turned(path, Rotation.from_euler("x", 30, degrees=True))
     findings = inspection.inspect(io.read(path)).findings
     assert [f.code for f in findings] == ["reference_attitude"], findings
-    assert "180° from up" in findings[0].what and "NED written for ENU" in findings[0].what
-    refusal(lambda: io.read(path).beside_reference(), str(path), "z axis points down")
+    refusal(
+        lambda: io.read(path).beside_reference(), str(path), "30° from up", "turns agree", "readings' axes",
+        "(x, y, z) = (0.00, -0.50, 0.87)",
+    )  # fmt: skip
+
+
+@needs_euroc
+def test_a_real_recordings_world_with_y_up_is_read_as_with_z_up(tmp_path: Path) -> None:
+    """EuRoC's V1_02 written with its world's up along +y (a motion capture's frame, turned by scipy's
+    Rotation): read turned back by 90° and said so; its reference is the z-up file's to 1e-9."""
+    path = tmp_path / "V1_02_medium.npz"
+    np.savez(path, **dict(np.load(EUROC / "V1_02_medium.npz")))
+    _world_turned(path, Rotation.from_euler("x", -90, degrees=True))
+    rec = io.read(path)
+    assert any("up lies along +y" in note and "turned by 90° about +x" in note for note in rec.notes)
+    want, got = io.read(EUROC / "V1_02_medium.npz").truth, rec.truth
+    angle = (Rotation.from_quat(want.q_nb).inv() * Rotation.from_quat(got.q_nb)).magnitude()
+    assert angle.max() < 1e-9
+    np.testing.assert_allclose(got.v_n, want.v_n, atol=1e-9)
+    np.testing.assert_allclose(got.lat, want.lat, atol=1e-14)
 
 
 @pytest.mark.parametrize("lag_s", [0.0, 0.0031, 0.020, -0.0125])

@@ -151,12 +151,35 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     tilt = float(np.degrees(np.arccos(np.clip(-reaction[2] / size, -1.0, 1.0))))
     if tilt <= REFERENCE_TILT_DEG:
         return _scale_findings(pairs, size)
-    what = (f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
-            "from up (its mean over the reference's span, the reference's acceleration taken out): the "
-            "attitude is not of the readings' axes")  # fmt: skip
-    if tilt >= 180.0 - REFERENCE_TILT_DEG:  # upside down: the world's z read the wrong way
-        what += ", or its world frame's z axis points down where it is read as up (NED written for ENU)"
+    what = (
+        f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
+        "from up (its mean over the reference's span, the reference's acceleration taken out)"
+    )
+    if agreement is not None:
+        # The turns are the gyro's: the attitude is of the readings' axes, and only the world is turned
+        # (a motion capture's frame with y up; NED written for ENU). Said so, not sent to the quaternion.
+        what += (f", while its turns agree with the gyro's (correlation {agreement:.2f}): the attitude is of "
+                 f"the readings' axes, in a world frame whose up lies along {_up_as_read(reaction / size)} "
+                 "as read, not z")  # fmt: skip
+        advice = ("write the reference in a world frame with z up (its attitude, velocity and position "
+                  "turned by the one rotation that takes its up to z)")  # fmt: skip
+        if tilt >= 180.0 - REFERENCE_TILT_DEG:
+            what += " (NED written for ENU)"
+    else:
+        what += ": the attitude is not of the readings' axes"
+        if tilt >= 180.0 - REFERENCE_TILT_DEG:  # upside down: the world's z read the wrong way
+            what += ", or its world frame's z axis points down where it is read as up (NED written for ENU)"
     return [Finding("reference_attitude", what, advice=advice)]
+
+
+def _up_as_read(up_ned: Array) -> str:
+    """Up (a unit vector in sins's NED) in the axes of the room frame as the file holds it (x east, y north,
+    z up: how every reader places a room's frame): an axis where within :data:`REFERENCE_TILT_DEG` of one."""
+    up = np.array([up_ned[1], up_ned[0], -up_ned[2]])
+    k = int(np.argmax(np.abs(up)))
+    if np.degrees(np.arccos(min(1.0, abs(float(up[k]))))) <= REFERENCE_TILT_DEG:
+        return f"{'+' if up[k] > 0 else '-'}{'xyz'[k]}"
+    return "(x, y, z) = ({:.2f}, {:.2f}, {:.2f})".format(*(np.round(up, 2) + 0.0))  # no "-0.00"
 
 
 def _scale_findings(pairs: tuple[Array, Array] | None, reaction: float) -> list[Finding]:
