@@ -193,6 +193,7 @@ def fit_referenced(
     ]
     if clock is not None:
         lines.append(f"reference: {clock_words(clock.lag_s)}")
+    lines += [a.line(where) for a in fitted.set_aside if a.spans_s]
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
     if name == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
         table = [c for c in table if c.term == "bias"]
@@ -214,6 +215,7 @@ def fit_referenced(
         "grade": grade,
         "held": held,
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
+        "set_aside": [a.to_dict() for a in fitted.set_aside if a.spans_s],
     }
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
@@ -281,6 +283,9 @@ def fit_several(
         )  # fmt: skip
     lines: list[str] = []
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
+    aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.spans_s]
+    lines += [a.line(n) for n, a in aside]
+    document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]
     strategy = fitted.strategy
     if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):
         how = f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole"

@@ -124,6 +124,9 @@ class IntervalFit:
     g_sensitivity_test: tuple[bool, float, float] | None = None
     iterations: int = 0
     weights: Array | None = field(default=None, repr=False)
+    #: Each interval's residual, gyro (k, 3) rad and accelerometer (k, 3) m/s, at the fit
+    #: (:mod:`sins.compensation.screening` reads them); None where not kept.
+    residuals: tuple[Array, Array] | None = field(default=None, repr=False)
 
     def corrected(self, imu: ImuIncrements) -> ImuIncrements:
         """``imu`` shifted by the time offsets and corrected by the seed model."""
@@ -209,7 +212,7 @@ def fit_intervals(
     kept = bool(g_sensitivity) if k_verdict is None else k_verdict[0]
     return IntervalFit(
         seed, tau, tau_se, tau_a, tau_a_se, len(iv), interval_s, quality, lever_arm, kept, k_verdict,
-        iterations, gyro_weights,
+        iterations, gyro_weights, (g_resid, a_resid),
     )  # fmt: skip
 
 

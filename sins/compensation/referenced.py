@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins import compensation
-from sins.compensation import Strategy, identifiability, interval_fit
+from sins.compensation import Strategy, identifiability, interval_fit, screening
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
@@ -49,6 +49,8 @@ class Fitted:
     strategy: Strategy
     intervals: IntervalFit
     review: identifiability.Review | None = None
+    #: What of the reference was set aside as gross errors (:mod:`sins.compensation.screening`).
+    set_aside: tuple[screening.SetAside, ...] = ()
 
 
 def fit(
@@ -83,8 +85,9 @@ def fit(
     """
     where = rec.source or "recording"
     try:
+        [rec], aside = _screened([rec], interval_s, grade)
         if name == BIAS_ONLY:
-            return _bias_only(rec, interval_s, grade)
+            return replace(_bias_only(rec, interval_s, grade), set_aside=aside)
         fitted, review = identifiability.fit_determined(
             lambda holds: interval_fit.fit_intervals(
                 rec, interval_s=interval_s, robust=name == "regression_robust", holds=holds
@@ -110,7 +113,7 @@ def fit(
         raise naming(where, exc) from None
     strategy.time_offset_s_ = np.array([fitted.time_offset_s, fitted.accel_time_offset_s])
     strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
-    return Fitted(strategy, fitted, review)
+    return Fitted(strategy, fitted, review, aside)
 
 
 @dataclass(frozen=True)
@@ -123,6 +126,8 @@ class FittedSeveral:
     several: SeveralFit
     rule: BiasRule | None
     review: identifiability.Review | None = None
+    #: What of each recording's reference was set aside (:mod:`sins.compensation.screening`).
+    set_aside: tuple[screening.SetAside, ...] = ()
 
 
 def fit_several(
@@ -158,6 +163,8 @@ def fit_several(
     where = " + ".join(rec.source or "recording" for rec in recs)
     say = stage or (lambda text: None)
     try:
+        say("the references' gross errors (a robust fit)")
+        recs, aside = _screened(recs, interval_s, grade)
         say(f"the seed model on {len(recs)} recordings")
         fit_all, review = _several_determined(recs, interval_s, name, grade, where)
         offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
@@ -168,7 +175,7 @@ def fit_several(
         else:
             strategy = compensation.make(name, **(params or {}))
         if name == "none":
-            return FittedSeveral(strategy, fit_all, None, review)
+            return FittedSeveral(strategy, fit_all, None, review, aside)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fit_all.seed)
@@ -185,7 +192,31 @@ def fit_several(
         **fitted_on(recs[0]), "recordings": [rec.source for rec in recs],
         "readings": [readings_of(rec) for rec in recs], "checks": review.to_dict(),
     }  # fmt: skip
-    return FittedSeveral(strategy, fit_all, rule, review)
+    return FittedSeveral(strategy, fit_all, rule, review, aside)
+
+
+def _screened(
+    recs: list[ReferencedRecording], interval_s: float, grade: str
+) -> tuple[list[ReferencedRecording], tuple[screening.SetAside, ...]]:
+    """``recs`` with their references' gross errors set aside (:mod:`sins.compensation.screening`), found
+    by a robust fit of the seed model that holds what the recordings do not determine for ``grade``."""
+    from sins.compensation import several
+
+    bounds = identifiability.class_bounds(grade)
+
+    def residuals(rs: list[ReferencedRecording]) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        if len(rs) == 1:
+            holds = identifiability.assess(rs[0], interval_s, bounds)
+            one = interval_fit.fit_intervals(
+                rs[0], interval_s=interval_s, g_sensitivity=False, robust=True, holds=holds
+            )
+            assert one.residuals is not None
+            return [one.residuals]
+        held = identifiability.assess_several(rs, interval_s, bounds).reasons
+        return list(several.fit_several(rs, interval_s=interval_s, robust=True, held=held).residuals)
+
+    out, aside = screening.set_aside(recs, residuals, interval_s)
+    return out, tuple(aside)
 
 
 def _several_determined(

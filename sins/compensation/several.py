@@ -17,7 +17,7 @@ What the per-recording biases say about a new recording of the unit is the corre
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -77,6 +77,9 @@ class SeveralFit:
     quality: tuple[ReferenceQuality, ...]
     sources: tuple[str, ...]
     g_sensitivity: bool
+    #: Each recording's interval residuals, gyro (k, 3) rad and accelerometer (k, 3) m/s, at the fit
+    #: (:mod:`sins.compensation.screening` reads them).
+    residuals: tuple[tuple[Array, Array], ...] = field(default=(), repr=False)
 
     def for_recording(self, r: int) -> IntervalFit:
         """The fit as recording ``r`` sees it (its own biases): an :class:`IntervalFit`, what
@@ -308,6 +311,7 @@ def _result(
         quality=tuple(quality(rec.imu, iv, g, a)
                       for rec, iv, g, a in zip(recs, ivs, g_resid, a_resid, strict=True)),
         sources=tuple(rec.source for rec in recs), g_sensitivity=g_sensitivity,
+        residuals=tuple(zip(g_resid, a_resid, strict=True)),
     )  # fmt: skip
 
 

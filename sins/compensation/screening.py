@@ -1,0 +1,146 @@
+"""Reference epochs that contradict the readings grossly, set aside before a fit against a trajectory.
+
+A reference is a measurement too, and its making can leave errors no sensor model explains: a motion
+capture's markers lost and the attitude slerped across the gap, a position glitch differentiated into a
+velocity that spikes for one step (EuRoC's laser-tracker positions, differentiated, spike by up to
+12 m/s), a marker swap. An interval whose end lies on such an epoch sits tens of the residuals' own
+spread off the fit. Least squares, whose standard errors come from those residuals, is pulled by it and
+then holds or refuses coefficients the rest of the reference determines: three EuRoC recordings with
+their velocity differentiated from their positions had ``regression`` refused ("accel bias x was held
+at zero and then moved ...: the fit is unstable").
+
+So before the fit proper, a robust one is made (Huber's weights, the same coefficients held), and every
+interval whose residual lies beyond :data:`SCREEN_Z` robust standard deviations (per recording, sensor
+and axis: the residuals' median absolute deviation / 0.6745) has its span's reference epochs, ends
+included, set aside (:func:`set_aside`). An interval formed across the hole then has ends the reference
+got right: an interval's residual reads its two ends' states and the readings between, nothing else.
+Passes repeat until none is found, at most :data:`MAX_PASSES`. What judges a model
+(:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened: it judges against
+the reference as it is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sins.compensation.intervals import INTERVAL_S, choose_intervals
+from sins.core.series import ReferencedRecording
+
+Array = NDArray[np.float64]
+
+#: An interval this many robust standard deviations off the fit, or more, is a gross error of the
+#: reference, set aside. Normal residuals would allow 7 (10,000 intervals pass it by chance one time in
+#: 4,000), but real ones have tails: the clean references sins holds reach 11.0 (BROAD's trial 18; its
+#: trial 05 10.5, EuRoC's eleven sequences 9.6, the PSINS drive 3.4), and none of them is touched. A
+#: slerped gap or a differentiated glitch reaches 13-600.
+SCREEN_Z = 12.0
+#: Passes of fit and screen at most (a pass sets aside what the last one's intervals showed; the
+#: intervals walked again across the holes may end on a gross epoch the last ones skipped).
+MAX_PASSES = 3
+#: The smallest residual spread screened against, gyro rad and accelerometer m/s an interval: an exact
+#: reference's residuals are rounding, whose spread would make any interval a gross error (a
+#: navigation-grade gyro's noise over 1 s is 3e-7 rad, an accelerometer's 2e-4 m/s).
+FLOOR = (1e-9, 1e-8)
+
+#: Residuals of a robust fit: each recording's gyro (k, 3) rad and accelerometer (k, 3) m/s per interval.
+Residuals = Callable[[list[ReferencedRecording]], list[tuple[Array, Array]]]
+
+
+@dataclass(frozen=True)
+class SetAside:
+    """What of one recording's reference was set aside: the spans of time, s (the recording's clock),
+    and the largest residual among them, in robust standard deviations."""
+
+    source: str
+    spans_s: tuple[tuple[float, float], ...]
+    largest_z: float
+
+    def seconds(self) -> float:
+        """The reference's time set aside, s."""
+        return float(sum(b - a for a, b in self.spans_s))
+
+    def line(self, name: str) -> str:
+        """What a fit says of it, one line."""
+        return (
+            f"{name}: {len(self.spans_s)} span(s) of its reference set aside ({self.seconds():.1f} s in all; "
+            f"intervals up to {self.largest_z:.0f} robust σ off the fit, beyond {SCREEN_Z:g}: a reference "
+            "that contradicts the readings there, a glitch or a gap filled by interpolation)"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """As plain JSON values (a fit's ``--json``: ``set_aside``)."""
+        return {
+            "source": self.source,
+            "spans_s": [list(s) for s in self.spans_s],
+            "largest_z": self.largest_z,
+        }
+
+
+def gross(gyro_resid: Array, accel_resid: Array) -> tuple[NDArray[np.bool_], Array]:
+    """Which intervals are gross errors (beyond :data:`SCREEN_Z` on any axis of either sensor), and each
+    interval's largest robust z."""
+    z = np.zeros(len(gyro_resid))
+    for resid, floor in zip((gyro_resid, accel_resid), FLOOR, strict=True):
+        centre = np.median(resid, axis=0)
+        spread = np.maximum(np.median(np.abs(resid - centre), axis=0) / 0.6745, floor)
+        z = np.maximum(z, (np.abs(resid - centre) / spread).max(axis=1))
+    return z > SCREEN_Z, z
+
+
+def without(rec: ReferencedRecording, spans_s: list[tuple[float, float]]) -> ReferencedRecording:
+    """``rec`` with its reference's epochs within any of ``spans_s`` (ends included) left out."""
+    t = rec.reference.t
+    out = np.zeros(len(t), dtype=bool)
+    for a, b in spans_s:
+        out |= (t >= a) & (t <= b)
+    return replace(rec, reference=rec.reference.at(np.flatnonzero(~out)))
+
+
+def set_aside(
+    recs: list[ReferencedRecording], residuals: Residuals, interval_s: float = INTERVAL_S
+) -> tuple[list[ReferencedRecording], list[SetAside]]:
+    """``recs`` with the reference epochs of their gross intervals set aside (see the module docstring),
+    and what was set aside of each. ``residuals(recs)`` is the robust fit's; where it cannot be made
+    (``ValueError``: the recordings do not determine the model), nothing is set aside and the fit proper
+    says why."""
+    out = list(recs)
+    spans: list[list[tuple[float, float]]] = [[] for _ in recs]
+    largest = np.zeros(len(recs))
+    for _ in range(MAX_PASSES):
+        try:
+            found = residuals(out)
+        except ValueError:
+            break
+        if not any(gross(g, a)[0].any() for g, a in found):
+            break
+        for r, (g, a) in enumerate(found):
+            bad, z = gross(g, a)
+            if not bad.any():
+                continue
+            iv = choose_intervals(out[r], interval_s)
+            t = out[r].imu.t
+            new = [(float(t[iv.start[k]]), float(t[iv.stop[k]])) for k in np.flatnonzero(bad)]
+            spans[r] += new
+            largest[r] = max(largest[r], float(z[bad].max()))
+            out[r] = without(out[r], new)
+    aside = [
+        SetAside(rec.source, tuple(sorted(s)), float(z))
+        for rec, s, z in zip(recs, spans, largest, strict=True)
+    ]
+    return out, aside
+
+
+__all__ = [
+    "FLOOR",
+    "MAX_PASSES",
+    "SCREEN_Z",
+    "SetAside",
+    "gross",
+    "set_aside",
+    "without",
+]
