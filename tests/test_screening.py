@@ -80,13 +80,13 @@ def test_a_references_glitches_are_set_aside_and_the_fit_is_the_clean_ones(seed:
 
 def test_gross_takes_normal_residuals_as_they_are_and_a_planted_error_out() -> None:
     """10,000 intervals of normal residuals (each sensor its own scale): none beyond the screen; one
-    planted 20 standard deviations off on one axis: that one alone. An exact reference's residuals
-    (rounding, 1e-16) are not screened against their own spread."""
+    planted 40 standard deviations off on one axis (twice the screen): that one alone. An exact
+    reference's residuals (rounding, 1e-16) are not screened against their own spread."""
     rng = np.random.default_rng(5)
     gyro, accel = rng.normal(0.0, 1e-4, (10_000, 3)), rng.normal(0.0, 0.02, (10_000, 3))
     bad, z = screening.gross(gyro, accel)
     assert not bad.any() and z.max() < 6.0
-    accel[1234, 2] += 20 * 0.02
+    accel[1234, 2] += 40 * 0.02
     bad, _ = screening.gross(gyro, accel)
     assert np.flatnonzero(bad).tolist() == [1234]
     exact = rng.normal(0.0, 1e-16, (500, 3))
