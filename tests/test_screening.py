@@ -6,14 +6,19 @@ slerped across a gap."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.spatial.transform import Rotation, Slerp
 
+from sins import imu, io
+from sins.cli import main
 from sins.compensation import referenced, screening
 from sins.core.series import ImuRates, NavSeries
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
 
 #: Velocity spikes (m/s) at these reference epochs (s; ends of the fit's 1 s intervals), and the
 #: attitude slerped between the ends of this span (s).
@@ -102,3 +107,26 @@ def test_without_leaves_out_the_epochs_within_the_spans_ends_included() -> None:
     assert len(kept) == len(t) - 11 - 1
     assert not np.any((kept >= 30.0 - 1e-9) & (kept <= 31.0 + 1e-9))
     np.testing.assert_array_equal(out.imu.t, rec.imu.t)
+
+
+def test_without_the_screen_the_glitches_stay_and_the_fit_holds_what_they_hide(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``screen=False`` (``sins fit --no-screen``) fits on every interval: nothing set aside, and the spikes
+    make the standard errors so large that most coefficients are held at zero as not determined (what
+    the screen is for). ``--no-screen`` beside a rig recording, whose rows are not screened, is refused in
+    one line and nothing is written."""
+    rec, _ = _recording(1, spoiled=True)
+    fitted = referenced.fit("regression", rec, screen=False)
+    assert not any(a.spans_s for a in fitted.set_aside)
+    assert len(fitted.review.held) >= 15  # type: ignore[union-attr]
+    rig = tmp_path / "rig.csv"
+    procedure = calibration.RigProcedure(
+        positions=6, position_dwell_s=2.0, rate_table=calibration.RateTable(rates_dps=(50.0,), dwell_s=2.0)
+    )
+    unit = imu_spec.draw_unit("tactical", 1, 101).only(*imu.BASELINE)
+    io.write_recording(rig, calibration.simulate_rig(procedure, unit, seed=1))
+    model = tmp_path / "m.json"
+    assert main(["fit", str(rig), "--strategy", "regression", "--no-screen", "--out", str(model)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--no-screen" in err and "rig recording" in err and not model.exists()

@@ -87,6 +87,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
         return fitting.fit_several(
             args.strategy, recs, [n for _, n in named], interval_s=args.interval_s, guard=not args.no_guard,
             rule_mode=args.bias_rule, grade=args.grade, progress=row_progress(bar), stage=bar.set_description,
+            screen=not args.no_screen,
         )  # fmt: skip
 
 
@@ -117,6 +118,10 @@ def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | Non
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
         rec = read_recording(args, recording, dataset, args.truth)
     if rec.rig is not None:
+        if args.no_screen:
+            raise SinsInputError(
+                f"--no-screen: {where} is a rig recording, fitted on its rows, which are not screened"
+            )
         with progress_bar(f"fitting {args.strategy}", fitting.progress_unit(args.strategy)) as bar:
             return fitting.fit_rig(
                 args.strategy, rec.rig, where=where, sensor=unit_of(rec),
@@ -128,7 +133,7 @@ def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | Non
             return fitting.fit_referenced(
                 args.strategy, rec.beside_reference(), where=where, validation=args.validation,
                 interval_s=args.interval_s, guard=not args.no_guard, grade=args.grade,
-                progress=row_progress(bar),
+                progress=row_progress(bar), screen=not args.no_screen,
             )  # fmt: skip
     missing = io.recording.missing_reference(rec)
     if missing.needs == "truth_topic":  # a bag with several pose topics: name one
@@ -170,6 +175,12 @@ def add(sub: Subparsers) -> None:
         "--no-guard", action="store_true",
         help="mlp, kohonen, mlp_window: use the learned correction on every channel, even where it does not "
         "beat regression on held-back blocks (recordings)",
+    )  # fmt: skip
+    p.add_argument(
+        "--no-screen", action="store_true",
+        help="against a reference trajectory: fit on every interval; by default those a robust fit puts "
+        "beyond 20 robust standard deviations are the reference's gross errors (a glitch, a gap filled by "
+        "interpolation), set aside and named",
     )  # fmt: skip
     p.add_argument(
         "--grade", choices=GRADES, default="consumer",

@@ -165,9 +165,11 @@ def fit_referenced(
     guard: bool = True,
     grade: str = "consumer",
     progress: Progress | None = None,
+    screen: bool = True,
 ) -> FitOutcome:
     """Strategy ``name`` fitted on a recording beside its reference trajectory: the seed model on
-    intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back)."""
+    intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back);
+    ``screen``: the reference's gross errors set aside first (:mod:`sins.compensation.screening`)."""
     from sins.compensation import referenced
 
     part = rec
@@ -183,6 +185,7 @@ def fit_referenced(
             params={} if guard else {"guard": False},
             progress=progress,
             grade=grade,
+            screen=screen,
         )
     fit = fitted.intervals
     back = f", the last {validation:g} of its span held back" if validation else ""
@@ -268,6 +271,7 @@ def fit_several(
     grade: str = "consumer",
     progress: Progress | None = None,
     stage: Callable[[str], Any] | None = None,
+    screen: bool = True,
 ) -> FitOutcome:
     """Strategy ``name`` fitted on several recordings of one unit (``names`` name them): one shared model,
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
@@ -279,7 +283,7 @@ def fit_several(
     with _clock_named(list(zip(names, clocks, strict=True))):
         fitted = referenced.fit_several(
             name, list(recs), interval_s=interval_s, params={} if guard else {"guard": False},
-            progress=progress, rule_mode=rule_mode, stage=stage, grade=grade,
+            progress=progress, rule_mode=rule_mode, stage=stage, grade=grade, screen=screen,
         )  # fmt: skip
     lines: list[str] = []
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)

@@ -61,6 +61,7 @@ def fit(
     params: dict[str, Any] | None = None,
     progress: Callable[[int, int], None] | None = None,
     grade: str = identifiability.DEFAULT_GRADE,
+    screen: bool = True,
 ) -> Fitted:
     """Fit strategy ``name`` on ``rec`` against its reference.
 
@@ -75,7 +76,8 @@ def fit(
     learned strategies' training. The coefficients the intervals do not determine are held at zero
     and every other one is checked against what a unit of class ``grade`` can have
     (:mod:`sins.compensation.identifiability`); the verdict is :attr:`Fitted.review`, and the model's
-    ``fitted_on_`` records it.
+    ``fitted_on_`` records it. With ``screen`` (the default) the reference's gross errors are set aside
+    first (:mod:`sins.compensation.screening`; :attr:`Fitted.set_aside` says what).
 
     Raises
     ------
@@ -85,7 +87,7 @@ def fit(
     """
     where = rec.source or "recording"
     try:
-        [rec], aside = _screened([rec], interval_s, grade)
+        [rec], aside = _screened([rec], interval_s, grade, screen)
         if name == BIAS_ONLY:
             return replace(_bias_only(rec, interval_s, grade), set_aside=aside)
         fitted, review = identifiability.fit_determined(
@@ -140,6 +142,7 @@ def fit_several(
     rule_mode: str | None = None,
     stage: Callable[[str], None] | None = None,
     grade: str = identifiability.DEFAULT_GRADE,
+    screen: bool = True,
 ) -> FittedSeveral:
     """Fit strategy ``name`` on several recordings of one unit against their references.
 
@@ -151,7 +154,7 @@ def fit_several(
     :class:`~sins.compensation.unit_bias.BiasRule` (the model file keeps it as ``unit_bias_``), its mode
     chosen on held-back recordings (:func:`choose_rule`) unless ``rule_mode`` names one. ``none`` learns
     nothing and has no rule. ``progress(done, total)`` is handed to a learner's training, ``stage(text)``
-    told of each stage.
+    told of each stage. ``screen``: as :func:`fit`, on every recording.
 
     Raises
     ------
@@ -163,8 +166,9 @@ def fit_several(
     where = " + ".join(rec.source or "recording" for rec in recs)
     say = stage or (lambda text: None)
     try:
-        say("the references' gross errors (a robust fit)")
-        recs, aside = _screened(recs, interval_s, grade)
+        if screen:
+            say("the references' gross errors (a robust fit)")
+        recs, aside = _screened(recs, interval_s, grade, screen)
         say(f"the seed model on {len(recs)} recordings")
         fit_all, review = _several_determined(recs, interval_s, name, grade, where)
         offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
@@ -196,11 +200,15 @@ def fit_several(
 
 
 def _screened(
-    recs: list[ReferencedRecording], interval_s: float, grade: str
+    recs: list[ReferencedRecording], interval_s: float, grade: str, screen: bool = True
 ) -> tuple[list[ReferencedRecording], tuple[screening.SetAside, ...]]:
     """``recs`` with their references' gross errors set aside (:mod:`sins.compensation.screening`), found
-    by a robust fit of the seed model that holds what the recordings do not determine for ``grade``."""
+    by a robust fit of the seed model that holds what the recordings do not determine for ``grade``;
+    without ``screen``, as they are (and nothing set aside of each)."""
     from sins.compensation import several
+
+    if not screen:
+        return recs, tuple(screening.SetAside(rec.source, (), 0.0) for rec in recs)
 
     bounds = identifiability.class_bounds(grade)
 
