@@ -59,7 +59,8 @@ def _z_scores(fitted: referenced.Fitted, unit: object) -> np.ndarray:
 
 @pytest.mark.parametrize("seed", [1, 2])
 def test_a_references_glitches_are_set_aside_and_the_fit_is_the_clean_ones(seed: int) -> None:
-    """With three velocity spikes and a 2 s slerped gap in its reference, a unit's fit sets aside the
+    """With three velocity spikes and a 2 s slerped gap in its reference, a unit's fit screened first
+    (``screen="always"``, ``sins fit --screen always``) sets aside the
     spikes' epochs and the gap, and little else (2 s an epoch: the two intervals that share it), and
     recovers the unit as from the clean reference: as many coefficients fitted (within two: 6 s less
     reference), each within 4 standard errors of the truth, the z-scores' RMS between 0.4 and 2. Without
@@ -68,7 +69,7 @@ def test_a_references_glitches_are_set_aside_and_the_fit_is_the_clean_ones(seed:
     clean = referenced.fit("regression", _recording(seed, spoiled=False)[0])
     assert not any(a.spans_s for a in clean.set_aside)
     rec, unit = _recording(seed, spoiled=True)
-    fitted = referenced.fit("regression", rec)
+    fitted = referenced.fit("regression", rec, screen="always")
     [aside] = fitted.set_aside
     assert aside.largest_z > screening.SCREEN_Z
 
@@ -112,14 +113,16 @@ def test_without_leaves_out_the_epochs_within_the_spans_ends_included() -> None:
 def test_without_the_screen_the_glitches_stay_and_the_fit_holds_what_they_hide(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``screen=False`` (``sins fit --no-screen``) fits on every interval: nothing set aside, and the spikes
-    make the standard errors so large that most coefficients are held at zero as not determined (what
-    the screen is for). ``--no-screen`` beside a rig recording, whose rows are not screened, is refused in
-    one line and nothing is written."""
+    """By default (``refused``) a fit that is not refused is not screened, and neither is one with
+    ``never``: nothing set aside, and the spikes make the standard errors so large that most coefficients
+    are held at zero as not determined (what ``--screen always`` is for; the fit says so, below).
+    ``--screen`` other than the default beside a rig recording, whose rows are not screened, is refused
+    in one line and nothing is written."""
     rec, _ = _recording(1, spoiled=True)
-    fitted = referenced.fit("regression", rec, screen=False)
-    assert not any(a.spans_s for a in fitted.set_aside)
-    assert len(fitted.review.held) >= 15  # type: ignore[union-attr]
+    for screen in ("refused", "never"):
+        fitted = referenced.fit("regression", rec, screen=screen)
+        assert not any(a.spans_s for a in fitted.set_aside)
+        assert len(fitted.review.held) >= 15  # type: ignore[union-attr]
     rig = tmp_path / "rig.csv"
     procedure = calibration.RigProcedure(
         positions=6, position_dwell_s=2.0, rate_table=calibration.RateTable(rates_dps=(50.0,), dwell_s=2.0)
@@ -127,6 +130,29 @@ def test_without_the_screen_the_glitches_stay_and_the_fit_holds_what_they_hide(
     unit = imu_spec.draw_unit("tactical", 1, 101).only(*imu.BASELINE)
     io.write_recording(rig, calibration.simulate_rig(procedure, unit, seed=1))
     model = tmp_path / "m.json"
-    assert main(["fit", str(rig), "--strategy", "regression", "--no-screen", "--out", str(model)]) == 2
+    assert main(["fit", str(rig), "--strategy", "regression", "--screen", "always", "--out", str(model)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--no-screen" in err and "rig recording" in err and not model.exists()
+    assert err.count("\n") == 1 and "--screen always" in err and "rig recording" in err and not model.exists()
+
+
+def test_a_refused_fit_is_made_again_on_what_the_screen_leaves_else_the_refusal_stands() -> None:
+    """``refused``: a fit that refuses the recording as it is (here: while the spikes are in it) is made
+    again without the epochs the screen sets aside, and those are returned; on the clean recording the
+    screen sets nothing aside and the refusal stands as it was; ``never`` passes it on untouched."""
+    spoiled, _ = _recording(2, spoiled=True)
+    clean, _ = _recording(2, spoiled=False)
+
+    def make(rs: list[referenced.ReferencedRecording]) -> int:
+        v = rs[0].reference.v_n
+        if np.abs(np.diff(v, axis=0)).max() > 1.0 or len(rs[0].reference.t) == len(clean.reference.t):
+            raise ValueError("refused")
+        return len(rs[0].reference.t)
+
+    kept, [rec], [aside] = screening.fitted_screened(make, [spoiled])
+    assert kept == len(rec.reference.t) < len(spoiled.reference.t) and aside.spans_s
+    assert np.abs(np.diff(rec.reference.v_n, axis=0)).max() < 1.0
+    for screen in ("refused", "never"):
+        with pytest.raises(ValueError, match="refused"):
+            screening.fitted_screened(make, [clean], screen=screen)
+    with pytest.raises(ValueError, match="refused"):
+        screening.fitted_screened(make, [spoiled], screen="never")

@@ -87,7 +87,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
         return fitting.fit_several(
             args.strategy, recs, [n for _, n in named], interval_s=args.interval_s, guard=not args.no_guard,
             rule_mode=args.bias_rule, grade=args.grade, progress=row_progress(bar), stage=bar.set_description,
-            screen=not args.no_screen,
+            screen=args.screen,
         )  # fmt: skip
 
 
@@ -118,9 +118,10 @@ def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | Non
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
         rec = read_recording(args, recording, dataset, args.truth)
     if rec.rig is not None:
-        if args.no_screen:
+        if args.screen != "refused":
             raise SinsInputError(
-                f"--no-screen: {where} is a rig recording, fitted on its rows, which are not screened"
+                f"--screen {args.screen}: {where} is a rig recording, fitted on its rows, which are not "
+                "screened"
             )
         with progress_bar(f"fitting {args.strategy}", fitting.progress_unit(args.strategy)) as bar:
             return fitting.fit_rig(
@@ -133,7 +134,7 @@ def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | Non
             return fitting.fit_referenced(
                 args.strategy, rec.beside_reference(), where=where, validation=args.validation,
                 interval_s=args.interval_s, guard=not args.no_guard, grade=args.grade,
-                progress=row_progress(bar), screen=not args.no_screen,
+                progress=row_progress(bar), screen=args.screen,
             )  # fmt: skip
     missing = io.recording.missing_reference(rec)
     if missing.needs == "truth_topic":  # a bag with several pose topics: name one
@@ -177,10 +178,10 @@ def add(sub: Subparsers) -> None:
         "beat regression on held-back blocks (recordings)",
     )  # fmt: skip
     p.add_argument(
-        "--no-screen", action="store_true",
-        help="against a reference trajectory: fit on every interval; by default those a robust fit puts "
-        "beyond 20 robust standard deviations are the reference's gross errors (a glitch, a gap filled by "
-        "interpolation), set aside and named",
+        "--screen", choices=("refused", "always", "never"), default="refused",
+        help="against a reference trajectory: when intervals a robust fit puts beyond 20 robust standard "
+        "deviations are set aside as the reference's gross errors (a glitch, a gap filled by interpolation): "
+        "where the fit is refused without (default), before every fit, or never",
     )  # fmt: skip
     p.add_argument(
         "--grade", choices=GRADES, default="consumer",

@@ -165,11 +165,11 @@ def fit_referenced(
     guard: bool = True,
     grade: str = "consumer",
     progress: Progress | None = None,
-    screen: bool = True,
+    screen: str = "refused",
 ) -> FitOutcome:
     """Strategy ``name`` fitted on a recording beside its reference trajectory: the seed model on
     intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back);
-    ``screen``: the reference's gross errors set aside first (:mod:`sins.compensation.screening`)."""
+    ``screen``: when the reference's gross errors are set aside (:mod:`sins.compensation.screening`)."""
     from sins.compensation import referenced
 
     part = rec
@@ -196,7 +196,7 @@ def fit_referenced(
     ]
     if clock is not None:
         lines.append(f"reference: {clock_words(clock.lag_s)}")
-    lines += [a.line(where) for a in fitted.set_aside if a.spans_s]
+    lines += _screen_lines([where], fitted.set_aside, [fitted.intervals.residuals])
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
     if name == referenced.BIAS_ONLY:  # the other terms are not fitted: zeros, not estimates
         table = [c for c in table if c.term == "bias"]
@@ -223,6 +223,17 @@ def fit_referenced(
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
     return FitOutcome(fitted.strategy, lines, document)
+
+
+def _screen_lines(names: list[str], aside: Sequence[Any], residuals: list[Any]) -> list[str]:
+    """What the screen set aside of each recording; or, where it set nothing aside, the intervals far
+    off the fit that it would (:mod:`sins.compensation.screening`)."""
+    from sins.compensation import screening
+
+    if any(a.spans_s for a in aside):
+        return [a.line(n) for n, a in zip(names, aside, strict=True) if a.spans_s]
+    lines = [screening.suspect_line(n, *r) for n, r in zip(names, residuals, strict=True) if r is not None]
+    return [line for line in lines if line]
 
 
 def _held_lines(review: Any, grade: str, what: str, lines: list[str]) -> dict[str, Any]:
@@ -271,7 +282,7 @@ def fit_several(
     grade: str = "consumer",
     progress: Progress | None = None,
     stage: Callable[[str], Any] | None = None,
-    screen: bool = True,
+    screen: str = "refused",
 ) -> FitOutcome:
     """Strategy ``name`` fitted on several recordings of one unit (``names`` name them): one shared model,
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
@@ -288,7 +299,7 @@ def fit_several(
     lines: list[str] = []
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
     aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.spans_s]
-    lines += [a.line(n) for n, a in aside]
+    lines += _screen_lines(list(names), fitted.set_aside, list(fitted.several.residuals))
     document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]
     strategy = fitted.strategy
     if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):

@@ -61,7 +61,7 @@ def fit(
     params: dict[str, Any] | None = None,
     progress: Callable[[int, int], None] | None = None,
     grade: str = identifiability.DEFAULT_GRADE,
-    screen: bool = True,
+    screen: str = screening.DEFAULT,
 ) -> Fitted:
     """Fit strategy ``name`` on ``rec`` against its reference.
 
@@ -76,8 +76,9 @@ def fit(
     learned strategies' training. The coefficients the intervals do not determine are held at zero
     and every other one is checked against what a unit of class ``grade`` can have
     (:mod:`sins.compensation.identifiability`); the verdict is :attr:`Fitted.review`, and the model's
-    ``fitted_on_`` records it. With ``screen`` (the default) the reference's gross errors are set aside
-    first (:mod:`sins.compensation.screening`; :attr:`Fitted.set_aside` says what).
+    ``fitted_on_`` records it. ``screen`` says when the reference's gross errors are set aside
+    (:data:`sins.compensation.screening.SCREENS`: by default where the fit is refused without;
+    :attr:`Fitted.set_aside` says what).
 
     Raises
     ------
@@ -86,16 +87,22 @@ def fit(
         line naming the recording).
     """
     where = rec.source or "recording"
-    try:
-        [rec], aside = _screened([rec], interval_s, grade, screen)
+
+    def seed(rs: list[ReferencedRecording]) -> Any:
         if name == BIAS_ONLY:
-            return replace(_bias_only(rec, interval_s, grade), set_aside=aside)
-        fitted, review = identifiability.fit_determined(
+            return _bias_only(rs[0], interval_s, grade)
+        return identifiability.fit_determined(
             lambda holds: interval_fit.fit_intervals(
-                rec, interval_s=interval_s, robust=name == "regression_robust", holds=holds
+                rs[0], interval_s=interval_s, robust=name == "regression_robust", holds=holds
             ),
-            rec, interval_s, grade, where,
+            rs[0], interval_s, grade, where,
         )  # fmt: skip
+
+    try:
+        made, [rec], aside = screening.fitted_screened(seed, [rec], interval_s, grade, screen)
+        if name == BIAS_ONLY:
+            return replace(made, set_aside=aside)
+        fitted, review = made
         strategy = compensation.make(name, **(params or {}))
         if name == "none":
             return Fitted(strategy, fitted, review)
@@ -142,7 +149,7 @@ def fit_several(
     rule_mode: str | None = None,
     stage: Callable[[str], None] | None = None,
     grade: str = identifiability.DEFAULT_GRADE,
-    screen: bool = True,
+    screen: str = screening.DEFAULT,
 ) -> FittedSeveral:
     """Fit strategy ``name`` on several recordings of one unit against their references.
 
@@ -166,11 +173,14 @@ def fit_several(
     where = " + ".join(rec.source or "recording" for rec in recs)
     say = stage or (lambda text: None)
     try:
-        if screen:
-            say("the references' gross errors (a robust fit)")
-        recs, aside = _screened(recs, interval_s, grade, screen)
         say(f"the seed model on {len(recs)} recordings")
-        fit_all, review = _several_determined(recs, interval_s, name, grade, where)
+        (fit_all, review), recs, aside = screening.fitted_screened(
+            lambda rs: _several_determined(rs, interval_s, name, grade, where),
+            recs,
+            interval_s,
+            grade,
+            screen,
+        )
         offsets = np.array([fit_all.time_offset_s, fit_all.accel_time_offset_s])
         if name == BIAS_ONLY:  # the seed model's biases alone, read as they come
             strategy: Strategy = Regression(g_sensitivity=False).set_fit(_biases_only(fit_all.seed))
@@ -197,34 +207,6 @@ def fit_several(
         "readings": [readings_of(rec) for rec in recs], "checks": review.to_dict(),
     }  # fmt: skip
     return FittedSeveral(strategy, fit_all, rule, review, aside)
-
-
-def _screened(
-    recs: list[ReferencedRecording], interval_s: float, grade: str, screen: bool = True
-) -> tuple[list[ReferencedRecording], tuple[screening.SetAside, ...]]:
-    """``recs`` with their references' gross errors set aside (:mod:`sins.compensation.screening`), found
-    by a robust fit of the seed model that holds what the recordings do not determine for ``grade``;
-    without ``screen``, as they are (and nothing set aside of each)."""
-    from sins.compensation import several
-
-    if not screen:
-        return recs, tuple(screening.SetAside(rec.source, (), 0.0) for rec in recs)
-
-    bounds = identifiability.class_bounds(grade)
-
-    def residuals(rs: list[ReferencedRecording]) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
-        if len(rs) == 1:
-            holds = identifiability.assess(rs[0], interval_s, bounds)
-            one = interval_fit.fit_intervals(
-                rs[0], interval_s=interval_s, g_sensitivity=False, robust=True, holds=holds
-            )
-            assert one.residuals is not None
-            return [one.residuals]
-        held = identifiability.assess_several(rs, interval_s, bounds).reasons
-        return list(several.fit_several(rs, interval_s=interval_s, robust=True, held=held).residuals)
-
-    out, aside = screening.set_aside(recs, residuals, interval_s)
-    return out, tuple(aside)
 
 
 def _several_determined(

@@ -9,12 +9,17 @@ then holds or refuses coefficients the rest of the reference determines: three E
 their velocity differentiated from their positions had ``regression`` refused ("accel bias x was held
 at zero and then moved ...: the fit is unstable").
 
-So before the fit proper, a robust one is made (Huber's weights, the same coefficients held), and every
+The screen (:func:`screened`): a robust fit (Huber's weights, the same coefficients held), and every
 interval whose residual lies beyond :data:`SCREEN_Z` robust standard deviations (per recording, sensor
 and axis: the residuals' median absolute deviation / 0.6745) has its span's reference epochs, ends
 included, set aside (:func:`set_aside`). An interval formed across the hole then has ends the reference
 got right: an interval's residual reads its two ends' states and the readings between, nothing else.
-Passes repeat until none is found, at most :data:`MAX_PASSES`. What judges a model
+Passes repeat until none is found, at most :data:`MAX_PASSES`.
+
+An error of the unit that the seed model lacks (a scale nonlinearity in the fastest turns) makes the
+largest residuals too, and those are a learner's to learn; so by default a fit is screened only where
+it is refused on every interval (:func:`fitted_screened`, :data:`SCREENS`), and a fit made on every
+interval names the intervals the screen would take (:func:`suspect_line`). What judges a model
 (:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened: it judges against
 the reference as it is.
 """
@@ -23,11 +28,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation import identifiability, interval_fit, several
 from sins.compensation.intervals import INTERVAL_S, choose_intervals
 from sins.core.series import ReferencedRecording
 
@@ -43,10 +49,36 @@ SCREEN_Z = 20.0
 #: Passes of fit and screen at most (a pass sets aside what the last one's intervals showed; the
 #: intervals walked again across the holes may end on a gross epoch the last ones skipped).
 MAX_PASSES = 3
+#: When a fit against a trajectory sets its reference's gross errors aside (:func:`fitted_screened`):
+#: only where the fit is refused without (the default: an error of the unit that the seed model lacks,
+#: a scale nonlinearity in the fastest turns, makes the largest residuals too, and a screen of every fit
+#: would take from a learner what it is there to learn), before every fit, or never.
+SCREENS = ("refused", "always", "never")
+DEFAULT = "refused"
 #: The smallest residual spread screened against, gyro rad and accelerometer m/s an interval: an exact
 #: reference's residuals are rounding, whose spread would make any interval a gross error (a
 #: navigation-grade gyro's noise over 1 s is 3e-7 rad, an accelerometer's 2e-4 m/s).
 FLOOR = (1e-9, 1e-8)
+
+_Made = TypeVar("_Made")
+#: What an interval far off the fit may be, for the lines a fit prints.
+_WHY = (
+    "the reference contradicts the readings there (a glitch, a gap filled by interpolation), or the unit "
+    "errs there as its seed model does not (a scale nonlinearity in the fastest turns: a learner's to learn)"
+)
+
+
+def suspect_line(name: str, gyro_resid: Array, accel_resid: Array) -> str | None:
+    """A line for a fit made on every interval whose residuals hold some beyond :data:`SCREEN_Z`; None
+    where none is."""
+    bad, z = gross(gyro_resid, accel_resid)
+    if not bad.any():
+        return None
+    return (
+        f"{name}: {int(bad.sum())} interval(s) up to {float(z.max()):.0f} robust σ off the fit, beyond "
+        f"{SCREEN_Z:g}: {_WHY}; sins fit --screen always sets them aside"
+    )
+
 
 #: Residuals of a robust fit: each recording's gyro (k, 3) rad and accelerometer (k, 3) m/s per interval.
 Residuals = Callable[[list[ReferencedRecording]], list[tuple[Array, Array]]]
@@ -69,8 +101,7 @@ class SetAside:
         """What a fit says of it, one line."""
         return (
             f"{name}: {len(self.spans_s)} span(s) of its reference set aside ({self.seconds():.1f} s in all; "
-            f"intervals up to {self.largest_z:.0f} robust σ off the fit, beyond {SCREEN_Z:g}: a reference "
-            "that contradicts the readings there, a glitch or a gap filled by interpolation)"
+            f"intervals up to {self.largest_z:.0f} robust σ off the fit, beyond {SCREEN_Z:g}): {_WHY}"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -136,12 +167,70 @@ def set_aside(
     return out, aside
 
 
+def screened(
+    recs: list[ReferencedRecording],
+    interval_s: float = INTERVAL_S,
+    grade: str = identifiability.DEFAULT_GRADE,
+) -> tuple[list[ReferencedRecording], tuple[SetAside, ...]]:
+    """``recs`` with their references' gross errors set aside (:func:`set_aside`), found by a robust fit
+    of the seed model (Huber's weights; on several recordings one fit, each its own biases) that holds
+    what the recordings do not determine for a unit of ``grade``."""
+    bounds = identifiability.class_bounds(grade)
+
+    def residuals(rs: list[ReferencedRecording]) -> list[tuple[Array, Array]]:
+        if len(rs) == 1:
+            holds = identifiability.assess(rs[0], interval_s, bounds)
+            one = interval_fit.fit_intervals(
+                rs[0], interval_s=interval_s, g_sensitivity=False, robust=True, holds=holds
+            )
+            assert one.residuals is not None
+            return [one.residuals]
+        held = identifiability.assess_several(rs, interval_s, bounds).reasons
+        return list(several.fit_several(rs, interval_s=interval_s, robust=True, held=held).residuals)
+
+    out, aside = set_aside(recs, residuals, interval_s)
+    return out, tuple(aside)
+
+
+def fitted_screened(
+    make: Callable[[list[ReferencedRecording]], _Made],
+    recs: list[ReferencedRecording],
+    interval_s: float = INTERVAL_S,
+    grade: str = identifiability.DEFAULT_GRADE,
+    screen: str = DEFAULT,
+) -> tuple[_Made, list[ReferencedRecording], tuple[SetAside, ...]]:
+    """``make(recs)`` (a fit), with the references' gross errors set aside as ``screen`` says
+    (:data:`SCREENS`): ``refused``, where ``make`` refuses the recordings as they are (``ValueError``)
+    and :func:`screened` sets something aside, ``make`` again on what is left (else the refusal stands);
+    ``always``, :func:`screened` first; ``never``, ``make(recs)`` alone. Returns the fit, the recordings
+    it was made on and what was set aside of each."""
+    if screen not in SCREENS:
+        raise ValueError(f"screen {screen!r} (known: {', '.join(SCREENS)})")
+    if screen == "always":
+        recs, aside = screened(recs, interval_s, grade)
+        return make(recs), recs, aside
+    try:
+        return make(recs), recs, tuple(SetAside(rec.source, (), 0.0) for rec in recs)
+    except ValueError:
+        if screen == "never":
+            raise
+        trimmed, aside = screened(recs, interval_s, grade)
+        if not any(a.spans_s for a in aside):
+            raise
+    return make(trimmed), trimmed, aside
+
+
 __all__ = [
+    "DEFAULT",
     "FLOOR",
     "MAX_PASSES",
+    "SCREENS",
     "SCREEN_Z",
     "SetAside",
+    "fitted_screened",
     "gross",
+    "screened",
     "set_aside",
+    "suspect_line",
     "without",
 ]
