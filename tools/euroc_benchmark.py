@@ -80,6 +80,9 @@ def main_(argv: list[str] | None = None) -> int:
     p.add_argument("--judge", nargs="+", default=JUDGE)
     p.add_argument("--json", type=Path, help="write every figure here")
     p.add_argument("--models", type=Path, help="keep the fitted models in this folder")
+    p.add_argument(
+        "--screen", choices=("refused", "always", "never"), help="sins fit --screen (default its own)"
+    )
     args = p.parse_args(argv)
     if args.root is not None:
         os.environ["SINS_DATA"] = str(args.root)
@@ -101,7 +104,8 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
         model = models / f"{strategy}.json"
         fit_json = work / f"{strategy}.fit.json"
         argv_fit = ["fit", *(a for n in args.train for a in ("--dataset", f"{args.folder}/{n}")),
-                    "--strategy", strategy, "--out", str(model), "--json", str(fit_json)]  # fmt: skip
+                    "--strategy", strategy, "--out", str(model), "--json", str(fit_json),
+                    *(["--screen", args.screen] if args.screen else [])]  # fmt: skip
         start = time.perf_counter()
         if _run(argv_fit):  # refused (its one line printed above): its column left out, the others go on
             results["fits"][strategy] = {"refused": True}
@@ -130,7 +134,7 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
 
 def run_on_unit(
     write: Callable[[Path], None], folder: str, train: list[str], judge: list[str], strategies: list[str],
-    *, json_out: Path | None = None, keep: Path | None = None,
+    *, json_out: Path | None = None, keep: Path | None = None, screen: str | None = None,
 ) -> int:  # fmt: skip
     """The benchmark on recordings of another unit: ``write`` puts them into ``ROOT/folder`` of a data root,
     ``keep`` or a temporary one, removed after (the recordings written for the run, not the user's)."""
@@ -139,7 +143,8 @@ def run_on_unit(
         (root / folder).mkdir(parents=True, exist_ok=True)
         write(root / folder)
         bench = ["--root", str(root), "--folder", folder, "--train", *train, "--judge", *judge,
-                 "--strategies", *strategies, *(["--json", str(json_out)] if json_out else [])]  # fmt: skip
+                 "--strategies", *strategies, *(["--json", str(json_out)] if json_out else []),
+                 *(["--screen", screen] if screen else [])]  # fmt: skip
         return main_(bench)
     finally:
         if keep is None:

@@ -105,7 +105,7 @@ def fit(
         fitted, review = made
         strategy = compensation.make(name, **(params or {}))
         if name == "none":
-            return Fitted(strategy, fitted, review)
+            return Fitted(strategy, fitted, review, aside)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
             strategy.set_fit(fitted.seed)
