@@ -157,7 +157,7 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     )
     if agreement is not None:
         # The turns are the gyro's: the attitude is of the readings' axes, and only the world is turned
-        # (a motion capture's frame with y up; NED written for ENU). Said so, not sent to the quaternion.
+        # (a motion capture's frame with y up; NED written for ENU): said so, not blamed on the quaternion.
         what += (f", while its turns agree with the gyro's (correlation {agreement:.2f}): the attitude is of "
                  f"the readings' axes, in a world frame whose up lies along {_up_as_read(reaction / size)} "
                  "as read, not z")  # fmt: skip
