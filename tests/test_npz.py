@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import numpy_unit_gap as nu
 import pytest
 from conftest import dataset_folder, refusal
 from scipy.spatial.transform import Rotation
@@ -440,3 +441,23 @@ def test_every_command_reads_an_npz_recording(
     for a in argv:
         if "{out}" in a:
             assert Path(a.format(**fill)).is_file()
+
+
+def test_a_euroc_folders_world_with_y_up_is_read_as_with_z_up(tmp_path: Path) -> None:
+    """The EuRoC/TUM-VI folder reader turns a y-up room as the .npz reader does: a numpy unit's recording
+    (tests/numpy_unit_gap.py) written as two EuRoC folders, one with its world's up along +y, reads back
+    the same reference to 1e-9 (its poses at their own stamps, gravity judged from the readings there)."""
+    arrays = nu.recording(3, duration_s=30.0)
+    turn = Rotation.from_euler("x", -90, degrees=True)
+    q = turn * Rotation.from_quat(arrays["q_wxyz"], scalar_first=True)
+    turned = {**arrays, "q_wxyz": q.as_quat(scalar_first=True), "v_m_s": turn.apply(arrays["v_m_s"]),
+              "p_m": turn.apply(arrays["p_m"])}  # fmt: skip
+    upright = io.read(nu.write_euroc(tmp_path / "z_up", arrays))
+    read = io.read(nu.write_euroc(tmp_path / "y_up", turned))
+    assert any("up lies along +y" in note and "turned by 90° about +x" in note for note in read.notes)
+    assert not any("up lies along" in note for note in upright.notes)
+    want, got = upright.truth, read.truth
+    angle = (Rotation.from_quat(want.q_nb).inv() * Rotation.from_quat(got.q_nb)).magnitude()
+    assert angle.max() < 1e-9
+    np.testing.assert_allclose(got.v_n, want.v_n, atol=1e-9)
+    assert not inspection.inspect(read).findings

@@ -110,11 +110,13 @@ def _read_euroc(
     for folder, width in REFERENCES.items():
         ref = (mav or csv.parent) / folder / "data.csv"
         if mav is not None and ref.is_file():
-            truth = _reference(ref, width, t0, origin, m)
+            truth, turned = _reference(ref, width, t0, origin, m, (stamps, values[:, 3:]))
             notes.append(
                 f"reference {ref}: {len(truth.t)} poses, room frame R taken as ENU at "
                 + (local.NOMINAL_PLACE if origin == local.NOMINAL_ORIGIN else local.describe_origin(origin))
             )
+            if turned:
+                notes.append(f"{ref}: {turned}")
             break
     return EurocRead(imu, t0, _rate(csv.parent / "sensor.yaml"), truth, tuple(notes))
 
@@ -208,19 +210,30 @@ def _check_readings(path: Path, values: Array) -> None:
         )
 
 
-def _reference(path: Path, width: int, t0: int, origin: tuple[float, float, float], m: Array) -> NavSeries:
-    """The poses of S in R (ENU) as a geodetic trajectory of the body on the axes ``m`` names."""
+def _reference(
+    path: Path, width: int, t0: int, origin: tuple[float, float, float], m: Array,
+    readings: tuple[NDArray[np.int64], Array],
+) -> tuple[NavSeries, str]:  # fmt: skip
+    """The poses of S in R (ENU) as a geodetic trajectory of the body on the axes ``m`` names, R turned to
+    put its up at z where it lies along another of its axes (:func:`sins.io.local.levelled`, judged by
+    the specific force of ``readings``, S's stamps and forces), and the note that says so (else "")."""
     stamps, a = _read_asl_csv(path, width)
     q_xyzw = np.column_stack([a[:, 4:7], a[:, 3]])
     norm = np.linalg.norm(q_xyzw, axis=1)
     if (np.abs(norm - 1.0) > 1e-3).any():
         k = int(np.argmax(np.abs(norm - 1.0) > 1e-3))
         raise SinsInputError(f"{path}:{k + 2}: q_RS has norm {norm[k]:.6g}, not a unit quaternion")
-    v = a[:, 7:10] if width >= 10 else None
-    return local.enu_track(
-        (stamps - t0) / 1e9, a[:, :3], origin, q_enu_body=q_xyzw / norm[:, None], v_enu=v, body_to_frd=m,
+    t = (stamps - t0) / 1e9
+    p = a[:, :3]
+    v = a[:, 7:10] if width >= 10 else (np.gradient(p, t, axis=0) if len(t) > 1 else np.zeros_like(p))
+    t_imu, f_imu = (readings[0] - t0) / 1e9, readings[1]
+    f_s = np.column_stack([np.interp(t, t_imu, f_imu[:, i]) for i in range(3)])
+    q_xyzw, v_w, p_w, turned = local.levelled(t, f_s, q_xyzw / norm[:, None], v, p)
+    track = local.enu_track(
+        t, p_w, origin, q_enu_body=q_xyzw, v_enu=v_w if width >= 10 else None, body_to_frd=m,
         source=str(path),
     )  # fmt: skip
+    return track, turned
 
 
 def _rate(path: Path) -> float | None:

@@ -11,14 +11,14 @@ from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.series import NavSeries, ReferencedRecording
-from sins.io import axes
+from sins.io import axes, local
 from sins.io.findings import Finding, ReferenceLag, Rest, Windows
 
 Array = NDArray[np.float64]
 
 #: Beside a reference attitude, the specific force it rotates into the world, less the acceleration its
 #: velocity gives, points up within this, °: a 1 m/s² accelerometer bias tilts it 6°.
-REFERENCE_TILT_DEG = 10.0
+REFERENCE_TILT_DEG = local.LEVEL_WITHIN_DEG
 #: Beside a reference attitude, its turns and the gyro's correlate at least this much (EuRoC and
 #: BROAD: 0.997 and more; the gyro's noise and a reference's lag take little off).
 REFERENCE_TURNS_AGREE = 0.9

@@ -63,6 +63,60 @@ def describe_origin(origin: tuple[float, float, float]) -> str:
     return f"{np.degrees(lat):.7f}°, {np.degrees(lon):.7f}°, {h:.2f} m"
 
 
+#: A room frame whose up, as its reference sees gravity, lies within this of one of its axes other than
+#: z is read turned to put that axis at z (:func:`levelled`), °: the reference's own tilt check's
+#: (:data:`sins.io.frame_check.REFERENCE_TILT_DEG`; a 1 m/s² accelerometer bias tilts it 6°).
+LEVEL_WITHIN_DEG = 10.0
+
+
+def levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tuple[Array, Array, Array, str]:
+    """A room's reference (the attitude ``q_xyzw`` of the sensor's axes, scalar last, its velocity
+    ``v_w`` and position ``p_w``, at ``t``; ``f_s`` the specific force read on those axes at ``t``) in a
+    world frame with z up, where the file's world has its up along another of its axes (a motion
+    capture's frame with y up; NED's z down written for ENU): the attitude, velocity and position turned
+    by the one rotation of 90° or 180° that takes that axis to z, and a note saying so (else everything
+    as it is and an empty note). Up is gravity's reaction as the reference sees it: the specific force
+    rotated into the world, averaged over the recording, less the mean acceleration its velocity gives.
+    Taken only within :data:`LEVEL_WITHIN_DEG` of an axis: a world tilted elsewhere, or an attitude that
+    is not of the readings' axes, is left for :func:`sins.io.frame_check.reference_findings` to name (its
+    turns against the gyro's judge the attitude whichever way the world is turned)."""
+    rows = slice(None, None, max(1, len(t) // 200_000))  # the mean of a long recording from 200,000 rows
+    weights = np.gradient(t[rows]) if len(t[rows]) > 1 else np.ones(1)
+    f_w = rotation.rotate(q_xyzw[rows], f_s[rows])
+    up = weights @ f_w / float(np.sum(weights))
+    if t[-1] > t[0]:
+        up = up - (v_w[-1] - v_w[0]) / float(t[-1] - t[0])
+    size = float(np.linalg.norm(up))
+    k = int(np.argmax(np.abs(up)))
+    if not size > 0 or (k == 2 and up[2] > 0):
+        return q_xyzw, v_w, p_w, ""
+    tilt = float(np.degrees(np.arccos(min(1.0, abs(float(up[k])) / size))))
+    if tilt > LEVEL_WITHIN_DEG:
+        return q_xyzw, v_w, p_w, ""
+    axis = np.zeros(3)
+    axis[k] = np.sign(up[k])
+    # 90° about the horizontal axis that takes this one to z; 180° about x for z down.
+    rotvec = np.array([np.pi, 0.0, 0.0]) if k == 2 else np.pi / 2 * np.cross(axis, [0.0, 0.0, 1.0])
+    turn = rotation.quat_from_rotvec(rotvec)
+    name = f"{'+' if axis[k] > 0 else '-'}{'xyz'[k]}"
+    note = (
+        f"its world frame's up lies along {name} (gravity's reaction as the reference sees it, within "
+        f"{tilt:.1f}° of that axis), where the form's is z: the reference is read turned by "
+        f"{np.degrees(np.linalg.norm(rotvec)):.0f}° about {_axis_name(rotvec)} to put its up at z"
+    )
+    return (
+        rotation.quat_multiply(turn, q_xyzw),
+        rotation.rotate(turn, v_w),
+        rotation.rotate(turn, p_w),
+        note,
+    )
+
+
+def _axis_name(rotvec: Array) -> str:
+    k = int(np.argmax(np.abs(rotvec)))
+    return f"{'+' if rotvec[k] > 0 else '-'}{'xyz'[k]}"
+
+
 def enu_track(
     t: Array,
     p_enu: Array,
@@ -117,10 +171,12 @@ def enu_track(
 
 
 __all__ = [
+    "LEVEL_WITHIN_DEG",
     "NOMINAL_ORIGIN",
     "NOMINAL_PLACE",
     "describe_origin",
     "ecef_to_lla",
     "enu_track",
+    "levelled",
     "ned_to_ecef_matrix",
 ]

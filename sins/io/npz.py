@@ -21,8 +21,8 @@ m/s² of any site's), or at the origin given for the place (``--origin``), and s
 without an origin, so that Earth's rate, which cannot be placed in such a frame, is left out of what is
 judged against it (the published open-loop figures leave it out too). A world frame whose up lies along
 another of its axes (y up, as motion capture often writes it; z down) is read turned to z up, and the
-notes say so (:func:`_levelled`). Times are made relative to the first reading (``t0_ns`` keeps the
-absolute stamp).
+notes say so (:func:`sins.io.local.levelled`). Times are made relative to the first reading
+(``t0_ns`` keeps the absolute stamp).
 """
 
 from __future__ import annotations
@@ -34,10 +34,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.core import rotation
 from sins.core.series import ImuRates, NavSeries
 from sins.errors import SinsInputError
-from sins.io import axes, formats, frame_check, local
+from sins.io import axes, formats, local
 
 Array = NDArray[np.float64]
 
@@ -117,7 +116,9 @@ def _read_npz(
             k = int(off[0])
             raise SinsInputError(f"{path}: q_wxyz: row {k + 1} has norm {norm[k]:.6g}, not a unit quaternion")
         q_xyzw = np.column_stack([q[:, 1:], q[:, 0]]) / norm[:, None]
-        q_xyzw, v_w, p_w, turned = _levelled(t, arrays["accel_m_s2"], q_xyzw, arrays["v_m_s"], arrays["p_m"])
+        q_xyzw, v_w, p_w, turned = local.levelled(
+            t, arrays["accel_m_s2"], q_xyzw, arrays["v_m_s"], arrays["p_m"]
+        )
         if turned:
             notes.append(f"{path}: {turned}")
         truth = local.enu_track(
@@ -138,53 +139,6 @@ def _read_npz(
         )
         notes.append(f"reference at every reading; its world frame (z up) {placed}")
     return imu, truth, float(t_abs[0]), tuple(notes)
-
-
-def _levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tuple[Array, Array, Array, str]:
-    """The reference in a world frame with z up where the file's world has its up along another of its
-    axes (a motion capture's frame with y up; NED's z down written for ENU): the attitude, velocity and
-    position turned by the one rotation of 90° or 180° that takes that axis to z, and a note saying so
-    (else everything as it is and an empty note). Up is gravity's reaction as the reference sees it: the
-    specific force rotated into the world, averaged over the recording, less the mean acceleration its
-    velocity gives. Taken only within :data:`~sins.io.frame_check.REFERENCE_TILT_DEG` of an axis: a world
-    tilted elsewhere, or an attitude that is not of the readings' axes, is left for
-    :func:`sins.io.frame_check.reference_findings` to name (its turns against the gyro's judge the
-    attitude whichever way the world is turned)."""
-    rows = slice(None, None, max(1, len(t) // 200_000))  # the mean of a long recording from 200,000 rows
-    weights = np.gradient(t[rows]) if len(t[rows]) > 1 else np.ones(1)
-    f_w = rotation.rotate(q_xyzw[rows], f_s[rows])
-    up = weights @ f_w / float(np.sum(weights))
-    if t[-1] > t[0]:
-        up = up - (v_w[-1] - v_w[0]) / float(t[-1] - t[0])
-    size = float(np.linalg.norm(up))
-    k = int(np.argmax(np.abs(up)))
-    if not size > 0 or (k == 2 and up[2] > 0):
-        return q_xyzw, v_w, p_w, ""
-    tilt = float(np.degrees(np.arccos(min(1.0, abs(float(up[k])) / size))))
-    if tilt > frame_check.REFERENCE_TILT_DEG:
-        return q_xyzw, v_w, p_w, ""
-    axis = np.zeros(3)
-    axis[k] = np.sign(up[k])
-    # 90° about the horizontal axis that takes this one to z; 180° about x for z down.
-    rotvec = np.array([np.pi, 0.0, 0.0]) if k == 2 else np.pi / 2 * np.cross(axis, [0.0, 0.0, 1.0])
-    turn = rotation.quat_from_rotvec(rotvec)
-    name = f"{'+' if axis[k] > 0 else '-'}{'xyz'[k]}"
-    note = (
-        f"its world frame's up lies along {name} (gravity's reaction as the reference sees it, within "
-        f"{tilt:.1f}° of that axis), where the form's is z: the reference is read turned by "
-        f"{np.degrees(np.linalg.norm(rotvec)):.0f}° about {_axis_name(rotvec)} to put its up at z"
-    )
-    return (
-        rotation.quat_multiply(turn, q_xyzw),
-        rotation.rotate(turn, v_w),
-        rotation.rotate(turn, p_w),
-        note,
-    )
-
-
-def _axis_name(rotvec: Array) -> str:
-    k = int(np.argmax(np.abs(rotvec)))
-    return f"{'+' if rotvec[k] > 0 else '-'}{'xyz'[k]}"
 
 
 def _load(path: Path) -> tuple[dict[str, Array], list[str]]:
