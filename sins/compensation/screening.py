@@ -40,11 +40,11 @@ from sins.core.series import ReferencedRecording
 Array = NDArray[np.float64]
 
 #: An interval this many robust standard deviations off the fit, or more, is a gross error of the
-#: reference, set aside. Normal residuals would allow 7 (10,000 intervals pass it by chance one time in
-#: 4,000), but real ones have tails: the clean references sins holds reach 16 (BROAD's unit B, its trials
-#: cut in three and fitted together, in trial 18's fast turns; each trial whole 11.0 and 10.5, EuRoC's
-#: eleven sequences 9.6, the PSINS drive 3.4), and none of them is touched. Gross errors made of them (a
-#: velocity differentiated from positions, a slerped gap) reach 31-600.
+#: reference, set aside. Normal residuals would allow 7 (the 60,000 values of 10,000 intervals pass it
+#: by chance once in 6.5 million fits), but real ones have tails: the clean references sins holds reach
+#: 16 (BROAD's unit B, its trials cut in three and fitted together, in trial 18's fast turns; each trial
+#: whole 11.0 and 10.5, EuRoC's eleven sequences 9.6, the PSINS drive 3.4), and none of them is touched.
+#: Gross errors made of them (a velocity differentiated from positions, a slerped gap) reach 31-600.
 SCREEN_Z = 20.0
 #: Passes of fit and screen at most (a pass sets aside what the last one's intervals showed; the
 #: intervals walked again across the holes may end on a gross epoch the last ones skipped).
