@@ -146,6 +146,11 @@ class SensorFit:
         m = len(e)
         return np.asarray(-0.5 * m * (np.log(2.0 * np.pi * (np.mean(e**2, axis=0) + TINY**2)) + 1.0))
 
+    def bic_penalty(self, parameters: int) -> float:
+        """BIC's penalty for ``parameters`` more on the fit intervals: half their number times the log of
+        the intervals' count (two at least)."""
+        return 0.5 * parameters * float(np.log(max(int(self.fit.sum()), 2)))
+
     def gains(self, before: Array, after: Array) -> Array:
         """Per component (3,), the withheld Gaussian log-likelihood gain of the model leaving
         ``after`` over the one leaving ``before`` (both unwhitened, (k, 3)), each with its own variance."""

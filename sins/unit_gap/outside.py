@@ -42,6 +42,11 @@ class Tried:
     fit_score: float = 0.0
 
 
+def _parameters(what: Outside) -> int:
+    """A disturbance's parameters: a step's size and time, a hum's two amplitudes and period."""
+    return 2 if what.kind == "bias step" else 3
+
+
 def _reduction(sf: SensorFit, basis: Array, left_w: Array, column: Array) -> float:
     """How much adding ``column`` (k, 3, q) to a model whose whitened fit columns span ``basis`` and
     which leaves ``left_w`` (its whitened fit residual, flat) lowers the fit rows' sum of squares."""
@@ -111,8 +116,7 @@ def _tried(sf: SensorFit, current: Array, columns: Array, what: Outside, axis: i
     size = float(own[0]) if what.kind == "bias step" else float(np.hypot(*own[:2]))
     gain = float(sf.gains(before, after)[axis])
     score = gain - SIGNIFICANT_NATS
-    k = 2 if what.kind == "bias step" else 3
-    fit_score = float(sf.fit_loglik(after)[axis]) - 0.5 * k * float(np.log(max(int(sf.fit.sum()), 2)))
+    fit_score = float(sf.fit_loglik(after)[axis]) - sf.bic_penalty(_parameters(what))
     outside = Outside(what.channel, what.kind, size, score, what.t_s, what.period_s)
     return Tried(outside, columns, gain, fit_score)
 
@@ -153,14 +157,12 @@ def beside_wander(
     above the same): the wander of a real gyro bias takes the shape of some slow hum on the fit intervals
     alone (EuRoC's MH_01: gyro z, 0.016 °/s over 90 s, 7.5 nats there and 5.3 withheld). A recording
     whose bias wanders and holds nothing else keeps its wander."""
-    n_fit = max(int(sf.fit.sum()), 2)
     found = []
     for t in tried:
         columns = np.concatenate([current, t.columns], axis=2)
         both = SensorFit.of(sf.y, sf.fit, sf.withheld, sf.joined, columns, phis)
         _, after = both.solve(columns)
-        k = 2 if t.outside.kind == "bias step" else 3
-        score = float(both.fit_loglik(after)[axis]) - 0.5 * (1 + k) * float(np.log(n_fit))
+        score = float(both.fit_loglik(after)[axis]) - both.bic_penalty(1 + _parameters(t.outside))
         if t.gain > SIGNIFICANT_NATS and score > wander_fit + SIGNIFICANT_NATS:
             found.append((score, t.outside))
     return max(found, key=lambda f: f[0])[1] if found else None

@@ -285,8 +285,7 @@ def _round(
             wandering = SensorFit.of(fit.y, fit.fit, fit.withheld, fit.joined, st.columns(), cand.phis)
             _, after = wandering.solve(st.columns())
             allowance = refit_allowance(fit, st.columns(), SIGNIFICANT_NATS)
-            penalty = 0.5 * float(np.log(max(int(fit.fit.sum()), 2)))  # its one more parameter, φ
-            scores = wandering.fit_loglik(after) - penalty
+            scores = wandering.fit_loglik(after) - fit.bic_penalty(1)  # its one more parameter, φ
             trials.append(Trial(cand, cross_gains(fit, before, wandering, after), allowance, scores))
             continue
         _, after = st.fit.solve(st.columns(cand))
