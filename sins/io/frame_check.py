@@ -141,9 +141,7 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     inside = inside[:: max(1, len(inside) // 200_000)]  # the mean of a long recording from 200,000 rows
     ts = t[inside]
     ref = truth.interpolate(ts)
-    f_n = rotation.rotate(ref.q_nb, f[inside])
-    weights = np.gradient(ts)  # each reading's share of the span, for uneven stamps
-    mean_f_n = weights @ f_n / float(np.sum(weights))
+    mean_f_n = local.mean_in_world(ts, f[inside], ref.q_nb)
     reaction = mean_f_n - (ref.v_n[-1] - ref.v_n[0]) / float(ts[-1] - ts[0])  # −g: up, in NED
     size = float(np.linalg.norm(reaction))
     if not size > 0:

@@ -69,6 +69,14 @@ def describe_origin(origin: tuple[float, float, float]) -> str:
 LEVEL_WITHIN_DEG = 10.0
 
 
+def mean_in_world(t: Array, f_s: Array, q_xyzw: Array) -> Array:
+    """The specific force ``f_s`` (n, 3), read on the axes whose attitude is ``q_xyzw`` (scalar last),
+    rotated into the world and averaged over ``t``'s span, each reading weighted by its share of it
+    (uneven stamps): gravity's reaction and the mean acceleration, as the reference sees them."""
+    weights = np.gradient(t) if len(t) > 1 else np.ones(1)
+    return np.asarray(weights @ rotation.rotate(q_xyzw, f_s) / float(np.sum(weights)))
+
+
 def levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tuple[Array, Array, Array, str]:
     """A room's reference (the attitude ``q_xyzw`` of the sensor's axes, scalar last, its velocity
     ``v_w`` and position ``p_w``, at ``t``; ``f_s`` the specific force read on those axes at ``t``) in a
@@ -81,9 +89,7 @@ def levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tup
     is not of the readings' axes, is left for :func:`sins.io.frame_check.reference_findings` to name (its
     turns against the gyro's judge the attitude whichever way the world is turned)."""
     rows = slice(None, None, max(1, len(t) // 200_000))  # the mean of a long recording from 200,000 rows
-    weights = np.gradient(t[rows]) if len(t[rows]) > 1 else np.ones(1)
-    f_w = rotation.rotate(q_xyzw[rows], f_s[rows])
-    up = weights @ f_w / float(np.sum(weights))
+    up = mean_in_world(t[rows], f_s[rows], q_xyzw[rows])
     if t[-1] > t[0]:
         up = up - (v_w[-1] - v_w[0]) / float(t[-1] - t[0])
     size = float(np.linalg.norm(up))
@@ -98,10 +104,9 @@ def levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tup
     # 90° about the horizontal axis that takes this one to z; 180° about x for z down.
     rotvec = np.array([np.pi, 0.0, 0.0]) if k == 2 else np.pi / 2 * np.cross(axis, [0.0, 0.0, 1.0])
     turn = rotation.quat_from_rotvec(rotvec)
-    name = f"{'+' if axis[k] > 0 else '-'}{'xyz'[k]}"
     note = (
-        f"its world frame's up lies along {name} (gravity's reaction as the reference sees it, within "
-        f"{tilt:.1f}° of that axis), where the form's is z: the reference is read turned by "
+        f"its world frame's up lies along {_axis_name(axis)} (gravity's reaction as the reference sees it, "
+        f"within {tilt:.1f}° of that axis), where the form's is z: the reference is read turned by "
         f"{np.degrees(np.linalg.norm(rotvec)):.0f}° about {_axis_name(rotvec)} to put its up at z"
     )
     return (
@@ -112,9 +117,10 @@ def levelled(t: Array, f_s: Array, q_xyzw: Array, v_w: Array, p_w: Array) -> tup
     )
 
 
-def _axis_name(rotvec: Array) -> str:
-    k = int(np.argmax(np.abs(rotvec)))
-    return f"{'+' if rotvec[k] > 0 else '-'}{'xyz'[k]}"
+def _axis_name(vector: Array) -> str:
+    """The axis ``vector`` lies along most, with its sign ("+y", "-z")."""
+    k = int(np.argmax(np.abs(vector)))
+    return f"{'+' if vector[k] > 0 else '-'}{'xyz'[k]}"
 
 
 def enu_track(
@@ -178,5 +184,6 @@ __all__ = [
     "ecef_to_lla",
     "enu_track",
     "levelled",
+    "mean_in_world",
     "ned_to_ecef_matrix",
 ]
