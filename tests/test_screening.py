@@ -73,11 +73,12 @@ def test_a_references_glitches_are_set_aside_and_the_fit_is_the_clean_ones(seed:
     [aside] = fitted.set_aside
     assert aside.largest_z > screening.SCREEN_Z
 
-    def covered(t: float) -> bool:
-        return any(a <= t <= b for a, b in aside.spans_s)
+    def covered(t: float, spans: tuple[tuple[float, float], ...]) -> bool:
+        return any(a <= t <= b for a, b in spans)
 
-    assert all(covered(t) for t in SPIKES_S)
-    assert all(covered(t) for t in np.arange(GAP_S[0] + 0.1, GAP_S[1] - 0.05, 0.1))
+    assert all(covered(t, aside.spans_s) for t in SPIKES_S)
+    # the gap is told by the reference alone, before the screen (screening.filled)
+    assert all(covered(t, aside.filled_s) for t in np.arange(GAP_S[0] + 0.1, GAP_S[1] - 0.05, 0.1))
     assert aside.seconds() <= 2.0 * len(SPIKES_S) + (GAP_S[1] - GAP_S[0]) + 2.0
     assert len(fitted.review.held) <= len(clean.review.held) + 2  # type: ignore[union-attr]
     z = _z_scores(fitted, unit)
@@ -114,15 +115,18 @@ def test_without_the_screen_the_glitches_stay_and_the_fit_holds_what_they_hide(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """By default (``refused``) a fit that is not refused is not screened, and neither is one with
-    ``never``: nothing set aside, and the spikes make the standard errors so large that most coefficients
-    are held at zero as not determined (what ``--screen always`` is for; the fit says so, below).
+    ``never``: nothing set aside by the screen (the slerped gap, by default, as filled), and the spikes
+    make the standard errors so large that most coefficients are held at zero as not determined (what
+    ``--screen always`` is for; the fit says so, below).
     ``--screen`` other than the default beside a rig recording, whose rows are not screened, is refused
     in one line and nothing is written."""
     rec, _ = _recording(1, spoiled=True)
     for screen in ("refused", "never"):
         fitted = referenced.fit("regression", rec, screen=screen)
-        assert not any(a.spans_s for a in fitted.set_aside)
-        assert len(fitted.review.held) >= 15  # type: ignore[union-attr]
+        [aside] = fitted.set_aside
+        assert not aside.spans_s and bool(aside.filled_s) == (screen == "refused")  # the gap: filled
+        # the clean reference holds 3; the spikes alone 11 (measured), with the gap 24
+        assert len(fitted.review.held) >= (8 if screen == "refused" else 15)  # type: ignore[union-attr]
     rig = tmp_path / "rig.csv"
     procedure = calibration.RigProcedure(
         positions=6, position_dwell_s=2.0, rate_table=calibration.RateTable(rates_dps=(50.0,), dwell_s=2.0)
@@ -156,3 +160,38 @@ def test_a_refused_fit_is_made_again_on_what_the_screen_leaves_else_the_refusal_
             screening.fitted_screened(make, [clean], screen=screen)
     with pytest.raises(ValueError, match="refused"):
         screening.fitted_screened(make, [spoiled], screen="never")
+
+
+def _turning(gap_s: tuple[float, float] | None) -> referenced.ReferencedRecording:
+    """60 s turning about z, its rate a sinusoid but for 20-40 s at one rate (0.5 rad/s), read at 100 Hz
+    with 1e-3 rad/s of noise beside its exact 20 Hz reference; with ``gap_s``, the reference slerped
+    between those times as a converter fills a lost marker."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 60.0 + 1e-9, 0.01)
+    steady = (t >= 20.0) & (t <= 40.0)
+    # the angle, exactly: 0.5 rad/s in the steady part, a sinusoid of rate about it elsewhere
+    angle = 0.5 * t + np.where(steady, 0.0, 0.8 * np.sin(2 * np.pi * (t - 20.0) / 5.0))
+    rate = 0.5 + np.where(steady, 0.0, 0.8 * 2 * np.pi / 5.0 * np.cos(2 * np.pi * (t - 20.0) / 5.0))
+    gyro = np.column_stack([np.zeros_like(t), np.zeros_like(t), rate]) + rng.normal(0.0, 1e-3, (len(t), 3))
+    accel = np.tile([0.0, 0.0, -9.81], (len(t), 1)) + rng.normal(0.0, 1e-3, (len(t), 3))
+    t_ref = t[::5]
+    q = Rotation.from_rotvec(np.column_stack([np.zeros_like(t_ref), np.zeros_like(t_ref), angle[::5]]))
+    q_nb = q.as_quat()
+    if gap_s is not None:
+        a, b = (int(np.argmin(np.abs(t_ref - g))) for g in gap_s)
+        q_nb[a : b + 1] = Slerp(t_ref[[a, b]], q[[a, b]])(t_ref[a : b + 1]).as_quat()
+    n = len(t_ref)
+    truth = NavSeries(
+        t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M),
+        v_n=np.zeros((n, 3)), q_nb=q_nb,
+    )  # fmt: skip
+    return referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, "turning unit")
+
+
+def test_a_span_filled_by_interpolation_is_told_by_the_reference_and_a_steady_turn_is_not() -> None:
+    """``screening.filled``: an exact reference that turns at one rate for 20 s, where the unit does, is
+    not filled (the gyro reads that one rate, to its noise); the same reference slerped across 1.5 s of
+    the sinusoid, where the gyro's rate swings by 1 rad/s, is: its inner epochs, and nothing else."""
+    assert screening.filled(_turning(None)) == ()
+    [(a, b)] = screening.filled(_turning((10.0, 11.5)))
+    assert (a, b) == pytest.approx((10.05, 11.45), abs=1e-9)

@@ -181,7 +181,8 @@ def add(sub: Subparsers) -> None:
         "--screen", choices=("refused", "always", "never"), default="refused",
         help="against a reference trajectory: when intervals a robust fit puts beyond 20 robust standard "
         "deviations are set aside as the reference's gross errors (a glitch, a gap filled by interpolation): "
-        "where the fit is refused without (default), before every fit, or never",
+        "where the fit is refused without (default), before every fit, or never (nor spans the reference "
+        "alone shows filled by interpolation, set aside otherwise)",
     )  # fmt: skip
     p.add_argument(
         "--grade", choices=GRADES, default="consumer",

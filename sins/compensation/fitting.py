@@ -218,7 +218,7 @@ def fit_referenced(
         "grade": grade,
         "held": held,
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
-        "set_aside": [a.to_dict() for a in fitted.set_aside if a.spans_s],
+        "set_aside": [a.to_dict() for a in fitted.set_aside if a.found()],
     }
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
@@ -230,10 +230,11 @@ def _screen_lines(names: list[str], aside: Sequence[Any], residuals: list[Any]) 
     off the fit that it would (:mod:`sins.compensation.screening`)."""
     from sins.compensation import screening
 
-    if any(a.spans_s for a in aside):
-        return [a.line(n) for n, a in zip(names, aside, strict=True) if a.spans_s]
-    lines = [screening.suspect_line(n, *r) for n, r in zip(names, residuals, strict=True) if r is not None]
-    return [line for line in lines if line]
+    lines = [a.line(n) for n, a in zip(names, aside, strict=True) if a.found()]
+    if any(a.spans_s for a in aside):  # screened: the intervals it left are the fit's
+        return lines
+    suspect = [screening.suspect_line(n, *r) for n, r in zip(names, residuals, strict=True) if r is not None]
+    return lines + [line for line in suspect if line]
 
 
 def _held_lines(review: Any, grade: str, what: str, lines: list[str]) -> dict[str, Any]:
@@ -298,7 +299,7 @@ def fit_several(
         )  # fmt: skip
     lines: list[str] = []
     document = _several_document(fitted, list(names), [None if c is None else c.lag_s for c in clocks], lines)
-    aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.spans_s]
+    aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.found()]
     lines += _screen_lines(list(names), fitted.set_aside, list(fitted.several.residuals))
     document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]
     strategy = fitted.strategy

@@ -19,9 +19,19 @@ Passes repeat until none is found, at most :data:`MAX_PASSES`.
 An error of the unit that the seed model lacks (a scale nonlinearity in the fastest turns) makes the
 largest residuals too, and those are a learner's to learn; so by default a fit is screened only where
 it is refused on every interval (:func:`fitted_screened`, :data:`SCREENS`), and a fit made on every
-interval names the intervals the screen would take (:func:`suspect_line`). What judges a model
-(:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened: it judges against
-the reference as it is.
+interval names the intervals the screen would take (:func:`suspect_line`).
+
+One gross error is told by the reference alone, and set aside before every fit (but ``never``): a span
+a converter filled by interpolation (:func:`filled`). A slerp turns at one constant rate; a measured
+attitude never holds its rate to 1 % of its own epoch-to-epoch change for :data:`FILLED_MIN_S` (the
+references sins holds: 14 ms at most), and a unit turning at one rate reads one rate, to its noise.
+So where the reference turns at one rate for that long while the gyro's readings vary beyond
+:data:`FILLED_Z` times their noise, the span's inner epochs are set aside: three 1 s gaps slerped into
+each of three EuRoC recordings cost 1-4° of judged attitude, and an error of the unit cannot look like
+this.
+
+What judges a model (:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened:
+it judges against the reference as it is.
 """
 
 from __future__ import annotations
@@ -32,6 +42,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 from sins.compensation import identifiability, interval_fit, several
 from sins.compensation.intervals import INTERVAL_S, choose_intervals
@@ -59,6 +70,19 @@ DEFAULT = "refused"
 #: reference's residuals are rounding, whose spread would make any interval a gross error (a
 #: navigation-grade gyro's noise over 1 s is 3e-7 rad, an accelerometer's 2e-4 m/s).
 FLOOR = (1e-9, 1e-8)
+
+#: A reference that turns at one constant rate this long, s, or longer, while the readings do not, was
+#: filled by interpolation (:func:`filled`). Measured references hold a rate for 14 ms at most (BROAD,
+#: upsampled from its capture; EuRoC's 0-10 ms); a converter's slerp across a lost marker for the gap.
+FILLED_MIN_S = 0.25
+#: One rate: each epoch's change of rate from the last within this fraction of the recording's median
+#: change (a slerp's is rounding, 1e-12 of it and less; float32 quaternions' 1e-3).
+FILLED_STEP = 1e-2
+#: ... while the gyro's readings over the span vary beyond this many times their noise (a standard
+#: deviation against the readings' own, from their step-to-step differences): a unit at rest or on a
+#: rate table, whose reference holds one rate truly, reads one rate to its noise. Slerped 1 s gaps in
+#: EuRoC's flights reach 9.7-32.
+FILLED_Z = 5.0
 
 _Made = TypeVar("_Made")
 #: What an interval far off the fit may be, for the lines a fit prints.
@@ -92,17 +116,34 @@ class SetAside:
     source: str
     spans_s: tuple[tuple[float, float], ...]
     largest_z: float
+    #: The spans found filled by interpolation (:func:`filled`), s.
+    filled_s: tuple[tuple[float, float], ...] = ()
+
+    def found(self) -> bool:
+        """Whether anything of the reference was set aside."""
+        return bool(self.spans_s or self.filled_s)
 
     def seconds(self) -> float:
         """The reference's time set aside, s."""
-        return float(sum(b - a for a, b in self.spans_s))
+        return float(sum(b - a for a, b in (*self.spans_s, *self.filled_s)))
 
     def line(self, name: str) -> str:
         """What a fit says of it, one line."""
-        return (
-            f"{name}: {len(self.spans_s)} span(s) of its reference set aside ({self.seconds():.1f} s in all; "
-            f"intervals up to {self.largest_z:.0f} robust σ off the fit, beyond {SCREEN_Z:g}): {_WHY}"
-        )
+        said = []
+        if self.filled_s:
+            seconds = sum(b - a for a, b in self.filled_s)
+            said.append(
+                f"{len(self.filled_s)} span(s) of its reference set aside ({seconds:.1f} s in all) as filled "
+                f"by interpolation: it turns at one rate for {FILLED_MIN_S:g} s or longer where the gyro's "
+                f"readings vary beyond {FILLED_Z:g}× their noise (a gap a converter slerped)"
+            )
+        if self.spans_s:
+            seconds = sum(b - a for a, b in self.spans_s)
+            said.append(
+                f"{len(self.spans_s)} span(s) of its reference set aside ({seconds:.1f} s in all; "
+                f"intervals up to {self.largest_z:.0f} robust σ off the fit, beyond {SCREEN_Z:g}): {_WHY}"
+            )
+        return f"{name}: " + "; and ".join(said)
 
     def to_dict(self) -> dict[str, Any]:
         """As plain JSON values (a fit's ``--json``: ``set_aside``)."""
@@ -110,7 +151,40 @@ class SetAside:
             "source": self.source,
             "spans_s": [list(s) for s in self.spans_s],
             "largest_z": self.largest_z,
+            "filled_spans_s": [list(s) for s in self.filled_s],
         }
+
+
+def filled(rec: ReferencedRecording) -> tuple[tuple[float, float], ...]:
+    """The spans of ``rec``'s reference filled by interpolation (see the module docstring): each the
+    times of the inner epochs of a stretch that turns at one rate for :data:`FILLED_MIN_S` or longer
+    while the gyro's readings over it vary beyond :data:`FILLED_Z` times their noise."""
+    t = rec.reference.t
+    if len(t) < 4:
+        return ()
+    q = Rotation.from_quat(rec.reference.q_nb)
+    rate = (q[:-1].inv() * q[1:]).as_rotvec() / np.diff(t)[:, None]  # body axes, each step between epochs
+    change = np.linalg.norm(np.diff(rate, axis=0), axis=1)  # at each inner epoch
+    typical = float(np.median(change))
+    if typical <= 0.0:  # an exact reference at rest or at one rate throughout: nothing to tell it by
+        return ()
+    imu = rec.imu
+    w = imu.dtheta_b / np.diff(imu.t)[:, None]
+    step = np.diff(w, axis=0)
+    noise = np.median(np.abs(step - np.median(step, axis=0)), axis=0) / 0.6745 / np.sqrt(2.0)
+    edges = np.diff(np.concatenate([[0], (change <= FILLED_STEP * typical).astype(np.int8), [0]]))
+    spans = []
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        # inner epochs a+1 .. b changed rate by nothing: epochs a .. b+1 lie on one arc
+        if t[b + 1] - t[a] < FILLED_MIN_S:
+            continue
+        inside = (imu.t[:-1] >= t[a]) & (imu.t[1:] <= t[b + 1])
+        if inside.sum() < 3:
+            continue
+        spread = w[inside].std(axis=0) / np.maximum(noise, np.finfo(float).tiny)
+        if float(spread.max()) > FILLED_Z:
+            spans.append((float(t[a + 1]), float(t[b])))
+    return tuple(spans)
 
 
 def gross(gyro_resid: Array, accel_resid: Array) -> tuple[NDArray[np.bool_], Array]:
@@ -202,31 +276,42 @@ def fitted_screened(
     """``make(recs)`` (a fit), with the references' gross errors set aside as ``screen`` says
     (:data:`SCREENS`): ``refused``, where ``make`` refuses the recordings as they are (``ValueError``)
     and :func:`screened` sets something aside, ``make`` again on what is left (else the refusal stands);
-    ``always``, :func:`screened` first; ``never``, ``make(recs)`` alone. Returns the fit, the recordings
-    it was made on and what was set aside of each."""
+    ``always``, :func:`screened` first; ``never``, ``make(recs)`` alone. Unless ``never``, the spans
+    :func:`filled` finds are set aside before all. Returns the fit, the recordings it was made on and what
+    was set aside of each."""
     if screen not in SCREENS:
         raise ValueError(f"screen {screen!r} (known: {', '.join(SCREENS)})")
+    if screen == "never":
+        return make(recs), recs, tuple(SetAside(rec.source, (), 0.0) for rec in recs)
+    fills = [filled(rec) for rec in recs]
+    recs = [without(rec, list(f)) if f else rec for rec, f in zip(recs, fills, strict=True)]
+
+    def with_filled(aside: tuple[SetAside, ...]) -> tuple[SetAside, ...]:
+        return tuple(replace(a, filled_s=f) for a, f in zip(aside, fills, strict=True))
+
     if screen == "always":
         recs, aside = screened(recs, interval_s, grade)
-        return make(recs), recs, aside
+        return make(recs), recs, with_filled(aside)
     try:
-        return make(recs), recs, tuple(SetAside(rec.source, (), 0.0) for rec in recs)
+        return make(recs), recs, with_filled(tuple(SetAside(rec.source, (), 0.0) for rec in recs))
     except ValueError:
-        if screen == "never":
-            raise
         trimmed, aside = screened(recs, interval_s, grade)
         if not any(a.spans_s for a in aside):
             raise
-    return make(trimmed), trimmed, aside
+    return make(trimmed), trimmed, with_filled(aside)
 
 
 __all__ = [
     "DEFAULT",
+    "FILLED_MIN_S",
+    "FILLED_STEP",
+    "FILLED_Z",
     "FLOOR",
     "MAX_PASSES",
     "SCREENS",
     "SCREEN_Z",
     "SetAside",
+    "filled",
     "fitted_screened",
     "gross",
     "screened",
