@@ -6,6 +6,7 @@ slerped across a gap."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -195,3 +196,18 @@ def test_a_span_filled_by_interpolation_is_told_by_the_reference_and_a_steady_tu
     assert screening.filled(_turning(None)) == ()
     [(a, b)] = screening.filled(_turning((10.0, 11.5)))
     assert (a, b) == pytest.approx((10.05, 11.45), abs=1e-9)
+
+
+def test_a_gap_is_told_in_a_reference_upsampled_from_a_slower_capture() -> None:
+    """A converter that writes its reference at a higher rate than its capture's slerps between the
+    capture's samples, so that half its epochs hold their rate exactly (here 20 Hz from 10 Hz, the
+    capture's noise 1e-4 rad on every sample); only the gap it slerps across, 1.3 s of the sinusoid, is
+    filled, and its inner epochs alone."""
+    rec = _turning(None)
+    t = rec.reference.t
+    captured = np.flatnonzero(((np.arange(len(t)) % 2) == 0) & ((t < 10.0) | (t > 11.19)))
+    noise = Rotation.from_rotvec(np.random.default_rng(8).normal(0.0, 1e-4, (len(captured), 3)))
+    upsampled = Slerp(t[captured], Rotation.from_quat(rec.reference.q_nb[captured]) * noise)(t)
+    written = replace(rec, reference=replace(rec.reference, q_nb=upsampled.as_quat()))
+    [(a, b)] = screening.filled(written)  # the capture's last sample before the gap at 9.9 s, first at 11.2 s
+    assert (a, b) == pytest.approx((9.95, 11.15), abs=1e-9)
