@@ -10,11 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import dataset_folder
+from scipy.spatial.transform import Rotation, Slerp
 
 from sins import io
 from sins.cli import main
 from sins.core.series import ImuRates
-from sins.io import inspection
+from sins.io import filled, inspection
 
 OMEGA = 7.292115e-5  # Earth's rate, rad/s
 G = 9.8062  # normal gravity at 45° N, m/s²
@@ -324,3 +325,29 @@ def test_broads_two_trials_find_one_clock_offset_of_their_capture_system() -> No
         assert "reference_lag" not in [f.code for f in found.findings], name
         lags.append(found.reference_lag.lag_s)
     assert abs(lags[0] - lags[1]) < 5e-4 and all(-0.005 < lag < 0.0 for lag in lags), lags
+
+
+EUROC = dataset_folder("euroc")
+
+
+@pytest.mark.skipif(not EUROC.is_dir(), reason=f"real data absent: {EUROC}")
+def test_a_reference_filled_by_interpolation_is_named(tmp_path: Path) -> None:
+    """EuRoC's V1_02 as it is holds no filled span. With 1 s of its reference slerped from 40 s on (by
+    scipy, as a converter fills a motion capture's lost markers), ``sins inspect`` names it
+    (``reference_filled``), its inner epochs, and ``sins fit`` would set those aside
+    (``sins.compensation.screening``)."""
+    arrays = dict(np.load(EUROC / "V1_02_medium.npz"))
+    t = arrays["t_s"]
+    a = int(np.searchsorted(t, t[0] + 40.0))
+    b = a + 200
+    q = np.asarray(arrays["q_wxyz"], dtype=float).copy()
+    ends = Rotation.from_quat(q[[a, b]], scalar_first=True)
+    q[a : b + 1] = Slerp(t[[a, b]], ends)(t[a : b + 1]).as_quat(scalar_first=True)
+    np.savez(tmp_path / "gap.npz", **{**arrays, "q_wxyz": q})
+    clean = inspection.inspect(io.read(EUROC / "V1_02_medium.npz"))
+    assert "reference_filled" not in [f.code for f in clean.findings]
+    gap = io.read(tmp_path / "gap.npz")
+    [finding] = [f for f in inspection.inspect(gap).findings if f.code == "reference_filled"]
+    assert "1 span(s)" in finding.what and "sins fit sets these spans aside" in finding.advice
+    t_ref, (t, w, _) = gap.truth.t, gap.mean_rates()
+    assert filled.filled_spans(t_ref, gap.truth.q_nb, t, w) == ((t_ref[a + 1], t_ref[b - 1]),)

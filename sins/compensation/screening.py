@@ -22,13 +22,9 @@ it is refused on every interval (:func:`fitted_screened`, :data:`SCREENS`), and 
 interval names the intervals the screen would take (:func:`suspect_line`).
 
 One gross error is told by the reference alone, and set aside before every fit (but ``never``): a span
-a converter filled by interpolation (:func:`filled`). A slerp turns at one constant rate; a measured
-attitude never holds its rate to 1 % of its own epoch-to-epoch change for :data:`FILLED_MIN_S` (the
-references sins holds: 14 ms at most), and a unit turning at one rate reads one rate, to its noise.
-So where the reference turns at one rate for that long while the gyro's readings vary beyond
-:data:`FILLED_Z` times their noise, the span's inner epochs are set aside: three 1 s gaps slerped into
-each of three EuRoC recordings cost 1-4° of judged attitude, and an error of the unit cannot look like
-this.
+a converter filled by interpolation (:func:`filled`, :mod:`sins.io.filled`: one constant rate for
+0.25 s or longer while the gyro's readings do not). Three 1 s gaps slerped into each of three EuRoC
+recordings cost 1-4° of judged attitude, and an error of the unit cannot look like this.
 
 What judges a model (:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened:
 it judges against the reference as it is.
@@ -42,11 +38,11 @@ from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from sins.compensation import identifiability, interval_fit, several
 from sins.compensation.intervals import INTERVAL_S, choose_intervals
 from sins.core.series import ReferencedRecording
+from sins.io.filled import FILLED_MIN_S, FILLED_Z, filled_spans
 
 Array = NDArray[np.float64]
 
@@ -70,19 +66,6 @@ DEFAULT = "refused"
 #: reference's residuals are rounding, whose spread would make any interval a gross error (a
 #: navigation-grade gyro's noise over 1 s is 3e-7 rad, an accelerometer's 2e-4 m/s).
 FLOOR = (1e-9, 1e-8)
-
-#: A reference that turns at one constant rate this long, s, or longer, while the readings do not, was
-#: filled by interpolation (:func:`filled`). Measured references hold a rate for 14 ms at most (BROAD,
-#: upsampled from its capture; EuRoC's 0-10 ms); a converter's slerp across a lost marker for the gap.
-FILLED_MIN_S = 0.25
-#: One rate: each epoch's change of rate from the last within this fraction of the recording's median
-#: change where its rate changes (a slerp's is rounding, 1e-12 of it and less; float32 quaternions' 1e-3).
-FILLED_STEP = 1e-2
-#: ... while the gyro's readings over the span vary beyond this many times their noise (a standard
-#: deviation against the readings' own, from their step-to-step differences): a unit at rest or on a
-#: rate table, whose reference holds one rate truly, reads one rate to its noise. Slerped 1 s gaps in
-#: EuRoC's flights reach 9.7-32.
-FILLED_Z = 5.0
 
 _Made = TypeVar("_Made")
 #: What an interval far off the fit may be, for the lines a fit prints.
@@ -135,7 +118,8 @@ class SetAside:
             said.append(
                 f"{len(self.filled_s)} span(s) of its reference set aside ({seconds:.1f} s in all) as filled "
                 f"by interpolation: it turns at one rate for {FILLED_MIN_S:g} s or longer where the gyro's "
-                f"readings vary beyond {FILLED_Z:g}× their noise (a gap a converter slerped)"
+                f"readings turn away from one rate {FILLED_Z:g}× more than their noise would (a gap a "
+                "converter slerped)"
             )
         if self.spans_s:
             seconds = sum(b - a for a, b in self.spans_s)
@@ -156,39 +140,11 @@ class SetAside:
 
 
 def filled(rec: ReferencedRecording) -> tuple[tuple[float, float], ...]:
-    """The spans of ``rec``'s reference filled by interpolation (see the module docstring): each the
-    times of the inner epochs of a stretch that turns at one rate for :data:`FILLED_MIN_S` or longer
-    while the gyro's readings over it vary beyond :data:`FILLED_Z` times their noise."""
-    t = rec.reference.t
-    if len(t) < 4:
-        return ()
-    q = Rotation.from_quat(rec.reference.q_nb)
-    rate = (q[:-1].inv() * q[1:]).as_rotvec() / np.diff(t)[:, None]  # body axes, each step between epochs
-    change = np.linalg.norm(np.diff(rate, axis=0), axis=1)  # at each inner epoch
-    # The typical change where the rate changes at all: a reference upsampled from a slower capture by
-    # slerp holds its rate between the capture's samples (half its epochs, from 100 Hz to 200 Hz).
-    scale = float(np.quantile(change, 0.99))
-    moving = change[change > 1e-9 * scale]
-    if scale <= 0.0 or len(moving) == 0:  # an exact reference at rest or at one rate throughout
-        return ()
-    typical = float(np.median(moving))
-    imu = rec.imu
-    w = imu.dtheta_b / np.diff(imu.t)[:, None]
-    step = np.diff(w, axis=0)
-    noise = np.median(np.abs(step - np.median(step, axis=0)), axis=0) / 0.6745 / np.sqrt(2.0)
-    edges = np.diff(np.concatenate([[0], (change <= FILLED_STEP * typical).astype(np.int8), [0]]))
-    spans = []
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-        # inner epochs a+1 .. b changed rate by nothing: epochs a .. b+1 lie on one arc
-        if t[b + 1] - t[a] < FILLED_MIN_S:
-            continue
-        inside = (imu.t[:-1] >= t[a]) & (imu.t[1:] <= t[b + 1])
-        if inside.sum() < 3:
-            continue
-        spread = w[inside].std(axis=0) / np.maximum(noise, np.finfo(float).tiny)
-        if float(spread.max()) > FILLED_Z:
-            spans.append((float(t[a + 1]), float(t[b])))
-    return tuple(spans)
+    """The spans of ``rec``'s reference filled by interpolation (:func:`sins.io.filled.filled_spans`,
+    against each increment's mean rate at its middle): the times of their inner epochs."""
+    mid = 0.5 * (rec.imu.t[:-1] + rec.imu.t[1:])
+    w = rec.imu.dtheta_b / np.diff(rec.imu.t)[:, None]
+    return filled_spans(rec.reference.t, rec.reference.q_nb, mid, w)
 
 
 def gross(gyro_resid: Array, accel_resid: Array) -> tuple[NDArray[np.bool_], Array]:
@@ -307,9 +263,6 @@ def fitted_screened(
 
 __all__ = [
     "DEFAULT",
-    "FILLED_MIN_S",
-    "FILLED_STEP",
-    "FILLED_Z",
     "FLOOR",
     "MAX_PASSES",
     "SCREENS",

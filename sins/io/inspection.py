@@ -30,9 +30,9 @@ from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.earth import OMEGA_IE
-from sins.core.series import ImuRates
+from sins.core.series import ImuRates, NavSeries
 from sins.errors import SinsInputError
-from sins.io import frame_check
+from sins.io import filled, frame_check
 from sins.io import units as unitdefs
 from sins.io.findings import Clipping, Finding, Gap, Inspection, Rest, Windows
 from sins.io.recording import Recording
@@ -103,6 +103,8 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
         # Only a reference of the readings' axes has turns to time against the gyro's.
         lag = None if attitude else frame_check.reference_lag(rec.truth, t, w)
         findings += attitude + frame_check.lag_findings(lag)
+        if not attitude:
+            findings += _filled_findings(rec.truth, t, w)
     findings = _one_per_unit(findings + _range_findings(rec, w))
     clipping = _clipping(rec)
     findings += [_clip_finding(c) for c in clipping]
@@ -113,6 +115,25 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
         rate_hz=1.0 / med, jitter=jitter, stated_rate_hz=stated, gaps=gaps, rest=rest, clipping=clipping,
         axes=frame, findings=tuple(findings), reference_lag=lag,
     )  # fmt: skip
+
+
+def _filled_findings(truth: NavSeries, t: Array, w: Array) -> list[Finding]:
+    """The reference's spans filled by interpolation (:mod:`sins.io.filled`), as one finding."""
+    spans = filled.filled_spans(truth.t, truth.q_nb, t, w)
+    if not spans:
+        return []
+    seconds = sum(b - a for a, b in spans)
+    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in spans[:3]) + (", ..." if len(spans) > 3 else "")
+    what = (
+        f"the reference turns at one constant rate for {filled.FILLED_MIN_S:g} s or longer where the "
+        f"gyro's readings turn away from one rate {filled.FILLED_Z:g}x more than their noise would, over "
+        f"{len(spans)} span(s) "
+        f"({seconds:.1f} s in all: {where}): filled by interpolation (a gap slerped), not measured"
+    )
+    advice = (
+        "sins fit sets these spans aside (unless --screen never); sins evaluate judges the reference as it is"
+    )
+    return [Finding("reference_filled", what, advice=advice)]
 
 
 #: The reference's scale checks and the checks of the readings alone that name the same unit's mistake.
