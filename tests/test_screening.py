@@ -211,3 +211,27 @@ def test_a_gap_is_told_in_a_reference_upsampled_from_a_slower_capture() -> None:
     written = replace(rec, reference=replace(rec.reference, q_nb=upsampled.as_quat()))
     [(a, b)] = screening.filled(written)  # the capture's last sample before the gap at 9.9 s, first at 11.2 s
     assert (a, b) == pytest.approx((9.95, 11.15), abs=1e-9)
+
+
+def test_an_exact_reference_at_rest_is_not_filled_beside_a_wandering_bias() -> None:
+    """A simulation's exact reference holds one attitude for 2 minutes, then turns for one, while its
+    unit's gyro bias wanders (a rate random walk of 1e-4 rad/s/√s: over the rest, its angle departs from
+    one rate far more than white noise's would): a rest, not a gap. A slerp between two measured
+    attitudes turns, by their noise at least."""
+    rng = np.random.default_rng(6)
+    t = np.arange(0.0, 180.0 + 1e-9, 0.01)
+    angle = np.where(t > 120.0, 0.8 * (1.0 - np.cos(2 * np.pi * (t - 120.0) / 5.0)), 0.0)
+    rate = np.where(t > 120.0, 0.8 * 2 * np.pi / 5.0 * np.sin(2 * np.pi * (t - 120.0) / 5.0), 0.0)
+    wander = np.cumsum(rng.normal(0.0, 1e-4 * np.sqrt(0.01), (len(t), 3)), axis=0)
+    gyro = np.column_stack([np.zeros_like(t), np.zeros_like(t), rate]) + wander
+    gyro += rng.normal(0.0, 1e-3, (len(t), 3))
+    accel = np.tile([0.0, 0.0, -9.81], (len(t), 1)) + rng.normal(0.0, 1e-3, (len(t), 3))
+    t_ref = t[::5]
+    n = len(t_ref)
+    q_nb = Rotation.from_rotvec(np.column_stack([np.zeros(n), np.zeros(n), angle[::5]])).as_quat()
+    truth = NavSeries(
+        t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M),
+        v_n=np.zeros((n, 3)), q_nb=q_nb,
+    )  # fmt: skip
+    rec = referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, "resting unit")
+    assert screening.filled(rec) == ()

@@ -33,6 +33,10 @@ FILLED_STEP = 1e-2
 #: holds one rate truly, reads about 1 (rate samples) to 2 (increments: the trapezoid that makes them
 #: halves the noise's step-to-step spread it is measured by); slerped 1 s gaps in EuRoC's flights 24-350.
 FILLED_Z = 10.0
+#: A reference turning slower than this, rad/s, holds one attitude: a simulation's exact rest, whose
+#: unit's bias may wander over minutes (a slerp between two measured attitudes turns by their noise at
+#: least, 1e-4 rad over the gap).
+_AT_REST = 1e-9
 
 
 def filled_spans(t_ref: Array, q_nb: Array, t: Array, w: Array) -> tuple[tuple[float, float], ...]:
@@ -64,8 +68,8 @@ def filled_spans(t_ref: Array, q_nb: Array, t: Array, w: Array) -> tuple[tuple[f
     spans = []
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
         # inner epochs a+1 .. b changed rate by nothing: epochs a .. b+1 lie on one arc
-        if t_ref[b + 1] - t_ref[a] < FILLED_MIN_S:
-            continue
+        if t_ref[b + 1] - t_ref[a] < FILLED_MIN_S or not np.abs(rate[a]).max() > _AT_REST:
+            continue  # too short, or an exact reference's rest (a slerp between measured ends turns)
         inside = (t >= t_ref[a]) & (t <= t_ref[b + 1])
         if inside.sum() >= 3 and _departure(w[inside], t[inside], noise) > FILLED_Z:
             spans.append((float(t_ref[a + 1]), float(t_ref[b])))
