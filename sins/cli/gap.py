@@ -132,8 +132,9 @@ def _print_statistic(statistic: dict[str, Any], intervals: bool) -> None:
     key = "reference_limits" if intervals else "interval_quality"
     if key in statistic:
         print(f"  reference: {statistic[key]}")
-    if "reference_clock" in statistic:
-        print(f"  reference: {statistic['reference_clock']['says']}")
+    for key in ("reference_clock", "reference_filled"):
+        if key in statistic:
+            print(f"  reference: {statistic[key]['says']}")
 
 
 def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -> None:

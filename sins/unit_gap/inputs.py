@@ -9,6 +9,12 @@ per-sample reference inputs (the per-sample statistic; for a trajectory, the exa
 motion through it: splines, differentiated), and, where the reference is a trajectory, the readings
 beside it at its epochs (the interval statistic, :mod:`sins.unit_gap.intervals`). The per-sample form
 of a trajectory is made only when asked for.
+
+A reference's spans filled by interpolation (:mod:`sins.io.filled`: a converter's slerp across a lost
+marker) are set aside from the trajectory form, as ``sins fit`` sets them aside: the diagnosis looks
+for what the unit's model lacks, and those spans are what the reference lacks (three 1 s slerped gaps
+in EuRoC's MH_01 made its clean diagnosis name a gyro y bias step). The per-sample form keeps them; the
+report says where they are (``statistic.reference_filled``).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sins.compensation import screening
 from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
 from sins.io.recording import ideal_inputs
@@ -35,6 +42,8 @@ class GapInput:
     referenced: ReferencedRecording | None
     make_samples: Callable[[], Samples]
     _samples: Samples | None = field(default=None, repr=False)
+    #: The reference's spans filled by interpolation, s, set aside from ``referenced``.
+    filled_s: tuple[tuple[float, float], ...] = ()
 
     def samples(self) -> Samples:
         """The readings beside per-sample reference inputs, and the trajectory at their times (None
@@ -73,11 +82,15 @@ def read_gap_input(
         return GapInput(name, None, lambda: (rig, None))
     if not rec.has_trajectory:
         raise MissingInputError(f"{name}: the recording has no reference trajectory", needs="truth")
+    referenced = rec.beside_reference()
+    spans = screening.filled(referenced)
+    if spans:
+        referenced = screening.without(referenced, list(spans))
     if rec.inputs_reader is not None:  # a dataset's own per-sample form
-        return GapInput(name, rec.beside_reference(), rec.inputs_reader)
+        return GapInput(name, referenced, rec.inputs_reader, filled_s=spans)
     if truth is not None:  # readings and a truth file: the exact ideal IMU, in either form
-        return GapInput(name, rec.beside_reference(), lambda: readings.gap_data(rec))
-    return GapInput(name, rec.beside_reference(), lambda: ideal_inputs(rec))
+        return GapInput(name, referenced, lambda: readings.gap_data(rec), filled_s=spans)
+    return GapInput(name, referenced, lambda: ideal_inputs(rec), filled_s=spans)
 
 
 def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:

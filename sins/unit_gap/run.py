@@ -108,13 +108,30 @@ def _with_statistic(report: GapReport, chosen: dict[str, Any]) -> GapReport:
 
 def _with_clock(report: GapReport, inp: GapInput) -> GapReport:
     """The report with where the reference's clock sits (:mod:`sins.unit_gap.clock`), beside a
-    reference trajectory whose turns show it."""
+    reference trajectory whose turns show it, and its spans filled by interpolation, where it has some
+    (:mod:`sins.unit_gap.inputs`)."""
     if inp.referenced is None:
         return report
+    if inp.filled_s:
+        report = _with_statistic(report, {**report.statistic, "reference_filled": _filled(report, inp)})
     found = clock.reference_clock(inp.referenced, report.sizes)
     if found is None:
         return report
     return _with_statistic(report, {**report.statistic, "reference_clock": found})
+
+
+def _filled(report: GapReport, inp: GapInput) -> dict[str, Any]:
+    """The reference's spans filled by interpolation, and what the diagnosis did with them."""
+    spans = inp.filled_s
+    kept = (
+        "set aside from its intervals"
+        if report.statistic.get("kind") == "intervals"
+        else ("kept in its per-sample residuals")
+    )
+    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in spans[:3]) + (", ..." if len(spans) > 3 else "")
+    seconds = sum(b - a for a, b in spans)
+    says = f"{len(spans)} span(s) filled by interpolation ({seconds:.1f} s in all), {kept}: {where}"
+    return {"spans_s": [list(s) for s in spans], "says": says}
 
 
 def shrinks(
