@@ -14,9 +14,9 @@ import pytest
 from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.spatial.transform import Rotation, Slerp
 
-from sins import imu, io
+from sins import compensation, imu, io
 from sins.cli import main
-from sins.compensation import referenced, screening
+from sins.compensation import evaluation, referenced, screening
 from sins.core.series import ImuRates, NavSeries
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
@@ -192,10 +192,18 @@ def _turning(gap_s: tuple[float, float] | None) -> referenced.ReferencedRecordin
 def test_a_span_filled_by_interpolation_is_told_by_the_reference_and_a_steady_turn_is_not() -> None:
     """``screening.filled``: an exact reference that turns at one rate for 20 s, where the unit does, is
     not filled (the gyro reads that one rate, to its noise); the same reference slerped across 1.5 s of
-    the sinusoid, where the gyro's rate swings by 1 rad/s, is: its inner epochs, and nothing else."""
+    the sinusoid, where the gyro's rate swings by 1 rad/s, is: its inner epochs, and nothing else.
+    ``sins evaluate`` says so (and judges against the reference as it is)."""
     assert screening.filled(_turning(None)) == ()
-    [(a, b)] = screening.filled(_turning((10.0, 11.5)))
+    gapped = _turning((10.0, 11.5))
+    [(a, b)] = screening.filled(gapped)
     assert (a, b) == pytest.approx((10.05, 11.45), abs=1e-9)
+    # sins evaluate judges against the reference as it is, and says where it was filled
+    judged = evaluation.evaluate_referenced(compensation.make("none"), gapped, "turning unit")
+    assert judged.document["reference_filled_s"] == [[a, b]]
+    assert any("1 span(s) filled by interpolation" in line for line in judged.lines)
+    clean = evaluation.evaluate_referenced(compensation.make("none"), _turning(None), "turning unit")
+    assert clean.document["reference_filled_s"] == []
 
 
 def test_a_gap_is_told_in_a_reference_upsampled_from_a_slower_capture() -> None:

@@ -111,7 +111,7 @@ def evaluate_referenced(
     against the reference; over the ``last`` fraction of the recording or all of it; with ``drive``
     (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
     ``stage(text)`` is told each open loop as it starts."""
-    from sins.compensation import referenced
+    from sins.compensation import referenced, screening
 
     fitted_here = _fitted_here(strategy, referenced.readings_of(rec))
     if last:
@@ -152,6 +152,13 @@ def evaluate_referenced(
             "against the gyro's): every figure is judged against it as stamped, the rate times that "
             f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
         )
+    filled_s = screening.filled(rec)
+    if filled_s:
+        seconds = sum(b - a for a, b in filled_s)
+        lines.append(
+            f"the reference holds {len(filled_s)} span(s) filled by interpolation ({seconds:.1f} s in all; "
+            "sins.io.filled): every figure is judged against it as it is there too"
+        )
     if fitted_here:
         lines.append(FITTED_HERE)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
@@ -160,6 +167,7 @@ def evaluate_referenced(
         "open_loop_attitude": attitude[strategy.label],
         "open_loop_attitude_raw": attitude[RAW],
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
+        "reference_filled_s": [list(s) for s in filled_s],
         "fitted_on_this_recording": fitted_here,
     }
     if bias_from_rest:
