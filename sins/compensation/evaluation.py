@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 from sins.io import frame_check
+from sins.io.filled import spans_said
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -154,10 +155,9 @@ def evaluate_referenced(
         )
     filled_s = screening.filled(rec)
     if filled_s:
-        seconds = sum(b - a for a, b in filled_s)
         lines.append(
-            f"the reference holds {len(filled_s)} span(s) filled by interpolation ({seconds:.1f} s in all; "
-            "sins.io.filled): every figure is judged against it as it is there too"
+            f"the reference holds {spans_said(filled_s)} filled by interpolation (sins.io.filled): every "
+            "figure is judged against it as it is there too"
         )
     if fitted_here:
         lines.append(FITTED_HERE)

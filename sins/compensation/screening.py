@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 from sins.compensation import identifiability, interval_fit, several
 from sins.compensation.intervals import INTERVAL_S, choose_intervals
 from sins.core.series import ReferencedRecording
-from sins.io.filled import FILLED_MIN_S, FILLED_Z, filled_spans
+from sins.io.filled import FILLED_MIN_S, FILLED_Z, filled_spans, spans_said
 
 Array = NDArray[np.float64]
 
@@ -114,12 +114,10 @@ class SetAside:
         """What a fit says of it, one line."""
         said = []
         if self.filled_s:
-            seconds = sum(b - a for a, b in self.filled_s)
             said.append(
-                f"{len(self.filled_s)} span(s) of its reference set aside ({seconds:.1f} s in all) as filled "
-                f"by interpolation: it turns at one rate for {FILLED_MIN_S:g} s or longer where the gyro's "
-                f"readings turn away from one rate {FILLED_Z:g}× more than their noise would (a gap a "
-                "converter slerped)"
+                f"{spans_said(self.filled_s)} of its reference set aside as filled by interpolation: it "
+                f"turns at one rate for {FILLED_MIN_S:g} s or longer where the gyro's readings turn away "
+                f"from one rate {FILLED_Z:g}× more than their noise would (a gap a converter slerped)"
             )
         if self.spans_s:
             seconds = sum(b - a for a, b in self.spans_s)

@@ -76,6 +76,12 @@ def filled_spans(t_ref: Array, q_nb: Array, t: Array, w: Array) -> tuple[tuple[f
     return tuple(spans)
 
 
+def spans_said(spans: tuple[tuple[float, float], ...]) -> str:
+    """``spans`` (s) as the reports say them: how many, their seconds in all, the first three."""
+    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in spans[:3]) + (", ..." if len(spans) > 3 else "")
+    return f"{len(spans)} span(s) ({sum(b - a for a, b in spans):.1f} s in all: {where})"
+
+
 def _departure(w: Array, t: Array, noise: Array) -> float:
     """How far the gyro's readings ``w`` (k, 3) at ``t`` (k,) turn away from one rate over their span, in
     units of what their ``noise`` (3,) alone would turn: the RMS of the angle their departure from their
@@ -89,4 +95,4 @@ def _departure(w: Array, t: Array, noise: Array) -> float:
     return float((rms / expected).max())
 
 
-__all__ = ["FILLED_MIN_S", "FILLED_STEP", "FILLED_Z", "filled_spans"]
+__all__ = ["FILLED_MIN_S", "FILLED_STEP", "FILLED_Z", "filled_spans", "spans_said"]

@@ -122,13 +122,10 @@ def _filled_findings(truth: NavSeries, t: Array, w: Array) -> list[Finding]:
     spans = filled.filled_spans(truth.t, truth.q_nb, t, w)
     if not spans:
         return []
-    seconds = sum(b - a for a, b in spans)
-    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in spans[:3]) + (", ..." if len(spans) > 3 else "")
     what = (
         f"the reference turns at one constant rate for {filled.FILLED_MIN_S:g} s or longer where the "
         f"gyro's readings turn away from one rate {filled.FILLED_Z:g}x more than their noise would, over "
-        f"{len(spans)} span(s) "
-        f"({seconds:.1f} s in all: {where}): filled by interpolation (a gap slerped), not measured"
+        f"{filled.spans_said(spans)}: filled by interpolation (a gap slerped), not measured"
     )
     advice = (
         "sins fit sets these spans aside (unless --screen never); sins evaluate judges the reference as it is"

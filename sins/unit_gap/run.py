@@ -14,6 +14,7 @@ from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE
+from sins.io.filled import spans_said
 from sins.unit_gap import across, clock, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
@@ -62,7 +63,7 @@ def diagnose_one(
         if data is None:
             data = inp.samples()
         report = diagnose(data[0], holdout, model, progress)
-        report = _with_clock(_with_statistic(report, chosen.to_dict()), inp)
+        report = _with_reference(_with_statistic(report, chosen.to_dict()), inp)
         return Diagnosed(inp.name, report, len(data[0]), data)
     if tuple(model) != tuple(BASELINE):
         raise SinsInputError(f"{inp.name}: --model goes with the per-sample statistic (--statistic samples)")
@@ -75,7 +76,7 @@ def diagnose_one(
         d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
-    report = _with_clock(interval_report(d, holdout, chosen.to_dict()), inp)
+    report = _with_reference(interval_report(d, holdout, chosen.to_dict()), inp)
     return Diagnosed(inp.name, report, len(inp.referenced.imu.t) - 1)
 
 
@@ -106,7 +107,7 @@ def _with_statistic(report: GapReport, chosen: dict[str, Any]) -> GapReport:
     return dataclasses.replace(report, statistic=chosen)
 
 
-def _with_clock(report: GapReport, inp: GapInput) -> GapReport:
+def _with_reference(report: GapReport, inp: GapInput) -> GapReport:
     """The report with where the reference's clock sits (:mod:`sins.unit_gap.clock`), beside a
     reference trajectory whose turns show it, and its spans filled by interpolation, where it has some
     (:mod:`sins.unit_gap.inputs`)."""
@@ -122,16 +123,10 @@ def _with_clock(report: GapReport, inp: GapInput) -> GapReport:
 
 def _filled(report: GapReport, inp: GapInput) -> dict[str, Any]:
     """The reference's spans filled by interpolation, and what the diagnosis did with them."""
-    spans = inp.filled_s
-    kept = (
-        "set aside from its intervals"
-        if report.statistic.get("kind") == "intervals"
-        else ("kept in its per-sample residuals")
-    )
-    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in spans[:3]) + (", ..." if len(spans) > 3 else "")
-    seconds = sum(b - a for a, b in spans)
-    says = f"{len(spans)} span(s) filled by interpolation ({seconds:.1f} s in all), {kept}: {where}"
-    return {"spans_s": [list(s) for s in spans], "says": says}
+    intervals = report.statistic.get("kind") == "intervals"
+    kept = "set aside from its intervals" if intervals else "kept in its per-sample residuals"
+    says = f"{spans_said(inp.filled_s)} filled by interpolation, {kept}"
+    return {"spans_s": [list(s) for s in inp.filled_s], "says": says}
 
 
 def shrinks(
