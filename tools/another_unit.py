@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python tools/another_unit.py [--parts 3] [--strategies regression mlp_window ...]
-        [--json OUT.json] [--keep DIR]
+        [--gaps N] [--screen refused|always|never] [--json OUT.json] [--keep DIR]
 
 sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
 with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
@@ -12,6 +12,11 @@ motion capture's short gaps, its world frame the optical one, z up). The models 
 ``--train`` lists (default ``05_1 18_1 18_3``) and judged on the others (default ``05_2 05_3 18_2``) by
 ``tools/euroc_benchmark.py``'s commands (``sins fit --dataset broad_b/...``, ``sins evaluate``). Prints the
 open-loop table; what must hold is that no correction is worse than the raw readings.
+
+``--gaps N``: each training part's reference with ``N`` gaps of 1 s filled as converters fill a motion
+capture's lost markers (the attitude slerped by scipy, the velocity a straight line; placed with a fixed
+seed), the judged parts as they are; ``--screen`` is handed to ``sins fit``
+(:mod:`sins.compensation.screening`).
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -63,23 +68,45 @@ def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -
     return names
 
 
+def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:
+    """The ``.npz`` recording at ``path`` written again with ``gaps`` 1 s gaps of its reference filled
+    (the attitude slerped, the velocity a straight line between the gap's ends)."""
+    a = dict(np.load(path))
+    t, q, v = a["t_s"], a["q_wxyz"].copy(), a["v_m_s"].copy()
+    steps = round(1.0 / float(np.median(np.diff(t))))
+    for _ in range(gaps):
+        i = int(rng.integers(len(t) // 10, len(t) - len(t) // 10 - steps))
+        j = i + steps
+        ends = Rotation.from_quat(q[[i, j]], scalar_first=True)
+        q[i : j + 1] = Slerp(t[[i, j]], ends)(t[i : j + 1]).as_quat(scalar_first=True)
+        v[i : j + 1] = v[i] + (v[j] - v[i]) * ((t[i : j + 1] - t[i]) / (t[j] - t[i]))[:, None]
+    np.savez(path, **{**a, "q_wxyz": q, "v_m_s": v})
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--parts", type=int, default=3)
     p.add_argument("--train", nargs="+", default=["05_1", "18_1", "18_3"])
     p.add_argument("--judge", nargs="+", default=["05_2", "05_3", "18_2"])
     p.add_argument("--strategies", nargs="+", default=euroc_benchmark.STRATEGIES)
+    p.add_argument("--gaps", type=int, default=0, help="1 s gaps filled in each training part's reference")
+    p.add_argument("--screen", choices=("refused", "always", "never"), help="handed to sins fit")
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
 
     def write(folder: Path) -> None:
+        rng = np.random.default_rng(0)
         for trial in ("05", "18"):
-            write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, args.parts, folder)
+            rec = io.read(dataset=f"broad_{trial}").beside_reference()
+            for name in write_parts(rec, trial, args.parts, folder):
+                if args.gaps and name in args.train:
+                    with_gaps(folder / f"{name}.npz", args.gaps, rng)
 
     return euroc_benchmark.run_on_unit(
-        write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep
-    )
+        write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep,
+        screen=args.screen,
+    )  # fmt: skip
 
 
 if __name__ == "__main__":
