@@ -140,8 +140,7 @@ class SetAside:
 def filled(rec: ReferencedRecording) -> tuple[tuple[float, float], ...]:
     """The spans of ``rec``'s reference filled by interpolation (:func:`sins.io.filled.filled_spans`,
     against each increment's mean rate at its middle): the times of their inner epochs."""
-    mid = 0.5 * (rec.imu.t[:-1] + rec.imu.t[1:])
-    w = rec.imu.dtheta_b / np.diff(rec.imu.t)[:, None]
+    mid, w, _ = rec.imu.mean_rates()
     return filled_spans(rec.reference.t, rec.reference.q_nb, mid, w)
 
 

@@ -110,6 +110,13 @@ class ImuIncrements:
     def __len__(self) -> int:
         return len(self.dtheta_b)
 
+    def mean_rates(self) -> tuple[Array, Array, Array]:
+        """``(t, omega_ib_b, f_ib_b)``: each increment divided by its interval, at the interval's
+        midpoint (s, rad/s, m/s²)."""
+        dt = np.diff(self.t)[:, None]
+        mid = 0.5 * (self.t[:-1] + self.t[1:])
+        return mid, self.dtheta_b / dt, self.dv_b / dt
+
 
 @dataclass(frozen=True)
 class ImuRates:

@@ -170,9 +170,7 @@ class Recording:
         their intervals, at the intervals' midpoints."""
         if isinstance(self.imu, ImuRates):
             return self.imu.t, self.imu.omega_ib_b, self.imu.f_ib_b
-        dt = np.diff(self.imu.t)[:, None]
-        mid = 0.5 * (self.imu.t[:-1] + self.imu.t[1:])
-        return mid, self.imu.dtheta_b / dt, self.imu.dv_b / dt
+        return self.imu.mean_rates()
 
 
 #: Suffixes that name a binary recording format (the bags, an ``.npz``), with what its file starts with
