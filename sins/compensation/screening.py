@@ -238,8 +238,9 @@ def fitted_screened(
     was set aside of each."""
     if screen not in SCREENS:
         raise ValueError(f"screen {screen!r} (known: {', '.join(SCREENS)})")
+    nothing = tuple(SetAside(rec.source, (), 0.0) for rec in recs)
     if screen == "never":
-        return make(recs), recs, tuple(SetAside(rec.source, (), 0.0) for rec in recs)
+        return make(recs), recs, nothing
     fills = [filled(rec) for rec in recs]
     recs = [without(rec, list(f)) if f else rec for rec, f in zip(recs, fills, strict=True)]
 
@@ -250,7 +251,7 @@ def fitted_screened(
         recs, aside = screened(recs, interval_s, grade)
         return make(recs), recs, with_filled(aside)
     try:
-        return make(recs), recs, with_filled(tuple(SetAside(rec.source, (), 0.0) for rec in recs))
+        return make(recs), recs, with_filled(nothing)
     except ValueError:
         trimmed, aside = screened(recs, interval_s, grade)
         if not any(a.spans_s for a in aside):
