@@ -26,11 +26,12 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
+import spoiled_references
 
 from sins import io
 from sins.core.series import ReferencedRecording
@@ -76,10 +77,7 @@ def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:
     steps = round(1.0 / float(np.median(np.diff(t))))
     for _ in range(gaps):
         i = int(rng.integers(len(t) // 10, len(t) - len(t) // 10 - steps))
-        j = i + steps
-        ends = Rotation.from_quat(q[[i, j]], scalar_first=True)
-        q[i : j + 1] = Slerp(t[[i, j]], ends)(t[i : j + 1]).as_quat(scalar_first=True)
-        v[i : j + 1] = v[i] + (v[j] - v[i]) * ((t[i : j + 1] - t[i]) / (t[j] - t[i]))[:, None]
+        spoiled_references.fill_gap(t, q, [v], i, i + steps)
     np.savez(path, **{**a, "q_wxyz": q, "v_m_s": v})
 
 

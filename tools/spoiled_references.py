@@ -37,6 +37,16 @@ JUDGE = ["V1_01_easy", "MH_02_easy", "V2_02_medium"]
 GAP_STEPS, GAPS = 200, 3
 
 
+def fill_gap(t: np.ndarray, q_wxyz: np.ndarray, lines: list[np.ndarray], a: int, b: int) -> None:
+    """Rows ``a`` to ``b`` filled in place as converters fill a motion capture's gap: the attitude
+    ``q_wxyz`` slerped by scipy between the two ends, each array of ``lines`` (n, 3) a straight line."""
+    ends = Rotation.from_quat(q_wxyz[[a, b]], scalar_first=True)
+    q_wxyz[a : b + 1] = Slerp(t[[a, b]], ends)(t[a : b + 1]).as_quat(scalar_first=True)
+    for x in lines:
+        for c in range(x.shape[1]):
+            x[a : b + 1, c] = np.interp(t[a : b + 1], t[[a, b]], x[[a, b], c])
+
+
 def spoiled(arrays: dict[str, np.ndarray], spoil: str, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """The recording's arrays with its reference spoiled (see the module docstring)."""
     t = arrays["t_s"]
@@ -45,11 +55,7 @@ def spoiled(arrays: dict[str, np.ndarray], spoil: str, rng: np.random.Generator)
     if spoil == "gaps":
         for _ in range(GAPS):
             a = int(rng.integers(2000, len(t) - 2000))
-            b = a + GAP_STEPS
-            ends = Rotation.from_quat(q[[a, b]], scalar_first=True)
-            q[a : b + 1] = Slerp(t[[a, b]], ends)(t[a : b + 1]).as_quat(scalar_first=True)
-            for c in range(3):
-                p[a : b + 1, c] = np.interp(t[a : b + 1], t[[a, b]], p[[a, b], c])
+            fill_gap(t, q, [p], a, a + GAP_STEPS)
     v = np.zeros_like(p)
     v[1:] = np.diff(p, axis=0) / 0.005
     return {**arrays, "q_wxyz": q, "v_m_s": v, "p_m": p}
