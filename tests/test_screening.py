@@ -39,13 +39,21 @@ def _recording(seed: int, spoiled: bool) -> tuple[referenced.ReferencedRecording
         a, b = (int(np.argmin(np.abs(s.t_ref - t))) for t in GAP_S)
         slerp = Slerp(s.t_ref[[a, b]], Rotation.from_quat(q_nb[[a, b]]))
         q_nb[a : b + 1] = slerp(s.t_ref[a : b + 1]).as_quat()
-    n = len(s.t_ref)
+    return _beside(s.t, s.gyro, s.accel, s.t_ref, q_nb, v_n, "numpy unit"), unit
+
+
+def _beside(
+    t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, t_ref: np.ndarray, q_nb: np.ndarray, v_n: np.ndarray,
+    source: str,
+) -> referenced.ReferencedRecording:  # fmt: skip
+    """Rate samples at ``t`` beside a reference at ``t_ref`` (attitude ``q_nb``, velocity ``v_n``) at the
+    numpy units' site."""
+    n = len(t_ref)
     truth = NavSeries(
-        t=s.t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M), v_n=v_n,
+        t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M), v_n=v_n,
         q_nb=q_nb,
     )  # fmt: skip
-    imu = ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel)
-    return referenced.from_recording(imu, truth, "numpy unit"), unit
+    return referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, source)
 
 
 def _z_scores(fitted: referenced.Fitted, unit: object) -> np.ndarray:
@@ -181,12 +189,7 @@ def _turning(gap_s: tuple[float, float] | None) -> referenced.ReferencedRecordin
     if gap_s is not None:
         a, b = (int(np.argmin(np.abs(t_ref - g))) for g in gap_s)
         q_nb[a : b + 1] = Slerp(t_ref[[a, b]], q[[a, b]])(t_ref[a : b + 1]).as_quat()
-    n = len(t_ref)
-    truth = NavSeries(
-        t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M),
-        v_n=np.zeros((n, 3)), q_nb=q_nb,
-    )  # fmt: skip
-    return referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, "turning unit")
+    return _beside(t, gyro, accel, t_ref, q_nb, np.zeros((len(t_ref), 3)), "turning unit")
 
 
 def test_a_span_filled_by_interpolation_is_told_by_the_reference_and_a_steady_turn_is_not() -> None:
@@ -238,9 +241,5 @@ def test_an_exact_reference_at_rest_is_not_filled_beside_a_wandering_bias() -> N
     t_ref = t[::5]
     n = len(t_ref)
     q_nb = Rotation.from_rotvec(np.column_stack([np.zeros(n), np.zeros(n), angle[::5]])).as_quat()
-    truth = NavSeries(
-        t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M),
-        v_n=np.zeros((n, 3)), q_nb=q_nb,
-    )  # fmt: skip
-    rec = referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, "resting unit")
+    rec = _beside(t, gyro, accel, t_ref, q_nb, np.zeros((n, 3)), "resting unit")
     assert screening.filled(rec) == ()
