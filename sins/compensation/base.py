@@ -107,7 +107,7 @@ class Strategy(ABC):
             return out
         from sins.compensation import unit_bias
 
-        return unit_bias.corrected_any(unit_bias.BiasRule.from_dict(rule), out)
+        return unit_bias.applied(unit_bias.BiasRule.from_dict(rule), readings, out)
 
     def aligned_rates(self, rates: ImuRates) -> ImuRates:
         """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends

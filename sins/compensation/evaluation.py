@@ -34,6 +34,11 @@ FITTED_HERE = (
     "the model was fitted on these readings: the figures say how it fits its own data, not how it does on "
     "a recording it has not seen (judge it on another)"
 )
+#: What ``sins evaluate`` says of a model that leaves the gyro as read (its bias rule ``readings``).
+GYRO_AS_READ = (
+    "the model leaves the gyro as read (its fit found every bias rule worse than the raw readings on a "
+    "held-back recording): its open loop is the raw one"
+)
 
 
 @dataclass(frozen=True)
@@ -112,7 +117,8 @@ def evaluate_referenced(
     against the reference; over the ``last`` fraction of the recording or all of it; with ``drive``
     (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
     ``stage(text)`` is told each open loop as it starts."""
-    from sins.compensation import referenced, screening
+    from sins.compensation import referenced
+    from sins.compensation.unit_bias import READINGS  # a model that leaves the gyro as read
 
     fitted_here = _fitted_here(strategy, referenced.readings_of(rec))
     if last:
@@ -140,27 +146,13 @@ def evaluate_referenced(
         f"{where}: the gyro integrated alone from the reference's first attitude, RMS error against "
         f"{rec.reference_name} over {judged}, degrees (AOE: over every epoch)"
     ]
-    if not rec.latitude_known:
-        lines.append("the reference's frame has no known latitude or heading: Earth's rate is left out")
-    elif not rec.heading_known:
-        lines.append(
-            "the reference's frame has no known north: only the vertical part of Earth's rate is put in"
-        )
-    clock = frame_check.recording_lag(rec)
-    if clock is not None and abs(clock.lag_s) >= frame_check.REFERENCE_LAG_S:
-        lines.append(
-            f"the reference's clock sits {frame_check.clock_sits(clock.lag_s)} (its turns "
-            "against the gyro's): every figure is judged against it as stamped, the rate times that "
-            f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
-        )
-    filled_s = screening.filled(rec)
-    if filled_s:
-        lines.append(
-            f"the reference holds {spans_said(filled_s)} filled by interpolation (sins.io.filled): every "
-            "figure is judged against it as it is there too"
-        )
+    notes, clock, filled_s = _reference_notes(rec)
+    lines += notes
     if fitted_here:
         lines.append(FITTED_HERE)
+    as_read = (getattr(strategy, "unit_bias_", None) or {}).get("mode") == READINGS
+    if as_read:
+        lines.append(GYRO_AS_READ)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
     document: dict[str, Any] = {
@@ -169,12 +161,43 @@ def evaluate_referenced(
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
         "reference_filled_s": [list(s) for s in filled_s],
         "fitted_on_this_recording": fitted_here,
+        "gyro_as_read": as_read,
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
     if drive is not None:
         document["drive"] = _drive(strategy, rec, drive, lines, stage)
     return Evaluation(lines, document, runs=runs, table=table)
+
+
+def _reference_notes(
+    rec: ReferencedRecording,
+) -> tuple[list[str], frame_check.ReferenceLag | None, tuple[tuple[float, float], ...]]:
+    """What ``sins evaluate`` says of the judged recording's reference: its frame's Earth rate, its clock
+    against the readings' (``frame_check.recording_lag``) and its spans filled by interpolation."""
+    from sins.compensation import screening
+
+    notes: list[str] = []
+    if not rec.latitude_known:
+        notes.append("the reference's frame has no known latitude or heading: Earth's rate is left out")
+    elif not rec.heading_known:
+        notes.append(
+            "the reference's frame has no known north: only the vertical part of Earth's rate is put in"
+        )
+    clock = frame_check.recording_lag(rec)
+    if clock is not None and abs(clock.lag_s) >= frame_check.REFERENCE_LAG_S:
+        notes.append(
+            f"the reference's clock sits {frame_check.clock_sits(clock.lag_s)} (its turns "
+            "against the gyro's): every figure is judged against it as stamped, the rate times that "
+            f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
+        )
+    filled_s = screening.filled(rec)
+    if filled_s:
+        notes.append(
+            f"the reference holds {spans_said(filled_s)} filled by interpolation (sins.io.filled): every "
+            "figure is judged against it as it is there too"
+        )
+    return notes, clock, filled_s
 
 
 def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
@@ -246,6 +269,7 @@ def _drive(
 
 __all__ = [
     "FITTED_HERE",
+    "GYRO_AS_READ",
     "OPEN_LOOP_HEAD",
     "RAW",
     "Evaluation",

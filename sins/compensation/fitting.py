@@ -366,7 +366,15 @@ def _several_document(
             f"{'the raw readings' if m == 'raw' else m} {v:.2f}°" for m, v in rule.held_back_deg.items()
         )
         judged = f" (open-loop attitude on held-back recordings: {held})" if held else ""
-        lines.append(f"a new recording's bias: {rule.mode}{judged}")
+        from sins.compensation.unit_bias import READINGS
+
+        if rule.mode == READINGS:
+            lines.append(
+                "a new recording's gyro: left as read, as every rule for its bias left a held-back recording "
+                f"worse than its raw readings{judged}"
+            )
+        else:
+            lines.append(f"a new recording's bias: {rule.mode}{judged}")
         document["bias_rule"] = rule.to_dict()
     return document
 

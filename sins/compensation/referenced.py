@@ -284,7 +284,9 @@ def choose_rule(
     """What ``strategy`` (fitted on ``recs``) does about a new recording's bias: the bias each recording's
     corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
     mode is the one whose open-loop attitude on held-back recordings is least (each recording in turn
-    held back, the seed model and the rule made from the others alone), unless ``mode`` names one."""
+    held back, the seed model and the rule made from the others alone) among those no worse than the
+    readings as they are on any of them, :data:`~sins.compensation.unit_bias.READINGS` (the gyro left
+    as read) where none is; ``mode`` names one instead."""
     from sins.compensation import interval_fit, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
@@ -315,8 +317,10 @@ def choose_rule(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
         held = {m: float(np.mean(v)) for m, v in scores.items()}
-        mode = min(held, key=held.__getitem__)
-        held["raw"] = float(np.mean(raw))  # the readings as they are, for scale
+        # A correction worse than the readings on a recording it was not fitted on may be so on the next.
+        kept = [m for m in unit_bias.MODES if np.all(np.array(scores[m]) <= np.array(raw))]
+        mode = min(kept, key=held.__getitem__) if kept else unit_bias.READINGS
+        held["raw"] = float(np.mean(raw))  # the readings as they are
     return unit_bias.rule_from(left, streams, mode=mode or "pooled", held_back_deg=held)
 
 

@@ -24,8 +24,12 @@ estimated from the recording itself, by one of these :data:`MODES`:
     nuisances), regularised towards the prior (``pooled`` or ``rest``) by the training recordings'
     spread. Readings are corrected by the last estimate made before them (causal).
 
-The mode is chosen on held-back training recordings (:func:`choose_mode`): each recording judged by its
-open-loop attitude with the prior made from the others, never from its own reference.
+The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
+recording judged by its open-loop attitude with the seed model and the prior made from the others, never
+from its own reference. A mode is taken only where it is no worse than the readings as they are on every
+held-back recording; where none is, the rule is :data:`READINGS`: the model leaves the gyro as read (a
+unit whose readings come calibrated already, its bias removed by its maker or its converter, gains
+nothing from a model fitted on a few recordings and loses what the fit's own errors add).
 """
 
 from __future__ import annotations
@@ -44,6 +48,8 @@ Array = NDArray[np.float64]
 
 #: The ways of estimating a recording's bias (see the module docstring).
 MODES = ("pooled", "rest", "online", "rest+online")
+#: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
+READINGS = "readings"
 #: Window of the rest detection, s.
 REST_WINDOW_S = 0.5
 #: A rest's specific force turns by less than this, deg (the reference's own rest test: 0.5° of turn;
@@ -84,8 +90,8 @@ class BiasRule:
     held_back_deg: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.mode not in MODES:
-            raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join(MODES)})")
+        if self.mode not in (*MODES, READINGS):
+            raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join((*MODES, READINGS))})")
         for key in ("prior", "spread", "rest_offset", "rest_spread"):
             value = np.asarray(getattr(self, key), dtype=float)
             if value.shape != (3,) or not np.isfinite(value).all():
@@ -143,7 +149,10 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
 
 def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
-    from the readings before it only."""
+    from the readings before it only. ``ValueError`` under :data:`READINGS`, which takes no bias: the gyro
+    is kept as read (:func:`applied`), not the model's correction of it."""
+    if rule.mode == READINGS:
+        raise ValueError("the readings rule takes no bias: the gyro is kept as read (unit_bias.applied)")
     dt = np.diff(imu.t)
     prior, sigma = rule.prior, rule.spread
     track = np.tile(prior, (len(dt), 1))
@@ -292,6 +301,20 @@ def with_mode(rule: BiasRule, mode: str) -> BiasRule:
     return replace(rule, mode=mode)
 
 
+def applied(
+    rule: BiasRule, readings: ImuRates | ImuIncrements, corrected: ImuRates | ImuIncrements
+) -> ImuRates | ImuIncrements:
+    """A whole recording's correction under ``rule``: ``corrected`` (the model's correction of
+    ``readings``, in their form) less the rule's bias; under :data:`READINGS`, the gyro of ``readings``
+    as read beside ``corrected``'s accelerometer."""
+    if rule.mode != READINGS:
+        return corrected_any(rule, corrected)
+    if isinstance(readings, ImuIncrements) and isinstance(corrected, ImuIncrements):
+        return ImuIncrements(t=corrected.t, dtheta_b=readings.dtheta_b, dv_b=corrected.dv_b)
+    assert isinstance(readings, ImuRates) and isinstance(corrected, ImuRates)
+    return ImuRates(t=corrected.t, omega_ib_b=readings.omega_ib_b, f_ib_b=corrected.f_ib_b)
+
+
 def corrected_any(rule: BiasRule, readings: ImuRates | ImuIncrements) -> ImuRates | ImuIncrements:
     """Readings in either form with :func:`bias_track`'s bias taken away: rates through their steps'
     mean rates (a sample is corrected by the estimate of the steps before it; the first by the prior)."""
@@ -354,11 +377,13 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 __all__ = [
     "MIN_REST_S",
     "MODES",
+    "READINGS",
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
     "UPDATE_S",
     "BiasRule",
+    "applied",
     "attitude_dcm",
     "bias_track",
     "corrected",
