@@ -426,6 +426,10 @@ def test_a_unit_whose_readings_come_calibrated_keeps_its_gyro_as_read(
     assert judged["gyro_as_read"] is True
     assert judged["open_loop_attitude"] == judged["open_loop_attitude_raw"]
     raw = judged["open_loop_attitude_raw"]["aoe_deg"]
+    capsys.readouterr()
+    fixed = tmp_path / "c.csv"
+    assert main(["correct", str(model), "--dataset", "cal/MH_05_difficult", "--out", str(fixed)]) == 0
+    assert "its gyro as read" in capsys.readouterr().out
     # The same model with the mode of least held-back mean, as sins chose before: worse than raw.
     doc = json.loads(model.read_text())
     held = {m: v for m, v in rule["held_back_deg"].items() if m in unit_bias.MODES}
