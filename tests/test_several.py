@@ -167,6 +167,9 @@ def test_a_damaged_rule_is_refused(tmp_path: Path) -> None:
     doc["state"]["unit_bias_"]["mode"] = "crystal ball"
     path.write_text(json.dumps(doc))
     refusal(lambda: compensation.load(path), str(path), "crystal ball")
+    doc["state"]["unit_bias_"] = {**fitted.rule.to_dict(), "held_back_each_deg": {"raw": 1.0}}
+    path.write_text(json.dumps(doc))
+    refusal(lambda: compensation.load(path), str(path), "held_back_each_deg")
 
 
 def test_recordings_of_two_units_or_rates_are_refused() -> None:
@@ -418,9 +421,13 @@ def test_a_unit_whose_readings_come_calibrated_keeps_its_gyro_as_read(
     model, fit_json, out = tmp_path / "m.json", tmp_path / "fit.json", tmp_path / "e.json"
     sets = [a for n in train for a in ("--dataset", f"cal/{n}")]
     assert main(["fit", *sets, "--strategy", "regression", "--out", str(model), "--json", str(fit_json)]) == 0
-    assert "a new recording's gyro: left as read" in capsys.readouterr().out
+    said = capsys.readouterr().out
     rule = json.loads(fit_json.read_text())["bias_rule"]
     assert rule["mode"] == unit_bias.READINGS and set(rule["held_back_deg"]) == {*unit_bias.MODES, "raw"}
+    each = rule["held_back_each_deg"]  # per training recording, in the order given
+    assert all(any(v > r for v, r in zip(each[m], each["raw"], strict=True)) for m in unit_bias.MODES)
+    assert "a new recording's gyro: left as read" in said
+    assert "(the best, online: cal/V1_03_difficult 2.05° against 1.96°)" in said, said
     assert main(["evaluate", str(model), "--dataset", "cal/MH_05_difficult", "--json", str(out)]) == 0
     judged = json.loads(out.read_text())
     assert judged["gyro_as_read"] is True

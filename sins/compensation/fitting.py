@@ -24,6 +24,7 @@ from sins.io import frame_check
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
+    from sins.compensation.unit_bias import BiasRule
     from sins.core.series import CalibrationData, ReferencedRecording
     from sins.io.findings import ReferenceLag
 
@@ -365,18 +366,30 @@ def _several_document(
         held = "; ".join(
             f"{'the raw readings' if m == 'raw' else m} {v:.2f}°" for m, v in rule.held_back_deg.items()
         )
-        judged = f" (open-loop attitude on held-back recordings: {held})" if held else ""
-        from sins.compensation.unit_bias import READINGS
-
-        if rule.mode == READINGS:
-            lines.append(
-                "a new recording's gyro: left as read, as every rule for its bias left a held-back recording "
-                f"worse than its raw readings{judged}"
-            )
-        else:
-            lines.append(f"a new recording's bias: {rule.mode}{judged}")
+        judged = f" (open-loop attitude on held-back recordings, mean: {held})" if held else ""
+        lines.append(_rule_line(rule, names, judged))
         document["bias_rule"] = rule.to_dict()
     return document
+
+
+def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:
+    """What ``sins fit`` says of a new recording's bias: the rule's mode, or, where the model leaves the
+    gyro as read, the held-back recordings the best rule left worse than their raw readings."""
+    from sins.compensation.unit_bias import MODES, READINGS
+
+    if rule.mode != READINGS:
+        return f"a new recording's bias: {rule.mode}{judged}"
+    each, means = rule.held_back_each_deg, rule.held_back_deg
+    best = min((m for m in MODES if m in means), key=means.__getitem__)
+    worse = ", ".join(
+        f"{name} {v:.2f}° against {raw:.2f}°"
+        for name, v, raw in zip(names, each.get(best, []), each.get("raw", []), strict=False)
+        if v > raw
+    )
+    return (
+        "a new recording's gyro: left as read, as every rule for its bias left a held-back recording worse "
+        f"than its raw readings (the best, {best}: {worse}){judged}"
+    )
 
 
 @contextmanager

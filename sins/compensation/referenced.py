@@ -293,6 +293,7 @@ def choose_rule(
     left = np.array([interval_fit.fit_biases(_with_imu(rec, s), interval_s=interval_s).seed.B0
                      for rec, s in zip(recs, streams, strict=True)])  # fmt: skip
     held: dict[str, float] = {}
+    each: dict[str, list[float]] = {}
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
         raw = []
@@ -321,7 +322,10 @@ def choose_rule(
         kept = [m for m in unit_bias.MODES if np.all(np.array(scores[m]) <= np.array(raw))]
         mode = min(kept, key=held.__getitem__) if kept else unit_bias.READINGS
         held["raw"] = float(np.mean(raw))  # the readings as they are
-    return unit_bias.rule_from(left, streams, mode=mode or "pooled", held_back_deg=held)
+        each = {**scores, "raw": raw}
+    return unit_bias.rule_from(
+        left, streams, mode=mode or "pooled", held_back_deg=held, held_back_each_deg=each
+    )
 
 
 def _check_one_unit(recs: list[ReferencedRecording]) -> None:

@@ -77,7 +77,8 @@ class BiasRule:
     does); ``rest_spread`` (3,): its spread; ``sigma_v_mps``: the true velocity's size in the online
     model; ``sigma_accel_mps2``: the accelerometer bias's prior size there; ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
-    and (``raw``) of their readings as they are.
+    and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
+    order the model was fitted on them.
     """
 
     mode: str = "pooled"
@@ -88,6 +89,7 @@ class BiasRule:
     sigma_v_mps: float = 1.0
     sigma_accel_mps2: float = 0.2
     held_back_deg: dict[str, float] = field(default_factory=dict)
+    held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
@@ -109,6 +111,7 @@ class BiasRule:
             "rest_offset": self.rest_offset.tolist(), "rest_spread": self.rest_spread.tolist(),
             "sigma_v_mps": self.sigma_v_mps, "sigma_accel_mps2": self.sigma_accel_mps2,
             "held_back_deg": dict(self.held_back_deg),
+            "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
         }  # fmt: skip
 
     @classmethod
@@ -118,10 +121,15 @@ class BiasRule:
         odd = [k for k in doc if k not in known]
         if odd:
             raise ValueError(f"bias rule: unknown key {odd[0]!r}")
-        held = doc.get("held_back_deg", {})
+        held, each = doc.get("held_back_deg", {}), doc.get("held_back_each_deg", {})
         if not isinstance(held, dict):
             raise ValueError("bias rule held_back_deg: expected an object")
-        return cls(**{**doc, "held_back_deg": {str(k): float(v) for k, v in held.items()}})
+        if not isinstance(each, dict) or not all(isinstance(v, list) for v in each.values()):
+            raise ValueError("bias rule held_back_each_deg: expected an object of lists")
+        return cls(**{
+            **doc, "held_back_deg": {str(k): float(v) for k, v in held.items()},
+            "held_back_each_deg": {str(k): [float(x) for x in v] for k, v in each.items()},
+        })  # fmt: skip
 
 
 def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
@@ -337,6 +345,7 @@ def rule_from(
     *,
     mode: str = "pooled",
     held_back_deg: dict[str, float] | None = None,
+    held_back_each_deg: dict[str, list[float]] | None = None,
 ) -> BiasRule:
     """A rule from training recordings: ``biases`` (r, 3) the bias each recording's ``streams`` (the
     model's corrected readings) still hold, fitted against its reference. The prior is their mean, the
@@ -355,6 +364,7 @@ def rule_from(
     return BiasRule(
         mode=mode, prior=biases.mean(axis=0), spread=spread, rest_offset=off.mean(axis=0),
         rest_spread=rest_spread, held_back_deg=held_back_deg or {},
+        held_back_each_deg=held_back_each_deg or {},
     )  # fmt: skip
 
 
