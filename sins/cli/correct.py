@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 
 def _cmd_correct(args: argparse.Namespace) -> int:
     from sins import __version__, compensation, io
+    from sins.compensation.unit_bias import READINGS
     from sins.core.series import ImuRates
     from sins.io import provenance
 
@@ -61,8 +62,6 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     )
     dropped = f"; the readings only, not {left} (judge the model on the original)" if left else ""
     print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}{dropped}")
-    from sins.compensation.unit_bias import READINGS
-
     if (getattr(strategy, "unit_bias_", None) or {}).get("mode") == READINGS:
         print("its gyro as read: the model's fit found every bias rule worse than the raw readings held back")
     return 0
