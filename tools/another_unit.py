@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python tools/another_unit.py [--parts 3] [--strategies regression mlp_window ...]
-        [--gaps N] [--screen refused|always|never] [--json OUT.json] [--keep DIR]
+        [--gaps N] [--screen refused|always|never] [--calibrated] [--json OUT.json] [--keep DIR]
 
 sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
 with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
@@ -17,6 +17,9 @@ open-loop table; what must hold is that no correction is worse than the raw read
 capture's lost markers (the attitude slerped by scipy, the velocity a straight line; placed with a fixed
 seed), the judged parts as they are; ``--screen`` is handed to ``sins fit``
 (:mod:`sins.compensation.screening`).
+
+``--calibrated``: each part with its own constant gyro bias taken out (``tools/calibrated_unit.py``'s
+``calibrated``, numpy and scipy alone): the unit as it would read calibrated at every power-up.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
 import spoiled_references
+from calibrated_unit import calibrated
 
 from sins import io
 from sins.core.series import ReferencedRecording
@@ -89,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--strategies", nargs="+", default=euroc_benchmark.STRATEGIES)
     p.add_argument("--gaps", type=int, default=0, help="1 s gaps filled in each training part's reference")
     p.add_argument("--screen", choices=("refused", "always", "never"), help="handed to sins fit")
+    p.add_argument("--calibrated", action="store_true", help="each part's own gyro bias taken out")
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
@@ -100,6 +105,8 @@ def main(argv: list[str] | None = None) -> int:
             for name in write_parts(rec, trial, args.parts, folder):
                 if args.gaps and name in args.train:
                     with_gaps(folder / f"{name}.npz", args.gaps, rng)
+                if args.calibrated:
+                    calibrated(folder / f"{name}.npz", folder)  # written again under its name
 
     return euroc_benchmark.run_on_unit(
         write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep,
