@@ -7,8 +7,8 @@ Usage::
         [--keep DIR]
 
 Some units are read already calibrated: their maker or the dataset's converter takes the bias out at
-every power-up (TUM-VI's calibrated recordings, a phone's OS). A model fitted on a few of their
-recordings has little left to correct and adds its own errors. Each of EuRoC's eleven sequences is
+every power-up (a phone's operating system, a dataset's "calibrated" readings). A model fitted on a few
+of their recordings has little left to correct and adds its own errors. Each of EuRoC's eleven sequences is
 written in the ``.npz`` form into a temporary data root (folder ``euroc_calibrated``), its gyro less the
 mean over the sequence of the gyro less the reference's rate (each step's turn by scipy's ``Rotation``;
 numpy and scipy alone, nothing of sins), and the published split is fitted and judged by
