@@ -53,6 +53,8 @@ def main(argv: list[str] | None = None) -> int:
         if not isinstance(rule_doc, dict):
             raise SystemExit(f"{path}: not fitted on several recordings (no bias rule)")
         rule = unit_bias.BiasRule.from_dict(rule_doc)
+        if rule.mode == unit_bias.READINGS:
+            raise SystemExit(f"{path}: leaves the gyro as read (bias rule {rule.mode}): no rule to judge")
         print(f"{path.name}: {model.label}, bias rule {rule.mode}")
         print(f"  {'sequence':<18} {'rule':>7} {'best constant':>14} {'rule across':>12} {'rule along':>11}"
               "  best bias, mrad/s")  # fmt: skip
