@@ -15,14 +15,20 @@ from sins.compensation import referenced
 from sins.core.series import ImuRates, NavSeries
 
 
-def recordings(seed: int, count: int = 3) -> tuple[list[referenced.ReferencedRecording], object, np.ndarray]:
+def recordings(
+    seed: int, count: int = 3, *, calibrated: bool = False
+) -> tuple[list[referenced.ReferencedRecording], object, np.ndarray]:
     """``count`` sessions of one numpy unit whose gyro and accelerometer biases are drawn anew for each
-    (the bias between power-ups), everything else shared."""
+    (the bias between power-ups), everything else shared; ``calibrated``: a gyro read calibrated at
+    every power-up (no bias, scale, misalignment or delay; its noise alone)."""
     rng = np.random.default_rng(seed)
     unit = typical_unit(rng)
+    if calibrated:
+        unit = replace(unit, B=np.zeros((3, 3)), gyro_delay_s=0.0)
     recs, biases = [], []
     for k in range(count):
-        own = replace(unit, B0=np.radians(rng.normal(0.0, 0.1, 3)), A0=rng.normal(0.0, 0.05, 3))
+        gyro_bias = np.zeros(3) if calibrated else np.radians(rng.normal(0.0, 0.1, 3))
+        own = replace(unit, B0=gyro_bias, A0=rng.normal(0.0, 0.05, 3))
         s = session(rng, own, duration_s=120.0)
         truth = NavSeries(
             t=s.t_ref, lat=np.full(len(s.t_ref), math.radians(LAT_DEG)), lon=np.zeros(len(s.t_ref)),
