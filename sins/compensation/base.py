@@ -96,7 +96,9 @@ class Strategy(ABC):
         """A whole recording, in time order and in its own form: :meth:`correct_rates` or
         :meth:`correct_increments`, then, where the strategy was fitted on several recordings of one unit,
         its rule for the recording's own gyro bias (``unit_bias_``: estimated from the readings before
-        each one). A stream corrected a chunk at a time (``correct_increments`` alone) has no rule."""
+        each one; under the rule ``readings``, the gyro kept as read:
+        :func:`sins.compensation.unit_bias.applied`). A stream corrected a chunk at a time
+        (``correct_increments`` alone) has no rule."""
         out = (
             self.correct_rates(readings, temp)
             if isinstance(readings, ImuRates)
