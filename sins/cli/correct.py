@@ -24,7 +24,6 @@ if TYPE_CHECKING:
 
 def _cmd_correct(args: argparse.Namespace) -> int:
     from sins import __version__, compensation, io
-    from sins.compensation.unit_bias import READINGS
     from sins.core.series import ImuRates
     from sins.io import provenance
 
@@ -62,7 +61,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     )
     dropped = f"; the readings only, not {left} (judge the model on the original)" if left else ""
     print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}{dropped}")
-    if (getattr(strategy, "unit_bias_", None) or {}).get("mode") == READINGS:
+    if strategy.leaves_gyro_as_read():
         print("its gyro as read: the model's fit found every bias rule worse than the raw readings held back")
     return 0
 

@@ -111,6 +111,14 @@ class Strategy(ABC):
 
         return unit_bias.applied(unit_bias.BiasRule.from_dict(rule), readings, out)
 
+    def leaves_gyro_as_read(self) -> bool:
+        """Whether :meth:`correct_recording` keeps the gyro as read: the model's fit on several recordings
+        found every bias rule worse than the raw readings on a held-back one (the rule ``readings``)."""
+        from sins.compensation.unit_bias import READINGS
+
+        rule = getattr(self, "unit_bias_", None)
+        return isinstance(rule, dict) and rule.get("mode") == READINGS
+
     def aligned_rates(self, rates: ImuRates) -> ImuRates:
         """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends
         held, so a stream corrected a chunk at a time holds each chunk's last reading over the offset),

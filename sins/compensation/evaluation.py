@@ -118,7 +118,6 @@ def evaluate_referenced(
     (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
     ``stage(text)`` is told each open loop as it starts."""
     from sins.compensation import referenced
-    from sins.compensation.unit_bias import READINGS  # a model that leaves the gyro as read
 
     fitted_here = _fitted_here(strategy, referenced.readings_of(rec))
     if last:
@@ -150,7 +149,7 @@ def evaluate_referenced(
     lines += notes
     if fitted_here:
         lines.append(FITTED_HERE)
-    as_read = (getattr(strategy, "unit_bias_", None) or {}).get("mode") == READINGS
+    as_read = strategy.leaves_gyro_as_read()
     if as_read:
         lines.append(GYRO_AS_READ)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
