@@ -588,6 +588,17 @@ def review(
     return Review(bounds.grade, held)
 
 
+def beyond_spread(values: Mapping[str, tuple[float, float]], bounds: ClassBounds) -> list[str]:
+    """The coefficients of ``values`` (``name: (value, standard error)``, SI) whose standard error
+    exceeds the class's spread, each as ``NAME ± SE`` in its datasheet unit: what :func:`review`
+    refuses in a model, said of a recording's own biases, which are not the model's."""
+    return [
+        f"{_pretty(n)} ± {_shown(n, se)} against {_shown(n, bounds.limit(n))}"
+        for n, (_, se) in values.items()
+        if se > bounds.limit(n)
+    ]
+
+
 def _judge(name: str, value: float, se: float | None, bounds: ClassBounds, where: str) -> None:
     """Refuse one coefficient that is not finite, not determined or beyond the class's bound."""
     if not (math.isfinite(value) and (se is None or math.isfinite(se))):
@@ -631,6 +642,7 @@ __all__ = [
     "accel_names",
     "assess",
     "assess_several",
+    "beyond_spread",
     "bias_names",
     "class_bounds",
     "determined",

@@ -214,8 +214,9 @@ def _several_determined(
 ) -> tuple[SeveralFit, identifiability.Review]:
     """The fit on several recordings with the shared coefficients they do not determine for a unit of
     ``grade`` held at zero (:func:`~sins.compensation.identifiability.assess_several`), made again
-    holding any that came out less determined than predicted, then judged against the class's bounds,
-    each recording's biases too (:func:`~sins.compensation.identifiability.review`)."""
+    holding any that came out less determined than predicted, then judged against the class's bounds
+    (:func:`~sins.compensation.identifiability.review`), each recording's own biases by their values
+    alone (``sins fit`` says where their standard errors exceed the class's spread)."""
     from sins.compensation import several
 
     holds = identifiability.assess_several(recs, interval_s, identifiability.class_bounds(grade))
@@ -233,8 +234,10 @@ def _several_determined(
     names = [*identifiability.bias_names("gyro"), *identifiability.bias_names("accel")]
     for r, source in enumerate(fit_all.sources):
         own = np.concatenate([fit_all.gyro_bias[r], fit_all.accel_bias[r]])
-        own_se = np.concatenate([fit_all.gyro_bias_se[r], fit_all.accel_bias_se[r]])
-        biases = {n: (float(v), float(e)) for n, v, e in zip(names, own, own_se, strict=True)}
+        # A recording's own bias is judged by its value alone (finite, within the class's bound): it is
+        # not the model's, and the residuals behind its standard error are behind the shared terms' and
+        # the mean bias's too, which are judged (sins fit prints it, and says where it is loose).
+        biases = {n: (float(v), None) for n, v in zip(names, own, strict=True)}
         identifiability.review(biases, holds.bounds, f"{where}: {source}")
     return fit_all, review
 
