@@ -461,3 +461,38 @@ def test_a_euroc_folders_world_with_y_up_is_read_as_with_z_up(tmp_path: Path) ->
     assert angle.max() < 1e-9
     np.testing.assert_allclose(got.v_n, want.v_n, atol=1e-9)
     assert not inspection.inspect(read).findings
+
+
+def test_corrected_readings_keep_the_stamp_their_times_count_from(
+    unit_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An .npz stamped in Unix seconds is read from its first stamp; ``sins correct`` writes that stamp
+    (``# time origin: N ns``), by path and by ``--dataset``, and the CSV reads back with it: every row's
+    stamp is the original's (within 1 µs, what float64 seconds hold at 1.4e9 s). Without stamps (the
+    numpy recording as written, from 0 s) the origin is 0."""
+    from sins.cli import main
+    from sins.io import provenance
+
+    arrays = dict(np.load(unit_root / "unit" / "r2.npz"))
+    stamps = 1.4e9 + arrays["t_s"]
+    np.savez(unit_root / "unit" / "r2_stamped.npz", **{**arrays, "t_s": stamps})
+    monkeypatch.setenv("SINS_DATA", str(unit_root))
+    origin = round(float(stamps[0]) * 1e9)
+    for name, given in (
+        ("path.csv", [str(unit_root / "unit" / "r2_stamped.npz")]),
+        ("dataset.csv", ["--dataset", "unit/r2_stamped"]),
+    ):
+        out = tmp_path / name
+        assert main(["correct", str(unit_root / "model.json"), *given, "--out", str(out)]) == 0
+        assert f"# time origin: {origin} ns" in out.read_text().splitlines()[:6]
+        back = io.read(out)
+        assert back.t0_ns == origin
+        stamped = back.t0_ns * 1e-9 + back.imu.t
+        np.testing.assert_allclose(stamped, stamps[: len(stamped)], rtol=0, atol=1e-6)
+    plain = tmp_path / "plain.csv"
+    assert main(["correct", str(unit_root / "model.json"), "--dataset", "unit/r2", "--out", str(plain)]) == 0
+    assert io.read(plain).t0_ns == 0
+    # A line that is no whole number of ns is no origin.
+    bad = tmp_path / "bad.csv"
+    bad.write_text(plain.read_text().replace("# time origin: 0 ns", "# time origin: 1.5e9 s"))
+    assert provenance.read_provenance(bad).t0_ns is None

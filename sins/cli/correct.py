@@ -47,6 +47,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
         *([f"{provenance.SENSOR_KEY}: {unit}"] if unit else []),
         *([f"{provenance.CORRECTED_KEY}: {said.corrected_by}"] * said.corrections),
         provenance.corrected_line(args.model, strategy.label, str(fitted_on.get("sensor") or "")),
+        *([provenance.time_origin_line(rec.t0_ns)] if rec.t0_ns is not None else []),
     ]
     with progress_bar(f"writing {args.out}", "row") as bar:
         io.write_imu(args.out, out, extra=extra, comment="\n".join(lines), progress=row_progress(bar))

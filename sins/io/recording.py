@@ -297,7 +297,7 @@ def _rig_recording(path: Path) -> Recording:
     imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
     return Recording(imu, str(path), "rig csv", units=_si("rate"), temp=data.temp, rig=data,
                      column_map={n: n for n in rig.RECORDING_COLUMNS}, sensor=said.sensor,
-                     corrected_by=said.corrected_by)  # fmt: skip
+                     corrected_by=said.corrected_by, t0_ns=said.t0_ns)  # fmt: skip
 
 
 def _read_path(
@@ -385,7 +385,7 @@ def _read_sins(path: Path, frame: str, t_start: float | None) -> Recording:
     said = provenance.read_provenance(path)
     rec = Recording(samples, str(path), "sins csv", units=_si(form), frame=axes.FRD, temp=temp,
                     column_map={n: n for n in names}, sensor=said.sensor,
-                    corrected_by=said.corrected_by)  # fmt: skip
+                    corrected_by=said.corrected_by, t0_ns=said.t0_ns)  # fmt: skip
     return _turned(rec, frame)
 
 
@@ -415,7 +415,7 @@ def _read_columns(
                     stated_rate_hz=rate_hz if got.time_from_rate else None,
                     stated_by="the given rate" if got.time_from_rate else "",
                     column_map=got.mapping, sensor=said.sensor,
-                    corrected_by=said.corrected_by)  # fmt: skip
+                    corrected_by=said.corrected_by, t0_ns=said.t0_ns)  # fmt: skip
     return _turned(rec, frame)
 
 

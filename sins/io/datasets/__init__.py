@@ -26,6 +26,8 @@ from sins.io.datasets.ferraris import (
     _read_ferraris_annotated,
 )
 from sins.io.datasets.npz_folders import (
+    _beside_own,
+    _read_npz_recording,
     _read_npz_reference,
     _read_npz_with_truth,
     is_folder_name,
@@ -104,13 +106,19 @@ def _read_dataset(
     SinsInputError
         for an unknown name (listing the known ones), or as the readers do.
     """
-    trajectory = _load_reference(name, root, origin)
+    t0_ns = None  # a FOLDER/NAME's stamps: read once, its time origin kept
+    if is_folder_name(name):
+        own = _read_npz_recording(name, root, origin)
+        trajectory: ReferencedRecording | None = _beside_own(own, name)
+        t0_ns = own.t0_ns
+    else:
+        trajectory = _load_reference(name, root, origin)
     if trajectory is not None:
         return Recording(
             trajectory.imu, trajectory.source, "dataset", trajectory.reference, _si("increment"),
             sensor=trajectory.sensor, heading_known=trajectory.heading_known,
             latitude_known=trajectory.latitude_known, dataset=name, on_reference=trajectory,
-            inputs_reader=lambda: _load_with_truth(name, root, origin),
+            inputs_reader=lambda: _load_with_truth(name, root, origin), t0_ns=t0_ns,
         )  # fmt: skip
     data = _load_with_truth(name, root)[0]
     imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)

@@ -81,7 +81,11 @@ def _read_npz_reference(
     SinsInputError
         as :func:`_read_npz_recording`, or a recording without the reference keys.
     """
-    rec = _read_npz_recording(name, root, origin)
+    return _beside_own(_read_npz_recording(name, root, origin), name)
+
+
+def _beside_own(rec: Recording, name: str) -> ReferencedRecording:
+    """``FOLDER/NAME``'s recording ``rec`` beside its own reference; the unit is the folder."""
     if rec.truth is None:
         raise SinsInputError(
             f"{rec.source}: no reference (keys {', '.join(npz.REFERENCE_KEYS)}): it cannot be fitted or "
