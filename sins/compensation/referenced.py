@@ -269,7 +269,13 @@ def _learn_several(
         strategy.progress = progress
     if isinstance(strategy, ResidualStrategy):  # its guard judges recordings held back whole
         say(f"training {name} (each recording held back in turn, then on all)")
-        strategy.fit(data, recordings=np.repeat(np.arange(len(parts)), [len(p) for p in parts]))
+        # On top of the seed model the intervals fitted (what they do not determine held at zero), as
+        # `regression` is: refitted on the per-sample references, least squares took the terms the
+        # intervals hold (g-sensitivity) from the differentiated reference's noise.
+        strategy.fit(
+            data, recordings=np.repeat(np.arange(len(parts)), [len(p) for p in parts]),
+            base=Regression().set_fit(fit_all.seed),
+        )  # fmt: skip
         return
     say(f"training {name}")
     strategy.fit(data)

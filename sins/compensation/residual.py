@@ -268,17 +268,26 @@ class ResidualStrategy(Strategy):
 
     # ------------------------------------------------------------------ fit
 
-    def fit(self, data: CalibrationData, recordings: NDArray[np.intp] | None = None) -> ResidualStrategy:
+    def fit(
+        self,
+        data: CalibrationData,
+        recordings: NDArray[np.intp] | None = None,
+        base: Regression | None = None,
+    ) -> ResidualStrategy:
         """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self.
         ``recordings`` (one per row): each row's recording, where several are fitted together; the folds
-        are then the recordings: the guard judges a learner on recordings it was not trained on."""
+        are then the recordings: the guard judges a learner on recordings it was not trained on.
+        ``base``: the least squares to learn on top of, fitted already (a seed model fitted on the
+        reference's intervals, with what they do not determine held at zero), kept for every fold; None:
+        regression fitted on ``data``'s rows (and again without each fold)."""
         started = time.perf_counter()
         self.__dict__.pop("_restored", None)
         kept = None if recordings is None else _with_reference(recordings, data)
         data = data.rows_with_reference()
         if len(data) < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
-        base = Regression().fit(data)
+        given = base is not None
+        base = base if base is not None else Regression().fit(data)
         self.base_ = base.get_state()
         self._base = base
         self._set_scaling(data)
@@ -292,6 +301,9 @@ class ResidualStrategy(Strategy):
         folds: list[tuple[int, NDArray[np.bool_], Array]] = []
         for k in range(n_folds):
             train = fold != k
+            if given:  # the given least squares is what the learner sits on, in every fold alike
+                folds.append((k, train, self._targets(base, data)))
+                continue
             try:
                 fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
             except ValueError:
