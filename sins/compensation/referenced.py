@@ -115,7 +115,11 @@ def fit(
         else:
             if progress is not None and hasattr(strategy, "progress"):  # the learners, whose fits take long
                 strategy.progress = progress
-            strategy.fit(interval_fit.interval_reference(rec, fitted))
+            rows = interval_fit.interval_reference(rec, fitted)
+            if isinstance(strategy, ResidualStrategy):  # on top of the intervals' seed model, as below
+                strategy.fit(rows, base=Regression().set_fit(fitted.seed))
+            else:
+                strategy.fit(rows)
     except ValueError as exc:
         if isinstance(exc, SinsInputError):
             raise
