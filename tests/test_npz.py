@@ -494,5 +494,7 @@ def test_corrected_readings_keep_the_stamp_their_times_count_from(
     assert io.read(plain).t0_ns == 0
     # A line that is no whole number of ns is no origin.
     bad = tmp_path / "bad.csv"
-    bad.write_text(plain.read_text().replace("# time origin: 0 ns", "# time origin: 1.5e9 s"))
-    assert provenance.read_provenance(bad).t0_ns is None
+    for line in ("# time origin: 1.5e9 s", "# time origin: --5 ns", "# time origin: 12 34 ns"):
+        bad.write_text(plain.read_text().replace("# time origin: 0 ns", line))
+        said = provenance.read_provenance(bad)
+        assert said.t0_ns is None and said.corrected_by, (line, said)

@@ -274,38 +274,31 @@ class ResidualStrategy(Strategy):
         recordings: NDArray[np.intp] | None = None,
         base: Regression | None = None,
     ) -> ResidualStrategy:
-        """Fit regression, choose each sensor's learner on held-back blocks, retrain it; returns self.
-        ``recordings`` (one per row): each row's recording, where several are fitted together; the folds
-        are then the recordings: the guard judges a learner on recordings it was not trained on.
-        ``base``: the least squares to learn on top of, fitted already (a seed model fitted on the
-        reference's intervals, with what they do not determine held at zero), kept for every fold; None:
-        regression fitted on ``data``'s rows (and again without each fold)."""
+        """Fit regression (or take ``base``, fitted already: a reference's intervals' seed model, in every
+        fold), choose each sensor's learner on held-back blocks, retrain it; returns self. ``recordings``
+        (one per row): each row's recording where several are fitted together; the folds are then the
+        recordings, and the guard judges a learner on recordings it was not trained on."""
         started = time.perf_counter()
         self.__dict__.pop("_restored", None)
         kept = None if recordings is None else _with_reference(recordings, data)
         data = data.rows_with_reference()
         if len(data) < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
-        given = base is not None
-        base = base if base is not None else Regression().fit(data)
-        self.base_ = base.get_state()
-        self._base = base
+        whole = base if base is not None else Regression().fit(data)
+        self.base_, self._base = whole.get_state(), whole
         self._set_scaling(data)
         x_terms = self._scaled(data.ref_gyro, data.ref_accel, data.temp)
         scaled = {s: _columns(s, x_terms) for s in SENSORS}
         block = segment(scaled["gyro"][:, :6], data.t)
         fold, n_folds = self._fold_of(block, kept, data.source)
         self.blocks_, self.cv_folds_ = int(block[-1]) + 1, n_folds
-        # Each fold's regression, refitted without the fold: the held-back residuals the terms and the
-        # learners are chosen on.
+        # Each fold's regression, refitted without the fold (a given base kept): the held-back residuals
+        # the terms and the learners are chosen on.
         folds: list[tuple[int, NDArray[np.bool_], Array]] = []
         for k in range(n_folds):
             train = fold != k
-            if given:  # the given least squares is what the learner sits on, in every fold alike
-                folds.append((k, train, self._targets(base, data)))
-                continue
             try:
-                fold_base = Regression().fit(data.rows(np.flatnonzero(train)))
+                fold_base = base if base is not None else Regression().fit(data.rows(np.flatnonzero(train)))
             except ValueError:
                 continue  # this fold's training part cannot determine the seed model
             folds.append((k, train, self._targets(fold_base, data)))
@@ -313,7 +306,7 @@ class ResidualStrategy(Strategy):
         groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
         if self.physics:
             groups = terms.choose(x_terms, [(train, t) for _, train, t in folds], block, self.guard_z)
-        targets = self._targets(base, data)
+        targets = self._targets(whole, data)
         self.terms_ = {
             ch: {"groups": list(g), "coef": terms.fit(terms.design(g, c, x_terms), targets[:, c]).tolist()}
             for c, (ch, g) in enumerate(zip(CHANNELS, groups, strict=True))
@@ -624,7 +617,9 @@ class ResidualStrategy(Strategy):
         if not isinstance(uses_temp, bool):
             raise ValueError("state.uses_temp_ must be true or false")
         scaling = state.get("scaling_")
-        if not isinstance(scaling, dict) or any(not _positive(scaling.get(k)) for k in _SCALES):
+        if not isinstance(scaling, dict) or any(
+            not (_finite(scaling.get(k)) and scaling[k] > 0) for k in _SCALES
+        ):
             raise ValueError(f"state.scaling_ must give {', '.join(_SCALES)}, positive numbers")
         if not _finite(scaling.get("temp_centre")):
             raise ValueError("state.scaling_.temp_centre must be a finite number")
@@ -665,10 +660,6 @@ _SCALES = ("rate", "accel", "temp_half")
 
 def _finite(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and bool(np.isfinite(value))
-
-
-def _positive(value: Any) -> bool:
-    return _finite(value) and value > 0
 
 
 def _check_terms(chosen: Any, uses_temp: bool) -> None:

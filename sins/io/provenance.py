@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,7 +83,7 @@ def read_provenance(path: str | os.PathLike[str]) -> Provenance:
 def _nanoseconds(value: str) -> int | None:
     """A ``time origin`` line's value, ``N ns``, as N (None where it is not a whole number of ns)."""
     number, _, unit = value.strip().partition(" ")
-    if unit.strip() != "ns" or not number.lstrip("-").isdigit() or len(number) > 25:
+    if unit.strip() != "ns" or re.fullmatch(r"-?[0-9]{1,25}", number) is None:
         return None
     return int(number)
 
