@@ -17,8 +17,6 @@ by ``tools/euroc_benchmark.py``'s commands. Prints the open-loop table.
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -27,8 +25,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
-
-SHARED = Path(os.environ.get("SINS_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
 
 
 def aliased(source: Path, folder: Path) -> None:
@@ -39,22 +35,9 @@ def aliased(source: Path, folder: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--strategies", nargs="+", default=["regression"])
-    p.add_argument("--train", nargs="+", default=euroc_benchmark.TRAIN, help="the sequences fitted on")
-    p.add_argument("--judge", nargs="+", default=euroc_benchmark.JUDGE, help="the sequences judged")
-    p.add_argument("--json", type=Path)
-    p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
-    args = p.parse_args(argv)
-
-    def write(folder: Path) -> None:
-        for name in [*args.train, *args.judge]:
-            aliased(SHARED / "euroc" / f"{name}.npz", folder)
-
-    return euroc_benchmark.run_on_unit(
-        write, "euroc_aliased", args.train, args.judge, args.strategies,
-        json_out=args.json, keep=args.keep,
-    )  # fmt: skip
+    return euroc_benchmark.run_on_euroc_as(
+        argv, __doc__.split("\n\n")[0], "euroc_aliased", aliased, ["regression"]
+    )
 
 
 if __name__ == "__main__":

@@ -3,8 +3,8 @@ ADIS16448 with each sequence's own constant gyro bias taken out.
 
 Usage::
 
-    .venv/bin/python tools/calibrated_unit.py [--strategies regression bias_only ...] [--json OUT.json]
-        [--keep DIR]
+    .venv/bin/python tools/calibrated_unit.py [--strategies regression bias_only ...] [--train NAME ...]
+        [--judge NAME ...] [--json OUT.json] [--keep DIR]
 
 Some units are read already calibrated: their maker or the dataset's converter takes the bias out at
 every power-up (a phone's operating system, a dataset's "calibrated" readings). A model fitted on a few
@@ -18,8 +18,6 @@ is worse than the raw readings.
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -29,8 +27,6 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
-
-SHARED = Path(os.environ.get("SINS_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
 
 
 def calibrated(source: Path, folder: Path) -> np.ndarray:
@@ -47,20 +43,9 @@ def calibrated(source: Path, folder: Path) -> np.ndarray:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--strategies", nargs="+", default=euroc_benchmark.STRATEGIES)
-    p.add_argument("--json", type=Path)
-    p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
-    args = p.parse_args(argv)
-
-    def write(folder: Path) -> None:
-        for name in [*euroc_benchmark.TRAIN, *euroc_benchmark.JUDGE]:
-            calibrated(SHARED / "euroc" / f"{name}.npz", folder)
-
-    return euroc_benchmark.run_on_unit(
-        write, "euroc_calibrated", euroc_benchmark.TRAIN, euroc_benchmark.JUDGE, args.strategies,
-        json_out=args.json, keep=args.keep,
-    )  # fmt: skip
+    return euroc_benchmark.run_on_euroc_as(
+        argv, __doc__.split("\n\n")[0], "euroc_calibrated", calibrated, euroc_benchmark.STRATEGIES
+    )
 
 
 if __name__ == "__main__":

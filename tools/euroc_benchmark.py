@@ -151,6 +151,32 @@ def run_on_unit(
             shutil.rmtree(root, ignore_errors=True)
 
 
+def run_on_euroc_as(
+    argv: list[str] | None, description: str, folder: str, rewrite: Callable[[Path, Path], object],
+    strategies: list[str],
+) -> int:  # fmt: skip
+    """The benchmark on EuRoC's sequences each written anew by ``rewrite(source, folder)`` (the ``.npz``
+    ``source`` into ``folder`` under its name): a command line of ``--strategies`` (default
+    ``strategies``), ``--train``, ``--judge`` (the published split), ``--json`` and ``--keep``, for the
+    tools that make another unit of EuRoC's (read calibrated, aliased)."""
+    p = argparse.ArgumentParser(description=description)
+    p.add_argument("--strategies", nargs="+", default=strategies)
+    p.add_argument("--train", nargs="+", default=TRAIN, help="the sequences fitted on")
+    p.add_argument("--judge", nargs="+", default=JUDGE, help="the sequences judged")
+    p.add_argument("--json", type=Path)
+    p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
+    args = p.parse_args(argv)
+    shared = Path(os.environ.get("SINS_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+
+    def write(out: Path) -> None:
+        for name in [*args.train, *args.judge]:
+            rewrite(shared / "euroc" / f"{name}.npz", out)
+
+    return run_on_unit(
+        write, folder, args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep
+    )
+
+
 def _table(results: dict[str, Any], strategies: list[str], published: bool) -> None:
     cols = ["none", *strategies]
     head = ["sequence", *cols] + (["Brossard 2020", "raw (SOURCE.md)"] if published else [])
