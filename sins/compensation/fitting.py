@@ -383,13 +383,10 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
     from sins.compensation import identifiability
 
     bounds = identifiability.class_bounds(grade)
-    keys = [*identifiability.bias_names("gyro"), *identifiability.bias_names("accel")]
     out = []
-    for name, *parts in zip(
-        names, fit.gyro_bias, fit.accel_bias, fit.gyro_bias_se, fit.accel_bias_se, strict=True
-    ):
-        values = np.concatenate(parts[:2]).tolist(), np.concatenate(parts[2:]).tolist()
-        loose = identifiability.beyond_spread(dict(zip(keys, zip(*values, strict=True), strict=True)), bounds)
+    for r, name in enumerate(names):
+        own = identifiability.interval_values(fit.for_recording(r), biases_only=True)
+        loose = identifiability.beyond_spread(own, bounds)
         if loose:
             out.append(
                 f"{name}: its own bias is determined only beyond a {grade} unit's spread "

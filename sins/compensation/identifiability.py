@@ -588,14 +588,14 @@ def review(
     return Review(bounds.grade, held)
 
 
-def beyond_spread(values: Mapping[str, tuple[float, float]], bounds: ClassBounds) -> list[str]:
-    """The coefficients of ``values`` (``name: (value, standard error)``, SI) whose standard error
+def beyond_spread(values: Mapping[str, tuple[float, float | None]], bounds: ClassBounds) -> list[str]:
+    """The coefficients of ``values`` (``name: (value, standard error or None)``, SI) whose standard error
     exceeds the class's spread, each as ``NAME ± SE`` in its datasheet unit: what :func:`review`
     refuses in a model, said of a recording's own biases, which are not the model's."""
     return [
         f"{_pretty(n)} ± {_shown(n, se)} against {_shown(n, bounds.limit(n))}"
         for n, (_, se) in values.items()
-        if se > bounds.limit(n)
+        if se is not None and se > bounds.limit(n)
     ]
 
 

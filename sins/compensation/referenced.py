@@ -235,14 +235,14 @@ def _several_determined(
             break
         holds.reasons.update(more)
     review = identifiability.review(values, holds.bounds, where, holds.reasons)
-    names = [*identifiability.bias_names("gyro"), *identifiability.bias_names("accel")]
     for r, source in enumerate(fit_all.sources):
-        own = np.concatenate([fit_all.gyro_bias[r], fit_all.accel_bias[r]])
+        own = identifiability.interval_values(fit_all.for_recording(r), biases_only=True)
         # A recording's own bias is judged by its value alone (finite, within the class's bound): it is
         # not the model's, and the residuals behind its standard error are behind the shared terms' and
         # the mean bias's too, which are judged (sins fit prints it, and says where it is loose).
-        biases = {n: (float(v), None) for n, v in zip(names, own, strict=True)}
-        identifiability.review(biases, holds.bounds, f"{where}: {source}")
+        identifiability.review(
+            {n: (v, None) for n, (v, _) in own.items()}, holds.bounds, f"{where}: {source}"
+        )
     return fit_all, review
 
 
