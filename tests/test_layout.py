@@ -7,6 +7,7 @@ it does not know), so the architecture is decided when a file is added, not disc
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -67,10 +68,16 @@ def _key(module: str) -> str:
     return ""
 
 
+@functools.cache  # by the text, not the path: the rules' own tests rewrite one file
+def _parsed(text: str) -> ast.Module:
+    """A module's syntax tree, parsed once for every test that reads it (none changes it)."""
+    return ast.parse(text)
+
+
 def _imports(module: str, path: Path) -> list[tuple[int, str]]:
     """Every imported module name, at any depth (imports inside functions count)."""
     found = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_parsed(path.read_text())):
         if isinstance(node, ast.Import):
             found += [(node.lineno, a.name) for a in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module:
@@ -234,7 +241,7 @@ LONG_ON_PURPOSE = {
 def _long_functions(module: str, path: Path) -> list[str]:
     """Functions of ``module`` whose body, docstring aside, is longer than :data:`SCREEN_LINES`."""
     found = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_parsed(path.read_text())):
         if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
             continue
         body = node.body

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import functools
 import io
 import re
 from collections.abc import Iterator
@@ -155,9 +156,16 @@ PACKAGE = Path(__file__).resolve().parents[1] / "sins"
 OTHER_WORDS = {"bias", "g_sensitivity"}
 
 
-def _strings_and_names(path: Path) -> tuple[list[str], set[str]]:
+def _strings_and_names(path: Path) -> tuple[tuple[str, ...], frozenset[str]]:
     """The string constants of a module's code (docstrings aside) and the names it uses (imports aside)."""
-    tree = ast.parse(path.read_text())
+    return _strings_and_names_of(path.read_text())
+
+
+# Each effect's case reads every module: each text is parsed once, keyed by the text, not the path (a
+# rule's own test rewrites one file).
+@functools.cache
+def _strings_and_names_of(text: str) -> tuple[tuple[str, ...], frozenset[str]]:
+    tree = ast.parse(text)
     docs = {
         id(node.value)
         for node in ast.walk(tree)
@@ -165,14 +173,14 @@ def _strings_and_names(path: Path) -> tuple[list[str], set[str]]:
         and isinstance(node.value, ast.Constant)
         and isinstance(node.value.value, str)
     }
-    strings = [
+    strings = tuple(
         n.value
         for n in ast.walk(tree)
         if isinstance(n, ast.Constant) and isinstance(n.value, str) and id(n) not in docs
-    ]
+    )
     names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
     names |= {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
-    return strings, names
+    return strings, frozenset(names)
 
 
 def _namers(cls: type[vocabulary.Effect], modules: dict[str, Path]) -> list[str]:
