@@ -29,9 +29,9 @@ run: $(STAMP)
 # networks on rigs, one worker each (the same wall time as two workers, and no worker runs two of them),
 # then the other files in three parts by name (test_gap.py, the longest file, takes one worker of the
 # g-r part while the other runs the rest of it). The a-f part runs three workers on the two cores: its
-# campaigns and examples wait on processes they start (dask's workers importing, a subprocess's
-# interpreter), and a third worker fills the core a waiting one leaves (measured on this tree: 246 s
-# against 278 s with two; the g-r part gains nothing from a third, 218 s against 210 s).
+# campaigns and examples wait on processes they start (dask's workers, a subprocess's interpreter), and
+# a third worker fills the core a waiting one leaves (the two cores 194 % busy against 187 % with two
+# workers, run after run on one tree; the g-r part was busier with two, 193 % against 182 %).
 # Every session runs even when one fails; make fails after.
 # Within a session the longest files go first (LONG_TESTS, longest first, from --durations), dealt
 # in that order (--no-loadscope-reorder: xdist's own order is by the number of tests in a file, which
