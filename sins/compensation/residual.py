@@ -292,21 +292,21 @@ class ResidualStrategy(Strategy):
         block = segment(scaled["gyro"][:, :6], data.t)
         fold, n_folds = self._fold_of(block, kept, data.source)
         self.blocks_, self.cv_folds_ = int(block[-1]) + 1, n_folds
-        # Each fold's regression, refitted without the fold (a given base kept): the held-back residuals
-        # the terms and the learners are chosen on.
+        # The held-back residuals the terms and the learners are chosen on: a given base's, made once.
+        given = None if base is None else self._targets(base, data)
         folds: list[tuple[int, NDArray[np.bool_], Array]] = []
         for k in range(n_folds):
             train = fold != k
-            try:
+            try:  # each fold's regression, refitted without the fold, where no base is given
                 fold_base = base if base is not None else Regression().fit(data.rows(np.flatnonzero(train)))
             except ValueError:
                 continue  # this fold's training part cannot determine the seed model
-            folds.append((k, train, self._targets(fold_base, data)))
+            folds.append((k, train, self._targets(fold_base, data) if given is None else given))
         # Physics first: the terms least squares carries, each channel's chosen on the held-back blocks.
         groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
         if self.physics:
             groups = terms.choose(x_terms, [(train, t) for _, train, t in folds], block, self.guard_z)
-        targets = self._targets(whole, data)
+        targets = self._targets(whole, data) if given is None else given
         self.terms_ = {
             ch: {"groups": list(g), "coef": terms.fit(terms.design(g, c, x_terms), targets[:, c]).tolist()}
             for c, (ch, g) in enumerate(zip(CHANNELS, groups, strict=True))
