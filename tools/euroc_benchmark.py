@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from sins.cli import main
+from sins.io.datasets import data_root
 
 TRAIN = ["MH_01_easy", "MH_03_medium", "MH_05_difficult", "V1_02_medium", "V2_01_easy", "V2_03_difficult"]
 JUDGE = ["MH_02_easy", "MH_04_difficult", "V1_01_easy", "V1_03_difficult", "V2_02_medium"]
@@ -166,7 +167,7 @@ def run_on_euroc_as(
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
-    shared = Path(os.environ.get("SINS_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+    shared = data_root()  # the library's rule: SINS_DATA, else ../shared/data
 
     def write(out: Path) -> None:
         for name in [*args.train, *args.judge]:
