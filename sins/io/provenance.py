@@ -51,11 +51,6 @@ class Provenance:
     corrections: int = 0
     t0_ns: int | None = None
 
-    def comment(self) -> str:
-        """The lines as a writer's comment text (without ``# ``), one per key present."""
-        lines = [f"{SENSOR_KEY}: {self.sensor}"] if self.sensor else []
-        return "\n".join(lines)
-
 
 def read_provenance(path: str | os.PathLike[str]) -> Provenance:
     """The ``sensor``, ``corrected by`` and ``time origin`` comment lines of a CSV (before its header);
