@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -245,13 +246,17 @@ def test_a_fit_on_several_still_recordings_keeps_their_biases_alone(tmp_path: Pa
     as a single recording's are; before, the model was written with 6.5e10 ppm. Each recording keeps its
     own biases. Each alone is fitted for its biases (what it determines)."""
     a, b = _still_npz(tmp_path / "a.npz", 0), _still_npz(tmp_path / "b.npz", 1)
-    rc, _, err = run_cli(
+    rc, out, err = run_cli(
         ["fit", str(a), str(b), "--strategy", "regression", "--out", str(tmp_path / "m.json"),
          "--json", str(tmp_path / "fit.json")]
     )  # fmt: skip
     assert rc == 0, err
     doc = json.loads((tmp_path / "fit.json").read_text())
     assert {"gyro.scale.x", "gyro.scale.y", "gyro.scale.z"} <= set(doc["held"]), doc["held"]
+    # Printed and written as one recording's fit gives a held coefficient (before: a bare "0", se NaN).
+    scale = _coefficients(doc)["gyro", "scale", "x"]
+    assert scale["value"] == 0.0 and scale["se"] is None, scale
+    assert re.search(r"gyro +scale +x +0 \(held\)", out), out
     state = json.loads((tmp_path / "m.json").read_text())["state"]
     np.testing.assert_array_equal(state["B_"], np.zeros((3, 3)))
     own = [r["gyro_bias_deg_h"] for r in doc["recording_biases"]]

@@ -268,13 +268,14 @@ def _gyro_rounds(
 def _solve_free(
     x: Array, y: Array, joined: SimpleNamespace, robust: bool, free: NDArray[np.bool_]
 ) -> tuple[Array, Array, Array]:
-    """:func:`~sins.compensation.interval_fit.solve` on the ``free`` columns alone: the step zero and
-    the covariance NaN on the others."""
+    """:func:`~sins.compensation.interval_fit.solve` on the ``free`` columns alone: a held one gets no
+    step and an infinite variance, as one recording's fit gives it (``sins fit`` prints it ``0 (held)``)."""
     step_free, cov_free, res, _ = solve(x[:, :, free], y, joined, robust)  # type: ignore[arg-type]
     step = np.zeros(len(free))
     step[free] = step_free
-    cov = np.full((len(free), len(free)), np.nan)
+    cov = np.zeros((len(free), len(free)))
     cov[np.ix_(free, free)] = cov_free
+    cov[~free, ~free] = np.inf
     return step, cov, res
 
 
