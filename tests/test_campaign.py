@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -339,6 +340,20 @@ def test_a_worker_running_a_task_imports_neither_the_engine_nor_pyarrow() -> Non
         "import sys, sins.campaign.unit; "
         "print(sorted(m for m in ('pyarrow', 'dask', 'distributed', 'sins.campaign.engine', 'torch') "
         "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_a_worker_running_a_unit_without_gnss_loads_no_filter_and_no_scipy_signal_or_stats(tmp_path):
+    # Each spawned worker pays its imports before its first unit: scipy.signal (for one recursion) and
+    # filterpy with scipy.stats (for a check of aided scenarios) cost ~0.5 s of a 2 s first unit.
+    spec = campaign.load(_campaign(tmp_path, count=1))
+    (tmp_path / "spec.pkl").write_bytes(pickle.dumps(spec))  # what a worker receives
+    code = (
+        "import pickle, sys, sins.campaign.unit as u; "
+        f"u.run_unit(pickle.loads(open({str(tmp_path / 'spec.pkl')!r}, 'rb').read()), 0); "
+        "print(sorted(m for m in ('filterpy', 'scipy.signal', 'scipy.stats', 'torch') if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

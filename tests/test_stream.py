@@ -268,6 +268,7 @@ def test_the_compiled_recursions_equal_the_array_code_they_replace():
     # the same operations in the same order, so equal, not close.
     from scipy.signal import lfilter
 
+    from sins.imu.numerics import ar1
     from sins.imu.stream import _gauss_markov_kernel, _reconstruct_own, _running_sum
 
     rng = np.random.default_rng(SEED)
@@ -287,6 +288,9 @@ def test_the_compiled_recursions_equal_the_array_code_they_replace():
     out = np.empty((n, 3))
     out[0] = start
     _gauss_markov_kernel(np.zeros((0, 3)), sigma, xi, a, out)
+    np.testing.assert_array_equal(out, expected)
+    out[1:] = 0.0  # the whole-array path's recursion (sins.imu.numerics), fed the same drive
+    ar1(a[None, :], drive, out, uniform=True)
     np.testing.assert_array_equal(out, expected)
     # Irregular samples: each interval's own coefficient, step by step.
     drive = sigma * np.sqrt(1.0 - phi * phi) * xi

@@ -15,6 +15,9 @@ Then, per command, what its handler imports before its work (:data:`WORK`), time
 interpreters (median), and which heavy libraries came in with it: every command, every dask worker of a
 campaign and every test that runs a command as a process pays these first, and for a small recording
 they are most of the command's time. Each heavy library should come in only where it is used.
+
+Last, a campaign worker's first unit in fresh interpreters (import, and one unit of a one-unit campaign
+from its pickled description), and which heavy libraries its work brought.
 """
 
 from __future__ import annotations
@@ -40,6 +43,27 @@ WORK = {
     "campaign worker": ["sins.campaign.unit"],
 }
 WORK_HEAVY = ("torch", "matplotlib", "pandas", "scipy.signal", "scipy.stats", "scipy.interpolate")
+#: A campaign of one tactical unit on the 5 min drive, fitted on the 24-position rig: the unit a worker runs
+#: first (:func:`_first_unit`).
+UNIT_CAMPAIGN = """name = "startup"
+[units]
+imu = "tactical"
+count = 1
+first_seed = 5
+[compensation]
+rig = "24pos_ratetable"
+strategies = ["none", "regression"]
+[[scenario]]
+file = "car_drive_5min"
+"""
+_UNIT_PROBE = """
+import json, pickle, sys, time
+wall, cpu = time.perf_counter(), time.process_time()
+import sins.campaign.unit as unit
+unit.run_unit(pickle.loads(open({spec!r}, "rb").read()), 0)
+print(json.dumps([time.perf_counter() - wall, time.process_time() - cpu,
+                  [m for m in {heavy!r} if m in sys.modules]]))
+"""
 _PROBE = """
 import json, sys, time
 start = time.perf_counter()
@@ -85,6 +109,30 @@ def _work(modules: list[str], repeat: int) -> tuple[list[float], list[str]]:
     return times, brought
 
 
+def _first_unit(repeat: int) -> tuple[list[float], list[float], list[str]]:
+    """Wall and CPU seconds of a fresh interpreter that imports the worker's task module and runs one unit
+    of :data:`UNIT_CAMPAIGN` from its pickled description (what a dask worker receives), and the heavy
+    libraries (:data:`WORK_HEAVY`, filterpy) loaded by then; one warm-up run first (numba's cache)."""
+    import pickle
+    import tempfile
+
+    from sins import campaign
+
+    with tempfile.TemporaryDirectory() as tmp:
+        toml, spec = Path(tmp) / "c.toml", Path(tmp) / "spec.pkl"
+        toml.write_text(UNIT_CAMPAIGN)
+        spec.write_bytes(pickle.dumps(campaign.load(toml)))
+        code = _UNIT_PROBE.format(spec=str(spec), heavy=(*WORK_HEAVY, "filterpy"))
+        walls, cpus, brought = [], [], []
+        for i in range(repeat + 1):
+            done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+            wall, cpu, brought = json.loads(done.stdout.splitlines()[-1])
+            if i:
+                walls.append(wall)
+                cpus.append(cpu)
+    return walls, cpus, brought
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=9)
@@ -109,6 +157,12 @@ def main() -> None:
             f"(spread {min(times):.3f}-{max(times):.3f} s)"
             f"   brings {', '.join(brought) or 'none of ' + ', '.join(WORK_HEAVY)}"
         )
+    walls, cpus, brought = _first_unit(args.repeat)
+    print(
+        f"\na campaign worker's first unit (import and one unit, fresh interpreters): median wall "
+        f"{statistics.median(walls):.2f} s, CPU {statistics.median(cpus):.2f} s "
+        f"(spread {min(cpus):.2f}-{max(cpus):.2f} s); loaded by then: {', '.join(brought) or 'none of them'}"
+    )
 
 
 if __name__ == "__main__":

@@ -17,17 +17,26 @@ Array = NDArray[np.float64]
 def ar1(phi: Array, drive: Array, out: Array, uniform: bool) -> None:
     """``out[k] = phi[k-1] out[k-1] + drive[k-1]`` (in place), vectorised over channels; ``uniform``:
     ``phi`` is one row (1, 3), every interval's."""
-    from scipy.signal import lfilter
-
     if len(phi) == 0:
         return
-    if uniform:  # one coefficient: a linear filter does it in C
-        for i in range(3):
-            a = float(phi[0, i])
-            out[1:, i], _ = lfilter([1.0], [1.0, -a], drive[:, i], zi=[a * out[0, i]])
+    if uniform:
+        _ar1_uniform(np.ascontiguousarray(phi[0], dtype=float), drive, out)
         return
     for k in range(1, len(out)):
         out[k] = phi[k - 1] * out[k - 1] + drive[k - 1]
+
+
+@numba.njit(cache=True, nogil=True)
+def _ar1_uniform(a: Array, drive: Array, out: Array) -> None:  # pragma: no cover  (compiled)
+    """``out[k] = a out[k-1] + drive[k-1]`` per channel, one coefficient a channel: the arithmetic of
+    ``scipy.signal.lfilter([1], [1, -a])`` to the last bit (``tests/test_stream.py``), without importing
+    scipy.signal (about 1 s in a fresh process, with scipy.stats, which every campaign worker and every
+    corrupted ``sins run`` paid for this one recursion)."""
+    for i in range(3):
+        v, c = out[0, i], a[i]
+        for k in range(1, out.shape[0]):
+            v = c * v + drive[k - 1, i]
+            out[k, i] = v
 
 
 def uniform_steps(t: Array) -> bool:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 Array = NDArray[np.float64]
 
@@ -52,6 +51,8 @@ def filled_spans(t_ref: Array, q_nb: Array, t: Array, w: Array) -> tuple[tuple[f
     tuple
         ``(first, last)`` s of each span's inner epochs: those the interpolation made, its ends left out.
     """
+    from scipy.spatial.transform import Rotation  # here: reading a recording need not import scipy.spatial
+
     if len(t_ref) < 4 or len(w) < 3:
         return ()
     q = Rotation.from_quat(q_nb)

@@ -386,8 +386,6 @@ def check_runnable(sc: Scenario, grade: str | None = None) -> None:
     SinsInputError
         naming the scenario and the key, as :func:`run_scenario` would.
     """
-    from sins.aiding import alignment, ekf, gnss, policy
-
     where = str(sc.source or sc.name)
     motion = scenario.build_motion(sc)
     if scenario.sample_count(sc, motion) < 1:
@@ -397,6 +395,10 @@ def check_runnable(sc: Scenario, grade: str | None = None) -> None:
     a = sc.aiding
     if a is None:
         return
+    # Here, not above: the filter's module imports filterpy and with it scipy.stats (~0.5 s), which a
+    # campaign without [gnss] never needs.
+    from sins.aiding import alignment, ekf, gnss, policy
+
     truth, ideal = simulate(sc)
     config = ekf.FilterConfig.for_grade(a.filter_grade or grade or "navigation")
     plan = policy.plan_alignment(a, truth, config, where)

@@ -20,7 +20,6 @@ from typing import Any, Literal
 # import, which every command paid for any recording (tools/bench_startup.py).
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation, RotationSpline
 
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData, NavSeries
@@ -72,6 +71,8 @@ class PsinsAlignment:
     @property
     def rotvec_deg(self) -> Array:
         """The mounting rotation MEMS ← FOG as a rotation vector, degrees."""
+        from scipy.spatial.transform import Rotation
+
         return np.degrees(Rotation.from_matrix(self.c_mems_fog).as_rotvec())
 
 
@@ -211,6 +212,7 @@ def _path(root: str | os.PathLike[str] | None) -> Path:
 def _load(path: Path) -> tuple[_Mems, NavSeries]:
     """The two tables, checked, in the package's axes and units (the FOG-INS on its own clock)."""
     import scipy.io
+    from scipy.spatial.transform import Rotation
 
     try:
         raw = path.read_bytes()
@@ -308,6 +310,7 @@ class _Reference:
 
     def __init__(self, nav: NavSeries) -> None:
         from scipy.interpolate import CubicSpline
+        from scipy.spatial.transform import Rotation, RotationSpline
 
         self.nav = nav
         self.attitude = RotationSpline(nav.t, Rotation.from_quat(nav.q_nb))
@@ -411,6 +414,8 @@ def _estimate_alignment(mems: _Mems, ref: _Reference, path: Path) -> PsinsAlignm
     vibration above 5 Hz, which the reference lacks, would flatten the correlation peak and bias it
     (the figures are in ``docs/guide/datasets.md``).
     """
+    from scipy.spatial.transform import Rotation
+
     t_fog = ref.nav.t
     _, omega_ref, f_ref = ref.interval_means()
     # The intervals the MEMS covers at every offset tried.
