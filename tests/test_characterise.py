@@ -359,7 +359,7 @@ def test_cli_refusals(tmp_path, capsys):
     )
     out = tmp_path / "unit.toml"
     for argv, fragment in (
-        (["characterise"], "give a RECORDING.csv or --dataset NAME"),
+        (["characterise"], "give a RECORDING or --dataset NAME"),
         (["characterise", str(rec), "--dataset", "ferraris"], "one of them"),
         (["characterise", str(rec), "--out", str(out)], "--static"),
         (["characterise", str(rec), "--static", "--truth", str(rec)], "exclude each other"),

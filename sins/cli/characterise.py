@@ -35,14 +35,12 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
     from sins.runs import pipeline
 
     if (args.recording is None) == (args.dataset is None):
-        raise SinsInputError("characterise: give a RECORDING.csv or --dataset NAME (one of them)")
+        raise SinsInputError("characterise: give a RECORDING or --dataset NAME (one of them)")
     if args.static and args.truth is not None:
         raise SinsInputError("characterise: --static and --truth exclude each other")
     if args.dataset is not None:
         if args.truth is not None or args.static:
-            raise SinsInputError(
-                "characterise: --truth and --static go with a RECORDING.csv, not with --dataset"
-            )
+            raise SinsInputError("characterise: --truth and --static go with a RECORDING, not with --dataset")
         inputs = read_recording(args, None, args.dataset).reference_inputs()
         return reference.reference_residual(inputs[0], args.dataset)
     rec = read_recording(args, args.recording, None, args.truth)
@@ -179,7 +177,7 @@ def add(sub: Subparsers) -> None:
     p = sub.add_parser(
         "characterise", help="Allan analysis of a recording: IEEE noise terms, an IMU file, the closing check"
     )
-    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING.csv")
+    p.add_argument("recording", type=Path, nargs="?", metavar="RECORDING")
     add_dataset(p)
     p.add_argument("--static", action="store_true", help="the unit stood still: its readings as they are")
     p.add_argument(
@@ -190,7 +188,9 @@ def add(sub: Subparsers) -> None:
         "--json", type=Path, metavar="OUT.json", help="write the curves, terms and check (SI units)"
     )
     p.add_argument("--rerun", type=Path, metavar="OUT.rrd", help="log the real and simulated Allan curves")
-    p.add_argument("--seed", type=seed, default=0, help="the closing simulation's seed (default 0)")
+    p.add_argument(
+        "--seed", type=seed, default=0, metavar="N", help="the closing simulation's seed (default 0)"
+    )
     add_plot(p, "the real and simulated Allan curves")
     add_recording_options(p)
     p.set_defaults(func=_cmd_characterise)

@@ -218,7 +218,7 @@ def add(sub: Subparsers) -> None:
         "--interval-s", type=positive, default=1.0, metavar="S",
         help="with the interval statistic: the interval between the reference epochs compared (default 1)",
     )  # fmt: skip
-    p.add_argument("--model", metavar="MODEL.toml", help="the simulation's IMU model (default: the baseline)")
+    p.add_argument("--model", metavar="IMU.toml", help="the simulation's IMU model (default: the baseline)")
     p.add_argument(
         "--holdout", type=fraction, default=0.3, metavar="FRACTION",
         help="withhold the last FRACTION of every phase (default 0.3); every verdict is judged on it",
@@ -233,7 +233,7 @@ def add(sub: Subparsers) -> None:
         help="log the residuals before and after, their Allan deviations and the excess by input quartile "
         "(several recordings: a tab each)",
     )  # fmt: skip
-    p.add_argument("--top", type=int, default=8, help="how many candidates to print (default 8)")
+    p.add_argument("--top", type=int, default=8, metavar="N", help="how many candidates to print (default 8)")
     add_recording_options(p)
     p.set_defaults(func=_cmd_gap)
 

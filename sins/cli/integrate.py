@@ -211,7 +211,11 @@ def add(sub: Subparsers) -> None:
         "without a truth)",
     )  # fmt: skip
     p.add_argument(
-        "--vertical-tau-s", type=positive, default=10.0, help="time constant of 'damp', s (default 10)"
+        "--vertical-tau-s",
+        type=positive,
+        default=10.0,
+        metavar="S",
+        help="time constant of 'damp', s (default 10)",
     )
     g = p.add_argument_group(
         "without a reference",

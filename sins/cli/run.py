@@ -188,7 +188,9 @@ def add(sub: Subparsers) -> None:
         "--serve", action="store_true",
         help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
     )  # fmt: skip
-    p.add_argument("--web-port", type=int, default=9090, help="port of --serve's web viewer (default 9090)")
+    p.add_argument(
+        "--web-port", type=int, default=9090, metavar="N", help="port of --serve's web viewer (default 9090)"
+    )
     add_plot(p, "the errors against time, per strategy")
     p.set_defaults(func=_cmd_run)
 
