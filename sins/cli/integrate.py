@@ -210,13 +210,8 @@ def add(sub: Subparsers) -> None:
         help="vertical channel: free inertial, held to, or damped towards the truth height (the start's "
         "without a truth)",
     )  # fmt: skip
-    p.add_argument(
-        "--vertical-tau-s",
-        type=positive,
-        default=10.0,
-        metavar="S",
-        help="time constant of 'damp', s (default 10)",
-    )
+    p.add_argument("--vertical-tau-s", type=positive, default=10.0, metavar="S",
+                   help="time constant of 'damp', s (default 10)")  # fmt: skip
     g = p.add_argument_group(
         "without a reference",
         "start a unit at rest at --origin LAT,LON,H (default: a bag's first fix) in a given attitude, or "
