@@ -109,8 +109,10 @@ def test_a_network_larger_than_fit_can_make_is_refused_before_torch_is_imported(
     )
     *messages, torch_imported = out.stdout.strip().splitlines()
     assert len(messages) == len(paths)
-    for path, message in zip(paths, messages, strict=True):
-        assert str(path) in message and "hidden must be 1 to 4 layer sizes" in message, message
+    for path, message, h in zip(paths, messages, hidden, strict=True):
+        # A string is not a list at all: refused by its kind, before the constructor's bounds.
+        said = "params.hidden is '32': expected a list" if h == "32" else "hidden must be 1 to 4 layer sizes"
+        assert str(path) in message and said in message, message
     assert torch_imported == "False"
 
 
@@ -146,6 +148,13 @@ MAP = ("state", "learners_", "gyro", "maps", 0)
         ("mlp", lambda d: _set(d, ["x"] * 6, "state", "used_"), "used_ must be 6 booleans"),
         ("mlp", lambda d: _set(d, {"gyro.x": {"groups": ["magic"], "coef": []}}, "state", "terms_"),
          "groups must be among"),
+        # Kinds numpy would convert: a switch or a string read as a number, a number as a switch.
+        ("regression", lambda d: _set(d, True, "state", "B0_", 0), "B0_ holds True, not a number"),
+        ("regression", lambda d: _set(d, "0.1", "state", "B0_", 0), "B0_ holds '0.1', not a number"),
+        ("regression", lambda d: _set(d, "yes", "params", "robust"), "params.robust is 'yes': expected true"),
+        ("regression", lambda d: _set(d, 1, "params", "foo"), "params.foo is not a parameter of regression"),
+        ("regression", lambda d: _set(d, {"rate_hz": "200"}, "state", "fitted_on_"), "rate_hz is '200'"),
+        ("regression", lambda d: _set(d, {"frame": "xyz"}, "state", "fitted_on_"), "frame is 'xyz'"),
     ],
 )  # fmt: skip
 def test_a_model_of_the_wrong_shape_is_one_line_naming_the_key(

@@ -394,6 +394,12 @@ def test_a_model_fitted_at_another_rate_is_refused(
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err, err
     assert "slow.npz" in err and "100 Hz" in err and "50 Hz" in err, err
+    # The rate written as a whole number (as a hand or another tool may write it) is judged the same.
+    doc = json.loads(model.read_text())
+    doc["state"]["fitted_on_"]["rate_hz"] = round(doc["state"]["fitted_on_"]["rate_hz"])
+    model.write_text(json.dumps(doc))
+    assert main(["evaluate", str(model), str(tmp_path / "u" / "slow.npz")]) == 2
+    assert "50 Hz" in capsys.readouterr().err
 
 
 def _exit(code: int) -> None:

@@ -159,6 +159,8 @@ class Strategy(ABC):
         odd = [k for k in state if not k.endswith("_")]
         if odd:
             raise ValueError(f"state.{odd[0]} is not a fitted attribute")
+        if "fitted_on_" in state:
+            _check_fitted_on(state["fitted_on_"])
         if "unit_bias_" in state:
             from sins.compensation import unit_bias
 
@@ -195,7 +197,11 @@ def state_array(
 
 def checked_array(value: Any, shape: tuple[int | None, ...], where: str) -> Array:
     """``value`` as a float array of ``shape`` (``None``: any size on that axis), every value finite;
-    else ``ValueError`` naming ``where``. Made of a file's own numbers, so no larger than the file."""
+    else ``ValueError`` naming ``where``. Made of a file's own numbers, so no larger than the file: a
+    ``true`` or a ``"0.1"`` in it is refused, not read as 1 or 0.1 (numpy would convert both)."""
+    odd = _not_a_number(value)
+    if odd is not None:
+        raise ValueError(f"{where} holds {odd!r}, not a number")
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError, OverflowError):
@@ -213,6 +219,50 @@ def checked_array(value: Any, shape: tuple[int | None, ...], where: str) -> Arra
     if not np.isfinite(array).all():
         raise ValueError(f"{where} holds a number that is not finite")
     return array
+
+
+def _not_a_number(value: Any) -> Any:
+    """The first boolean or string in ``value`` (nested lists walked), else None."""
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, list | tuple):
+            stack.extend(item)
+        elif isinstance(item, bool | str | bytes):
+            return item
+    return None
+
+
+#: The most a recording's rate may be, Hz, in a model file's ``fitted_on_`` (the readers' own bound).
+_MAX_RATE_HZ = 1e6
+
+
+def _check_fitted_on(fitted: Any) -> None:
+    """Refuse a ``fitted_on_`` that would make :func:`~sins.compensation.referenced.check_fitted_on` pass
+    what it exists to refuse: not an object, a rate that is not a positive finite number (a rig's is
+    null), axes that are not three letters of a right-handed frame, a unit's name that is not text."""
+    if not isinstance(fitted, dict):
+        raise ValueError("state.fitted_on_ is not an object")
+    rate = fitted.get("rate_hz")
+    if rate is not None and (
+        isinstance(rate, bool) or not isinstance(rate, int | float) or not 0.0 < rate <= _MAX_RATE_HZ
+    ):
+        raise ValueError(f"state.fitted_on_.rate_hz is {rate!r}: a rate in Hz (0 to 1e6), or null for a rig")
+    frame = fitted.get("frame")
+    if frame is not None:
+        from sins.io.axes import frame_matrix
+
+        try:
+            if not isinstance(frame, str):
+                raise SinsInputError("not text")
+            frame_matrix(frame)
+        except SinsInputError:
+            raise ValueError(
+                f"state.fitted_on_.frame is {frame!r}: the letters of a frame, such as frd"
+            ) from None
+    sensor = fitted.get("sensor")
+    if sensor is not None and not isinstance(sensor, str):
+        raise ValueError(f"state.fitted_on_.sensor is {sensor!r}: a unit's name")
 
 
 def _json_param(value: Any) -> Any:

@@ -669,7 +669,7 @@ def check_fitted_on(
     rate = fitted.get("rate_hz")
     t = rec.imu.t if isinstance(rec, ReferencedRecording | Recording) else rec.t
     here = float(1.0 / np.median(np.diff(t)))
-    if isinstance(rate, float) and abs(here - rate) > 0.05 * rate:
+    if isinstance(rate, int | float) and not isinstance(rate, bool) and abs(here - rate) > 0.05 * rate:
         raise SinsInputError(
             f"{where}: the model was fitted on readings at {rate:.6g} Hz, its time offsets in those terms; "
             f"this recording is at {here:.6g} Hz (fit a model on readings at its rate)"

@@ -155,7 +155,11 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     """
     path = Path(path)
     doc = io.read_json_document(path, "model file", FORMAT_NAME)
-    if doc.get("version") != FORMAT_VERSION:
+    if doc.get("version") != FORMAT_VERSION or isinstance(doc.get("version"), bool):
+        if "version" not in doc or not isinstance(doc["version"], int) or isinstance(doc["version"], bool):
+            said = "no" if "version" not in doc else f"{short(doc['version'])} for its"
+            wanted = f"the number {FORMAT_VERSION} in this sins's"
+            raise SinsInputError(f'{path}: malformed model file ({said} "version": {wanted})')
         version, writer = short(doc.get("version")), short(doc.get("sins"))
         raise SinsInputError(
             f"{path}: model file format version {version} (written by sins {writer}); "
@@ -164,11 +168,14 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     name = doc.get("strategy")
     if name not in SAVED_STRATEGIES:
         raise SinsInputError(f"{path}: unknown strategy {short(name)} (known: {', '.join(SAVED_STRATEGIES)})")
-    params, state = doc.get("params", {}), doc.get("state", {})
+    if "state" not in doc:
+        raise SinsInputError(f'{path}: malformed {name} model (no "state": what the fit learned)')
+    params, state = doc.get("params", {}), doc["state"]
     for key, value in (("params", params), ("state", state)):
         if not isinstance(value, dict):
             raise SinsInputError(f'{path}: malformed {name} model ("{key}" is not an object)')
         _check_values(path, name, value, key)
+    _check_params(path, name, params)
     try:
         strategy = strategy_class(name)(**params)  # its parameters' own bounds (a network's size, a map's)
         # The state's shapes and sizes against the strategy's, before any array, network or map is made.
@@ -207,6 +214,55 @@ _PROBE = (
 #: The largest magnitude a number in a model file may have: fitted coefficients, weights, prototypes
 #: and scales are all far smaller; larger ones overflow when a reading is corrected.
 MAX_MODEL_VALUE = 1e12
+
+
+def _check_params(path: Path, name: str, params: dict[str, Any]) -> None:
+    """Refuse a parameter the strategy's constructor does not take, or of another kind than its default
+    (a ``"big"`` for a number, a ``1`` for a switch, a number for a list of layers): the constructors
+    bound their values, not their types, and a string would pass some of them silently."""
+    import inspect
+
+    signature = inspect.signature(strategy_class(name).__init__).parameters
+    known = [
+        k for k, p in signature.items() if k != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+    ]
+    for key, value in params.items():
+        if key not in known:
+            shown = printable(str(key))[:60]
+            raise SinsInputError(
+                f"{path}: malformed {name} model (params.{shown} is not a parameter of {name}; "
+                f"known: {', '.join(known)})"
+            )
+        default = signature[key].default
+        wanted = _kind(default)
+        if wanted and not _is_kind(value, default):
+            raise SinsInputError(
+                f"{path}: malformed {name} model (params.{key} is {short(value)}: expected {wanted})"
+            )
+
+
+def _kind(default: Any) -> str:
+    """What a parameter whose default is ``default`` must be, in words ("" where any value may do)."""
+    if isinstance(default, bool):
+        return "true or false"
+    if isinstance(default, int | float):
+        return "a number"
+    if isinstance(default, str):
+        return "text"
+    if isinstance(default, tuple | list):
+        return "a list"
+    return ""
+
+
+def _is_kind(value: Any, default: Any) -> bool:
+    """Whether ``value`` (from JSON) is of the kind of ``default`` (:func:`_kind`)."""
+    if isinstance(default, bool):
+        return isinstance(value, bool)
+    if isinstance(default, int | float):
+        return isinstance(value, int | float) and not isinstance(value, bool)
+    if isinstance(default, str):
+        return isinstance(value, str)
+    return isinstance(value, list)
 
 
 def _check_values(path: Path, name: str, value: Any, where: str) -> None:
