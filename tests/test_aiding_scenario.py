@@ -60,7 +60,7 @@ def cli_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, dict[str, An
 
 def test_run_reports_the_aided_errors_and_each_outage(cli_run):
     out, doc = cli_run
-    assert "aided by GNSS at 1 Hz (1 outages), filter tuned to the tactical grade" in out
+    assert "aided by GNSS at 1 Hz (1 outage), filter tuned to the tactical grade" in out
     assert "started aligned over the first 60 s (heading from elsewhere)" in out
     assert "100-130 s" in out
     free, aided = doc["strategies"]["none"], doc["aided"]["none"]

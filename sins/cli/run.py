@@ -135,7 +135,8 @@ def _aided_report(
     head = ["strategy"] + [c[0] for c in columns]
     rows = [[name] + [fmt.format(s[key]) for _, key, fmt in columns] for name, s in aided.items()]
     text = [
-        f"\naided by GNSS at {a.rate_hz:g} Hz ({len(a.outages)} outages), filter tuned to the {grade} grade, "
+        f"\naided by GNSS at {a.rate_hz:g} Hz ({len(a.outages)} outage{'' if len(a.outages) == 1 else 's'}), "
+        f"filter tuned to the {grade} grade, "
         f"started {start}",
         fixed_width(head, rows),
     ]
