@@ -26,6 +26,7 @@ from conftest import communicate, wait_for
 from test_fuzz import IMU_MODEL, RIG, SCENARIO, assert_one_line, run_cli, to_toml
 
 from sins import io
+from sins.errors import SinsInputError
 from sins.io import provenance
 from sins.io.datasets.root import data_root
 from sins.io.recording import RATE_HZ_RANGE
@@ -804,3 +805,25 @@ def test_a_huge_quaternion_in_an_npz_is_one_line_without_numpy_warnings(tmp_path
         rc, _, err = run_cli(["inspect", str(tmp_path / "r.npz")])
     assert rc == 2 and "q_wxyz: row 10 has norm inf" in err and err.count("\n") == 1, err
     assert [str(w.message) for w in caught] == []
+
+
+def test_a_recording_the_system_will_not_let_sins_read_is_said_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file sins may not read (mode 000 for a user who is not root) is refused as such, not taken for a
+    damaged one: before, the format sniffers swallowed the error and an ``.npz`` read as "its first bytes
+    are not a zip archive's". The refusal is the system's own, so it is planted here as the system
+    gives it (root reads a file of mode 000 anyway)."""
+    path = tmp_path / "r.npz"
+    np.savez(path, t_s=np.arange(3.0))
+    real_open = os.open
+
+    def refusing(file: object, *args: object, **kwargs: object) -> int:
+        if Path(str(file)) == path:
+            raise PermissionError(13, "Permission denied", str(file))
+        return real_open(file, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(os, "open", refusing)
+    with pytest.raises(SinsInputError) as info:
+        io.read(path)
+    assert str(info.value) == f"{path}: cannot read: Permission denied", info.value

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import re
 import shutil
 import sys
 import warnings
@@ -322,8 +324,28 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main(twice) == 2 and not (tmp_path / "twice.json").exists()
     err = capsys.readouterr().err.strip()
     assert err == "sins: error: fit: unit/r0 is given twice", err
+    # So is the same file by another name: its path beside its FOLDER/NAME, a link, ./ before it.
+    r0 = tmp_path / "unit" / "r0.npz"
+    (tmp_path / "link.npz").symlink_to(r0)
+    os.link(r0, tmp_path / "hard.npz")
+    dotted = f"{r0.parent}/./r0.npz"  # pathlib would fold the "."
+    for given in (["--dataset", "unit/r0", str(r0)], [str(tmp_path / "link.npz"), str(r0)],
+                  [str(tmp_path / "hard.npz"), str(r0)], [str(r0), dotted]):  # fmt: skip
+        assert main(["fit", *given, "--strategy", "regression", "--out", str(tmp_path / "twice.json")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("sins: error: fit: ") and err.endswith(" are one recording"), err
+    assert not (tmp_path / "twice.json").exists()
     assert main(["evaluate", str(model), "--dataset", "unit/r2", "--json", str(out)]) == 0
     judged = json.loads(out.read_text())
+    # --drive: a window backwards is refused as such; one past the reference is navigated to its end
+    # and said so (before: "not within the reference" for the first, the asked end for the second).
+    capsys.readouterr()
+    assert main(["evaluate", str(model), "--dataset", "unit/r2", "--drive", "5:2"]) == 2
+    assert "--drive '5:2': START must come before END" in capsys.readouterr().err
+    assert main(["evaluate", str(model), "--dataset", "unit/r2", "--drive", "0:1e9"]) == 0
+    said = capsys.readouterr().out
+    window = re.search(r"free inertial from the reference's state at (\S+) s to (\S+) s", said)
+    assert window is not None and 0.0 < float(window[2]) < 1e3, said  # 120 s recordings
     raw, pooled = judged["open_loop_attitude_raw"]["aoe_deg"], judged["open_loop_attitude"]["aoe_deg"]
     # The third recording's bias was drawn anew (0.1 °/s apart): the training recordings' mean corrects
     # the unit's scale and misalignment but not that; the online rule, from the recording's own bounded
@@ -494,3 +516,29 @@ def test_a_unit_whose_readings_come_calibrated_keeps_its_gyro_as_read(
     assert main(["evaluate", str(model), "--dataset", "cal/MH_05_difficult", "--json", str(out)]) == 0
     judged = json.loads(out.read_text())
     assert judged["gyro_as_read"] is False and judged["open_loop_attitude"]["aoe_deg"] > 1.05 * raw
+
+
+def test_a_gap_in_the_readings_is_said_not_blamed_on_the_reference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A recording whose stamps jump 2 s half way (readings and reference alike: nothing recorded
+    there): before, ``sins fit`` refused it as a reference whose attitude is not of the readings' axes
+    (one interval across the gap took the turns' correlation to 0.84). The intervals across the gap are
+    left out of that check, the fit goes on, and ``sins evaluate`` says where the open loop crossed the
+    gap, with its length (numpy's own)."""
+    recs, _, _ = recordings(5)
+    (tmp_path / "u").mkdir()
+    write_npz(tmp_path / "u", "r", recs[0])
+    path = tmp_path / "u" / "r.npz"
+    with np.load(path) as held:
+        doc = dict(held)
+    half = len(doc["t_s"]) // 2
+    doc["t_s"] = doc["t_s"] + np.where(np.arange(len(doc["t_s"])) >= half, 2.0, 0.0)
+    np.savez(path, **doc)
+    model = tmp_path / "m.json"
+    assert main(["fit", str(path), "--strategy", "regression", "--out", str(model)]) == 0, capsys.readouterr()
+    capsys.readouterr()
+    assert main(["evaluate", str(model), str(path)]) == 0
+    said = capsys.readouterr().out
+    step = doc["t_s"][half] - doc["t_s"][half - 1]
+    assert f"the readings have 1 gap(s) of 5 steps or more, the longest {step:.3g} s at t = " in said, said

@@ -87,7 +87,7 @@ def _evaluate_several(
     given = [flag for flag, value in one_only.items() if value]
     if given:
         raise SinsInputError(f"evaluate: {', '.join(given)}: for one recording, not for several")
-    check_distinct([name for name, _, _ in inputs], "evaluate")
+    check_distinct([p for _, p, _ in inputs if p], [d for _, _, d in inputs if d], "evaluate")
     recordings = {}
     for name, path, dataset in inputs:
         with progress_bar(f"reading {name}", ""):
@@ -148,6 +148,8 @@ def _evaluate_referenced(
             start, end = (float(x) for x in args.drive.split(":"))
         except ValueError:
             raise SinsInputError(f"--drive {args.drive!r}: expected START:END in seconds") from None
+        if not start < end:
+            raise SinsInputError(f"--drive {args.drive!r}: START must come before END")
         drive = (start, end)
     with progress_bar("open loop", "") as bar:
         result = evaluation.evaluate_referenced(

@@ -70,7 +70,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
         )
     recs = []
     named = [("path", r) for r in args.recording] + [("dataset", d) for d in args.dataset or []]
-    check_distinct([name for _, name in named], "fit")
+    check_distinct(list(args.recording), list(args.dataset or []), "fit")
     with progress_bar(f"fitting {args.strategy}", "") as bar:
         for kind, name in named:
             bar.set_description(f"reading {name}")

@@ -11,6 +11,7 @@ from sins.cli.options import (
     add_dataset,
     add_recording_options,
     check_distinct,
+    count,
     dataset_inputs,
     fraction,
     positive,
@@ -112,7 +113,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
         raise SinsInputError(f"--holdout must be in (0, 1), got {args.holdout}")
     if args.truth is not None and (names or len(paths) != 1):
         raise SinsInputError("gap: --truth goes with one RECORDING, not with --dataset or several")
-    check_distinct([str(p) for p in paths] + names, "gap")
+    check_distinct([str(p) for p in paths], names, "gap")
     options = recording_options(args)
     inputs = [read_gap_input(p, truth=args.truth, options=options) for p in paths]
     inputs += [read_gap_input(None, dataset=n, options=options) for n in names]  # one not applying: refused
@@ -233,7 +234,9 @@ def add(sub: Subparsers) -> None:
         help="log the residuals before and after, their Allan deviations and the excess by input quartile "
         "(several recordings: a tab each)",
     )  # fmt: skip
-    p.add_argument("--top", type=int, default=8, metavar="N", help="how many candidates to print (default 8)")
+    p.add_argument(
+        "--top", type=count, default=8, metavar="N", help="how many candidates to print (default 8)"
+    )
     add_recording_options(p)
     p.set_defaults(func=_cmd_gap)
 

@@ -124,16 +124,29 @@ def read_recording(
     return io.read(recording, truth=truth, **chosen, progress=progress)
 
 
-def check_distinct(names: list[str], command: str) -> None:
+def check_distinct(paths: list[str], datasets: list[str], command: str) -> None:
     """Refuse a recording given twice to a command that takes several (``gap``: its verdicts would agree
     with themselves; ``evaluate``: its mean would count it twice; ``fit``: it would weigh twice, and the
     guard holding recordings back would judge the fit on a copy of a recording it was fitted on), before
-    any is read."""
-    seen = set()
-    for name in names:
+    any is read: by name, and by the file itself (device and inode), so that ``./r.npz`` beside ``r.npz``,
+    a link to it, or a data root's ``FOLDER/NAME`` beside its path is the same recording too."""
+    import os
+
+    from sins.io.datasets.npz_folders import npz_path
+
+    seen: set[str] = set()
+    files: dict[tuple[int, int], str] = {}
+    for name, is_path in [(p, True) for p in paths] + [(d, False) for d in datasets]:
         if name in seen:
             raise SinsInputError(f"{command}: {name} is given twice")
         seen.add(name)
+        try:  # a name that is no file (yet) is the readers' to refuse
+            st = os.stat(name if is_path else npz_path(name))
+        except (OSError, SinsInputError):
+            continue
+        if (st.st_dev, st.st_ino) in files:
+            raise SinsInputError(f"{command}: {name} and {files[st.st_dev, st.st_ino]} are one recording")
+        files[st.st_dev, st.st_ino] = name
 
 
 def recording_options(args: argparse.Namespace) -> dict[str, Any]:

@@ -15,6 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 from sins.io import frame_check
@@ -173,7 +175,8 @@ def _reference_notes(
     rec: ReferencedRecording,
 ) -> tuple[list[str], frame_check.ReferenceLag | None, tuple[tuple[float, float], ...]]:
     """What ``sins evaluate`` says of the judged recording's reference: its frame's Earth rate, its clock
-    against the readings' (``frame_check.recording_lag``) and its spans filled by interpolation."""
+    against the readings' (``frame_check.recording_lag``), the readings' own gaps and the reference's
+    spans filled by interpolation."""
     from sins.compensation import screening
 
     notes: list[str] = []
@@ -189,6 +192,16 @@ def _reference_notes(
             f"the reference's clock sits {frame_check.clock_sits(clock.lag_s)} (its turns "
             "against the gyro's): every figure is judged against it as stamped, the rate times that "
             f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
+        )
+    steps = np.diff(rec.imu.t)
+    gaps = np.flatnonzero(steps > frame_check.GAP_STEPS * float(np.median(steps)))
+    if len(gaps):
+        longest = int(gaps[np.argmax(steps[gaps])])
+        notes.append(
+            f"the readings have {len(gaps)} gap(s) of {frame_check.GAP_STEPS:g} steps or more, the longest "
+            f"{steps[longest]:.3g} s at t = {rec.imu.t[longest]:.6g} s: the open loop integrates across each "
+            "as one interval, and every figure after it carries that (trim the recording there, or read it "
+            "in parts)"
         )
     filled_s = screening.filled(rec)
     if filled_s:
@@ -258,6 +271,7 @@ def _drive(
         out[label] = d.to_dict()
         figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
         rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])
+    start, end = d.start_s, d.end_s  # the window as navigated: its end clipped to the reference's last epoch
     lines.append(
         f"\nfree inertial from the reference's state at {start:g} s to {end:g} s (vertical held), RMS errors"
     )

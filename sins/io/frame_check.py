@@ -26,6 +26,10 @@ REFERENCE_TURNS_AGREE = 0.9
 #: that a hand-held unit's turn over one is its integrated rate (over 1 s, BROAD's fast turns of 60-90°
 #: about changing axes took the correlation down to 0.78), long beside the noise.
 TURN_INTERVAL_S = 0.1
+#: A step between readings this many times their median is a gap: the intervals across it hold no turn
+#: of the readings' to compare, and are left out (before, one 2 s gap took the correlation to 0.84, and
+#: the reference was blamed for the readings' gap).
+GAP_STEPS = 5.0
 #: The shifts of the reference's clock tried, s, either way (a motion capture's latency is milliseconds
 #: to tens of them; a quarter second is a clock set wrongly, which the stamps' own check names).
 LAG_SEARCH_S = 0.25
@@ -221,7 +225,10 @@ def _turn_pairs(truth: NavSeries, t: Array, w: Array, inside: NDArray[np.intp]) 
     vector of ``q(t_k)⁻¹ q(t_k+1)``, in the body), (m, 3) each; None where the gyro turns too little
     to tell (under 1 °/s RMS about its mean)."""
     ends, gyro = _gyro_turns(truth, t, w, inside)
-    return None if gyro is None else (gyro, _reference_turns(truth, t[ends]))
+    if gyro is None:
+        return None
+    kept = np.isfinite(gyro[:, 0])  # intervals across a gap in the readings left out
+    return gyro[kept], _reference_turns(truth, t[ends])[kept]
 
 
 def reference_lag(truth: NavSeries, t: Array, w: Array) -> ReferenceLag | None:
@@ -300,11 +307,18 @@ def _gyro_turns(
     if len(ends) < 10:
         return ends, None
     within = np.arange(ends[0], ends[-1] + 1)
-    steps = np.diff(t[within])[:, None] * 0.5 * (w[within][1:] + w[within][:-1])  # trapezoids
+    dt = np.diff(t[within])
+    steps = dt[:, None] * 0.5 * (w[within][1:] + w[within][:-1])  # trapezoids
     summed = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
     gyro = np.diff(summed[ends - ends[0]], axis=0)
-    b = gyro - gyro.mean(axis=0)
-    spread = float(np.sqrt(np.mean(np.sum(b * b, axis=1)) / np.mean(np.diff(t[ends]) ** 2)))
+    # An interval across a gap in the readings holds no turn of theirs to compare: NaN, left out.
+    gaps = np.concatenate([[0], np.cumsum(dt > GAP_STEPS * float(np.median(dt)))])
+    gyro[np.diff(gaps[ends - ends[0]]) > 0] = np.nan
+    kept = np.isfinite(gyro[:, 0])
+    if kept.sum() < 10:
+        return ends, None
+    b = gyro[kept] - gyro[kept].mean(axis=0)
+    spread = float(np.sqrt(np.mean(np.sum(b * b, axis=1)) / np.mean(np.diff(t[ends])[kept] ** 2)))
     return ends, (gyro if spread >= np.radians(1.0) else None)
 
 
@@ -321,7 +335,10 @@ def _reference_turns(truth: NavSeries, t_ends: Array) -> Array:
 
 
 def _correlation(gyro: Array, turns: Array) -> float:
-    """The correlation of two sets of turns about their means."""
+    """The correlation of two sets of turns about their means (the gyro's NaN rows, across a gap in the
+    readings, left out)."""
+    kept = np.isfinite(gyro[:, 0])
+    gyro, turns = gyro[kept], turns[kept]
     a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
     return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
 
@@ -332,6 +349,7 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 
 
 __all__ = [
+    "GAP_STEPS",
     "LAG_SEARCH_S",
     "REFERENCE_LAG_S",
     "REFERENCE_SCALE",

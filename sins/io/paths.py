@@ -75,6 +75,10 @@ def check_input(path: str | os.PathLike[str], *, folder: bool = False) -> Path:
         raise SinsInputError(f"{path}: is a directory, expected a file")
     if not stat.S_ISREG(st.st_mode):
         raise SinsInputError(f"{path}: is {_kind(st.st_mode)}, not a regular file: sins reads regular files")
+    try:  # opened once here: a file sins may not read is said so, not taken for a damaged one by a sniffer
+        os.close(os.open(path, os.O_RDONLY))
+    except OSError as exc:
+        raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
     available = available_memory()
     if available is not None and st.st_size * READ_FACTOR > available:
         need = format_size(st.st_size * READ_FACTOR)
