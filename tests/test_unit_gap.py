@@ -241,6 +241,11 @@ def test_gap_reads_an_npz_path_a_euroc_folder_and_refuses_bad_input_in_one_line(
     assert main(["gap", str(path), str(path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"gap: {path} is given twice" in err, err
+    # A count of candidates to print below one is refused by argparse (before: 0 and -1 printed none).
+    for top in ("0", "-1"):
+        with pytest.raises(SystemExit) as info:
+            main(["gap", str(path), "--top", top])
+        assert info.value.code == 2 and "--top: must be at least 1" in capsys.readouterr().err
 
 
 def _rrd_entities(path: Path) -> dict[str, Any]:
