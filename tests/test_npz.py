@@ -347,6 +347,8 @@ def test_dataset_names_and_a_missing_one(tmp_path: Path) -> None:
     assert rec.sensor == "unit" and not rec.latitude_known
     refusal(lambda: io.read(dataset="unit/b", root=tmp_path).beside_reference(), "unit/b.npz", "no such file")
     refusal(lambda: io.read(dataset="unit/../x", root=tmp_path).beside_reference(), "expected FOLDER/NAME")
+    # The file's name given for the dataset's: said so (before: no such file unit/a.npz.npz).
+    refusal(lambda: io.read(dataset="unit/a.npz", root=tmp_path), "the name without .npz (unit/a)")
 
 
 def test_the_room_is_placed_at_45_degrees_or_where_given(tmp_path: Path) -> None:

@@ -51,6 +51,10 @@ def npz_path(name: str, root: str | os.PathLike[str] | None = None) -> Path:
         raise SinsInputError(
             f"--dataset {name!r}: expected FOLDER/NAME (NAME.npz in a folder of the data root)"
         )
+    if stem.lower().endswith(".npz"):
+        raise SinsInputError(
+            f"--dataset {name!r}: the name without .npz ({folder}/{stem[:-4]}), or the file's path"
+        )
     return dataset_file(folder, f"{stem}.npz", root)
 
 

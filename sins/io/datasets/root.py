@@ -46,13 +46,13 @@ def dataset_file(folder: str, name: str, root: str | os.PathLike[str] | None = N
     where = data_root(root) / folder
     if not where.is_dir():
         raise SinsInputError(
-            f"{where}: no such data folder; set {ENV_VAR} or pass root= to point at the folder that "
+            f"{where}: no such data folder; set {ENV_VAR} (from Python: root=) to point at the folder that "
             f"holds {folder}/ (the project's ../shared/data)"
         )
     path = where / name
     if not path.is_file():
         raise SinsInputError(
-            f"{path}: no such file; set {ENV_VAR} or pass root= to point at the data root that holds "
+            f"{path}: no such file; set {ENV_VAR} (from Python: root=) to point at the data root that holds "
             f"{folder}/"
         )
     return path
