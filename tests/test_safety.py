@@ -442,7 +442,7 @@ def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
     imu.write_text(old)
     rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", "/dev/full"])
     assert rc == 2 and "No space left on device" in err, err
-    assert f"none of its outputs written ({imu}: as they were)" in err, err
+    assert f"none of its outputs written ({imu}: not replaced)" in err, err
     assert imu.read_text() == old and sorted(p.name for p in tmp_path.iterdir()) == ["i.csv"]
     truth = tmp_path / "t.csv"
     rc, _, err = run_cli(["simulate", "car_drive_5min", "--imu", str(imu), "--truth", str(truth)])

@@ -140,7 +140,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if discarded:
             kept = ", ".join(str(p) for p in discarded)
-            print(f"sins: none of its outputs written ({kept}: as they were)", file=sys.stderr)
+            print(f"sins: none of its outputs written ({kept}: not replaced)", file=sys.stderr)
 
 
 __all__ = ["SUBCOMMANDS", "Terminated", "build_parser", "main", "terminated_as_exception"]
