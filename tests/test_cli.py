@@ -368,6 +368,28 @@ def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) ->
     # A recording or --dataset FOLDER/NAME, one of them: sins's own one-line refusal, exit 2 too.
     rc = main(["integrate"])
     _assert_one_line_error(rc, "", capsys.readouterr().err)
+    # Words argparse leaves over that no positional can take, and unknown options, are still refused,
+    # by the command's own usage.
+    for argv in (["inspect", "a.csv", "--json", "x.json", "b.csv"], ["run", "static", "--seed", "1", "extra"],
+                 ["fit", "a.npz", "--strategy", "regression", "--out", "m.json", "--bogus"]):  # fmt: skip
+        with pytest.raises(SystemExit) as info:
+            main(argv)
+        err = capsys.readouterr().err
+        assert info.value.code == 2 and f"sins {argv[0]}: error: unrecognized arguments: " in err, err
+
+
+def test_a_recording_after_an_option_is_the_commands_recording() -> None:
+    """argparse gives an optional positional the words before the first option and took a recording
+    after one for unrecognised (``sins correct M.json --out c.csv r.npz`` was refused): now it is the
+    command's, converted by the positional's own type, after those before it."""
+    from sins.cli import parse
+
+    args = parse(["correct", "m.json", "--out", "c.csv", "r.npz"])
+    assert (str(args.model), str(args.recording), str(args.out)) == ("m.json", "r.npz", "c.csv")
+    args = parse(["fit", "a.npz", "--strategy", "regression", "b.npz", "--out", "m.json", "c.npz"])
+    assert [str(r) for r in args.recording] == ["a.npz", "b.npz", "c.npz"] and str(args.out) == "m.json"
+    args = parse(["inspect", "--json", "x.json", "r.csv"])
+    assert str(args.recording) == "r.csv"
 
 
 def test_json_onto_a_directory(

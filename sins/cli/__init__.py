@@ -109,9 +109,40 @@ def _together(command: str, discarded: list[Path]) -> contextlib.AbstractContext
     return all_or_nothing(discarded)
 
 
+def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """``argv`` parsed, recordings given after an option included: argparse gives a command's optional
+    positional (``RECORDING``, ``RECORDING ...``) the words before the first option and takes any after
+    it for unrecognised (``sins correct M.json --out c.csv r.npz`` was refused), so those are given to it
+    here, converted by its own type; anything else unrecognised is refused as argparse refuses it."""
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if not extra:
+        return args
+    command = _subparser(parser, args.command)
+    late = next(
+        (a for a in command._actions if not a.option_strings and a.nargs in ("?", "*") and a.dest != "help"),
+        None,
+    )
+    taken = getattr(args, late.dest) if late is not None else None
+    fits = late is not None and (late.nargs == "*" or (taken is None and len(extra) == 1))
+    if not fits or any(word.startswith("-") for word in extra):
+        command.error(f"unrecognized arguments: {' '.join(extra)}")
+    assert late is not None
+    convert = late.type if callable(late.type) else str
+    values = [convert(word) for word in extra]
+    setattr(args, late.dest, [*(taken or []), *values] if late.nargs == "*" else values[0])
+    return args
+
+
+def _subparser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
+    """The parser of subcommand ``name``."""
+    found = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return found.choices[name]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
-    args = build_parser().parse_args(argv)
+    args = parse(argv)
     discarded: list[Path] = []
     try:
         with terminated_as_exception(), _together(args.command, discarded):
@@ -143,4 +174,4 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"sins: none of its outputs written ({kept}: not replaced)", file=sys.stderr)
 
 
-__all__ = ["SUBCOMMANDS", "Terminated", "build_parser", "main", "terminated_as_exception"]
+__all__ = ["SUBCOMMANDS", "Terminated", "build_parser", "main", "parse", "terminated_as_exception"]
