@@ -376,6 +376,14 @@ def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) ->
             main(argv)
         err = capsys.readouterr().err
         assert info.value.code == 2 and f"sins {argv[0]}: error: unrecognized arguments: " in err, err
+    # An output file named as a folder (argparse's Path drops the slash: model.json was written).
+    for argv in (["fit", "a.npz", "--strategy", "regression", "--out", "m.json/"],
+                 ["evaluate", "m.json", "a.npz", "--json=e.json/"],
+                 ["simulate", "static", "--imu", "i.csv/", "--truth", "t.csv"]):  # fmt: skip
+        with pytest.raises(SystemExit) as info:
+            main(argv)
+        err = capsys.readouterr().err
+        assert info.value.code == 2 and "/: ends in /, a folder's name; " in err, err
 
 
 def test_a_recording_after_an_option_is_the_commands_recording() -> None:

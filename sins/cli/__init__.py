@@ -116,9 +116,10 @@ def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
     here, converted by its own type; anything else unrecognised is refused as argparse refuses it."""
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
+    command = _subparser(parser, args.command)
+    _check_file_names(command, list(sys.argv[1:] if argv is None else argv))
     if not extra:
         return args
-    command = _subparser(parser, args.command)
     late = next(
         (a for a in command._actions if not a.option_strings and a.nargs in ("?", "*") and a.dest != "help"),
         None,
@@ -132,6 +133,24 @@ def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
     values = [convert(word) for word in extra]
     setattr(args, late.dest, [*(taken or []), *values] if late.nargs == "*" else values[0])
     return args
+
+
+#: The options that name a file sins writes (a campaign's ``--out DIR`` names a folder: not among them;
+#: ``--imu`` and ``--truth`` are outputs of ``simulate`` alone).
+_FILE_OUTPUTS = ("--out", "--json", "--plot", "--rerun")
+
+
+def _check_file_names(command: argparse.ArgumentParser, argv: list[str]) -> None:
+    """Refuse an output file's name that ends in ``/`` (a folder's): ``type=Path`` drops the slash, and
+    ``--out model.json/`` wrote ``model.json``."""
+    outputs = (*_FILE_OUTPUTS, "--imu", "--truth") if command.prog.endswith(" simulate") else _FILE_OUTPUTS
+    files = {o for a in command._actions for o in a.option_strings if o in outputs and a.metavar != "DIR"}
+    for i, word in enumerate(argv):
+        flag, eq, value = word.partition("=")
+        if not eq:
+            flag, value = word, argv[i + 1] if i + 1 < len(argv) else ""
+        if flag in files and value.endswith("/") and value.strip("/"):
+            command.error(f"{flag} {value}: ends in /, a folder's name; {flag} names a file")
 
 
 def _subparser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
