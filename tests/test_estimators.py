@@ -13,6 +13,8 @@ its model file with the same parameters and the same corrections, to the last bi
 from __future__ import annotations
 
 import inspect
+import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -64,6 +66,13 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     if name != "oracle":  # the oracle's model is a simulation's, not a file's
         assert list(params) == arguments
         assert type(strategy)(**params).params() == params
+    if name not in ("none", "oracle"):  # nothing to learn: nothing to refuse
+        # One reading not finite: refused by name, not a model of NaN coefficients that corrects every
+        # reading to NaN (and that its own model file's load then refused).
+        gyro = data.gyro.copy()
+        gyro[len(gyro) // 2, 0] = np.nan
+        with pytest.raises(ValueError, match=r"1 row\(s\) of readings not finite"):
+            _make(name).fit(replace(data, gyro=gyro))
     assert strategy.fit(data) is strategy
     learned = [k for k in vars(strategy) if k.endswith("_")]
     assert (len(learned) > 0) == (name not in ("none", "oracle"))
@@ -80,8 +89,21 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     assert isinstance(by_steps, ImuIncrements) and by_steps.dtheta_b.shape == steps.dtheta_b.shape
     whole = strategy.correct_recording(steps, temp)
     np.testing.assert_array_equal(whole.dtheta_b, by_steps.dtheta_b)  # no bias rule: the same
+    # A stream's chunk of one reading, or of no interval (a chunked stream may make either): corrected,
+    # not a crash (before, the window and rest strategies took the median of no steps).
+    one = ImuRates(t=data.t[:1], omega_ib_b=data.gyro[:1], f_ib_b=data.accel[:1])
+    assert np.isfinite(strategy.correct_rates(one, None if temp is None else temp[:1]).omega_ib_b).all()
+    none = ImuIncrements(t=data.t[:1], dtheta_b=np.zeros((0, 3)), dv_b=np.zeros((0, 3)))
+    assert len(strategy.correct_increments(none, None if temp is None else temp[:1])) == 0
     if name == "oracle":
         return
+    # Parameters from a numpy sweep (np.int64, np.float64, np.bool_) are reported as Python's: a model
+    # file can hold them (before, json refused np.int64 when the model was saved).
+    swept = {
+        k: np.bool_(v) if isinstance(v, bool) else np.int64(v) if isinstance(v, int) else np.float64(v)
+        for k, v in params.items() if isinstance(v, int | float)
+    }  # fmt: skip
+    assert json.dumps(type(strategy)(**{**params, **swept}).params()) == json.dumps(params)
     path = tmp_path / "model.json"
     compensation.save(strategy, path)
     back = compensation.load(path)

@@ -249,3 +249,14 @@ def test_bad_arguments_are_refused():
         strapdown.integrate(imu, init, vertical="hold", h_ref=np.zeros(3))
     with pytest.raises(ValueError, match="every"):
         strapdown.integrate(imu, init, every=0)
+    # Increments of mismatched shapes, or backwards in time: the compiled kernel checks no bounds, and
+    # read past the arrays' ends (results that changed from run to run); refused before it runs.
+    for bad in (
+        dataclasses.replace(imu, dv_b=imu.dv_b[:-1]),
+        dataclasses.replace(imu, dtheta_b=imu.dtheta_b[:, :2]),
+        dataclasses.replace(imu, t=imu.t[:-1]),
+    ):
+        with pytest.raises(ValueError, match="t must be"):
+            strapdown.integrate(bad, init)
+    with pytest.raises(ValueError, match="t must increase"):
+        strapdown.integrate(dataclasses.replace(imu, t=imu.t[::-1].copy()), init)

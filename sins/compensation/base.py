@@ -266,9 +266,12 @@ def _check_fitted_on(fitted: Any) -> None:
 
 
 def _json_param(value: Any) -> Any:
-    """A constructor parameter in JSON's terms: tuples (nested too) as lists."""
+    """A constructor parameter in JSON's terms: tuples (nested too) as lists, numpy's scalars (a sweep's
+    ``np.int64``, ``np.bool_``) as Python's, which JSON writes."""
     if isinstance(value, tuple | list):
         return [_json_param(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
     return value
 
 

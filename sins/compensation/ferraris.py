@@ -107,6 +107,7 @@ class Ferraris(Strategy):
         """
         if not self.turn_sd_deg >= 0 or self.batches < 1:
             raise ValueError("turn_sd_deg must be >= 0 and batches >= 1")
+        data.check_readings()
         holds, turns = _session_phases(data)
         acc, acc_se, _ = _hold_means(data.accel, holds, self.batches)
         gyr, gyr_se, gyr_sd = _hold_means(data.gyro, holds, self.batches)

@@ -83,6 +83,7 @@ class Kohonen(Strategy):
         """Train the map on standardised readings and store each node's mean error; returns self."""
         from minisom import MiniSom
 
+        data.check_readings()
         ok = data.has_reference
         x = np.hstack([data.gyro, data.accel])[ok]
         y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
@@ -337,11 +338,15 @@ MAX_NEIGHBOURS = 64
 
 def check_map(size: Any, where: str) -> int:
     """``size``, a map's nodes a side, a whole number from 1 to :data:`MAX_SIDE`; else ``ValueError``."""
-    if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= MAX_SIDE:
+    if (
+        isinstance(size, bool | np.bool_)
+        or not isinstance(size, int | np.integer)
+        or not 1 <= size <= MAX_SIDE
+    ):
         raise ValueError(
             f"{where} must be a whole number of nodes from 1 to {MAX_SIDE}, got {str(size)[:40]}"
         )
-    return size
+    return int(size)
 
 
 @dataclass(frozen=True)

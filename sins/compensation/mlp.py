@@ -162,6 +162,7 @@ class MLP(Strategy):
         """Train the network from readings (and temperature) to errors in ``mode``; returns self."""
         import torch
 
+        data.check_readings()
         torch.manual_seed(self.seed)
         ok = data.has_reference
         if ok.sum() < 10:

@@ -118,6 +118,11 @@ SAVED_STRATEGIES = (
 
 def make(name: str, **params: Any) -> Strategy:
     """A strategy by variant name (see :data:`VARIANTS`), with parameters overriding the variant's."""
+    if name in REFERENCE_VARIANTS:
+        raise ValueError(
+            f"{name} is fitted against a reference trajectory only: sins fit RECORDING --strategy {name}, "
+            f"or sins.compensation.referenced.fit({name!r}, recording)"
+        )
     if name not in VARIANTS:
         raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
     cls_name, defaults = VARIANTS[name]

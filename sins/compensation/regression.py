@@ -155,6 +155,7 @@ class ExtendedRegression(Strategy):
 
     def fit(self, data: CalibrationData) -> ExtendedRegression:
         """Fit each channel's coefficients by least squares on the reference inputs; returns self."""
+        data.check_readings()
         ok = data.has_reference
         self.uses_temp_ = bool(self.temperature and data.temp is not None)
         temp = None if data.temp is None else data.temp[ok]

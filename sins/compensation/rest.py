@@ -81,6 +81,8 @@ class RestAware(Regression):
     def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
         """The seed model, then the gyro bias re-taken at each rest (module docstring)."""
         out = super().correct_rates(rates, temp)
+        if len(rates.t) < 2:  # no step to read a window's or a rest's length by: the seed model alone
+            return out
         dt = float(np.median(np.diff(rates.t)))
         return ImuRates(
             t=out.t, omega_ib_b=out.omega_ib_b - self.bias_track(out.omega_ib_b, dt), f_ib_b=out.f_ib_b
@@ -89,6 +91,8 @@ class RestAware(Regression):
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """The seed model, then the gyro bias re-taken at each rest (module docstring)."""
         out = super().correct_increments(imu, temp)
+        if len(imu.t) < 2:  # no interval: nothing to correct beyond the seed model
+            return out
         dt = np.diff(imu.t)
         track = self.bias_track(out.dtheta_b / dt[:, None], float(np.median(dt)))
         return ImuIncrements(t=out.t, dtheta_b=out.dtheta_b - track * dt[:, None], dv_b=out.dv_b)

@@ -64,12 +64,16 @@ class GyroWindow(Regression):
     def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
         """The seed model, then the window's gyro correction."""
         out = super().correct_rates(rates, temp)
+        if len(rates.t) < 2:  # no step to read a window's or a rest's length by: the seed model alone
+            return out
         error = self.window_error(out.omega_ib_b, out.f_ib_b, float(np.median(np.diff(rates.t))))
         return ImuRates(t=out.t, omega_ib_b=out.omega_ib_b - error, f_ib_b=out.f_ib_b)
 
     def correct_increments(self, imu: ImuIncrements, temp: Array | None = None) -> ImuIncrements:
         """The seed model, then the window's gyro correction on the mean rates."""
         out = super().correct_increments(imu, temp)
+        if len(imu.t) < 2:  # no interval: nothing to correct beyond the seed model
+            return out
         dt = np.diff(imu.t)
         error = self.window_error(out.dtheta_b / dt[:, None], out.dv_b / dt[:, None], float(np.median(dt)))
         return ImuIncrements(t=out.t, dtheta_b=out.dtheta_b - error * dt[:, None], dv_b=out.dv_b)

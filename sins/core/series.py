@@ -205,6 +205,27 @@ class CalibrationData:
     def __len__(self) -> int:
         return len(self.t)
 
+    def check_readings(self) -> None:
+        """Refuse readings a fit cannot take: a time, gyro, accelerometer or temperature value that is not
+        finite (a NaN reading made every coefficient NaN, and the model it gave corrected every reading to
+        NaN). The reference may be NaN where the rig gives none (the class docstring).
+
+        Raises
+        ------
+        ValueError
+            naming how many rows and the first one's time.
+        """
+        columns = [self.t[:, None], self.gyro, self.accel] + (
+            [] if self.temp is None else [self.temp[:, None]]
+        )
+        bad = ~np.all(np.hstack([np.isfinite(c) for c in columns]), axis=1)
+        if bad.any():
+            first = int(np.argmax(bad))
+            raise ValueError(
+                f"{self.source or 'recording'}: {int(bad.sum())} row(s) of readings not finite (the first, "
+                f"row {first}, at t = {self.t[first]:g} s): drop them before fitting"
+            )
+
     def rows(self, index: NDArray[np.integer] | slice) -> CalibrationData:
         """The rows at ``index`` (phases are dropped: their row ranges no longer apply)."""
         return CalibrationData(

@@ -482,6 +482,7 @@ def fit_seed_model(
     for sensor in sensors:
         if sensor not in ("gyro", "accel"):
             raise ValueError(f"sensors must be gyro and/or accel, got {sensor!r}")
+    data.check_readings()
     ok = data.has_reference
     w_ref, n_ref = data.ref_gyro[ok], data.ref_accel[ok]
     ones = np.ones((len(w_ref), 1))

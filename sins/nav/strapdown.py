@@ -369,6 +369,19 @@ def moved(state: Array, to: InitialState) -> Array:
     return out
 
 
+def _check_increments(imu: ImuIncrements) -> None:
+    """Refuse increments the compiled kernel would read past the end of, or integrate backwards: ``t``
+    (n+1,) increasing, ``dtheta_b`` and ``dv_b`` (n, 3). The kernel checks no bounds (it is compiled for
+    speed), so a mismatch gave results that changed from run to run, not an error."""
+    t, dtheta, dv = np.shape(imu.t), np.shape(imu.dtheta_b), np.shape(imu.dv_b)
+    if len(dtheta) != 2 or dtheta[1] != 3 or dv != dtheta or t != (dtheta[0] + 1,):
+        raise ValueError(
+            f"increments: t must be (n+1,) and dtheta_b, dv_b (n, 3); got t {t}, dtheta_b {dtheta}, dv_b {dv}"
+        )
+    if dtheta[0] and not np.all(np.diff(imu.t) > 0.0):
+        raise ValueError("increments: t must increase from each step to the next")
+
+
 def advance(
     state: Array,
     imu: ImuIncrements,
@@ -397,6 +410,7 @@ def advance(
     state : the updated state (a new array)
     """
     n = len(imu.dtheta_b)
+    _check_increments(imu)
     mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s)
     state = np.array(state, dtype=float)
     first = int(state[_COUNTDOWN])
