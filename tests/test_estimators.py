@@ -89,6 +89,12 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     assert isinstance(by_steps, ImuIncrements) and by_steps.dtheta_b.shape == steps.dtheta_b.shape
     whole = strategy.correct_recording(steps, temp)
     np.testing.assert_array_equal(whole.dtheta_b, by_steps.dtheta_b)  # no bias rule: the same
+    # One reading not finite spoils its own row, not every row after it (the window and rest strategies'
+    # running sums carried a NaN to the end of the stream).
+    spoilt = rates.omega_ib_b.copy()
+    spoilt[1000, 0] = np.nan
+    got = strategy.correct_rates(ImuRates(t=rates.t, omega_ib_b=spoilt, f_ib_b=rates.f_ib_b), temp)
+    assert np.isfinite(np.delete(got.omega_ib_b, 1000, axis=0)).all()
     # A stream's chunk of one reading, or of no interval (a chunked stream may make either): corrected,
     # not a crash (before, the window and rest strategies took the median of no steps).
     one = ImuRates(t=data.t[:1], omega_ib_b=data.gyro[:1], f_ib_b=data.accel[:1])

@@ -109,7 +109,7 @@ class RestAware(Regression):
         for a, b in zip(starts, stops, strict=True):
             if last is not None:
                 out[previous:a] = last + self.motion_offset_
-            running = np.cumsum(omega[a:b], axis=0) / np.arange(1, b - a + 1)[:, None]
+            running = np.nancumsum(omega[a:b], axis=0) / np.arange(1, b - a + 1)[:, None]
             out[a:b] = running
             last, previous = running[-1], int(b)
         if last is not None:
@@ -120,7 +120,7 @@ class RestAware(Regression):
 def _window_rms(x: Array, dt: float) -> Array:
     """RMS of the rate's norm over a trailing window of :data:`WINDOW_S` (n,)."""
     n = max(1, round(WINDOW_S / dt))
-    power = np.cumsum(np.r_[0.0, np.sum(x * x, axis=1)])
+    power = np.nancumsum(np.r_[0.0, np.sum(x * x, axis=1)])
     count = np.minimum(np.arange(1, len(x) + 1), n)
     return np.asarray(np.sqrt((power[1:] - power[np.maximum(np.arange(1, len(x) + 1) - n, 0)]) / count))
 

@@ -146,7 +146,7 @@ def window_features(omega_ib_b: Array, f_ib_b: Array, dt: float) -> Array:
     n = len(omega_ib_b)
     block = max(1, round(WINDOW_S / BLOCKS / dt))
     both = np.hstack([omega_ib_b, f_ib_b])
-    sums = np.vstack([np.zeros((1, 6)), np.cumsum(both, axis=0)])
+    sums = np.vstack([np.zeros((1, 6)), np.nancumsum(both, axis=0)])
     row = np.arange(n)
     out = np.empty((n, FEATURES))
     for k in range(BLOCKS):

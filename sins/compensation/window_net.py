@@ -235,7 +235,7 @@ def window_inputs(omega_ib_b: Array, f_ib_b: Array, dt: float) -> tuple[NDArray[
     reading holds what the recording has; an empty one (the first rows) repeats the first reading."""
     n = len(omega_ib_b)
     both = np.hstack([omega_ib_b, f_ib_b, omega_ib_b**2, f_ib_b**2])
-    sums = np.vstack([np.zeros((1, 12)), np.cumsum(both, axis=0)])
+    sums = np.vstack([np.zeros((1, 12)), np.nancumsum(both, axis=0)])
     rows = np.arange(0, n, STRIDE)
     out = np.empty((len(rows), FEATURES))
     for k, (near, far) in enumerate(itertools.pairwise(EDGES_S)):
