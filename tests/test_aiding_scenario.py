@@ -145,6 +145,9 @@ def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
     refusal(lambda: from_dict(_with(gnss={"filter_grade": "fog"})), "gnss.filter_grade")
     refusal(lambda: from_dict(_with(gnss={"antenna": 1})), "gnss.antenna", "unknown key")
     refusal(lambda: from_dict(_with(alignment={"static_s": 30.0, "coarse_s": 40.0})), "alignment.coarse_s")
+    # A mean of less than ten readings levels nothing (0.001 s at 100 Hz was taken, a yaw error 5x 40 s's).
+    short = _with(alignment={"static_s": 0.001})
+    refusal(lambda: from_dict(short), "alignment.static_s", "at least 10 IMU samples")
     # A vehicle that moves within the alignment's window, and a window longer than the run.
     moving = _with(alignment={"static_s": 70.0})
     refusal(lambda: pipeline.run_scenario(from_dict(moving)), "alignment.static_s", "the vehicle moves")

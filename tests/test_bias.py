@@ -378,6 +378,7 @@ def test_refusals_without_a_reference(tmp_path: Path, capsys: pytest.CaptureFixt
     assert "no reference trajectory" in err and "--truth TRUTH.csv" in err and "--align SECONDS" in err
     assert "--lat DEG" in refused("bias", str(csv))
     assert "latitude" in refused("bias", str(csv), "--lat", "91")
+    assert "a height within ±1e5 m" in refused("bias", str(csv), "--lat", "45", "--height", "1e12")
     # A gyro bias far above Earth's level rate: no heading to gyrocompass, and none given.
     big, _ = still_unit(20.0, np.array(MEMS_GYRO_DPH) * DPH, np.zeros(3), np.r_[[3e-4] * 3, [0.01] * 3])
     io.write_imu(tmp_path / "mems.csv", big)
@@ -401,3 +402,23 @@ def test_refusals_without_a_reference(tmp_path: Path, capsys: pytest.CaptureFixt
         == 0
     )
     assert "heading given: 30.0000°" in capsys.readouterr().out
+
+
+def test_a_start_without_a_reference_refuses_a_heading_or_a_solution_that_is_not_finite(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Readings at the edge of the physical ranges held for 55 h drive a free solution beyond floating
+    point: refused in one line, as against a truth (before, exit 0 and a table and files of NaN). A
+    heading of NaN is refused by the option (before, 54,001 rows of NaN)."""
+    n = 200_000
+    path = tmp_path / "huge.csv"
+    readings = np.column_stack([np.arange(n, dtype=float), np.zeros((n, 3)), np.full((n, 3), 9e5)])
+    head = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    np.savetxt(path, readings, delimiter=",", fmt="%.9g", header=head, comments="")
+    out = tmp_path / "s.csv"
+    assert main(["integrate", str(path), "--origin", "45,0,0", "--attitude", "0,0,0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "the last position came out nan" in err and err.count("\n") == 1 and not out.exists(), err
+    with pytest.raises(SystemExit) as info:
+        main(["integrate", str(path), "--origin", "45,0,0", "--align", "60", "--heading", "nan"])
+    assert info.value.code == 2 and "--heading: must be a finite number" in capsys.readouterr().err

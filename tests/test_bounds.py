@@ -188,7 +188,7 @@ def _fits(doc: dict[str, Any], key: str, value: float, inside: bool = True) -> d
 #: The lower bounds that depend on another field (or on the rate, 20 Hz here), above the static ones;
 #: :func:`test_bounds_that_depend_on_another_field` walks them.
 DYNAMIC_LOW = {"segment.duration_s": 2e-3, "waypoint.speed_mps": 0.01, "navigation.vertical_tau_s": 0.1,
-               "oscillation.period_s": 0.5}  # fmt: skip
+               "oscillation.period_s": 0.5, "alignment.static_s": 0.5}  # fmt: skip
 
 
 def _run(tmp: Path, doc: dict[str, Any]) -> tuple[int, str, str, Path]:
@@ -241,6 +241,9 @@ def test_every_scenario_field_is_walked() -> None:
         (SCENARIO, ("navigation", "vertical_tau_s"), 0.1, math.nextafter(0.1, 0.0), "2 IMU samples"),
         # An oscillation spans ten samples (0.5 s).
         (SCENARIO, ("oscillation", 0, "period_s"), 0.5, math.nextafter(0.5, 0.0), "10 IMU samples"),
+        # A static alignment averages ten samples (0.5 s).
+        (_set(AIDED, ("alignment", "coarse_s"), 0.25), ("alignment", "static_s"), 0.5,
+         math.nextafter(0.5, 0.0), "10 IMU samples"),
         # The slowest waypoint.
         (WAYPOINTS, ("waypoint", 1, "speed_mps"), 0.01, math.nextafter(0.01, 0.0), "at least 0.01 m/s"),
         # A turn by angle is at most 360 °/s over its plateau (1 s - 0.25 s).

@@ -328,6 +328,11 @@ def test_an_unreachable_scheduler_is_refused_before_anything_is_written_and_a_ba
     spec = campaign.load(_campaign(tmp_path, count=1))
     refusal(lambda: engine.run(spec, tmp_path / "none", scheduler="tcp://127.0.0.1:1"), "cannot reach")
     assert not (tmp_path / "none").exists()
+    # More local workers than four a core: refused before a process or a file is made (before, --workers
+    # 100000 spawned processes until the machine stalled, and left a locked folder).
+    many = engine.WORKERS_PER_CORE * (os.cpu_count() or 1) + 1
+    refusal(lambda: engine.run(spec, tmp_path / "many", workers=many), f"--workers {many}", "--scheduler")
+    assert not (tmp_path / "many").exists()
     folder.prepare(tmp_path / "bare", spec, resume=False)  # a description, no parts
     assert engine.run(spec, tmp_path / "bare", workers=1).units_run == 1
 

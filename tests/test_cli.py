@@ -486,6 +486,10 @@ def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.Capt
         ('[[effect]]\nname = "gyro.bias"\nbias_dps = 1\n', "unknown parameter 'bias_dps'"),
         ('[[effect]]\nname = "gyro.scale_misalignment"\nmatrix_ppm = [1, 2]\n', "shape"),
         ("unit_seed = 1\n", "give a grade"),
+        (
+            '[[effect]]\nname = "gyro.bias"\n[[effect]]\nname = "gyro.bias"\n',
+            "effect[2].name: gyro.bias is given",
+        ),
     ],
 )
 def test_bad_imu_files_give_one_line(

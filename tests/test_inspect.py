@@ -117,6 +117,14 @@ def test_a_clean_static_recording_is_silent(
     assert doc["rate_hz"] == pytest.approx(100.0) and doc["gaps"] == [] and doc["clipping"] == []
 
 
+def test_a_dead_accelerometer_is_named_not_a_crash(tmp_path: Path) -> None:
+    """Accelerometer columns of zeros (dead, or not recorded): before, the unit search divided by gravity's
+    ratio of zero and ``sins inspect`` ended in a ZeroDivisionError."""
+    d = static(grade="tactical")
+    doc = inspect_cli(write(tmp_path / "dead.csv", d["t"], d["w"], 0.0 * d["f"]))
+    assert [f["code"] for f in doc["findings"]] == ["gravity_unknown"], doc["findings"]
+
+
 def test_a_clean_drive_is_silent_and_its_axes_are_frd(tmp_path: Path) -> None:
     d = drive()
     doc = inspect_cli(write(tmp_path / "drive.csv", d["t"], d["w"], d["f"]))

@@ -292,6 +292,24 @@ def test_refused(tmp_path: Path, doc: dict[str, Any], change, fragments: list[st
         assert message.startswith(f"{path}: {key}")
 
 
+@pytest.mark.parametrize(
+    "points",
+    [
+        [{"speed_mps": 1.0}, {"up_m": 10.0, "speed_mps": 1.0}],  # straight up
+        [{"speed_mps": 1.0}, {"north_m": 100.0, "speed_mps": 1.0}, {"north_m": 0.0, "speed_mps": 1.0}],
+    ],
+    ids=["vertical", "out-and-back"],
+)
+def test_a_waypoint_path_that_stops_moving_level_is_refused(
+    tmp_path: Path, points: list[dict[str, Any]]
+) -> None:
+    """The attitude follows the level velocity: where it vanishes, the motion had NaN attitudes, numpy's
+    warnings and a refusal that blamed the inputs' size ("beyond finite numbers"). Now one line says why."""
+    path = tmp_path / "scenario.toml"
+    path.write_text(_toml({**WAYPOINTS, "waypoint": points}), encoding="utf-8")
+    refusal(lambda: scenario.build_motion(scenario.load(path)), f"{path}: waypoint[", "no level direction")
+
+
 def test_base_documents_are_valid(tmp_path: Path) -> None:
     """The refusal tests edit valid documents: prove they are."""
     for i, doc in enumerate((BASE, WAYPOINTS)):

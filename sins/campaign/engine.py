@@ -31,6 +31,9 @@ from sins.errors import SinsInputError
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
 #: end, few enough that each task's start-up (a worker's first import of torch, say) is paid rarely.
 TASKS_PER_WORKER = 4
+#: The most local worker processes a core may be given (``--workers 100000`` spawned processes until the
+#: machine stalled): a larger cluster is started by hand and given as a scheduler.
+WORKERS_PER_CORE = 4
 #: The most units in one task: a task's units share each scenario's generated trajectory (its cost split
 #: among them, small beside a unit's own from 8 units up), and a task is what a lost worker costs and how
 #: often results come back (the figures: ``docs/speed.md``).
@@ -91,6 +94,12 @@ def run(
         ``resume`` is not given; the scheduler cannot be reached; parts keep failing their check.
     """
     start = time.perf_counter()
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > WORKERS_PER_CORE * cores:
+        raise SinsInputError(
+            f"--workers {workers}: more than {WORKERS_PER_CORE} processes a core ({cores} cores here); each "
+            "worker is a process of its own (for a larger cluster, start one and give --scheduler)"
+        )
     if scheduler:
         _connect(scheduler).close()  # refuse an address with no scheduler before writing anything
     with folder.locked(out, spec):
@@ -128,7 +137,7 @@ def _compute(
 
     client: Any = None
     cluster: Any = None
-    n = workers or os.cpu_count() or 1
+    n = min(workers or os.cpu_count() or 1, len(todo))  # a worker beyond the units would wait for none
     with _quiet_dask(), _DeferredInterrupt() as interrupt:
         try:
             if scheduler:
@@ -335,6 +344,7 @@ __all__ = [
     "RUNS",
     "SPAWN_WAIT_S",
     "TASKS_PER_WORKER",
+    "WORKERS_PER_CORE",
     "WORKERS_WAIT_S",
     "CampaignRun",
     "log_progress",

@@ -26,6 +26,10 @@ def _cmd_bias(args: argparse.Namespace) -> int:
     check_plot(args)
     attitude = None if args.attitude is None else angles(args.attitude, "--attitude")
     lat = None if args.lat is None else latitude(args.lat)
+    if (
+        args.height is not None and not abs(args.height) <= 1e5
+    ):  # as --origin's: gravity's formula holds there
+        raise SinsInputError(f"--height {args.height:g}: a height within ±1e5 m")
     estimate = _estimate(args, lat, attitude)
     print(format_bias(estimate))
     if args.json:

@@ -15,6 +15,7 @@ from sins.cli.options import (
     add_plot,
     add_recording_options,
     dataset_inputs,
+    finite,
     positive,
     read_recording,
     recording_options,
@@ -131,6 +132,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
                                   levels=levels, source=where)  # fmt: skip
         bar.set_description("integrating")
         sol = replay.navigate_free(imu, start, args.vertical, args.vertical_tau_s)
+    check_finite({"the last position": float(sol.lat[-1] + sol.lon[-1] + sol.h[-1])}, where)  # NaN, inf
     report = free_report.free_report(
         where, start, sol, args.align, args.grade, heading_given=args.heading is not None
     )
@@ -142,11 +144,8 @@ def _integrate_free(args: argparse.Namespace) -> int:
         from sins.viz import plots
 
         title = f"sins integrate {where}: no reference, {start.how} start"
-        save_plot(
-            args.plot,
-            lambda: plots.solution_figure(sol, title, free_report.expected_growth(start, sol)),
-            title,
-        )
+        growth = free_report.expected_growth(start, sol)
+        save_plot(args.plot, lambda: plots.solution_figure(sol, title, growth), title)
     return 0
 
 
@@ -227,7 +226,7 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     g.add_argument(
         "--heading",
-        type=float,
+        type=finite,
         metavar="DEG",
         help="with --align: the heading, where the gyros cannot find it",
     )

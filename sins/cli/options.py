@@ -23,6 +23,17 @@ def positive(text: str) -> float:
     return value
 
 
+def finite(text: str) -> float:
+    """An argument type: a finite number (``nan`` and ``inf`` refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return value
+
+
 def count(text: str) -> int:
     """An argument type: a whole number of at least 1."""
     try:

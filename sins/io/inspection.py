@@ -315,8 +315,10 @@ def _rest(win: Windows, med: float, turning: NDArray[np.bool_] | None = None) ->
     scatter = float(np.linalg.norm(win.mean_w[rest].std(axis=0)))
     agreeing = scatter <= max(0.2 * size_w, 3.0 * noise / root)
     # Quiet windows whose gravity points 20° or more away from the rest's: other orientations at rest.
-    up = win.mean_f[quiet] / np.linalg.norm(win.mean_f[quiet], axis=1)[:, None]
-    turned = up @ (mean_f / np.linalg.norm(mean_f)) < np.cos(np.radians(20.0))
+    # (A force of zero, a dead accelerometer's, points nowhere: taken as not turned.)
+    up = win.mean_f[quiet] / np.maximum(np.linalg.norm(win.mean_f[quiet], axis=1), 1e-300)[:, None]
+    turned = up @ (mean_f / max(float(np.linalg.norm(mean_f)), 1e-300)) < np.cos(np.radians(20.0))
+    turned &= np.linalg.norm(win.mean_f[quiet], axis=1) > 0.0
     return Rest(
         seconds=seconds,
         specific_force=(float(mean_f[0]), float(mean_f[1]), float(mean_f[2])),
@@ -377,6 +379,8 @@ def _rest_findings(rec: Recording, rest: Rest | None, med: float) -> list[Findin
 def _unit_for(rec: Recording, key: str, ratio: float) -> str | None:
     """The unit of ``key`` under which a size ``ratio`` × the expected one would be right, if any
     other than the one read with."""
+    if not ratio > 0.0:  # a channel that reads zero (a dead or unrecorded accelerometer): no unit fits
+        return None
     current = rec.units.get(key, unitdefs.SI[key])
     wanted = unitdefs.UNITS[key][current] / ratio
     for unit, k in unitdefs.UNITS[key].items():

@@ -16,6 +16,21 @@ from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
 from sins.scenario.validate import MAX_DURATION_S
 
 
+def _check_level(p: np.ndarray, where: object) -> None:
+    """Refuse waypoints whose path has no level direction somewhere: a leg straight up or down, or a
+    waypoint whose neighbours lie level-wise on one spot (the path turns back on itself there). The
+    attitude follows the level velocity, which such a path makes zero (before: NaN attitudes, numpy's
+    warnings, and a refusal that blamed the inputs' size)."""
+    legs = np.linalg.norm(np.diff(p, axis=0)[:, :2], axis=1)
+    through = np.linalg.norm((p[2:] - p[:-2])[:, :2], axis=1)
+    for i in np.flatnonzero(legs == 0.0):
+        raise SinsInputError(f"{where}: waypoint[{i + 2}]: straight up or down from waypoint[{i + 1}]: "
+                             "the path has no level direction there (the attitude follows it)")  # fmt: skip
+    for i in np.flatnonzero(through == 0.0):
+        raise SinsInputError(f"{where}: waypoint[{i + 2}]: the path turns back on itself there (waypoints "
+                             f"{i + 1} and {i + 3} level at one place): no level direction")  # fmt: skip
+
+
 def build_motion(scenario: Scenario) -> motion.Motion:
     """The continuous motion a scenario describes.
 
@@ -38,6 +53,7 @@ def build_motion(scenario: Scenario) -> motion.Motion:
         r_m, r_n = earth.radii(spec.lat)
         lat0 = spec.lat + p[0, 0] / (r_m + spec.h)
         lon0 = spec.lon + p[0, 1] / ((r_n + spec.h) * math.cos(spec.lat))
+        _check_level(p, scenario.source or scenario.name)
         return motion.WaypointMotion.from_waypoints(lat0, lon0, spec.h - p[0, 2], p, np.array(spec.speeds))
     if not spec.path.is_file():
         raise SinsInputError(f"{scenario.source or scenario.name}: truth.file: no such file: {spec.path}")

@@ -60,9 +60,13 @@ def load_imu(path: str | os.PathLike[str]) -> ImuSpec:
     grade = top.string("grade", None, tuple(imu_spec.GRADES)) if top.has("grade") else None
     unit_seed = top.integer("unit_seed", 0, high=MAX_SEED)
     withhold = tuple(top.strings("withhold", [], imu.effect_names()))
-    effects = []
+    effects: list[imu.Effect] = []
     for table in top.tables("effect"):
         name = table.string("name", choices=imu.effect_names())
+        if any(e.name == name for e in effects):  # one effect, one table: the model would refuse it later
+            raise table.error(
+                f"{name} is given by an earlier [[effect]] table too (one table an effect)", "name"
+            )
         params = {k: table.get(k) for k in table.table if k != "name"}
         try:
             effects.append(imu_spec.effect_from_params(name, params))

@@ -44,6 +44,9 @@ MIN_WAYPOINT_SPEED_MPS = 0.01
 #: An oscillation's period spans at least this many IMU samples: Simpson's rule then integrates it to
 #: a relative error of (2π/10)⁴/2880 = 5e-5 per interval; a shorter period aliases.
 MIN_PERIOD_SAMPLES = 10
+#: A static alignment averages at least this many IMU samples (0.001 s at 100 Hz, a fraction of one, was
+#: taken, and levelled the unit on nothing).
+MIN_ALIGN_SAMPLES = 10
 #: The damp loop's time constant spans at least this many IMU samples: the integrator's explicit
 #: update of the loop is unstable below one sample; two keep a margin.
 MIN_TAU_SAMPLES = 2
@@ -148,7 +151,7 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     )
     vertical, tau = _navigation(top.sub("navigation"), rate_hz)
     trajectory = _trajectory(top, rate_hz, base)
-    aiding = _aiding(top)
+    aiding = _aiding(top, rate_hz)
     top.done()
     return Scenario(
         name=name,
@@ -248,7 +251,7 @@ def _triple(keys: TomlKeys, key: str, default: list[float]) -> tuple[float, floa
     return values[0], values[1], values[2]
 
 
-def _aiding(top: TomlKeys) -> AidingSpec | None:
+def _aiding(top: TomlKeys, imu_rate_hz: float) -> AidingSpec | None:
     """The ``[gnss]``, ``[[outage]]`` and ``[alignment]`` tables, or None without ``[gnss]``."""
     if not top.has("gnss"):
         for other in ("outage", "alignment"):
@@ -275,7 +278,7 @@ def _aiding(top: TomlKeys) -> AidingSpec | None:
             raise out.error(f"must come after start_s {start:g} s, got {end:g}", "end_s")
         out.done()
         outages.append((start, end))
-    align = _alignment(top)
+    align = _alignment(top, imu_rate_hz)
     return AidingSpec(
         rate_hz=rate_hz, sigma_m=sigma_m, markov_sigma_m=markov_sigma_m, markov_tau_s=markov_tau_s,
         sigma_vel_mps=sigma_vel, lever_arm_m=lever_arm_m, latency_s=latency_s, seed=seed, filter_grade=grade,
@@ -283,7 +286,7 @@ def _aiding(top: TomlKeys) -> AidingSpec | None:
     )  # fmt: skip
 
 
-def _alignment(top: TomlKeys) -> dict[str, Any]:
+def _alignment(top: TomlKeys, imu_rate_hz: float) -> dict[str, Any]:
     """The ``[alignment]`` table as :class:`AidingSpec`'s fields (none: ``auto``, each default)."""
     if not top.has("alignment"):
         return {}
@@ -297,6 +300,12 @@ def _alignment(top: TomlKeys) -> dict[str, Any]:
     out: dict[str, Any] = {"alignment": method}
     if method == "static" or align.has("static_s"):
         out["static_s"] = align.bounded("static_s", _B["alignment.static_s"], 300.0)
+        if out["static_s"] < MIN_ALIGN_SAMPLES / imu_rate_hz:  # a mean of fewer readings levels nothing
+            raise align.error(
+                f"must be at least {MIN_ALIGN_SAMPLES} IMU samples ({MIN_ALIGN_SAMPLES / imu_rate_hz:g} s at "
+                f"{imu_rate_hz:g} Hz), got {out['static_s']:g}",
+                "static_s",
+            )
     limit = out.get("static_s", 3600.0)
     out["coarse_s"] = align.bounded("coarse_s", _B["alignment.coarse_s"], min(60.0, limit))
     if out["coarse_s"] > limit:
@@ -487,6 +496,7 @@ __all__ = [
     "FILTER_GRADES",
     "MAX_DURATION_S",
     "MAX_SPEED_MPS",
+    "MIN_ALIGN_SAMPLES",
     "MIN_PERIOD_SAMPLES",
     "MIN_RAMP_S",
     "MIN_TAU_SAMPLES",
