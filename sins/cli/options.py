@@ -222,6 +222,7 @@ __all__ = [
     "check_distinct",
     "count",
     "dataset_inputs",
+    "finite",
     "fraction",
     "positive",
     "read_recording",
