@@ -66,7 +66,10 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     if name != "oracle":  # the oracle's model is a simulation's, not a file's
         assert list(params) == arguments
         assert type(strategy)(**params).params() == params
-    if name not in ("none", "oracle"):  # nothing to learn: nothing to refuse
+    if name not in ("none", "oracle"):  # nothing to learn: nothing to refuse, nothing to be fitted first
+        # Used before fit: said so (scikit-learn's NotFittedError), not an AttributeError from inside.
+        with pytest.raises(compensation.NotFittedError, match="is not fitted: call fit"):
+            _make(name).correct(data.gyro[:5], data.accel[:5], None if data.temp is None else data.temp[:5])
         # One reading not finite: refused by name, not a model of NaN coefficients that corrects every
         # reading to NaN (and that its own model file's load then refused).
         gyro = data.gyro.copy()

@@ -8,6 +8,7 @@ name and keeps their model files; the strategies are :mod:`~sins.compensation.re
 
 from sins.compensation.base import (
     NoCompensation,
+    NotFittedError,
     Oracle,
     Strategy,
     residual_rms,
@@ -36,6 +37,7 @@ __all__ = [
     "VARIANTS",
     "ExtendedRegression",
     "NoCompensation",
+    "NotFittedError",
     "Oracle",
     "Regression",
     "Strategy",

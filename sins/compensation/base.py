@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import inspect
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -37,8 +38,20 @@ from sins.imu import CHANNELS, ImuModel
 Array = NDArray[np.float64]
 
 
+class NotFittedError(ValueError, AttributeError):
+    """A strategy used before :meth:`Strategy.fit` (scikit-learn's ``NotFittedError``: an AttributeError
+    too, so ``getattr(strategy, "fitted_on_", None)`` keeps its default)."""
+
+
 class Strategy(ABC):
     """A compensation strategy (see the module docstring)."""
+
+    def __getattr__(self, name: str) -> Any:
+        # Called only where the attribute is missing: a learned one (ending in "_") before fit said so,
+        # not an AttributeError deep inside a correction ("'Regression' object has no attribute 'B0_'").
+        if name.endswith("_") and not name.startswith("__"):
+            raise NotFittedError(f"{type(self).__name__} is not fitted: call fit() first (it sets {name})")
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     name: ClassVar[str] = ""
     #: The variant it was made as (``regression_robust`` is a ``regression``; :func:`make` sets it).
@@ -53,6 +66,9 @@ class Strategy(ABC):
     #: recordings of one unit (:class:`sins.compensation.unit_bias.BiasRule` as a dict; applied by
     #: :meth:`correct_recording`); absent otherwise.
     unit_bias_: dict[str, Any]
+    #: Called as ``progress(done, total)`` while a long fit trains (the learners set it up in their
+    #: constructors; absent on the others).
+    progress: Callable[[int, int], None] | None
 
     @abstractmethod
     def fit(self, data: CalibrationData) -> Strategy:
@@ -372,6 +388,7 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
 
 __all__ = [
     "NoCompensation",
+    "NotFittedError",
     "Oracle",
     "Strategy",
     "checked_array",
