@@ -9,7 +9,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from sins.cli.common import Subparsers, check_outputs, check_plot, fixed_width, save_plot
-from sins.cli.options import add_dataset, add_plot, add_recording_options, dataset_inputs, read_recording
+from sins.cli.options import (
+    MAX_HEIGHT_M,
+    add_dataset,
+    add_plot,
+    add_recording_options,
+    dataset_inputs,
+    read_recording,
+)
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
@@ -26,9 +33,7 @@ def _cmd_bias(args: argparse.Namespace) -> int:
     check_plot(args)
     attitude = None if args.attitude is None else angles(args.attitude, "--attitude")
     lat = None if args.lat is None else latitude(args.lat)
-    if (
-        args.height is not None and not abs(args.height) <= 1e5
-    ):  # as --origin's: gravity's formula holds there
+    if args.height is not None and not abs(args.height) <= MAX_HEIGHT_M:  # --origin's bound too
         raise SinsInputError(f"--height {args.height:g}: a height within ±1e5 m")
     estimate = _estimate(args, lat, attitude)
     print(format_bias(estimate))

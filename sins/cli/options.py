@@ -23,6 +23,11 @@ def positive(text: str) -> float:
     return value
 
 
+#: The largest height a command takes, m (``--origin``'s, ``sins bias --height``; their messages say
+#: 1e5 m): normal gravity's height correction is a series that holds near the Earth, not at 1e12 m.
+MAX_HEIGHT_M = 1e5
+
+
 def finite(text: str) -> float:
     """An argument type: a finite number (``nan`` and ``inf`` refused)."""
     try:
@@ -180,7 +185,7 @@ def _origin(text: str) -> tuple[float, float, float]:
         lat, lon, h = (float(p) for p in parts)
     except ValueError:
         raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
-    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= 1e5):
+    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= MAX_HEIGHT_M):
         raise SinsInputError(f"--origin {text!r}: latitude within ±90°, longitude ±360°, height ±1e5 m")
     return math.radians(lat), math.radians(lon), h
 
@@ -216,6 +221,7 @@ def dataset_inputs(name: str | None) -> list[Path]:
 
 
 __all__ = [
+    "MAX_HEIGHT_M",
     "add_dataset",
     "add_plot",
     "add_recording_options",

@@ -193,12 +193,16 @@ class Strategy(ABC):
         """The constructor's parameters as it holds them (scikit-learn's rule: each ``__init__`` argument
         is kept under its own name), in JSON's terms (tuples as lists): what a model file saves beside
         the state, and what the class is made again from."""
-        found = {}
-        for name, p in inspect.signature(type(self).__init__).parameters.items():
-            if name == "self" or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
-                continue
-            found[name] = _json_param(getattr(self, name))
-        return found
+        return {name: _json_param(getattr(self, name)) for name in self.init_parameters()}
+
+    @classmethod
+    def init_parameters(cls) -> dict[str, inspect.Parameter]:
+        """The constructor's named parameters, in order (what :meth:`params` reports, and a model file's
+        ``params`` may hold)."""
+        return {
+            name: p for name, p in inspect.signature(cls.__init__).parameters.items()
+            if name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+        }  # fmt: skip
 
 
 def state_array(
@@ -265,20 +269,21 @@ def _check_fitted_on(fitted: Any) -> None:
     ):
         raise ValueError(f"state.fitted_on_.rate_hz is {rate!r}: a rate in Hz (0 to 1e6), or null for a rig")
     frame = fitted.get("frame")
-    if frame is not None:
-        from sins.io.axes import frame_matrix
-
-        try:
-            if not isinstance(frame, str):
-                raise SinsInputError("not text")
-            frame_matrix(frame)
-        except SinsInputError:
-            raise ValueError(
-                f"state.fitted_on_.frame is {frame!r}: the letters of a frame, such as frd"
-            ) from None
+    if frame is not None and not _is_frame(frame):
+        raise ValueError(f"state.fitted_on_.frame is {frame!r}: the letters of a frame, such as frd")
     sensor = fitted.get("sensor")
     if sensor is not None and not isinstance(sensor, str):
         raise ValueError(f"state.fitted_on_.sensor is {sensor!r}: a unit's name")
+
+
+def _is_frame(frame: Any) -> bool:
+    """Whether ``frame`` is the letters of a right-handed frame (:func:`sins.io.axes.frame_matrix`)."""
+    from sins.io.axes import frame_matrix
+
+    try:
+        return isinstance(frame, str) and frame_matrix(frame) is not None
+    except SinsInputError:
+        return False
 
 
 def _json_param(value: Any) -> Any:

@@ -15,12 +15,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 from sins.io import frame_check
 from sins.io.filled import spans_said
+from sins.io.inspection import gaps_note
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -193,16 +192,8 @@ def _reference_notes(
             "against the gyro's): every figure is judged against it as stamped, the rate times that "
             f"added to each error (add {-clock.lag_s:+.4f} s to its times to align them)"
         )
-    steps = np.diff(rec.imu.t)
-    gaps = np.flatnonzero(steps > frame_check.GAP_STEPS * float(np.median(steps)))
-    if len(gaps):
-        longest = int(gaps[np.argmax(steps[gaps])])
-        notes.append(
-            f"the readings have {len(gaps)} gap(s) of {frame_check.GAP_STEPS:g} steps or more, the longest "
-            f"{steps[longest]:.3g} s at t = {rec.imu.t[longest]:.6g} s: the open loop integrates across each "
-            "as one interval, and every figure after it carries that (trim the recording there, or read it "
-            "in parts)"
-        )
+    if gaps := gaps_note(rec.imu.t):  # sins inspect's gaps, as sins integrate says them
+        notes.append(gaps)
     filled_s = screening.filled(rec)
     if filled_s:
         notes.append(

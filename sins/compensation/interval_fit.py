@@ -573,12 +573,17 @@ def _solve_held(
             "the intervals determine none of the coefficients: " + "; ".join(holds.reasons.values())
         )
     step, cov, resid, weights = _solve(x[:, :, free], y, iv, robust, huber_k)
-    p = x.shape[2]
-    full_step, full_cov = np.zeros(p), np.zeros((p, p))
+    return *widened(step, cov, free), resid, weights
+
+
+def widened(step: Array, cov: Array, free: NDArray[np.bool_]) -> tuple[Array, Array]:
+    """A solve on the ``free`` columns alone, widened to every column: a held one gets no step and an
+    infinite variance (what ``sins fit`` prints ``0 (held)``)."""
+    full_step, full_cov = np.zeros(len(free)), np.zeros((len(free), len(free)))
     full_step[free] = step
     full_cov[np.ix_(free, free)] = cov
     full_cov[~free, ~free] = np.inf
-    return full_step, full_cov, resid, weights
+    return full_step, full_cov
 
 
 def quality(imu: ImuIncrements, iv: Intervals, g_resid: Array, a_resid: Array) -> ReferenceQuality:
@@ -622,4 +627,5 @@ __all__ = [
     "interval_reference",
     "quality",
     "solve",
+    "widened",
 ]

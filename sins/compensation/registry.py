@@ -160,14 +160,15 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     """
     path = Path(path)
     doc = io.read_json_document(path, "model file", FORMAT_NAME)
-    if doc.get("version") != FORMAT_VERSION or isinstance(doc.get("version"), bool):
-        if "version" not in doc or not isinstance(doc["version"], int) or isinstance(doc["version"], bool):
-            said = "no" if "version" not in doc else f"{short(doc['version'])} for its"
+    version = doc.get("version")
+    if isinstance(version, bool) or version != FORMAT_VERSION:
+        if isinstance(version, bool) or not isinstance(version, int):  # none, text, a switch
+            said = "no" if "version" not in doc else f"{short(version)} for its"
             wanted = f"the number {FORMAT_VERSION} in this sins's"
             raise SinsInputError(f'{path}: malformed model file ({said} "version": {wanted})')
-        version, writer = short(doc.get("version")), short(doc.get("sins"))
+        writer = short(doc.get("sins"))
         raise SinsInputError(
-            f"{path}: model file format version {version} (written by sins {writer}); "
+            f"{path}: model file format version {short(version)} (written by sins {writer}); "
             f"this sins reads version {FORMAT_VERSION}: fit the model again"
         )
     name = doc.get("strategy")
@@ -225,12 +226,8 @@ def _check_params(path: Path, name: str, params: dict[str, Any]) -> None:
     """Refuse a parameter the strategy's constructor does not take, or of another kind than its default
     (a ``"big"`` for a number, a ``1`` for a switch, a number for a list of layers): the constructors
     bound their values, not their types, and a string would pass some of them silently."""
-    import inspect
-
-    signature = inspect.signature(strategy_class(name).__init__).parameters
-    known = [
-        k for k, p in signature.items() if k != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
-    ]
+    signature = strategy_class(name).init_parameters()
+    known = list(signature)
     for key, value in params.items():
         if key not in known:
             shown = printable(str(key))[:60]

@@ -31,6 +31,7 @@ from sins.compensation.interval_fit import (
     gyro_problem,
     quality,
     solve,
+    widened,
 )
 from sins.compensation.intervals import (
     INTERVAL_S,
@@ -271,12 +272,7 @@ def _solve_free(
     """:func:`~sins.compensation.interval_fit.solve` on the ``free`` columns alone: a held one gets no
     step and an infinite variance, as one recording's fit gives it (``sins fit`` prints it ``0 (held)``)."""
     step_free, cov_free, res, _ = solve(x[:, :, free], y, joined, robust)  # type: ignore[arg-type]
-    step = np.zeros(len(free))
-    step[free] = step_free
-    cov = np.zeros((len(free), len(free)))
-    cov[np.ix_(free, free)] = cov_free
-    cov[~free, ~free] = np.inf
-    return step, cov, res
+    return *widened(step_free, cov_free, free), res
 
 
 def _result(
