@@ -3,17 +3,20 @@
 The ideal IMU in increment form is the integral of the continuous body rate
 ``omega_ib_b(t)`` and specific force ``f_ib_b(t)`` over each sample interval,
 with Earth rate, transport rate, normal gravity and Coriolis. The integrals use
-Simpson's rule on sub-intervals split at the motion's breakpoints, so the
-integrands are smooth wherever they are sampled. Simpson's error on a smooth
-integrand telescopes: summed over any span it is ``-h⁴/2880 [f‴(b) - f‴(a)]``
-(``h`` the sample interval), about 1e-10 rad or m/s for the motions here, far
-below the integrator's own error (``tests/test_trajectory.py`` compares it with
-a Gauss–Legendre reference). That sum telescopes over sub-intervals of one width: a breakpoint
-between two samples splits an interval into two of other widths, whose errors do not cancel (a 1 s
-turn at 90 °/s with 0.25 s ramps sampled at 10 Hz loses 2.4e-4° a turn; ``docs/guide/core.md``).
-The sub-interval edges include the sample times,
-so the truth comes from the same evaluations. Position is integrated from the
-velocity on the ellipsoid with the same rule, in one compiled pass.
+Simpson's rule on pieces: each sample interval is cut at the motion's
+breakpoints (where a derivative jumps, so the integrands are smooth on every
+piece) and into equal pieces no wider than :data:`MAX_SUBINTERVAL_S` (10 ms;
+from 100 Hz up an interval is one piece). Simpson's error on a piece of width
+``w`` is ``-w⁵ f⁗/2880``, so an interval of width ``h`` is off by at most
+``h w⁴ max|f⁗| / 2880``: 8e-9 rad for a turn ramped from rest to 90 °/s in
+0.5 s, about 1e-12 for the motions of the presets (``tests/test_trajectory.py``
+compares it with a Gauss–Legendre reference and with scipy's adaptive
+quadrature). Without the 10 ms cut the same ramp sampled at 4 Hz was off by
+0.09° in one interval (cancelled by the ramp's end, where the errors
+telescope), and a breakpoint between two samples broke the telescoping: 0.1° a
+turn at 3 Hz (``docs/guide/core.md``). The piece edges include the sample
+times, so the truth comes from the same evaluations. Position is integrated
+from the velocity on the ellipsoid with the same rule, in one compiled pass.
 """
 
 from __future__ import annotations
@@ -33,6 +36,9 @@ Array = NDArray[np.float64]
 
 #: Sample intervals generated per chunk; bounds memory, not results.
 CHUNK = 8192
+#: Widest Simpson sub-interval, s: a sample interval wider than this is cut into equal pieces (module
+#: docstring).
+MAX_SUBINTERVAL_S = 0.01
 
 _earth = numba.njit(cache=True, inline="always")(earth.radii_and_gravity_from_sin2)
 
@@ -166,17 +172,21 @@ def generate_chunks(
     Yields ``(truth, imu)`` per chunk: ``imu`` covers the intervals
     ``(t[k0], t[k1]]`` (``imu.t`` has ``k1 - k0 + 1`` times) and ``truth`` the
     states at ``imu.t[1:]``. The start state is :func:`start_state`. Memory
-    stays bounded by the chunk, whatever the duration.
+    stays bounded by the chunk, whatever the duration: a chunk holds ``chunk``
+    Simpson pieces, so below 100 Hz, where each interval is cut in several, it
+    holds fewer intervals.
     """
     if chunk < 1:
         raise ValueError(f"chunk must be >= 1, got {chunk}")
     t = sample_times(motion, rate_hz)
     n = len(t) - 1
     breaks = np.asarray(motion.breakpoints(), dtype=float)
+    pieces = _pieces_per_interval(t)
     position = (motion.lat0, motion.lon0, motion.h0)
-    for k0 in range(0, n, chunk):
-        ts = t[k0 : min(n, k0 + chunk) + 1]
-        truth, imu = _chunk(motion, ts, breaks, *position)
+    span = max(1, chunk // pieces)
+    for k0 in range(0, n, span):
+        ts = t[k0 : min(n, k0 + span) + 1]
+        truth, imu = _chunk(motion, ts, breaks, pieces, *position)
         position = (truth.lat[-1], truth.lon[-1], truth.h[-1])
         yield truth, imu
 
@@ -216,19 +226,36 @@ def ideal_rates(motion: Motion, truth: NavSeries) -> ImuRates:
     return ImuRates(t=truth.t, omega_ib_b=omega, f_ib_b=f)
 
 
+def _off_grid(ts: Array, breaks: Array) -> Array:
+    """The breakpoints within ``ts``'s span that are not within rounding of one of its samples."""
+    inner = breaks[(breaks > ts[0]) & (breaks < ts[-1])]
+    if inner.size:
+        j = np.clip(np.searchsorted(ts, inner), 1, len(ts) - 1)
+        near = np.minimum(np.abs(inner - ts[j - 1]), np.abs(ts[j] - inner)) < 1e-9 * (ts[1] - ts[0])
+        inner = inner[~near]
+    return inner
+
+
+def _pieces_per_interval(t: Array) -> int:
+    """Equal Simpson pieces per sample interval: as many as keep each within :data:`MAX_SUBINTERVAL_S`
+    (one from 100 Hz up). Decided once for the motion, so every chunk splits alike."""
+    return max(1, math.ceil((t[1] - t[0]) / MAX_SUBINTERVAL_S - 1e-9))
+
+
 def _chunk(
-    motion: Motion, ts: Array, breaks: Array, lat0: float, lon0: float, h0: float
+    motion: Motion, ts: Array, breaks: Array, pieces: int, lat0: float, lon0: float, h0: float
 ) -> tuple[NavSeries, ImuIncrements]:
     """Truth at ``ts[1:]`` and increments over the intervals of ``ts``, from the position at ``ts[0]``."""
     m = len(ts) - 1
-    step = ts[1] - ts[0]
-    # Sub-interval edges: the samples plus any breakpoint not within rounding of a sample.
-    inner = breaks[(breaks > ts[0]) & (breaks < ts[-1])]
+    # Sub-interval edges: the samples, each interval cut in ``pieces``, and any breakpoint not within
+    # rounding of a sample.
+    edges = ts
+    if pieces > 1:
+        cuts = ts[:-1, None] + np.arange(1, pieces) * (np.diff(ts)[:, None] / pieces)
+        edges = np.union1d(edges, cuts.ravel())
+    inner = _off_grid(ts, breaks)
     if inner.size:
-        j = np.clip(np.searchsorted(ts, inner), 1, m)
-        near = np.minimum(np.abs(inner - ts[j - 1]), np.abs(ts[j] - inner)) < 1e-9 * step
-        inner = inner[~near]
-    edges = np.union1d(ts, inner) if inner.size else ts
+        edges = np.union1d(edges, inner)
     ne = len(edges)
     sample_at = np.searchsorted(edges, ts)  # where each sample sits among the edges
     width = np.diff(edges)
@@ -250,6 +277,7 @@ def _chunk(
 
 __all__ = [
     "CHUNK",
+    "MAX_SUBINTERVAL_S",
     "generate",
     "generate_chunks",
     "ideal_rates",
