@@ -230,3 +230,30 @@ def test_a_loaded_model_refuses_nothing_sins_fits() -> None:
         compensation.make("kohonen_pure", rows=64)
     with pytest.raises(ValueError, match="sizes must be"):
         compensation.make("kohonen", sizes=(40,))
+
+
+def test_a_parameter_of_another_kind_is_refused_when_made_and_never_saved(tmp_path: Path) -> None:
+    """The loader refuses a model file whose ``params`` are of another kind than the constructor's
+    defaults; the library refuses them when the strategy is made, and ``save`` never writes a file its
+    own loader would refuse. Before, ``make("mlp", guard="false")`` made a guarded network (the text
+    is true) and ``save`` wrote ``"guard": "false"``, which ``load`` then refused."""
+    for name, params, said in [
+        ("mlp", {"guard": "false"}, "guard is 'false', expected true or false"),
+        ("regression", {"huber_k": "2"}, "huber_k is '2', expected a number"),
+        ("kohonen", {"sizes": 5}, "sizes is 5, expected a list"),
+    ]:
+        with pytest.raises(ValueError, match=said):
+            compensation.make(name, **params)
+    with pytest.raises(ValueError, match=r"hidden is not a parameter of mlp \(known: hidden_sizes, "):
+        compensation.make("mlp", hidden=32)
+    # A sweep's numpy scalars and tuples are of their kinds.
+    made = compensation.make("regression", robust=np.bool_(True), huber_k=np.float64(2.0))
+    assert made.params() == {"robust": True, "huber_k": 2.0, "g_sensitivity": True}
+    from sins.compensation.regression import Regression
+
+    odd = Regression(robust="no")  # type: ignore[arg-type]  # made by hand: nothing checked yet
+    odd.B0_ = odd.A0_ = np.zeros(3)
+    odd.B_ = odd.K_ = odd.A_ = np.zeros((3, 3))
+    with pytest.raises(ValueError, match="regression: robust is 'no', expected true or false"):
+        compensation.save(odd, tmp_path / "odd.json")
+    assert list(tmp_path.iterdir()) == []

@@ -195,6 +195,14 @@ class Strategy(ABC):
         the state, and what the class is made again from."""
         return {name: _json_param(getattr(self, name)) for name in self.init_parameters()}
 
+    def check_params(self) -> None:
+        """Refuse a constructor argument of another kind than its default (``guard="false"``, which is
+        true; ``huber_k="2"``): ``ValueError`` naming it. The constructors keep what they are given
+        (scikit-learn's rule); :func:`~sins.compensation.make` and :func:`~sins.compensation.save` call
+        this, as a model file's loader checks its ``params``."""
+        names = self.init_parameters()
+        check_param_kinds(self.label, {name: getattr(self, name) for name in names}, names)
+
     @classmethod
     def init_parameters(cls) -> dict[str, inspect.Parameter]:
         """The constructor's named parameters, in order (what :meth:`params` reports, and a model file's
@@ -284,6 +292,40 @@ def _is_frame(frame: Any) -> bool:
         return isinstance(frame, str) and frame_matrix(frame) is not None
     except SinsInputError:
         return False
+
+
+def param_kind(default: Any) -> str:
+    """What a parameter whose default is ``default`` must be, in words ("" where any value may do)."""
+    if isinstance(default, bool):
+        return "true or false"
+    if isinstance(default, int | float):
+        return "a number"
+    if isinstance(default, str):
+        return "text"
+    if isinstance(default, tuple | list):
+        return "a list"
+    return ""
+
+
+def is_param_kind(value: Any, default: Any) -> bool:
+    """Whether ``value`` (from JSON) is of the kind of ``default`` (:func:`param_kind`)."""
+    if isinstance(default, bool):
+        return isinstance(value, bool)
+    if isinstance(default, int | float):
+        return isinstance(value, int | float) and not isinstance(value, bool)
+    if isinstance(default, str):
+        return isinstance(value, str)
+    return isinstance(value, list)
+
+
+def check_param_kinds(label: str, values: dict[str, Any], signature: dict[str, inspect.Parameter]) -> None:
+    """Refuse a value of ``values`` of another kind than its parameter's default in ``signature``
+    (numpy's scalars and tuples taken as JSON takes them): ``ValueError`` naming ``label`` and it."""
+    for name, value in values.items():
+        default = signature[name].default
+        wanted = param_kind(default)
+        if wanted and not is_param_kind(_json_param(value), default):
+            raise ValueError(f"{label}: {name} is {value!r}, expected {wanted}")
 
 
 def _json_param(value: Any) -> Any:
@@ -396,7 +438,10 @@ __all__ = [
     "NotFittedError",
     "Oracle",
     "Strategy",
+    "check_param_kinds",
     "checked_array",
+    "is_param_kind",
+    "param_kind",
     "residual_rms",
     "state_array",
 ]

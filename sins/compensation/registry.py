@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from sins import __version__, io
-from sins.compensation.base import Strategy
+from sins.compensation.base import Strategy, check_param_kinds, is_param_kind, param_kind
 from sins.errors import SinsInputError
 from sins.io.documents import printable, short
 
@@ -126,7 +126,13 @@ def make(name: str, **params: Any) -> Strategy:
     if name not in VARIANTS:
         raise ValueError(f"unknown strategy {name!r} (known: {', '.join(VARIANTS)})")
     cls_name, defaults = VARIANTS[name]
-    strategy = strategy_class(cls_name)(**{**defaults, **params})
+    cls = strategy_class(cls_name)
+    signature = cls.init_parameters()
+    unknown = [k for k in params if k not in signature]
+    if unknown:
+        raise ValueError(f"{unknown[0]} is not a parameter of {name} (known: {', '.join(signature)})")
+    check_param_kinds(name, params, signature)  # before the constructor bounds them
+    strategy = cls(**{**defaults, **params})
     strategy.variant = name
     return strategy
 
@@ -135,7 +141,9 @@ def make(name: str, **params: Any) -> Strategy:
 
 
 def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
-    """Write a fitted strategy to a versioned JSON file (atomically)."""
+    """Write a fitted strategy to a versioned JSON file (atomically). A parameter of another kind than
+    its default is refused (:meth:`Strategy.check_params`): the file could not be loaded."""
+    strategy.check_params()
     doc = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -236,35 +244,11 @@ def _check_params(path: Path, name: str, params: dict[str, Any]) -> None:
                 f"known: {', '.join(known)})"
             )
         default = signature[key].default
-        wanted = _kind(default)
-        if wanted and not _is_kind(value, default):
+        wanted = param_kind(default)
+        if wanted and not is_param_kind(value, default):
             raise SinsInputError(
                 f"{path}: malformed {name} model (params.{key} is {short(value)}: expected {wanted})"
             )
-
-
-def _kind(default: Any) -> str:
-    """What a parameter whose default is ``default`` must be, in words ("" where any value may do)."""
-    if isinstance(default, bool):
-        return "true or false"
-    if isinstance(default, int | float):
-        return "a number"
-    if isinstance(default, str):
-        return "text"
-    if isinstance(default, tuple | list):
-        return "a list"
-    return ""
-
-
-def _is_kind(value: Any, default: Any) -> bool:
-    """Whether ``value`` (from JSON) is of the kind of ``default`` (:func:`_kind`)."""
-    if isinstance(default, bool):
-        return isinstance(value, bool)
-    if isinstance(default, int | float):
-        return isinstance(value, int | float) and not isinstance(value, bool)
-    if isinstance(default, str):
-        return isinstance(value, str)
-    return isinstance(value, list)
 
 
 def _check_values(path: Path, name: str, value: Any, where: str) -> None:
