@@ -487,9 +487,11 @@ def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.Capt
         ('[[effect]]\nname = "gyro.scale_misalignment"\nmatrix_ppm = [1, 2]\n', "shape"),
         ("unit_seed = 1\n", "give a grade"),
         (
-            '[[effect]]\nname = "gyro.bias"\n[[effect]]\nname = "gyro.bias"\n',
+            '[[effect]]\nname = "gyro.bias"\nbias_dph = 1\n[[effect]]\nname = "gyro.bias"\nbias_dph = 2\n',
             "effect[2].name: gyro.bias is given",
         ),
+        # A table cut short: before, a bias of zero, changing nothing without a word.
+        ('grade = "tactical"\n[[effect]]\nname = "gyro.bias"\n', "effect[1]: gyro.bias: no parameter given"),
     ],
 )
 def test_bad_imu_files_give_one_line(

@@ -47,11 +47,15 @@ def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
     """Build an effect from file parameters (familiar units); missing parameters are zero.
 
     Raises ``ValueError`` naming the effect and parameter for an unknown key, a wrong shape, a
-    non-finite value or one outside the parameter's range (:class:`sins.imu.vocabulary.Param`).
+    non-finite value or one outside the parameter's range (:class:`sins.imu.vocabulary.Param`), and
+    naming the effect where none of its parameters is given (it would change nothing: a table cut short).
     """
     cls = imu.effect_class(name)
     sensor = name.split(".")[0]
     known = {p.key: p for p in cls.params[sensor]}
+    if known and not params:
+        listed = ", ".join(known)
+        raise ValueError(f"{name}: no parameter given, so it would change nothing (parameters: {listed})")
     for key in params:
         if key not in known:
             raise ValueError(f"{name}: unknown parameter {key!r} (parameters: {', '.join(known)})")
