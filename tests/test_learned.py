@@ -294,6 +294,7 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--no-guard" in err and not (tmp_path / "r.json").exists()
+    assert "(only mlp, mlp_window, kohonen do)" in err  # the registry's: the constructors taking a guard
 
 
 def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Path):

@@ -104,10 +104,9 @@ def _check_args(args: argparse.Namespace) -> None:
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    if args.no_guard and args.strategy not in ("mlp", "kohonen", "mlp_window"):
-        raise SinsInputError(
-            f"--no-guard: {args.strategy} has no guard (only mlp, kohonen and mlp_window do)"
-        )
+    guarded = strategy_names(taking="guard")
+    if args.no_guard and args.strategy not in guarded:
+        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only {', '.join(guarded)} do)")
 
 
 def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | None, where: str) -> FitOutcome:

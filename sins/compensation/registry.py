@@ -95,9 +95,13 @@ DESCRIPTIONS: dict[str, str] = {
 }
 
 
-def strategy_names() -> list[str]:
-    """The strategies a user can fit (:data:`DESCRIPTIONS`), in order."""
-    return list(DESCRIPTIONS)
+def strategy_names(taking: str | None = None) -> list[str]:
+    """The strategies a user can fit (:data:`DESCRIPTIONS`), in order; with ``taking``, those whose
+    constructor takes that parameter (``"guard"``: the learners with a guard)."""
+    names = list(DESCRIPTIONS)
+    if taking is None:
+        return names
+    return [n for n in names if n in VARIANTS and taking in strategy_class(VARIANTS[n][0]).init_parameters()]
 
 
 #: Names a model file may carry (the registered classes that can be fitted).
