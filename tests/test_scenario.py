@@ -6,6 +6,7 @@ import copy
 import json
 import math
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -386,6 +387,34 @@ def test_truth_table_builds_recorded_motion(tmp_path: Path) -> None:
     mid = 0.5 * (truth.t[:-1] + truth.t[1:])
     speed = np.linalg.norm(m.kinematics(mid).v_n, axis=1)
     assert np.all((speed > 7.9) & (speed < 12.1))
+
+
+def test_a_truth_whose_velocities_do_not_integrate_to_its_positions_is_refused(tmp_path: Path) -> None:
+    """The motion is made from a truth file's velocities (its first position the start); where they lead
+    elsewhere than its positions, the file's positions would be set aside without a word. A solution's
+    own noise (0.05 m/s on the velocities, 1 m on the positions, at 10 Hz over 2.4 km) passes; a velocity
+    given east, north, down, or in km/h, is refused naming the time and the miss."""
+    start = motion.Start(
+        lat=math.radians(45.0), lon=math.radians(7.0), h=300.0, speed=20.0, yaw=math.radians(40.0)
+    )
+    segs = [motion.Turn(40.0, math.radians(3.0), 2.0), motion.Accelerate(40.0, 5.0, 2.0), motion.Hold(40.0)]
+    truth, _ = trajectory.generate(motion.SegmentMotion.from_segments(start, segs), 10.0)
+    rng = np.random.default_rng(3)
+    noisy = replace(
+        truth,
+        v_n=truth.v_n + rng.normal(0, 0.05, truth.v_n.shape),
+        h=truth.h + rng.normal(0, 1.0, len(truth.h)),
+    )
+    sc = scenario.from_dict({"truth": {"file": "truth.csv"}}, source=tmp_path / "rec.toml")
+    io.write_truth(tmp_path / "truth.csv", noisy)
+    assert isinstance(scenario.build_motion(sc), motion.RecordedMotion)
+    for v_n in (truth.v_n[:, [1, 0, 2]], truth.v_n * 3.6):
+        (tmp_path / "truth.csv").unlink()
+        io.write_truth(tmp_path / "truth.csv", replace(truth, v_n=v_n))
+        refusal(
+            lambda: scenario.build_motion(sc),
+            "truth.csv: its velocities do not integrate to its positions: at t = ",
+        )
 
 
 def test_truth_table_too_short(tmp_path: Path) -> None:

@@ -31,6 +31,46 @@ def _check_level(p: np.ndarray, where: object) -> None:
                              f"{i + 1} and {i + 3} level at one place): no level direction")  # fmt: skip
 
 
+#: A truth file's velocities, integrated from its first position, may leave a row this far from its
+#: recorded position, m, ...
+TRUTH_DRIFT_M = 10.0
+#: ... or this share of the path recorded up to it: a solution's velocities and positions agree to
+#: centimetres over minutes (a velocity bias of 1 cm/s: 36 m an hour, against tens of km travelled),
+#: while a velocity in another frame (east, north, up) or unit (km/h) misses by the path's own length.
+TRUTH_DRIFT_SHARE = 0.05
+
+
+def _check_truth(truth: NavSeries, path: object) -> None:
+    """Refuse a truth file whose velocities do not integrate (trapezoids on the ellipsoid) to its
+    positions: the motion is made from its velocities and attitudes, its first position the start
+    (:class:`~sins.nav.motion.RecordedMotion`), so the file's other positions would be set aside
+    without a word."""
+    lat, lon, h = truth.lat, np.unwrap(truth.lon), truth.h
+    r_m, r_n = earth.radii(lat)
+    north, east = r_m + h, (r_n + h) * np.cos(lat)  # metres a radian of latitude, of longitude
+    dt = np.diff(truth.t)
+
+    def integral(rate: np.ndarray) -> np.ndarray:
+        return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
+
+    off = np.sqrt(
+        ((integral(truth.v_n[:, 0] / north) - (lat - lat[0])) * north) ** 2
+        + ((integral(truth.v_n[:, 1] / east) - (lon - lon[0])) * east) ** 2
+        + (integral(-truth.v_n[:, 2]) - (h - h[0])) ** 2
+    )
+    steps = np.sqrt((np.diff(lat) * north[1:]) ** 2 + (np.diff(lon) * east[1:]) ** 2 + np.diff(h) ** 2)
+    travelled = np.concatenate([[0.0], np.cumsum(steps)])
+    bad = np.flatnonzero(off > np.maximum(TRUTH_DRIFT_M, TRUTH_DRIFT_SHARE * travelled))
+    if bad.size:
+        k = int(bad[0])
+        raise SinsInputError(
+            f"{path}: its velocities do not integrate to its positions: at t = {truth.t[k]:g} s they lead "
+            f"{off[k]:.3g} m from the recorded position, {travelled[k]:.3g} m along the recorded path "
+            "(a velocity in another frame than north, east, down, or in another unit?); the motion is "
+            "made from the velocities"
+        )
+
+
 def build_motion(scenario: Scenario) -> motion.Motion:
     """The continuous motion a scenario describes.
 
@@ -41,8 +81,9 @@ def build_motion(scenario: Scenario) -> motion.Motion:
     Raises
     ------
     SinsInputError
-        the truth file is missing, cannot be read, has fewer than 4 rows or spans more than
-        :data:`~sins.scenario.validate.MAX_DURATION_S`.
+        the truth file is missing, cannot be read, has fewer than 4 rows, spans more than
+        :data:`~sins.scenario.validate.MAX_DURATION_S`, or its velocities do not integrate to its
+        positions (:data:`TRUTH_DRIFT_M`, :data:`TRUTH_DRIFT_SHARE`).
     """
     spec = scenario.trajectory
     if isinstance(spec, SegmentsSpec):
@@ -66,6 +107,7 @@ def build_motion(scenario: Scenario) -> motion.Motion:
             f"{spec.path}: the truth spans {span:g} s (column 't'), more than a scenario's "
             f"{MAX_DURATION_S:g} s"
         )
+    _check_truth(truth, spec.path)
     return motion.RecordedMotion.from_series(truth)
 
 
@@ -105,6 +147,8 @@ def check_latitude(scenario: Scenario, truth: NavSeries) -> None:
 
 __all__ = [
     "MAX_LAT_DEG",
+    "TRUTH_DRIFT_M",
+    "TRUTH_DRIFT_SHARE",
     "build_motion",
     "check_latitude",
     "sample_count",
