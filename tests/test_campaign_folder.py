@@ -262,6 +262,22 @@ def test_damaged_and_foreign_parts_run_again_and_the_results_equal_an_uninterrup
     assert again.summary == whole.summary
 
 
+def test_a_resume_around_a_finished_middle_part_runs_the_units_either_side_as_tasks_of_their_own(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A walkthrough's Ctrl-C left only the middle part; resumed, the units either side of it went to
+    one task, named by their span, whose part the check refused (a row for every unit between) and the
+    campaign ended without results. Tasks now hold consecutive units alone."""
+    assert engine.batches([0, 1, 2, 5, 6, 9], 2) == [[0, 1], [2], [5, 6], [9]]
+    spec = campaign.load(_campaign(tmp_path, count=3))
+    monkeypatch.setattr(engine, "units_per_task", lambda units, workers: 3)  # tasks of many units, as at 120
+    out = tmp_path / "out"
+    results.write_part(out / "parts", [1], _rows(spec, [1]), folder.prepare(out, spec, resume=False).identity)
+    again = engine.run(spec, out, workers=1, resume=True)
+    assert (again.units_resumed, again.units_run, again.rejected) == (1, 2, ())
+    assert (out / "results.parquet").is_file()
+
+
 # --------------------------------------------------------------------------- Ctrl-C, a port in use
 
 

@@ -46,6 +46,20 @@ def units_per_task(units: int, workers: int) -> int:
     return max(1, min(MAX_UNITS_PER_TASK, math.ceil(units / (TASKS_PER_WORKER * max(1, workers)))))
 
 
+def batches(todo: list[int], size: int) -> list[list[int]]:
+    """``todo`` (increasing unit numbers) in tasks of at most ``size`` units, each a run of consecutive
+    units: a task's part is named by its first and last unit, and its check expects a row for every unit
+    between them. (A resume with a finished part between two missing units had put both in one task,
+    whose part the check then refused: the campaign ended without results.)"""
+    out: list[list[int]] = []
+    for u in todo:
+        if out and u == out[-1][-1] + 1 and len(out[-1]) < size:
+            out[-1].append(u)
+        else:
+            out.append([u])
+    return out
+
+
 #: How many times the units a check finds missing or damaged are run: once, and once more for parts
 #: damaged while the campaign ran; a part damaged again means a disk that loses what is written to it.
 RUNS = 2
@@ -151,10 +165,9 @@ def _compute(
             interrupt.check()
             n_workers = max(1, len(client.scheduler_info()["workers"]))
             size = units_per_task(len(todo), n_workers)
-            batches = [todo[i : i + size] for i in range(0, len(todo), size)]
             key = f"sins-campaign-{parts.identity[:16]}"
             pending = as_completed(
-                [client.submit(task, spec, b, key=f"{key}-{b[0]}-{b[-1]}") for b in batches]
+                [client.submit(task, spec, b, key=f"{key}-{b[0]}-{b[-1]}") for b in batches(todo, size)]
             )
             finished = len(parts.done)
             while not pending.is_empty():
@@ -347,6 +360,7 @@ __all__ = [
     "WORKERS_PER_CORE",
     "WORKERS_WAIT_S",
     "CampaignRun",
+    "batches",
     "log_progress",
     "run",
     "units_per_task",
