@@ -4,6 +4,7 @@ and the open-loop attitude of the raw gyro against SOURCE.md's figures (an indep
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy_unit_gap as nu
@@ -243,6 +244,59 @@ def test_readings_of_another_size_than_the_reference_are_refused_by_what_judges_
     refusal(lambda: io.read(path).beside_reference(), str(path), *said.split("; "))
 
 
+def _flying(path: Path) -> dict[str, np.ndarray]:
+    """Twenty seconds of a unit turning at a constant rate about a tilted axis while it moves about a
+    room (positions of sines, up to 0.5 m: accelerations up to 1.2 m/s²), its readings exact: the rate
+    in its axes, the acceleration less gravity's pull (9.81 m/s², z up) turned into them."""
+    t = np.arange(4000) / 200.0
+    w_b = np.array([0.05, -0.03, 0.2])
+    q = Rotation.from_euler("x", 0.2) * Rotation.from_rotvec(np.outer(t, w_b))
+    k = 2 * np.pi / np.array([4.0, 5.0, 3.0])
+    amp, phase = np.array([0.5, 0.4, 0.1]), np.array([0.0, 1.0, 2.0])
+    p = amp * np.sin(np.outer(t, k) + phase)
+    v = amp * k * np.cos(np.outer(t, k) + phase)
+    a = -amp * k**2 * np.sin(np.outer(t, k) + phase)
+    return _write(
+        path, n=4000, t_s=t, gyro_rad_s=np.tile(w_b, (4000, 1)),
+        accel_m_s2=q.inv().apply(a + np.array([0.0, 0.0, 9.81])), q_wxyz=q.as_quat(scalar_first=True),
+        v_m_s=v, p_m=p,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("change", "code", "said"),
+    [
+        (lambda d: {}, None, None),
+        # Before each of these was fitted: lever arms of metres, a model written without a word.
+        (lambda d: {"accel_m_s2": -d["accel_m_s2"]}, "reference_force", "reads against the motion"),
+        (lambda d: {"v_m_s": 0 * d["v_m_s"]}, "reference_velocity", "integrate to 0 m"),
+        (lambda d: {"p_m": 1000 * d["p_m"]}, "reference_velocity", "positions move"),
+        (
+            lambda d: {"gyro_rad_s": d["gyro_rad_s"] * [1, 0, 1]},
+            "dead_channel",
+            "gyro's y reads 0 on every one",
+        ),
+    ],
+    ids=["as written", "accelerometer negated", "velocity zero", "positions in mm", "dead gyro axis"],
+)
+def test_a_reference_that_contradicts_the_readings_or_itself_is_refused(
+    tmp_path: Path, change: Any, code: str | None, said: str | None
+) -> None:
+    """Numpy's moving unit with one thing wrong: what judges against the reference refuses it in one
+    line and ``sins inspect`` names it. A negated accelerometer shows gravity's reaction pointing down,
+    as a world written with z down does (the reader turns it up); only its horizontal force, which runs
+    against the reference's acceleration (correlation -1), tells them apart."""
+    path = tmp_path / "fly.npz"
+    doc = _flying(path)
+    np.savez(path, **{**doc, **change(doc)})
+    if code is None:
+        assert not inspection.inspect(io.read(path)).findings
+        io.read(path).beside_reference()
+        return
+    assert [f.code for f in inspection.inspect(io.read(path)).findings] == [code]
+    refusal(lambda: io.read(path).beside_reference(), str(path), said)
+
+
 def test_a_time_column_in_nanoseconds_is_named_and_places_no_clock(tmp_path: Path) -> None:
     """The swing's time written in ns, read as s: its readings 5e6 s apart. The time's unit is the
     mistake named; the clock search (shifts within 0.25 s) has no shift to try, so no clock is said
@@ -269,10 +323,16 @@ def test_euroc_references_sit_on_the_readings_clock() -> None:
 
 
 def test_readings_alone(tmp_path: Path) -> None:
-    path = tmp_path / "imu.npz"
+    """Readings without a reference, as a path and as a data root's ``FOLDER/NAME`` alike: read and
+    inspected (before, the name was refused as "no reference", the path read); what needs a reference
+    says so when it asks for one."""
+    (tmp_path / "unit").mkdir()
+    path = tmp_path / "unit" / "imu.npz"
     _write(path, q_wxyz=None, v_m_s=None, p_m=None)
-    rec = io.read(path)
-    assert rec.truth is None and len(rec.imu) == 400
+    for rec in (io.read(path), io.read(dataset="unit/imu", root=tmp_path)):
+        assert rec.truth is None and len(rec.imu) == 400
+        inspection.inspect(rec)
+        refusal(rec.beside_reference, "no reference")
 
 
 @pytest.mark.parametrize(

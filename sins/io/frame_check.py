@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import rotation
+from sins.core.earth import radii as local_radii
 from sins.core.series import NavSeries, ReferencedRecording
 from sins.io import axes, local
 from sins.io.findings import Finding, ReferenceLag, Rest, Windows
@@ -45,6 +46,32 @@ REFERENCE_LAG_S = 0.005
 REFERENCE_SCALE = 1.5
 #: Normal gravity's size for that comparison, m/s² (any site's within 0.3 %).
 _G = 9.806
+#: The windows over which the specific force's horizontal part in the world and the reference's
+#: acceleration (its velocity's change over the window) are compared, s ...
+MOTION_WINDOW_S = 0.5
+#: ... where the reference's horizontal acceleration varies by this much at least (RMS about its mean
+#: over the windows, m/s²: a drone's or a hand's motion, 0.3-1.5; still, nothing to compare) ...
+ACCEL_SEEN_MPS2 = 0.1
+#: ... and must not correlate below minus this (an accelerometer read negated: -0.99 on EuRoC's V1_02,
+#: its world turned upside down to match it). Only against the motion is refused: a gentle motion's
+#: correlation is low, not negative (EuRoC's eleven sequences 0.64-1.00, V1_01 the gentlest; BROAD's
+#: two trials 0.94 and 1.00; the PSINS drive 0.99).
+FORCE_AGAINST = 0.5
+#: A channel that reads one value throughout is dead where the reference departs from it over windows
+#: of this, s, by more than :data:`DEAD_RATE` (rad/s: 1 °/s, a differentiated motion capture's noise over
+#: 1 s a tenth of it) or :data:`DEAD_FORCE` (m/s², gravity's reaction: 3° of tilt) RMS.
+DEAD_WINDOW_S = 1.0
+DEAD_RATE = np.radians(1.0)
+DEAD_FORCE = 0.5
+#: A reference's positions move over windows of :data:`POSITION_WINDOW_S` by what its velocities
+#: integrate to within :data:`REFERENCE_SCALE` either way, correlating at least this much (EuRoC's,
+#: BROAD's and the PSINS drive's: 1.00, their sizes equal to 0.2 %; positions in mm read as m: 1000 ×;
+#: velocities of zero beside moving positions: correlation 0).
+VELOCITY_AGREES = 0.9
+#: The windows positions and velocities are compared over, s.
+POSITION_WINDOW_S = 1.0
+#: Both move less than this over the windows (RMS, m): a still reference, nothing to compare.
+STILL_M = 0.01
 
 
 def seen_axes(win: Windows | None, rest: Rest | None, f: Array) -> str | None:
@@ -132,6 +159,9 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     inside = np.flatnonzero((t >= truth.t[0]) & (t <= truth.t[-1]))
     if len(inside) < 2 or not t[inside[-1]] > t[inside[0]]:
         return []
+    dead = dead_findings(truth, t, w, f, inside)
+    if dead:  # nothing of a dead channel's can be judged against the reference
+        return dead
     advice = ("check the reference's quaternion order (w, x, y, z or x, y, z, w), its direction (the "
               "sensor's attitude in the world, not the world's in the sensor) and the readings' "
               "axes")  # fmt: skip
@@ -152,7 +182,7 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
         return []
     tilt = float(np.degrees(np.arccos(np.clip(-reaction[2] / size, -1.0, 1.0))))
     if tilt <= REFERENCE_TILT_DEG:
-        return _scale_findings(pairs, size)
+        return _scale_findings(pairs, size) + _force_findings(truth, t, f, inside) + _position_findings(truth)
     what = (
         f"the specific force, rotated into the world by the reference's attitude, points {tilt:.0f}° "
         "from up (its mean over the reference's span, the reference's acceleration taken out)"
@@ -172,6 +202,104 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
         if tilt >= 180.0 - REFERENCE_TILT_DEG:  # upside down: the world's z read the wrong way
             what += ", or its world frame's z axis points down where it is read as up (NED written for ENU)"
     return [Finding("reference_attitude", what, advice=advice)]
+
+
+def dead_findings(truth: NavSeries, t: Array, w: Array, f: Array, inside: NDArray[np.intp]) -> list[Finding]:
+    """A channel of the gyro ``w`` or the accelerometer ``f`` (n, 3) that reads one value on every row
+    while the reference says it should read otherwise: a dead or unrecorded axis, which every fit would
+    take for an axis that never turned or never felt a force. An ideal simulated unit's channel may be
+    constant too (a level unit's accelerometer x, a steady turn's rate), but then it reads what the
+    reference gives: the turn over :data:`DEAD_WINDOW_S` windows in the body (against the gyro) and
+    gravity's reaction in the body (against the accelerometer; the vehicle's acceleration is left out)
+    must depart from the constant by :data:`DEAD_RATE` or :data:`DEAD_FORCE` RMS."""
+    step = max(1, round(DEAD_WINDOW_S / float(np.median(np.diff(t[inside])))))
+    ends = inside[::step]
+    if len(ends) < 3:
+        return []
+    found = []
+    ref = truth.interpolate(t[ends])
+    expected = {
+        "gyro": (w, _reference_turns(truth, t[ends]) / np.diff(t[ends])[:, None], DEAD_RATE),
+        "accelerometer": (f, rotation.rotate(rotation.quat_conjugate(ref.q_nb), [0.0, 0.0, -_G]), DEAD_FORCE),
+    }
+    for sensor, (values, reference, limit) in expected.items():
+        for k in np.flatnonzero(np.ptp(values[inside], axis=0) == 0.0):
+            value = float(values[inside[0], k]) + 0.0  # no "-0"
+            if float(np.sqrt(np.mean((reference[:, k] - value) ** 2))) > limit:
+                what = (f"the {sensor}'s {'xyz'[k]} reads {value:g} on every one of its {len(inside)} rows, "
+                        "where the reference moves it")  # fmt: skip
+                found.append(
+                    Finding("dead_channel", what, advice="a dead or unrecorded axis: check the recording")
+                )
+    return found
+
+
+def _force_findings(truth: NavSeries, t: Array, f: Array, inside: NDArray[np.intp]) -> list[Finding]:
+    """Whether the specific force's horizontal part, rotated into the world by the reference's attitude
+    and averaged over windows of :data:`MOTION_WINDOW_S`, follows the reference's acceleration (its
+    velocity's change over each window): the accelerometer's sign and axes against the reference's. An
+    accelerometer read negated shows gravity's reaction pointing down, which a world frame written with
+    z down shows too (and the reader turns it the right way up, :func:`sins.io.local.levelled`); only
+    the motion tells them apart. Nothing is said where the reference hardly accelerates
+    (:data:`ACCEL_SEEN_MPS2`)."""
+    step = max(1, round(MOTION_WINDOW_S / float(np.median(np.diff(t[inside])))))
+    edges = inside[::step]
+    if len(edges) < 10:
+        return []
+    rows = np.arange(edges[0], edges[-1])
+    world = rotation.rotate(truth.interpolate(t[rows]).q_nb, f[rows])[:, :2]
+    force = np.add.reduceat(world, edges[:-1] - edges[0], axis=0) / np.diff(edges)[:, None]
+    ref = truth.interpolate(t[edges])
+    accel = np.diff(ref.v_n[:, :2], axis=0) / np.diff(t[edges])[:, None]
+    x, y = force - force.mean(axis=0), accel - accel.mean(axis=0)
+    if float(np.sqrt(np.mean(np.sum(y * y, axis=1)))) < ACCEL_SEEN_MPS2:
+        return []
+    agreement = float(np.sum(x * y) / np.sqrt(np.sum(x * x) * np.sum(y * y)))
+    if agreement >= -FORCE_AGAINST:
+        return []
+    what = (f"the specific force's horizontal part, turned into the world by the reference's attitude, "
+            f"correlates {agreement:.2f} with the reference's acceleration over {MOTION_WINDOW_S:g} s "
+            "windows (1 where both see one motion): the accelerometer reads against the motion (its "
+            "readings negated?)")  # fmt: skip
+    advice = "check the accelerometer's sign and axes, and the frame of the reference's velocity"
+    return [Finding("reference_force", what, advice=advice)]
+
+
+def _position_findings(truth: NavSeries) -> list[Finding]:
+    """Whether the reference's positions move over windows of :data:`POSITION_WINDOW_S` by what its
+    velocities integrate to (trapezoids): positions in another unit than metres, or velocities of
+    another frame or none, are said; a still reference (:data:`STILL_M`) says nothing, nor one that
+    holds no positions (one place throughout: written as zeros where only attitude and velocity are
+    known)."""
+    if not (np.ptp(truth.lat) or np.ptp(truth.lon) or np.ptp(truth.h)):
+        return []
+    dt = np.diff(truth.t)
+    step = max(1, round(POSITION_WINDOW_S / float(np.median(dt))))
+    at = np.arange(0, len(truth.t), step)
+    if len(at) < 4:
+        return []
+    lat, h = truth.lat, truth.h
+    r_m, r_n = local_radii(lat)
+    north = (lat - lat[0]) * (r_m + h)
+    east = (np.unwrap(truth.lon) - truth.lon[0]) * (r_n + h) * np.cos(lat)
+    moved = np.diff(np.column_stack([north, east, -(h - h[0])])[at], axis=0)
+    integral = np.concatenate(
+        [np.zeros((1, 3)), np.cumsum(0.5 * (truth.v_n[1:] + truth.v_n[:-1]) * dt[:, None], axis=0)]
+    )
+    flown = np.diff(integral[at], axis=0)
+    size_p, size_v = (float(np.sqrt(np.mean(np.sum(a * a, axis=1)))) for a in (moved, flown))
+    if max(size_p, size_v) < STILL_M:
+        return []
+    ratio = size_p / max(size_v, 1e-300)
+    agreement = float(np.sum(moved * flown) / max(np.sqrt(np.sum(moved**2) * np.sum(flown**2)), 1e-300))
+    if 1.0 / REFERENCE_SCALE <= ratio <= REFERENCE_SCALE and agreement >= VELOCITY_AGREES:
+        return []
+    what = (f"the reference's positions move {size_p:.3g} m over {POSITION_WINDOW_S:g} s windows (RMS) where "
+            f"its velocities integrate to {size_v:.3g} m, correlating {agreement:.2f} with them")  # fmt: skip
+    advice = (
+        "check the reference's position unit (metres) and its velocity's frame and unit (the world's, m/s)"
+    )
+    return [Finding("reference_velocity", what, advice=advice)]
 
 
 def _up_as_read(up_ned: Array) -> str:
@@ -349,14 +477,24 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 
 
 __all__ = [
+    "ACCEL_SEEN_MPS2",
+    "DEAD_FORCE",
+    "DEAD_RATE",
+    "DEAD_WINDOW_S",
+    "FORCE_AGAINST",
     "GAP_STEPS",
     "LAG_SEARCH_S",
+    "MOTION_WINDOW_S",
+    "POSITION_WINDOW_S",
     "REFERENCE_LAG_S",
     "REFERENCE_SCALE",
     "REFERENCE_TILT_DEG",
     "REFERENCE_TURNS_AGREE",
+    "STILL_M",
     "TURN_INTERVAL_S",
+    "VELOCITY_AGREES",
     "clock_sits",
+    "dead_findings",
     "frame_findings",
     "lag_findings",
     "recording_lag",

@@ -10,6 +10,7 @@ the one public way in.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import numpy as np
@@ -109,6 +110,8 @@ def _read_dataset(
     t0_ns = None  # a FOLDER/NAME's stamps: read once, its time origin kept
     if is_folder_name(name):
         own = _read_npz_recording(name, root, origin)
+        if own.truth is None:  # readings alone: a command that needs a reference says so when it asks
+            return dataclasses.replace(own, sensor=name.partition("/")[0], dataset=name)
         trajectory: ReferencedRecording | None = _beside_own(own, name)
         t0_ns = own.t0_ns
     else:
