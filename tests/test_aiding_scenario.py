@@ -139,6 +139,11 @@ def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
         "outage[1].end_s",
         "after start_s",
     )
+    # Overlapping or nested: each outage's figure is the error at its own end, where fixes came back
+    # (a walkthrough: 100-200 s beside 150-250 s was reported at 200 s, 34 m, with no fix until 250 s).
+    for second in ({"start_s": 150.0, "end_s": 250.0}, {"start_s": 110.0, "end_s": 120.0}):
+        both = _with(outage=[{"start_s": 100.0, "end_s": 200.0}, second])
+        refusal(lambda doc=both: from_dict(doc), "outage[2].start_s", "overlaps outage[1] (100-200 s)")
     refusal(lambda: from_dict(_with(gnss=None)), "outage", "needs a [gnss] receiver")
     refusal(lambda: from_dict(_with(gnss={"sigma_m": [1.0, 2.0]})), "gnss.sigma_m", "expected 3 numbers")
     refusal(lambda: from_dict(_with(gnss={"rate_hz": 50})), "gnss.rate_hz", "<= 10 Hz")

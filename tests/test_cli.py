@@ -280,6 +280,11 @@ def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]
         "nan": (["integrate", str(nan), "--truth", str(truth)], f"{nan}:13: column 'dv_y'"),
         "non-increasing-time": (["integrate", str(back), "--truth", str(truth)], f"{back}:23: column 't'"),
         "mixed-forms": (["integrate", str(mixed), "--truth", str(truth)], "mixes rate columns"),
+        # A damp loop shorter than two steps: before, NaN, and a message that blamed the data.
+        "damp-loop-too-short": (
+            ["integrate", str(imu), "--truth", str(truth), "--vertical", "damp", "--vertical-tau-s", "0.001"],
+            "--vertical-tau-s 0.001: with --vertical damp at least 2 IMU steps",
+        ),
         "nonexistent-imu": (["integrate", str(tmp / "nope.csv"), "--truth", str(truth)], "nope.csv"),
         "nonexistent-truth": (["integrate", str(imu), "--truth", str(tmp / "nope.csv")], "nope.csv"),
         "nonexistent-scenario": (["run", str(tmp / "nope.toml")], "nope.toml"),
@@ -490,6 +495,9 @@ def test_calibrate_writes_a_seeded_recording(tmp_path: Path, capsys: pytest.Capt
             '[[effect]]\nname = "gyro.bias"\nbias_dph = 1\n[[effect]]\nname = "gyro.bias"\nbias_dph = 2\n',
             "effect[2].name: gyro.bias is given",
         ),
+        # Strings and booleans were read by float(): "1e3" a bias of 1000 mg, true one of 1 mg.
+        ('[[effect]]\nname = "accel.bias"\nbias_mg = ["1", "0", "0"]\n', "bias_mg: expected a number or"),
+        ('[[effect]]\nname = "accel.bias"\nbias_mg = true\n', "bias_mg: expected a number or a list"),
         # A table cut short: before, a bias of zero, changing nothing without a word.
         ('grade = "tactical"\n[[effect]]\nname = "gyro.bias"\n', "effect[1]: gyro.bias: no parameter given"),
     ],

@@ -260,3 +260,18 @@ def test_bad_arguments_are_refused():
             strapdown.integrate(bad, init)
     with pytest.raises(ValueError, match="t must increase"):
         strapdown.integrate(dataclasses.replace(imu, t=imu.t[::-1].copy()), init)
+
+
+def test_a_damp_loop_shorter_than_two_steps_is_refused_as_a_scenario_refuses_it() -> None:
+    """The loop's explicit update is unstable below a step: ``integrate`` gave NaN for a 0.1 s loop at
+    10 Hz where a scenario refused it; the library refuses it now, at the scenario's bound."""
+    from sins.scenario import validate
+
+    assert strapdown.MIN_TAU_SAMPLES == validate.MIN_TAU_SAMPLES
+    still = SegmentMotion.from_segments(Start(0.7, 0.0, 100.0, 0.0, 0.0, 0.0, 0.0), [Hold(5.0)])
+    truth, imu = trajectory.generate(still, 10.0)
+    start = strapdown.InitialState.from_series(truth)
+    with pytest.raises(ValueError, match=r"at least 2 IMU steps \(0.2 s at 10 Hz\)"):
+        strapdown.integrate(imu, start, vertical="damp", vertical_tau_s=0.1)
+    sol = strapdown.integrate(imu, start, vertical="damp", vertical_tau_s=0.2)
+    assert np.abs(sol.h - 100.0).max() < 1e-6

@@ -19,6 +19,7 @@ from sins.cli.options import (
     positive,
     read_recording,
     recording_options,
+    vertical_tau,
 )
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import MissingInputError, SinsInputError
@@ -62,7 +63,7 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
                 raise
             raise SinsInputError(f"{exc}; {NO_REFERENCE}") from None
         bar.set_description("integrating")
-        run = pipeline.navigate(rec.imu, rec.truth, args.vertical, args.vertical_tau_s)
+        run = pipeline.navigate(rec.imu, rec.truth, args.vertical, vertical_tau(args, rec.imu.t))
     where = read.name
     if note := gaps_note(rec.imu.t):
         print(f"sins: note: {where}: {note}", file=sys.stderr)
@@ -131,7 +132,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
         start = replay.free_start(imu, origin, attitude=attitude, align_s=args.align, heading=heading,
                                   levels=levels, source=where)  # fmt: skip
         bar.set_description("integrating")
-        sol = replay.navigate_free(imu, start, args.vertical, args.vertical_tau_s)
+        sol = replay.navigate_free(imu, start, args.vertical, vertical_tau(args, imu.t))
     check_finite({"the last position": float(sol.lat[-1] + sol.lon[-1] + sol.h[-1])}, where)  # NaN, inf
     report = free_report.free_report(
         where, start, sol, args.align, args.grade, heading_given=args.heading is not None

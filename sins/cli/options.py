@@ -198,6 +198,23 @@ def add_plot(p: argparse.ArgumentParser, what: str) -> None:
     )  # fmt: skip
 
 
+def vertical_tau(args: argparse.Namespace, t: Any) -> float:
+    """``--vertical-tau-s`` checked against the recording's step ``t`` (s): with ``--vertical damp``, at
+    least the integrator's ``MIN_TAU_SAMPLES`` steps (a shorter loop is unstable: a scenario's
+    ``vertical_tau_s`` is held to the same), refused naming the flag."""
+    import numpy as np
+
+    from sins.nav.strapdown import MIN_TAU_SAMPLES
+
+    tau, step = float(args.vertical_tau_s), float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    if args.vertical == "damp" and tau < MIN_TAU_SAMPLES * step * (1.0 - 1e-9):
+        raise SinsInputError(
+            f"--vertical-tau-s {tau:g}: with --vertical damp at least {MIN_TAU_SAMPLES} IMU steps "
+            f"({MIN_TAU_SAMPLES * step:g} s at {1.0 / step:g} Hz): a shorter damp loop is unstable"
+        )
+    return tau
+
+
 def dataset_inputs(name: str | None) -> list[Path]:
     """The folder of the data root a ``--dataset`` is read from (``FOLDER/NAME``'s folder, a named
     dataset's own), as an input no output may be inside: an output there must not be one of its files."""
@@ -234,4 +251,5 @@ __all__ = [
     "read_recording",
     "recording_options",
     "seed",
+    "vertical_tau",
 ]

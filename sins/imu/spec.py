@@ -62,6 +62,8 @@ def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
     kwargs: dict[str, Any] = {}
     for key, value in params.items():
         p = known[key]
+        if not _numbers(value):  # TOML's strings and booleans: float() would read "1e3" and true
+            raise ValueError(f"{name}.{key}: expected a number or a list of numbers, got {repr(value)[:60]}")
         a = np.asarray(value, dtype=float)
         if p.shape == (3,) and a.shape == ():
             a = np.full(3, float(a))
@@ -78,6 +80,13 @@ def effect_from_params(name: str, params: dict[str, Any]) -> imu.Effect:
             )
         kwargs[p.field] = float(a) * p.factor if p.shape == () else a * p.factor
     return cls(sensor, **kwargs)
+
+
+def _numbers(value: Any) -> bool:
+    """Whether ``value`` is a number (not a boolean) or a list, nested, of them."""
+    if isinstance(value, list | tuple):
+        return all(_numbers(v) for v in value)
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
 
 
 # --------------------------------------------------------------------------- grades

@@ -302,8 +302,13 @@ def _batch_kernel(
         )  # fmt: skip
 
 
+#: The "damp" loop's time constant spans at least this many IMU steps: its explicit update is unstable
+#: below one step; two keep a margin.
+MIN_TAU_SAMPLES = 2
+
+
 def _vertical_args(
-    vertical: VerticalMode, h_ref: Array | None, n: int, h0: float, tau_s: float
+    vertical: VerticalMode, h_ref: Array | None, n: int, h0: float, tau_s: float, t: Array
 ) -> tuple[int, Array, float, float]:
     if vertical not in VERTICAL_MODES:
         raise ValueError(f"vertical must be one of {', '.join(VERTICAL_MODES)}, got {vertical!r}")
@@ -315,6 +320,12 @@ def _vertical_args(
         raise ValueError(f"h_ref must have one height per sample time, shape ({n + 1},), got {h_ref.shape}")
     if not tau_s > 0:
         raise ValueError(f"vertical_tau_s must be positive, got {tau_s}")
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    if vertical == "damp" and tau_s < MIN_TAU_SAMPLES * step * (1.0 - 1e-9):  # a step's rounding passes
+        raise ValueError(
+            f"vertical_tau_s must be at least {MIN_TAU_SAMPLES} IMU steps ({MIN_TAU_SAMPLES * step:g} s at "
+            f"{1.0 / step:g} Hz): a shorter damp loop is unstable, got {tau_s:g}"
+        )
     # Critically damped: s² + 2s/τ + 1/τ², far faster than the 570 s instability.
     return mode, h_ref, 2.0 / tau_s, 1.0 / tau_s**2
 
@@ -411,7 +422,7 @@ def advance(
     """
     n = len(imu.dtheta_b)
     _check_increments(imu)
-    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s)
+    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s, imu.t)
     state = np.array(state, dtype=float)
     first = int(state[_COUNTDOWN])
     m = 0 if n < first else 1 + (n - first) // every
@@ -493,7 +504,7 @@ def integrate_batch(
             f"dtheta_b and dv_b must both have shape (m, n, 3), got {dtheta_b.shape}, {dv_b.shape}"
         )
     streams, n, _ = dtheta_b.shape
-    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s)
+    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s, np.asarray(t))
     state = np.tile(start(initial), (streams, 1))
     lat = np.empty((streams, n + 1))
     lon = np.empty((streams, n + 1))
@@ -515,6 +526,7 @@ def _alloc(m: int) -> tuple[Array, Array, Array, Array, Array]:
 
 
 __all__ = [
+    "MIN_TAU_SAMPLES",
     "STATE_SIZE",
     "InitialState",
     "advance",

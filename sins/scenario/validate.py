@@ -47,8 +47,9 @@ MIN_PERIOD_SAMPLES = 10
 #: A static alignment averages at least this many IMU samples (0.001 s at 100 Hz, a fraction of one, was
 #: taken, and levelled the unit on nothing).
 MIN_ALIGN_SAMPLES = 10
-#: The damp loop's time constant spans at least this many IMU samples: the integrator's explicit
-#: update of the loop is unstable below one sample; two keep a margin.
+#: The damp loop's time constant spans at least this many IMU samples: the integrator's own bound
+#: (``sins.nav.strapdown.MIN_TAU_SAMPLES``, not imported: loading a scenario does not load the compiled
+#: integrator; a test holds them equal).
 MIN_TAU_SAMPLES = 2
 
 #: Static bounds of every numeric scenario field, by its place (``segment.duration_s`` stands for
@@ -270,12 +271,19 @@ def _aiding(top: TomlKeys, imu_rate_hz: float) -> AidingSpec | None:
     seed = gnss.integer("seed", 0, high=MAX_SEED)
     compensate = gnss.boolean("compensate_latency", True)
     gnss.done()
-    outages = []
+    outages: list[tuple[float, float]] = []
     for out in top.tables("outage"):
         start = out.bounded("start_s", _B["outage.start_s"])
         end = out.bounded("end_s", _B["outage.end_s"])
         if end <= start:
             raise out.error(f"must come after start_s {start:g} s, got {end:g}", "end_s")
+        for k, (a, b) in enumerate(outages):  # each outage's figure is the error at its own end
+            if start < b and a < end:
+                raise out.error(
+                    f"{start:g}-{end:g} s overlaps outage[{k + 1}] ({a:g}-{b:g} s): give one outage of "
+                    f"{min(a, start):g}-{max(b, end):g} s",
+                    "start_s",
+                )
         out.done()
         outages.append((start, end))
     align = _alignment(top, imu_rate_hz)
