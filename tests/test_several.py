@@ -61,9 +61,11 @@ def test_one_recording_for_each_recording_reproduces_its_own_fit_bias() -> None:
 
 
 def _bounded_flight(seed: int, *, bias: np.ndarray, rest_s: float = 0.0, duration_s: float = 120.0,
-                    rate_hz: float = 200.0) -> ImuIncrements:  # fmt: skip
+                    rate_hz: float = 200.0,
+                    rest_offset: np.ndarray | None = None) -> ImuIncrements:  # fmt: skip
     """A vehicle that yaws freely, tilts by up to 15° and moves at up to ~1 m/s in a room (its velocity
-    bounded), after ``rest_s`` standing still; a gyro of bias ``bias`` and white noise; gravity 9.81 up.
+    bounded), after ``rest_s`` standing still; a gyro of bias ``bias`` (``bias + rest_offset`` at rest:
+    motors idling) and white noise; gravity 9.81 up.
     Written with numpy and scipy's Rotation only (increments: the exact turn of each step, its rotation
     vector; the specific force's mean over the step, trapezoid)."""
     rng = np.random.default_rng(seed)
@@ -80,7 +82,9 @@ def _bounded_flight(seed: int, *, bias: np.ndarray, rest_s: float = 0.0, duratio
     f_frame = a + np.array([0.0, 0.0, 9.81])
     f_b = att.inv().apply(f_frame)
     # White noise of 2e-3 rad/s a sample on the rate (its mean over a step).
-    dtheta = (att[:-1].inv() * att[1:]).as_rotvec() + (bias + rng.normal(0.0, 2e-3, (n, 3))) / rate_hz
+    still = 1.0 - moving[1:] if rest_offset is not None else np.zeros((n, 1))
+    bias_t = bias + still * (np.zeros(3) if rest_offset is None else rest_offset)
+    dtheta = (att[:-1].inv() * att[1:]).as_rotvec() + (bias_t + rng.normal(0.0, 2e-3, (n, 3))) / rate_hz
     dv = 0.5 * (f_b[:-1] + f_b[1:]) / rate_hz + rng.normal(0.0, 0.02, (n, 3)) / rate_hz
     return ImuIncrements(t=t, dtheta_b=dtheta, dv_b=dv)
 
@@ -103,6 +107,36 @@ def test_the_rest_rule_takes_the_opening_rest_and_nothing_before_it() -> None:
     np.testing.assert_array_equal(track[0], 0.0)  # before the rest has ended: the prior
     # After: the rest's mean rate, the bias to its noise (2e-3 rad/s a sample over 800 samples).
     np.testing.assert_allclose(track[-1], bias, atol=4 * 2e-3 / math.sqrt(800))
+
+
+def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() -> None:
+    """A unit whose bias moves by 4e-3 rad/s between two days and 2e-4 within one, each rest reading its
+    bias in flight plus a motor's 3e-4: trained on two recordings of each day, a new recording of day B
+    takes day B's bias after its rest (within 1e-3 rad/s, where the pooled prior is 1.5e-3 off or more on
+    every axis), and the pooled prior until its rest has ended; a recording of a day never seen (its rest
+    0.03 rad/s from every one) and one that opens moving take the pooled prior. Its spread is what each
+    training recording's prior from the others missed by: its day's sibling, not the pooled spread."""
+    rng = np.random.default_rng(11)
+    day_a = np.array([0.01, -0.02, 0.03])
+    day_b = day_a + 4e-3
+
+    def recording(seed: int, day: np.ndarray, rest_s: float = 3.0) -> tuple[np.ndarray, ImuIncrements]:
+        bias = day + rng.normal(0.0, 2e-4, 3)
+        motors = rng.normal(0.0, 3e-4, 3)
+        return bias, _bounded_flight(seed, bias=bias, rest_s=rest_s, duration_s=20.0, rest_offset=motors)
+
+    train = [recording(seed, day) for seed, day in ((21, day_a), (22, day_a), (23, day_b), (24, day_b))]
+    rule = unit_bias.rule_from(np.array([b for b, _ in train]), [s for _, s in train], mode="nearest")
+    assert np.all(rule.nearest_spread < 1e-3) and np.all(rule.spread > 1.5e-3), (
+        rule.nearest_spread,
+        rule.spread,
+    )
+    bias, new = recording(25, day_b)
+    track = unit_bias.bias_track(rule, new)
+    np.testing.assert_array_equal(track[0], rule.prior)  # before the rest has ended
+    assert np.abs(track[-1] - bias).max() < 1e-3 and np.abs(rule.prior - bias).min() > 1.5e-3
+    for far in (recording(26, day_a + 0.03)[1], recording(27, day_b, rest_s=0.0)[1]):
+        np.testing.assert_array_equal(unit_bias.bias_track(rule, far)[-1], rule.prior)
 
 
 @pytest.mark.parametrize("seed", [3, 4, 5])

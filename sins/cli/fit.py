@@ -189,7 +189,7 @@ def add(sub: Subparsers) -> None:
         "them to be fitted rather than held at zero (default consumer, the loosest; guide: compensation)",
     )  # fmt: skip
     p.add_argument(
-        "--bias-rule", choices=("pooled", "rest", "online", "rest+online"),
+        "--bias-rule", choices=("pooled", "rest", "online", "rest+online", "nearest", "nearest+online"),
         help="several recordings: how a new recording's gyro bias is taken (default: the one that does best "
         "on held-back recordings; the gyro left as read where each leaves one worse than its raw readings)",
     )  # fmt: skip

@@ -13,6 +13,16 @@ estimated from the recording itself, by one of these :data:`MODES`:
     specific force's direction and the mean rate both steady), plus the training recordings' own
     difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
     tremor: the bias at rest is not the bias in motion); ``pooled`` where the recording opens moving.
+``nearest``
+    the bias of the training recordings whose opening rests read most like this recording's: each
+    training recording weighted by how likely its rest's mean rate is this one's, given the two rests'
+    own noise and how far a rest says what the bias in flight will be (the training recordings' spread
+    of bias in motion less bias at rest); ``pooled`` where the recording opens moving, no training
+    recording opened with a rest, or none lies within reach (:data:`NEAREST_CHI2`). A unit's bias moves
+    most between power-ups and days, and a rest of a few seconds tells the day's bias apart where the
+    days differ by more than a rest's noise and its motors' effect: the prior is then the day's, not the
+    mean of all days. Its spread is what such priors missed by on the training recordings, each in turn
+    predicted from the others (leave one out).
 ``online``
     the bias's horizontal components (and what of the vertical one the motion reveals) estimated as the
     recording goes, from the one thing every recording of a vehicle that stays within reach knows: its
@@ -21,8 +31,9 @@ estimated from the recording itself, by one of these :data:`MODES`:
     (4.4 m/s after 30 s for 1e-3 rad/s), while the true velocity stays within a few m/s. Every
     :data:`UPDATE_S` the bias is estimated again by least squares on the velocity so far (the true
     velocity as noise of ``sigma_v``, the initial tilt and velocity and the accelerometer's bias as
-    nuisances), regularised towards the prior (``pooled`` or ``rest``) by the training recordings'
-    spread. Readings are corrected by the last estimate made before them (causal).
+    nuisances), regularised towards the prior by its spread: ``online`` from ``pooled``'s,
+    ``rest+online`` from ``rest``'s, ``nearest+online`` from ``nearest``'s. Readings are corrected by
+    the last estimate made before them (causal).
 
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
@@ -47,7 +58,7 @@ from sins.nav import attitude
 Array = NDArray[np.float64]
 
 #: The ways of estimating a recording's bias (see the module docstring).
-MODES = ("pooled", "rest", "online", "rest+online")
+MODES = ("pooled", "rest", "online", "rest+online", "nearest", "nearest+online")
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -59,6 +70,10 @@ REST_MAX_TILT_DEG = 1.0
 REST_MAX_RATE_STEP = 0.02
 #: The shortest opening rest used, s.
 MIN_REST_S = 1.0
+#: ``nearest``: a training recording's rest is within reach of this one's below this squared
+#: distance (the 99th percentile of chi-squared with 3 degrees of freedom: the three axes' differences,
+#: each in its standard deviations): beyond every one, the day is new, and the prior is ``pooled``.
+NEAREST_CHI2 = 11.34
 #: How often the online estimate is made again, s.
 UPDATE_S = 2.0
 #: Normal gravity's size for the velocity model, m/s² (the latitude is not known; only the horizontal
@@ -88,17 +103,31 @@ class BiasRule:
     rest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
     sigma_v_mps: float = 1.0
     sigma_accel_mps2: float = 0.2
+    rest_rates: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    rest_rates_se: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    rest_biases: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    nearest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
             raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join((*MODES, READINGS))})")
-        for key in ("prior", "spread", "rest_offset", "rest_spread"):
+        for key in ("prior", "spread", "rest_offset", "rest_spread", "nearest_spread"):
             value = np.asarray(getattr(self, key), dtype=float)
             if value.shape != (3,) or not np.isfinite(value).all():
                 raise ValueError(f"bias rule {key}: expected 3 finite numbers")
             object.__setattr__(self, key, value)
+        for key in ("rest_rates", "rest_rates_se", "rest_biases"):
+            value = np.asarray(getattr(self, key), dtype=float)
+            value = value.reshape(0, 3) if value.size == 0 else value
+            if value.ndim != 2 or value.shape[1] != 3 or not np.isfinite(value).all():
+                raise ValueError(f"bias rule {key}: expected rows of 3 finite numbers")
+            if len(value) != len(np.asarray(self.rest_rates).reshape(-1, 3)):
+                raise ValueError(f"bias rule {key}: expected as many rows as rest_rates")
+            object.__setattr__(self, key, value)
+        if np.any(self.rest_rates_se <= 0.0) or np.any(self.nearest_spread <= 0.0):
+            raise ValueError("bias rule: rest_rates_se and nearest_spread must be positive")
         if not (0.0 < self.sigma_v_mps < 1e3 and 0.0 < self.sigma_accel_mps2 < 1e3):
             raise ValueError("bias rule: sigma_v_mps and sigma_accel_mps2 must be in (0, 1000)")
         if np.any(self.spread <= 0.0) or np.any(self.rest_spread <= 0.0):
@@ -110,6 +139,8 @@ class BiasRule:
             "mode": self.mode, "prior": self.prior.tolist(), "spread": self.spread.tolist(),
             "rest_offset": self.rest_offset.tolist(), "rest_spread": self.rest_spread.tolist(),
             "sigma_v_mps": self.sigma_v_mps, "sigma_accel_mps2": self.sigma_accel_mps2,
+            "rest_rates": self.rest_rates.tolist(), "rest_rates_se": self.rest_rates_se.tolist(),
+            "rest_biases": self.rest_biases.tolist(), "nearest_spread": self.nearest_spread.tolist(),
             "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
         }  # fmt: skip
@@ -164,17 +195,60 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     dt = np.diff(imu.t)
     prior, sigma = rule.prior, rule.spread
     track = np.tile(prior, (len(dt), 1))
-    if rule.mode in ("rest", "rest+online"):
+    if rule.mode in ("rest", "rest+online", "nearest", "nearest+online"):
         omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
         rest = opening_rest(omega, force, float(np.median(dt)))
-        if rest:
+        if rest and rule.mode.startswith("rest"):
             # Before the rest has ended nothing better than the prior is known; after, its mean.
             prior = omega[:rest].mean(axis=0) + rule.rest_offset
             sigma = rule.rest_spread
             track[rest:] = prior
-    if rule.mode in ("online", "rest+online"):
+        elif rest:
+            near = nearest_prior(
+                rule, omega[:rest].mean(axis=0), _rest_se(omega[:rest], float(np.median(dt)))
+            )
+            if near is not None:
+                prior, sigma = near, rule.nearest_spread
+                track[rest:] = prior
+    if rule.mode in ("online", "rest+online", "nearest+online"):
         track = _online(imu, track, prior, sigma, rule)
     return track
+
+
+def nearest_prior(
+    rule: BiasRule, rest_rate: Array, rest_se: Array, leave_out: int | None = None
+) -> Array | None:
+    """``nearest``'s prior for a recording whose opening rest's mean rate is ``rest_rate`` (± ``rest_se``),
+    rad/s: the training recordings' biases (:attr:`BiasRule.rest_biases`) weighted by the likelihood of
+    their rests' mean rates being this one's, each axis's difference in standard deviations of the two
+    rests' noise and the spread of bias in motion less bias at rest (``rest_spread``); None where no
+    training recording's rest lies within :data:`NEAREST_CHI2` (``leave_out``: one training recording
+    left out, to judge the others' prediction of it)."""
+    keep = np.ones(len(rule.rest_rates), dtype=bool)
+    if leave_out is not None:
+        keep[leave_out] = False
+    if not keep.any():
+        return None
+    # Two rests of one day differ by their noise and by each one's own bias at rest less in motion.
+    var = rest_se**2 + rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
+    d2 = (((rule.rest_rates[keep] - rest_rate) ** 2) / var).sum(axis=1)
+    if d2.min() > NEAREST_CHI2:
+        return None
+    w = np.exp(-0.5 * (d2 - d2.min()))
+    return np.asarray((w[:, None] * rule.rest_biases[keep]).sum(axis=0) / w.sum(), dtype=float)
+
+
+def _rest_se(omega: Array, dt: float) -> Array:
+    """The standard error of a rest's mean rate, rad/s (3,): by batch means over windows of
+    :data:`REST_WINDOW_S` (a motor's vibration and the bias's own wander are not white), at least the
+    readings' white-noise standard error."""
+    n = max(1, round(REST_WINDOW_S / dt))
+    k = len(omega) // n
+    white = omega.std(axis=0) / np.sqrt(len(omega))
+    if k < 2:
+        return np.maximum(white, _MIN_SPREAD)
+    means = omega[: k * n].reshape(k, n, 3).mean(axis=1)
+    return np.maximum(np.maximum(means.std(axis=0, ddof=1) / np.sqrt(k), white), _MIN_SPREAD)
 
 
 def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
@@ -351,21 +425,39 @@ def rule_from(
     model's corrected readings) still hold, fitted against its reference. The prior is their mean, the
     spread their standard deviation (at least :data:`_MIN_SPREAD`); the rest offset the mean of bias
     less opening-rest rate over the recordings that open with a rest."""
-    offsets = []
+    offsets, rates, ses, rested = [], [], [], []
     for b, s in zip(biases, streams, strict=True):
         dt = np.diff(s.t)
         omega, force = s.dtheta_b / dt[:, None], s.dv_b / dt[:, None]
         rest = opening_rest(omega, force, float(np.median(dt)))
         if rest:
             offsets.append(b - omega[:rest].mean(axis=0))
+            rates.append(omega[:rest].mean(axis=0))
+            ses.append(_rest_se(omega[:rest], float(np.median(dt))))
+            rested.append(b)
     spread = np.maximum(biases.std(axis=0, ddof=1) if len(biases) > 1 else np.full(3, 1e-3), _MIN_SPREAD)
     off = np.array(offsets) if offsets else np.zeros((1, 3))
     rest_spread = np.maximum(off.std(axis=0, ddof=1), _MIN_SPREAD) if len(off) > 1 else spread
-    return BiasRule(
+    rule = BiasRule(
         mode=mode, prior=biases.mean(axis=0), spread=spread, rest_offset=off.mean(axis=0),
-        rest_spread=rest_spread, held_back_deg=held_back_deg or {},
-        held_back_each_deg=held_back_each_deg or {},
+        rest_spread=rest_spread, rest_rates=np.array(rates).reshape(-1, 3),
+        rest_rates_se=np.array(ses).reshape(-1, 3), rest_biases=np.array(rested).reshape(-1, 3),
+        held_back_deg=held_back_deg or {}, held_back_each_deg=held_back_each_deg or {},
     )  # fmt: skip
+    return replace(rule, nearest_spread=_nearest_spread(rule, spread))
+
+
+def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
+    """What ``nearest``'s prior missed by on the training recordings with a rest, each predicted from the
+    others (RMS per axis; a recording none of the others is near is predicted by the pooled prior, as a
+    new one would be); the pooled spread where fewer than three have a rest."""
+    if len(rule.rest_rates) < 3:
+        return pooled
+    misses = []
+    for i in range(len(rule.rest_rates)):
+        near = nearest_prior(rule, rule.rest_rates[i], rule.rest_rates_se[i], leave_out=i)
+        misses.append(rule.rest_biases[i] - (rule.prior if near is None else near))
+    return np.asarray(np.maximum(np.sqrt(np.mean(np.square(misses), axis=0)), _MIN_SPREAD), dtype=float)
 
 
 #: The least spread a rule takes, rad/s (0.2 °/h): two recordings that happen to agree say little more.
@@ -387,6 +479,7 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 __all__ = [
     "MIN_REST_S",
     "MODES",
+    "NEAREST_CHI2",
     "READINGS",
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
@@ -398,6 +491,7 @@ __all__ = [
     "bias_track",
     "corrected",
     "corrected_any",
+    "nearest_prior",
     "open_loop_deg",
     "opening_rest",
     "rule_from",
