@@ -283,7 +283,7 @@ def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]
         # A damp loop shorter than two steps: before, NaN, and a message that blamed the data.
         "damp-loop-too-short": (
             ["integrate", str(imu), "--truth", str(truth), "--vertical", "damp", "--vertical-tau-s", "0.001"],
-            "--vertical-tau-s 0.001: with --vertical damp at least 2 IMU steps",
+            "--vertical-tau-s 0.001: with the vertical channel damped, at least 2 IMU steps",
         ),
         "nonexistent-imu": (["integrate", str(tmp / "nope.csv"), "--truth", str(truth)], "nope.csv"),
         "nonexistent-truth": (["integrate", str(imu), "--truth", str(tmp / "nope.csv")], "nope.csv"),

@@ -199,20 +199,13 @@ def add_plot(p: argparse.ArgumentParser, what: str) -> None:
 
 
 def vertical_tau(args: argparse.Namespace, t: Any) -> float:
-    """``--vertical-tau-s`` checked against the recording's step ``t`` (s): with ``--vertical damp``, at
-    least the integrator's ``MIN_TAU_SAMPLES`` steps (a shorter loop is unstable: a scenario's
-    ``vertical_tau_s`` is held to the same), refused naming the flag."""
-    import numpy as np
+    """``--vertical-tau-s``, refused naming the flag where the integrator refuses it beside the times
+    ``t`` (:func:`sins.nav.strapdown.damp_loop_problem`: a scenario's bound too)."""
+    from sins.nav.strapdown import damp_loop_problem
 
-    from sins.nav.strapdown import MIN_TAU_SAMPLES
-
-    tau, step = float(args.vertical_tau_s), float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    if args.vertical == "damp" and tau < MIN_TAU_SAMPLES * step * (1.0 - 1e-9):
-        raise SinsInputError(
-            f"--vertical-tau-s {tau:g}: with --vertical damp at least {MIN_TAU_SAMPLES} IMU steps "
-            f"({MIN_TAU_SAMPLES * step:g} s at {1.0 / step:g} Hz): a shorter damp loop is unstable"
-        )
-    return tau
+    if problem := damp_loop_problem(args.vertical, args.vertical_tau_s, t):
+        raise SinsInputError(f"--vertical-tau-s {args.vertical_tau_s:g}: {problem}")
+    return float(args.vertical_tau_s)
 
 
 def dataset_inputs(name: str | None) -> list[Path]:

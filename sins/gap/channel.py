@@ -103,6 +103,9 @@ class ChannelModel:
     loglik_rows: Array | None = None
     fit_loglik: float = np.nan
     coefficients: Array | None = None
+    #: A random bias's size once fitted, SI: a Gauss–Markov bias's stationary σ and correlation time τ
+    #: (s), a walk's density (per √s) (:func:`sins.gap.randombias.sizes`).
+    process_size: tuple[float, ...] | None = None
 
     @property
     def late(self) -> DelayedInputs | None:
@@ -222,14 +225,14 @@ class ChannelModel:
         coef, scale = design.lstsq(error, rows, rcond, scale_rows=self.fit)
         design = design.scaled_by(scale)
         pred = design.predict(coef)
-        fit_loglik = self.fit_loglik
+        fit_loglik, process_size = self.fit_loglik, self.process_size
         if self.process is not None:
             least_squares = error - pred
             del pred  # what least squares leave is all the random bias's fit needs of them
             process = self._with_random_bias(error, least_squares, design, rows, rcond)
             if process is None:  # not this process: see randombias.falsified
                 return dataclasses.replace(self, delay_s=delay_s, predicted=np.full_like(error, np.nan))
-            pred, fit_loglik, coef = process
+            pred, fit_loglik, coef, process_size = process
         if lag is not None:
             pred = pred + lag
         quantizer, loglik_rows = self.quantizer, self.loglik_rows
@@ -247,14 +250,16 @@ class ChannelModel:
             loglik_rows=loglik_rows,
             fit_loglik=fit_loglik,
             coefficients=coef / scale,
+            process_size=process_size,
         )
 
     def _with_random_bias(
         self, error: Array, residual: Array, design: Design, rows: NDArray[np.bool_], rcond: float | None
-    ) -> tuple[Array, float, Array] | None:
+    ) -> tuple[Array, float, Array, tuple[float, ...]] | None:
         """Given what least squares leave of ``error`` (``residual``), the regressors refitted beside
         the random bias and the bias's one-step prediction added: the predicted error of every row,
-        the process's fit-row log-likelihood and the regressors' coefficients (None: falsified).
+        the process's fit-row log-likelihood, the regressors' coefficients and the bias's size
+        (:func:`sins.gap.randombias.sizes`) (None: falsified).
 
         A random bias misleads least squares: a walk's level in each static position passes for
         scale factors. Generalised least squares instead: the innovations filter is linear, so the
@@ -273,7 +278,7 @@ class ChannelModel:
             return None
         out = np.add(pred, y, out=pred)
         out -= process.innovations
-        return out, process.fit_loglik, coef
+        return out, process.fit_loglik, coef, randombias.sizes(process.phi, process.q, self.x.step_s)
 
     def _fit_process(self, y: Array) -> randombias.RandomBiasFit:
         """The random bias under the residual ``y``, its white part from first differences within the

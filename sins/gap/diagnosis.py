@@ -467,7 +467,8 @@ def _report(
 
 def _sizes(state: _Search) -> dict[str, dict[str, list[float]]]:
     """Each accepted effect's fitted size per channel, SI: a regressor effect's coefficients (its block
-    of each channel's columns), a delay's seconds, a quantizer's step; a random bias's, a clip's: none."""
+    of each channel's columns), a delay's seconds, a quantizer's step, a random bias's parameters
+    (:func:`sins.gap.randombias.sizes`); a clip's: none."""
     out: dict[str, dict[str, list[float]]] = {}
     for name, channels in state.blocks.items():
         kind = CANDIDATES[name].kind
@@ -482,6 +483,8 @@ def _sizes(state: _Search) -> dict[str, dict[str, list[float]]]:
                 out[name][CHANNELS[i]] = [float(m.delay_s)]
             elif name.endswith("quantization") and m.lattice is not None:
                 out[name][CHANNELS[i]] = [float(m.lattice.step)]
+            elif kind == "process" and m.process_size is not None:
+                out[name][CHANNELS[i]] = [float(v) for v in m.process_size]
     return {n: v for n, v in out.items() if v}
 
 

@@ -151,6 +151,16 @@ class RandomBiasFit:
         return [(self.phi, steady_gain(self.phi, ratio * self.r, self.r)[0]) for ratio in self.ratios]
 
 
+def sizes(phi: float, q: float, step_s: float) -> tuple[float, ...]:
+    """A random bias's size in the library's terms from its discrete model ``b' = φ b + w`` (``w`` of
+    variance ``q``) at steps of ``step_s``: a Gauss–Markov bias's stationary σ = √(q / (1 − φ²)) and
+    correlation time τ = −step / ln φ (:class:`sins.imu.BiasInstability`'s ``sigma``, ``tau``); a walk's
+    (φ = 1) density √(q / step) (:class:`sins.imu.RateRandomWalk`'s ``density``)."""
+    if phi >= 1.0:
+        return (float(np.sqrt(q / step_s)),)
+    return float(np.sqrt(q / (1.0 - phi * phi))), float(-step_s / np.log(phi))
+
+
 def fit(y: Array, rows: NDArray[np.bool_], step_s: float, r: float, walk: bool) -> RandomBiasFit:
     """The (φ, q) maximising the innovations' likelihood on ``rows``, over a grid of τ and q/r.
 
@@ -227,5 +237,6 @@ __all__ = [
     "fit",
     "innovations",
     "log_likelihood",
+    "sizes",
     "steady_gain",
 ]

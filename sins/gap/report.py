@@ -107,7 +107,7 @@ class GapReport:
     predicted_after: Array = field(default_factory=lambda: np.zeros((0, 6)))
     #: Per accepted effect and channel, its fitted coefficients, SI (:func:`in_units` gives them in its
     #: parameters' units): its columns' coefficients in the order its class gives them, a delay's
-    #: seconds, a quantizer's step; a random bias's correlation time (s) where the intervals fit it.
+    #: seconds, a quantizer's step; a random bias's σ and correlation time (s), or a walk's density.
     sizes: dict[str, dict[str, list[float]]] = field(default_factory=dict)
     #: Which statistic the verdicts were reached on, and why (``sins.unit_gap.statistic``); empty when
     #: :func:`sins.gap.diagnose` is called directly (samples).
@@ -142,10 +142,9 @@ def in_units(name: str, values: list[float]) -> tuple[list[float], str]:
     one vector parameter per column (``k2``; a temperature bias's ``c1`` and ``c2``), else its one
     matrix parameter's for all (a size effect's lever arm, mm; a g² sensitivity's coefficients of
     ``f_j f_k``, °/h/g², where those of the cross products are twice the symmetric tensor's element).
-    A random bias's correlation time is in s; an effect without parameters keeps SI ("SI")."""
-    sensor, kind = name.split(".")
-    if kind in ("bias_instability", "rate_random_walk"):
-        return list(values), "s (correlation time)"
+    A random bias's σ and correlation time, or a walk's density, are its class's parameters; an effect
+    without parameters keeps SI ("SI")."""
+    sensor = name.split(".")[0]
     cls = vocabulary.effect_class(name)
     params = [p for p in cls.params.get(sensor, ()) if p.shape != ()]
     vectors = [p for p in params if p.shape == (3,)]

@@ -307,6 +307,17 @@ def _batch_kernel(
 MIN_TAU_SAMPLES = 2
 
 
+def damp_loop_problem(vertical: str, tau_s: float, t: Array) -> str:
+    """What is wrong with a "damp" loop of ``tau_s`` beside the sample times ``t`` ("" where nothing):
+    it must span :data:`MIN_TAU_SAMPLES` steps at least (a step's rounding passes)."""
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    if vertical != "damp" or tau_s >= MIN_TAU_SAMPLES * step * (1.0 - 1e-9):
+        return ""
+    shortest = MIN_TAU_SAMPLES * step
+    return (f"with the vertical channel damped, at least {MIN_TAU_SAMPLES} IMU steps ({shortest:g} s at "
+            f"{1.0 / step:g} Hz): a shorter damp loop is unstable")  # fmt: skip
+
+
 def _vertical_args(
     vertical: VerticalMode, h_ref: Array | None, n: int, h0: float, tau_s: float, t: Array
 ) -> tuple[int, Array, float, float]:
@@ -320,12 +331,8 @@ def _vertical_args(
         raise ValueError(f"h_ref must have one height per sample time, shape ({n + 1},), got {h_ref.shape}")
     if not tau_s > 0:
         raise ValueError(f"vertical_tau_s must be positive, got {tau_s}")
-    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    if vertical == "damp" and tau_s < MIN_TAU_SAMPLES * step * (1.0 - 1e-9):  # a step's rounding passes
-        raise ValueError(
-            f"vertical_tau_s must be at least {MIN_TAU_SAMPLES} IMU steps ({MIN_TAU_SAMPLES * step:g} s at "
-            f"{1.0 / step:g} Hz): a shorter damp loop is unstable, got {tau_s:g}"
-        )
+    if problem := damp_loop_problem(vertical, tau_s, t):
+        raise ValueError(f"vertical_tau_s {tau_s:g}: {problem}")
     # Critically damped: s² + 2s/τ + 1/τ², far faster than the 570 s instability.
     return mode, h_ref, 2.0 / tau_s, 1.0 / tau_s**2
 
@@ -531,6 +538,7 @@ __all__ = [
     "InitialState",
     "advance",
     "current",
+    "damp_loop_problem",
     "integrate",
     "integrate_batch",
     "moved",

@@ -50,15 +50,20 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
 
 
 def size_text(per_channel: dict[str, Any]) -> str:
-    """One recording's sizes of an effect, short: per channel its value (or, for several, the largest
-    in magnitude), then the unit."""
+    """One recording's sizes of an effect, short: per channel its value (where each value has a
+    parameter of its own, a random bias's σ and τ, all of them; for several of one parameter, the
+    largest in magnitude), then the unit."""
     parts, unit = [], ""
     for ch, v in per_channel.items():
         values = np.asarray(v["values"], dtype=float)
         unit = v["unit"]
-        shown = values[0] if len(values) == 1 else values[np.argmax(np.abs(values))]
-        mark = "" if len(values) == 1 else " (largest)"
-        parts.append(f"{ch.split('.')[1]} {shown:.3g}{mark}")
+        if " | " in unit:  # one value per parameter, in the unit's order
+            shown = " | ".join(f"{x:.3g}" for x in values)
+        elif len(values) == 1:
+            shown = f"{values[0]:.3g}"
+        else:
+            shown = f"{values[np.argmax(np.abs(values))]:.3g} (largest)"
+        parts.append(f"{ch.split('.')[1]} {shown}")
     return f"{', '.join(parts)} {unit}".strip()
 
 

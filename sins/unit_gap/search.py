@@ -80,15 +80,19 @@ class SensorState:
     accepted: list[Candidate] = field(default_factory=list)
     aside: set[int] = field(default_factory=set)  # axes a disturbance outside the library explains
     phis: Array = field(default_factory=lambda: NO_WANDER)  # the wander its noise may take
+    disturbances: list[Array] = field(default_factory=list)  # their columns (k, 3, q), every component
 
     def columns(self, extra: Candidate | None = None) -> Array:
         """The baseline's and the accepted candidates' columns (and ``extra``'s), on the axes not set
-        aside for a candidate."""
+        aside for a candidate, then the set-aside disturbances' own: an interval's residual is in the
+        interval's turning axes, so a step on one axis shows on the others as the body turns (a 0.3 °/s
+        gyro x step on EuRoC's MH_02 had y and z take a g² sensitivity 3× their own, and leave them
+        unexplained)."""
         axes = [a for a in range(3) if a not in self.aside]
         blocks = [self.baseline] + [c.columns(axes) for c in self.accepted]
         if extra is not None:
             blocks.append(extra.columns(axes))
-        return np.concatenate(blocks, axis=2)
+        return np.concatenate(blocks + self.disturbances, axis=2)
 
 
 @dataclass(frozen=True)
@@ -310,6 +314,9 @@ def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Out
         if disturbance is not None:
             found.append(disturbance)
             st.aside.add(axis)
+            st.disturbances.append(next(t.columns for t in tried if t.outside is disturbance))
+    if found:  # the noise is the model's, as when an effect is accepted (_accept)
+        st.fit = SensorFit.of(st.fit.y, st.fit.fit, st.fit.withheld, st.fit.joined, st.columns(), st.phis)
     return found
 
 
@@ -367,13 +374,8 @@ def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, l
         axes = [a for a in range(3) if a not in st.aside]
         for cand in st.accepted:
             out[cand.name] = {}
-            if cand.phis is not None:  # a Gauss-Markov bias: its correlation time, s; a walk: none
-                if cand.name.endswith("bias_instability"):
-                    out[cand.name] = {
-                        f"{sensor}.{'xyz'[a]}": [_correlation_time(float(st.fit.phi[a]), span)] for a in axes
-                    }
-                else:
-                    del out[cand.name]
+            if cand.phis is not None:  # a random bias: its parameters, from the intervals' noise model
+                out[cand.name] = {f"{sensor}.{'xyz'[a]}": _process_size(st.fit, a, span) for a in axes}
                 continue
             for a in axes:
                 width = cand.per_axis[a].shape[2]
@@ -382,9 +384,20 @@ def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, l
     return out
 
 
-def _correlation_time(phi: float, interval_s: float = 1.0) -> float:
-    """A Gauss-Markov bias's correlation time, s, from its coefficient between intervals of ``interval_s``."""
-    return float(-interval_s / np.log(phi)) if 0.0 < phi < 1.0 else float("inf")
+def _process_size(fit: SensorFit, axis: int, span: float) -> list[float]:
+    """A random bias's parameters from the intervals' noise model on component ``axis``: ``(1 − φB) y =
+    (1 + θB) a``, ``a`` of spread σ, read as the bias over an interval of ``span`` s (``y = T b + n``, ``n``
+    white) that moves as ``b' = φ b + w``. Matching the two sides' autocovariances, ``T² var(w) = σ²
+    (1 + θ² + θ (1 + φ²) / φ)``: a Gauss–Markov bias's stationary σ = √(var(w) / (1 − φ²)) and correlation
+    time τ = −T / ln φ; a walk's (φ = 1; the bias averaged over each interval) density σ (1 + θ) / T^1.5
+    (the library's parameters, :func:`sins.gap.randombias.sizes`' on samples)."""
+    phi, theta, sigma = float(fit.phi[axis]), float(fit.theta[axis]), float(fit.sigma[axis])
+    if phi >= 1.0:
+        return [max(sigma * (1.0 + theta), 0.0) / span**1.5]
+    if not phi > 0.0:
+        return [0.0, float("inf")]
+    drive = max(sigma**2 * (1.0 + theta**2 + theta * (1.0 + phi**2) / phi), 0.0) / span**2
+    return [float(np.sqrt(drive / (1.0 - phi**2))), float(-span / np.log(phi))]
 
 
 def interval_noise_level(residual: Array, joined: Rows) -> float:
