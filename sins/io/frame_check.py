@@ -1,5 +1,7 @@
 """What a recording's axes are, as far as its data show them: beside a reference attitude, whether that
-attitude is of the readings' axes (its turns are the gyro's, gravity's reaction in it points up) and how
+attitude is of the readings' axes (its turns are the gyro's, gravity's reaction in it points up, its
+acceleration is the accelerometer's, no axis of the readings dead where it moves), whether its positions
+are what its velocities integrate to, and how
 its clock sits against the readings' (the shift at which its turns agree best); without one, the
 readings' axes against FRD's, from gravity at rest and the lateral force in a land vehicle's turns.
 Part of :func:`sins.io.inspection.inspect`."""
@@ -9,8 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.core import rotation
-from sins.core.earth import radii as local_radii
+from sins.core import earth, rotation
 from sins.core.series import NavSeries, ReferencedRecording
 from sins.io import axes, local
 from sins.io.findings import Finding, ReferenceLag, Rest, Windows
@@ -50,7 +51,7 @@ _G = 9.806
 #: acceleration (its velocity's change over the window) are compared, s ...
 MOTION_WINDOW_S = 0.5
 #: ... where the reference's horizontal acceleration varies by this much at least (RMS about its mean
-#: over the windows, m/s²: a drone's or a hand's motion, 0.3-1.5; still, nothing to compare) ...
+#: over the windows, m/s²; below it, too little motion to compare) ...
 ACCEL_SEEN_MPS2 = 0.1
 #: ... and must not correlate below minus this (an accelerometer read negated: -0.99 on EuRoC's V1_02,
 #: its world turned upside down to match it). Only against the motion is refused: a gentle motion's
@@ -279,7 +280,7 @@ def _position_findings(truth: NavSeries) -> list[Finding]:
     if len(at) < 4:
         return []
     lat, h = truth.lat, truth.h
-    r_m, r_n = local_radii(lat)
+    r_m, r_n = earth.radii(lat)
     north = (lat - lat[0]) * (r_m + h)
     east = (np.unwrap(truth.lon) - truth.lon[0]) * (r_n + h) * np.cos(lat)
     moved = np.diff(np.column_stack([north, east, -(h - h[0])])[at], axis=0)
