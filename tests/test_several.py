@@ -135,8 +135,13 @@ def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() ->
     track = unit_bias.bias_track(rule, new)
     np.testing.assert_array_equal(track[0], rule.prior)  # before the rest has ended
     assert np.abs(track[-1] - bias).max() < 1e-3 and np.abs(rule.prior - bias).min() > 1.5e-3
-    for far in (recording(26, day_a + 0.03)[1], recording(27, day_b, rest_s=0.0)[1]):
-        np.testing.assert_array_equal(unit_bias.bias_track(rule, far)[-1], rule.prior)
+    far, moving = recording(26, day_a + 0.03)[1], recording(27, day_b, rest_s=0.0)[1]
+    for other in (far, moving):
+        np.testing.assert_array_equal(unit_bias.bias_track(rule, other)[-1], rule.prior)
+    # What sins evaluate says of each, beside the judged figures.
+    assert "reads like some training recordings' rests" in unit_bias.prior_said(rule, new)
+    assert "reads like no training recording's" in unit_bias.prior_said(rule, far)
+    assert "opens moving" in unit_bias.prior_said(rule, moving)
 
 
 @pytest.mark.parametrize("seed", [3, 4, 5])

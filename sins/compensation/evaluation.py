@@ -153,6 +153,8 @@ def evaluate_referenced(
     as_read = strategy.leaves_gyro_as_read()
     if as_read:
         lines.append(GYRO_AS_READ)
+    elif said := _prior_said(strategy, rec):
+        lines.append(said)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
     document: dict[str, Any] = {
@@ -168,6 +170,17 @@ def evaluate_referenced(
     if drive is not None:
         document["drive"] = _drive(strategy, rec, drive, lines, stage)
     return Evaluation(lines, document, runs=runs, table=table)
+
+
+def _prior_said(strategy: Strategy, rec: ReferencedRecording) -> str:
+    """Where a model fitted on several recordings took this recording's gyro bias prior, in words
+    (:func:`sins.compensation.unit_bias.prior_said`); "" for another model."""
+    rule = getattr(strategy, "unit_bias_", None)
+    if not isinstance(rule, dict):
+        return ""
+    from sins.compensation import unit_bias
+
+    return unit_bias.prior_said(unit_bias.BiasRule.from_dict(rule), strategy.correct_increments(rec.imu))
 
 
 def _reference_notes(

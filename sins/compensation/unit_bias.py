@@ -215,6 +215,27 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     return track
 
 
+def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
+    """Where the rule took the prior of a recording's gyro bias (its corrected increments ``imu``), in
+    words ("" for a rule that takes no prior from the recording): what ``sins evaluate`` says, so that a
+    judged figure can be read with the rule's reason beside it."""
+    if rule.mode not in ("rest", "rest+online", "nearest", "nearest+online"):
+        return ""
+    dt = np.diff(imu.t)
+    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
+    rest = opening_rest(omega, force, float(np.median(dt)))
+    head = f"a new recording's gyro bias (rule {rule.mode}): "
+    if not rest:
+        return head + "it opens moving, so its prior is the training recordings' mean"
+    rest_s = f"its opening rest of {rest * float(np.median(dt)):.1f} s"
+    if rule.mode.startswith("rest"):
+        return head + f"the prior is {rest_s}'s mean rate and the training recordings' motion offset"
+    still = omega[:rest]
+    if nearest_prior(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt)))) is None:
+        return head + f"{rest_s} reads like no training recording's, so its prior is their mean"
+    return head + f"{rest_s} reads like some training recordings' rests: the prior is their bias"
+
+
 def nearest_prior(
     rule: BiasRule, rest_rate: Array, rest_se: Array, leave_out: int | None = None
 ) -> Array | None:
@@ -494,6 +515,7 @@ __all__ = [
     "nearest_prior",
     "open_loop_deg",
     "opening_rest",
+    "prior_said",
     "rule_from",
     "with_mode",
 ]
