@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from sins import __version__
@@ -40,6 +41,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         f"wrote {args.imu} ({args.form} form, {len(sim.readings)} rows, {unit}) and {args.truth} "
         f"({len(sim.truth)} rows)"
     )
+    if sc.vertical != "free":  # sins integrate's default is free: say how to integrate as sins run does
+        tau = f" --vertical-tau-s {sc.vertical_tau_s:g}" if sc.vertical == "damp" else ""
+        flags = f"--vertical {sc.vertical}{tau}"
+        print(f"sins: note: the scenario's vertical channel is {sc.vertical}: sins integrate {args.imu} "
+              f"--truth {args.truth} {flags} integrates as sins run does", file=sys.stderr)  # fmt: skip
     return 0
 
 
