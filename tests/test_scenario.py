@@ -17,6 +17,7 @@ from conftest import refusal
 from scipy.spatial.transform import Rotation
 
 from sins import io, scenario
+from sins.cli import main
 from sins.imu import calibration
 from sins.nav import motion, trajectory
 from sins.runs import pipeline
@@ -415,6 +416,20 @@ def test_a_truth_whose_velocities_do_not_integrate_to_its_positions_is_refused(t
             lambda: scenario.build_motion(sc),
             "truth.csv: its velocities do not integrate to its positions: at t = ",
         )
+
+
+def test_a_motion_end_between_two_samples_is_said(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A run has ``floor(duration · rate)`` intervals: a 2.5 s turn at 1 Hz ran 2 s and never ended its
+    turn, without a word (a walkthrough). ``sins run`` says so; whole intervals say nothing."""
+    doc = {"name": "short", "imu": {"rate_hz": 1}, "initial": {"lat_deg": 45.0},
+           "segment": [{"type": "turn", "duration_s": 2.5, "angle_deg": 90.0}]}  # fmt: skip
+    assert scenario.unsampled_end(scenario.from_dict(doc)).startswith("the motion lasts 2.5 s; at 1 Hz its")
+    doc["imu"]["rate_hz"] = 2  # type: ignore[index]
+    assert scenario.unsampled_end(scenario.from_dict(doc)) == ""
+    doc["imu"]["rate_hz"] = 1  # type: ignore[index]
+    (tmp_path / "short.toml").write_text(_toml(doc), encoding="utf-8")
+    assert main(["run", str(tmp_path / "short.toml")]) == 0
+    assert "its last 0.5 s, shorter than an interval, are not run" in capsys.readouterr().err
 
 
 def test_truth_table_too_short(tmp_path: Path) -> None:

@@ -28,6 +28,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     with progress_bar(f"simulating {sc.name}", ""):
         sim = pipeline.simulate_readings(sc, args.form, ideal=args.ideal)
     scenario.check_latitude(sc, sim.truth)
+    if note := scenario.unsampled_end(sc):
+        print(f"sins: note: {path}: {note}", file=sys.stderr)
     unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
     model = "" if sim.model is None else f", IMU file {sim.model}"
     note = f"sins {__version__}: {unit} of scenario {sc.name} ({path}{model})"

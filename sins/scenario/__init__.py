@@ -33,7 +33,7 @@ shipped presets by name), :mod:`~sins.scenario.schema` (the dataclasses),
 """
 
 from sins.nav.vertical import VERTICAL_MODES
-from sins.scenario.build import MAX_LAT_DEG, build_motion, check_latitude, sample_count
+from sins.scenario.build import MAX_LAT_DEG, build_motion, check_latitude, sample_count, unsampled_end
 from sins.scenario.files import RIG_BOUNDS, load_imu, load_rig, rig_rows
 from sins.scenario.presets import PresetKind, find_preset, preset_dir, preset_or_path, presets, resolve_preset
 from sins.scenario.schema import (
@@ -89,4 +89,5 @@ __all__ = [
     "resolve_preset",
     "rig_rows",
     "sample_count",
+    "unsampled_end",
 ]

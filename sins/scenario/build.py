@@ -12,7 +12,7 @@ from sins.core import earth
 from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.nav import motion, trajectory
-from sins.scenario.schema import Scenario, SegmentsSpec, WaypointsSpec
+from sins.scenario.schema import Scenario, SegmentsSpec, TruthFileSpec, WaypointsSpec
 from sins.scenario.validate import MAX_DURATION_S
 
 
@@ -111,6 +111,21 @@ def build_motion(scenario: Scenario) -> motion.Motion:
     return motion.RecordedMotion.from_series(truth)
 
 
+def unsampled_end(scenario: Scenario) -> str:
+    """What of a segment or waypoint motion's end falls after its last sample, in words ("" where
+    nothing does, and for a truth file, which the samples cover as it was recorded): a run has
+    ``floor(duration · rate)`` intervals, so at 1 Hz a 2.5 s motion runs 2 s and never ends its turn."""
+    if isinstance(scenario.trajectory, TruthFileSpec):
+        return ""
+    m = build_motion(scenario)
+    span = m.t_end - m.t_start
+    covered = trajectory.interval_count(span, scenario.rate_hz) / scenario.rate_hz
+    if span - covered <= 1e-9 * max(1.0, span):
+        return ""
+    return (f"the motion lasts {span:g} s; at {scenario.rate_hz:g} Hz its samples end at {covered:g} s, and "
+            f"its last {span - covered:.6g} s, shorter than an interval, are not run")  # fmt: skip
+
+
 def sample_count(scenario: Scenario, motion_: motion.Motion | None = None) -> float:
     """How many IMU samples the scenario's run has (a float: it may be far beyond any array's size).
 
@@ -152,4 +167,5 @@ __all__ = [
     "build_motion",
     "check_latitude",
     "sample_count",
+    "unsampled_end",
 ]
