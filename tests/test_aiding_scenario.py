@@ -158,6 +158,12 @@ def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
     refusal(lambda: pipeline.run_scenario(from_dict(moving)), "alignment.static_s", "the vehicle moves")
     long = _with(alignment={"static_s": 3000.0})
     refusal(lambda: pipeline.run_scenario(from_dict(long)), "alignment.static_s", "longer than the run")
+    # Aligning in motion through an outage of the whole run: said so (it read "the GNSS speed never
+    # reaches 5 m/s (at most 0 m/s)", where no fix gave a speed at all).
+    blind = _with(alignment={"method": "gnss_velocity"}, outage=[{"start_s": 0.0, "end_s": 1e4}])
+    refusal(
+        lambda: pipeline.run_scenario(from_dict(blind)), "alignment.min_speed_mps", "give a speed (outages?)"
+    )
     # Through the command line: exit 2 and the file's name.
     path = tmp_path / "bad.toml"
     path.write_text(to_toml(_with(outage=[{"start_s": 5.0, "end_s": 5.0}])), encoding="utf-8")

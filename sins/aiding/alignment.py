@@ -270,10 +270,14 @@ def _aligning_fix(
     fast = np.nan_to_num(speed, nan=0.0) >= motion.min_speed_mps
     rows = np.flatnonzero(fast & (valid - motion.level_s >= imu.t[0] - 1e-9) & (valid <= imu.t[-1]))
     if rows.size == 0:
-        top = float(np.nanmax(speed)) if np.any(np.isfinite(speed)) else 0.0
+        if not np.any(np.isfinite(speed)):  # no fix, or none with one before it within the baseline
+            why = f"no two GNSS fixes within {motion.baseline_s:g} s of each other give a speed (outages?)"
+        else:
+            top = float(np.nanmax(speed))
+            why = f"the GNSS speed never reaches {motion.min_speed_mps:g} m/s (at most {top:.3g} m/s)"
         raise SinsInputError(
-            f"alignment.min_speed_mps: the GNSS speed never reaches {motion.min_speed_mps:g} m/s (at most "
-            f'{top:.3g} m/s): align still (method = "static") or start from the truth (method = "truth")'
+            f'alignment.min_speed_mps: {why}: align still (method = "static") or start from the truth '
+            '(method = "truth")'
         )
     j = int(rows[0])
     return j, v[j], sigma[j], float(lag[j]), v, sigma
