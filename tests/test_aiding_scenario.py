@@ -171,6 +171,20 @@ def test_bad_aiding_tables_are_refused_in_one_line(tmp_path: Path):
     assert rc == 2 and str(path) in err and "outage[1].end_s" in err and err.count("\n") <= 1
 
 
+def test_an_outage_past_the_runs_end_is_shown_to_that_end(tmp_path: Path):
+    """An outage that the run's end cuts short was labelled with its whole window (a walkthrough's
+    550-700 s of a 600 s run), its figure the run's last sample's: now shown to the run's end."""
+    short = _with(imu={"rate_hz": 20, "model": "tactical", "seed": 1}, alignment={"static_s": 20.0},
+                  outage=[{"start_s": 30.0, "end_s": 500.0}])  # fmt: skip
+    short["segment"] = [{"type": "hold", "duration_s": 25.0}, {"type": "accelerate", "duration_s": 15.0,
+                                                               "to_speed_mps": 10.0, "ramp_s": 2.0}]  # fmt: skip
+    path = tmp_path / "short.toml"
+    path.write_text(to_toml(short), encoding="utf-8")
+    rc, out, err = run_cli(["run", str(path)])
+    assert rc == 0, err
+    assert "30-40 s (the run's end)" in out and "30-500 s" not in out
+
+
 def test_a_scenario_without_gnss_reports_no_aided_runs(tmp_path: Path):
     plain = _with(gnss=None, outage=None, alignment=None, imu={"rate_hz": 20})
     plain["segment"] = plain["segment"][:1]

@@ -74,7 +74,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         check_finite(summary, f"{path}: aided strategy {name}")
     if aided:
         grade = next(iter(result.aided.values())).filter_grade
-        report.append(_aided_report(sc, aided, outages, grade))
+        report.append(_aided_report(sc, aided, outages, grade, float(result.truth.t[-1])))
     print("\n".join(report))
     if args.json:
         io.write_report(args.json, result.to_dict(str(path)))
@@ -122,9 +122,11 @@ def format_residuals(residuals: dict[str, dict[str, float]]) -> str:
 
 
 def _aided_report(
-    sc: Scenario, aided: dict[str, dict[str, Any]], outages: dict[str, list[dict[str, float]]], grade: str
-) -> str:
-    """The aided runs' table and, if any, the errors per outage."""
+    sc: Scenario, aided: dict[str, dict[str, Any]], outages: dict[str, list[dict[str, float]]], grade: str,
+    end_s: float,
+) -> str:  # fmt: skip
+    """The aided runs' table and, if any, the errors per outage (one past the run's end ``end_s``, s,
+    shown to that end)."""
     a = sc.aiding
     assert a is not None  # only aided scenarios have aided runs
     start = _alignment_text(a, next(iter(aided.values())))
@@ -150,8 +152,11 @@ def _aided_report(
     windows = [(name, o) for name, items in outages.items() for o in items]
     if windows:
         text.append("\nposition error per outage (horizontal, before the first fix after it)")
-        rows = [[name, f"{o['start_s']:g}-{o['end_s']:g} s", f"{o['final_horizontal_m']:.3f}",
-                 f"{o['max_horizontal_m']:.3f}"] for name, o in windows]  # fmt: skip
+        rows = []
+        for name, o in windows:
+            past = " (the run's end)" if o["end_s"] > end_s else ""
+            label = f"{o['start_s']:g}-{min(o['end_s'], end_s):g} s{past}"
+            rows.append([name, label, f"{o['final_horizontal_m']:.3f}", f"{o['max_horizontal_m']:.3f}"])
         text.append(fixed_width(["strategy", "outage", "at end m", "max m"], rows))
     return "\n".join(text)
 
