@@ -176,8 +176,10 @@ def test_an_outage_past_the_runs_end_is_shown_to_that_end(tmp_path: Path):
     550-700 s of a 600 s run), its figure the run's last sample's: now shown to the run's end."""
     short = _with(imu={"rate_hz": 20, "model": "tactical", "seed": 1}, alignment={"static_s": 20.0},
                   outage=[{"start_s": 30.0, "end_s": 500.0}])  # fmt: skip
-    short["segment"] = [{"type": "hold", "duration_s": 25.0}, {"type": "accelerate", "duration_s": 15.0,
-                                                               "to_speed_mps": 10.0, "ramp_s": 2.0}]  # fmt: skip
+    short["segment"] = [
+        {"type": "hold", "duration_s": 25.0},
+        {"type": "accelerate", "duration_s": 15.0, "to_speed_mps": 10.0, "ramp_s": 2.0},
+    ]
     path = tmp_path / "short.toml"
     path.write_text(to_toml(short), encoding="utf-8")
     rc, out, err = run_cli(["run", str(path)])
