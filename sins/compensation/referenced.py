@@ -323,7 +323,9 @@ def choose_rule(
                 np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
             )
             own = [seed.correct_increments(r.imu) for r in others]
-            base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own)
+            base = unit_bias.rule_from(
+                part.gyro_bias - part.gyro_bias.mean(axis=0), own, model_bias=seed.B0_
+            )
             stream = seed.correct_increments(rec.imu)
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
@@ -337,8 +339,9 @@ def choose_rule(
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
     return unit_bias.rule_from(
-        left, streams, mode=mode or "pooled", held_back_deg=held, held_back_each_deg=each
-    )
+        left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0, held_back_deg=held,
+        held_back_each_deg=each,
+    )  # fmt: skip
 
 
 def _check_one_unit(recs: list[ReferencedRecording]) -> None:
