@@ -323,9 +323,7 @@ def choose_rule(
                 np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
             )
             own = [seed.correct_increments(r.imu) for r in others]
-            base = unit_bias.rule_from(
-                part.gyro_bias - part.gyro_bias.mean(axis=0), own, model_bias=seed.B0_
-            )
+            base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own, model_bias=seed.B0_)
             stream = seed.correct_increments(rec.imu)
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
