@@ -297,6 +297,23 @@ def test_a_reference_that_contradicts_the_readings_or_itself_is_refused(
     refusal(lambda: io.read(path).beside_reference(), str(path), said)
 
 
+@needs_euroc
+def test_a_clipped_or_negated_gyro_is_not_blamed_on_the_reference(tmp_path: Path) -> None:
+    """EuRoC's V1_02 with its gyro clipped at ±0.3 rad/s, and negated (numpy): both turn away from the
+    reference's turns. Clipped, it was refused as a quaternion of the wrong order (correlation 0.90); now
+    the refusal names the clipped axis, its level and how many readings sit there. Negated (correlation
+    −1.00), it says the gyro may read every turn negated, beside the reference's advice."""
+    with np.load(EUROC / "V1_02_medium.npz") as held:
+        doc = dict(held)
+    for name, gyro, said in [
+        ("clipped", np.clip(doc["gyro_rad_s"], -0.3, 0.3), "clipped at the sensor's range"),
+        ("negated", -doc["gyro_rad_s"], "or the gyro reads every turn negated"),
+    ]:
+        path = tmp_path / f"{name}.npz"
+        np.savez(path, **{**doc, "gyro_rad_s": gyro})
+        refusal(lambda p=path: io.read(p).beside_reference(), str(path), said)
+
+
 def test_a_time_column_in_nanoseconds_is_named_and_places_no_clock(tmp_path: Path) -> None:
     """The swing's time written in ns, read as s: its readings 5e6 s apart. The time's unit is the
     mistake named; the clock search (shifts within 0.25 s) has no shift to try, so no clock is said

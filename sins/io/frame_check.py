@@ -170,8 +170,15 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     agreement = None if pairs is None else _correlation(*pairs)
     if agreement is not None and agreement < REFERENCE_TURNS_AGREE:
         what = (f"the reference's turns over {TURN_INTERVAL_S:g} s intervals, in the body, correlate "
-                f"{agreement:.2f} with the gyro's (1 where its attitude is of the readings' axes): the "
-                "attitude is not of the readings' axes")  # fmt: skip
+                f"{agreement:.2f} with the gyro's (1 where its attitude is of the readings' "
+                "axes)")  # fmt: skip
+        clipped = _clipped(w[inside])
+        if clipped:  # readings held at the sensor's range turn away from the reference's: not its fault
+            cut = "the clipped spans cannot be judged against the reference: record with a wider range"
+            return [Finding("reference_attitude", f"{what}, and {clipped}", advice=cut)]
+        what += ": the attitude is not of the readings' axes"
+        if agreement < -REFERENCE_TURNS_AGREE:  # the turns exactly against the gyro's: a sign
+            what += ", or the gyro reads every turn negated"
         return [Finding("reference_attitude", what, advice=advice)]
     inside = inside[:: max(1, len(inside) // 200_000)]  # the mean of a long recording from 200,000 rows
     ts = t[inside]
@@ -301,6 +308,22 @@ def _position_findings(truth: NavSeries) -> list[Finding]:
         "check the reference's position unit (metres) and its velocity's frame and unit (the world's, m/s)"
     )
     return [Finding("reference_velocity", what, advice=advice)]
+
+
+#: A gyro axis whose readings sit at their largest or smallest value on this share of rows (and three at
+#: least) is clipped: a live axis's noise makes each extreme a single reading.
+CLIPPED_SHARE = 0.005
+
+
+def _clipped(w: Array) -> str:
+    """Where the gyro's readings ``w`` (n, 3) are clipped, in words ("" where they are not)."""
+    for k in range(3):
+        for level in (float(w[:, k].max()), float(w[:, k].min())):
+            at = int(np.count_nonzero(w[:, k] == level))
+            if at >= 3 and at >= CLIPPED_SHARE * len(w):
+                return (f"the gyro's {'xyz'[k]} sits at {level:g} rad/s on {at} of its {len(w)} readings: "
+                        "clipped at the sensor's range")  # fmt: skip
+    return ""
 
 
 def _up_as_read(up_ned: Array) -> str:
@@ -479,6 +502,7 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 
 __all__ = [
     "ACCEL_SEEN_MPS2",
+    "CLIPPED_SHARE",
     "DEAD_FORCE",
     "DEAD_RATE",
     "DEAD_WINDOW_S",
