@@ -336,10 +336,8 @@ def choose_rule(
         mode = min(kept, key=held.__getitem__) if kept else unit_bias.READINGS
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
-    return unit_bias.rule_from(
-        left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0, held_back_deg=held,
-        held_back_each_deg=each,
-    )  # fmt: skip
+    return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
+                               held_back_deg=held, held_back_each_deg=each)  # fmt: skip
 
 
 def _check_one_unit(recs: list[ReferencedRecording]) -> None:
