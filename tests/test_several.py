@@ -397,6 +397,14 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert not (tmp_path / "twice.json").exists()
     assert main(["evaluate", str(model), "--dataset", "unit/r2", "--json", str(out)]) == 0
     judged = json.loads(out.read_text())
+    # The same recording in another folder is another unit's, and the refusal says why the folder counts.
+    (tmp_path / "elsewhere").mkdir()
+    shutil.copy(tmp_path / "unit" / "r2.npz", tmp_path / "elsewhere" / "r2.npz")
+    capsys.readouterr()
+    assert main(["evaluate", str(model), "--dataset", "elsewhere/r2"]) == 2
+    assert "this recording is elsewhere (a data root's FOLDER/NAME takes its folder for its unit)" in (
+        capsys.readouterr().err
+    )
     # --drive: a window backwards is refused as such; one past the reference is navigated to its end
     # and said so (before: "not within the reference" for the first, the asked end for the second).
     capsys.readouterr()

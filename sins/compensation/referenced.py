@@ -656,9 +656,9 @@ def check_fitted_on(
         return
     sensor = getattr(rec, "sensor", "") if sensor is None else sensor
     if fitted.get("sensor") and sensor and fitted["sensor"] != sensor:
-        raise SinsInputError(
-            f"{where}: the model was fitted on {fitted['sensor']}; this recording is {sensor}"
-        )
+        folder = " (a data root's FOLDER/NAME takes its folder for its unit)" if f"{sensor}/" in where else ""
+        said = f"the model was fitted on {fitted['sensor']}; this recording is {sensor}{folder}"
+        raise SinsInputError(f"{where}: {said}")
     frame = getattr(rec, "frame", "")
     if fitted.get("frame") and frame and fitted["frame"] != frame:
         raise SinsInputError(
