@@ -281,20 +281,15 @@ def _position_findings(truth: NavSeries) -> list[Finding]:
     known)."""
     if not (np.ptp(truth.lat) or np.ptp(truth.lon) or np.ptp(truth.h)):
         return []
-    dt = np.diff(truth.t)
-    step = max(1, round(POSITION_WINDOW_S / float(np.median(dt))))
+    step = max(1, round(POSITION_WINDOW_S / float(np.median(np.diff(truth.t)))))
     at = np.arange(0, len(truth.t), step)
     if len(at) < 4:
         return []
-    lat, h = truth.lat, truth.h
-    r_m, r_n = earth.radii(lat)
-    north = (lat - lat[0]) * (r_m + h)
-    east = (np.unwrap(truth.lon) - truth.lon[0]) * (r_n + h) * np.cos(lat)
-    moved = np.diff(np.column_stack([north, east, -(h - h[0])])[at], axis=0)
-    integral = np.concatenate(
-        [np.zeros((1, 3)), np.cumsum(0.5 * (truth.v_n[1:] + truth.v_n[:-1]) * dt[:, None], axis=0)]
-    )
-    flown = np.diff(integral[at], axis=0)
+    from scipy.integrate import cumulative_trapezoid
+
+    lat, lon, h, a, b = truth.lat, np.unwrap(truth.lon), truth.h, at[:-1], at[1:]
+    moved = earth.ned_offset(lat[b], lon[b], h[b], lat[a], lon[a], h[a])
+    flown = np.diff(cumulative_trapezoid(truth.v_n, truth.t, axis=0, initial=0.0)[at], axis=0)
     size_p, size_v = (float(np.sqrt(np.mean(np.sum(a * a, axis=1)))) for a in (moved, flown))
     if max(size_p, size_v) < STILL_M:
         return []

@@ -45,20 +45,21 @@ def _check_truth(truth: NavSeries, path: object) -> None:
     positions: the motion is made from its velocities and attitudes, its first position the start
     (:class:`~sins.nav.motion.RecordedMotion`), so the file's other positions would be set aside
     without a word."""
+    from scipy.integrate import cumulative_trapezoid
+
     lat, lon, h = truth.lat, np.unwrap(truth.lon), truth.h
     r_m, r_n = earth.radii(lat)
     north, east = r_m + h, (r_n + h) * np.cos(lat)  # metres a radian of latitude, of longitude
-    dt = np.diff(truth.t)
 
     def integral(rate: np.ndarray) -> np.ndarray:
-        return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
+        return np.asarray(cumulative_trapezoid(rate, truth.t, initial=0.0))
 
     off = np.sqrt(
         ((integral(truth.v_n[:, 0] / north) - (lat - lat[0])) * north) ** 2
         + ((integral(truth.v_n[:, 1] / east) - (lon - lon[0])) * east) ** 2
         + (integral(-truth.v_n[:, 2]) - (h - h[0])) ** 2
     )
-    steps = np.sqrt((np.diff(lat) * north[1:]) ** 2 + (np.diff(lon) * east[1:]) ** 2 + np.diff(h) ** 2)
+    steps = np.linalg.norm(earth.ned_offset(lat[1:], lon[1:], h[1:], lat[:-1], lon[:-1], h[:-1]), axis=-1)
     travelled = np.concatenate([[0.0], np.cumsum(steps)])
     bad = np.flatnonzero(off > np.maximum(TRUTH_DRIFT_M, TRUTH_DRIFT_SHARE * travelled))
     if bad.size:
