@@ -186,30 +186,40 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
     return k * n if k * n * dt >= MIN_REST_S else 0
 
 
+#: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`).
+_FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
+
+
+def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, Array]:
+    """What the rule takes from a recording's opening rest (its corrected increments ``imu``): the
+    rest's length in steps (0: it opens moving, or the mode takes nothing from a rest), the prior it
+    gives with its spread (``rest``: the rest's mean rate plus the training recordings' motion offset;
+    ``nearest``: :func:`nearest_prior`), or None and the pooled spread where it gives none."""
+    if rule.mode not in _FROM_REST:
+        return 0, None, rule.spread
+    dt = np.diff(imu.t)
+    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
+    rest = opening_rest(omega, force, float(np.median(dt)))
+    if not rest:
+        return 0, None, rule.spread
+    still = omega[:rest]
+    if rule.mode.startswith("rest"):
+        return rest, still.mean(axis=0) + rule.rest_offset, rule.rest_spread
+    near = nearest_prior(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt))))
+    return rest, near, (rule.spread if near is None else rule.nearest_spread)
+
+
 def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
     from the readings before it only. ``ValueError`` under :data:`READINGS`, which takes no bias: the gyro
     is kept as read (:func:`applied`), not the model's correction of it."""
     if rule.mode == READINGS:
         raise ValueError("the readings rule takes no bias: the gyro is kept as read (unit_bias.applied)")
-    dt = np.diff(imu.t)
-    prior, sigma = rule.prior, rule.spread
-    track = np.tile(prior, (len(dt), 1))
-    if rule.mode in ("rest", "rest+online", "nearest", "nearest+online"):
-        omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
-        rest = opening_rest(omega, force, float(np.median(dt)))
-        if rest and rule.mode.startswith("rest"):
-            # Before the rest has ended nothing better than the prior is known; after, its mean.
-            prior = omega[:rest].mean(axis=0) + rule.rest_offset
-            sigma = rule.rest_spread
-            track[rest:] = prior
-        elif rest:
-            near = nearest_prior(
-                rule, omega[:rest].mean(axis=0), _rest_se(omega[:rest], float(np.median(dt)))
-            )
-            if near is not None:
-                prior, sigma = near, rule.nearest_spread
-                track[rest:] = prior
+    track = np.tile(rule.prior, (len(imu.t) - 1, 1))
+    rest, own, sigma = _rest_prior(rule, imu)
+    prior = rule.prior if own is None else own
+    if own is not None:  # before the rest has ended nothing better than the pooled prior is known
+        track[rest:] = own
     if rule.mode in ("online", "rest+online", "nearest+online"):
         track = _online(imu, track, prior, sigma, rule)
     return track
@@ -219,19 +229,16 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     """Where the rule took the prior of a recording's gyro bias (its corrected increments ``imu``), in
     words ("" for a rule that takes no prior from the recording): what ``sins evaluate`` says, so that a
     judged figure can be read with the rule's reason beside it."""
-    if rule.mode not in ("rest", "rest+online", "nearest", "nearest+online"):
+    if rule.mode not in _FROM_REST:
         return ""
-    dt = np.diff(imu.t)
-    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
-    rest = opening_rest(omega, force, float(np.median(dt)))
+    rest, own, _ = _rest_prior(rule, imu)
     head = f"a new recording's gyro bias (rule {rule.mode}): "
     if not rest:
         return head + "it opens moving, so its prior is the training recordings' mean"
-    rest_s = f"its opening rest of {rest * float(np.median(dt)):.1f} s"
+    rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
     if rule.mode.startswith("rest"):
         return head + f"the prior is {rest_s}'s mean rate and the training recordings' motion offset"
-    still = omega[:rest]
-    if nearest_prior(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt)))) is None:
+    if own is None:
         return head + f"{rest_s} reads like no training recording's, so its prior is their mean"
     return head + f"{rest_s} reads like some training recordings' rests: the prior is their bias"
 
