@@ -305,20 +305,43 @@ def _position_findings(truth: NavSeries) -> list[Finding]:
     return [Finding("reference_velocity", what, advice=advice)]
 
 
-#: A gyro axis whose readings sit at their largest or smallest value on this share of rows (and three at
-#: least) is clipped: a live axis's noise makes each extreme a single reading.
+#: A gyro axis whose readings sit at their largest or smallest value, in runs of three or more
+#: (:func:`stuck`), on this share of rows is clipped: a live axis's noise makes each extreme a single
+#: reading.
 CLIPPED_SHARE = 0.005
 
 
 def _clipped(w: Array) -> str:
-    """Where the gyro's readings ``w`` (n, 3) are clipped, in words ("" where they are not)."""
+    """Where the gyro's readings ``w`` (n, 3) are clipped (:func:`stuck` on :data:`CLIPPED_SHARE` of them
+    at least), in words ("" where they are not)."""
     for k in range(3):
         for level in (float(w[:, k].max()), float(w[:, k].min())):
-            at = int(np.count_nonzero(w[:, k] == level))
-            if at >= 3 and at >= CLIPPED_SHARE * len(w):
-                return (f"the gyro's {'xyz'[k]} sits at {level:g} rad/s on {at} of its {len(w)} readings: "
-                        "clipped at the sensor's range")  # fmt: skip
+            found = stuck(w[:, k], level)
+            if found is not None and found[0] >= CLIPPED_SHARE * len(w):
+                return (f"the gyro's {'xyz'[k]} sits at {level:g} rad/s on {found[0]} of its {len(w)} "
+                        "readings: clipped at the sensor's range")  # fmt: skip
     return ""
+
+
+def stuck(v: Array, level: float) -> tuple[int, int, int] | None:
+    """``(samples, runs, first row)`` of the runs of three or more readings equal to ``level`` (clipped
+    readings: what ``sins inspect`` names, and what :func:`_clipped` tells a reference check). Readings
+    that take fewer distinct values than half their count are quantized: there a still unit's noise sits
+    on its few levels for several readings, so a run counts only more than 10 steps from the median."""
+    at = v == level
+    if at.sum() < 3:
+        return None
+    levels = np.unique(v)
+    if len(levels) < len(v) / 2:
+        step = float(np.min(np.diff(levels))) if len(levels) > 1 else 0.0
+        if abs(level - float(np.median(v))) <= 10.0 * step:
+            return None
+    edges = np.diff(np.concatenate([[0], at.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long = (stops - starts) >= 3
+    if not long.any():
+        return None
+    return int((stops - starts)[long].sum()), int(long.sum()), int(starts[long][0])
 
 
 def _up_as_read(up_ned: Array) -> str:
@@ -521,4 +544,5 @@ __all__ = [
     "reference_findings",
     "reference_lag",
     "seen_axes",
+    "stuck",
 ]

@@ -486,7 +486,7 @@ def _range_findings(rec: Recording, w: Array) -> list[Finding]:
 
 def _clipping(rec: Recording) -> tuple[Clipping, ...]:
     """Channels whose readings stick at their extreme: runs of three or more equal readings there (see
-    :func:`_stuck` for quantized readings)."""
+    :func:`sins.io.frame_check.stuck` for quantized readings)."""
     imu = rec.imu
     if isinstance(imu, ImuRates):
         values, t, names = np.hstack([imu.omega_ib_b, imu.f_ib_b]), imu.t, ("gyro", "accel")
@@ -496,31 +496,11 @@ def _clipping(rec: Recording) -> tuple[Clipping, ...]:
     for c in range(6):
         v = values[:, c]
         for level in (float(v.max()), float(v.min())):
-            found = _stuck(v, level)
+            found = frame_check.stuck(v, level)
             if found is not None:
                 samples, runs, first = found
                 out.append(Clipping(f"{names[c // 3]}_{'xyz'[c % 3]}", level, samples, runs, float(t[first])))
     return tuple(out)
-
-
-def _stuck(v: Array, level: float) -> tuple[int, int, int] | None:
-    """``(samples, runs, first row)`` of the runs of three or more readings equal to ``level``. Readings
-    that take fewer distinct values than half their count are quantized: there a still unit's noise sits
-    on its few levels for several readings, so a run counts only more than 10 steps from the median."""
-    at = v == level
-    if at.sum() < 3:
-        return None
-    levels = np.unique(v)
-    if len(levels) < len(v) / 2:
-        step = float(np.min(np.diff(levels))) if len(levels) > 1 else 0.0
-        if abs(level - float(np.median(v))) <= 10.0 * step:
-            return None
-    edges = np.diff(np.concatenate([[0], at.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    long = (stops - starts) >= 3
-    if not long.any():
-        return None
-    return int((stops - starts)[long].sum()), int(long.sum()), int(starts[long][0])
 
 
 def _clip_finding(c: Clipping) -> Finding:
