@@ -318,14 +318,24 @@ def is_param_kind(value: Any, default: Any) -> bool:
     return isinstance(value, list)
 
 
-def check_param_kinds(label: str, values: dict[str, Any], signature: dict[str, inspect.Parameter]) -> None:
-    """Refuse a value of ``values`` of another kind than its parameter's default in ``signature``
-    (numpy's scalars and tuples taken as JSON takes them): ``ValueError`` naming ``label`` and it."""
+def wrong_kind(
+    values: dict[str, Any], signature: dict[str, inspect.Parameter]
+) -> tuple[str, Any, str] | None:
+    """The first of ``values`` of another kind than its parameter's default in ``signature`` (numpy's
+    scalars and tuples taken as JSON takes them), as ``(name, value, the kind wanted)``; None if none is."""
     for name, value in values.items():
         default = signature[name].default
         wanted = param_kind(default)
         if wanted and not is_param_kind(_json_param(value), default):
-            raise ValueError(f"{label}: {name} is {value!r}, expected {wanted}")
+            return name, value, wanted
+    return None
+
+
+def check_param_kinds(label: str, values: dict[str, Any], signature: dict[str, inspect.Parameter]) -> None:
+    """Refuse :func:`wrong_kind`'s first value: ``ValueError`` naming ``label`` and it."""
+    if found := wrong_kind(values, signature):
+        name, value, wanted = found
+        raise ValueError(f"{label}: {name} is {value!r}, expected {wanted}")
 
 
 def _json_param(value: Any) -> Any:
@@ -444,4 +454,5 @@ __all__ = [
     "param_kind",
     "residual_rms",
     "state_array",
+    "wrong_kind",
 ]

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from sins import __version__, io
-from sins.compensation.base import Strategy, check_param_kinds, is_param_kind, param_kind
+from sins.compensation.base import Strategy, check_param_kinds, wrong_kind
 from sins.errors import SinsInputError
 from sins.io.documents import printable, short
 
@@ -240,19 +240,18 @@ def _check_params(path: Path, name: str, params: dict[str, Any]) -> None:
     bound their values, not their types, and a string would pass some of them silently."""
     signature = strategy_class(name).init_parameters()
     known = list(signature)
-    for key, value in params.items():
+    for key in params:
         if key not in known:
             shown = printable(str(key))[:60]
             raise SinsInputError(
                 f"{path}: malformed {name} model (params.{shown} is not a parameter of {name}; "
                 f"known: {', '.join(known)})"
             )
-        default = signature[key].default
-        wanted = param_kind(default)
-        if wanted and not is_param_kind(value, default):
-            raise SinsInputError(
-                f"{path}: malformed {name} model (params.{key} is {short(value)}: expected {wanted})"
-            )
+    if found := wrong_kind(params, signature):
+        key, value, wanted = found
+        raise SinsInputError(
+            f"{path}: malformed {name} model (params.{key} is {short(value)}: expected {wanted})"
+        )
 
 
 def _check_values(path: Path, name: str, value: Any, where: str) -> None:
