@@ -104,8 +104,7 @@ def _check_args(args: argparse.Namespace) -> None:
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    guarded = strategy_names(taking="guard")
-    if args.no_guard and args.strategy not in guarded:
+    if args.no_guard and args.strategy not in (guarded := strategy_names(taking="guard")):  # imports them all
         raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only {', '.join(guarded)} do)")
 
 
