@@ -227,3 +227,26 @@ def test_rerun_shows_the_aided_errors_with_3_sigma_fixes_outages_and_biases(tmp_
     # within 3σ of the unit's constant bias, give or take its bias instability (20 µg = 2e-4 m/s²).
     last = aided.bias[-1, 3:5] - aided.true_bias[3:5]
     assert np.all(np.abs(last) < 3.0 * aided.sigma[-1, 12:14] + 2e-4), (last, aided.sigma[-1, 12:14])
+
+
+def test_the_progress_ends_when_the_aided_filters_do(monkeypatch: pytest.MonkeyPatch):
+    """A run's progress counts the aided filters, which run after the stream: its bar reached its end
+    while a 2 h aided run still filtered for 20 s. Every call moves forward, and the end is reported only
+    after the last filter has run (the filters are marked in the same log as the calls)."""
+    from sins.aiding import policy
+
+    log: list[tuple[str, int, int]] = []
+    aligned = policy.run_aligned
+
+    def marked(*args: Any, **kwargs: Any) -> Any:
+        out = aligned(*args, **kwargs)
+        log.append(("filter", 0, 0))
+        return out
+
+    monkeypatch.setattr(policy, "run_aligned", marked)
+    pipeline.run_scenario(from_dict(DRIVE), progress=lambda done, work: log.append(("progress", done, work)))
+    calls = [(done, work) for kind, done, work in log if kind == "progress"]
+    last_filter = max(i for i, (kind, _, _) in enumerate(log) if kind == "filter")
+    assert all(done < work for kind, done, work in log[:last_filter] if kind == "progress")
+    assert log[-1][0] == "progress" and calls[-1][0] == calls[-1][1]
+    assert [d for d, _ in calls] == sorted(d for d, _ in calls) and len({w for _, w in calls}) == 1

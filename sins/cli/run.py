@@ -44,7 +44,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if sc.imu_model is not None:
             with progress_bar("fitting the strategies on the rig", "strategies") as bar:
                 unit = pipeline.fit_unit(scenario.load_imu(sc.imu_model), sc.compensation, row_progress(bar))
-        with progress_bar(f"running {sc.name}", "samples") as bar:
+        # With [gnss], each aided filter counts as the samples again (pipeline.run_units).
+        then = "" if sc.aiding is None else " (its samples, then each aided filter's)"
+        with progress_bar(f"running {sc.name}{then}", "samples") as bar:
             result = pipeline.run_scenario(sc, unit=unit, progress=row_progress(bar))
     except ValueError as exc:  # a rig session that cannot be fitted, say
         if isinstance(exc, SinsInputError):

@@ -14,6 +14,7 @@ IMU whole, and after the stream each unit's readings go through the GNSS/INS fil
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
@@ -98,7 +99,8 @@ def run_scenario(
     The unit is ``unit`` (from :func:`fit_unit`: a campaign fits a unit once and drives it through every
     scenario), else the scenario's ``[imu] model`` with its ``[compensation]`` strategies fitted first
     (silently: :func:`fit_unit` takes its own ``progress``), else the ideal IMU, whose one run is
-    ``"none"``. ``progress(samples_done, samples)`` is called as chunks are integrated.
+    ``"none"``. ``progress(done, work)`` is called as chunks are integrated and as aided filters end
+    (:func:`run_units`).
 
     The rig session and the navigation run are two power-ons of the same unit (seeds ``[compensation]
     seed`` and ``[imu] seed``): strategies fitted on the rig meet the navigation run's own turn-on bias.
@@ -134,7 +136,9 @@ def run_units(
     and ideal IMU whole for the aided runs (:func:`aided_runs`), which follow the stream.
     ``sensor_errors=False`` leaves out the runs' ``sensor_error`` and the ``sensor_t`` (a plot's, which a
     campaign does not keep; the ideal IMU has none).
-    ``progress(samples_done, samples)`` is called as the chunks are integrated.
+    ``progress(done, work)`` is called as the chunks are integrated (``done`` samples of ``work``) and
+    as each aided run's filter ends (each counts as the samples again: ``work`` is the samples times one
+    plus the aided runs), so that a bar ends only when the runs do.
 
     Raises
     ------
@@ -155,6 +159,10 @@ def run_units(
             for unit, seed in zip(units, nav_seeds, strict=True)
         ]
         whole = _Simulated(first, total) if sc.aiding is not None else None  # for the aided runs
+        # An aided run filters the whole recording after the stream: each counts as its samples again, so
+        # that the bar does not stand at its end while the filters run (20 s for an aided hour).
+        aided = sum(len(d.strategies) for d in driven) if whole is not None else 0
+        work = total * (1 + aided)
         for truth, frame, ideal6, ideal, cabin in chunks:
             pending.add(frame, ideal6)
             if whole is not None:
@@ -164,11 +172,17 @@ def run_units(
             done = min(d.step.samples for d in driven)
             pending.release(done)
             if progress is not None:
-                progress(done, total)
+                progress(done, work)
         for d in driven:
             d.finish()
         simulated = None if whole is None else whole.arrays()
-        return [d.result(seed, simulated) for d, seed in zip(driven, nav_seeds, strict=True)]
+        filtered = itertools.count(1)
+
+        def one_filtered() -> None:
+            if progress is not None:
+                progress(total * (1 + next(filtered)), work)
+
+        return [d.result(seed, simulated, one_filtered) for d, seed in zip(driven, nav_seeds, strict=True)]
 
 
 def _shared(
@@ -272,9 +286,15 @@ class _DrivenUnit:
         """The stream's last intervals."""
         self.step(self.stream.finish())
 
-    def result(self, nav_seed: int, simulated: tuple[NavSeries, ImuIncrements] | None) -> ScenarioRun:
+    def result(
+        self,
+        nav_seed: int,
+        simulated: tuple[NavSeries, ImuIncrements] | None,
+        filtered: Callable[[], None] | None = None,
+    ) -> ScenarioRun:
         """The unit's runs, as :func:`run_scenario` gives them; ``simulated`` the scenario's whole truth
-        and ideal IMU for its aided runs (None: the scenario has none)."""
+        and ideal IMU for its aided runs (None: the scenario has none), ``filtered()`` called as each
+        aided run ends."""
         samples, keep_every = self.step.samples, self.keep_every
         last_truth = self.step.last_truth
         if samples % keep_every and last_truth is not None:
@@ -289,7 +309,9 @@ class _DrivenUnit:
         aided = {}
         if simulated is not None:
             grade = self.unit.spec.grade if self.unit is not None else None
-            aided = aided_runs(sc, self.strategies, *simulated, self.nav_model, grade, keep_every=keep_every)
+            aided = aided_runs(
+                sc, self.strategies, *simulated, self.nav_model, grade, keep_every, filtered=filtered
+            )
         return ScenarioRun(
             scenario=sc,
             samples=samples,
@@ -308,6 +330,7 @@ def aided_runs(
     nav_model: ImuModel | None = None,
     grade: str | None = None,
     keep_every: int = 1,
+    filtered: Callable[[], None] | None = None,
 ) -> dict[str, AidedRun]:
     """Each strategy's corrected stream navigated by the GNSS/INS filter (``[gnss]`` in the scenario).
 
@@ -325,6 +348,7 @@ def aided_runs(
     nav_model : the unit's error model for this run (None: the ideal IMU)
     grade : the IMU file's grade, if any
     keep_every : the display series keep every ``keep_every``-th sample (and the last)
+    filtered : called as each strategy's filter ends (a progress bar's step)
     """
     from sins.aiding import ekf, gnss, policy  # the filter's imports (filterpy) only for aided runs
 
@@ -359,6 +383,8 @@ def aided_runs(
             heading_sigma_deg=None if heading_sigma is None else math.degrees(heading_sigma),
             velocity_rejected=result.velocity_rejected,
         )  # fmt: skip
+        if filtered is not None:
+            filtered()
     return out
 
 
