@@ -250,3 +250,21 @@ def test_the_progress_ends_when_the_aided_filters_do(monkeypatch: pytest.MonkeyP
     assert all(done < work for kind, done, work in log[:last_filter] if kind == "progress")
     assert log[-1][0] == "progress" and calls[-1][0] == calls[-1][1]
     assert [d for d, _ in calls] == sorted(d for d, _ in calls) and len({w for _, w in calls}) == 1
+
+
+def test_an_outage_that_drops_no_fix_is_said_so(tmp_path: Path):
+    """An outage drops the fixes strictly inside it: 100-101 s at 1 Hz drops none, and was reported as
+    an outage without a word. Now a note says so; the run's fixes are those of no outage at all (173),
+    and an outage that drops fixes (100-130 s) has no note. The same in the library."""
+    from sins import scenario
+
+    doc = _with(outage=[{"start_s": 100.0, "end_s": 101.0}, {"start_s": 110.0, "end_s": 130.0}])
+    path = tmp_path / "idle.toml"
+    path.write_text(to_toml(doc), encoding="utf-8")
+    rc, _, err = run_cli(["run", str(path), "--json", str(tmp_path / "idle.json")])
+    assert rc == 0, err
+    assert "outage 100-101 s drops no fix of the 1 Hz receiver" in err and "110-130" not in err
+    assert json.loads((tmp_path / "idle.json").read_text())["aided"]["none"]["fixes"] == 173 - 19
+    assert scenario.idle_outages(from_dict(DRIVE)) == []
+    shifted = _with(outage=[{"start_s": 100.5, "end_s": 101.5}])
+    assert scenario.idle_outages(from_dict(shifted)) == []  # the fix at 101 s is dropped

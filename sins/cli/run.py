@@ -53,8 +53,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
             raise
         raise SinsInputError(f"{path}: {exc}") from None
     scenario.check_latitude(sc, result.truth)
-    if note := scenario.unsampled_end(sc):
-        print(f"sins: note: {path}: {note}", file=sys.stderr)
+    for note in [scenario.unsampled_end(sc), *scenario.idle_outages(sc)]:
+        if note:
+            print(f"sins: note: {path}: {note}", file=sys.stderr)
     summaries: dict[str, dict[str, Any]] = {name: run.summary.to_dict() for name, run in result.runs.items()}
     for name, summary in summaries.items():
         check_finite(summary, f"{path}: strategy {name}")

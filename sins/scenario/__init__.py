@@ -33,7 +33,14 @@ shipped presets by name), :mod:`~sins.scenario.schema` (the dataclasses),
 """
 
 from sins.nav.vertical import VERTICAL_MODES
-from sins.scenario.build import MAX_LAT_DEG, build_motion, check_latitude, sample_count, unsampled_end
+from sins.scenario.build import (
+    MAX_LAT_DEG,
+    build_motion,
+    check_latitude,
+    idle_outages,
+    sample_count,
+    unsampled_end,
+)
 from sins.scenario.files import RIG_BOUNDS, load_imu, load_rig, rig_rows
 from sins.scenario.presets import PresetKind, find_preset, preset_dir, preset_or_path, presets, resolve_preset
 from sins.scenario.schema import (
@@ -79,6 +86,7 @@ __all__ = [
     "check_latitude",
     "find_preset",
     "from_dict",
+    "idle_outages",
     "load",
     "load_imu",
     "load_rig",

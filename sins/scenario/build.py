@@ -127,6 +127,30 @@ def unsampled_end(scenario: Scenario) -> str:
             f"its last {span - covered:.6g} s, shorter than an interval, are not run")  # fmt: skip
 
 
+def idle_outages(scenario: Scenario) -> list[str]:
+    """The ``[[outage]]`` windows that drop no fix of the scenario's receiver, each in words (none
+    without ``[gnss]``): the receiver fixes at ``1/rate_hz`` from the run's start (those within
+    ``latency_s`` of it left out, as :func:`sins.aiding.gnss.simulate` does) and an outage drops those
+    strictly inside it, so 300–301 s at 1 Hz drops none. Its figures are then the drift between two fixes,
+    not an outage's."""
+    a = scenario.aiding
+    if a is None or not a.outages:
+        return []
+    m = build_motion(scenario)
+    step = 1.0 / a.rate_hz
+    span = m.t_end - m.t_start
+    fix_t = m.t_start + step * np.arange(int(np.floor(span / step + 1e-9)) + 1)
+    fix_t = fix_t[fix_t - a.latency_s >= m.t_start - 1e-12]
+    notes = []
+    for start, end in a.outages:
+        if start < m.t_end and not np.any((fix_t > start) & (fix_t < end)):
+            notes.append(
+                f"the outage {start:g}-{end:g} s drops no fix of the {a.rate_hz:g} Hz receiver (an outage "
+                "drops the fixes strictly inside it): its figures are the drift between two fixes"
+            )
+    return notes
+
+
 def sample_count(scenario: Scenario, motion_: motion.Motion | None = None) -> float:
     """How many IMU samples the scenario's run has (a float: it may be far beyond any array's size).
 
@@ -167,6 +191,7 @@ __all__ = [
     "TRUTH_DRIFT_SHARE",
     "build_motion",
     "check_latitude",
+    "idle_outages",
     "sample_count",
     "unsampled_end",
 ]
