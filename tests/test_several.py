@@ -539,6 +539,28 @@ def test_a_numpy_unit_read_calibrated_is_left_as_read_in_either_form(seed: int) 
         unit_bias.bias_track(rule, out)
 
 
+def test_a_mode_that_only_ties_with_the_readings_is_not_taken() -> None:
+    """``bias_only`` on a numpy unit read calibrated (seed 5): its pooled prior gives back the mean bias
+    the model takes (the recordings do not determine it), so held back it equals the readings on every
+    recording, to rounding. It was taken (the first mode of least mean), and the model fitted on all
+    three then moved the judged gyro by a hair: a helper's EuRoC unit read calibrated went from 0.64° and
+    1.54° raw to 0.65° and 1.55°. A tie adds nothing: the gyro is left as read, to the bit."""
+    recs, _, _ = recordings(5, calibrated=True)
+    fitted = referenced.fit_several("bias_only", recs)
+    each = fitted.rule.held_back_each_deg
+    np.testing.assert_allclose(each["pooled"], each["raw"], rtol=1e-12)
+    assert fitted.rule.mode == unit_bias.READINGS
+    imu = recs[0].imu
+    assert np.array_equal(fitted.strategy.correct_recording(imu).dtheta_b, imu.dtheta_b)
+    # The choice alone: a strict gain on the mean, no loss on any recording.
+    raw = [1.0, 2.0, 3.0]
+    scores = {m: [2.0, 2.0, 3.0] for m in unit_bias.MODES}  # worse on the first
+    assert unit_bias.chosen_mode(scores, raw) == unit_bias.READINGS
+    scores["online"], scores["nearest"] = [1.0, 1.9, 3.0], [1.0, 1.5, 2.0]
+    assert unit_bias.chosen_mode(scores, raw) == "nearest"
+    assert unit_bias.chosen_mode({**scores, "online": raw, "nearest": raw}, raw) == unit_bias.READINGS
+
+
 @needs_euroc
 def test_a_unit_whose_readings_come_calibrated_keeps_its_gyro_as_read(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]

@@ -298,8 +298,9 @@ def choose_rule(
     corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
     mode is the one whose open-loop attitude on held-back recordings is least (each recording in turn
     held back, the seed model and the rule made from the others alone) among those no worse than the
-    readings as they are on any of them, :data:`~sins.compensation.unit_bias.READINGS` (the gyro left
-    as read) where none is; ``mode`` names one instead."""
+    readings as they are on any of them and better on their mean (``unit_bias.chosen_mode``),
+    :data:`~sins.compensation.unit_bias.READINGS` (the gyro left as read) where none is; ``mode`` names
+    one instead."""
     from sins.compensation import interval_fit, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
@@ -309,7 +310,7 @@ def choose_rule(
     each: dict[str, list[float]] = {}
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
-        raw = []
+        raw: list[float] = []
         biases_alone = getattr(strategy, "variant", None) == BIAS_ONLY  # its own correction, held back too
         for k, rec in enumerate(recs):
             if stage is not None:
@@ -331,9 +332,7 @@ def choose_rule(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
         held = {m: float(np.mean(v)) for m, v in scores.items()}
-        # A correction worse than the readings on a recording it was not fitted on may be so on the next.
-        kept = [m for m in unit_bias.MODES if np.all(np.array(scores[m]) <= np.array(raw))]
-        mode = min(kept, key=held.__getitem__) if kept else unit_bias.READINGS
+        mode = unit_bias.chosen_mode(scores, raw)
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
     return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,

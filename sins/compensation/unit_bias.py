@@ -38,7 +38,8 @@ estimated from the recording itself, by one of these :data:`MODES`:
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
 from its own reference. A mode is taken only where it is no worse than the readings as they are on every
-held-back recording; where none is, the rule is :data:`READINGS`: the model leaves the gyro as read (a
+held-back recording and better on their mean (:func:`chosen_mode`); where none is, the rule is
+:data:`READINGS`: the model leaves the gyro as read (a
 unit whose readings come calibrated already, its bias removed by its maker or its converter, gains
 nothing from a model fitted on a few recordings and loses what the fit's own errors add).
 """
@@ -406,6 +407,23 @@ def attitude_dcm(q: Array) -> Array:
     return np.asarray(rotation.dcm_from_quat(q), dtype=float)
 
 
+#: A held-back mean within this share of the readings' ties with them: a rounding's difference, no gain.
+TIE = 1e-9
+
+
+def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
+    """The mode of least mean open-loop attitude over held-back recordings (``scores``: each mode's, deg,
+    one per recording; ``raw``: the readings' as they are) among those no worse than the readings on any
+    of them and better on their mean (by more than :data:`TIE`); :data:`READINGS` where none is. A
+    correction worse than the readings on a recording it was not fitted on may be so on the next; one that
+    only ties with them (a ``bias_only`` prior that gives back the bias it takes) adds nothing to them."""
+    kept = [
+        m for m in MODES
+        if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < (1.0 - TIE) * np.mean(raw)
+    ]  # fmt: skip
+    return min(kept, key=lambda m: float(np.mean(scores[m]))) if kept else READINGS
+
+
 def with_mode(rule: BiasRule, mode: str) -> BiasRule:
     """``rule`` with another mode."""
     return replace(rule, mode=mode)
@@ -546,11 +564,13 @@ __all__ = [
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
+    "TIE",
     "UPDATE_S",
     "BiasRule",
     "applied",
     "attitude_dcm",
     "bias_track",
+    "chosen_mode",
     "corrected",
     "corrected_any",
     "nearest_prior",
