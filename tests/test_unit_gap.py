@@ -542,3 +542,56 @@ def test_a_reference_filled_by_interpolation_is_set_aside_from_the_intervals(tmp
     assert report.statistic["reference_filled"]["spans_s"] == [list(s) for s in inp.filled_s]
     says = report.statistic["reference_filled"]["says"]
     assert says.startswith("3 span(s) (3.0 s in all") and "set aside from its intervals" in says
+
+
+def test_an_accepted_effect_no_unit_has_is_labelled(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """EuRoC's MH_02 cut to its first 60 s: the diagnosis (per sample, its reference as good as the
+    sensor there) accepts ``accel.scale_nonlinearity`` by 5 nats with k2 = 1.1e5 ppm/g on x, a 15 %
+    scale error at the recording's largest force: no accelerometer has that (a consumer unit's scale
+    bound is 5 %). ``sins gap`` now says so beside the size, and its JSON holds why; the verdict stays."""
+    _needs("euroc/MH_02_easy")
+    arrays = dict(np.load(datasets.data_root() / "euroc" / "MH_02_easy.npz"))
+    keep = arrays["t_s"] < arrays["t_s"][0] + 60.0
+    np.savez(tmp_path / "MH_02_60s.npz", **{k: v[keep] for k, v in arrays.items()})
+    assert main(["gap", str(tmp_path / "MH_02_60s.npz"), "--json", str(tmp_path / "g.json")]) == 0
+    doc = json.loads((tmp_path / "g.json").read_text())
+    assert doc["diagnosis"] == ["accel.scale_nonlinearity"]
+    k2_x = doc["sizes"]["accel.scale_nonlinearity"]["accel.x"]["si"][0]
+    assert 5e4 < k2_x / 1e-6 * 9.80665 < 2e5  # ppm/g
+    why = doc["implausible"]["accel.scale_nonlinearity"]
+    assert why.startswith("x a ") and "consumer unit's scale bound of 5 %" in why
+    out = capsys.readouterr().out
+    assert "diagnosis: accel.scale_nonlinearity (at a size no unit has: below)" in out
+    assert "    implausible: x a " in out
+
+
+def test_sizes_within_a_units_reach_are_not_labelled() -> None:
+    """The bounds alone: k2 below the scale bound at the largest input, an asymmetry of 0.5 % and a 2 cm
+    lever arm pass; 6 % between the signs and a 3.87 m lever arm (a walkthrough's, on a reference whose
+    point was not the IMU's) do not, each named by its axis."""
+    from sins.unit_gap.plausible import implausible
+
+    largest = {"gyro.z": 5.0, "accel.x": 20.0, "accel.y": 9.81}
+    fine = {
+        "gyro.scale_nonlinearity": {"gyro.z": [0.01]},  # 5 % at 5 rad/s, within 10 %
+        "accel.scale_asymmetry": {"accel.y": [0.005]},
+        "accel.size_effect": {"accel.x": [0.02, 0.0, 0.0]},
+    }
+    assert implausible(fine, largest) == {}
+    wrong = {
+        "gyro.scale_nonlinearity": {"gyro.z": [0.03]},  # 15 % at 5 rad/s
+        "accel.scale_asymmetry": {"accel.x": [0.01], "accel.y": [-0.06]},
+        "accel.size_effect": {"accel.x": [0.02, 0.0, 0.0], "accel.y": [3.0, 2.0, 1.4]},
+    }
+    out = implausible(wrong, largest)
+    assert out["gyro.scale_nonlinearity"].startswith("z a 15 % scale error")
+    assert (
+        out["accel.scale_asymmetry"].startswith("y 6 % between the signs")
+        and "x " not in out["accel.scale_asymmetry"]
+    )
+    assert (
+        out["accel.size_effect"].startswith("y 3.87 m from the unit's centre")
+        and "the reference's point" in out["accel.size_effect"]
+    )

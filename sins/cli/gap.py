@@ -185,7 +185,9 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
         print(f"  {e.name:<26} {e.score:14.1f}  {mark}")
     for name, why in report.unfitted.items():
         print(f"  {name:<26} {'not fitted':>14}  {why}")
-    print(f"\ndiagnosis: {', '.join(report.diagnosis) or 'nothing to add'}")
+    odd = " (at a size no unit has: below)"
+    named = [e + (odd if e in report.implausible else "") for e in report.diagnosis]
+    print(f"\ndiagnosis: {', '.join(named) or 'nothing to add'}")
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
@@ -198,6 +200,8 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
             for ch, v in channels.items()
         }
         print(f"  {effect}: {size_text(shown)}")
+        if beyond := report.implausible.get(effect):
+            print(f"    implausible: {beyond}")
 
 
 def add(sub: Subparsers) -> None:

@@ -112,6 +112,9 @@ class GapReport:
     #: Which statistic the verdicts were reached on, and why (``sins.unit_gap.statistic``); empty when
     #: :func:`sins.gap.diagnose` is called directly (samples).
     statistic: dict[str, Any] = field(default_factory=dict)
+    #: Accepted effects whose size no unit has, and why (``sins.unit_gap.plausible``); empty when
+    #: :func:`sins.gap.diagnose` is called directly.
+    implausible: dict[str, str] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The stable JSON form: the findings and Allan deviations, not the series."""
@@ -133,6 +136,7 @@ class GapReport:
                 for name, channels in self.sizes.items()
             },
             "statistic": self.statistic or {"kind": "samples"},
+            "implausible": self.implausible,
         }
 
 

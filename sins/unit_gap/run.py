@@ -9,13 +9,16 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from sins.compensation.interval_fit import IntervalFit
 from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
-from sins.imu import BASELINE
+from sins.imu import BASELINE, CHANNELS
 from sins.io.filled import spans_said
-from sins.unit_gap import across, clock, shrink, statistic
+from sins.unit_gap import across, clock, plausible, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import baseline_fit, diagnose_intervals
@@ -64,7 +67,8 @@ def diagnose_one(
             data = inp.samples()
         report = diagnose(data[0], holdout, model, progress)
         report = _with_reference(_with_statistic(report, chosen.to_dict()), inp)
-        return Diagnosed(inp.name, report, len(data[0]), data)
+        readings = np.hstack([data[0].gyro, data[0].accel])
+        return Diagnosed(inp.name, _with_plausibility(report, readings), len(data[0]), data)
     if tuple(model) != tuple(BASELINE):
         raise SinsInputError(f"{inp.name}: --model goes with the per-sample statistic (--statistic samples)")
     assert inp.referenced is not None
@@ -77,7 +81,16 @@ def diagnose_one(
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
     report = _with_reference(interval_report(d, holdout, chosen.to_dict()), inp)
-    return Diagnosed(inp.name, report, len(inp.referenced.imu.t) - 1)
+    imu = inp.referenced.imu
+    readings = np.hstack([imu.dtheta_b, imu.dv_b]) / np.diff(imu.t)[:, None]
+    return Diagnosed(inp.name, _with_plausibility(report, readings), len(imu.t) - 1)
+
+
+def _with_plausibility(report: GapReport, readings: NDArray[np.float64]) -> GapReport:
+    """The report with its accepted effects whose size no unit has (:mod:`sins.unit_gap.plausible`),
+    judged against the recording's largest readings (``readings`` (n, 6), in the channels' order)."""
+    largest = dict(zip(CHANNELS, np.abs(readings).max(axis=0).tolist(), strict=True))
+    return dataclasses.replace(report, implausible=plausible.implausible(report.sizes, largest))
 
 
 def _baseline(inp: GapInput, interval_s: float) -> tuple[IntervalFit | None, str]:
