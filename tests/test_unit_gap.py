@@ -595,3 +595,18 @@ def test_sizes_within_a_units_reach_are_not_labelled() -> None:
         out["accel.size_effect"].startswith("y 3.87 m from the unit's centre")
         and "the reference's point" in out["accel.size_effect"]
     )
+
+
+def test_recordings_of_two_units_are_not_diagnosed_as_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sins gap`` reads several recordings as one unit's (verdicts across them, each one's model judged
+    on the next), and took EuRoC's MH_02 with BROAD's trial 05 as one unit for 27 s; ``sins fit`` refuses
+    such a pair. A data root's folder is the unit: two folders, one line naming both, nothing diagnosed."""
+    for unit in ("unitA", "unitB"):
+        nu.write(tmp_path / unit / "r.npz", nu.recording(3, duration_s=40.0))
+    monkeypatch.setenv("SINS_DATA", str(tmp_path))
+    assert main(["gap", "--dataset", "unitA/r", "--dataset", "unitB/r"]) == 2
+    err = capsys.readouterr().err
+    assert "unitB/r: recordings of one unit are diagnosed together; unitA/r is unitA, this is unitB" in err
+    assert err.count("\n") == 1

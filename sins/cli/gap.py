@@ -31,12 +31,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         from sins.viz import viewer as viz
 
         viz.check_rrd_path(args.rerun)
-    read = [
-        *(args.recording or []),
-        args.truth,
-        args.model,
-        *(p for d in (args.dataset or []) for p in dataset_inputs(d)),
-    ]
+    read = [*(args.recording or []), args.truth, args.model]
+    read += [p for d in (args.dataset or []) for p in dataset_inputs(d)]
     check_outputs({"--json": args.json, "--rerun": args.rerun}, read)
     inputs, model = _gap_inputs(args)
     results = [_diagnose(args, inp, model) for inp in inputs]
@@ -104,7 +100,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
     """``sins gap``'s recordings (files, datasets by name, or both), each with its reference, and the
     model's effects."""
     from sins import imu, scenario
-    from sins.unit_gap.inputs import read_gap_input
+    from sins.unit_gap.inputs import check_one_unit, read_gap_input
 
     paths, names = list(args.recording or []), list(args.dataset or [])
     if not paths and not names:
@@ -117,6 +113,7 @@ def _gap_inputs(args: argparse.Namespace) -> tuple[list[Any], tuple[str, ...]]:
     options = recording_options(args)
     inputs = [read_gap_input(p, truth=args.truth, options=options) for p in paths]
     inputs += [read_gap_input(None, dataset=n, options=options) for n in names]  # one not applying: refused
+    check_one_unit(inputs)
     model: tuple[str, ...] = imu.BASELINE
     if args.model:
         spec = scenario.load_imu(scenario.resolve_preset(args.model, "imu"))
@@ -191,10 +188,10 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
-    for effect, channels in report.sizes.items():
-        from sins.gap.report import in_units
-        from sins.unit_gap.across import size_text
+    from sins.gap.report import in_units
+    from sins.unit_gap.across import size_text
 
+    for effect, channels in report.sizes.items():
         shown = {
             ch: {"values": in_units(effect, v)[0], "unit": in_units(effect, v)[1]}
             for ch, v in channels.items()

@@ -93,6 +93,19 @@ def read_gap_input(
     return GapInput(name, referenced, lambda: ideal_inputs(rec), filled_s=spans)
 
 
+def check_one_unit(inputs: list[GapInput]) -> None:
+    """Refuse recordings of two units (each's reference names its unit, as :func:`sins.io.read` finds
+    it): ``sins gap`` reads several recordings as one unit's, its verdicts across them and each one's
+    model judged on the next; ``sins fit`` refuses such a pair alike. One line, both named."""
+    named = [(i.name, r.sensor) for i in inputs if (r := i.referenced) is not None and r.sensor]
+    for name, sensor in named[1:]:
+        if sensor != named[0][1]:
+            raise SinsInputError(
+                f"{name}: recordings of one unit are diagnosed together; {named[0][0]} is {named[0][1]}, "
+                f"this is {sensor} (diagnose each on its own)"
+            )
+
+
 def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:
     """A CSV of sins's or its own columns, without a trajectory and without ``ref_`` columns: the
     trajectory is what is missing (said before its columns are read as some other form)."""
@@ -110,5 +123,6 @@ def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[s
 
 __all__ = [
     "GapInput",
+    "check_one_unit",
     "read_gap_input",
 ]
