@@ -170,10 +170,12 @@ def fit_several(
     Raises
     ------
     SinsInputError
-        fewer than two recordings, recordings of different units or rates, or as :func:`fit`.
+        fewer than two recordings, recordings of different units or rates, one recording twice, or as
+        :func:`fit`.
     """
+    from sins.compensation.several import check_one_unit
 
-    _check_one_unit(recs)
+    check_one_unit(recs)
     where = " + ".join(rec.source or "recording" for rec in recs)
     say = stage or (lambda text: None)
     try:
@@ -337,23 +339,6 @@ def choose_rule(
         each = {**scores, "raw": raw}
     return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
                                held_back_deg=held, held_back_each_deg=each)  # fmt: skip
-
-
-def _check_one_unit(recs: list[ReferencedRecording]) -> None:
-    """Refuse fewer than two recordings, two units, or rates more than 5 % apart (one line, both named)."""
-    if len(recs) < 2:
-        raise SinsInputError("a fit on several recordings needs two or more")
-    for rec in recs[1:]:
-        if recs[0].sensor and rec.sensor and rec.sensor != recs[0].sensor:
-            raise SinsInputError(
-                f"{rec.source}: recordings of one unit are fitted together; {recs[0].source} is "
-                f"{recs[0].sensor}, this is {rec.sensor}"
-            )
-        if abs(rec.rate_hz - recs[0].rate_hz) > 0.05 * recs[0].rate_hz:
-            raise SinsInputError(
-                f"{rec.source}: readings at {rec.rate_hz:.6g} Hz; {recs[0].source} at "
-                f"{recs[0].rate_hz:.6g} Hz: one model is fitted on recordings at one rate"
-            )
 
 
 def _biases_only(seed: Any) -> Any:

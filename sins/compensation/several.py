@@ -166,6 +166,37 @@ class _State:
         return replace(self.seed, B0=self.gyro_bias[r], A0=self.accel_bias[r])
 
 
+def check_one_unit(recs: list[ReferencedRecording]) -> None:
+    """Refuse fewer than two recordings, two units, rates more than 5 % apart, or one recording's readings
+    given twice (a copy under another name: the bias's spread between recordings would read zero and the
+    held-back rule would judge a recording by itself). One line, both named."""
+    from sins.errors import SinsInputError
+    from sins.io.provenance import readings_digest
+
+    if len(recs) < 2:
+        raise SinsInputError("a fit on several recordings needs two or more")
+    seen: dict[str, str] = {}
+    for i, rec in enumerate(recs):
+        first = recs[0]
+        if i and first.sensor and rec.sensor and rec.sensor != first.sensor:
+            raise SinsInputError(
+                f"{rec.source}: recordings of one unit are fitted together; {first.source} is "
+                f"{first.sensor}, this is {rec.sensor}"
+            )
+        if abs(rec.rate_hz - first.rate_hz) > 0.05 * first.rate_hz:
+            raise SinsInputError(
+                f"{rec.source}: readings at {rec.rate_hz:.6g} Hz; {first.source} at "
+                f"{first.rate_hz:.6g} Hz: one model is fitted on recordings at one rate"
+            )
+        digest = readings_digest(rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
+        if digest in seen:
+            raise SinsInputError(
+                f"{rec.source}: the same readings as {seen[digest]}: a fit on several recordings takes "
+                "each once"
+            )
+        seen[digest] = rec.source
+
+
 def _joined(ivs: list[Intervals]) -> SimpleNamespace:
     """The stacked intervals' ends, offset so that no interval of one recording meets another's: what
     the residual covariance reads to let neighbours correlate."""
@@ -314,5 +345,6 @@ def _result(
 
 __all__ = [
     "SeveralFit",
+    "check_one_unit",
     "fit_several",
 ]

@@ -35,6 +35,11 @@ estimated from the recording itself, by one of these :data:`MODES`:
     ``rest+online`` from ``rest``'s, ``nearest+online`` from ``nearest``'s. Readings are corrected by
     the last estimate made before them (causal).
 
+Every mode that reads a rest (``rest``, ``nearest`` and their ``+online``) takes, while the unit rests,
+the rest's mean rate so far, weighted against the pooled prior by their precisions (the rest's standard
+error from its rates' spread so far): the bias at rest is what a resting unit's readings tell, and a
+recording that never moves is corrected by its own readings, not by the prior.
+
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
 from its own reference. A mode is taken only where it is no worse than the readings as they are on every
@@ -223,7 +228,29 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
         track[rest:] = own
     if rule.mode in ("online", "rest+online", "nearest+online"):
         track = _online(imu, track, prior, sigma, rule)
+    if rest:  # while the unit rests, its own readings so far tell its bias (the rest's, not the flight's)
+        track[:rest] = _resting(rule, imu, rest)
     return track
+
+
+def _resting(rule: BiasRule, imu: ImuIncrements, rest: int) -> Array:
+    """The bias over the opening rest's ``rest`` steps, each from the steps before it: the pooled prior
+    (give or take its spread) and the rest's mean rate so far (give or take its standard error, from the
+    rates' spread so far) weighted by their precisions. Causal to the rest window: the first
+    :data:`REST_WINDOW_S` keeps the prior (the rest is told from whole windows)."""
+    dt = np.diff(imu.t)[:rest, None]
+    omega = imu.dtheta_b[:rest] / dt
+    out = np.tile(rule.prior, (rest, 1))
+    first = max(2, round(REST_WINDOW_S / float(np.median(dt))))
+    if rest <= first:
+        return out
+    count = np.arange(first, rest)[:, None]  # step k's estimate takes the steps before it
+    mean = np.cumsum(omega, axis=0)[first - 1 : rest - 1] / count
+    square = np.cumsum(omega**2, axis=0)[first - 1 : rest - 1] / count
+    se2 = np.maximum(square - mean**2, _MIN_SPREAD**2) / count
+    w_prior, w_rest = 1.0 / rule.spread**2, 1.0 / se2
+    out[first:] = (w_prior * rule.prior + w_rest * mean) / (w_prior + w_rest)
+    return out
 
 
 def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
@@ -237,11 +264,12 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     if not rest:
         return head + "it opens moving, so its prior is the training recordings' mean"
     rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
+    head += f"{rest_s}'s mean rate so far while it rests; "
     if rule.mode.startswith("rest"):
-        return head + f"the prior is {rest_s}'s mean rate and the training recordings' motion offset"
+        return head + "after it, the rest's mean rate and the training recordings' motion offset"
     if own is None:
-        return head + f"{rest_s} reads like no training recording's, so its prior is their mean"
-    return head + f"{rest_s} reads like some training recordings' rests: the prior is their bias"
+        return head + "the rest reads like no training recording's, so after it their mean"
+    return head + "the rest reads like some training recordings' rests: after it, their bias"
 
 
 def nearest_prior(
