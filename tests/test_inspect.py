@@ -213,6 +213,22 @@ def test_the_planted_figures(tmp_path: Path) -> None:
     assert "98.0" in slow["what"] and "+2.0 %" in slow["what"]
 
 
+def test_clipping_in_increments_is_found_as_rates(tmp_path: Path) -> None:
+    """A clipped drive written as increments (each rate times its step; the steps of ``t = k / 100``
+    differ in their last bits, and so do the increments of one clipped rate): found as the rate it sticks
+    at, in rad/s, as in rate form. A new-user walk's clipped EuRoC .npz (read as increments) was called
+    clean, and a clipping reported on increments showed an angle as a rate."""
+    d = _clipped(drive())
+    dt = np.diff(d["t"])[:, None]
+    assert (
+        len(np.unique(d["w"][1:, 2][np.abs(d["w"][1:, 2]) == 0.15] * dt[np.abs(d["w"][1:, 2]) == 0.15, 0]))
+        > 2
+    )
+    clips = inspect_cli(write(tmp_path / "clip.csv", d["t"][1:], d["w"][1:] * dt, d["f"][1:] * dt, INCREMENT))
+    found = {(c["channel"], round(c["level"], 12)) for c in clips["clipping"]}
+    assert found == {("gyro_z", 0.15), ("gyro_z", -0.15)}
+
+
 def test_a_stated_rate_is_checked_against_the_stamps(tmp_path: Path) -> None:
     d = static(seconds=30.0, rate=98.0)
     path = write(tmp_path / "rec.csv", d["t"], d["w"], d["f"])

@@ -445,6 +445,14 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main(["evaluate", str(model), "--dataset", "unit/r2", "--json", str(out)]) == 0
     online = json.loads(out.read_text())["open_loop_attitude"]["aoe_deg"]
     assert online < pooled < raw, (online, pooled, raw)
+    # A copy of r2 whose gyro x is clipped at half its largest rate: judged all the same, and said so.
+    arrays = dict(np.load(tmp_path / "unit" / "r2.npz"))
+    top = 0.5 * float(np.abs(arrays["gyro_rad_s"][:, 0]).max())
+    arrays["gyro_rad_s"][:, 0] = np.clip(arrays["gyro_rad_s"][:, 0], -top, top)
+    np.savez(tmp_path / "unit" / "r2_clipped.npz", **arrays)
+    capsys.readouterr()
+    assert main(["evaluate", str(model), "--dataset", "unit/r2_clipped"]) == 0
+    assert f"the readings stick at their extremes (gyro_x at {top:+.6g} on " in capsys.readouterr().out
     # Several judged in one command: each recording's document as its own command writes it, and the
     # means numpy takes of theirs.
     singles = {}

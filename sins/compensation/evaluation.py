@@ -207,6 +207,8 @@ def _reference_notes(
         )
     if gaps := gaps_note(rec.imu.t):  # sins inspect's gaps, as sins integrate says them
         notes.append(gaps)
+    if clipped := _clipped(rec):
+        notes.append(clipped)
     filled_s = screening.filled(rec)
     if filled_s:
         notes.append(
@@ -214,6 +216,20 @@ def _reference_notes(
             "figure is judged against it as it is there too"
         )
     return notes, clock, filled_s
+
+
+def _clipped(rec: ReferencedRecording) -> str:
+    """The readings' channels stuck at their extremes (``sins inspect``'s clipping), in words ("" where
+    none is): a clipped gyro's open loop is not the motion's, whatever the model."""
+    import numpy as np
+
+    imu = rec.imu
+    values = np.hstack([imu.dtheta_b, imu.dv_b]) / np.diff(imu.t)[:, None]
+    found = frame_check.clipped_channels(imu.t[1:], values)
+    if not found:
+        return ""
+    said = ", ".join(f"{c.channel} at {c.level:+.6g} on {c.samples} readings" for c in found)
+    return f"the readings stick at their extremes ({said}): clipped at the sensor's range, not the motion"
 
 
 def across(judged: dict[str, Evaluation], label: str) -> Evaluation:

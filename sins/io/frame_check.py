@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from sins.core import earth, rotation
 from sins.core.series import NavSeries, ReferencedRecording
 from sins.io import axes, local
-from sins.io.findings import Finding, ReferenceLag, Rest, Windows
+from sins.io.findings import Clipping, Finding, ReferenceLag, Rest, Windows
 
 Array = NDArray[np.float64]
 
@@ -316,19 +316,41 @@ def _clipped(w: Array) -> str:
     at least), in words ("" where they are not)."""
     for k in range(3):
         for level in (float(w[:, k].max()), float(w[:, k].min())):
-            found = stuck(w[:, k], level)
+            found = stuck(w[:, k], level, STUCK_RTOL)
             if found is not None and found[0] >= CLIPPED_SHARE * len(w):
                 return (f"the gyro's {'xyz'[k]} sits at {level:g} rad/s on {found[0]} of its {len(w)} "
                         "readings: clipped at the sensor's range")  # fmt: skip
     return ""
 
 
-def stuck(v: Array, level: float) -> tuple[int, int, int] | None:
-    """``(samples, runs, first row)`` of the runs of three or more readings equal to ``level`` (clipped
-    readings: what ``sins inspect`` names, and what :func:`_clipped` tells a reference check). Readings
-    that take fewer distinct values than half their count are quantized: there a still unit's noise sits
-    on its few levels for several readings, so a run counts only more than 10 steps from the median."""
-    at = v == level
+def clipped_channels(t: Array, values: Array) -> tuple[Clipping, ...]:
+    """The channels of ``values`` (n, 6: rates and specific forces at the times ``t`` (n,), SI) whose
+    readings stick at their extreme (:func:`stuck`), each as a :class:`~sins.io.findings.Clipping`: what
+    ``sins inspect`` names and ``sins evaluate`` notes. Rates from increments (an increment over its step)
+    differ from the clipped level in their last bits, where the steps do: equal within :data:`STUCK_RTOL`."""
+    out = []
+    for c in range(6):
+        v = values[:, c]
+        for level in (float(v.max()), float(v.min())):
+            found = stuck(v, level, STUCK_RTOL)
+            if found is not None:
+                samples, runs, first = found
+                name = f"{('gyro', 'accel')[c // 3]}_{'xyz'[c % 3]}"
+                out.append(Clipping(name, level, samples, runs, float(t[first])))
+    return tuple(out)
+
+
+#: Readings within this share of a channel's extreme are at it (an increment's rate, its step's rounding).
+STUCK_RTOL = 1e-9
+
+
+def stuck(v: Array, level: float, rtol: float = 0.0) -> tuple[int, int, int] | None:
+    """``(samples, runs, first row)`` of the runs of three or more readings equal to ``level`` (within
+    ``rtol`` of it: clipped readings, what ``sins inspect`` names, and what :func:`_clipped` tells a
+    reference check). Readings that take fewer distinct values than half their count are quantized: there
+    a still unit's noise sits on its few levels for several readings, so a run counts only more than 10
+    steps from the median."""
+    at = np.abs(v - level) <= rtol * abs(level)
     if at.sum() < 3:
         return None
     levels = np.unique(v)
@@ -534,8 +556,10 @@ __all__ = [
     "REFERENCE_TILT_DEG",
     "REFERENCE_TURNS_AGREE",
     "STILL_M",
+    "STUCK_RTOL",
     "TURN_INTERVAL_S",
     "VELOCITY_AGREES",
+    "clipped_channels",
     "clock_sits",
     "dead_findings",
     "frame_findings",

@@ -485,31 +485,22 @@ def _range_findings(rec: Recording, w: Array) -> list[Finding]:
 
 
 def _clipping(rec: Recording) -> tuple[Clipping, ...]:
-    """Channels whose readings stick at their extreme: runs of three or more equal readings there (see
-    :func:`sins.io.frame_check.stuck` for quantized readings)."""
+    """Channels whose readings stick at their extreme (:func:`sins.io.frame_check.clipped_channels`), an
+    increment recording's as its steps' mean rates."""
     imu = rec.imu
     if isinstance(imu, ImuRates):
-        values, t, names = np.hstack([imu.omega_ib_b, imu.f_ib_b]), imu.t, ("gyro", "accel")
-    else:
-        values, t, names = np.hstack([imu.dtheta_b, imu.dv_b]), imu.t[1:], ("dtheta", "dv")
-    out = []
-    for c in range(6):
-        v = values[:, c]
-        for level in (float(v.max()), float(v.min())):
-            found = frame_check.stuck(v, level)
-            if found is not None:
-                samples, runs, first = found
-                out.append(Clipping(f"{names[c // 3]}_{'xyz'[c % 3]}", level, samples, runs, float(t[first])))
-    return tuple(out)
+        return frame_check.clipped_channels(imu.t, np.hstack([imu.omega_ib_b, imu.f_ib_b]))
+    dt = np.diff(imu.t)[:, None]
+    return frame_check.clipped_channels(imu.t[1:], np.hstack([imu.dtheta_b, imu.dv_b]) / dt)
 
 
 def _clip_finding(c: Clipping) -> Finding:
-    gyro = c.channel.startswith(("gyro", "dtheta"))
+    gyro = c.channel.startswith("gyro")
     unit, scale = ("°/s", np.degrees(1.0)) if gyro else ("g", 1.0 / 9.80665)
     shown = c.level * scale
     scales = FULL_SCALES["gyro" if gyro else "accel"]
     near = next((s for s in scales if abs(abs(shown) / s - 1.0) < 0.02), None)
-    full = f", a ±{near:g} {unit} full scale" if near is not None and c.channel[0] in "ga" else ""
+    full = f", a ±{near:g} {unit} full scale" if near is not None else ""
     return Finding(
         "clipping",
         f"{c.channel} sticks at {c.level:+.6g} (SI; {shown:+.4g} {unit}{full}) on {c.samples} readings in "
