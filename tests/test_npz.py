@@ -314,6 +314,22 @@ def test_a_clipped_or_negated_gyro_is_not_blamed_on_the_reference(tmp_path: Path
         refusal(lambda p=path: io.read(p).beside_reference(), str(path), said)
 
 
+@needs_euroc
+def test_a_constant_reference_and_swapped_columns_are_named_as_such(tmp_path: Path) -> None:
+    """EuRoC's V1_02 (its first 30 s) with a reference that never turns, and with the gyro's and the
+    accelerometer's columns swapped (numpy): both were refused as a quaternion of the wrong order (a new
+    user's walk); now each refusal says what it is."""
+    with np.load(EUROC / "V1_02_medium.npz") as held:
+        doc = {k: v[:6000] for k, v in held.items()}
+    for name, change, said in [
+        ("constant", {"q_wxyz": doc["q_wxyz"][:1].repeat(6000, 0)}, "the reference barely turns"),
+        ("swapped", {"gyro_rad_s": doc["accel_m_s2"], "accel_m_s2": doc["gyro_rad_s"]}, "look swapped"),
+    ]:
+        path = tmp_path / f"{name}.npz"
+        np.savez(path, **{**doc, **change})
+        refusal(lambda p=path: io.read(p).beside_reference(), str(path), said)
+
+
 def test_a_time_column_in_nanoseconds_is_named_and_places_no_clock(tmp_path: Path) -> None:
     """The swing's time written in ns, read as s: its readings 5e6 s apart. The time's unit is the
     mistake named; the clock search (shifts within 0.25 s) has no shift to try, so no clock is said

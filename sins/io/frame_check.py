@@ -163,6 +163,8 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
     dead = dead_findings(truth, t, w, f, inside)
     if dead:  # nothing of a dead channel's can be judged against the reference
         return dead
+    if swapped := _swapped(w[inside], f[inside]):
+        return [swapped]
     advice = ("check the reference's quaternion order (w, x, y, z or x, y, z, w), its direction (the "
               "sensor's attitude in the world, not the world's in the sensor) and the readings' "
               "axes")  # fmt: skip
@@ -176,6 +178,14 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
         if clipped:  # readings held at the sensor's range turn away from the reference's: not its fault
             cut = "the clipped spans cannot be judged against the reference: record with a wider range"
             return [Finding("reference_attitude", f"{what}, and {clipped}", advice=cut)]
+        assert pairs is not None
+        gyro_turns, ref_turns = pairs
+        if _rms(ref_turns) < 0.05 * _rms(gyro_turns):  # the gyro turns at least 1 °/s RMS (_turn_pairs)
+            ref_deg, gyro_deg = np.degrees(_rms(ref_turns)), np.degrees(_rms(gyro_turns))
+            still = (f"the reference barely turns ({ref_deg:.3g}° RMS over its {TURN_INTERVAL_S:g} s "
+                     f"intervals) while the gyro turns {gyro_deg:.3g}°")  # fmt: skip
+            advice = "check that the reference's attitude is the recording's own (a constant is no reference)"
+            return [Finding("reference_attitude", still, advice=advice)]
         what += ": the attitude is not of the readings' axes"
         if agreement < -REFERENCE_TURNS_AGREE:  # the turns exactly against the gyro's: a sign
             what += ", or the gyro reads every turn negated"
@@ -524,6 +534,24 @@ def _reference_turns(truth: NavSeries, t_ends: Array) -> Array:
     """The reference's turns between the times ``t_ends``, in the body, (m - 1, 3)."""
     q = truth.interpolate(t_ends).q_nb
     return np.asarray(rotation.turn_between(q[:-1], q[1:]), dtype=float)
+
+
+def _swapped(w: Array, f: Array) -> Finding | None:
+    """The gyro reading gravity's size on average and the accelerometer next to nothing: its columns and
+    the accelerometer's swapped (a rate of 9.8 rad/s held for the recording is no motion)."""
+    g_rate, g_force = float(np.linalg.norm(w.mean(axis=0))), float(np.linalg.norm(f.mean(axis=0)))
+    if abs(g_rate / earth.G0 - 1.0) > 0.15 or g_force > 0.2 * earth.G0:
+        return None
+    what = (
+        f"the gyro's mean reads {g_rate:.3g} (rad/s), gravity's size; the accelerometer's {g_force:.3g} m/s²"
+    )
+    advice = "check the columns: the gyro's and the accelerometer's look swapped"
+    return Finding("reference_attitude", what, advice=advice)
+
+
+def _rms(turns: Array) -> float:
+    """The RMS size of turns (m, 3) about their mean, rad."""
+    return float(np.sqrt(np.mean(np.sum((turns - turns.mean(axis=0)) ** 2, axis=1))))
 
 
 def _correlation(gyro: Array, turns: Array) -> float:
