@@ -403,12 +403,16 @@ def test_bad_files_are_refused_naming_the_file_and_key(
     assert "not a readable" not in message and "np.float64" not in message and message.count(str(path)) == 1
 
 
-def test_keys_not_of_the_form_are_said_not_read(tmp_path: Path) -> None:
+def test_keys_not_of_the_form_are_said_not_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A magnetometer beside the form's keys: read as the form says, the rest named in the notes (nothing
-    is dropped silently)."""
-    path = tmp_path / "rec.npz"
+    is dropped silently), by its path and as a data root's FOLDER/NAME alike (whose notes were dropped:
+    ``sins inspect --dataset`` said nothing of them)."""
+    path = tmp_path / "unit" / "rec.npz"
+    path.parent.mkdir()
     _write(path, mag_uT=np.zeros((400, 3)), temp_c=np.zeros(400))
     assert f"{path}: not read (not of the form): mag_uT, temp_c" in io.read(path).notes
+    monkeypatch.setenv("SINS_DATA", str(tmp_path))
+    assert f"{path}: not read (not of the form): mag_uT, temp_c" in io.read(dataset="unit/rec").notes
     _write(path)
     assert not any("not read" in note for note in io.read(path).notes)
 

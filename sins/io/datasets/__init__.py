@@ -107,13 +107,15 @@ def _read_dataset(
     SinsInputError
         for an unknown name (listing the known ones), or as the readers do.
     """
-    t0_ns = None  # a FOLDER/NAME's stamps: read once, its time origin kept
+    # A FOLDER/NAME's stamps: read once, its time origin and notes kept.
+    t0_ns: int | None = None
+    notes: tuple[str, ...] = ()
     if is_folder_name(name):
         own = _read_npz_recording(name, root, origin)
         if own.truth is None:  # readings alone: a command that needs a reference says so when it asks
             return dataclasses.replace(own, sensor=name.partition("/")[0], dataset=name)
         trajectory: ReferencedRecording | None = _beside_own(own, name)
-        t0_ns = own.t0_ns
+        t0_ns, notes = own.t0_ns, own.notes
     else:
         trajectory = _load_reference(name, root, origin)
     if trajectory is not None:
@@ -121,7 +123,7 @@ def _read_dataset(
             trajectory.imu, trajectory.source, "dataset", trajectory.reference, _si("increment"),
             sensor=trajectory.sensor, heading_known=trajectory.heading_known,
             latitude_known=trajectory.latitude_known, dataset=name, on_reference=trajectory,
-            inputs_reader=lambda: _load_with_truth(name, root, origin), t0_ns=t0_ns,
+            inputs_reader=lambda: _load_with_truth(name, root, origin), t0_ns=t0_ns, notes=notes,
         )  # fmt: skip
     data = _load_with_truth(name, root)[0]
     imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
