@@ -174,6 +174,11 @@ def test_determined_holds_the_collinear_and_the_unexcited_and_keeps_the_rest() -
     assert free.tolist() == [True, True, True, True, False, False]
     assert reasons["gyro.scale.y"].startswith("too little excitation")
     assert reasons["gyro.scale.z"].startswith("confounded with gyro bias z")
+    # Turns at the rounding of a constant rate (a unit at rest: 1e-20 rad): no measurement at all, where
+    # it read "too little excitation: its standard error 1.65e+33 ms exceeds ..." (a new-user walk's).
+    x[:, 1, 4] = rng.normal(0.0, 1e-20, k)
+    _, reasons = identifiability.determined(x, y, names, identifiability.class_bounds("consumer"))
+    assert reasons["gyro.scale.y"] == "not excited at all by the recording"
 
 
 def test_a_rig_fit_beyond_its_class_is_refused(tmp_path: Path) -> None:

@@ -382,6 +382,11 @@ def _worst(order: NDArray[np.int_], badness: Array, among: NDArray[np.bool_]) ->
     return int(np.flatnonzero(candidates)[np.argmax(badness[candidates])])
 
 
+#: A column whose standard error alone exceeds the spread by this much is not excited at all (at rest, a
+#: time offset's column is the rounding of a constant rate's change).
+_UNEXCITED = 1e6
+
+
 def _why(
     a: Array, j: int, cols: NDArray[np.int_], se: float, limit: float, sigma2: float,
     names: tuple[str, ...], grade: str,
@@ -393,6 +398,8 @@ def _why(
     beyond = (
         f"its standard error {_shown(names[j], se)} exceeds a {grade} unit's spread {_shown(names[j], limit)}"
     )
+    if not alone <= _UNEXCITED * limit:  # the column at its rounding: an error of 1e33 ms says nothing
+        return "not excited at all by the recording"
     if not alone <= limit:
         return f"too little excitation: {beyond}"
     others = [int(c) for c in cols if c != j]
