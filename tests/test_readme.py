@@ -100,3 +100,22 @@ def test_the_format_note_lists_the_reading_options() -> None:
     text = README.read_text(encoding="utf-8")
     note = text[text.index(f"`{FORMAT}` say how") :].split("\n\n")[0]
     assert set(re.findall(r"--[a-z][a-z-]*", note)) - {"--dataset", "--help"} == _format_flags()
+
+
+CLI_GUIDE = README.parent / "docs" / "guide" / "cli.md"
+
+
+@pytest.mark.parametrize("name", sorted(_subparsers()))
+def test_the_cli_guides_synopsis_holds_every_option_both_ways(name: str) -> None:
+    """docs/guide/cli.md's synopsis lines of each command hold every option its ``--help`` has (the reading
+    options once, in the prose under it) and none it lacks: a docs walk found ``fit``'s lines six options
+    short, ``gap``'s four."""
+    text = CLI_GUIDE.read_text(encoding="utf-8")
+    block = text.split("```sh", 1)[1].split("```", 1)[0]
+    lines = [line.split("#")[0] for line in block.splitlines() if re.match(rf"sins {name}( |$)", line)]
+    assert lines, f"docs/guide/cli.md has no synopsis of sins {name}"
+    written = set(re.findall(r"--[a-z][a-z0-9-]*", " ".join(lines)))
+    expected = _flags(_subparsers()[name][0]) - _format_flags()
+    assert written - _format_flags() == expected, (
+        f"cli.md of sins {name}: missing {sorted(expected - written)}, unknown {sorted(written - expected)}"
+    )

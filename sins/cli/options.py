@@ -112,8 +112,8 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     g.add_argument(
         "--origin", metavar="LAT,LON,H",
-        help="where a bag's or EuRoC's local reference frame lies, degrees, degrees, metres "
-        "(default: a bag's first NavSatFix, else 0,0,0)",
+        help="where a bag's, EuRoC's or an .npz's local reference frame lies, degrees, degrees, metres "
+        "(default: a bag's first NavSatFix, else 45° N, 0° E, 0 m)",
     )  # fmt: skip
 
 
