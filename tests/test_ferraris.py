@@ -577,3 +577,23 @@ def test_fit_and_evaluate_through_the_library(example: CalibrationData, tmp_path
             assert v["rms_after"] < min(1.5 * G * fitted.placement_rad_, 0.1 * v["rms_before"]), (name, v)
         else:
             assert v["rms_after"] < 1.05 * spread[axis] and abs(v["mean_after"]) < 5 * fitted.B0_se_[axis], v
+
+
+@needs_example
+def test_sins_fit_prints_the_procedures_own_coefficients(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sins fit --dataset ferraris --strategy ferraris`` prints the strategy's own coefficients, its
+    g-sensitivity from each pair's difference among them, each the model file's value (°/h/g): it had
+    printed least squares of the seed model, which a session of angles cannot give a g-sensitivity (a
+    docs walk found the guide's "and its g-sensitivity" nowhere in the output)."""
+    from sins.cli import main
+
+    model = tmp_path / "m.json"
+    assert main(["fit", "--dataset", "ferraris", "--strategy", "ferraris", "--out", str(model)]) == 0
+    out = capsys.readouterr().out
+    assert "the Ferraris procedure's coefficients (± 1σ)" in out
+    fitted = compensation.load(model)
+    k_xx = fitted.K_[0, 0] * 3600.0 * 180.0 / math.pi * 9.80665  # rad/s per m/s² in °/h/g
+    row = next(line for line in out.splitlines() if "g_sensitivity" in line and "x←x" in line)
+    assert float(row.split()[3]) == pytest.approx(k_xx, rel=1e-3), row

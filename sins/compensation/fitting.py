@@ -137,6 +137,7 @@ def _rig_seed_review(
     """The seed model's coefficients with their standard errors (the strategy's own for regression, the
     stage the learners start from for the others), reviewed against a ``grade`` unit's."""
     from sins.compensation import identifiability
+    from sins.compensation.ferraris import Ferraris
     from sins.imu import calibration
 
     try:
@@ -147,10 +148,17 @@ def _rig_seed_review(
             seed, with_k = calibration.fit_seed_model(part, g_sensitivity=False), False
         except ValueError:
             seed = None
+    caption = "least squares of the seed model on the rows (± 1σ)"
+    if isinstance(strategy, Ferraris):  # its own fit, g-sensitivity and all, where least squares has none
+        f = strategy
+        seed = calibration.SeedModelFit(
+            f.B0_, f.B_, f.K_, f.A0_, f.A_, f.B0_se_, f.B_se_, f.K_se_, f.A0_se_, f.A_se_, np.full(6, np.nan)
+        )
+        with_k, caption = True, "the Ferraris procedure's coefficients (± 1σ)"
     if strategy.name == "none" or seed is None:
         return {"grade": grade, "held": {}}
     table = coefficients.engineering(seed, g_sensitivity=with_k)
-    lines += coefficient_lines(table, "least squares of the seed model on the rows (± 1σ)")
+    lines += coefficient_lines(table, caption)
     document["coefficients"] = [c.to_dict() for c in table]
     bounds = identifiability.class_bounds(grade)
     return identifiability.review(identifiability.seed_values(seed), bounds, where).to_dict()
