@@ -428,6 +428,9 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert "this recording is elsewhere (a data root's FOLDER/NAME takes its folder for its unit)" in (
         capsys.readouterr().err
     )
+    # By its path the file names no unit: judged as the model's, and said so.
+    assert main(["evaluate", str(model), str(tmp_path / "elsewhere" / "r2.npz")]) == 0
+    assert "the recording names no unit: it is judged as unit's, the model's" in capsys.readouterr().out
     # --drive: a window backwards is refused as such; one past the reference is navigated to its end
     # and said so (before: "not within the reference" for the first, the asked end for the second).
     capsys.readouterr()

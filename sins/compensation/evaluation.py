@@ -148,6 +148,9 @@ def evaluate_referenced(
     ]
     notes, clock, filled_s = _reference_notes(rec)
     lines += notes
+    unit = (getattr(strategy, "fitted_on_", None) or {}).get("sensor")
+    if unit and not rec.sensor:  # a unit's check needs the recording to name one (a path's may not)
+        lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
     if fitted_here:
         lines.append(FITTED_HERE)
     as_read = strategy.leaves_gyro_as_read()
