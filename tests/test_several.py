@@ -610,6 +610,16 @@ def test_a_mode_that_only_ties_with_the_readings_is_not_taken() -> None:
     scores["online"], scores["nearest"] = [1.0, 1.9, 3.0], [1.0, 1.5, 2.0]
     assert unit_bias.chosen_mode(scores, raw) == "nearest"
     assert unit_bias.chosen_mode({**scores, "online": raw, "nearest": raw}, raw) == unit_bias.READINGS
+    # Two modes within one standard error of each other, recording by recording: the simpler (MODES'
+    # order) is taken. A helper's unit of new power-ups held `rest+online` at 45.56, 1.73, 4.08 and
+    # `nearest+online` at 45.56, 2.21, 3.23 (means 17.12 and 17.00): `nearest+online` was taken, and its
+    # judged recordings, whose rests read like none of the training ones, went from 5.08 to 16.75.
+    wide = [116.92, 115.62, 106.39]
+    close = {m: wide for m in unit_bias.MODES}
+    close.update({"rest+online": [45.56, 1.73, 4.08], "nearest+online": [45.56, 2.21, 3.23]})
+    assert unit_bias.chosen_mode(close, wide) == "rest+online"
+    close["rest+online"] = [45.56, 3.73, 6.08]  # 1.8 standard errors behind: the better one is taken
+    assert unit_bias.chosen_mode(close, wide) == "nearest+online"
 
 
 @needs_euroc

@@ -298,11 +298,11 @@ def choose_rule(
 ) -> BiasRule:
     """What ``strategy`` (fitted on ``recs``) does about a new recording's bias: the bias each recording's
     corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
-    mode is the one whose open-loop attitude on held-back recordings is least (each recording in turn
-    held back, the seed model and the rule made from the others alone) among those no worse than the
-    readings as they are on any of them and better on their mean (``unit_bias.chosen_mode``),
-    :data:`~sins.compensation.unit_bias.READINGS` (the gyro left as read) where none is; ``mode`` names
-    one instead."""
+    mode is chosen on the open-loop attitude of held-back recordings (each recording in turn held back,
+    the seed model and the rule made from the others alone) by ``unit_bias.chosen_mode``: the simplest
+    within one standard error of the best among those no worse than the readings as they are on any of
+    them, :data:`~sins.compensation.unit_bias.READINGS` (the gyro left as read) where none is; ``mode``
+    names one instead."""
     from sins.compensation import interval_fit, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]

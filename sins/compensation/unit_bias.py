@@ -440,16 +440,29 @@ TIE = 1e-9
 
 
 def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
-    """The mode of least mean open-loop attitude over held-back recordings (``scores``: each mode's, deg,
-    one per recording; ``raw``: the readings' as they are) among those no worse than the readings on any
-    of them and better on their mean (by more than :data:`TIE`); :data:`READINGS` where none is. A
-    correction worse than the readings on a recording it was not fitted on may be so on the next; one that
-    only ties with them (a ``bias_only`` prior that gives back the bias it takes) adds nothing to them."""
+    """The mode a rule takes from its open-loop attitude over held-back recordings (``scores``: each
+    mode's, deg, one per recording; ``raw``: the readings' as they are); :data:`READINGS` where none is
+    kept. Kept: no worse than the readings on any of them, and better on their mean (by more than
+    :data:`TIE`): a correction worse than the readings on a recording it was not fitted on may be so on
+    the next, and one that only ties with them (a ``bias_only`` prior that gives back the bias it takes)
+    adds nothing. Of those, the first in :data:`MODES`' order (simplest first: what it takes from the
+    training recordings and from the recording grows along it) whose mean lies within one standard error
+    of the best one's, the error that of their differences recording by recording (the one-standard-error
+    rule of cross-validation): three or six held-back recordings cannot tell modes closer than that apart,
+    and the simpler one is less of a guess on a unit the recordings have not shown."""
     kept = [
         m for m in MODES
         if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < (1.0 - TIE) * np.mean(raw)
     ]  # fmt: skip
-    return min(kept, key=lambda m: float(np.mean(scores[m]))) if kept else READINGS
+    if not kept:
+        return READINGS
+    best = np.array(scores[min(kept, key=lambda m: float(np.mean(scores[m])))])
+    for mode in kept:
+        gap = np.array(scores[mode]) - best
+        se = float(gap.std(ddof=1) / np.sqrt(len(gap))) if len(gap) > 1 else 0.0
+        if float(gap.mean()) <= se:
+            return mode
+    raise AssertionError("the best mode is within its own standard error")  # pragma: no cover
 
 
 def with_mode(rule: BiasRule, mode: str) -> BiasRule:
