@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import pickle
 from dataclasses import replace
 from pathlib import Path
 
@@ -76,7 +77,27 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
         gyro[len(gyro) // 2, 0] = np.nan
         with pytest.raises(ValueError, match=r"1 row\(s\) of readings not finite"):
             _make(name).fit(replace(data, gyro=gyro))
+    if name not in ("none", "oracle", "ferraris"):  # Ferraris's session is its own holds and turns
+        # One orientation held still determines no scale factor: refused, as least squares refuses it
+        # (regression_extended had fitted it, and corrected other forces by tens of m/s²).
+        with pytest.raises(ValueError, match="not determined by this recording"):
+            _make(name).fit(data.rows(slice(0, 500)))
+    if name not in ("none", "oracle"):
+        # Saved before fit: refused (the file's load would have refused it: "state.B0_ is missing").
+        with pytest.raises(compensation.NotFittedError, match="is not fitted"):
+            compensation.save(_make(name), tmp_path / "unfitted.json")
+        assert not (tmp_path / "unfitted.json").exists()
+    # Data of another type: refused by name (it was "'Recording' object has no attribute ...").
+    with pytest.raises(TypeError, match=r"\.fit takes CalibrationData .*, not ImuRates"):
+        _make(name).fit(ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel))
+    # A fit starts from nothing learned (scikit-learn's refit): what an earlier fit against a trajectory
+    # left (time offsets, a bias rule, provenance) is gone, not applied to the new fit's corrections.
+    strategy.time_offset_s_ = np.array([0.01, 0.02])
+    strategy.unit_bias_ = {"mode": "pooled"}
+    strategy.fitted_on_ = {"sensor": "another"}
     assert strategy.fit(data) is strategy
+    for left in ("time_offset_s_", "unit_bias_", "fitted_on_"):
+        assert left not in vars(strategy), left
     learned = [k for k in vars(strategy) if k.endswith("_")]
     assert (len(learned) > 0) == (name not in ("none", "oracle"))
     probe_w, probe_f = data.gyro[::97], data.accel[::97]
@@ -104,6 +125,10 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     assert np.isfinite(strategy.correct_rates(one, None if temp is None else temp[:1]).omega_ib_b).all()
     none = ImuIncrements(t=data.t[:1], dtheta_b=np.zeros((0, 3)), dv_b=np.zeros((0, 3)))
     assert len(strategy.correct_increments(none, None if temp is None else temp[:1])) == 0
+    # Pickled (a process pool's way of sending it) and back: the same corrections to the bit (the seed
+    # network's neuron was a class made inside a method, which pickle cannot find).
+    again = pickle.loads(pickle.dumps(strategy))
+    np.testing.assert_array_equal(again.correct(probe_w, probe_f, probe_t)[0], w)
     if name == "oracle":
         return
     # Parameters from a numpy sweep (np.int64, np.float64, np.bool_) are reported as Python's: a model
@@ -126,3 +151,19 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
 def test_every_saved_strategy_is_a_registered_variant() -> None:
     assert set(compensation.SAVED_STRATEGIES) <= set(compensation.VARIANTS)
     assert set(compensation.strategy_names()) == (set(compensation.VARIANTS) - {"oracle"}) | {"bias_only"}
+
+
+def test_a_unit_of_an_unknown_grade_and_a_start_in_degrees_are_refused_by_name() -> None:
+    """A library walk's: ``draw_unit("bogus", 1)`` raised a bare ``KeyError: 'bogus'``, and
+    ``motion.Start(lat=45.0, ...)`` (degrees for radians) made a trajectory at 45 rad."""
+    from sins.nav import motion
+
+    with pytest.raises(ValueError, match=r"unknown grade 'bogus' \(known: consumer, "):
+        imu_spec.draw_unit("bogus", 1)
+    with pytest.raises(
+        ValueError, match=r"Start\.lat is 45\.0 rad, beyond ±π/2 \(degrees given for radians\?\)"
+    ):
+        motion.Start(lat=45.0, lon=0.0, h=0.0)
+    with pytest.raises(ValueError, match=r"Start\.h is nan, not finite"):
+        motion.Start(lat=0.7, lon=0.0, h=float("nan"))
+    assert motion.Start(lat=-0.5 * np.pi, lon=0.0, h=0.0).lat == -0.5 * np.pi

@@ -588,6 +588,9 @@ def test_a_fit_on_several_takes_recordings_of_one_unit_each_once() -> None:
     refusal(lambda: referenced.fit_several("regression", [a, b, copy]),
             "copy.npz: the same readings as a.npz: a fit on several recordings takes each once")  # fmt: skip
     several.check_one_unit([a, b])
+    # An interval that is not positive: refused (the walk over the reference's epochs never moved on).
+    for bad in (0.0, -1.0, float("nan")):
+        refusal(lambda v=bad: referenced.fit("regression", a, interval_s=v), "interval_s must be positive")
 
 
 def test_a_mode_that_only_ties_with_the_readings_is_not_taken() -> None:

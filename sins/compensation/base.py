@@ -22,6 +22,7 @@ them by name and keeps their model files.
 
 from __future__ import annotations
 
+import functools
 import inspect
 from abc import ABC, abstractmethod
 from collections.abc import Callable
@@ -38,6 +39,33 @@ from sins.imu import CHANNELS, ImuModel
 Array = NDArray[np.float64]
 
 
+def _fresh_fit(fit: Callable[..., Any]) -> Callable[..., Any]:
+    """``fit`` that starts from nothing learned, as scikit-learn's estimators do: every attribute ending in
+    ``_`` is dropped first, so that a refit keeps none of an earlier fit's (a model fitted against a
+    trajectory, then on a rig, had kept its time offsets, bias rule and provenance: 800 °/h of gyro
+    correction a fresh fit did not make). Only the outermost call drops them (a fit may call another),
+    and data of another type is refused by name, not by an attribute missing deep inside."""
+
+    @functools.wraps(fit)
+    def fresh(self: Strategy, data: Any, *args: Any, **kwargs: Any) -> Any:
+        if self.__dict__.get("_fitting"):
+            return fit(self, data, *args, **kwargs)
+        if not isinstance(data, CalibrationData):
+            raise TypeError(
+                f"{type(self).__name__}.fit takes CalibrationData (a rig's rows, or a recording's per-sample "
+                f"references: Recording.reference_inputs()[0]), not {type(data).__name__}"
+            )
+        for name in [n for n in vars(self) if n.endswith("_") and not n.startswith("_")]:
+            delattr(self, name)
+        self.__dict__["_fitting"] = True
+        try:
+            return fit(self, data, *args, **kwargs)
+        finally:
+            del self.__dict__["_fitting"]
+
+    return fresh
+
+
 class NotFittedError(ValueError, AttributeError):
     """A strategy used before :meth:`Strategy.fit` (scikit-learn's ``NotFittedError``: an AttributeError
     too, so ``getattr(strategy, "fitted_on_", None)`` keeps its default)."""
@@ -45,6 +73,11 @@ class NotFittedError(ValueError, AttributeError):
 
 class Strategy(ABC):
     """A compensation strategy (see the module docstring)."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "fit" in cls.__dict__:
+            cls.fit = _fresh_fit(cls.__dict__["fit"])  # type: ignore[method-assign]
 
     def __getattr__(self, name: str) -> Any:
         # Called only where the attribute is missing: a learned one (ending in "_") before fit said so,

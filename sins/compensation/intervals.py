@@ -192,7 +192,10 @@ def choose_intervals(rec: ReferencedRecording, interval_s: float = INTERVAL_S) -
 
 
 def _walk(times: Array, interval_s: float) -> list[tuple[int, int]]:
-    """Consecutive pairs of epochs about ``interval_s`` apart: each starts where the last ended."""
+    """Consecutive pairs of epochs about ``interval_s`` apart: each starts where the last ended.
+    ``ValueError`` for an interval that is not positive (the walk would not move)."""
+    if not interval_s > 0.0:
+        raise ValueError(f"interval_s must be positive, got {interval_s!r}")
     out: list[tuple[int, int]] = []
     k = 0
     while k < len(times) - 1:

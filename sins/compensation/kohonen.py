@@ -38,6 +38,7 @@ from sins.compensation.base import Strategy, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
 from sins.core.series import CalibrationData
+from sins.imu import calibration
 
 Array = NDArray[np.float64]
 
@@ -84,6 +85,7 @@ class Kohonen(Strategy):
         from minisom import MiniSom
 
         data.check_readings()
+        calibration.fit_seed_model(data)  # rows that do not determine a linear model teach no map
         ok = data.has_reference
         x = np.hstack([data.gyro, data.accel])[ok]
         y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]

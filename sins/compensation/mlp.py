@@ -42,6 +42,7 @@ from sins.compensation.base import Strategy, checked_array, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
 from sins.core.series import CalibrationData
+from sins.imu import calibration
 
 Array = NDArray[np.float64]
 
@@ -135,17 +136,7 @@ class MLP(Strategy):
         import torch
         from torch import nn
 
-        class Sigmoid(nn.Module):
-            """``1/(1+exp(−a(x−c)))`` with a learnable centre per neuron."""
-
-            def __init__(self, width: int, gain: float) -> None:
-                super().__init__()
-                self.gain = gain
-                self.centre = nn.Parameter(torch.zeros(width, dtype=torch.float64))
-
-            def forward(self, x: torch.Tensor) -> torch.Tensor:
-                return torch.sigmoid(self.gain * (x - self.centre))
-
+        Sigmoid = _sigmoid()
         layers: list[nn.Module] = []
         width = n_in
         for h in self.hidden:
@@ -163,6 +154,7 @@ class MLP(Strategy):
         import torch
 
         data.check_readings()
+        calibration.fit_seed_model(data)  # rows that do not determine a linear model teach no network
         torch.manual_seed(self.seed)
         ok = data.has_reference
         if ok.sum() < 10:
@@ -581,6 +573,38 @@ class _NetLearner:
             out[lo : lo + _PREDICT_ROWS] = h @ w_t + b
         scaled: Array = out * self.sigma
         return scaled
+
+
+_SIGMOID: Any = None
+
+
+def _sigmoid() -> Any:
+    """The seed network's neuron, ``1/(1+exp(−a(x−c)))`` with a learnable centre per neuron: a torch
+    module made once, on first use (torch is imported only by the learned strategies), and reachable as
+    this module's ``Sigmoid`` (:func:`__getattr__`) so that a fitted network pickles and unpickles."""
+    global _SIGMOID
+    if _SIGMOID is None:
+        import torch
+        from torch import nn
+
+        class Sigmoid(nn.Module):
+            def __init__(self, width: int, gain: float) -> None:
+                super().__init__()
+                self.gain = gain
+                self.centre = nn.Parameter(torch.zeros(width, dtype=torch.float64))
+
+            def forward(self, x: torch.Tensor) -> torch.Tensor:
+                return torch.sigmoid(self.gain * (x - self.centre))
+
+        Sigmoid.__qualname__ = "Sigmoid"
+        _SIGMOID = Sigmoid
+    return _SIGMOID
+
+
+def __getattr__(name: str) -> Any:
+    if name == "Sigmoid":  # made on first use (see _sigmoid): what pickle looks up
+        return _sigmoid()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = [

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from sins import __version__, io
-from sins.compensation.base import Strategy, check_param_kinds, wrong_kind
+from sins.compensation.base import NoCompensation, NotFittedError, Strategy, check_param_kinds, wrong_kind
 from sins.errors import SinsInputError
 from sins.io.documents import printable, short
 
@@ -146,8 +146,12 @@ def make(name: str, **params: Any) -> Strategy:
 
 def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
     """Write a fitted strategy to a versioned JSON file (atomically). A parameter of another kind than
-    its default is refused (:meth:`Strategy.check_params`): the file could not be loaded."""
+    its default is refused (:meth:`Strategy.check_params`), and a strategy not fitted
+    (:class:`NotFittedError`): the file could not be loaded."""
     strategy.check_params()
+    state = strategy.get_state()
+    if not state and strategy.name != NoCompensation.name:  # a file load would refuse ("B0_ is missing")
+        raise NotFittedError(f"{type(strategy).__name__} is not fitted: call fit() before saving it")
     doc = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -155,7 +159,7 @@ def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
         "strategy": strategy.name,
         "variant": strategy.label,
         "params": strategy.params(),
-        "state": strategy.get_state(),
+        "state": state,
     }
     io.write_json(path, doc)
 

@@ -154,8 +154,12 @@ class ExtendedRegression(Strategy):
         return [np.hstack([shared, d, d * d, d * u[:, [i]]]) for i in range(6)]
 
     def fit(self, data: CalibrationData) -> ExtendedRegression:
-        """Fit each channel's coefficients by least squares on the reference inputs; returns self."""
+        """Fit each channel's coefficients by least squares on the reference inputs; returns self.
+        ``ValueError`` where the rows do not determine the seed model (one orientation, no turns), as
+        ``regression`` refuses them: its minimum-norm solution there spread the bias over the force's
+        columns, and corrected other forces by tens of m/s²."""
         data.check_readings()
+        calibration.fit_seed_model(data)  # its refusal, where the rows do not determine it
         ok = data.has_reference
         self.uses_temp_ = bool(self.temperature and data.temp is not None)
         temp = None if data.temp is None else data.temp[ok]

@@ -174,6 +174,8 @@ def draw_unit(grade: str | Grade, unit_seed: int, run_seed: int | None = None) -
     -------
     ImuModel with the baseline effects (``imu.BASELINE``) plus ``*.bias_instability``
     """
+    if isinstance(grade, str) and grade not in GRADES:
+        raise ValueError(f"unknown grade {grade!r} (known: {', '.join(GRADES)})")
     g = GRADES[grade] if isinstance(grade, str) else grade
     unit = np.random.default_rng([unit_seed, 1])
     turn_on = np.random.default_rng([run_seed, 2]) if run_seed is not None else None

@@ -111,6 +111,14 @@ class Start:
     pitch: float = 0.0
     yaw: float = 0.0
 
+    def __post_init__(self) -> None:
+        # Radians: 45.0 given for 45° is 45 rad, a latitude beyond the pole that a trajectory then ran on.
+        if not abs(self.lat) <= 0.5 * np.pi:
+            raise ValueError(f"Start.lat is {self.lat!r} rad, beyond ±π/2 (degrees given for radians?)")
+        for name in ("lon", "h", "speed", "roll", "pitch", "yaw"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"Start.{name} is {getattr(self, name)!r}, not finite")
+
 
 @dataclass(frozen=True)
 class Hold:
