@@ -3,7 +3,8 @@
 Every strategy follows one interface (scikit-learn style):
 
 * ``fit(data)`` on a :class:`~sins.core.series.CalibrationData` returns the
-  strategy; what it learned sits in attributes ending in ``_``;
+  strategy; what it learned sits in attributes ending in ``_``, and a refit starts
+  from none of them;
 * ``correct(gyro, accel, temp=None)`` maps readings (rate form, SI) to
   estimates of the true inputs; ``correct_rates`` and ``correct_increments``
   apply it to whole IMU streams (increments through their mean rate over each
