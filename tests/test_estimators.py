@@ -103,6 +103,11 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     probe_w, probe_f = data.gyro[::97], data.accel[::97]
     probe_t = None if data.temp is None else data.temp[::97]
     w, f = strategy.correct(probe_w, probe_f, probe_t)
+    # Readings of another shape: one line, whatever the strategy (five answered with numpy's errors).
+    with pytest.raises(ValueError, match=r"gyro and accel must both be \(n, 3\), got \(\d+, 2\)"):
+        strategy.correct(probe_w[:, :2], probe_f[:, :2], probe_t)
+    with pytest.raises(ValueError, match=r"must both be \(n, 3\), got \(3,\)"):
+        strategy.correct(probe_w[0], probe_f[0], None)
     eg, ea = strategy.predict_error(probe_w, probe_f, probe_t)
     np.testing.assert_array_equal(eg, probe_w - w)
     np.testing.assert_array_equal(ea, probe_f - f)

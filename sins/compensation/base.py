@@ -67,6 +67,22 @@ def _fresh_fit(fit: Callable[..., Any]) -> Callable[..., Any]:
     return fresh
 
 
+def _shaped_correct(correct: Callable[..., Any]) -> Callable[..., Any]:
+    """``correct`` that refuses readings of another shape in one line, whatever the strategy (some had
+    answered (n, 2) readings with numpy's broadcasting error, or a single reading with an axis error)."""
+
+    @functools.wraps(correct)
+    def shaped(self: Strategy, gyro: Array, accel: Array, temp: Array | None = None) -> Any:
+        g, a = np.shape(gyro), np.shape(accel)
+        if len(g) != 2 or g[1] != 3 or a != g:
+            raise ValueError(f"gyro and accel must both be (n, 3), got {g} and {a}")
+        if temp is not None and np.shape(temp) != (g[0],):
+            raise ValueError(f"temp must be ({g[0]},), got {np.shape(temp)}")
+        return correct(self, gyro, accel, temp)
+
+    return shaped
+
+
 class NotFittedError(ValueError, AttributeError):
     """A strategy used before :meth:`Strategy.fit` (scikit-learn's ``NotFittedError``: an AttributeError
     too, so ``getattr(strategy, "fitted_on_", None)`` keeps its default)."""
@@ -79,6 +95,8 @@ class Strategy(ABC):
         super().__init_subclass__(**kwargs)
         if "fit" in cls.__dict__:
             cls.fit = _fresh_fit(cls.__dict__["fit"])  # type: ignore[method-assign]
+        if "correct" in cls.__dict__:
+            cls.correct = _shaped_correct(cls.__dict__["correct"])  # type: ignore[method-assign]
 
     def __getattr__(self, name: str) -> Any:
         # Called only where the attribute is missing: a learned one (ending in "_") before fit said so,
