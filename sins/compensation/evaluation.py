@@ -224,11 +224,7 @@ def _reference_notes(
 def _clipped(rec: ReferencedRecording) -> str:
     """The readings' channels stuck at their extremes (``sins inspect``'s clipping), in words ("" where
     none is): a clipped gyro's open loop is not the motion's, whatever the model."""
-    import numpy as np
-
-    imu = rec.imu
-    values = np.hstack([imu.dtheta_b, imu.dv_b]) / np.diff(imu.t)[:, None]
-    found = frame_check.clipped_channels(imu.t[1:], values)
+    found = frame_check.clipped_channels(rec.imu)
     if not found:
         return ""
     said = ", ".join(f"{c.channel} at {c.level:+.6g} on {c.samples} readings" for c in found)

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import earth, rotation
-from sins.core.series import NavSeries, ReferencedRecording
+from sins.core.series import ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.io import axes, local
 from sins.io.findings import Clipping, Finding, ReferenceLag, Rest, Windows
 
@@ -180,8 +180,8 @@ def reference_findings(truth: NavSeries, t: Array, w: Array, f: Array) -> list[F
             return [Finding("reference_attitude", f"{what}, and {clipped}", advice=cut)]
         assert pairs is not None
         gyro_turns, ref_turns = pairs
-        if _rms(ref_turns) < 0.05 * _rms(gyro_turns):  # the gyro turns at least 1 °/s RMS (_turn_pairs)
-            ref_deg, gyro_deg = np.degrees(_rms(ref_turns)), np.degrees(_rms(gyro_turns))
+        ref_deg, gyro_deg = np.degrees(_rms_about_mean(ref_turns)), np.degrees(_rms_about_mean(gyro_turns))
+        if ref_deg < 0.05 * gyro_deg:  # the gyro turns at least 1 °/s RMS (_turn_pairs)
             still = (f"the reference barely turns ({ref_deg:.3g}° RMS over its {TURN_INTERVAL_S:g} s "
                      f"intervals) while the gyro turns {gyro_deg:.3g}°")  # fmt: skip
             advice = "check that the reference's attitude is the recording's own (a constant is no reference)"
@@ -333,11 +333,17 @@ def _clipped(w: Array) -> str:
     return ""
 
 
-def clipped_channels(t: Array, values: Array) -> tuple[Clipping, ...]:
-    """The channels of ``values`` (n, 6: rates and specific forces at the times ``t`` (n,), SI) whose
-    readings stick at their extreme (:func:`stuck`), each as a :class:`~sins.io.findings.Clipping`: what
-    ``sins inspect`` names and ``sins evaluate`` notes. Rates from increments (an increment over its step)
-    differ from the clipped level in their last bits, where the steps do: equal within :data:`STUCK_RTOL`."""
+def clipped_channels(imu: ImuRates | ImuIncrements) -> tuple[Clipping, ...]:
+    """The channels of ``imu`` whose readings stick at their extreme (:func:`stuck`), each as a
+    :class:`~sins.io.findings.Clipping` (rates and specific forces, SI; an increment's at its interval's
+    end): what ``sins inspect`` names and ``sins evaluate`` notes. Increments are taken as their
+    intervals' mean rates, which differ from the clipped level in their last bits where the intervals
+    do: equal within :data:`STUCK_RTOL`."""
+    if isinstance(imu, ImuRates):
+        t, w, f = imu.t, imu.omega_ib_b, imu.f_ib_b
+    else:
+        (_, w, f), t = imu.mean_rates(), imu.t[1:]
+    values = np.hstack([w, f])
     out = []
     for c in range(6):
         v = values[:, c]
@@ -547,11 +553,6 @@ def _swapped(w: Array, f: Array) -> Finding | None:
     )
     advice = "check the columns: the gyro's and the accelerometer's look swapped"
     return Finding("reference_attitude", what, advice=advice)
-
-
-def _rms(turns: Array) -> float:
-    """The RMS size of turns (m, 3) about their mean, rad."""
-    return float(np.sqrt(np.mean(np.sum((turns - turns.mean(axis=0)) ** 2, axis=1))))
 
 
 def _correlation(gyro: Array, turns: Array) -> float:

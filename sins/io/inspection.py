@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.earth import OMEGA_IE
-from sins.core.series import ImuRates, NavSeries
+from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.io import filled, frame_check
 from sins.io import units as unitdefs
@@ -487,11 +487,7 @@ def _range_findings(rec: Recording, w: Array) -> list[Finding]:
 def _clipping(rec: Recording) -> tuple[Clipping, ...]:
     """Channels whose readings stick at their extreme (:func:`sins.io.frame_check.clipped_channels`), an
     increment recording's as its steps' mean rates."""
-    imu = rec.imu
-    if isinstance(imu, ImuRates):
-        return frame_check.clipped_channels(imu.t, np.hstack([imu.omega_ib_b, imu.f_ib_b]))
-    dt = np.diff(imu.t)[:, None]
-    return frame_check.clipped_channels(imu.t[1:], np.hstack([imu.dtheta_b, imu.dv_b]) / dt)
+    return frame_check.clipped_channels(rec.imu)
 
 
 def _clip_finding(c: Clipping) -> Finding:

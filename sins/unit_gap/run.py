@@ -81,9 +81,9 @@ def diagnose_one(
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
     report = _with_reference(interval_report(d, holdout, chosen.to_dict()), inp)
-    imu = inp.referenced.imu
-    readings = np.hstack([imu.dtheta_b, imu.dv_b]) / np.diff(imu.t)[:, None]
-    return Diagnosed(inp.name, _with_plausibility(report, readings), len(imu.t) - 1)
+    _, omega, force = inp.referenced.imu.mean_rates()
+    readings = np.hstack([omega, force])
+    return Diagnosed(inp.name, _with_plausibility(report, readings), len(inp.referenced.imu.t) - 1)
 
 
 def _with_plausibility(report: GapReport, readings: NDArray[np.float64]) -> GapReport:
