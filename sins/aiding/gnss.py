@@ -170,6 +170,15 @@ def offset_position(lat: Array, lon: Array, h: Array, d_n: Array) -> tuple[Array
     )
 
 
+def fix_times(t_start: float, t_end: float, rate_hz: float, latency_s: float = 0.0) -> Array:
+    """The times a receiver at ``rate_hz`` stamps fixes over ``[t_start, t_end]`` s: every ``1/rate_hz``
+    from the start, less those whose measured position (``latency_s`` earlier) would precede it. Outages
+    are not taken out (:meth:`GnssFixes.without`)."""
+    step = 1.0 / rate_hz
+    t = t_start + step * np.arange(int(np.floor((t_end - t_start) / step + 1e-9)) + 1)
+    return np.asarray(t[t - latency_s >= t_start - 1e-12], dtype=float)
+
+
 def simulate(truth: NavSeries, config: GnssConfig, seed: int) -> GnssFixes:
     """Fixes of a receiver riding the truth, at ``config.rate_hz`` from the truth's first time.
 
@@ -184,10 +193,7 @@ def simulate(truth: NavSeries, config: GnssConfig, seed: int) -> GnssFixes:
     GnssFixes within the truth's span, outages removed
     """
     rng = np.random.default_rng([seed, 22])
-    step = 1.0 / config.rate_hz
-    span = truth.t[-1] - truth.t[0]
-    t = truth.t[0] + step * np.arange(int(np.floor(span / step + 1e-9)) + 1)
-    t = t[t - config.latency_s >= truth.t[0] - 1e-12]
+    t = fix_times(float(truth.t[0]), float(truth.t[-1]), config.rate_hz, config.latency_s)
     at = truth.interpolate(np.maximum(t - config.latency_s, truth.t[0]))
     C_nb = rotation.dcm_from_quat(at.q_nb)
     arm_n = C_nb @ config.lever_arm_b
@@ -273,6 +279,7 @@ __all__ = [
     "Outage",
     "check_fixes",
     "check_outages",
+    "fix_times",
     "gauss_markov",
     "offset_position",
     "simulate",

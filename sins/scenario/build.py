@@ -129,18 +129,16 @@ def unsampled_end(scenario: Scenario) -> str:
 
 def idle_outages(scenario: Scenario) -> list[str]:
     """The ``[[outage]]`` windows that drop no fix of the scenario's receiver, each in words (none
-    without ``[gnss]``): the receiver fixes at ``1/rate_hz`` from the run's start (those within
-    ``latency_s`` of it left out, as :func:`sins.aiding.gnss.simulate` does) and an outage drops those
-    strictly inside it, so 300–301 s at 1 Hz drops none. Its figures are then the drift between two fixes,
-    not an outage's."""
+    without ``[gnss]``): the receiver's fixes (:func:`sins.aiding.gnss.fix_times`, as it simulates them)
+    that an outage drops are those strictly inside it, so 300–301 s at 1 Hz drops none. Its figures are
+    then the drift between two fixes, not an outage's."""
     a = scenario.aiding
     if a is None or not a.outages:
         return []
+    from sins.aiding.gnss import fix_times
+
     m = build_motion(scenario)
-    step = 1.0 / a.rate_hz
-    span = m.t_end - m.t_start
-    fix_t = m.t_start + step * np.arange(int(np.floor(span / step + 1e-9)) + 1)
-    fix_t = fix_t[fix_t - a.latency_s >= m.t_start - 1e-12]
+    fix_t = fix_times(m.t_start, m.t_end, a.rate_hz, a.latency_s)
     notes = []
     for start, end in a.outages:
         if start < m.t_end and not np.any((fix_t > start) & (fix_t < end)):
