@@ -23,6 +23,7 @@ import pytest
 
 from sins import compensation, imu
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates
+from sins.errors import SinsInputError
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 
@@ -172,3 +173,53 @@ def test_a_unit_of_an_unknown_grade_and_a_start_in_degrees_are_refused_by_name()
     with pytest.raises(ValueError, match=r"Start\.h is nan, not finite"):
         motion.Start(lat=0.7, lon=0.0, h=float("nan"))
     assert motion.Start(lat=-0.5 * np.pi, lon=0.0, h=0.0).lat == -0.5 * np.pi
+
+
+def _outside(allowed: compensation.ParamRange) -> list[float]:
+    """Values just outside ``allowed``: below its low bound (the bound itself where it is excluded), above
+    its high one, a fraction where only whole numbers are, and a number that is not finite."""
+    out: list[float] = [float("nan"), float("inf")]
+    if allowed.low is not None:
+        out.append(allowed.low if allowed.above else allowed.low - (1 if allowed.whole else 1e-6))
+    if allowed.high is not None:
+        out.append(allowed.high + (1 if allowed.whole else 1e-6 * max(1.0, abs(allowed.high))))
+    if allowed.whole:
+        out.append((allowed.low or 0) + 1.5)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(set(compensation.VARIANTS) - {"oracle"}))
+def test_every_number_a_strategy_takes_has_a_range_that_is_held(name: str, tmp_path: Path) -> None:
+    # Every numeric parameter (or list of numbers) has a declared range, its variant's value lies in it,
+    # and a value outside is refused in one line naming it: by make, by fit on a strategy built by hand,
+    # and in a model file by load (a max_epochs of -3 had fitted an untrained network, 0 epochs and a
+    # loss of inf; a huber_k of -1 failed in LAPACK's SVD, a batch_size of 0 in range(), a seed of 1.5
+    # in torch).
+    strategy = compensation.make(name)
+    ranges = type(strategy).param_ranges
+    assert set(ranges) <= set(strategy.params()), "a range for what the constructor does not take"
+    for param, value in strategy.params().items():
+        numeric = isinstance(value, int | float) and not isinstance(value, bool)
+        if numeric or (isinstance(value, list) and value and isinstance(value[0], int | float)):
+            assert param in ranges, f"{name}.{param} has no range"
+    data = _data(name)
+    fitted = _make(name).fit(data)
+    model = tmp_path / "model.json"
+    compensation.save(fitted, model)
+    doc = json.loads(model.read_text())
+    for param, allowed in ranges.items():
+        default = strategy.params()[param]
+        for bad in _outside(allowed):
+            value = [bad] * len(default) if isinstance(default, list) else bad
+            # (a network's layers and a map's sides are bounded by their constructors, in their words)
+            said = rf"^([a-z_]+: )?(params\.)?{param} (is .*, expected a (whole )?number|must be)"
+            with pytest.raises(ValueError, match=said):
+                compensation.make(name, **{param: value})
+            with pytest.raises(ValueError, match=said):  # built by hand, then fitted
+                type(strategy)(**{**strategy.params(), param: value}).fit(data)
+            damaged = tmp_path / "damaged.json"
+            damaged.write_text(json.dumps({**doc, "params": {**doc["params"], param: value}}))
+            with pytest.raises(SinsInputError) as refused:
+                compensation.load(damaged)
+            said = str(refused.value)
+            assert said.startswith(f"{damaged}: malformed") and param in said and "\n" not in said

@@ -123,6 +123,6 @@ def test_model_file_round_trip_and_a_damaged_network(tmp_path: Path) -> None:
 def test_parameters_out_of_bounds_are_refused() -> None:
     with pytest.raises(ValueError, match="hidden"):
         WindowNet(hidden=(1000,))
-    with pytest.raises(ValueError, match="ensemble"):
-        WindowNet(ensemble=0)
+    with pytest.raises(ValueError, match="ensemble is 0, expected a whole number from 1 to 16"):
+        WindowNet(ensemble=0).check_params()
     assert window_net.FEATURES == 8 * (len(EDGES_S) - 1)

@@ -10,6 +10,7 @@ from sins.compensation.base import (
     NoCompensation,
     NotFittedError,
     Oracle,
+    ParamRange,
     Strategy,
     residual_rms,
 )
@@ -39,6 +40,7 @@ __all__ = [
     "NoCompensation",
     "NotFittedError",
     "Oracle",
+    "ParamRange",
     "Regression",
     "Strategy",
     "load",

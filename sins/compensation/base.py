@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import functools
 import inspect
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -56,6 +58,7 @@ def _fresh_fit(fit: Callable[..., Any]) -> Callable[..., Any]:
                 f"{type(self).__name__}.fit takes CalibrationData (a rig's rows, or a recording's per-sample "
                 f"references: Recording.reference_inputs()[0]), not {type(data).__name__}"
             )
+        self.check_params()  # a max_epochs of -3 is refused here, not by an empty loop's missing loss
         for name in [n for n in vars(self) if n.endswith("_") and not n.startswith("_")]:
             delattr(self, name)
         self.__dict__["_fitting"] = True
@@ -106,6 +109,9 @@ class Strategy(ABC):
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     name: ClassVar[str] = ""
+    #: Each numeric constructor parameter's range (every element's, for a list): what
+    #: :meth:`check_params` holds it to. A subclass extends its parent's.
+    param_ranges: ClassVar[dict[str, ParamRange]] = {}
     #: The variant it was made as (``regression_robust`` is a ``regression``; :func:`make` sets it).
     variant: str = ""
     #: How late the gyro and the accelerometer read, s (see the module docstring); set by a fit against a
@@ -249,11 +255,17 @@ class Strategy(ABC):
 
     def check_params(self) -> None:
         """Refuse a constructor argument of another kind than its default (``guard="false"``, which is
-        true; ``huber_k="2"``): ``ValueError`` naming it. The constructors keep what they are given
-        (scikit-learn's rule); :func:`~sins.compensation.make` and :func:`~sins.compensation.save` call
-        this, as a model file's loader checks its ``params``."""
+        true; ``huber_k="2"``) or outside its :attr:`param_ranges` (``max_epochs=-3``, ``seed=1.5``):
+        ``ValueError`` naming it and what it must be. The constructors keep what they are given
+        (scikit-learn's rule); :func:`~sins.compensation.make`, :meth:`fit`, :func:`~sins.compensation.save`
+        and a model file's loader call this."""
         names = self.init_parameters()
         check_param_kinds(self.label, {name: getattr(self, name) for name in names}, names)
+        for name, allowed in self.param_ranges.items():
+            value = getattr(self, name)
+            items = value if isinstance(value, list | tuple) else [value]
+            if not all(allowed.holds(v) for v in items):
+                raise ValueError(f"{self.label}: {name} is {value!r}, expected {allowed}")
 
     @classmethod
     def init_parameters(cls) -> dict[str, inspect.Parameter]:
@@ -346,6 +358,58 @@ def _is_frame(frame: Any) -> bool:
         return False
 
 
+@dataclass(frozen=True)
+class ParamRange:
+    """The values a numeric constructor parameter may take: finite, from ``low`` to ``high`` (None: no
+    bound), ``low`` itself excluded where ``above``; only whole numbers where ``whole`` (a count, a seed);
+    None too where ``none``. Held by :meth:`Strategy.check_params`; its ``str`` is what the refusal says."""
+
+    low: float | None = None
+    high: float | None = None
+    whole: bool = False
+    above: bool = False
+    none: bool = False
+
+    def holds(self, value: Any) -> bool:
+        """Whether ``value`` lies in the range (a boolean is not a number; 2.0 is not a whole one)."""
+        if value is None:
+            return self.none
+        if isinstance(value, bool | np.bool_) or not isinstance(
+            value, int | float | np.integer | np.floating
+        ):
+            return False
+        if self.whole and not isinstance(value, int | np.integer):
+            return False
+        if not math.isfinite(value):
+            return False
+        low_ok = self.low is None or (value > self.low if self.above else value >= self.low)
+        return bool(low_ok and (self.high is None or value <= self.high))
+
+    def __str__(self) -> str:
+        what = "a whole number" if self.whole else "a number"
+        low, high = _said(self.low), _said(self.high)
+        if self.low is not None and self.high is not None:
+            said = f"{what} above {low}, at most {high}" if self.above else f"{what} from {low} to {high}"
+        elif self.low is not None:
+            said = f"{what} above {low}" if self.above else f"{what}, {low} or more"
+        else:
+            said = what if self.high is None else f"{what}, at most {high}"
+        return said + (" (or None)" if self.none else "")
+
+
+def _said(bound: float | None) -> str:
+    """A range's bound as a user writes it: whole bounds in full (4294967295, not 4.29497e+09)."""
+    if bound is None:
+        return ""
+    return str(int(bound)) if float(bound).is_integer() else f"{bound:g}"
+
+
+#: A seed of the generators the learners use (numpy's, MiniSom's and torch's all take 0 to 2³² − 1).
+SEED_RANGE = ParamRange(0, 2**32 - 1, whole=True)
+#: A guard's threshold in standard errors.
+GUARD_Z_RANGE = ParamRange(0, 100)
+
+
 def param_kind(default: Any) -> str:
     """What a parameter whose default is ``default`` must be, in words ("" where any value may do)."""
     if isinstance(default, bool):
@@ -429,6 +493,7 @@ class Oracle(Strategy):
     """
 
     name = "oracle"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {"iterations": ParamRange(1, 100, whole=True)}
 
     def __init__(self, model: ImuModel | None = None, iterations: int = 6) -> None:
         self.model = model
@@ -496,9 +561,12 @@ def residual_rms(strategy: Strategy, data: CalibrationData) -> dict[str, dict[st
 
 
 __all__ = [
+    "GUARD_Z_RANGE",
+    "SEED_RANGE",
     "NoCompensation",
     "NotFittedError",
     "Oracle",
+    "ParamRange",
     "Strategy",
     "check_param_kinds",
     "checked_array",

@@ -20,10 +20,11 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from sins.compensation.base import Array, Strategy
+from sins.compensation.base import Array, ParamRange, Strategy
 from sins.core import rotation
 from sins.core.series import CalibrationData, ImuIncrements, RigPhase
 from sins.errors import SinsInputError
@@ -90,6 +91,10 @@ class Ferraris(Strategy):
     """
 
     name = "ferraris"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "turn_sd_deg": ParamRange(0, 90),
+        "batches": ParamRange(1, 1000, whole=True),
+    }
 
     def __init__(self, g_sensitivity: bool = True, turn_sd_deg: float = 2.0, batches: int = 10) -> None:
         self.g_sensitivity = g_sensitivity
@@ -105,8 +110,6 @@ class Ferraris(Strategy):
             one line, naming the recording: a hold or turn missing or of the wrong kind, a hold's
             reference not along its axis, a turn without its angle or not from rest to rest.
         """
-        if not self.turn_sd_deg >= 0 or self.batches < 1:
-            raise ValueError("turn_sd_deg must be >= 0 and batches >= 1")
         data.check_readings()
         holds, turns = _session_phases(data)
         acc, acc_se, _ = _hold_means(data.accel, holds, self.batches)

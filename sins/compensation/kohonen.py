@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import Strategy, state_array
+from sins.compensation.base import SEED_RANGE, ParamRange, Strategy, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
 from sins.core.series import CalibrationData
@@ -46,6 +46,14 @@ Array = NDArray[np.float64]
 #: Rows per block of the (rows, nodes) distance matrices: 8192 × 400 nodes is 26 MB a matrix, where a
 #: 51,000-row rig whole took 160 MB each, three at a time (each row's nearest nodes are its own).
 _ROWS = 8192
+
+
+#: The largest map a model may hold: nodes a side (the registry's fits use 20 for ``kohonen_pure``, at
+#: most 12 for ``kohonen``). A correction compares every reading with every node, a block of 65,536 rows
+#: at a time: a 32 × 32 map holds that at 0.5 GB.
+MAX_SIDE = 32
+#: The most nodes a ``kohonen_pure`` prediction blends.
+MAX_NEIGHBOURS = 64
 
 
 class Kohonen(Strategy):
@@ -62,6 +70,15 @@ class Kohonen(Strategy):
     """
 
     name = "kohonen_pure"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "rows": ParamRange(1, MAX_SIDE, whole=True),
+        "cols": ParamRange(1, MAX_SIDE, whole=True),
+        "sigma": ParamRange(0, 100, above=True),
+        "learning_rate": ParamRange(0, 10, above=True),
+        "iterations": ParamRange(1, 10**8, whole=True),
+        "neighbours": ParamRange(1, MAX_NEIGHBOURS, whole=True),
+        "seed": SEED_RANGE,
+    }
 
     def __init__(
         self,
@@ -122,17 +139,9 @@ class Kohonen(Strategy):
 
     def check_state(self, state: dict[str, Any]) -> None:
         """A map of ``rows`` × ``cols`` nodes (:func:`check_map`): ``codebook_`` and ``node_error_``
-        (nodes, 6), ``node_count_`` (nodes,), the inputs' scales (6, none zero); ``neighbours`` from 1 to
-        :data:`MAX_NEIGHBOURS`."""
+        (nodes, 6), ``node_count_`` (nodes,), the inputs' scales (6, none zero)."""
         super().check_state(state)
         nodes = check_map(self.rows, "params.rows") * check_map(self.cols, "params.cols")
-        neighbours = self.neighbours
-        if (
-            isinstance(neighbours, bool)
-            or not isinstance(neighbours, int)
-            or not 1 <= neighbours <= MAX_NEIGHBOURS
-        ):
-            raise ValueError(f"params.neighbours must be a whole number from 1 to {MAX_NEIGHBOURS}")
         for key, shape in (("codebook_", (nodes, 6)), ("node_error_", (nodes, 6)), ("node_count_", (nodes,)),
                            ("x_mean_", (6,)), ("x_scale_", (6,))):  # fmt: skip
             state_array(state, key, shape)
@@ -170,6 +179,14 @@ class LocalLinearMap(ResidualStrategy):
     """
 
     name = "kohonen"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        **ResidualStrategy.param_ranges,
+        "sizes": ParamRange(1, MAX_SIDE, whole=True),
+        "sigmas": ParamRange(0, 100, above=True),
+        "smoothing": ParamRange(0, 1e6),
+        "slope_ridge": ParamRange(0, 1e6),
+        "som_iterations": ParamRange(1, 100_000, whole=True),
+    }
 
     def __init__(
         self,
@@ -328,14 +345,6 @@ def _columns_in(value: Any, n_inputs: int, where: str) -> list[int]:
     if not ok or not all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c < n_inputs for c in value):
         raise ValueError(f"{where} must be distinct input columns, 0 to {n_inputs - 1}")
     return list(value)
-
-
-#: The largest map a model may hold: nodes a side (the registry's fits use 20 for ``kohonen_pure``, at
-#: most 12 for ``kohonen``). A correction compares every reading with every node, a block of 65,536 rows
-#: at a time: a 32 × 32 map holds that at 0.5 GB.
-MAX_SIDE = 32
-#: The most nodes a ``kohonen_pure`` prediction blends.
-MAX_NEIGHBOURS = 64
 
 
 def check_map(size: Any, where: str) -> int:

@@ -32,13 +32,13 @@ import operator
 import threading
 from collections.abc import Callable, Generator, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import Strategy, checked_array, state_array
+from sins.compensation.base import SEED_RANGE, ParamRange, Strategy, checked_array, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
 from sins.core.series import CalibrationData
@@ -103,6 +103,18 @@ class MLP(Strategy):
     """
 
     name = "mlp_pure"
+    #: ``validation`` a share of the rows: none or all of them leaves nothing to train or to stop by.
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "hidden": ParamRange(1, MAX_WIDTH, whole=True),
+        "alpha": ParamRange(0, 10, above=True),
+        "gain": ParamRange(0, 100, above=True),
+        "residual": ParamRange(0, 1e6),
+        "max_epochs": ParamRange(1, 100_000, whole=True),
+        "batch_size": ParamRange(1, 10**8, whole=True),
+        "patience": ParamRange(1, 100_000, whole=True),
+        "validation": ParamRange(0, 0.9, above=True),
+        "seed": SEED_RANGE,
+    }
 
     def __init__(
         self,
@@ -384,6 +396,10 @@ class ResidualMLP(ResidualStrategy):
     """
 
     name = "mlp"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        **ResidualStrategy.param_ranges,
+        "decays": ParamRange(0, 10),
+    }
 
     def __init__(
         self,

@@ -138,6 +138,7 @@ def make(name: str, **params: Any) -> Strategy:
     check_param_kinds(name, params, signature)  # before the constructor bounds them
     strategy = cls(**{**defaults, **params})
     strategy.variant = name
+    strategy.check_params()  # and their ranges
     return strategy
 
 
@@ -200,6 +201,7 @@ def load(path: str | os.PathLike[str]) -> Strategy:
     _check_params(path, name, params)
     try:
         strategy = strategy_class(name)(**params)  # its parameters' own bounds (a network's size, a map's)
+        strategy.check_params()  # their ranges (a max_epochs of -3, a seed of 1.5)
         # The state's shapes and sizes against the strategy's, before any array, network or map is made.
         strategy.check_state(state)
         strategy.set_state(state)

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from sins.compensation.base import Array, Strategy, state_array
+from sins.compensation.base import Array, ParamRange, Strategy, state_array
 from sins.core.series import CalibrationData, ImuIncrements
 from sins.imu import calibration
 
@@ -21,6 +21,8 @@ class Regression(Strategy):
     """
 
     name = "regression"
+    #: ``huber_k`` in robust standard deviations: below about 0.1 every row is down-weighted alike.
+    param_ranges: ClassVar[dict[str, ParamRange]] = {"huber_k": ParamRange(0, 100, above=True)}
 
     def __init__(self, robust: bool = False, huber_k: float = 1.345, g_sensitivity: bool = True) -> None:
         self.robust = robust
@@ -107,6 +109,11 @@ class ExtendedRegression(Strategy):
     """
 
     name = "regression_extended"
+    #: ``t0``, °C: the temperature the thermal terms are taken about.
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "t0": ParamRange(-273.15, 1000),
+        "iterations": ParamRange(1, MAX_ITERATIONS, whole=True),
+    }
 
     def __init__(
         self, squares: bool = True, temperature: bool = True, t0: float = 20.0, iterations: int = 6
@@ -120,8 +127,6 @@ class ExtendedRegression(Strategy):
         """``uses_temp_`` a boolean; ``coef_`` (6, p) with the columns of the fitted regressors; at most
         :data:`MAX_ITERATIONS` passes of the inversion."""
         super().check_state(state)
-        if not isinstance(self.iterations, int) or not 1 <= self.iterations <= MAX_ITERATIONS:
-            raise ValueError(f"params.iterations must be a whole number in [1, {MAX_ITERATIONS}]")
         uses_temp = state.get("uses_temp_", False)
         if not isinstance(uses_temp, bool):
             raise ValueError("state.uses_temp_ must be true or false")

@@ -48,7 +48,7 @@ from abc import abstractmethod
 from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from sins.compensation import terms
-from sins.compensation.base import Strategy, state_array
+from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, Strategy, state_array
 from sins.compensation.points import (
     MIN_REPEATS,
     Points,
@@ -206,6 +206,10 @@ class ResidualStrategy(Strategy):
         each row corrected alone), so it is not saved with the model
     """
 
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "folds": ParamRange(2, 50, whole=True), "guard_z": GUARD_Z_RANGE, "seed": SEED_RANGE,
+        "n_jobs": ParamRange(1, 256, whole=True, none=True)}  # fmt: skip
+
     def __init__(
         self,
         folds: int = 3,
@@ -215,10 +219,6 @@ class ResidualStrategy(Strategy):
         n_jobs: int | None = None,
         physics: bool = True,
     ) -> None:
-        if folds < 2:
-            raise ValueError(f"folds must be 2 or more, got {folds}")
-        if n_jobs is not None and n_jobs < 1:
-            raise ValueError(f"n_jobs must be 1 or more (or None), got {n_jobs}")
         self.folds = folds
         self.guard = guard
         self.guard_z = guard_z

@@ -35,12 +35,12 @@ from __future__ import annotations
 import itertools
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import checked_array, state_array
+from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, checked_array, state_array
 from sins.compensation.regression import Regression
 from sins.compensation.window import GyroWindow
 from sins.core.series import CalibrationData, ImuIncrements, ReferencedRecording
@@ -69,6 +69,14 @@ class WindowNet(GyroWindow):
     docstring)."""
 
     name = "mlp_window"
+    param_ranges: ClassVar[dict[str, ParamRange]] = {
+        "hidden": ParamRange(1, MAX_WIDTH, whole=True),
+        "weight_decay": ParamRange(0, 10),
+        "steps": ParamRange(1, 100_000, whole=True),
+        "ensemble": ParamRange(1, 16, whole=True),
+        "guard_z": GUARD_Z_RANGE,
+        "seed": SEED_RANGE,
+    }
 
     def __init__(
         self,
@@ -82,18 +90,23 @@ class WindowNet(GyroWindow):
         g_sensitivity: bool = False,
     ) -> None:
         super().__init__(g_sensitivity=g_sensitivity)
-        sizes = [int(h) for h in hidden] if isinstance(hidden, list | tuple) else []
+        whole = isinstance(hidden, list | tuple) and all(
+            isinstance(h, int | np.integer) and not isinstance(h, bool) for h in hidden
+        )  # a layer of 1.5 neurons is refused, not made one of 1
+        sizes = [int(h) for h in hidden] if whole else []
         if not 1 <= len(sizes) <= MAX_LAYERS or not all(1 <= h <= MAX_WIDTH for h in sizes):
-            raise ValueError(f"hidden: 1 to {MAX_LAYERS} layers of 1 to {MAX_WIDTH} neurons, got {hidden!r}")
-        if not (0.0 <= weight_decay < 10.0 and 1 <= steps <= 100_000 and 1 <= ensemble <= 16):
-            raise ValueError("weight_decay in [0, 10), steps in 1..100000, ensemble in 1..16")
+            raise ValueError(
+                f"hidden must be 1 to {MAX_LAYERS} layers of 1 to {MAX_WIDTH} neurons (whole numbers), "
+                f"got {hidden!r}"
+            )
         self.hidden = tuple(sizes)
-        self.weight_decay = float(weight_decay)
-        self.steps = int(steps)
-        self.ensemble = int(ensemble)
-        self.guard = bool(guard)
-        self.guard_z = float(guard_z)
-        self.seed = int(seed)
+        # Kept as given (scikit-learn's rule); check_params holds them to param_ranges.
+        self.weight_decay = weight_decay
+        self.steps = steps
+        self.ensemble = ensemble
+        self.guard = guard
+        self.guard_z = guard_z
+        self.seed = seed
         self.progress: Callable[[int, int], None] | None = None
 
     def fit_beyond(self, data: CalibrationData) -> WindowNet:
