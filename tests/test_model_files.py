@@ -155,6 +155,7 @@ MAP = ("state", "learners_", "gyro", "maps", 0)
         ("regression", lambda d: _set(d, 1, "params", "foo"), "params.foo is not a parameter of regression"),
         ("regression", lambda d: _set(d, {"rate_hz": "200"}, "state", "fitted_on_"), "rate_hz is '200'"),
         ("regression", lambda d: _set(d, {"frame": "xyz"}, "state", "fitted_on_"), "frame is 'xyz'"),
+        ("regression", lambda d: _set(d, {"marks": [[1, 2]]}, "state", "fitted_on_"), "marks is not a list"),
     ],
 )  # fmt: skip
 def test_a_model_of_the_wrong_shape_is_one_line_naming_the_key(

@@ -597,3 +597,28 @@ def test_corrected_readings_keep_the_stamp_their_times_count_from(
         bad.write_text(plain.read_text().replace("# time origin: 0 ns", line))
         said = provenance.read_provenance(bad)
         assert said.t0_ns is None and said.corrected_by, (line, said)
+
+
+def test_marks_know_a_part_of_readings_wherever_it_is_cut() -> None:
+    # Content-defined marks (sins.io.provenance.readings_marks): a part cut anywhere from readings holds
+    # their marks of that part, all of them, so its share in the whole is 1; readings drawn apart share
+    # none; about one window in MARK_EVERY is a mark (random readings: binomial, within 4 sigma).
+    from sins.io import provenance
+
+    rng = np.random.default_rng(7)
+    gyro, accel = rng.normal(size=(60_000, 3)), rng.normal(size=(60_000, 3))
+    whole = provenance.readings_marks(gyro, accel)
+    expected = (60_000 - provenance.MARK_ROWS + 1) / provenance.MARK_EVERY
+    assert abs(len(whole) - expected) < 4 * np.sqrt(expected)
+    for start, stop in ((0, 20_000), (12_345, 51_001), (7, 59_990)):
+        part = provenance.readings_marks(gyro[start:stop], accel[start:stop])
+        assert set(part) <= set(whole) and provenance.shared_share(part, [whole]) == 1.0
+    other = provenance.readings_marks(rng.normal(size=(20_000, 3)), rng.normal(size=(20_000, 3)))
+    assert provenance.shared_share(other, [whole]) == 0.0
+    # One reading changed by one bit: the windows over it are new, the others are kept.
+    nudged = gyro.copy()
+    nudged[30_000, 0] = np.nextafter(nudged[30_000, 0], np.inf)
+    changed = set(whole) ^ set(provenance.readings_marks(nudged, accel))
+    assert len(changed) <= 2 * provenance.MARK_ROWS
+    # Too short to tell: no share, not a share of 0.
+    assert provenance.shared_share(provenance.readings_marks(gyro[:200], accel[:200]), [whole]) is None

@@ -483,7 +483,17 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     copy = Path(shutil.copy(tmp_path / "unit" / "r1.npz", tmp_path / "copy" / "renamed.npz"))
     assert main(["evaluate", str(model), str(copy), "--json", str(out)]) == 0
     assert json.loads(out.read_text())["fitted_on_this_recording"] is True
+    # A part cut from a training recording (its middle, times made relative to its first again): said to
+    # be one, by its share of the fit's marks; the recording the fit held out shares none of them.
+    part = {k: v[2000:-3000] for k, v in np.load(tmp_path / "unit" / "r1.npz").items()}
+    part["t_s"] = part["t_s"] - part["t_s"][0]
+    np.savez(tmp_path / "copy" / "part.npz", **part)
     capsys.readouterr()
+    assert main(["evaluate", str(model), str(tmp_path / "copy" / "part.npz"), "--json", str(out)]) == 0
+    judged = json.loads(out.read_text())
+    assert judged["fitted_on_this_recording"] is True and judged["share_in_fit"] == 1.0
+    assert "about 100% of these readings were in the model's fit (a part of" in capsys.readouterr().out
+    assert singles["unit/r2"]["share_in_fit"] == 0.0
     for extra, what in ((["--plot", str(tmp_path / "x.png")], "--plot"), (["--dataset", "unit/r2"], "twice")):
         assert main([*several, *extra]) == 2
         err = capsys.readouterr().err.strip()
@@ -588,6 +598,11 @@ def test_a_fit_on_several_takes_recordings_of_one_unit_each_once() -> None:
     refusal(lambda: referenced.fit_several("regression", [a, b, copy]),
             "copy.npz: the same readings as a.npz: a fit on several recordings takes each once")  # fmt: skip
     several.check_one_unit([a, b])
+    # A part of one (its middle minute): what a copy does, it does, and it is refused alike.
+    part = replace(referenced.between(a, 30.0, 90.0), source="part.npz")
+    refusal(lambda: several.check_one_unit([a, b, part]),
+            "part.npz: about 100% of its readings are a.npz's (a part of it): a fit on several recordings "
+            "takes each reading once")  # fmt: skip
     # An interval that is not positive: refused (the walk over the reference's epochs never moved on).
     for bad in (0.0, -1.0, float("nan")):
         refusal(lambda v=bad: referenced.fit("regression", a, interval_s=v), "interval_s must be positive")

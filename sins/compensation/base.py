@@ -343,6 +343,12 @@ def _check_fitted_on(fitted: Any) -> None:
     frame = fitted.get("frame")
     if frame is not None and not _is_frame(frame):
         raise ValueError(f"state.fitted_on_.frame is {frame!r}: the letters of a frame, such as frd")
+    marks = fitted.get("marks")
+    if marks is not None and not (
+        isinstance(marks, list)
+        and all(isinstance(m, list) and all(isinstance(x, str) for x in m) for m in marks)
+    ):
+        raise ValueError("state.fitted_on_.marks is not a list of each recording's marks (text)")
     sensor = fitted.get("sensor")
     if sensor is not None and not isinstance(sensor, str):
         raise ValueError(f"state.fitted_on_.sensor is {sensor!r}: a unit's name")

@@ -20,6 +20,7 @@ from sins.errors import SinsInputError
 from sins.io import frame_check
 from sins.io.filled import spans_said
 from sins.io.inspection import gaps_note
+from sins.io.provenance import PART_SHARE
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
@@ -34,6 +35,11 @@ RAW = "none (raw readings)"
 FITTED_HERE = (
     "the model was fitted on these readings: the figures say how it fits its own data, not how it does on "
     "a recording it has not seen (judge it on another)"
+)
+#: Said of a judgement on a part of readings the model was fitted on (``{share}``: its share of them).
+PART_FITTED_HERE = (
+    "about {share:.0%} of these readings were in the model's fit (a part of a recording it was fitted on): "
+    "the figures are not those of a recording it has not seen (judge it on another)"
 )
 #: What ``sins evaluate`` says of a model that leaves the gyro as read (its bias rule ``readings``).
 GYRO_AS_READ = (
@@ -72,13 +78,13 @@ def evaluate_rig(
         naming ``where``: a ``last`` the phases cannot be split at.
     """
     from sins.compensation.base import residual_rms
-    from sins.compensation.referenced import readings_of
+    from sins.compensation.referenced import marks_of, readings_of
     from sins.imu import display_unit
 
-    fitted_here = _fitted_here(strategy, readings_of(data))
+    fitted_here, share = _in_fit(strategy, readings_of(data), marks_of(data))
     held_back = float((getattr(strategy, "fitted_on_", None) or {}).get("held_back") or 0.0)
     if fitted_here and last and last <= held_back:
-        fitted_here = False  # the part of each phase its fit held back: a held-back judgement
+        fitted_here, share = False, None  # the part of each phase its fit held back: held back
     if last:
         try:
             _, data = data.split(last)
@@ -97,9 +103,10 @@ def evaluate_rig(
         f"{where}, {scope}: reading - reference",
         fixed_width(["channel", "unit", "rms before", "rms after", "bias left", "beyond noise"], rows),
         "beyond noise: the RMS left after the white noise (from the residual's sample-to-sample changes)",
-        *([FITTED_HERE] if fitted_here else []),
+        *_fitted_lines(fitted_here, share),
     ]
-    document = {"channels": channels, "fitted_on_this_recording": fitted_here}
+    document = {"channels": channels, "fitted_on_this_recording": _fitted(fitted_here, share),
+                "share_in_fit": share}  # fmt: skip
     return Evaluation(lines, document, channels=channels, scope=scope)
 
 
@@ -120,7 +127,7 @@ def evaluate_referenced(
     ``stage(text)`` is told each open loop as it starts."""
     from sins.compensation import referenced
 
-    fitted_here = _fitted_here(strategy, referenced.readings_of(rec))
+    fitted_here, share = _in_fit(strategy, referenced.readings_of(rec), referenced.marks_of(rec))
     if last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
@@ -151,8 +158,7 @@ def evaluate_referenced(
     unit = (getattr(strategy, "fitted_on_", None) or {}).get("sensor")
     if unit and not rec.sensor:  # a unit's check needs the recording to name one (a path's may not)
         lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
-    if fitted_here:
-        lines.append(FITTED_HERE)
+    lines += _fitted_lines(fitted_here, share)
     as_read = strategy.leaves_gyro_as_read()
     if as_read:
         lines.append(GYRO_AS_READ)
@@ -165,7 +171,8 @@ def evaluate_referenced(
         "open_loop_attitude_raw": attitude[RAW],
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
         "reference_filled_s": [list(s) for s in filled_s],
-        "fitted_on_this_recording": fitted_here,
+        "fitted_on_this_recording": _fitted(fitted_here, share),
+        "share_in_fit": share,
         "gyro_as_read": as_read,
     }
     if bias_from_rest:
@@ -262,13 +269,31 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
     return Evaluation(lines, document, table=table)
 
 
-def _fitted_here(strategy: Strategy, digest: str) -> bool | None:
+def _in_fit(strategy: Strategy, digest: str, marks: list[str]) -> tuple[bool | None, float | None]:
     """Whether the model was fitted on the readings of ``digest`` (among ``fitted_on_["readings"]``; None
-    where the model file does not say: one written before it did)."""
-    said = (getattr(strategy, "fitted_on_", None) or {}).get("readings")
-    if not isinstance(said, list):
-        return None
-    return digest in said
+    where the model file does not say: one written before it did), and the share of their ``marks``
+    among those of the readings it was fitted on (``fitted_on_["marks"]``; None where the file keeps
+    none or the readings are too short to tell: :func:`sins.io.provenance.shared_share`)."""
+    from sins.io.provenance import shared_share
+
+    fitted = getattr(strategy, "fitted_on_", None) or {}
+    said, held = fitted.get("readings"), fitted.get("marks")
+    share = shared_share(marks, held) if isinstance(held, list) else None
+    return (digest in said if isinstance(said, list) else None), share
+
+
+def _fitted(whole: bool | None, share: float | None) -> bool | None:
+    """Whether the judged readings were (all or in good part) in the model's fit."""
+    return True if whole or (share is not None and share >= PART_SHARE) else whole
+
+
+def _fitted_lines(whole: bool | None, share: float | None) -> list[str]:
+    """What the report says of readings that were in the model's fit, whole or in part."""
+    if whole:
+        return [FITTED_HERE]
+    if share is not None and share >= PART_SHARE:
+        return [PART_FITTED_HERE.format(share=share)]
+    return []
 
 
 def _drive(

@@ -115,7 +115,8 @@ def fit_rig(
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
-        "readings": [referenced.readings_of(data)], "held_back": validation or 0.0,
+        "readings": [referenced.readings_of(data)], "marks": [referenced.marks_of(data)],
+        "held_back": validation or 0.0,
     }  # fmt: skip
     return FitOutcome(strategy, lines, document)
 

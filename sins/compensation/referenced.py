@@ -210,7 +210,8 @@ def fit_several(
     strategy.unit_bias_ = rule.to_dict()
     strategy.fitted_on_ = {
         **fitted_on(recs[0]), "recordings": [rec.source for rec in recs],
-        "readings": [readings_of(rec) for rec in recs], "checks": review.to_dict(),
+        "readings": [readings_of(rec) for rec in recs], "marks": [marks_of(rec) for rec in recs],
+        "checks": review.to_dict(),
     }  # fmt: skip
     return FittedSeveral(strategy, fit_all, rule, review, aside)
 
@@ -385,7 +386,7 @@ def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
     (:func:`readings_of`)."""
     said = {"frame": rec.frame} if rec.frame else {}
     return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name, **said,
-            "readings": [readings_of(rec)]}  # fmt: skip
+            "readings": [readings_of(rec)], "marks": [marks_of(rec)]}  # fmt: skip
 
 
 def readings_of(rec: ReferencedRecording | CalibrationData) -> str:
@@ -396,6 +397,16 @@ def readings_of(rec: ReferencedRecording | CalibrationData) -> str:
     if isinstance(rec, CalibrationData):
         return readings_digest(rec.t, rec.gyro, rec.accel)
     return readings_digest(rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
+
+
+def marks_of(rec: ReferencedRecording | CalibrationData) -> list[str]:
+    """The marks of the readings a fit takes (:func:`sins.io.provenance.readings_marks`), by which a part
+    cut from them is known: a rig's rates and forces, a recording's increments."""
+    from sins.io.provenance import readings_marks
+
+    if isinstance(rec, CalibrationData):
+        return readings_marks(rec.gyro, rec.accel)
+    return readings_marks(rec.imu.dtheta_b, rec.imu.dv_b)
 
 
 def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitted:
@@ -676,6 +687,7 @@ __all__ = [
     "fitted_on",
     "frame_turn",
     "from_recording",
+    "marks_of",
     "open_loop",
     "open_loop_attitude",
     "opening_rest",

@@ -16,6 +16,7 @@ What the per-recording biases say about a new recording of the unit is the corre
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Collection
 from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
@@ -195,6 +196,25 @@ def check_one_unit(recs: list[ReferencedRecording]) -> None:
                 "each once"
             )
         seen[digest] = rec.source
+    _check_no_parts(recs)
+
+
+def _check_no_parts(recs: list[ReferencedRecording]) -> None:
+    """Refuse a recording that holds a part of another (a cut of it, or one cut from it: most of the
+    shorter one's marks, :func:`sins.io.provenance.readings_marks`, in the other's): what a copy does to
+    the spread between recordings and to the held-back rule, that part does."""
+    from sins.errors import SinsInputError
+    from sins.io.provenance import PART_SHARE, readings_marks, shared_share
+
+    marks = [readings_marks(rec.imu.dtheta_b, rec.imu.dv_b) for rec in recs]
+    for i, j in itertools.combinations(range(len(recs)), 2):
+        short, long = (i, j) if len(marks[i]) <= len(marks[j]) else (j, i)
+        share = shared_share(marks[short], [marks[long]])
+        if share is not None and share >= PART_SHARE:
+            raise SinsInputError(
+                f"{recs[short].source}: about {share:.0%} of its readings are {recs[long].source}'s (a part "
+                "of it): a fit on several recordings takes each reading once"
+            )
 
 
 def _joined(ivs: list[Intervals]) -> SimpleNamespace:

@@ -17,7 +17,8 @@ up with the rest of the user's data again. :func:`read_provenance` reads them ba
 
 A model file says which readings it was fitted on by their digest (:func:`readings_digest`, kept in
 ``fitted_on_["readings"]``), so that a judgement on one of them is said to be no held-back judgement,
-whatever the file's name or path.
+whatever the file's name or path; and by their marks (:func:`readings_marks`, ``fitted_on_["marks"]``),
+so that a judgement on a part of one (a recording cut from it) is said to be one too.
 """
 
 from __future__ import annotations
@@ -106,14 +107,75 @@ def readings_digest(t: np.ndarray, *readings: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
+#: A mark is made of this many consecutive readings (a run of a still, quantised unit's identical readings
+#: is shorter than this in any recording with noise) ...
+MARK_ROWS = 16
+#: ... and about one window in this many is a mark: 300 marks for EuRoC's six training recordings.
+MARK_EVERY = 512
+#: The least number of marks a recording must have for its share in a fit to be told (~ 10 s at 200 Hz).
+MIN_MARKS = 4
+#: A recording with at least this share of its marks among another's is a part of it (a share of
+#: unrelated recordings' marks is 0: 64-bit hashes of 16 readings do not meet by chance).
+PART_SHARE = 0.5
+
+_MIX = np.uint64(0x9E3779B97F4A7C15)
+
+
+def _mixed(x: np.ndarray) -> np.ndarray:
+    """A 64-bit finaliser (SplitMix64's): every bit of ``x`` moves every bit of the result."""
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def readings_marks(*readings: np.ndarray) -> list[str]:
+    """The readings' marks: the 64-bit hashes (16 hex digits, sorted) of those windows of
+    :data:`MARK_ROWS` consecutive rows (the values as float64 bits: a rig's ``gyro, accel``, a recording's
+    increments ``dtheta_b, dv_b``) whose hash is a multiple of :data:`MARK_EVERY`. Chosen by their content,
+    not their place, and without the time stamps (a reader makes a file's times relative to its first),
+    so a part cut from a recording holds the marks of that part of it wherever it starts: a recording's
+    share of marks in another's says how much of it the other holds (:func:`shared_share`)."""
+    n = min(len(r) for r in readings)
+    if n < MARK_ROWS:
+        return []
+    columns = [np.asarray(r, dtype=np.float64).reshape(len(r), -1)[:n] for r in readings]
+    words = np.ascontiguousarray(np.hstack(columns)).view(np.uint64)
+    with np.errstate(over="ignore"):
+        row = np.zeros(n, dtype=np.uint64)
+        for c in range(words.shape[1]):
+            row = _mixed(row ^ words[:, c]) * _MIX
+        window = np.zeros(n - MARK_ROWS + 1, dtype=np.uint64)
+        for j in range(MARK_ROWS):
+            window = window * _MIX + row[j : n - MARK_ROWS + 1 + j]
+        window = _mixed(window)
+    kept = np.unique(window[window % np.uint64(MARK_EVERY) == 0])
+    return [f"{int(h):016x}" for h in kept]
+
+
+def shared_share(marks: list[str], held: list[list[str]]) -> float | None:
+    """The share of ``marks`` (a recording's, :func:`readings_marks`) found among ``held`` (those of the
+    recordings a model was fitted on): about the share of its readings the fit took; None where it has
+    fewer than :data:`MIN_MARKS` marks (too short to tell)."""
+    if len(marks) < MIN_MARKS:
+        return None
+    known = {m for part in held for m in part}
+    return sum(m in known for m in marks) / len(marks)
+
+
 __all__ = [
     "CORRECTED_KEY",
+    "MARK_EVERY",
+    "MARK_ROWS",
     "MAX_COMMENT_LINES",
+    "MIN_MARKS",
+    "PART_SHARE",
     "SENSOR_KEY",
     "TIME_ORIGIN_KEY",
     "Provenance",
     "corrected_line",
     "read_provenance",
     "readings_digest",
+    "readings_marks",
+    "shared_share",
     "time_origin_line",
 ]
