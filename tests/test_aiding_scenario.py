@@ -268,3 +268,7 @@ def test_an_outage_that_drops_no_fix_is_said_so(tmp_path: Path):
     assert scenario.idle_outages(from_dict(DRIVE)) == []
     shifted = _with(outage=[{"start_s": 100.5, "end_s": 101.5}])
     assert scenario.idle_outages(from_dict(shifted)) == []  # the fix at 101 s is dropped
+    # An outage after the motion ends (DRIVE lasts under 200 s) was counted among the outages and said
+    # nothing else: now a note.
+    beyond = scenario.idle_outages(from_dict(_with(outage=[{"start_s": 700.0, "end_s": 800.0}])))
+    assert len(beyond) == 1 and beyond[0].startswith("the outage 700-800 s starts after the motion ends (")

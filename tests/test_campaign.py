@@ -246,7 +246,15 @@ def test_bootstrap_intervals_equal_a_percentile_bootstrap_by_hand() -> None:
     [
         (("count = 3", "count = 0"), ("units.count", "must be")),
         (("first_seed = 5", "first_seed = 5\ncolour = 1"), ("colour",)),
-        (('strategies = ["none", "regression"]', 'strategies = ["none", "magic"]'), ("magic",)),
+        (
+            ('strategies = ["none", "regression"]', 'strategies = ["none", "magic"]'),
+            ("item 2: 'magic' is not a known name (one of none,",),
+        ),
+        # A name given twice: refused, where it was merged without a word.
+        (
+            ('strategies = ["none", "regression"]', 'strategies = ["none", "regression", "none"]'),
+            ("compensation.strategies: item 3: 'none' is given twice",),
+        ),
         (('file = "car_drive_5min"', 'file = "no_such_drive"'), ("no_such_drive",)),
         (('imu = "tactical"', 'imu = "no_such_unit"'), ("no_such_unit",)),
     ],

@@ -566,3 +566,35 @@ def test_the_run_table_says_where_the_guard_kept_regression() -> None:
     assert len(notes) == 2
     assert notes[0].startswith("mlp: the guard kept regression") and "every channel" in notes[0]
     assert notes[1] == "kohonen: learned on gyro.x; the guard kept regression on the others"
+
+
+def test_a_list_of_numbers_that_starts_negative_is_a_value() -> None:
+    # argparse takes "-33.9" for a value but "-33.9,151.2,10" for an option: every southern origin and
+    # negative roll was refused ("expected one argument") unless written with "=". Now both spellings
+    # parse alike, and a word that is an option after one is still an option.
+    from sins.cli import parse
+
+    spaced = parse(["integrate", "r.csv", "--origin", "-33.9,151.2,10", "--attitude", "-2,1,30"])
+    joined = parse(["integrate", "r.csv", "--origin=-33.9,151.2,10", "--attitude=-2,1,30"])
+    assert vars(spaced) == vars(joined)
+    assert spaced.origin is not None and spaced.attitude is not None
+    assert parse(["bias", "r.csv", "--lat", "-45", "--attitude", "-1,-0.5,-.5"]).lat == -45.0
+    with pytest.raises(SystemExit):
+        parse(["integrate", "r.csv", "--origin", "--json", "x.json"])
+
+
+def test_an_option_no_one_reads_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # A walk found three options taken and ignored (exit 0, no word): --web-port without --serve,
+    # --vertical-tau-s without --vertical damp; and --web-port 99999999 refused only after the whole
+    # run, in rerun's words ("out of range integral type conversion attempted").
+    assert main(["run", "static", "--web-port", "9091"]) == 2
+    assert capsys.readouterr().err == "sins: error: --web-port goes with --serve\n"
+    with pytest.raises(SystemExit):
+        main(["run", "static", "--serve", "--web-port", "99999999"])
+    assert "must be a port, 1 to 65535" in capsys.readouterr().err
+    imu, truth, short = tmp_path / "imu.csv", tmp_path / "truth.csv", tmp_path / "short.toml"
+    short.write_text('[initial]\nlat_deg = 45.0\n[[segment]]\ntype = "hold"\nduration_s = 20\n')
+    assert main(["simulate", str(short), "--imu", str(imu), "--truth", str(truth), "--ideal"]) == 0
+    capsys.readouterr()
+    assert main(["integrate", str(imu), "--truth", str(truth), "--vertical-tau-s", "1e-9"]) == 2
+    assert "--vertical-tau-s goes with --vertical damp (the channel is free)" in capsys.readouterr().err

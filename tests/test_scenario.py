@@ -183,6 +183,9 @@ REFUSALS = [
     ("ramp-over-half", BASE, _seg(1, ramp_s=2.5), ["segment[2].ramp_s:", "half the duration"]),
     ("latitude-95", BASE, lambda d: d["initial"].update(lat_deg=95.0), ["initial.lat_deg:", "89.9"]),
     ("latitude-missing", BASE, _pop("initial", "lat_deg"), ["initial.lat_deg:", "missing"]),
+    # A misspelt table is named (it had been the key the scenario then lacked: "initial.lat_deg: missing").
+    ("misspelt-initial", BASE, lambda d: d.update(intial=d.pop("initial")), ["intial: unknown key"]),
+    ("misspelt-segment", BASE, lambda d: d.update(segments=d.pop("segment")), ["segments: unknown key"]),
     ("latitude-nan", BASE, lambda d: d["initial"].update(lat_deg=math.nan), ["initial.lat_deg:", "finite"]),
     ("negative-speed", BASE, lambda d: d["initial"].update(speed_mps=-1.0), ["initial.speed_mps:", ">= 0"]),
     ("negative-to-speed", BASE, _seg(1, to_speed_mps=-2.0), ["segment[2].to_speed_mps:", ">= 0"]),
@@ -634,3 +637,22 @@ def test_the_recorded_runs_tolerance_bites() -> None:
     del moved["aided"]["none"]["final_east_m"]
     moved["scenario"]["vertical"] = "hold"
     assert len(recorded_runs.differences(moved, recorded)) == 3
+
+
+@pytest.mark.parametrize(("duration_s", "said"), [(100.0, "reaches latitude"), (560.0, "reaches a pole at")])
+def test_a_trajectory_over_a_pole_is_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], duration_s: float, said: str
+) -> None:
+    # 20 m/s north from 89.9° meets the pole after 0.1° × 111.7 km/° / 20 m/s ≈ 558.5 s: a run that ends
+    # before it is refused by the latitude it reaches; one that gets there had crashed dividing by its
+    # cos(lat) = 0 (ZeroDivisionError, a traceback): now one line, the time it gets there.
+    path = tmp_path / "pole.toml"
+    path.write_text(
+        f'[initial]\nlat_deg = 89.9\nspeed_mps = 20\n[[segment]]\ntype = "hold"\nduration_s = {duration_s}\n'
+    )
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"sins: error: {path}: the trajectory {said}") and err.count("\n") == 1, err
+    if duration_s > 500:
+        at = float(err.split("t = ")[1].split(" s")[0])
+        assert abs(at - 558.5) < 1.0, at  # the meridian arc of 0.1° at the pole: 11.17 km

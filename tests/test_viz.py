@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -244,6 +245,29 @@ def test_cli_saves_a_recording_and_refuses_what_cannot_work(
     assert main(["run", str(path), "--rerun", str(tmp_path / "nowhere" / "x.rrd")]) == 2
     assert "does not exist" in capsys.readouterr().err
     refusal(lambda: sins.viz.viewer.check_rrd_path(tmp_path / "run.csv"), "must end in .rrd")
+
+
+def test_serve_keeps_the_outputs_it_said_it_wrote(
+    drive, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # --serve ends only by an interrupt, which had removed the --json and --rerun files it had said were
+    # written ("none of its outputs written"): they land before the wait now. (The server is stubbed and
+    # the wait interrupted at once: what is judged is the files, not the viewer.)
+    import time
+
+    path, _ = drive
+    monkeypatch.setattr(sins.viz.viewer, "serve", lambda result, **kw: "http://localhost:1/")
+
+    def interrupted(seconds: float) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(time, "sleep", interrupted)
+    out, rrd = tmp_path / "run.json", tmp_path / "run.rrd"
+    assert main(["run", str(path), "--json", str(out), "--rerun", str(rrd), "--serve"]) == 130
+    said = capsys.readouterr()
+    assert "serving the Rerun web viewer" in said.out and "none of its outputs" not in said.err, said.err
+    assert json.loads(out.read_text())["scenario"]["name"] == "viz_drive" and rrd.stat().st_size > 0
+    assert not list(tmp_path.glob(".*tmp"))
 
 
 def _free_port() -> int:

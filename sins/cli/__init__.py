@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -115,9 +116,10 @@ def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
     it for unrecognised (``sins correct M.json --out c.csv r.npz`` was refused), so those are given to it
     here, converted by its own type; anything else unrecognised is refused as argparse refuses it."""
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
+    words = _negatives_joined(parser, list(sys.argv[1:] if argv is None else argv))
+    args, extra = parser.parse_known_args(words)
     command = _subparser(parser, args.command)
-    _check_file_names(command, list(sys.argv[1:] if argv is None else argv))
+    _check_file_names(command, words)
     if not extra:
         return args
     late = next(
@@ -133,6 +135,31 @@ def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
     values = [convert(word) for word in extra]
     setattr(args, late.dest, [*(taken or []), *values] if late.nargs == "*" else values[0])
     return args
+
+
+#: A word that is a negative number or a list of numbers that starts with one (``-33.9,151.2,10``).
+_NEGATIVE = re.compile(r"^-(\d|\.\d)")
+
+
+def _negatives_joined(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``argv`` with each option that takes one value joined to a value that starts with a minus sign
+    (``--origin -33.9,151.2,10`` as ``--origin=-33.9,151.2,10``): argparse takes a negative number alone
+    for a value but a list of them for an option, and refused every southern origin and negative roll."""
+    found = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    single = {
+        o for command in found.choices.values() for a in command._actions
+        if a.nargs is None and a.option_strings for o in a.option_strings
+    }  # fmt: skip
+    out: list[str] = []
+    k = 0
+    while k < len(argv):
+        if argv[k] in single and k + 1 < len(argv) and _NEGATIVE.match(argv[k + 1]):
+            out.append(f"{argv[k]}={argv[k + 1]}")
+            k += 2
+        else:
+            out.append(argv[k])
+            k += 1
+    return out
 
 
 #: The options that name a file sins writes (a campaign's ``--out DIR`` names a folder: not among them;

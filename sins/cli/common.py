@@ -103,7 +103,10 @@ def has_display() -> bool:
 
 
 def check_viewer_args(args: argparse.Namespace) -> None:
-    """Refuse what cannot work before the run, not after it: ``--spawn`` without a display at once."""
+    """Refuse what cannot work before the run, not after it: ``--spawn`` without a display at once, a
+    ``--web-port`` without ``--serve`` (which alone reads it)."""
+    if getattr(args, "web_port", None) is not None and not args.serve:
+        raise SinsInputError("--web-port goes with --serve")
     if not (args.rerun or args.spawn or args.serve):
         return
     if args.spawn and not has_display():
@@ -129,9 +132,12 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
         viz.spawn(result, summary=summary)
     if args.serve:
         try:
-            address = viz.serve(result, summary=summary, web_port=args.web_port)
+            address = viz.serve(result, summary=summary, web_port=args.web_port or 9090)
         except SinsInputError as exc:
             raise SinsInputError(f"--serve: {exc}") from None
+        from sins.core import deferred
+
+        deferred.land()  # the outputs said to be written are, before the wait only an interrupt ends
         print(f"serving the Rerun web viewer at {address}  (Ctrl-C stops)", flush=True)
         import time
 

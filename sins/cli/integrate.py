@@ -210,7 +210,7 @@ def add(sub: Subparsers) -> None:
         help="vertical channel: free inertial, held to, or damped towards the truth height (the start's "
         "without a truth)",
     )  # fmt: skip
-    p.add_argument("--vertical-tau-s", type=positive, default=10.0, metavar="S",
+    p.add_argument("--vertical-tau-s", type=positive, metavar="S",
                    help="time constant of 'damp', s (default 10)")  # fmt: skip
     g = p.add_argument_group(
         "without a reference",

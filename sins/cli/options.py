@@ -23,8 +23,7 @@ def positive(text: str) -> float:
     return value
 
 
-#: The largest height a command takes, m (``--origin``'s, ``sins bias --height``; their messages say
-#: 1e5 m): normal gravity's height correction is a series that holds near the Earth, not at 1e12 m.
+#: The largest height a command takes, m (``--origin``, ``sins bias --height``): gravity's series.
 MAX_HEIGHT_M = 1e5
 
 
@@ -199,13 +198,16 @@ def add_plot(p: argparse.ArgumentParser, what: str) -> None:
 
 
 def vertical_tau(args: argparse.Namespace, t: Any) -> float:
-    """``--vertical-tau-s``, refused naming the flag where the integrator refuses it beside the times
-    ``t`` (:func:`sins.nav.strapdown.damp_loop_problem`: a scenario's bound too)."""
+    """``--vertical-tau-s`` (10 s unless given; given, only with ``--vertical damp``, which reads it),
+    refused naming the flag where the integrator refuses it beside the times ``t``."""
     from sins.nav.strapdown import damp_loop_problem
 
-    if problem := damp_loop_problem(args.vertical, args.vertical_tau_s, t):
-        raise SinsInputError(f"--vertical-tau-s {args.vertical_tau_s:g}: {problem}")
-    return float(args.vertical_tau_s)
+    if args.vertical_tau_s is not None and args.vertical != "damp":
+        raise SinsInputError(f"--vertical-tau-s goes with --vertical damp (the channel is {args.vertical})")
+    tau = 10.0 if args.vertical_tau_s is None else args.vertical_tau_s
+    if problem := damp_loop_problem(args.vertical, tau, t):
+        raise SinsInputError(f"--vertical-tau-s {tau:g}: {problem}")
+    return float(tau)
 
 
 def dataset_inputs(name: str | None) -> list[Path]:

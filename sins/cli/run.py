@@ -20,7 +20,7 @@ from sins.cli.common import (
     scenario_inputs,
     show,
 )
-from sins.cli.options import add_plot, seed
+from sins.cli.options import add_plot, count, seed
 from sins.cli.progress import progress_bar, row_progress
 from sins.errors import SinsInputError
 
@@ -87,6 +87,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
         save_plot(args.plot, lambda: plots.run_figure(result), f"sins run {sc.name}")
     show(args, result, "\n".join(report))
     return 0
+
+
+def _port(text: str) -> int:
+    """An argument type: a TCP port, 1 to 65535 (a larger one had failed after the whole run)."""
+    value = count(text)
+    if value > 65535:
+        raise argparse.ArgumentTypeError(f"must be a port, 1 to 65535, got {text}")
+    return value
 
 
 def guard_notes(strategies: dict[str, Any]) -> list[str]:
@@ -200,9 +208,7 @@ def add(sub: Subparsers) -> None:
         "--serve", action="store_true",
         help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
     )  # fmt: skip
-    p.add_argument(
-        "--web-port", type=int, default=9090, metavar="N", help="port of --serve's web viewer (default 9090)"
-    )
+    p.add_argument("--web-port", type=_port, metavar="N", help="port of --serve's web viewer (default 9090)")
     add_plot(p, "the errors against time, per strategy")
     p.set_defaults(func=_cmd_run)
 

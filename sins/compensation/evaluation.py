@@ -328,6 +328,7 @@ __all__ = [
     "FITTED_HERE",
     "GYRO_AS_READ",
     "OPEN_LOOP_HEAD",
+    "PART_FITTED_HERE",
     "RAW",
     "Evaluation",
     "across",

@@ -38,6 +38,21 @@ def all_or_nothing(discarded: list[Path] | None = None) -> Iterator[None]:
         raise
     finally:
         _PENDING.reset(token)
+    _rename(pending)
+
+
+def land() -> None:
+    """Rename the current block's outputs written so far now, not at its end: for a command that then
+    waits until it is interrupted (``sins run --serve``), whose outputs, said to be written, the interrupt
+    had removed. Outside a block, nothing to do."""
+    found = _PENDING.get()
+    if found:
+        _rename(found)
+        found.clear()
+
+
+def _rename(pending: list[tuple[Path, Path]]) -> None:
+    """Each temporary file to its target, in order; where one fails, the later ones removed."""
     for k, (tmp, path) in enumerate(pending):
         try:
             os.replace(tmp, path)
@@ -52,4 +67,4 @@ def pending() -> list[tuple[Path, Path]] | None:
     return _PENDING.get()
 
 
-__all__ = ["all_or_nothing", "pending"]
+__all__ = ["all_or_nothing", "land", "pending"]

@@ -116,6 +116,13 @@ def _integrate_position(
         lat1 = lat[i] + w / 6.0 * (dlat0 + 4.0 * dlatm + dlat1)
         cm = np.sqrt(1.0 - sm * sm)
         c1 = np.sqrt(1.0 - s1 * s1)
+        if cm <= 0.0 or c1 <= 0.0:  # at a pole the longitude has no rate: the rest is not defined
+            lat[i + 1 :] = np.nan
+            lon[i + 1 :] = np.nan
+            h[i + 1 :] = np.nan
+            lat_m[i:] = np.nan
+            h_m[i:] = np.nan
+            break
         dlon = v[i, 1] / ((r_n0 + h[i]) * c0) + 4.0 * v[ne + i, 1] / ((r_nm + hm) * cm)
         dlon += v[i + 1, 1] / ((r_n1 + h1) * c1)
         lat[i + 1], lon[i + 1], h[i + 1] = lat1, lon[i] + w / 6.0 * dlon, h1
@@ -262,6 +269,12 @@ def _chunk(
     # One evaluation at every edge, then every midpoint.
     kin = motion.kinematics(np.concatenate([edges, edges[:-1] + 0.5 * width]))
     lat_e, lon_e, h_e, lat_m, h_m = _integrate_position(width, kin.v_n, lat0, lon0, h0)
+    if not np.isfinite(lat_e).all():
+        at_pole = float(edges[int(np.argmin(np.isfinite(lat_e)))])
+        raise ValueError(
+            f"the trajectory reaches a pole at t = {at_pole:g} s; the latitude/longitude mechanisation "
+            "cannot pass one"
+        )
     omega, f = specific_force_and_rate(kin, np.concatenate([lat_e, lat_m]), np.concatenate([h_e, h_m]))
 
     def simpson_sums(rate: Array) -> Array:

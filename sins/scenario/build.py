@@ -128,10 +128,11 @@ def unsampled_end(scenario: Scenario) -> str:
 
 
 def idle_outages(scenario: Scenario) -> list[str]:
-    """The ``[[outage]]`` windows that drop no fix of the scenario's receiver, each in words (none
-    without ``[gnss]``): the receiver's fixes (:func:`sins.aiding.gnss.fix_times`, as it simulates them)
-    that an outage drops are those strictly inside it, so 300–301 s at 1 Hz drops none. Its figures are
-    then the drift between two fixes, not an outage's."""
+    """The ``[[outage]]`` windows that drop no fix of the scenario's receiver (or start after its motion
+    ends), each in words (none without ``[gnss]``): the receiver's fixes
+    (:func:`sins.aiding.gnss.fix_times`, as it simulates them) that an outage drops are those strictly
+    inside it, so 300–301 s at 1 Hz drops none. Its figures are then the drift between two fixes, not an
+    outage's."""
     a = scenario.aiding
     if a is None or not a.outages:
         return []
@@ -141,7 +142,11 @@ def idle_outages(scenario: Scenario) -> list[str]:
     fix_t = fix_times(m.t_start, m.t_end, a.rate_hz, a.latency_s)
     notes = []
     for start, end in a.outages:
-        if start < m.t_end and not np.any((fix_t > start) & (fix_t < end)):
+        if start >= m.t_end:  # counted among the outages, and no table nor word said it did nothing
+            notes.append(
+                f"the outage {start:g}-{end:g} s starts after the motion ends ({m.t_end:g} s): it drops none"
+            )
+        elif not np.any((fix_t > start) & (fix_t < end)):
             notes.append(
                 f"the outage {start:g}-{end:g} s drops no fix of the {a.rate_hz:g} Hz receiver (an outage "
                 "drops the fixes strictly inside it): its figures are the drift between two fixes"

@@ -183,16 +183,20 @@ class TomlKeys:
         return out
 
     def strings(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> list[str]:
-        """An array of strings, each among ``choices`` when given."""
+        """An array of strings, each among ``choices`` when given, none twice."""
         if key not in self.table:
             return list(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, list):
             raise self.error(f"expected an array of strings, got {_kind(value)}", key)
+        allowed = f" (one of {', '.join(choices)})" if choices else ""
         for i, item in enumerate(value):
-            if not isinstance(item, str) or (choices and item not in choices):
-                allowed = f" (one of {', '.join(choices)})" if choices else ""
+            if not isinstance(item, str):
                 raise self.error(f"item {i + 1}: expected a string{allowed}, got {short(item)}", key)
+            if choices and item not in choices:
+                raise self.error(f"item {i + 1}: {short(item)} is not a known name{allowed}", key)
+            if item in value[:i]:  # a second run of the same name, silently merged before
+                raise self.error(f"item {i + 1}: {short(item)} is given twice", key)
         return list(value)
 
     def boolean(self, key: str, default: bool) -> bool:

@@ -128,6 +128,12 @@ def load(path: str | os.PathLike[str]) -> Scenario:
     return from_dict(read_toml(path, "scenario"), source=path)
 
 
+#: The keys and tables a scenario may hold at its top, checked before any is read: a misspelt ``[intial]``
+#: is named, where it had been the key it then lacks ("initial.lat_deg: missing required key").
+TOP_KEYS = ("name", "description", "imu", "compensation", "navigation", "initial", "segment", "waypoint",
+            "oscillation", "truth", "gnss", "outage", "alignment")  # fmt: skip
+
+
 def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     """Validate a parsed scenario table (what :func:`load` does after parsing).
 
@@ -143,6 +149,8 @@ def from_dict(data: dict[str, Any], source: Path | None = None) -> Scenario:
     """
     name_of_source = str(source) if source else "<scenario>"
     top = TomlKeys(name_of_source, "", data)
+    if odd := [k for k in data if k not in TOP_KEYS]:
+        raise top.error(f"unknown key (a scenario's keys: {', '.join(sorted(TOP_KEYS))})", odd[0])
     name = top.string("name", default=source.stem if source else "scenario")
     description = top.string("description", default="")
     base = source.parent if source else Path(".")
@@ -511,6 +519,7 @@ __all__ = [
     "MIN_WAYPOINT_SPEED_MPS",
     "SCENARIO_BOUNDS",
     "SEGMENT_TYPES",
+    "TOP_KEYS",
     "from_dict",
     "load",
 ]
