@@ -604,9 +604,13 @@ sys.exit(main(sys.argv[2:]))
 """
 
 
-def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("signum", "said"), [(signal.SIGTERM, "terminated"), (signal.SIGHUP, "hung up")])
+def test_sigterm_while_writing_leaves_no_temporary_file(
+    files: Path, tmp_path: Path, signum: int, said: str
+) -> None:
     """Before, a killed ``sins correct`` left its 5 MB ``.tmp`` behind: SIGTERM now ends the command
-    as Ctrl-C does, every ``finally`` run (exit 143, one line)."""
+    as Ctrl-C does, every ``finally`` run (exit 143, one line); SIGHUP (a closed terminal) alike, where
+    it had left the temporary file and said nothing (exit 129)."""
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
     rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
     out, ready = tmp_path / "out" / "c.csv", tmp_path / "ready"
@@ -619,12 +623,12 @@ def test_sigterm_while_writing_leaves_no_temporary_file(files: Path, tmp_path: P
         wait_for(lambda: ready.exists() or child.poll() is not None, child.pid, "the child's write")
         assert child.poll() is None, child.communicate()[1]
         assert [p.name for p in out.parent.iterdir() if p.name.endswith(".tmp")]  # mid-write
-        child.send_signal(signal.SIGTERM)
+        child.send_signal(signum)
         _, err = communicate(child)
     finally:
         if child.poll() is None:
             child.kill()
-    assert child.returncode == 143 and err.strip().endswith("sins: terminated"), err
+    assert child.returncode == 128 + signum and err.strip().endswith(f"sins: {said}"), err
     assert list(out.parent.iterdir()) == []
 
 

@@ -77,27 +77,38 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class Terminated(BaseException):
-    """SIGTERM arrived (a BaseException, as KeyboardInterrupt is: no ``except Exception`` swallows it,
-    and every ``finally`` runs, so a write in progress removes its temporary file)."""
+    """SIGTERM or SIGHUP arrived (a BaseException, as KeyboardInterrupt is: no ``except Exception``
+    swallows it, and every ``finally`` runs, so a write in progress removes its temporary file);
+    ``signum`` the signal's number."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
 
 
 def _terminate(signum: int, frame: object) -> None:
-    raise Terminated
+    raise Terminated(signum)
+
+
+#: The signals that end a command as SIGTERM does: SIGHUP too (a closed terminal, a dropped ssh session
+#: had ended it at once, its temporary files of hundreds of MB left behind and nothing said).
+_ENDING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 @contextlib.contextmanager
 def terminated_as_exception() -> Iterator[None]:
-    """Within the block, SIGTERM raises :class:`Terminated` in the main thread (as Ctrl-C raises
-    KeyboardInterrupt) instead of ending the process at once with its files half written; the handler
-    before is restored after. Elsewhere than the main thread, nothing changes."""
+    """Within the block, SIGTERM and SIGHUP (:data:`_ENDING`) raise :class:`Terminated` in the main
+    thread (as Ctrl-C raises KeyboardInterrupt) instead of ending the process at once with its files half
+    written; the handlers before are restored after. Elsewhere than the main thread, nothing changes."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    previous = {s: signal.signal(s, _terminate) for s in _ENDING}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 def _together(command: str, discarded: list[Path]) -> contextlib.AbstractContextManager[None]:
@@ -211,9 +222,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("sins: interrupted", file=sys.stderr)
         return 130
-    except Terminated:
-        print("sins: terminated", file=sys.stderr)
-        return 143
+    except Terminated as exc:
+        print("sins: hung up" if exc.signum != signal.SIGTERM else "sins: terminated", file=sys.stderr)
+        return 128 + exc.signum
     finally:
         if discarded:
             kept = ", ".join(str(p) for p in discarded)
