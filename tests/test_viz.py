@@ -270,6 +270,21 @@ def test_serve_keeps_the_outputs_it_said_it_wrote(
     assert not list(tmp_path.glob(".*tmp"))
 
 
+def test_a_full_disk_is_one_line(drive, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # A recording written where no byte fits (/dev/full, written in place as devices are): rerun's own
+    # file sink had raised "Failed to encode LogMsg ... No space left on device" with a traceback (exit 1),
+    # and on a disk that filled as it wrote, hung in its flush past SIGINT and SIGTERM. The bytes are
+    # written by Python now: one line, exit 2.
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full on this system")
+    path, _ = drive
+    full = tmp_path / "full.rrd"
+    full.symlink_to("/dev/full")
+    assert main(["run", str(path), "--rerun", str(full)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"sins: error: {full}: No space left on device") and err.count("\n") <= 2, err
+
+
 def _free_port() -> int:
     import socket
 

@@ -330,14 +330,20 @@ def check_rrd_path(path: str | os.PathLike[str]) -> Path:
 def _write(
     path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None]
 ) -> Path:
-    """Log into a ``.rrd`` file through a temporary name (:func:`sins.io.atomic_path`), so a failed run
-    leaves none."""
+    """Log into a ``.rrd`` file: into memory first (rerun's binary stream, the blueprint the default one as
+    :meth:`~rerun.RecordingStream.save` sends it), then written through a temporary name
+    (:func:`sins.io.atomic_path`) by Python, so a failed run leaves none and a full disk is one line.
+    Rerun's own file sink, on a disk that filled as it wrote, had hung in its flush past SIGINT and
+    SIGTERM, or raised "File-writer thread shut down prematurely" with a traceback. A recording is a
+    few MB (a one-hour drive's 8), so memory holds it."""
     path = check_rrd_path(path)
+    stream = rec.binary_stream()
+    rec.send_blueprint(bp, make_active=False, make_default=True)
+    log()
+    data = stream.read(flush=True) or b""
+    rec.disconnect()
     with atomic_path(path) as tmp:
-        rec.save(tmp, default_blueprint=bp)
-        log()
-        rec.flush()
-        rec.disconnect()
+        Path(tmp).write_bytes(data)
     return path
 
 
