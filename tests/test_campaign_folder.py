@@ -516,3 +516,30 @@ def _progress(line: str) -> bool:
     """A log's progress line (``campaign NAME: working (5 s)``, ``...: done``), which a long job on a busy
     machine writes to stderr beside its result (:class:`sins.cli.progress.LogProgress`)."""
     return not line.startswith("sins:") and re.search(r": .* \(\d+ s\)$", line) is not None
+
+
+def test_another_command_does_not_write_into_a_campaigns_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A walk replaced a campaign's campaign.json by `sins inspect --json` and its results.parquet by
+    # `sins integrate --out` (both exit 0): the campaign then refused to resume ("not a sins campaign
+    # results folder"). Every output in its folder, or a folder of it, is refused now but the
+    # campaign's own (its --out among the command's folders).
+    from sins.cli import main
+    from sins.io import paths
+
+    camp = tmp_path / "camp"
+    (camp / "parts").mkdir(parents=True)
+    identity = '{"format": "sins-campaign", "identity": "abc"}\n'
+    (camp / "campaign.json").write_text(identity)
+    scenario = tmp_path / "short.toml"
+    scenario.write_text('[initial]\nlat_deg = 45.0\n[[segment]]\ntype = "hold"\nduration_s = 5\n')
+    for out in (camp / "campaign.json", camp / "summary.json", camp / "parts" / "x.json"):
+        assert main(["run", str(scenario), "--json", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert (
+            f"--json {out}: is in the results folder of a campaign ({camp})" in err and err.count("\n") == 1
+        )
+    assert (camp / "campaign.json").read_text() == identity and not (camp / "summary.json").exists()
+    assert main(["run", str(scenario), "--json", str(tmp_path / "beside.json")]) == 0  # beside it: fine
+    paths.check_outputs({"--plot": camp / "errors.png"}, folders={"--out": camp})  # the campaign's own

@@ -159,6 +159,16 @@ def _others(folder: Path) -> None:
     os.rename(folder / "rec.mat", folder / "session.dat")
     pq.write_table(pa.table({"t": [0.0, 1.0]}), folder / "table.parquet")
     (folder / "link.json").symlink_to(folder / "recording")
+    # A picture, a page and a Rerun recording of the user's own (rerun, under another application id).
+    (folder / "photo.png").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)))
+    (folder / "page.html").write_text("<!DOCTYPE html>\n<html><body>my notes</body></html>\n")
+    import rerun as rr
+
+    rec = rr.RecordingStream("another_application")
+    rec.save(folder / "other.rrd")
+    rec.log("x", rr.Scalars([1.0]))
+    rec.flush()
+    rec.disconnect()
     readings = np.column_stack([np.arange(3.0), np.zeros((3, 5)), np.full(3, 9.8)])
     np.savetxt(folder / "logger.csv", readings, delimiter=",", header="t,gx,gy,gz,ax,ay,az", comments="")
 
@@ -195,6 +205,17 @@ KEPT: dict[str, tuple[tuple[str, ...], str, str, str]] = {
         ("static.csv", "s.toml"), "characterise {static.csv} --static --out scenario.toml", "--out",
         NOT_SINS,
     ),
+    # A plot or a recording had replaced any PNG, any text and any Rerun recording (a walk's photo,
+    # shopping list and page): only those sins drew or wrote now.
+    "a plot onto a user's picture": (
+        ("s.toml",), "run {s.toml} --plot photo.png", "--plot", "a PNG image sins did not draw",
+    ),
+    "a plot's page onto a user's page": (
+        ("s.toml",), "run {s.toml} --plot page.html", "--plot", "text sins did not write (a page",
+    ),
+    "a recording onto another application's": (
+        ("s.toml",), "run {s.toml} --rerun other.rrd", "--rerun", "a Rerun recording of another application",
+    ),
     "a CSV solution onto a Parquet table": (
         ("inc.csv", "truth.csv"), "integrate {inc.csv} --truth {truth.csv} --out table.csv", "--out",
         "a Parquet table",
@@ -216,7 +237,8 @@ def test_an_output_never_replaces_a_file_that_holds_what_it_is_not(
         shutil.copy(tmp_path / "table.parquet", tmp_path / "table.csv")
     if case == "an IMU file onto a hand-written scenario":
         shutil.copy(tmp_path / "s.toml", tmp_path / "scenario.toml")
-    others = ("recording", "session.dat", "table.parquet", "table.csv", "logger.csv", "scenario.toml")
+    others = ("recording", "session.dat", "table.parquet", "table.csv", "logger.csv", "scenario.toml",
+              "photo.png", "page.html", "other.rrd")  # fmt: skip
     kept = [*inputs, *(tmp_path / n for n in others)]
     before = _digests(kept)
     rc, err = _run_in(tmp_path, argv, names)

@@ -43,10 +43,10 @@ from sins.campaign.spec import CampaignSpec, describe
 from sins.campaign.unit import BIAS_FIELDS, RESIDUAL_FIELDS, SUMMARY_FIELDS
 from sins.errors import SinsInputError
 from sins.io.documents import printable
-from sins.io.paths import check_writable
+from sins.io.paths import CAMPAIGN_FORMAT, check_writable
 from sins.scenario import TruthFileSpec
 
-FORMAT = "sins-campaign"
+FORMAT = CAMPAIGN_FORMAT
 LOCK_NAME = "campaign.lock"
 #: The key of a part's Parquet metadata that holds the campaign's identity.
 IDENTITY_KEY = b"sins.campaign.identity"

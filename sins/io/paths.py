@@ -22,7 +22,11 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
 * not an input: an output that is the same file as any input of the command (same device and inode,
   or the same path once links are resolved: a hard link, ``./x`` beside ``x``), a file inside an input
   folder, or the same file as another output of the command, is refused. sins never writes over
-  what it reads.
+  what it reads;
+* not a campaign's: a file in a campaign's results folder (one holding a ``campaign.json`` of
+  :data:`CAMPAIGN_FORMAT`, or a folder of it) is written by that campaign alone (``sins campaign --out
+  DIR``, which names it among its folders): a report or a table of another command there had replaced
+  its identity or its results, and the campaign could not resume.
 """
 
 from __future__ import annotations
@@ -36,6 +40,10 @@ from pathlib import Path
 
 from sins.errors import SinsInputError
 from sins.io.limits import available_memory, format_size
+
+#: The ``format`` of a campaign's ``campaign.json``, which marks its results folder
+#: (:mod:`sins.campaign.folder`).
+CAMPAIGN_FORMAT = "sins-campaign"
 
 #: Memory a read takes per byte of the file (the text, the parsed numbers and their copies): a file
 #: above the available memory divided by this is refused before it is read.
@@ -157,6 +165,18 @@ SINS_TEXT = "a file sins wrote"
 #: (:func:`sins.io.json_files.write_report`), or whose ``"format"`` names a sins kind that is no input
 #: (``sins inspect --json`` before the mark). Other JSON is a user's, which a report does not replace.
 SINS_REPORT = "a report sins wrote"
+#: What :func:`_holds` calls the pictures sins drew: a PNG with matplotlib's ``Software: sins`` text chunk
+#: (:func:`sins.viz.plots.save`), the HTML page that holds one, a Rerun recording of sins's application
+#: id. A plot or a recording replaces these, not a user's own image, page or recording.
+SINS_PNG, SINS_PAGE, SINS_RRD = (
+    "a PNG image sins drew",
+    "a web page sins wrote",
+    "a Rerun recording sins wrote",
+)
+_SINS_PAGE = re.compile(
+    r'\A<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>[^<]*</title></head>\n'
+    r'<body><h1 style="font-family: sans-serif; font-size: 1\.2em">'
+)
 #: The first key of every report a command writes: the version of the sins that wrote it.
 REPORT_KEY = "sins"
 _SINS_REPORT = re.compile(r'\A\ufeff?\s*\{\s*"' + REPORT_KEY + r'"\s*:\s*"')
@@ -167,8 +187,8 @@ _REPLACES = {
     "csv": (SINS_TEXT,),
     "toml": (SINS_TEXT,),
     "text": ("JSON", "text", SINS_TEXT, SINS_REPORT),
-    "image": ("a PNG image", "text"),  # a plot's .png, or its .html page
-    "rrd": ("a Rerun recording",),
+    "image": (SINS_PNG, SINS_PAGE),  # a plot's .png, or its .html page
+    "rrd": (SINS_RRD,),
     "parquet": ("a Parquet table",),
 }
 _WRITES = {"json": "JSON", "csv": "a CSV table", "toml": "a TOML file", "text": "text", "image": "an image",
@@ -209,6 +229,10 @@ def _holds(path: Path) -> str | None:
         return "empty"
     for magic, what in _SIGNATURES:
         if head.startswith(magic):
+            if magic == b"\x89PNG" and b"tEXtSoftware\x00sins" in head:
+                return SINS_PNG
+            if magic == b"RRF" and b"\n\x04sins" in head[:1024]:  # its store's application id, "sins"
+                return SINS_RRD
             return what
     if b"\x00" in head:
         return "binary data"
@@ -225,6 +249,8 @@ def _holds(path: Path) -> str | None:
         return SINS_REPORT
     if _SINS_LINE.match(text):
         return SINS_TEXT
+    if _SINS_PAGE.match(text):
+        return SINS_PAGE
     if _SINS_REPORT.match(text):
         return SINS_REPORT
     return "JSON" if _JSON_START.match(text) else "text"
@@ -250,9 +276,14 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
     allowed = _REPLACES.get(kind, (SINS_REPORT, kind))  # a document: a report or its own format
     if holds is None or holds == "empty" or holds in allowed:
         return
-    seen = {"text": "text that is not JSON", **_DOCUMENTS}.get(holds, holds)
+    seen = {
+        "text": "text that is not JSON", "a PNG image": "a PNG image sins did not draw (a picture of yours?)",
+        "a Rerun recording": "a Rerun recording of another application", **_DOCUMENTS,
+    }.get(holds, holds)  # fmt: skip
     if kind in ("csv", "toml") and holds in ("text", "JSON"):
         seen = "text sins did not write (a recording, table or scenario of yours?)"
+    elif kind == "image" and holds in ("text", "JSON"):
+        seen = "text sins did not write (a page or notes of yours?)"
     elif holds == "JSON":  # where a report or a model goes
         seen = 'JSON sins did not write (a file of yours? a report of an older sins, without "sins" first?)'
     raise SinsInputError(
@@ -334,6 +365,20 @@ def _identity(path: Path) -> tuple[tuple[int, int] | None, str]:
     return ident, os.path.realpath(path)
 
 
+def _campaign_of(real: str) -> Path | None:
+    """The campaign results folder that holds the file at ``real`` (its folder or the one above, where
+    a ``campaign.json`` of :data:`CAMPAIGN_FORMAT` is), or None."""
+    for folder in list(Path(real).parents)[:2]:
+        try:
+            head = (folder / "campaign.json").read_bytes()[:4096].decode("utf-8", "replace")
+        except OSError:
+            continue
+        found = _FORMAT.match(head)
+        if found is not None and found.group(1) == CAMPAIGN_FORMAT:
+            return folder
+    return None
+
+
 def _inside(folder: str, path: str) -> bool:
     return path != folder and path.startswith(folder.rstrip(os.sep) + os.sep)
 
@@ -386,6 +431,12 @@ def check_outputs(
                     f"{flag} {path}: is also {other_flag} {other}; give each output its own file"
                 )
         seen.append((flag, path, ident, real))
+        campaign = _campaign_of(real)
+        if campaign is not None and not any(_inside(os.path.realpath(d), real) for d in dirs.values()):
+            raise SinsInputError(
+                f"{flag} {path}: is in the results folder of a campaign ({campaign}), which only that "
+                "campaign writes (sins campaign --out, --resume): write elsewhere"
+            )
         kind = (kinds or {}).get(flag)
         if kind is not None:  # after the inputs, and a file held before its name: each says more
             if os.path.isfile(real):
@@ -401,10 +452,14 @@ def check_outputs(
 
 
 __all__ = [
+    "CAMPAIGN_FORMAT",
     "KINDS",
     "READ_FACTOR",
     "REPORT_KEY",
+    "SINS_PAGE",
+    "SINS_PNG",
     "SINS_REPORT",
+    "SINS_RRD",
     "SINS_TEXT",
     "check_input",
     "check_named",

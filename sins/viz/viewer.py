@@ -319,8 +319,7 @@ def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
 
 
 def check_rrd_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` as a Path if it names a Rerun recording (``.rrd``), else a one-line error (the place is
-    :func:`sins.io.paths.check_outputs`'s, which the commands call with every output)."""
+    """``path`` as a Path if it names a ``.rrd``, else one line (its place is ``check_outputs``'s)."""
     path = Path(path)
     if path.suffix != ".rrd":
         raise SinsInputError(f"{path}: a Rerun recording's name must end in .rrd")
@@ -330,12 +329,8 @@ def check_rrd_path(path: str | os.PathLike[str]) -> Path:
 def _write(
     path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None]
 ) -> Path:
-    """Log into a ``.rrd`` file: into memory first (rerun's binary stream, the blueprint the default one as
-    :meth:`~rerun.RecordingStream.save` sends it), then written through a temporary name
-    (:func:`sins.io.atomic_path`) by Python, so a failed run leaves none and a full disk is one line.
-    Rerun's own file sink, on a disk that filled as it wrote, had hung in its flush past SIGINT and
-    SIGTERM, or raised "File-writer thread shut down prematurely" with a traceback. A recording is a
-    few MB (a one-hour drive's 8), so memory holds it."""
+    """Log into memory (a few MB: a one-hour drive's 8), then write through a temporary name by Python:
+    a full disk is one line (rerun's file sink had hung in its flush past SIGINT, or raised a traceback)."""
     path = check_rrd_path(path)
     stream = rec.binary_stream()
     rec.send_blueprint(bp, make_active=False, make_default=True)
