@@ -130,8 +130,9 @@ def check_owned(out: Path) -> None:
         return
     others = sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME)
     if others:
+        more = ", ..." if len(others) > 1 else ""
         raise SinsInputError(
-            f"{out}: holds {len(others)} file(s) ({printable(others[0])[:80]}, ...) and no campaign.json: "
+            f"{out}: holds {len(others)} file(s) ({printable(others[0])[:80]}{more}) and no campaign.json: "
             "not a campaign's results folder; give a new or empty --out"
         )
 
