@@ -16,7 +16,8 @@ and differentiated per sample some 140 times.
 Effects (added to the readings from the true inputs, each sensor reading its own axes):
 ``gyro.scale_asymmetry`` ``ka |ω_i|``; ``gyro.motion_bias`` ``b |ω|² / (|ω|² + ω₀²)``, ω₀ = 5 °/s;
 ``gyro.time_offset`` the gyro's input ``τ`` late; ``gyro.y step`` a bias step on gyro y half way;
-``gyro.bias_instability`` a first-order Gauss-Markov bias on every gyro axis (τ = 10 s, 0.3 °/s).
+``gyro.bias_instability`` a first-order Gauss-Markov bias on every gyro axis (τ = 10 s, 0.3 °/s);
+``gyro.rate_random_walk`` a walk on every gyro axis (:data:`WALK_DENSITY`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,11 @@ DEG = np.pi / 180.0
 DPH = DEG / 3600.0
 #: The room's frame (ENU, z up) from the NED the motion is written in.
 ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+#: ``gyro.rate_random_walk``'s density, rad/s/√s (2,475 °/h/√h: a consumer unit's tens, raised so that
+#: 150 s show it: its spread after 150 s is 0.14 °/s).
+WALK_DENSITY = 2e-4
 
 
 def motion_bias(omega: np.ndarray, b: np.ndarray, half_rate: float = 5.0 * DEG) -> np.ndarray:
@@ -87,6 +93,8 @@ def recording(
         phi = np.exp(-1.0 / (rate_hz * 10.0))
         drive = size * 0.3 * DEG * np.sqrt(1.0 - phi * phi) * rng.normal(0.0, 1.0, gyro.shape)
         gyro += lfilter([1.0], [1.0, -phi], drive, axis=0)
+    elif effect == "gyro.rate_random_walk":  # a walk of WALK_DENSITY: its steps' spread density·√dt
+        gyro += np.cumsum(size * WALK_DENSITY / np.sqrt(rate_hz) * rng.normal(0.0, 1.0, gyro.shape), axis=0)
     elif effect != "clean":
         raise ValueError(f"unknown effect {effect!r}")
     noise = Rotation.from_rotvec(rng.normal(0.0, ref_angle_deg * DEG, (n + 1, 3)))

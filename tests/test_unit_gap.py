@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import numpy_unit_gap as nu
 import pytest
+from conftest import refusal
 
 from sins import imu, io
 from sins.cli import main
@@ -183,6 +184,24 @@ def _holds_its_wander(sizes: dict[str, list[float]], sigma_within: tuple[float, 
             assert sigma_within[0] * WANDER_SIGMA < sigma < sigma_within[1] * WANDER_SIGMA, (ch, values)
 
 
+@pytest.mark.parametrize("seed", [3, 4])
+def test_a_random_walk_on_intervals_is_sized_as_a_walk(tmp_path: Path, seed: int) -> None:
+    """A gyro rate random walk of numpy's (density 2e-4 rad/s/√s), diagnosed on intervals: accepted, and
+    sized by one density per channel, where the report had read its model (fitted at φ = 0.995) as a
+    Gauss-Markov σ and τ and shown the τ of 200 s as a density of 2.5e9 °/h/√h (EuRoC's MH_01). The
+    density within a factor 1.6 below and above: the seed model's bias and scale columns take the walk's
+    mean and part of its drift (measured 0.63-0.75 of it over these two seeds)."""
+    nu.write(tmp_path / "unit" / "rw.npz", nu.recording(seed, "gyro.rate_random_walk"))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(datasets.ENV_VAR, str(tmp_path))
+        report = diagnose_one(read_gap_input(None, dataset="unit/rw")).report
+    assert report.statistic["kind"] == "intervals" and "gyro.rate_random_walk" in report.diagnosis
+    for ch, values in report.sizes["gyro.rate_random_walk"].items():
+        assert len(values) == 1 and nu.WALK_DENSITY / 1.6 < values[0] < 1.6 * nu.WALK_DENSITY, (ch, values)
+    shown = report.to_dict()["sizes"]["gyro.rate_random_walk"]["gyro.x"]
+    assert shown["unit"] == "°/h/√h" and len(shown["values"]) == 1
+
+
 def test_a_random_bias_on_samples_reports_its_size_in_the_librarys_terms(tmp_path: Path) -> None:
     """The same wander beside an exact reference, diagnosed on samples: its size is reported in the
     library's parameters (σ and τ, or a walk's density: what an IMU file's ``[[effect]]`` takes), where
@@ -277,14 +296,16 @@ def test_gap_reads_an_npz_path_a_euroc_folder_and_refuses_bad_input_in_one_line(
         assert main(["gap", str(bad)]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and what in err, err
-    # Too short for the intervals the statistic asks for (12 s: 11 intervals of 1 s, 20 needed): one line
-    # naming the file and the way on, not an assertion's traceback.
+    # Too short for a diagnosis (12 s: under two 10 s blocks; 11 intervals of 1 s where 20 are needed):
+    # one line naming the file, not an assertion's traceback.
     with np.load(path) as z:
         keep = z["t_s"] <= z["t_s"][0] + 12.0
         short = nu.write(tmp_path / "twelve.npz", {k: z[k][keep] for k in z.files})
     assert main(["gap", str(short), "--statistic", "intervals"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "twelve.npz" in err and "--statistic samples" in err, err
+    assert err.count("\n") == 1 and "twelve.npz: 12 s of readings; a diagnosis against a trajectory" in err, (
+        err
+    )
     # One recording given twice, refused before either is read: its verdicts would agree with themselves.
     assert main(["gap", str(path), str(path)]) == 2
     err = capsys.readouterr().err
@@ -368,6 +389,49 @@ def test_verdicts_across_recordings_and_the_shrink_on_the_other_in_degrees(
     assert main(args) == 0
     doc = json.loads(out.read_text())
     assert doc["across"]["on_one_only"] == ["gyro.scale_asymmetry"]
+
+
+def test_a_shrink_is_said_against_the_raw_readings_too() -> None:
+    """A shrink over a model worse than the readings is said against them, and a model no better than
+    raw is said so (a walk's BROAD pair had read "from 4.38° to 1.57°" where the readings give 2.59°)."""
+    from sins.unit_gap.shrink import said
+
+    assert said(True, 4.38, 1.57, 2.59).endswith("from 4.38° to 1.57° (the raw readings: 2.59°, so against "
+                                                  "them from 2.59° to 1.57°)")  # fmt: skip
+    assert said(True, 0.9, 0.6, 0.5).endswith("the model, effects and all, is no better than raw")
+    assert (
+        said(True, 0.9, 0.6, 1.2)
+        == "the accepted effects shrink the open-loop attitude error from 0.9° to 0.6°"
+    )
+    assert "do not shrink" in said(True, 0.6, 0.9, 1.2) and "nothing to judge" in said(False, 1.0, 1.0, 1.0)
+
+
+def test_free_inertial_attitude_is_the_rotation_angle(tmp_path: Path) -> None:
+    """The shrink's free-inertial attitude is the RMS of the error's rotation angle (scipy's, from the
+    gyro integrated from the reference's attitude), not of Euler differences, which swell near ±90° of
+    pitch (EuRoC's V1_01: 2.63° against the angle's 1.73°, a walk measured). Within 0.06°: the
+    mechanisation turns with the Earth (0.04° over 10 s), scipy's integration does not."""
+    from scipy.spatial.transform import Rotation
+
+    from sins.compensation import referenced
+
+    nu.write(tmp_path / "w.npz", nu.recording(3))
+    rec = io.read(tmp_path / "w.npz").beside_reference()
+    drive = referenced.drive_errors(None, rec, 20.0, 30.0)
+    a = int(np.searchsorted(rec.imu.t, drive.start_s))
+    b = int(np.searchsorted(rec.imu.t, drive.end_s))
+    ref = rec.reference.interpolate(rec.imu.t[a : b + 1])
+    q0 = ref.q_nb[0]  # scalar last, body to frame
+    steps = Rotation.from_rotvec(rec.imu.dtheta_b[a:b])
+    att = [Rotation.from_quat(q0)]
+    for r in steps:
+        att.append(att[-1] * r)
+    est = Rotation.concatenate(att)
+    at = (rec.reference.t >= drive.start_s) & (rec.reference.t <= drive.end_s)
+    rows = np.searchsorted(rec.imu.t[a : b + 1], rec.reference.t[at])
+    angle = (est[rows].inv() * Rotation.from_quat(ref.q_nb[rows])).magnitude()
+    expected = float(np.degrees(np.sqrt(np.mean(angle * angle))))
+    assert expected > 0.3 and abs(drive.attitude_angle_rms_deg - expected) < 0.06, (drive, expected)
 
 
 # --------------------------------------------------------------------------- real recordings
@@ -610,3 +674,36 @@ def test_recordings_of_two_units_are_not_diagnosed_as_one(
     err = capsys.readouterr().err
     assert "unitB/r: recordings of one unit are diagnosed together; unitA/r is unitA, this is unitB" in err
     assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("seconds", [1.0, 2.0, 10.0])
+def test_a_recording_too_short_for_a_diagnosis_is_refused(tmp_path: Path, seconds: float) -> None:
+    """Under two 10 s blocks: refused in one line, whichever statistic the reference calls for (1-2 s of a
+    unit at rest had been diagnosed per sample: lever arms of 14 m, exit 0; 5-20 s refused)."""
+    arrays = nu.recording(3, duration_s=seconds)
+    nu.write(tmp_path / "short.npz", arrays)
+    refusal(
+        lambda: diagnose_one(read_gap_input(tmp_path / "short.npz")),
+        f"short.npz: {seconds:.3g} s of readings; a diagnosis against a trajectory needs at least 20 s",
+    )
+
+
+def test_sizes_of_opposite_signs_on_all_recordings_are_labelled() -> None:
+    """An effect accepted on both trials with sizes of opposite signs on a channel (a walk's BROAD pair:
+    the accelerometer's time offset +2.87 ms on x on one, -2.01 ms on the other) is labelled with the
+    channel, where it read as holding on all; sizes of one sign are not."""
+    from types import SimpleNamespace
+
+    from sins.unit_gap import across
+
+    def report(x: float, y: float) -> Any:
+        sizes = {"accel.time_offset": {"accel.x": [x], "accel.y": [y]}}
+        return SimpleNamespace(diagnosis=["accel.time_offset"], sizes=sizes)
+
+    found = across.verdicts([("a", report(2.87e-3, 1e-3)), ("b", report(-2.01e-3, 2e-3))])
+    effect = found["effects"]["accel.time_offset"]
+    assert effect["holds_on"] == "all" and effect["signs_differ_on"] == ["accel.x"]
+    assert across.table_rows(found)[0][1] == "all, signs differ on x"
+    assert "sizes of opposite signs between recordings" in "\n".join(across.lines(found))
+    same = across.verdicts([("a", report(2.87e-3, 1e-3)), ("b", report(2.01e-3, 2e-3))])
+    assert same["effects"]["accel.time_offset"]["signs_differ_on"] == []

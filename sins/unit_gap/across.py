@@ -3,7 +3,9 @@ one only, with their fitted sizes side by side.
 
 A sensor effect of the unit should be found wherever the recordings excite it; one found on a single
 recording of several is as likely that recording's (its reference, its motion) as the unit's, and is
-labelled so. The sizes are the accepted effects' fitted coefficients
+labelled so; one found on several with sizes of opposite signs on a channel is labelled with those
+channels (a unit's effect has one sign; a time offset of +2.9 ms on one trial and -2.0 ms on the other
+had read as holding on all). The sizes are the accepted effects' fitted coefficients
 (:attr:`sins.gap.report.GapReport.sizes`) in their parameters' units
 (:func:`sins.gap.report.in_units`).
 """
@@ -39,7 +41,8 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
                     ch: {"values": in_units(e, v)[0], "unit": in_units(e, v)[1]}
                     for ch, v in r.sizes[e].items()
                 }
-        effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes}
+        effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes,
+                      "signs_differ_on": _signs_differ(sizes, found)}  # fmt: skip
     return {
         "recordings": names,
         "effects": effects,
@@ -47,6 +50,17 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
         "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
         "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
     }
+
+
+def _signs_differ(sizes: dict[str, dict[str, Any]], found: list[str]) -> list[str]:
+    """The channels whose first size has opposite signs on two of the recordings that accepted it."""
+    channels = dict.fromkeys(ch for n in found for ch in sizes.get(n, {}))
+    out = []
+    for ch in channels:
+        signs = {np.sign(sizes[n][ch]["values"][0]) for n in found if ch in sizes.get(n, {})} - {0.0}
+        if len(signs) > 1:
+            out.append(ch)
+    return out
 
 
 def size_text(per_channel: dict[str, Any]) -> str:
@@ -76,6 +90,8 @@ def table_rows(across: dict[str, Any]) -> list[list[str]]:
             if v["holds_on"] != SOME
             else f"some ({len(v['found_on'])} of {len(across['recordings'])})"
         )
+        if v.get("signs_differ_on"):
+            label += f", signs differ on {', '.join(ch.split('.')[1] for ch in v['signs_differ_on'])}"
         cells = [size_text(v["sizes"][n]) if n in v["found_on"] and n in v["sizes"] else
                  ("accepted" if n in v["found_on"] else "-") for n in across["recordings"]]  # fmt: skip
         rows.append([e, label, *cells])
@@ -90,6 +106,15 @@ def lines(across: dict[str, Any]) -> list[str]:
     out.append(fixed_width(["effect", "holds on", *across["recordings"]], table_rows(across)))
     if across["on_one_only"]:
         out.append(f"found on one recording only: {', '.join(across['on_one_only'])}")
+    differ = [
+        f"{e} ({', '.join(v['signs_differ_on'])})"
+        for e, v in across["effects"].items()
+        if v.get("signs_differ_on")
+    ]
+    if differ:
+        out.append(
+            f"sizes of opposite signs between recordings (a unit's effect has one): {', '.join(differ)}"
+        )
     return out
 
 

@@ -21,7 +21,12 @@ from sins.io.filled import spans_said
 from sins.unit_gap import across, clock, plausible, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
-from sins.unit_gap.search import baseline_fit, diagnose_intervals
+from sins.unit_gap.search import BLOCK_S, baseline_fit, diagnose_intervals
+
+#: The shortest recording diagnosed against a trajectory, s: two blocks, each of whose last part is held
+#: back (1-2 s of a unit at rest had been given per-sample verdicts and lever arms of 14 m, where 5-20 s
+#: were refused for too few intervals).
+MIN_SPAN_S = 2.0 * BLOCK_S
 
 
 @dataclass
@@ -52,6 +57,13 @@ def diagnose_one(
         one line naming the recording: intervals asked of a per-sample reference, a recording whose
         intervals cannot be fitted, a model beyond the baseline on intervals, and as the diagnosis does.
     """
+    if inp.referenced is not None:  # whichever statistic: a 1 s recording had been given a diagnosis
+        span = float(inp.referenced.imu.t[-1] - inp.referenced.imu.t[0])
+        if span < MIN_SPAN_S:
+            raise SinsInputError(
+                f"{inp.name}: {span:.3g} s of readings; a diagnosis against a trajectory needs at least "
+                f"{MIN_SPAN_S:g} s (two of the {BLOCK_S:g} s blocks whose last part it holds back)"
+            )
     if asked == "intervals" and inp.referenced is None:
         raise SinsInputError(
             f"{inp.name}: --statistic intervals needs a reference trajectory; this one is per-sample inputs"
@@ -169,6 +181,7 @@ def verdicts(results: list[Diagnosed]) -> dict[str, Any]:
 
 
 __all__ = [
+    "MIN_SPAN_S",
     "Diagnosed",
     "diagnose_one",
     "shrinks",

@@ -375,7 +375,8 @@ def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, l
         for cand in st.accepted:
             out[cand.name] = {}
             if cand.phis is not None:  # a random bias: its parameters, from the intervals' noise model
-                out[cand.name] = {f"{sensor}.{'xyz'[a]}": _process_size(st.fit, a, span) for a in axes}
+                walk = cand.name.endswith("rate_random_walk")  # fitted at φ = 0.995: read as a walk
+                out[cand.name] = {f"{sensor}.{'xyz'[a]}": _process_size(st.fit, a, span, walk) for a in axes}
                 continue
             for a in axes:
                 width = cand.per_axis[a].shape[2]
@@ -384,15 +385,18 @@ def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, l
     return out
 
 
-def _process_size(fit: SensorFit, axis: int, span: float) -> list[float]:
+def _process_size(fit: SensorFit, axis: int, span: float, walk: bool = False) -> list[float]:
     """A random bias's parameters from the intervals' noise model on component ``axis``: ``(1 − φB) y =
     (1 + θB) a``, ``a`` of spread σ, read as the bias over an interval of ``span`` s (``y = T b + n``, ``n``
     white) that moves as ``b' = φ b + w``. Matching the two sides' autocovariances, ``T² var(w) = σ²
     (1 + θ² + θ (1 + φ²) / φ)``: a Gauss–Markov bias's stationary σ = √(var(w) / (1 − φ²)) and correlation
     time τ = −T / ln φ; a walk's (φ = 1; the bias averaged over each interval) density σ (1 + θ) / T^1.5
-    (the library's parameters, :func:`sins.gap.randombias.sizes`' on samples)."""
+    (the library's parameters, :func:`sins.gap.randombias.sizes`' on samples). ``walk``: the candidate is
+    a walk, fitted at φ just below 1 (:data:`~sins.unit_gap.fitter.RANDOM_WALK`) to keep its model
+    stationary: its density (read as a Gauss-Markov σ and τ, its τ of 200 s had been shown as a density of
+    2.5e9 °/h/√h)."""
     phi, theta, sigma = float(fit.phi[axis]), float(fit.theta[axis]), float(fit.sigma[axis])
-    if phi >= 1.0:
+    if phi >= 1.0 or walk:
         return [max(sigma * (1.0 + theta), 0.0) / span**1.5]
     if not phi > 0.0:
         return [0.0, float("inf")]

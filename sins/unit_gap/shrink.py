@@ -150,7 +150,7 @@ def _windows(rec: ReferencedRecording) -> dict[str, Any]:
     start = t0
     while start + WINDOW_S <= t1:
         drive = referenced.drive_errors(None, rec, start, start + WINDOW_S)
-        att.append(float(np.sqrt(np.mean(np.square(drive.attitude_rms_deg)))))
+        att.append(drive.attitude_angle_rms_deg)  # the rotation angle, as the open loop's (not Euler's)
         vel.append(float(np.sqrt(np.mean(np.square(drive.velocity_rms_mps)))))
         start += WINDOW_S
     if not att:
@@ -172,20 +172,35 @@ def shrink(
     before, source = judged(judged_on, without, interval_s)
     after, _ = judged(judged_on, with_effects, interval_s)
     raw, _ = judged(judged_on, _identity(without.seed), interval_s)
-    b, a = before["open_loop_attitude_deg"]["total"], after["open_loop_attitude_deg"]["total"]
     used = [e for e in effects if e not in left_out]
+    verdict = said(bool(used), *(d["open_loop_attitude_deg"]["total"] for d in (before, after, raw)))
+    return {
+        "fitted_on": fitted_on.source, "judged_on": judged_on.source, "effects": used, "left_out": left_out,
+        "bias_from": source, "raw": raw, "without_effects": before, "with_effects": after, "verdict": verdict,
+    }  # fmt: skip
+
+
+def said(used: bool, without_deg: float, with_deg: float, raw_deg: float) -> str:
+    """The verdict on the open-loop attitude error of a recording corrected by a model fitted on another,
+    without and with the accepted effects, beside its raw readings': a shrink over a model worse than the
+    readings is said against them (a walk's BROAD pair shrank from 4.38° to 1.57°, the readings 2.59°),
+    and a model no better than raw, effects and all, is said so."""
+    b, a, r = without_deg, with_deg, raw_deg
     if not used:
-        verdict = "no accepted effect predicts another recording: nothing to judge"
-    elif a < b:
+        return "no accepted effect predicts another recording: nothing to judge"
+    if a < b:
         verdict = f"the accepted effects shrink the open-loop attitude error from {b:.3g}° to {a:.3g}°"
     else:
         verdict = (
             f"the accepted effects do not shrink the open-loop attitude error ({b:.3g}° without, {a:.3g}°)"
         )
-    return {
-        "fitted_on": fitted_on.source, "judged_on": judged_on.source, "effects": used, "left_out": left_out,
-        "bias_from": source, "raw": raw, "without_effects": before, "with_effects": after, "verdict": verdict,
-    }  # fmt: skip
+    if a >= r:
+        return (
+            verdict + f"; the raw readings give {r:.3g}°: the model, effects and all, is no better than raw"
+        )
+    if b > r:
+        return verdict + f" (the raw readings: {r:.3g}°, so against them from {r:.3g}° to {a:.3g}°)"
+    return verdict
 
 
 def _identity(seed: SeedModelFit) -> UnitModel:
@@ -209,6 +224,7 @@ def lines(judged: list[dict[str, Any]]) -> list[str]:
                     f"    free inertial over {w['free_inertial_windows']} windows of 10 s: attitude "
                     f"{raw[att]:.3g}° raw, {wo[att]:.3g}° without, {w[att]:.3g}° with; velocity "
                     f"{raw[vel]:.3g}, {wo[vel]:.3g}, {w[vel]:.3g} m/s"
+                    + ("; with the effects worse than raw" if w[att] > raw[att] or w[vel] > raw[vel] else "")
                 )
             total = raw["open_loop_attitude_deg"]["total"]
             out.append(f"    raw readings (bias from {j['bias_from']}): {total:.3g}°")
@@ -221,5 +237,6 @@ __all__ = [
     "fit_model",
     "judged",
     "lines",
+    "said",
     "shrink",
 ]
