@@ -288,6 +288,22 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     doc = json.loads((tmp_path / "k.json").read_text())
     assert doc["version"] == compensation.FORMAT_VERSION == 3
     assert {"configs_", "cv_scores_", "guard_", "used_", "base_", "terms_"} <= set(doc["state"])
+    # What each channel uses, as the model does, and the same in words (a walk found "--no-guard" fits
+    # printing "-> regression (guard off)" on every channel while the model used the learner on all six).
+    used = [ch for ch, u in zip(imu.CHANNELS, doc["state"]["used_"], strict=True) if u]
+    said = [line.split()[0] for line in out.splitlines() if line.split() and line.split()[0] in imu.CHANNELS
+            and line.rstrip().endswith("-> learned")]  # fmt: skip
+    assert said == used
+    assert ("the learner adds nothing: least squares (the guard keeps the learner where its held-back gain "
+            "exceeds 2 standard errors" in out) == (not used)  # fmt: skip
+    assert main(["fit", str(rec), "--strategy", "kohonen", "--no-guard", "--out", str(tmp_path / "k0.json"),
+                 "--json", str(tmp_path / "k0.fit.json")]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert json.loads((tmp_path / "k0.json").read_text())["state"]["used_"] == [True] * 6
+    assert json.loads((tmp_path / "k0.fit.json").read_text())["learned_on"] == list(imu.CHANNELS)
+    verdicts = [line for line in out.splitlines() if line.split() and line.split()[0] in imu.CHANNELS]
+    assert len(verdicts) == 6 and all("-> learned" in v for v in verdicts), verdicts
+    assert f"the learner corrects {', '.join(imu.CHANNELS)} (the guard is off: the learner corrects" in out
     assert (
         main(["fit", str(rec), "--strategy", "regression", "--no-guard", "--out", str(tmp_path / "r.json")])
         == 2

@@ -163,7 +163,11 @@ def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() ->
         np.testing.assert_array_equal(unit_bias.bias_track(rule, other)[-1], rule.prior)
     # What sins evaluate says of each, beside the judged figures.
     assert "reads like some training recordings' rests" in unit_bias.prior_said(rule, new)
-    assert "reads like no training recording's" in unit_bias.prior_said(rule, far)
+    said = unit_bias.prior_said(rule, far)
+    assert "reads like no training recording's (" in said and "another unit, a new day?)" in said
+    # 0.03 rad/s from its day on every axis, against rests that differ by their noise and motors (3e-4):
+    # tens of standard deviations, said (before, no figure).
+    assert float(said.split("recording's (")[1].split(" standard")[0]) > 20.0, said
     assert "opens moving" in unit_bias.prior_said(rule, moving)
 
 
@@ -229,6 +233,16 @@ def test_bias_only_on_several_recordings_keeps_the_biases_alone() -> None:
     assert s.label == "bias_only"
     np.testing.assert_array_equal(s.B_, np.zeros((3, 3)))
     np.testing.assert_allclose(s.B0_, fitted.several.gyro_bias.mean(axis=0))
+    # What sins fit prints and writes of it: the biases alone, as the model keeps (a walk found the scale
+    # and misalignment of the shared fit printed, and none of them applied); on two recordings, the rule
+    # said not to be chosen on held-back ones.
+    from sins.compensation import fitting
+
+    outcome = fitting.fit_several("bias_only", recs[:2], ["a", "b"])
+    assert {c["term"] for c in outcome.document["coefficients"]} == {"bias"}
+    assert any(
+        "not chosen on held-back recordings: that takes three or more, here 2" in x for x in outcome.lines
+    )
 
 
 def test_bias_only_chooses_its_rule_by_its_own_correction_on_held_back_recordings() -> None:

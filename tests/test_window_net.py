@@ -90,6 +90,13 @@ def test_a_motion_dependent_error_is_learned_and_only_where_it_is() -> None:
     parts = [_recording(s, 0.01) for s in range(4)]
     net = _seeded().fit_recordings(parts)
     assert net.window_axes == ["z"], (net.held_back_gain_, net.held_back_gain_se_)
+    # What sins fit says of it (a walk found it said nothing of the networks' guard): the gain and the axes.
+    from sins.compensation.fitting import _window_lines
+
+    said, doc = _window_lines(net, "squared error")
+    assert said[0].endswith("-> the networks correct gyro z") and doc["window_guard"][
+        "gyro_axes_corrected"
+    ] == ["z"]
     new = _recording(9, 0.01)
     out = net.correct_rates(ImuRates(t=new.t, omega_ib_b=new.gyro, f_ib_b=new.accel))
     before = new.gyro - new.ref_gyro
@@ -103,6 +110,13 @@ def test_the_guard_refuses_a_network_with_nothing_to_learn() -> None:
     parts = [_recording(s, 0.0) for s in range(4)]
     net = _seeded().fit_recordings(parts)
     assert net.window_axes == [] and net.networks_ == []
+    from sins.compensation.fitting import _window_lines
+
+    said, doc = _window_lines(net, "deg")
+    assert (
+        said[0].endswith("-> the networks are not used: least squares")
+        and doc["window_guard"]["unit"] == "deg"
+    )
 
 
 def test_model_file_round_trip_and_a_damaged_network(tmp_path: Path) -> None:

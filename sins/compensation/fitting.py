@@ -84,6 +84,7 @@ def fit_rig(
     from sins.compensation.mlp import MLP
     from sins.compensation.regression import Regression
     from sins.compensation.residual import ResidualStrategy
+    from sins.compensation.window_net import WindowNet
 
     if name == "bias_only":
         raise SinsInputError(
@@ -112,6 +113,11 @@ def fit_rig(
         lines += _learner_lines(
             strategy, f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks"
         )
+        document["learned_on"] = [ch for ch, u in zip(strategy.guard_, strategy.used_, strict=True) if u]
+    elif isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
+        window, found = _window_lines(strategy, "squared error")
+        lines += window
+        document |= found
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
@@ -122,9 +128,45 @@ def fit_rig(
 
 
 def _learner_lines(strategy: Any, how: str) -> list[str]:
-    """What a learned strategy chose (``how``: on what it was chosen), then its guard per channel."""
+    """What a learned strategy chose (``how``: on what it was chosen), then its guard per channel: the
+    physics terms each took, the learner's held-back gain over them, what the model uses there (the
+    learner where the guard kept it, or everywhere with the guard off), and the same in words."""
     chosen = "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
-    return [f"{how}: {chosen}", strategy.guard_report()]
+    lines, learned = [f"{how}: {chosen}"], []
+    for k, (ch, g) in enumerate(strategy.guard_.items()):
+        base = "regression" + "".join(f" + {t}" for t in strategy.terms_.get(ch, {}).get("groups", []))
+        used = bool(strategy.used_[k])
+        learned += [ch] if used else []
+        forced = " (guard off)" if used and not g["earns_its_place"] else ""
+        gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
+        lines.append(f"{ch:<8} {base:<26} learner's held-back gain {gain:+7.2f} % ± {se:.2f} %  -> "
+                     f"{'learned' if used else base}{forced}")  # fmt: skip
+    rule = (
+        "the guard is off: the learner corrects every channel, whatever its held-back gain"
+        if not strategy.guard
+        else f"the guard keeps the learner where its held-back gain exceeds {strategy.guard_z:g} standard "
+        "errors, least squares (and its terms) elsewhere"
+    )
+    said = (
+        f"the learner corrects {', '.join(learned)}" if learned else "the learner adds nothing: least squares"
+    )
+    return [*lines, f"{said} ({rule})"]
+
+
+def _window_lines(strategy: Any, unit: str) -> tuple[list[str], dict[str, Any]]:
+    """``mlp_window``'s guard: the networks' held-back gain over least squares (``unit``: degrees of
+    open-loop attitude on held-back recordings, or the squared error of held-back parts), and the gyro
+    axes they correct (none where the guard refused them), in a line and as its document."""
+    gain, se = strategy.held_back_gain_, strategy.held_back_gain_se_
+    axes = strategy.window_axes
+    shown = (f"{gain[0]:+.3g}° ± {se[0]:.2g}° of open-loop attitude" if unit == "deg"
+             else ", ".join(f"{a} {g:+.3g} ± {s:.2g}" for a, g, s in zip("xyz", gain, se, strict=True)) +
+             " of squared error")  # fmt: skip
+    used = (f"the networks correct gyro {', '.join(axes)}" + ("" if strategy.guard else " (guard off)")
+            if axes else "the networks are not used: least squares")  # fmt: skip
+    line = f"the window networks' held-back gain over least squares: {shown} -> {used}"
+    return [line], {"window_guard": {"held_back_gain": gain.tolist(), "standard_error": se.tolist(),
+                                     "unit": unit, "gyro_axes_corrected": axes}}  # fmt: skip
 
 
 def _rig_seed_review(
@@ -300,6 +342,7 @@ def fit_several(
     that does best on held-back recordings)."""
     from sins.compensation import referenced
     from sins.compensation.residual import ResidualStrategy
+    from sins.compensation.window_net import WindowNet
 
     clocks = [frame_check.recording_lag(r) for r in recs]
     with _clock_named(list(zip(names, clocks, strict=True))):
@@ -318,6 +361,11 @@ def fit_several(
         how = f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole"
         lines += _learner_lines(strategy, f"{how} ({strategy.blocks_} blocks)")
         document["guard"] = {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()}
+        document["learned_on"] = [ch for ch, u in zip(strategy.guard_, strategy.used_, strict=True) if u]
+    elif isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
+        window, found = _window_lines(strategy, "deg")
+        lines += window
+        document |= found
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)
@@ -334,6 +382,8 @@ def _several_document(
         f"{sum(fit.intervals)} intervals of {fit.interval_s:g} s"
     )
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
+    if fitted.strategy.label == "bias_only":  # its model keeps the biases alone: the rest is not applied
+        table = [c for c in table if c.term == "bias"]
     lines += coefficient_lines(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
     per_hour = np.degrees(1.0) * 3600.0
     rows, biases = [], []
@@ -377,7 +427,11 @@ def _several_document(
         held = "; ".join(
             f"{'the raw readings' if m == 'raw' else m} {v:.2f}°" for m, v in rule.held_back_deg.items()
         )
-        judged = f" (open-loop attitude on held-back recordings, mean: {held})" if held else ""
+        judged = (
+            f" (open-loop attitude on held-back recordings, mean: {held})" if held
+            else " (as named)" if len(names) >= 3
+            else f" (not chosen on held-back recordings: that takes three or more, here {len(names)})"
+        )  # fmt: skip
         lines.append(_rule_line(rule, names, judged))
         document["bias_rule"] = rule.to_dict()
     return document

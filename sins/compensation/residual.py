@@ -578,20 +578,6 @@ class ResidualStrategy(Strategy):
             cache[sensor] = self._learner_from_state(learner) if isinstance(learner, dict) else learner
         return cache[sensor]
 
-    def guard_report(self) -> str:
-        """One line per channel: the physics terms it took, the learner's held-back gain over them and
-        whether the learner is used."""
-        lines = []
-        for ch, g in self.guard_.items():
-            groups = self.terms_.get(ch, {}).get("groups", [])
-            base = "regression" + "".join(f" + {t}" for t in groups)
-            verdict = "learned" if g["earns_its_place"] else base
-            forced = " (guard off)" if not self.guard and not g["earns_its_place"] else ""
-            gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
-            learner = f"learner's held-back gain {gain:+7.2f} % ± {se:.2f} %"
-            lines.append(f"{ch:<8} {base:<26} {learner}  -> {verdict}{forced}")
-        return "\n".join(lines)
-
     def get_state(self) -> dict[str, Any]:
         """The fitted state, each sensor's learner as plain lists and numbers."""
         state = {k: v for k, v in super().get_state().items() if k != "learners_"}

@@ -268,8 +268,23 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     if rule.mode.startswith("rest"):
         return head + "after it, the rest's mean rate and the training recordings' motion offset"
     if own is None:
-        return head + "the rest reads like no training recording's, so after it their mean"
+        far = _rest_distance(rule, imu, rest)
+        said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
+        return head + f"the rest reads like no training recording's{said}, so after it their mean"
     return head + "the rest reads like some training recordings' rests: after it, their bias"
+
+
+def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
+    """How far a recording's opening rest (its first ``rest`` steps) reads from the nearest training
+    recording's, in standard deviations (the root of :func:`nearest_prior`'s squared distance); 0 where
+    no training recording opened with a rest. A walk's BROAD unit, judged by a EuRoC model, read as far
+    as its bias is from EuRoC's: said, where before only "reads like no training recording's"."""
+    if not len(rule.rest_rates):
+        return 0.0
+    dt = float(np.median(np.diff(imu.t)))
+    still = imu.dtheta_b[:rest] / np.diff(imu.t)[:rest, None]
+    var = _rest_se(still, dt) ** 2 + rule.rest_rates_se**2 + 2.0 * rule.rest_spread**2
+    return float(np.sqrt((((rule.rest_rates - still.mean(axis=0)) ** 2) / var).sum(axis=1).min()))
 
 
 def nearest_prior(
