@@ -508,6 +508,12 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert judged["fitted_on_this_recording"] is True and judged["share_in_fit"] == 1.0
     assert "about 100% of these readings were in the model's fit (a part of" in capsys.readouterr().out
     assert singles["unit/r2"]["share_in_fit"] == 0.0
+    # A part too short for its marks to tell (under 4): neither said fitted nor said unseen (a docs walk
+    # found a 500-row cut of a training recording written "fitted_on_this_recording": false).
+    np.savez(tmp_path / "copy" / "short.npz", **{k: v[2000:2500] for k, v in part.items()})
+    assert main(["evaluate", str(model), str(tmp_path / "copy" / "short.npz"), "--json", str(out)]) == 0
+    judged = json.loads(out.read_text())
+    assert judged["share_in_fit"] is None and judged["fitted_on_this_recording"] is None
     for extra, what in ((["--plot", str(tmp_path / "x.png")], "--plot"), (["--dataset", "unit/r2"], "twice")):
         assert main([*several, *extra]) == 2
         err = capsys.readouterr().err.strip()

@@ -273,13 +273,17 @@ def _in_fit(strategy: Strategy, digest: str, marks: list[str]) -> tuple[bool | N
     """Whether the model was fitted on the readings of ``digest`` (among ``fitted_on_["readings"]``; None
     where the model file does not say: one written before it did), and the share of their ``marks``
     among those of the readings it was fitted on (``fitted_on_["marks"]``; None where the file keeps
-    none or the readings are too short to tell: :func:`sins.io.provenance.shared_share`)."""
+    none or the readings are too short to tell: :func:`sins.io.provenance.shared_share`; the first is then
+    None too, where the readings are not the whole of one: it cannot be told)."""
     from sins.io.provenance import shared_share
 
     fitted = getattr(strategy, "fitted_on_", None) or {}
     said, held = fitted.get("readings"), fitted.get("marks")
     share = shared_share(marks, held) if isinstance(held, list) else None
-    return (digest in said if isinstance(said, list) else None), share
+    whole = digest in said if isinstance(said, list) else None
+    if whole is False and isinstance(held, list) and share is None:
+        whole = None  # too short for its marks to tell whether it is a part of a training recording
+    return whole, share
 
 
 def _fitted(whole: bool | None, share: float | None) -> bool | None:

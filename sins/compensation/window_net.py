@@ -96,7 +96,8 @@ class WindowNet(GyroWindow):
         sizes = [int(h) for h in hidden] if whole else []
         if not 1 <= len(sizes) <= MAX_LAYERS or not all(1 <= h <= MAX_WIDTH for h in sizes):
             raise ValueError(
-                f"hidden must be 1 to {MAX_LAYERS} layers of 1 to {MAX_WIDTH} neurons (whole numbers), "
+                f"mlp_window: hidden must be 1 to {MAX_LAYERS} layers of 1 to {MAX_WIDTH} neurons (whole "
+                "numbers), "
                 f"got {hidden!r}"
             )
         self.hidden = tuple(sizes)

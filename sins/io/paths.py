@@ -282,7 +282,7 @@ def replaceable(path: Path, shown: str, kind: str) -> None:
     }.get(holds, holds)  # fmt: skip
     if kind in ("csv", "toml") and holds in ("text", "JSON"):
         seen = "text sins did not write (a recording, table or scenario of yours?)"
-    elif kind == "image" and holds in ("text", "JSON"):
+    elif kind in ("image", "rrd") and holds in ("text", "JSON"):
         seen = "text sins did not write (a page or notes of yours?)"
     elif holds == "JSON":  # where a report or a model goes
         seen = 'JSON sins did not write (a file of yours? a report of an older sins, without "sins" first?)'
