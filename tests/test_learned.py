@@ -426,3 +426,20 @@ def test_a_candidate_stops_training_where_its_held_back_loss_stops_falling(seed_
             assert all(stopped.cv_scores_[sensor][k] == scores[k] for k in got)
             reached += len(got)
     assert reached < 2 * 4 * len(mlp.CHECKPOINTS)  # some candidate did stop early on this unit
+
+
+def test_a_fit_against_a_trajectory_says_its_guard_too(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    # A learner fitted on one recording beside its trajectory said nothing of its guard (the rig's and the
+    # several recordings' fits did): the same lines and keys now.
+    import numpy_unit_gap as nu
+
+    nu.write(tmp_path / "r.npz", nu.recording(3))
+    fit = tmp_path / "f.json"
+    args = ["fit", str(tmp_path / "r.npz"), "--strategy", "kohonen", "--out", str(tmp_path / "k.json")]
+    assert main([*args, "--json", str(fit)]) == 0
+    out = capsys.readouterr().out
+    doc = json.loads(fit.read_text())
+    used = json.loads((tmp_path / "k.json").read_text())["state"]["used_"]
+    assert doc["learned_on"] == [ch for ch, u in zip(imu.CHANNELS, used, strict=True) if u]
+    assert set(doc["guard"]) == set(imu.CHANNELS) and "chosen on " in out
+    assert "the learner adds nothing: least squares" in out or "the learner corrects " in out

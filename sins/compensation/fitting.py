@@ -84,7 +84,6 @@ def fit_rig(
     from sins.compensation.mlp import MLP
     from sins.compensation.regression import Regression
     from sins.compensation.residual import ResidualStrategy
-    from sins.compensation.window_net import WindowNet
 
     if name == "bias_only":
         raise SinsInputError(
@@ -109,15 +108,9 @@ def fit_rig(
     held = f" (the last {validation:g} of each phase held back)" if validation else ""
     lines.append(f"fitted {strategy.label} on {len(part)} of {len(data)} rows of {where}{held}")
     document: dict[str, Any] = {"strategy": strategy.label, "rows": len(part)}
-    if isinstance(strategy, ResidualStrategy):
-        lines += _learner_lines(
-            strategy, f"chosen on {strategy.cv_folds_} folds of {strategy.blocks_} held-back blocks"
-        )
-        document["learned_on"] = [ch for ch, u in zip(strategy.guard_, strategy.used_, strict=True) if u]
-    elif isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
-        window, found = _window_lines(strategy, "squared error")
-        lines += window
-        document |= found
+    said, found = _guard_report(strategy, "", "squared error")
+    lines += said
+    document |= found
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
@@ -125,6 +118,26 @@ def fit_rig(
         "held_back": validation or 0.0,
     }  # fmt: skip
     return FitOutcome(strategy, lines, document)
+
+
+def _guard_report(strategy: Any, how: str, unit: str) -> tuple[list[str], dict[str, Any]]:
+    """A learned strategy's guard, in lines and as its document (``guard``, ``learned_on``; or
+    ``mlp_window``'s ``window_guard``, its gain in ``unit``), and nothing for the others. ``how``: on what
+    the learner was chosen, with ``{folds}`` and ``{blocks}`` (default: folds of held-back blocks)."""
+    from sins.compensation.residual import ResidualStrategy
+    from sins.compensation.window_net import WindowNet
+
+    if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):
+        how = how or "chosen on {folds} folds of {blocks} held-back blocks"
+        used = [ch for ch, u in zip(strategy.guard_, strategy.used_, strict=True) if u]
+        document = {"guard": {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()},
+                    "learned_on": used}  # fmt: skip
+        return _learner_lines(
+            strategy, how.format(folds=strategy.cv_folds_, blocks=strategy.blocks_)
+        ), document
+    if isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
+        return _window_lines(strategy, unit)
+    return [], {}
 
 
 def _learner_lines(strategy: Any, how: str) -> list[str]:
@@ -274,7 +287,8 @@ def fit_referenced(
     }
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
-    return FitOutcome(fitted.strategy, lines, document)
+    said, found = _guard_report(fitted.strategy, "", "squared error")  # the learners' guard, as elsewhere
+    return FitOutcome(fitted.strategy, lines + said, document | found)
 
 
 def _screen_lines(names: list[str], aside: Sequence[Any], residuals: list[Any]) -> list[str]:
@@ -341,8 +355,6 @@ def fit_several(
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
     that does best on held-back recordings)."""
     from sins.compensation import referenced
-    from sins.compensation.residual import ResidualStrategy
-    from sins.compensation.window_net import WindowNet
 
     clocks = [frame_check.recording_lag(r) for r in recs]
     with _clock_named(list(zip(names, clocks, strict=True))):
@@ -357,15 +369,10 @@ def fit_several(
     lines += _screen_lines(list(names), fitted.set_aside, list(fitted.several.residuals))
     document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]
     strategy = fitted.strategy
-    if isinstance(strategy, ResidualStrategy) and getattr(strategy, "guard_", None):
-        how = f"its learner chosen with each of the {strategy.cv_folds_} recordings held back whole"
-        lines += _learner_lines(strategy, f"{how} ({strategy.blocks_} blocks)")
-        document["guard"] = {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()}
-        document["learned_on"] = [ch for ch, u in zip(strategy.guard_, strategy.used_, strict=True) if u]
-    elif isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
-        window, found = _window_lines(strategy, "deg")
-        lines += window
-        document |= found
+    how = "its learner chosen with each of the {folds} recordings held back whole ({blocks} blocks)"
+    said, found = _guard_report(strategy, how, "deg")
+    lines += said
+    document |= found
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)
