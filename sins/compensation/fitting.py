@@ -389,7 +389,9 @@ def _several_document(
         f"{sum(fit.intervals)} intervals of {fit.interval_s:g} s"
     )
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
-    if fitted.strategy.label == "bias_only":  # its model keeps the biases alone: the rest is not applied
+    from sins.compensation.referenced import BIAS_ONLY
+
+    if fitted.strategy.label == BIAS_ONLY:  # its model keeps the biases alone: the rest is not applied
         table = [c for c in table if c.term == "bias"]
     lines += coefficient_lines(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
     per_hour = np.degrees(1.0) * 3600.0
