@@ -192,7 +192,8 @@ def test_correct_writes_the_form_its_help_names_and_shows_each_step(
     text = " ".join(capsys.readouterr().out.split())
     assert "rates for a rig recording or a rate file" in text
     assert (
-        "increments for an increment file and for a recording read against its reference trajectory" in text
+        "increments for an increment file and for a recording read with a trajectory (its own: a EuRoC"
+        in text
     )
 
 

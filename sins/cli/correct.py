@@ -112,9 +112,9 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--out", type=Path, required=True, metavar="CORRECTED.csv",
         help="the corrected readings in sins's CSV columns, in the form sins reads the recording in: rates "
-        "for a rig recording or a rate file without a trajectory (a CSV, a bag), increments for an "
-        "increment file and for a recording read with its reference trajectory (a EuRoC folder or .npz, "
-        "--dataset FOLDER/NAME, broad_NN, psins_vehicle), which sins holds as increments",
+        "for a rig recording or a rate file read without a trajectory (a CSV, a bag), increments for an "
+        "increment file and for a recording read with a trajectory (its own: a EuRoC folder, an .npz, "
+        "--dataset FOLDER/NAME, broad_NN, psins_vehicle; or --truth), which sins holds as increments",
     )  # fmt: skip
     p.add_argument(
         "--again", action="store_true",
