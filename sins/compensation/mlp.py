@@ -53,13 +53,16 @@ Array = NDArray[np.float64]
 MAX_LAYERS, MAX_WIDTH = 4, 256
 
 
-def check_hidden(hidden: Any, where: str) -> tuple[int, ...]:
-    """``hidden`` as layer sizes, 1 to :data:`MAX_LAYERS` layers of 1 to :data:`MAX_WIDTH` neurons;
-    else ``ValueError`` naming ``where``. What a model file may give, and what :meth:`MLP.fit` takes."""
+def check_hidden(
+    hidden: Any, where: str, layers: int = MAX_LAYERS, width: int = MAX_WIDTH
+) -> tuple[int, ...]:
+    """``hidden`` as layer sizes, 1 to ``layers`` layers of 1 to ``width`` neurons (by default
+    :data:`MAX_LAYERS`, :data:`MAX_WIDTH`; ``mlp_window`` bounds its own); else ``ValueError`` naming
+    ``where``. What a model file may give, and what :meth:`MLP.fit` takes."""
     sizes = [_whole(h) for h in hidden] if isinstance(hidden, list | tuple) else []
-    if not 1 <= len(sizes) <= MAX_LAYERS or not all(h is not None and 1 <= h <= MAX_WIDTH for h in sizes):
+    if not 1 <= len(sizes) <= layers or not all(h is not None and 1 <= h <= width for h in sizes):
         raise ValueError(
-            f"{where} must be 1 to {MAX_LAYERS} layer sizes, each a whole number from 1 to {MAX_WIDTH}; "
+            f"{where} must be 1 to {layers} layer sizes, each a whole number from 1 to {width}; "
             f"got {str(hidden)[:60]}"
         )
     return tuple(h for h in sizes if h is not None)

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, checked_array, state_array
+from sins.compensation.mlp import check_hidden
 from sins.compensation.regression import Regression
 from sins.compensation.window import GyroWindow
 from sins.core.series import CalibrationData, ImuIncrements, ReferencedRecording
@@ -90,17 +91,8 @@ class WindowNet(GyroWindow):
         g_sensitivity: bool = False,
     ) -> None:
         super().__init__(g_sensitivity=g_sensitivity)
-        whole = isinstance(hidden, list | tuple) and all(
-            isinstance(h, int | np.integer) and not isinstance(h, bool) for h in hidden
-        )  # a layer of 1.5 neurons is refused, not made one of 1
-        sizes = [int(h) for h in hidden] if whole else []
-        if not 1 <= len(sizes) <= MAX_LAYERS or not all(1 <= h <= MAX_WIDTH for h in sizes):
-            raise ValueError(
-                f"mlp_window: hidden must be 1 to {MAX_LAYERS} layers of 1 to {MAX_WIDTH} neurons (whole "
-                "numbers), "
-                f"got {hidden!r}"
-            )
-        self.hidden = tuple(sizes)
+        # A layer of 1.5 neurons is refused, not made one of 1 (mlp's check, with mlp_window's bounds).
+        self.hidden = check_hidden(hidden, "mlp_window: hidden", MAX_LAYERS, MAX_WIDTH)
         # Kept as given (scikit-learn's rule); check_params holds them to param_ranges.
         self.weight_decay = weight_decay
         self.steps = steps
