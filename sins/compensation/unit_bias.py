@@ -281,10 +281,20 @@ def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
     as its bias is from EuRoC's: said, where before only "reads like no training recording's"."""
     if not len(rule.rest_rates):
         return 0.0
-    dt = float(np.median(np.diff(imu.t)))
     still = imu.dtheta_b[:rest] / np.diff(imu.t)[:rest, None]
-    var = _rest_se(still, dt) ** 2 + rule.rest_rates_se**2 + 2.0 * rule.rest_spread**2
-    return float(np.sqrt((((rule.rest_rates - still.mean(axis=0)) ** 2) / var).sum(axis=1).min()))
+    d2 = _rest_d2(rule, still.mean(axis=0), _rest_se(still, float(np.median(np.diff(imu.t)))))
+    return float(np.sqrt(d2.min()))
+
+
+def _rest_d2(
+    rule: BiasRule, rest_rate: Array, rest_se: Array, keep: NDArray[np.bool_] | None = None
+) -> Array:
+    """Each (kept) training recording's rest's squared distance from a rest of mean rate ``rest_rate``
+    (± ``rest_se``), summed over the axes, each axis's difference in standard deviations: two rests of
+    one day differ by their noise and by each one's own bias at rest less in motion."""
+    keep = np.ones(len(rule.rest_rates), dtype=bool) if keep is None else keep
+    var = rest_se**2 + rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
+    return np.asarray((((rule.rest_rates[keep] - rest_rate) ** 2) / var).sum(axis=1), dtype=float)
 
 
 def nearest_prior(
@@ -301,9 +311,7 @@ def nearest_prior(
         keep[leave_out] = False
     if not keep.any():
         return None
-    # Two rests of one day differ by their noise and by each one's own bias at rest less in motion.
-    var = rest_se**2 + rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
-    d2 = (((rule.rest_rates[keep] - rest_rate) ** 2) / var).sum(axis=1)
+    d2 = _rest_d2(rule, rest_rate, rest_se, keep)
     if d2.min() > NEAREST_CHI2:
         return None
     w = np.exp(-0.5 * (d2 - d2.min()))
