@@ -561,7 +561,7 @@ class DriveErrors:
     velocity_rms_mps: tuple[float, float, float]
     velocity_final_mps: tuple[float, float, float]
     horizontal_final_m: float
-    attitude_angle_rms_deg: float = 0.0
+    attitude_angle_rms_deg: float
 
     def to_dict(self) -> dict[str, Any]:
         """The figures as a JSON object."""
