@@ -145,8 +145,6 @@ def check_distinct(paths: list[str], datasets: list[str], command: str) -> None:
     guard holding recordings back would judge the fit on a copy of a recording it was fitted on), before
     any is read: by name, and by the file itself (device and inode), so that ``./r.npz`` beside ``r.npz``,
     a link to it, or a data root's ``FOLDER/NAME`` beside its path is the same recording too."""
-    import os
-
     from sins.io.datasets.npz_folders import npz_path
 
     seen: set[str] = set()
@@ -184,8 +182,10 @@ def _origin(text: str) -> tuple[float, float, float]:
         lat, lon, h = (float(p) for p in parts)
     except ValueError:
         raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
-    if not (abs(lat) <= 90.0 and abs(lon) <= 360.0 and abs(h) <= MAX_HEIGHT_M):
-        raise SinsInputError(f"--origin {text!r}: latitude within ±90°, longitude ±360°, height ±1e5 m")
+    from sins.scenario import MAX_LAT_DEG  # a scenario's bound: the navigation is singular at a pole
+
+    if not (abs(lat) <= MAX_LAT_DEG and abs(lon) <= 360.0 and abs(h) <= MAX_HEIGHT_M):
+        raise SinsInputError(f"--origin {text!r}: latitude ±{MAX_LAT_DEG:g}°, longitude ±360°, height ±1e5 m")
     return math.radians(lat), math.radians(lon), h
 
 

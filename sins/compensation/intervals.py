@@ -79,8 +79,8 @@ def correct_increments(
 def shift_increments(
     imu: ImuIncrements, tau_s: float, *, gyro: bool = True, accel: bool = True
 ) -> ImuIncrements:
-    """The increments the unit would have given ``tau_s`` later: each step's integral over
-    ``(t[k-1] + τ, t[k] + τ]``, the running integral interpolated linearly between boundaries (exact
+    """The increments the unit would have given ``tau_s`` later: row ``k``'s integral over
+    ``(t[k] + τ, t[k+1] + τ]``, the running integral interpolated linearly between boundaries (exact
     for a rate constant over each step; the last steps extrapolate at the last step's rate)."""
     if tau_s == 0.0:
         return imu

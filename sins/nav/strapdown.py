@@ -1,6 +1,7 @@
 """Quaternion strapdown mechanisation in NED on WGS84, compiled with numba.
 
-One step takes the increments of one IMU interval ``(t[k-1], t[k]]``:
+One step takes one row of increments, ``Δθ_k, Δv_k`` (row ``k``'s integrals over ``(t[k], t[k+1]]``,
+the convention stated in :mod:`sins`), with the row before it, ``Δθ_{k-1}, Δv_{k-1}``:
 
 * attitude: body rotation vector ``φ = Δθ_k + (1/12) Δθ_{k-1} × Δθ_k`` (two-sample
   coning correction), navigation-frame rotation ``ζ = (omega_ie_n + omega_en_n) Δt``
