@@ -18,6 +18,15 @@ class MissingInputError(SinsInputError):
         self.needs = needs
 
 
+class LateStartError(SinsInputError):
+    """Increments whose first row does not end after the start they were given (``first_end_s``, s):
+    the reader that took the start from a reference names that reference instead."""
+
+    def __init__(self, message: str, first_end_s: float) -> None:
+        super().__init__(message)
+        self.first_end_s = first_end_s
+
+
 def naming(where: str, exc: Exception) -> SinsInputError:
     """``exc``'s message as a :class:`SinsInputError` that names ``where``: prefixed with it, unless it
     opens with it already (a strategy's own message may name the data)."""
@@ -26,6 +35,7 @@ def naming(where: str, exc: Exception) -> SinsInputError:
 
 
 __all__ = [
+    "LateStartError",
     "MissingInputError",
     "SinsInputError",
     "naming",

@@ -110,6 +110,16 @@ def short_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     return {"dir": d, "scenario": scenario, "imu": imu, "truth": truth}
 
 
+def test_a_truth_file_says_it_is_the_truth(short_files: dict[str, Path]) -> None:
+    # The truth file's header had said "ideal IMU of scenario ..." and "sensor: ideal IMU (simulated)",
+    # the readings' words: a truth file is no sensor's.
+    head = [x for x in short_files["truth"].read_text().splitlines() if x.startswith("#")]
+    assert "truth of scenario short" in head[0] and "beside imu.csv's readings" in head[0]
+    assert not any(x.startswith("# sensor:") for x in head)
+    imu_head = [x for x in short_files["imu"].read_text().splitlines() if x.startswith("#")]
+    assert "# sensor: ideal IMU (simulated)" in imu_head
+
+
 @pytest.fixture(scope="module")
 def round_trips(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, float]]:
     """Simulate the one-minute scenario in both IMU forms and integrate each back against the truth."""
@@ -310,7 +320,7 @@ def _bad_cases(f: dict[str, Path], tmp: Path) -> dict[str, tuple[list[str], str]
         ),
         "imu-starts-at-truth-start": (
             ["integrate", str(_shifted(imu, tmp)), "--truth", str(truth)],
-            "not after",
+            "not before",
         ),
     }
 
@@ -591,6 +601,31 @@ def test_an_origin_at_a_pole_is_refused(capsys: pytest.CaptureFixture[str]) -> N
     assert "--origin '90,0,0': latitude ±89.9°" in capsys.readouterr().err
     assert main(["integrate", "r.npz", "--origin=-89.95,0,0", "--attitude", "0,0,0"]) == 2
     assert "latitude ±89.9°" in capsys.readouterr().err
+
+
+def test_an_origin_without_an_attitude_asks_for_one(
+    short_files: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A walk's `sins integrate r.csv --origin 45,0,0` read "origin: does not apply to r.csv, a CSV file",
+    # where --origin does apply to it: what was missing is the start's attitude.
+    assert main(["integrate", str(short_files["imu"]), "--origin", "45,0,0"]) == 2
+    err = capsys.readouterr().err
+    assert "--origin starts" in err and "give --attitude R,P,Y or --align SECONDS with it" in err
+
+
+def test_a_truth_that_begins_late_is_named(
+    short_files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A truth file cut of its first rows had the IMU file blamed ("imu.csv:4: column 't': first
+    # increment ends at 0.01 s, not after the start time 0.5 s"): the truth is what begins too late.
+    lines = short_files["truth"].read_text().splitlines()
+    head = sum(1 for x in lines if x.startswith("#")) + 1  # the comments and the column names
+    late = tmp_path / "late.csv"
+    late.write_text("\n".join(lines[:head] + lines[head + 50 :]) + "\n")
+    t0 = float(lines[head + 50].split(",")[0])
+    assert main(["integrate", str(short_files["imu"]), "--truth", str(late)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"sins: error: {late}: begins at {t0:g} s, not before ") and err.count("\n") == 1
 
 
 def test_an_option_no_one_reads_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -135,7 +135,10 @@ def add(sub: Subparsers) -> None:
         "suite", metavar="SUITE.toml",
         help="a quality suite, or a campaign file or preset (its distributions gated: sins.campaign.gate)",
     )  # fmt: skip
-    p.add_argument("--baseline", type=Path, required=True, metavar="BASELINE.json")
+    p.add_argument(
+        "--baseline", type=Path, required=True, metavar="BASELINE.json",
+        help="the figures the suite is held to (written by --update-baseline)",
+    )  # fmt: skip
     p.add_argument(
         "--update-baseline", action="store_true", help="write the measured metrics as the baseline"
     )

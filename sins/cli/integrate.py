@@ -54,6 +54,9 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
     for flag, given in (("--heading", args.heading), ("--grade", args.grade)):
         if given is not None:
             raise SinsInputError(f"{flag} goes with --align SECONDS")
+    if args.origin is not None and _free_options(args)["origin"] is None:  # a start, not a frame's place
+        raise SinsInputError(f"--origin starts {args.imu} without a reference: give --attitude R,P,Y or "
+                             "--align SECONDS with it")  # fmt: skip
     with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)
         try:
             read = read_recording(args, args.imu, args.dataset, args.truth, row_progress(bar))
@@ -109,6 +112,7 @@ def _write_solution(args: argparse.Namespace, sol: NavSeries, comment: str) -> N
 def _integrate_free(args: argparse.Namespace) -> int:
     """No reference: from ``--origin`` in ``--attitude``, or aligned on the opening rest (``--align``)."""
     from sins import io
+    from sins.cli.bias import angles
     from sins.io.inspection import gaps_note
     from sins.runs import free_report, replay
 
@@ -125,7 +129,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
         print(f"sins: note: {where}: {note}", file=sys.stderr)
     origin = free_report.start_position(rec, recording_options(args)["origin"])
     imu = free_report.increments(rec)
-    attitude = None if args.attitude is None else _angles(args.attitude, "--attitude")
+    attitude = None if args.attitude is None else angles(args.attitude, "--attitude")
     heading = None if args.heading is None else math.radians(args.heading)
     with progress_bar("aligning" if args.align else "integrating", "") as bar:
         levels = free_report.grade_levels(args.grade)
@@ -173,12 +177,6 @@ def _free_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.imu is not None and recording_kind(Path(args.imu)) in ("sins csv",):
         options["origin"] = None
     return options
-
-
-def _angles(text: str, flag: str) -> tuple[float, float, float]:
-    from sins.cli.bias import angles
-
-    return angles(text, flag)
 
 
 def add(sub: Subparsers) -> None:

@@ -86,8 +86,8 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     :func:`recording_options` on."""
     g = p.add_argument_group(
         "recording formats",
-        "a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file or a "
-        "EuRoC/TUM-VI folder (docs/guide/formats.md)",
+        "a sins CSV, a CSV with its own columns, a ROS 1 bag, a ROS 2 bag folder, an MCAP file, a "
+        "EuRoC/TUM-VI folder or an .npz of t_s, gyro_rad_s, accel_m_s2 (docs/guide/formats.md)",
     )
     g.add_argument("--topic", metavar="TOPIC", help="a bag's sensor_msgs/Imu topic, where it has several")
     g.add_argument(

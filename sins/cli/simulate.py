@@ -33,12 +33,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
     model = "" if sim.model is None else f", IMU file {sim.model}"
     note = f"sins {__version__}: {unit} of scenario {sc.name} ({path}{model})"
-    note += f"\nsensor: {simulated_unit(sim.model)}"
+    truth_note = f"sins {__version__}: truth of scenario {sc.name} ({path}), beside {args.imu.name}'s readings"
+    note += f"\nsensor: {simulated_unit(sim.model)}"  # the readings', not the truth's
     extra = None if sim.temp is None else {"temp": sim.temp}
     with progress_bar(f"writing {args.imu}", "row") as bar:
         io.write_imu(args.imu, sim.readings, extra, comment=note, progress=row_progress(bar))
     with progress_bar(f"writing {args.truth}", "row") as bar:
-        io.write_truth(args.truth, sim.truth, comment=note, progress=row_progress(bar))
+        io.write_truth(args.truth, sim.truth, comment=truth_note, progress=row_progress(bar))
     print(
         f"wrote {args.imu} ({args.form} form, {len(sim.readings)} rows, {unit}) and {args.truth} "
         f"({len(sim.truth)} rows)"

@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.series import ImuIncrements, ImuRates, NavSeries
-from sins.errors import SinsInputError
+from sins.errors import LateStartError, SinsInputError
 
 # These lived here before the tables, atomic writes and JSON files had modules of their own.
 from sins.io.atomic import atomic_path as atomic_path
@@ -190,9 +190,10 @@ def increments_from_table(table: Table, t_start: float) -> ImuIncrements:
     d = table.data[:, idx]
     if not t_start < d[0, 0]:
         line = line_of_row(table.path, table.first_data_line - 1, 0)
-        raise SinsInputError(
+        raise LateStartError(
             f"{table.path}:{line}: column 't': first increment ends at {format_number(d[0, 0])} s, "
-            f"not after the start time {format_number(t_start)} s"
+            f"not after the start time {format_number(t_start)} s",
+            float(d[0, 0]),
         )
     check_readings(table, INCREMENT_COLUMNS[1:], np.diff(np.concatenate([[t_start], d[:, 0]])))
     return ImuIncrements(

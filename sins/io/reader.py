@@ -17,12 +17,13 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from sins.core.series import NavSeries
-from sins.errors import SinsInputError
+from sins.errors import LateStartError, SinsInputError
 from sins.io import rig
 from sins.io.datasets import _read_dataset
 from sins.io.datasets.npz_folders import is_folder_name
 from sins.io.formats import read_truth
 from sins.io.recording import Recording, _read_path, _rig_recording
+from sins.io.tables import format_number
 
 
 def read(
@@ -109,10 +110,17 @@ def read(
             rec = dataclasses.replace(rec, stated_rate_hz=float(rate_hz), stated_by="the given rate")
         return rec
     reference = truth if isinstance(truth, NavSeries) or truth is None else read_truth(truth)
-    if t_start is None and reference is not None:
-        t_start = float(reference.t[0])
-    rec = _read_path(path, topic, columns, units, frame=frame, rate_hz=rate_hz, truth_topic=truth_topic,
-                     origin=origin, t_start=t_start, progress=progress)  # fmt: skip
+    try:
+        rec = _read_path(path, topic, columns, units, frame=frame, rate_hz=rate_hz, truth_topic=truth_topic,
+                         origin=origin, t_start=_start(t_start, reference), progress=progress)  # fmt: skip
+    except LateStartError as exc:
+        if t_start is not None or reference is None:
+            raise
+        named = "the truth" if isinstance(truth, NavSeries) else str(truth)
+        raise SinsInputError(  # the reference is what begins too late, not the readings
+            f"{named}: begins at {format_number(reference.t[0])} s, not before {path}'s first "
+            f"increment ends ({format_number(exc.first_end_s)} s): an increment needs its interval's start"
+        ) from None
     if reference is None:
         return rec
     # A truth file is geodetic: its north and latitude are known, whatever the recording's own frame.
@@ -120,6 +128,11 @@ def read(
     return dataclasses.replace(
         rec, truth=reference, truth_from=given_from, heading_known=True, latitude_known=True
     )
+
+
+def _start(t_start: float | None, reference: NavSeries | None) -> float | None:
+    """Where the first increment starts: as given, else the reference's first time (where one is)."""
+    return float(reference.t[0]) if t_start is None and reference is not None else t_start
 
 
 __all__ = [
