@@ -114,7 +114,7 @@ def test_a_truth_file_says_it_is_the_truth(short_files: dict[str, Path]) -> None
     # The truth file's header had said "ideal IMU of scenario ..." and "sensor: ideal IMU (simulated)",
     # the readings' words: a truth file is no sensor's.
     head = [x for x in short_files["truth"].read_text().splitlines() if x.startswith("#")]
-    assert "truth of scenario short" in head[0] and "beside imu.csv's readings" in head[0]
+    assert "truth of scenario short" in head[0] and head[0].endswith("beside imu.csv's")
     assert not any(x.startswith("# sensor:") for x in head)
     imu_head = [x for x in short_files["imu"].read_text().splitlines() if x.startswith("#")]
     assert "# sensor: ideal IMU (simulated)" in imu_head

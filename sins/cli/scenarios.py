@@ -18,7 +18,8 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
         marker = " (default)" if name == pipeline.DEFAULT_SCENARIO else ""
         print(f"{name:<{width}}  {sc.description}{marker}")
     print(f"rig procedures (sins calibrate RIG): {', '.join(scenario.presets('rig'))}")
-    print(f"IMU models (run and calibrate --imu, simulate and gap --model): {', '.join(scenario.presets('imu'))}")
+    imu_models = ", ".join(scenario.presets("imu"))
+    print(f"IMU models (run and calibrate --imu, simulate and gap --model): {imu_models}")
     print(f"campaigns (sins campaign NAME): {', '.join(scenario.presets('campaign'))}")
     return 0
 

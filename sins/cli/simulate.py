@@ -33,7 +33,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     unit = "ideal IMU" if sim.model is None else f"IMU {sim.model.stem} (power-on seed {sim.seed})"
     model = "" if sim.model is None else f", IMU file {sim.model}"
     note = f"sins {__version__}: {unit} of scenario {sc.name} ({path}{model})"
-    truth_note = f"sins {__version__}: truth of scenario {sc.name} ({path}), beside {args.imu.name}'s readings"
+    truth_note = f"sins {__version__}: truth of scenario {sc.name} ({path}), beside {args.imu.name}'s"
     note += f"\nsensor: {simulated_unit(sim.model)}"  # the readings', not the truth's
     extra = None if sim.temp is None else {"temp": sim.temp}
     with progress_bar(f"writing {args.imu}", "row") as bar:
