@@ -654,6 +654,62 @@ def test_sigterm_while_writing_leaves_no_temporary_file(
     assert list(out.parent.iterdir()) == []
 
 
+SWALLOWING_CHILD = """
+import os, signal, sys, time
+import sins.cli.correct as correct
+import sins.core.deferred as deferred
+
+how = sys.argv[1]
+
+def swallow(bar):  # a library's callback that swallows the Ctrl-C raised in it (numba's cache notice)
+    def progress(done, total):
+        if how in ("go on", "fail"):
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)
+            except KeyboardInterrupt:
+                pass
+            if how == "fail":
+                raise RuntimeError("no compiled object yet")
+    return progress
+
+rename = deferred._rename
+
+def late(pending):  # a Ctrl-C while the outputs land
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.2)
+    rename(pending)
+
+correct.row_progress = swallow
+deferred._rename = late if how == "landing" else rename
+from sins.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.parametrize("how", ["go on", "fail", "landing"])
+def test_a_swallowed_interrupt_still_ends_the_command(files: Path, tmp_path: Path, how: str) -> None:
+    """A Ctrl-C while numba's compilation cache called back into Python was swallowed there: the command
+    went on and wrote its outputs (exit 0), or numba failed after it with a traceback (exit 1). A signal
+    seen now ends the command as interrupted (130, one line, nothing written), however it was swallowed;
+    one that comes while the outputs land, after the work, is too late to undo them and is held off."""
+    model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
+    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    out = tmp_path / "out" / "c.csv"
+    out.parent.mkdir()
+    child = subprocess.run(
+        [sys.executable, "-c", SWALLOWING_CHILD, how, "correct", str(model), str(rec), "--out", str(out)],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert "Traceback" not in child.stderr, child.stderr
+    if how == "landing":
+        assert child.returncode == 0 and out.exists(), child.stderr
+        assert "interrupted" not in child.stderr
+    else:
+        assert child.returncode == 130 and "sins: interrupted" in child.stderr, child.stderr
+        assert list(out.parent.iterdir()) == []
+
+
 # --------------------------------------------------------------------------- bags and messages
 
 

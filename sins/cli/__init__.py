@@ -13,8 +13,7 @@ import os
 import re
 import signal
 import sys
-import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from sins import __version__
@@ -37,6 +36,7 @@ from sins.cli import (
     strategies,
 )
 from sins.cli.common import Subparsers
+from sins.cli.signals import Seen, Terminated, signals_as_exceptions
 from sins.errors import MissingInputError, SinsInputError
 
 #: Every subcommand, in the order ``sins --help`` lists them.
@@ -74,41 +74,6 @@ def build_parser() -> argparse.ArgumentParser:
     for add in SUBCOMMANDS:
         add(sub)
     return parser
-
-
-class Terminated(BaseException):
-    """SIGTERM or SIGHUP arrived (a BaseException, as KeyboardInterrupt is: no ``except Exception``
-    swallows it, and every ``finally`` runs, so a write in progress removes its temporary file);
-    ``signum`` the signal's number."""
-
-    def __init__(self, signum: int = signal.SIGTERM) -> None:
-        super().__init__(signum)
-        self.signum = int(signum)
-
-
-def _terminate(signum: int, frame: object) -> None:
-    raise Terminated(signum)
-
-
-#: The signals that end a command as SIGTERM does: SIGHUP too (a closed terminal, a dropped ssh session
-#: had ended it at once, its temporary files of hundreds of MB left behind and nothing said).
-_ENDING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
-@contextlib.contextmanager
-def terminated_as_exception() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGHUP (:data:`_ENDING`) raise :class:`Terminated` in the main
-    thread (as Ctrl-C raises KeyboardInterrupt) instead of ending the process at once with its files half
-    written; the handlers before are restored after. Elsewhere than the main thread, nothing changes."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = {s: signal.signal(s, _terminate) for s in _ENDING}
-    try:
-        yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
 
 
 def _together(command: str, discarded: list[Path]) -> contextlib.AbstractContextManager[None]:
@@ -201,9 +166,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     args = parse(argv)
     discarded: list[Path] = []
+    seen: Seen | None = None
     try:
-        with terminated_as_exception(), _together(args.command, discarded):
-            return int(args.func(args))
+        # argv None: this process is the command (its console script), held off signals after it
+        with signals_as_exceptions(process=argv is None) as seen, _together(args.command, discarded):
+            status = int(args.func(args))
+            seen.landing()  # its outputs land now, whatever signal comes (sins.cli.signals)
+            return status
     except MissingInputError as exc:
         flag = _FLAG_FOR.get(exc.needs)
         print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)
@@ -220,15 +189,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("sins: interrupted", file=sys.stderr)
-        return 130
+        return _ended(signal.SIGINT)
     except Terminated as exc:
-        print("sins: hung up" if exc.signum != signal.SIGTERM else "sins: terminated", file=sys.stderr)
-        return 128 + exc.signum
+        return _ended(exc.signum)
+    except Exception:
+        if seen is None or not seen.signums:
+            raise
+        return _ended(seen.signums[0])  # a library swallowed the signal, then failed for want of it
     finally:
         if discarded:
             kept = ", ".join(str(p) for p in discarded)
             print(f"sins: none of its outputs written ({kept}: not replaced)", file=sys.stderr)
 
 
-__all__ = ["SUBCOMMANDS", "Terminated", "build_parser", "main", "parse", "terminated_as_exception"]
+def _ended(signum: int) -> int:
+    """Say that a signal ended the command; its exit status, 128 + the signal's number."""
+    said = {int(signal.SIGINT): "interrupted", int(signal.SIGTERM): "terminated"}.get(signum, "hung up")
+    print(f"sins: {said}", file=sys.stderr)
+    return 128 + int(signum)
+
+
+__all__ = ["SUBCOMMANDS", "build_parser", "main", "parse"]

@@ -1,0 +1,90 @@
+"""How a command ends on a signal: Ctrl-C (SIGINT), SIGTERM and SIGHUP end it as an exception in the main
+thread, every ``finally`` run (a write in progress removes its temporary file), and never after its
+outputs have begun to land.
+
+Two things can hide a signal from the command's own code. A library's callback into Python swallows the
+exception raised in it: numba's compilation cache notifies through a ctypes callback, and a Ctrl-C in the
+instant it ran was printed as "Exception ignored" and then either ignored (the command went on, wrote its
+outputs and exited 0) or followed by numba's own ``RuntimeError`` and a traceback. So every signal is
+also recorded (:class:`Seen`): a command that returns, or fails, after one was seen ends as interrupted.
+And once the work is done its outputs land (:mod:`sins.core.deferred`): an interrupt in those renames had
+replaced some files and not others, or all of them and then exited 130 without a word. From
+:meth:`Seen.landing` on, the signals are held off: the command has done what it said.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+
+
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP arrived (a BaseException, as KeyboardInterrupt is: no ``except Exception``
+    swallows it, and every ``finally`` runs, so a write in progress removes its temporary file);
+    ``signum`` the signal's number."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+#: The signals that end a command as SIGTERM does: SIGHUP too (a closed terminal, a dropped ssh session
+#: had ended it at once, its temporary files of hundreds of MB left behind and nothing said).
+ENDING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+class Seen:
+    """The signals a command received (:func:`signals_as_exceptions`), in order."""
+
+    def __init__(self) -> None:
+        self.signums: list[int] = []
+        self._landing = False
+
+    def handle(self, signum: int, frame: object) -> None:
+        """The handler: record the signal, and raise it as the command's end (unless landing)."""
+        if self._landing:
+            return
+        self.signums.append(signum)
+        raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
+
+    def raise_if_any(self) -> None:
+        """Raise the first signal seen, where something between its handler and here swallowed it."""
+        if self.signums:
+            first = self.signums[0]
+            raise KeyboardInterrupt if first == signal.SIGINT else Terminated(first)
+
+    def landing(self) -> None:
+        """The work is done and its outputs land now: a signal from here on is too late to undo them,
+        and is ignored (the raise of one seen and swallowed comes first)."""
+        self.raise_if_any()
+        self._landing = True
+
+
+@contextlib.contextmanager
+def signals_as_exceptions(*, process: bool = False) -> Iterator[Seen]:
+    """Within the block, SIGINT raises KeyboardInterrupt and SIGTERM and SIGHUP (:data:`ENDING`) raise
+    :class:`Terminated` in the main thread, instead of ending the process at once with its files half
+    written, and each is recorded in the :class:`Seen` yielded; the handlers before are restored after,
+    unless the block is the ``process``'s whole command: then every signal is held off after it, until
+    the process exits (a Ctrl-C there had ended a command that had written its outputs with 130 and no
+    word). Elsewhere than the main thread, nothing changes (and nothing is recorded)."""
+    seen = Seen()
+    if threading.current_thread() is not threading.main_thread():
+        yield seen
+        return
+    previous = {s: signal.signal(s, seen.handle) for s in (signal.SIGINT, *ENDING)}
+    try:
+        yield seen
+    finally:
+        if process:  # ignored, not handled: the interpreter's exit puts back the default of a handled one
+            seen._landing = True
+            for s in previous:
+                signal.signal(s, signal.SIG_IGN)
+        else:
+            for s, handler in previous.items():
+                signal.signal(s, handler)
+
+
+__all__ = ["ENDING", "Seen", "Terminated", "signals_as_exceptions"]
