@@ -405,6 +405,11 @@ def characterise(
                             res.warnings)  # fmt: skip
 
 
+#: What an unresolved term without a bound is said to be: its fit beside the resolved terms fails (a
+#: Gauss–Markov bias whose correlation time nothing in the curve holds), so the data give it no bound.
+UNBOUNDED = "no bound: no fit holds it beside the resolved terms"
+
+
 def display(sensor: str, name: str, value: float | None) -> str:
     """A term's value in its display unit, four significant digits ('-' for None)."""
     if value is None or not math.isfinite(value):
@@ -433,6 +438,7 @@ __all__ = [
     "SI_UNITS",
     "SLOW_STEP_S",
     "STEP_TOLERANCE",
+    "UNBOUNDED",
     "ChannelResult",
     "Characterisation",
     "Residual",

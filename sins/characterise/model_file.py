@@ -43,7 +43,7 @@ import math
 import os
 from pathlib import Path
 
-from sins.characterise.analysis import DISPLAY, Characterisation, display, duration
+from sins.characterise.analysis import DISPLAY, UNBOUNDED, Characterisation, display, duration
 from sins.characterise.noise_terms import FLICKER_FACTOR, GM_PEAK, GM_PEAK_X
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG, MG, UG, ImuModel, spec
@@ -202,6 +202,8 @@ def model_toml(result: Characterisation) -> str:
             if not t.resolved and t.upper is not None:
                 size, symbol = DISPLAY[r.sensor][term]
                 lines.append(f"# {ch}: {term} not resolved, at most {t.upper / size:.4g} {symbol}")
+            elif not t.resolved:
+                lines.append(f"# {ch}: {term} not resolved, {UNBOUNDED}")
     for name, params in effect_tables(result):
         lines += ["", "[[effect]]", f'name = "{name}"']
         lines += [f"{key} = {_axes(values)}" for key, values in params.items()]

@@ -139,10 +139,12 @@ def _format_characterisation(result: Characterisation) -> str:
 
 def _cells(r: ChannelResult, name: str) -> list[str]:
     """One term's value, unit and support (or what it would need) in the table."""
-    from sins.characterise.analysis import DISPLAY, display, duration
+    from sins.characterise.analysis import DISPLAY, UNBOUNDED, display, duration
 
     t = r.fit.terms[name]
     unit = DISPLAY[r.sensor][name][1]
+    if not t.resolved and t.upper is None:
+        return ["not resolved", unit, UNBOUNDED]
     if not t.resolved:
         support = ""
         if t.needs_length_s:
