@@ -708,6 +708,8 @@ def test_a_term_the_data_give_no_bound_is_said_so(tmp_path, capsys):
     assert cli.main(["characterise", "--dataset", "euroc/MH_01_easy", "--out", str(out)]) == 0
     table = capsys.readouterr().out
     assert "(< -)" not in table
+    # what a slow term needs is a longer stretch, not a longer recording (this one is 182 s; its rests 15 s)
+    assert "needs a stretch of ≥ 42 s" in table and "of recording" not in table
     unbounded = [line.split()[0] for line in table.splitlines() if line.endswith(analysis.UNBOUNDED)]
     assert unbounded, table
     written = out.read_text()

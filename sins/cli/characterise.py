@@ -148,7 +148,7 @@ def _cells(r: ChannelResult, name: str) -> list[str]:
     if not t.resolved:
         support = ""
         if t.needs_length_s:
-            support = f"needs ≥ {duration(t.needs_length_s)} of recording"
+            support = f"needs a stretch of ≥ {duration(t.needs_length_s)}"  # the longest, not the whole
         elif t.needs_rate_hz:
             support = f"needs sampling at ≥ {t.needs_rate_hz:.3g} Hz"
         return [f"not resolved (< {display(r.sensor, name, t.upper)})", unit, support]
