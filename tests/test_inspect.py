@@ -229,6 +229,28 @@ def test_clipping_in_increments_is_found_as_rates(tmp_path: Path) -> None:
     assert found == {("gyro_z", 0.15), ("gyro_z", -0.15)}
 
 
+def test_a_clip_is_at_the_channels_largest_size_either_way() -> None:
+    """A sine of 2 rad/s clipped at ±1.5 (numpy) sticks at both levels: found. The same sine held at
+    its own minimum -1.2 for three readings, reaching +2.0 the other way, is equal readings in motion, not
+    a range (a range is symmetric about zero to within the bias, :data:`~sins.io.frame_check.CLIP_ASYMMETRY`):
+    EuRoC's MH_02 gyro y, three readings at -1.248 rad/s where it reads +1.678, was called the unit
+    saturating. Its mirror, and a one-sided clip at +1.5 whose other side reaches -1.4 (within the bias's
+    asymmetry, 0.2), are judged alike."""
+    from sins.io.frame_check import stuck
+
+    s = 2.0 * np.sin(np.linspace(0.0, 6.0 * np.pi, 3000))
+    clipped = np.clip(s, -1.5, 1.5)
+    for level in (1.5, -1.5):
+        found = stuck(clipped, level)
+        assert found is not None and found[0] == int(np.sum(clipped == level)), level
+    held = np.where(s < -1.2, -1.2 + 0.01 * (s + 1.2), s)  # below -1.2 only the run set next
+    held[1000:1003] = held.min() - 0.01
+    assert int(np.sum(held == held.min())) == 3 and held.max() == pytest.approx(2.0, abs=1e-4)
+    assert stuck(held, float(held.min())) is None and stuck(-held, float(-held.min())) is None
+    one_sided = np.clip(np.where(s < 0.0, 0.7 * s, s), None, 1.5)  # reaches -1.4 the other way
+    assert stuck(one_sided, 1.5) is not None
+
+
 def test_a_stated_rate_is_checked_against_the_stamps(tmp_path: Path) -> None:
     d = static(seconds=30.0, rate=98.0)
     path = write(tmp_path / "rec.csv", d["t"], d["w"], d["f"])

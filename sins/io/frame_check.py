@@ -358,6 +358,12 @@ def clipped_channels(imu: ImuRates | ImuIncrements) -> tuple[Clipping, ...]:
 
 #: Readings within this share of a channel's extreme are at it (an increment's rate, its step's rounding).
 STUCK_RTOL = 1e-9
+#: A clipped level's size is at least this share less than the channel's largest size. A sensor's range
+#: is symmetric about zero, ±A; a bias ``b`` taken out after the converter moves the two clips to
+#: ``±A - b``, whose sizes differ by ``2|b|``. Allowing ``|b|`` up to 11 % of ``A`` (a consumer MEMS's
+#: worst: MPU-6050's ±20 °/s zero-rate output at ±250 °/s is 8 %, its ±80 mg zero-g offset at ±2 g
+#: 4 %), ``A - |b| >= (1 - 0.2)(A + |b|)``.
+CLIP_ASYMMETRY = 0.2
 
 
 def stuck(v: Array, level: float, rtol: float = 0.0) -> tuple[int, int, int] | None:
@@ -365,9 +371,17 @@ def stuck(v: Array, level: float, rtol: float = 0.0) -> tuple[int, int, int] | N
     ``rtol`` of it: clipped readings, what ``sins inspect`` names, and what :func:`_clipped` tells a
     reference check). Readings that take fewer distinct values than half their count are quantized: there
     a still unit's noise sits on its few levels for several readings, so a run counts only more than 10
-    steps from the median."""
+    steps from the median.
+
+    A clip is at the sensor's range, the channel's largest size either way: a level whose size is less
+    than ``1 - CLIP_ASYMMETRY`` of the largest size of ``v`` (the other sign's, which the range's symmetry
+    about zero bounds to within the bias, :data:`CLIP_ASYMMETRY`) is not the range but equal readings
+    in motion. EuRoC's MH_02 held its gyro y at -1.24826 rad/s for three readings, and reads +1.678
+    elsewhere (0.74 of it; the ADIS16448's range is ±17.5 rad/s): that was called the unit saturating."""
     at = np.abs(v - level) <= rtol * abs(level)
     if at.sum() < 3:
+        return None
+    if abs(level) < (1.0 - CLIP_ASYMMETRY) * float(np.max(np.abs(v))):
         return None
     levels = np.unique(v)
     if len(levels) < len(v) / 2:
@@ -572,6 +586,7 @@ _NAMED = {"frd": "sins's own", "flu": "ROS, REP 103", "rfu": "x right, y forward
 __all__ = [
     "ACCEL_SEEN_MPS2",
     "CLIPPED_SHARE",
+    "CLIP_ASYMMETRY",
     "DEAD_FORCE",
     "DEAD_RATE",
     "DEAD_WINDOW_S",
