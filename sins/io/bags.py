@@ -379,9 +379,12 @@ def _origin(
     if fixes is not None:
         first = (float(fixes.lat[0]), float(fixes.lon[0]), float(fixes.h[0]))
         return first, f"origin at the first fix, {local.describe_origin(first)}"
+    # Placed nowhere, the ENU frame's latitude is not the unit's: Earth's rate cannot be placed in it, as
+    # in a room's (:func:`sins.io.recording._read_path` sets the flags that leave it out).
     return (
         local.NOMINAL_ORIGIN,
-        f"origin at {local.NOMINAL_PLACE} (no fix in the bag: give the origin for the place)",
+        f"origin at {local.NOMINAL_PLACE} (no fix in the bag): its latitude is not known, so Earth's rate is "
+        "left out of what is judged against it (give --origin for the place)",
     )
 
 

@@ -111,9 +111,11 @@ def _read_euroc(
         ref = (mav or csv.parent) / folder / "data.csv"
         if mav is not None and ref.is_file():
             truth, turned = _reference(ref, width, t0, origin, m, (stamps, values[:, 3:]))
+            nominal = origin == local.NOMINAL_ORIGIN  # R's heading is never known (the module docstring)
             notes.append(
                 f"reference {ref}: {len(truth.t)} poses, room frame R taken as ENU at "
-                + (local.NOMINAL_PLACE if origin == local.NOMINAL_ORIGIN else local.describe_origin(origin))
+                + (local.NOMINAL_PLACE if nominal else local.describe_origin(origin))
+                + f": {local.room_frame_rate(not nominal)}"
             )
             if turned:
                 notes.append(f"{ref}: {turned}")

@@ -30,6 +30,17 @@ NOMINAL_PLACE = "45° N, 0° E, 0 m (gravity 9.806 m/s², within 0.026 of any si
 Array = NDArray[np.float64]
 
 
+def room_frame_rate(origin_given: bool) -> str:
+    """What a local frame with no geographic heading (a room's: EuRoC's R, an ``.npz``'s world) lets be
+    placed of Earth's rate, for its readers' notes: none at :data:`NOMINAL_ORIGIN` (its latitude is not
+    the recording's either: ``latitude_known`` False), the vertical part at a given origin
+    (``heading_known`` False). Each such reader says it in these words, as the flags it sets do."""
+    if not origin_given:
+        return ("its heading and latitude are not known, so Earth's rate is left out of what is judged "
+                "against it (give --origin for the place)")  # fmt: skip
+    return "its heading is not known, so only the vertical part of Earth's rate is placed in it"
+
+
 def ned_to_ecef_matrix(lat: Array, lon: Array) -> Array:
     """``C_en`` (..., 3, 3): NED axes at ``(lat, lon)`` (rad) into ECEF."""
     s_lat, c_lat, s_lon, c_lon = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
@@ -186,4 +197,5 @@ __all__ = [
     "levelled",
     "mean_in_world",
     "ned_to_ecef_matrix",
+    "room_frame_rate",
 ]

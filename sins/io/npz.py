@@ -130,13 +130,10 @@ def _read_npz(
             body_to_frd=m,
             source=str(path),
         )
-        placed = (
-            f"taken as ENU at {local.NOMINAL_PLACE}: its heading and latitude are not known, so Earth's rate "
-            "is left out of what is judged against it (give --origin for the place)"
-            if origin is None
-            else f"taken as ENU at the given origin ({local.describe_origin(origin)}): its heading is not "
-            "known, so only the vertical part of Earth's rate is placed in it"
+        place = (
+            local.NOMINAL_PLACE if origin is None else f"the given origin ({local.describe_origin(origin)})"
         )
+        placed = f"taken as ENU at {place}: {local.room_frame_rate(origin is not None)}"
         notes.append(f"reference at every reading; its world frame (z up) {placed}")
     return imu, truth, float(t_abs[0]), tuple(notes)
 

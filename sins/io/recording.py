@@ -66,7 +66,8 @@ class Recording:
     column_map : a CSV's sins column names and the file columns read for them (``{}`` for other kinds)
     sensor, corrected_by : a CSV's ``# sensor:`` and ``# corrected by:`` lines (:mod:`sins.io.provenance`),
         "" where it has none
-    heading_known : whether the reference's north is true north (False for a room frame: EuRoC, .npz)
+    heading_known : whether the reference's north is true north (False for a room frame: EuRoC, .npz,
+        and a bag placed nowhere: without a fix or an origin)
     latitude_known : whether the reference's latitude is the recording's own (False where the frame was
         placed at a nominal origin: Earth's rate then cannot be placed in it and is left out)
     rig : the readings beside per-sample reference inputs where the recording has them (a rig CSV's
@@ -340,8 +341,12 @@ def _read_path(
         read = bags._read_bag(
             path, topic, truth_topic, frame=frame or axes.FLU, origin=origin, progress=progress
         )
+        # The poses' frame is ENU (REP 103) at a fix or a given origin; placed at the nominal one, neither
+        # its latitude nor so its Earth's rate is the unit's: left out, as a room's (bags._origin says so).
+        placed = read.fixes is not None or origin is not None
         rec = Recording(read.imu, str(path), kind, read.truth, _si("rate"), frame or axes.FLU, read.notes,
-                        read.t0_ns, receive_t=read.receive_t, fixes=read.fixes)  # fmt: skip
+                        read.t0_ns, receive_t=read.receive_t, fixes=read.fixes, heading_known=placed,
+                        latitude_known=placed)  # fmt: skip
     if kind not in ("sins csv", "csv columns") and chosen:
         rec = _rescaled(rec, chosen)
     if rate_hz is not None and not rec.time_from_rate:
