@@ -422,3 +422,163 @@ def test_a_start_without_a_reference_refuses_a_heading_or_a_solution_that_is_not
     with pytest.raises(SystemExit) as info:
         main(["integrate", str(path), "--origin", "45,0,0", "--align", "60", "--heading", "nan"])
     assert info.value.code == 2 and "--heading: must be a finite number" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- a walk through sins bias
+
+
+def _numpy_batch_means(values: np.ndarray, rests: list[tuple[int, int]], batches: int = 30) -> np.ndarray:
+    """The batch-means standard error of a mean pooled over rests, in numpy alone: batches of a thirtieth
+    of the rows inside each rest, their means' variance about the rest's mean, times batch rows / rows."""
+    n = sum(b - a for a, b in rests)
+    m = n // batches
+    square, dof = np.zeros(values.shape[1]), 0
+    for a, b in rests:
+        k = (b - a) // m
+        if k < 2:
+            continue
+        means = values[a : a + k * m].reshape(k, m, -1).mean(axis=1)
+        square += ((means - means.mean(axis=0)) ** 2).sum(axis=0)
+        dof += k - 1
+    return np.sqrt(square / dof * m / n)
+
+
+def test_the_mean_error_by_batch_means_is_white_for_white_noise_and_above_it_for_gauss_markov() -> None:
+    """White noise: 1σ = σ/√n; an AR(1) of φ = 0.92 (correlation 12 rows): √((1+φ)/(1−φ)) = 4.9 times
+    that. 30 batches leave 29 degrees of freedom (the 1σ spreads by 1/√58, 13 %): held within 3 of it.
+    Three rests with offsets of ±10 σ (other attitudes) change neither figure."""
+    from sins.characterise.mean_error import batch_means_sigma, white_sigma
+
+    rng = np.random.default_rng(SEED)
+    n, phi = 30_000, 0.92
+    white = rng.standard_normal((n, 2))
+    gm = lfilter([1.0], [1.0, -phi], rng.standard_normal((n, 2)), axis=0) * math.sqrt(1 - phi**2)
+    rests = [(0, 9_000), (9_000, 21_000), (21_000, n)]
+    offsets = np.repeat([[10.0, -10.0], [-10.0, 0.0], [0.0, 10.0]], [9_000, 12_000, 9_000], axis=0)
+    spread = 3.0 / math.sqrt(2 * 29)
+    for noise, factor in ((white, 1.0), (gm, math.sqrt((1 + phi) / (1 - phi)))):
+        values = noise + offsets
+        got = batch_means_sigma(values, rests) * math.sqrt(n)
+        np.testing.assert_allclose(got, factor, rtol=spread)
+        np.testing.assert_allclose(got, _numpy_batch_means(values, rests) * math.sqrt(n), rtol=1e-12)
+        # If white: the spread about each rest's own mean, 1 for either (the AR(1) is of unit variance;
+        # its sample variance spreads by √((1+φ²)/(1−φ²)/(2n)), 1.4 %: 5 % is over 3 of it).
+        np.testing.assert_allclose(white_sigma(values, rests) * math.sqrt(n), 1.0, rtol=0.05)
+
+
+def test_seconds_is_a_positive_number_and_keeps_seconds_times_rate_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--seconds -5``, ``nan`` and ``0`` were taken, then refused as "0 rows; an Allan analysis…";
+    ``--seconds 2`` at 100 Hz kept 201 rows (t ≤ t0 + 2). Now the option refuses them, and the first
+    2 s are 200 rows, 0-1.99 s; 1 s, 100 rows, is too few for the noise fit and says so."""
+    imu, _ = still_unit(20.0, np.zeros(3), np.zeros(3), np.r_[[3e-4] * 3, [0.01] * 3])
+    csv = tmp_path / "still.csv"
+    io.write_imu(csv, imu)
+    for bad in ("-5", "nan", "0", "inf"):
+        with pytest.raises(SystemExit) as info:
+            main(["bias", str(csv), "--lat", "45", "--seconds", bad])
+        assert info.value.code == 2 and "--seconds: must be a positive number" in capsys.readouterr().err
+    out = tmp_path / "b.json"
+    assert main(["bias", str(csv), "--lat", "45", "--seconds", "2", "--json", str(out)]) == 0
+    doc = _json(out)
+    assert doc["rows"] == 200 and doc["end_s"] == pytest.approx(1.99)
+    assert main(["bias", str(csv), "--lat", "45", "--seconds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "--seconds 1 keeps 100 rows at 100 Hz" in err and "at least 128 (1.28 s)" in err, err
+
+
+def test_a_recording_without_a_rest_long_enough_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A unit still for 1 s, then turning: its rest is too short for the noise fit, said as a rest (it was
+    "the longest stretch of referenced rows without a gap has 75"); so is PSINS's vehicle, which never
+    stands still (96 rows, 9.6 s at its 10 Hz, against 128)."""
+    imu, _ = still_unit(10.0, np.zeros(3), np.zeros(3), np.r_[[3e-4] * 3, [0.01] * 3])
+    turning = imu.t >= 1.0
+    imu.omega_ib_b[turning, 2] += 0.5 * np.sin(2 * math.pi * 0.5 * imu.t[turning])  # rad/s
+    io.write_imu(tmp_path / "turns.csv", imu)
+    assert main(["bias", str(tmp_path / "turns.csv"), "--lat", "45"]) == 2
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert "no rest long enough for the biases" in err and "needs 128 in one stretch (1.28 s)" in err, err
+    dataset_folder("psins_fog_mems_vehicle")
+    assert main(["bias", "--dataset", "psins_vehicle"]) == 2
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert "psins_vehicle: no rest long enough" in err and "96 rows (9.6 s at 10 Hz)" in err, err
+
+
+def _dataset_bias(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> tuple[dict, str]:
+    out = tmp_path / f"{name.replace('/', '_')}.json"
+    assert main(["bias", "--dataset", name, "--json", str(out)]) == 0
+    return _json(out), capsys.readouterr().out
+
+
+def test_ferraris_holds_are_rests_each_in_its_own_attitude(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Ferraris's six holds face six ways: the header had averaged their gravity to 0.51 m/s² at roll
+    −25°, and said "at −0.0000°" from a reference without Earth's rate. Now: each hold's attitude (an
+    axis up or down: multiples of 90°), gravity 9.81 m/s² (SOURCE.md's check, to the 3 mm/s² any
+    European latitude moves it), and no latitude."""
+    dataset_folder("imucal_ferraris")
+    doc, text = _dataset_bias("ferraris", tmp_path, capsys)
+    assert doc["lat_deg"] is None and "latitude not known" in text and "0.510587" not in text
+    assert doc["gravity_mps2"] == pytest.approx(9.81, abs=3e-3) and doc["earth_rate_radps"] == 0.0
+    assert len(doc["rests"]) == 6 and sum(r["rows"] for r in doc["rests"]) == doc["rows"]
+    for r in doc["rests"]:
+        assert r["gravity_mps2"] == pytest.approx(9.81, abs=3e-3) and r["yaw_deg"] is None
+        for angle in (r["roll_deg"], r["pitch_deg"]):
+            assert abs(angle / 90.0 - round(angle / 90.0)) < 1e-9, r
+
+
+def test_ferraris_white_figure_is_the_spread_within_each_hold(tmp_path: Path) -> None:
+    """ "1σ if white" was the spread of the readings across holds facing different ways (1.17e4 µg on
+    accel.x); now it lies inside SOURCE.md's within-hold spread, 0.011–0.018 m/s², over √rows."""
+    dataset_folder("imucal_ferraris")
+    out = tmp_path / "f.json"
+    assert main(["bias", "--dataset", "ferraris", "--json", str(out)]) == 0
+    doc = _json(out)
+    n = doc["rows"]
+    for axis in "xyz":
+        white = doc["channels"][f"accel.{axis}"]["sigma_white"]
+        assert 0.011 / math.sqrt(n) <= white <= 0.018 / math.sqrt(n), (axis, white / UG)
+
+
+def test_a_referenced_dataset_is_placed_where_its_reference_lies(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """EuRoC's room frame is placed at 45° N only nominally, its latitude not known (formats.md), BROAD
+    was recorded in Berlin (52.51° N, its reader's): the header had said −90° and −9.13°, from the
+    reference's rate at rest, which is the trajectory's residual motion (56-175 °/h), not Earth's rate,
+    and said it was Earth's. BROAD's five breaks are five rests."""
+    dataset_folder("euroc")
+    doc, text = _dataset_bias("euroc/MH_01_easy", tmp_path, capsys)
+    assert doc["lat_deg"] is None and "latitude not known" in text
+    assert "69.87 °/h (not Earth's 15.04 °/h: the reference's own motion at rest)" in text
+    assert all(r["yaw_deg"] is None and "not Earth's" in r["heading_note"] for r in doc["rests"])
+    dataset_folder("broad_mocap")
+    doc, text = _dataset_bias("broad_05", tmp_path, capsys)
+    assert doc["lat_deg"] == pytest.approx(52.51, abs=1e-3) and len(doc["rests"]) == 5
+    assert doc["gravity_mps2"] == pytest.approx(9.8127, abs=2e-3)  # normal gravity in Berlin, its reader's
+
+
+def test_a_1_sigma_is_at_least_the_batch_means_of_what_is_averaged(tmp_path: Path) -> None:
+    """On EuRoC's MH_01 the noise model (a quantization) gave accel.x a 1σ of 8.57 µg where numpy's
+    batch means of the readings less their reference over the rests give 48.6: every 1σ is now at least
+    the batch means' (the same rows, each rest's stretches found again by the times the report gives)."""
+    dataset_folder("euroc")
+    out = tmp_path / "e.json"
+    assert main(["bias", "--dataset", "euroc/MH_01_easy", "--json", str(out)]) == 0
+    doc = _json(out)
+    data = io.read(dataset="euroc/MH_01_easy").reference_inputs()[0]
+    error = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])
+    rows = np.zeros(len(data.t), dtype=bool)
+    for r in doc["rests"]:
+        rows |= (data.t >= r["start_s"] - 1e-9) & (data.t <= r["end_s"] + 1e-9)
+    edges = np.diff(np.r_[0, rows.astype(int), 0])
+    rests = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True))
+    assert sum(b - a for a, b in rests) == doc["rows"]
+    batch = _numpy_batch_means(error, rests)
+    sigma = np.array([c["sigma"] for c in doc["channels"].values()])
+    assert np.all(sigma >= batch * (1 - 1e-9)), sigma / batch
+    assert doc["channels"]["accel.x"]["sigma"] == pytest.approx(48.6 * UG, rel=0.01)

@@ -175,3 +175,22 @@ def test_what_sins_writes_it_reads_back_nan_included(tmp_path: Path) -> None:
     assert math.isnan(back["values"][1])
     back["values"][1] = doc["values"][1] = 0.0
     assert back == doc
+
+
+def test_a_report_is_standard_json_a_figure_that_is_not_finite_null(tmp_path: Path) -> None:
+    """A command's report is read by jq and JavaScript, whose JSON has no NaN: ``sins bias --dataset
+    psins_lasergyro --json`` wrote ``"level_rate_ratio": NaN``. Every figure that is not finite, nested
+    or numpy's, is null; the rest as given; a sins file (write_json) still keeps its NaN."""
+    import numpy as np
+
+    from sins.io import write_report
+
+    doc = {"a": math.nan, "b": [1.5, math.inf, (-math.inf, 2)], "c": {"d": np.float64("nan"), "e": "NaN"}}
+    write_report(tmp_path / "r.json", doc)
+    text = (tmp_path / "r.json").read_text(encoding="utf-8")
+
+    def refuse(constant: str) -> None:
+        raise AssertionError(f"{constant} in a report")
+
+    back = json.loads(text, parse_constant=refuse)  # what a strict reader takes
+    assert back["a"] is None and back["b"] == [1.5, None, [None, 2]] and back["c"] == {"d": None, "e": "NaN"}

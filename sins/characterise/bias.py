@@ -8,7 +8,10 @@ the attitude ``C_nb``:
 
 * **given** (a levelled table facing a known heading, :func:`estimate_bias`'s ``attitude``), or a
   reference's (a dataset's per-sample Earth rate and gravity, a bag's odometry): every axis's bias
-  follows. An error ``δ`` in the given tilt moves the level accelerometers' biases by ``g δ`` (171 µg per
+  follows. A per-sample reference is taken away row by row, so every rest counts, each against its own
+  reference (:class:`Rest`: its own attitude and gravity, never their average over rests that face
+  different ways); a recording without one is judged on its opening rest, whose one attitude the data
+  level. An error ``δ`` in the given tilt moves the level accelerometers' biases by ``g δ`` (171 µg per
   0.01°), an error in the heading the level gyros' by ``Ω cos φ δ``;
 * **levelled** from the data (:func:`sins.aiding.alignment.still_attitude`): roll and pitch from the mean
   specific force, the heading from the levelled mean rate (gyrocompassing) where the gyro resolves it.
@@ -22,12 +25,17 @@ the attitude ``C_nb``:
 
 **Standard error.** The mean of ``n`` readings of white noise of deviation ``σ`` has ``σ/√n``; coloured
 noise (a Gauss–Markov bias, flicker, a rate random walk) averages down more slowly. The error reported
-is the Allan deviation of the channel's fitted noise model (:mod:`sins.characterise`, the IEEE terms the
-data resolve) at the averaging time ``T`` (the rows' span): for white noise ``N/√T = σ/√n`` exactly;
+is the larger of two figures. The batch-means standard error of what is averaged (the reading less its
+row's expectation; :mod:`sins.characterise.mean_error`) needs no model. The Allan deviation of the
+channel's fitted noise model (:mod:`sins.characterise`, the IEEE terms the data resolve) at the
+averaging time ``T`` (the rows' span) sees correlations longer than a batch: for white noise
+``N/√T = σ/√n`` exactly;
 for a Gauss–Markov bias of correlation time ``T_c ≪ T`` it is ``√(2 σ_b² T_c / T)``, the standard error
 of the mean of such a process; for flicker and a random walk, whose mean has no fixed value to converge
 to, it is how far two such means ``T`` apart differ over ``√2``: the bias of this run, as repeatable as
-the noise lets it be. The white-noise figure is reported beside it (:attr:`ChannelBias.sigma_white`).
+the noise lets it be. A model whose fit misses part of the curve (quantization alone, beside a
+vibration hump) can fall below what the data average to; the batch means do not. The white-noise figure,
+the spread about each rest's own mean over ``√n``, is reported beside it (:attr:`ChannelBias.sigma_white`).
 
 **Warm-up.** The rate's least-squares line over the rows (:func:`sins.characterise.trend.fit_ramp`),
 judged against the slow noise the Allan curve allows: *significant* at 3σ. The bias reported is the mean,
@@ -46,6 +54,8 @@ from numpy.typing import NDArray
 
 from sins.aiding import alignment, ekf
 from sins.characterise.analysis import ChannelResult, characterise, residual
+from sins.characterise.mean_error import batch_means_sigma, white_sigma
+from sins.characterise.rests import check_rest_rows, earth_rate_rows, first_rows, rest_groups
 from sins.characterise.still import motion, still_rows
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData
@@ -77,8 +87,10 @@ class ChannelBias:
     mean : the reading's mean over the rows used
     expected : Earth's rate or gravity on this axis in the attitude used (what is taken away)
     bias : ``mean − expected``
-    sigma : its standard error: the fitted noise model's Allan deviation at the averaging time
-    sigma_white : what white noise alone would give, the readings' standard deviation over ``√n``
+    sigma : its standard error: the larger of the fitted noise model's Allan deviation at the averaging
+        time and the batch-means standard error (see the module's text)
+    sigma_white : what white noise alone would give, the standard deviation of the reading less its
+        expectation about each rest's own mean, over ``√n``
     heading_bound : a gyro's part of Earth's level rate an unknown heading may leave in ``bias`` (its
         axis's level part times ``Ω cos φ``); 0 where the heading is known
     trend : the rate's fitted slope, per s
@@ -142,6 +154,40 @@ class RestAttitude:
 
 
 @dataclass(frozen=True)
+class Rest:
+    """One rest of a recording taken against a per-row reference: consecutive still rows whose reference
+    specific force keeps its direction (:func:`sins.characterise.rests.rest_groups`: a Ferraris hold, a
+    BROAD break).
+
+    Attributes
+    ----------
+    start_s, end_s, rows : its rows' first and last times, s, and how many
+    attitude : the roll and pitch its reference's mean specific force implies, source ``"reference"``;
+        the heading only where the reference's rate is Earth's on every row (a static rig's), else None
+    gravity : the size of its reference's mean specific force, m/s² (the gravity taken away there)
+    rate : the size of its reference's mean rate, rad/s (Earth's, where the reference holds it; 0 where it
+        leaves it out; a trajectory's residual motion else)
+    """
+
+    start_s: float
+    end_s: float
+    rows: int
+    attitude: RestAttitude
+    gravity: float
+    rate: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON entry: SI units, angles in degrees."""
+        a = self.attitude
+        return {
+            "start_s": self.start_s, "end_s": self.end_s, "rows": self.rows,
+            "roll_deg": math.degrees(a.roll), "pitch_deg": math.degrees(a.pitch),
+            "yaw_deg": None if a.yaw is None else math.degrees(a.yaw), "heading_note": a.heading_note,
+            "gravity_mps2": self.gravity, "rate_radps": self.rate,
+        }  # fmt: skip
+
+
+@dataclass(frozen=True)
 class BiasEstimate:
     """A still unit's biases (see the module's text).
 
@@ -156,6 +202,8 @@ class BiasEstimate:
     attitude : the attitude they were taken in
     channels : ``gyro.x`` … ``accel.z`` → :class:`ChannelBias`
     notes : what was done, one line each
+    rests : against a per-row reference, each rest's own attitude and gravity (:class:`Rest`); then
+        ``attitude`` is the one rest's, or NaN where rests in several attitudes are pooled
     block_t, block_bias : the rows used in up to :data:`BLOCKS` blocks: each block's middle time (k,) s
         and mean reading less what was taken away (k, 6), for a picture of the rest (not in the JSON)
     """
@@ -171,6 +219,7 @@ class BiasEstimate:
     attitude: RestAttitude
     channels: dict[str, ChannelBias] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    rests: tuple[Rest, ...] = ()
     block_t: Array = field(default_factory=lambda: np.zeros(0))
     block_bias: Array = field(default_factory=lambda: np.zeros((0, 6)))
 
@@ -183,6 +232,19 @@ class BiasEstimate:
         """``bias`` (or ``sigma``, ``mean`` …) of the three axes of ``sensor`` (3,), SI."""
         return np.array([getattr(self.channels[f"{sensor}.{a}"], what) for a in "xyz"])
 
+    @property
+    def gravity(self) -> float:
+        """The gravity taken away, m/s²: its size in the attitude used, or against a reference the rests'
+        own sizes averaged by rows (the mean of vectors of rests facing different ways is no gravity:
+        Ferraris's six holds averaged to 0.51 m/s²)."""
+        if self.rests:
+            return self.rest_figure("gravity")
+        return float(np.linalg.norm(self.vector("accel", "expected")))
+
+    def rest_figure(self, name: str) -> float:
+        """A :class:`Rest` figure (``gravity``, ``rate``) averaged over the rests by their rows."""
+        return float(sum(getattr(r, name) * r.rows for r in self.rests) / sum(r.rows for r in self.rests))
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON document: SI units (rad, rad/s, m/s², s), each channel also in °/h or µg."""
         a = self.attitude
@@ -193,11 +255,11 @@ class BiasEstimate:
             "end_s": self.end_s,
             "rows": self.rows,
             "rate_hz": self.rate_hz,
-            "lat_deg": math.degrees(self.lat),
+            "lat_deg": math.degrees(self.lat) if math.isfinite(self.lat) else None,
             "h_m": self.h if math.isfinite(self.h) else None,
             "location": self.location,
-            "earth_rate_radps": earth.OMEGA_IE,
-            "gravity_mps2": float(np.linalg.norm(self.vector("accel", "expected"))),
+            "earth_rate_radps": self.rest_figure("rate") if self.rests else earth.OMEGA_IE,
+            "gravity_mps2": self.gravity,
             "attitude": {
                 "roll_deg": math.degrees(a.roll), "pitch_deg": math.degrees(a.pitch),
                 "yaw_deg": None if a.yaw is None else math.degrees(a.yaw), "source": a.source,
@@ -206,6 +268,7 @@ class BiasEstimate:
                 "level_rate_ratio": a.level_rate_ratio, "heading_note": a.heading_note,
             },
             "channels": {ch: c.to_dict() for ch, c in self.channels.items()},
+            "rests": [r.to_dict() for r in self.rests],
             "notes": list(self.notes),
         }  # fmt: skip
 
@@ -250,17 +313,42 @@ def _levelled(mean: Array, sigma: Array, lat: float) -> RestAttitude:
     return RestAttitude(roll, pitch, yaw, "levelled", tilt, yaw_sigma, ratio)
 
 
-def _from_reference(reference_mean: Array) -> RestAttitude:
-    """The attitude a reference's Earth rate and gravity (6,) in the body axes imply, exactly."""
-    roll, pitch, yaw = alignment.still_attitude(reference_mean[3:], reference_mean[:3])
-    return RestAttitude(roll, pitch, yaw, "reference")
+def _from_reference(reference: Array) -> RestAttitude:
+    """The attitude a rest's reference rows (k, 6) imply: roll and pitch from their mean specific force;
+    the heading from their mean rate where it is Earth's on every row (gyrocompassing the reference)."""
+    mean = reference.mean(axis=0)
+    roll, pitch, yaw = alignment.still_attitude(mean[3:], mean[:3])
+    if earth_rate_rows(reference).all():
+        return RestAttitude(roll, pitch, yaw, "reference")
+    rate = float(np.linalg.norm(mean[:3])) / DEG_PER_H
+    note = (
+        f"the reference's rate at rest, {rate:.3g} °/h, is not Earth's ({earth.OMEGA_IE / DEG_PER_H:.4g} °/h)"
+    )
+    return RestAttitude(roll, pitch, None, "reference", yaw_sigma=None, heading_note=note)
 
 
-def _standard_errors(result: dict[str, ChannelResult], seconds: float) -> Array:
-    """Each channel's (6,) standard error of its mean over ``seconds``: its noise model's Allan deviation
-    there (a removed ramp left out: it is the trend, reported apart)."""
+def _rests(t: Array, reference: Array, segments: tuple[tuple[int, int], ...]) -> tuple[Rest, ...]:
+    """The rests (see :class:`Rest`) of the still ``segments`` of a per-row ``reference`` (n, 6)."""
+    out = []
+    for group in rest_groups(t, reference, segments):
+        ref = np.concatenate([reference[a:b] for a, b in group])
+        mean = ref.mean(axis=0)
+        out.append(Rest(float(t[group[0][0]]), float(t[group[-1][1] - 1]), len(ref), _from_reference(ref),
+                        float(np.linalg.norm(mean[3:])), float(np.linalg.norm(mean[:3]))))  # fmt: skip
+    return tuple(out)
+
+
+def _standard_errors(
+    result: dict[str, ChannelResult], seconds: float, averaged: Array, segments: tuple[tuple[int, int], ...]
+) -> Array:
+    """Each channel's (6,) standard error of its mean over ``seconds``: the larger of its noise model's
+    Allan deviation there (a removed ramp left out: it is the trend, reported apart) and the batch-means
+    standard error of what is averaged (:func:`sins.characterise.mean_error.batch_means_sigma`), which
+    needs no model: a model fitted as quantization alone falls as 1/τ, and on EuRoC's MH_01, whose Allan
+    curve rises over 5-40 ms (a vibration hump), it had said 2.67 °/h where white noise alone says 32.6."""
     tau = np.array([seconds])
-    return np.array([math.sqrt(max(float(result[ch].fit.avar(tau)[0]), 0.0)) for ch in CHANNELS])
+    model = np.array([math.sqrt(max(float(result[ch].fit.avar(tau)[0]), 0.0)) for ch in CHANNELS])
+    return np.asarray(np.fmax(model, batch_means_sigma(averaged, segments)), dtype=float)
 
 
 def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white: Array, expected: Array,
@@ -301,7 +389,8 @@ def estimate_bias(
     attitude : ``(roll, pitch, yaw)`` rad where it is known (``attitude_source`` says how: "given",
         "reference"); None: levelled from the data
     reference : (n, 6) Earth's rate and gravity in the body axes per row (a dataset's reference), taken
-        away instead (the attitude is what they imply)
+        away row by row instead; the rests are pooled, each against its own reference, and each rest's
+        attitude is what its reference implies (:class:`Rest`)
     keep : (n,) the rows to use (default all)
     source, location : for messages and the report
     progress : ``progress(channels_done, 6)`` while the noise is fitted
@@ -311,30 +400,43 @@ def estimate_bias(
     SinsInputError
         too few rows for the noise fit (one line naming ``source``), a channel without noise.
     """
+    check_rest_rows(t, readings, reference, keep, source)
     res = residual(t, readings, None, source, keep)
     rows = np.zeros(len(t), dtype=bool)
     for a, b in res.segments:
         rows[a:b] = True
-    used = np.asarray(readings, dtype=float)[rows]
-    mean, n = used.mean(axis=0), len(used)
-    white = used.std(axis=0, ddof=1) / math.sqrt(n)
+    readings = np.asarray(readings, dtype=float)
+    ref = None if reference is None else np.asarray(reference, dtype=float)
+    # What is averaged: each row less its own expectation (a constant one without a reference, added back
+    # below); each rest is taken about its own mean, so rests in other attitudes are not noise.
+    averaged = readings if ref is None else readings - ref
+    mean, n = readings[rows].mean(axis=0), int(rows.sum())
+    white = white_sigma(averaged, res.segments)
     result = characterise(res, progress=progress).channels
-    sigma = _standard_errors(result, n * res.dt)
-    if reference is not None:
-        expected, bound = np.asarray(reference, dtype=float)[rows].mean(axis=0), np.zeros(6)
-        att = _from_reference(expected)
+    sigma = _standard_errors(result, n * res.dt, averaged, res.segments)
+    rests: tuple[Rest, ...] = ()
+    if ref is not None:
+        expected, bound = ref[rows].mean(axis=0), np.zeros(6)
+        rests = _rests(np.asarray(t, dtype=float), ref, res.segments)
+        nan = math.nan  # rests in several attitudes pooled: no one attitude (each rest's in rests)
+        att = (
+            rests[0].attitude
+            if len(rests) == 1
+            else RestAttitude(nan, nan, None, "reference", yaw_sigma=None)
+        )
     else:
         att = _levelled(mean, sigma, lat)
         if attitude is not None:
             att = RestAttitude(*attitude, attitude_source, level_rate_ratio=att.level_rate_ratio)
         gyro, accel, gyro_bound = _expected(att.C_nb, lat, h, att.yaw is not None)
         expected, bound = np.r_[gyro, accel], np.r_[gyro_bound, np.zeros(3)]
+        averaged = readings - expected
     idx = np.flatnonzero(rows)
-    block_t, block_mean = _blocks(np.asarray(t, dtype=float)[rows], used)
+    block_t, block_bias = _blocks(np.asarray(t, dtype=float)[rows], averaged[rows])
     return BiasEstimate(
         source, float(t[idx[0]]), float(t[idx[-1]]), n, 1.0 / res.dt, lat, h, location, att,
         _channels(result, mean, sigma, white, expected, bound), tuple(res.notes) + tuple(res.warnings),
-        block_t, block_mean - expected,
+        rests, block_t, block_bias,
     )  # fmt: skip
 
 
@@ -393,8 +495,10 @@ def opening_rest(t: Array, readings: Array, source: str = "") -> tuple[NDArray[n
 
 
 def location_of(rec: Recording) -> tuple[float, float, str] | None:
-    """``(lat, h, where)`` a recording says it lies at: its reference's or its fixes' mean, or None."""
-    if rec.truth is not None:
+    """``(lat, h, where)`` a recording says it lies at: its reference's or its fixes' mean, or None (a
+    room frame placed at a nominal origin, EuRoC's or an ``.npz``'s, says no latitude: ``latitude_known``
+    False; its 45° N had been reported as where the unit stood)."""
+    if rec.truth is not None and rec.latitude_known:
         return float(np.mean(rec.truth.lat)), float(np.mean(rec.truth.h)), "the recording's reference"
     if rec.fixes is not None and len(rec.fixes.t):
         return float(np.mean(rec.fixes.lat)), float(np.mean(rec.fixes.h)), "the recording's fixes"
@@ -423,7 +527,7 @@ def recording_bias(
     t, omega, force = rec.mean_rates()
     readings = np.hstack([omega, force])
     if seconds is not None:
-        within = t <= t[0] + seconds
+        within = first_rows(t, seconds, rec.source)
         t, readings = t[within], readings[within]
     keep, note = opening_rest(t, readings, rec.source)
     read = location_of(rec)
@@ -449,31 +553,49 @@ def recording_bias(
 
 
 def dataset_bias(
-    data: CalibrationData, name: str, progress: Callable[[int, int], None] | None = None
+    data: CalibrationData,
+    name: str,
+    progress: Callable[[int, int], None] | None = None,
+    *,
+    location: tuple[float, float, str] | None = None,
+    seconds: float | None = None,
 ) -> BiasEstimate:
-    """:func:`estimate_bias` of a dataset against its own reference inputs (Earth's rate and gravity, or
-    a trajectory's), over the rows where the unit stood still (all of a still recording). The latitude
-    reported is the one the reference's Earth rate implies (its vertical part is ``−Ω sin φ``).
+    """:func:`estimate_bias` of a dataset against its own reference inputs, row by row, over the rows
+    where the unit stood still (all of a still recording; every rest of one that moves, each against its
+    own reference: Ferraris's holds, BROAD's breaks); ``seconds`` keeps the first that many.
+
+    Where it stood: ``location`` (``(lat, h, where)``, a trajectory's, :func:`location_of`), else the
+    latitude the reference's Earth rate implies (its vertical part is ``−Ω sin φ``) where the reference's
+    rate is Earth's on every row used (:func:`sins.characterise.rests.earth_rate_rows`), else not known
+    (NaN): a reference without Earth's rate (Ferraris's) implies none, and had read 0°, and EuRoC's, whose
+    rate at rest is its trajectory's residual motion (56-175 °/h), −90°.
 
     Raises
     ------
     SinsInputError
-        a dataset without a reference at rest, or with too few still rows.
+        a dataset without a reference at rest, or without a rest long enough for the noise fit.
     """
     readings = np.hstack([data.gyro, data.accel])
     reference = np.hstack([data.ref_gyro, data.ref_accel])
-    known: NDArray[np.bool_] = np.asarray(np.isfinite(reference).all(axis=1))
-    keep = known.copy()
+    keep: NDArray[np.bool_] = np.asarray(np.isfinite(reference).all(axis=1))
+    if seconds is not None:
+        keep &= first_rows(data.t, seconds, name)
     if motion(data.t, readings) is not None:
         keep &= still_rows(readings, _step(data.t))
     if not keep.any():
         raise SinsInputError(f"{name}: no row at rest with a reference to take the biases against")
-    ref = reference[keep].mean(axis=0)
-    down = -ref[3:] / np.linalg.norm(ref[3:])
-    lat = math.asin(float(np.clip(-(ref[:3] @ down) / earth.OMEGA_IE, -1.0, 1.0)))
-    where = "the dataset's reference (its Earth rate and gravity per row)"
+    h = math.nan
+    if location is not None:
+        lat, h, where = location
+    elif earth_rate_rows(reference[keep]).all():
+        ref = reference[keep]
+        down = -ref[:, 3:] / np.linalg.norm(ref[:, 3:], axis=1, keepdims=True)
+        vertical = np.clip(-np.sum(ref[:, :3] * down, axis=1) / earth.OMEGA_IE, -1.0, 1.0)
+        lat, where = float(np.mean(np.arcsin(vertical))), "the latitude the reference's Earth rate implies"
+    else:
+        lat, where = math.nan, "not known: the reference's rate at rest is not Earth's"
     note = () if keep.all() else (f"the rows at rest: {int(keep.sum())} of {len(keep)}",)
-    estimate = estimate_bias(data.t, readings, lat, math.nan, reference=reference, keep=keep, source=name,
+    estimate = estimate_bias(data.t, readings, lat, h, reference=reference, keep=keep, source=name,
                              location=where, progress=progress)  # fmt: skip
     return replace(estimate, notes=note + estimate.notes)
 
@@ -508,6 +630,7 @@ __all__ = [
     "MAX_GYROCOMPASS_LAT",
     "BiasEstimate",
     "ChannelBias",
+    "Rest",
     "RestAttitude",
     "alignment_accuracy",
     "dataset_bias",

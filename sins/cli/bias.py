@@ -15,6 +15,7 @@ from sins.cli.options import (
     add_plot,
     add_recording_options,
     dataset_inputs,
+    positive,
     read_recording,
 )
 from sins.cli.progress import progress_bar, row_progress
@@ -57,9 +58,11 @@ def _estimate(
                 "bias: --lat, --height and --attitude go with a RECORDING; a dataset has its own"
             )
         with progress_bar(f"reading {args.dataset}", "") as bar:
-            inputs = read_recording(args, None, args.dataset).reference_inputs()
+            rec = read_recording(args, None, args.dataset)
+            data = rec.reference_inputs()[0]
             bar.set_description("fitting the noise")
-            return bias.dataset_bias(inputs[0], args.dataset, progress=row_progress(bar))
+            return bias.dataset_bias(data, args.dataset, progress=row_progress(bar),
+                                     location=bias.location_of(rec), seconds=args.seconds)  # fmt: skip
     with progress_bar("reading", "messages") as bar:
         rec = read_recording(args, args.recording, None, progress=row_progress(bar))
     with progress_bar("fitting the noise", "channels") as bar:
@@ -91,7 +94,8 @@ def format_attitude(a: RestAttitude, lat: float) -> list[str]:
 
     roll, pitch = math.degrees(a.roll), math.degrees(a.pitch)
     if a.source != "levelled":
-        heading = "" if a.yaw is None else f", yaw {math.degrees(a.yaw):.4f}°"
+        heading = f", yaw {math.degrees(a.yaw):.4f}°" if a.yaw is not None else ""
+        heading += f" (heading not known: {a.heading_note})" if a.heading_note else ""
         return [f"attitude {a.source}: roll {roll:.4f}°, pitch {pitch:.4f}°{heading}"]
     per_mg = math.degrees(1e-3)  # b/g with b in g
     tilt = math.degrees(a.tilt_sigma)
@@ -115,19 +119,51 @@ def format_attitude(a: RestAttitude, lat: float) -> list[str]:
     return lines
 
 
+def format_rests(e: BiasEstimate, where: str) -> list[str]:
+    """Against a per-row reference: what it takes away, and each rest's own attitude and gravity (never
+    their average: rests facing different ways average to no attitude and to less than gravity)."""
+    from sins.core import earth
+    from sins.core.earth import G0
+    from sins.imu import DEG_PER_H
+
+    g, rate = e.gravity, e.rest_figure("rate") / DEG_PER_H
+    earth_dph = earth.OMEGA_IE / DEG_PER_H
+    said = ("Earth's rate left out" if rate == 0.0 else "Earth's" if abs(rate / earth_dph - 1.0) < 0.01
+            else f"not Earth's {earth_dph:.4g} °/h: the reference's own motion at rest")  # fmt: skip
+    lines = [
+        f"taken away, the reference's rate and specific force, row by row: {rate:.4g} °/h ({said}) and "
+        f"{g:.6g} m/s² ({g / G0:.7g} g) at rest; {where}"
+    ]
+    if len(e.rests) == 1:
+        return lines + format_attitude(e.rests[0].attitude, e.lat)
+    lines.append(f"{len(e.rests)} rests pooled, each against its own reference:")
+    for i, r in enumerate(e.rests, 1):
+        a = r.attitude
+        yaw = "" if a.yaw is None else f", yaw {math.degrees(a.yaw):.4f}°"
+        lines.append(
+            f"  rest {i}: {r.start_s:.6g}-{r.end_s:.6g} s, {r.rows} rows: roll {math.degrees(a.roll):.4f}°, "
+            f"pitch {math.degrees(a.pitch):.4f}°{yaw}, gravity {r.gravity:.6g} m/s²"
+        )
+    return lines
+
+
 def format_bias(e: BiasEstimate) -> str:
     """The report: what was averaged, where, in which attitude; each channel's bias ± 1σ and trend."""
     from sins.characterise.bias import DISPLAY
     from sins.core.earth import G0
 
-    g = float(sum(x * x for x in e.vector("accel", "expected"))) ** 0.5
-    where = f"{math.degrees(e.lat):.4f}°" + (f", {e.h:g} m" if math.isfinite(e.h) else "")
+    g = e.gravity
+    where = f"at {math.degrees(e.lat):.4f}°" + (f", {e.h:g} m" if math.isfinite(e.h) else "")
+    where = f"{where} ({e.location})" if math.isfinite(e.lat) else f"latitude {e.location}"
     lines = [
         f"{e.source}: {e.rows} rows at {e.rate_hz:.6g} Hz at rest, {e.start_s:.6g}-{e.end_s:.6g} s",
         *(f"  {note}" for note in e.notes),
-        f"Earth's rate and gravity ({g:.6g} m/s², {g / G0:.7g} g) at {where} ({e.location})",
-        *format_attitude(e.attitude, e.lat),
     ]
+    if e.rests:
+        lines += format_rests(e, where)
+    else:
+        lines.append(f"Earth's rate and gravity ({g:.6g} m/s², {g / G0:.7g} g) {where}")
+        lines += format_attitude(e.attitude, e.lat)
     bounded = any(c.heading_bound > 0 for c in e.channels.values())
     head = [
         "channel",
@@ -150,9 +186,10 @@ def format_bias(e: BiasEstimate) -> str:
         rows.append(cells + ([f"{c.heading_bound / size:.3g}" if c.heading_bound else ""] if bounded else []))
     lines.append(fixed_width(head, rows))
     lines.append(
-        "1σ: the noise model's Allan deviation at the averaging time (coloured noise averages down slower "
-        "than white); trend: the fitted line's rise over the rows, 'significant' at 3σ of the slowest noise "
-        "the Allan curve allows"
+        "1σ: the larger of the noise model's Allan deviation at the averaging time and the batch-means "
+        "standard error of what is averaged (coloured noise averages down slower than white); 1σ if white: "
+        "the spread about each rest's own mean over √rows; trend: the fitted line's rise over the rows, "
+        "'significant' at 3σ of the slowest noise the Allan curve allows"
     )
     return "\n".join(lines)
 
@@ -180,8 +217,9 @@ def add(sub: Subparsers) -> None:
         "default: levelled from the data, the heading gyrocompassed where the gyro resolves it",
     )  # fmt: skip
     p.add_argument(
-        "--seconds", type=float, metavar="S", help="average only the first S seconds (default: all at rest)"
-    )
+        "--seconds", type=positive, metavar="S",
+        help="average only the first S seconds (S × rate rows; default: all at rest)",
+    )  # fmt: skip
     p.add_argument(
         "--json", type=Path, metavar="OUT.json", help="write the biases and their errors (SI units)"
     )
@@ -195,5 +233,6 @@ __all__ = [
     "angles",
     "format_attitude",
     "format_bias",
+    "format_rests",
     "latitude",
 ]
