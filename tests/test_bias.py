@@ -485,7 +485,7 @@ def test_seconds_is_a_positive_number_and_keeps_seconds_times_rate_rows(
     assert doc["rows"] == 200 and doc["end_s"] == pytest.approx(1.99)
     assert main(["bias", str(csv), "--lat", "45", "--seconds", "1"]) == 2
     err = capsys.readouterr().err
-    assert "--seconds 1 keeps 100 rows at 100 Hz" in err and "at least 128 (1.28 s)" in err, err
+    assert "the first 1 s keep 100 rows at 100 Hz" in err and "at least 128 (1.28 s)" in err, err
 
 
 def test_a_recording_without_a_rest_long_enough_says_so(

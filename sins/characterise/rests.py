@@ -88,12 +88,12 @@ def first_rows(t: Array, seconds: float, source: str) -> NDArray[np.bool_]:
         ``seconds`` not positive, or fewer rows than the noise fit needs.
     """
     if not 0.0 < seconds < math.inf:
-        raise SinsInputError(f"--seconds {seconds:g}: a positive number of seconds")
+        raise SinsInputError(f"{source}: the first {seconds:g} s: expected a positive number of seconds")
     dt = float(np.median(np.diff(t)))
     within: NDArray[np.bool_] = np.asarray(t < t[0] + seconds - 0.5 * dt, dtype=bool)
-    if int(within.sum()) < MIN_ROWS:
+    if (kept := int(within.sum())) < MIN_ROWS:
         raise SinsInputError(
-            f"{source}: --seconds {seconds:g} keeps {int(within.sum())} rows at {1.0 / dt:.4g} Hz; the noise "
+            f"{source}: the first {seconds:g} s keep {kept} rows at {1.0 / dt:.4g} Hz; the noise "
             f"fit needs at least {MIN_ROWS} ({MIN_ROWS * dt:.3g} s)"
         )
     return within
