@@ -715,3 +715,14 @@ def test_a_term_the_data_give_no_bound_is_said_so(tmp_path, capsys):
     written = out.read_text()
     for ch in unbounded:
         assert f"# {ch}: gauss_markov not resolved, {analysis.UNBOUNDED}" in written
+
+
+def test_a_resolved_term_that_leads_at_no_cluster_time_says_how_it_is_resolved(capsys):
+    """PSINS's laser-gyro INS resolves accel.y's white noise by the joint fit, where it holds half the
+    Allan variance at no cluster time: its support column was empty, as if nothing stood behind it."""
+    if not dataset_folder("psins_lasergyro_static").is_dir():
+        pytest.skip("dataset psins_lasergyro_static not found under the data root")
+    assert cli.main(["characterise", "--dataset", "psins_lasergyro"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()]
+    white = next(r for r in rows if r[:2] == ["accel.y", "N"])
+    assert " ".join(white).endswith("under half the variance at every τ; resolved by the joint fit"), white

@@ -137,6 +137,10 @@ def _format_characterisation(result: Characterisation) -> str:
     return "\n".join(head) + "\n" + fixed_width(["channel", "term", "value", "unit", "support"], rows)
 
 
+#: The support of a resolved term that holds half the Allan variance at no cluster time.
+_NOWHERE_LEADING = "under half the variance at every τ; resolved by the joint fit"
+
+
 def _cells(r: ChannelResult, name: str) -> list[str]:
     """One term's value, unit and support (or what it would need) in the table."""
     from sins.characterise.analysis import DISPLAY, UNBOUNDED, display, duration
@@ -153,7 +157,9 @@ def _cells(r: ChannelResult, name: str) -> list[str]:
             support = f"needs sampling at ≥ {t.needs_rate_hz:.3g} Hz"
         return [f"not resolved (< {display(r.sensor, name, t.upper)})", unit, support]
     text = f"{display(r.sensor, name, t.value)} ± {display(r.sensor, name, t.sigma)}"
-    support = f"τ {t.support_tau_s[0]:.3g}-{t.support_tau_s[-1]:.3g} s" if t.support_tau_s else ""
+    support = (  # a term may hold half the variance at no τ and still be resolved by the joint fit
+        f"τ {t.support_tau_s[0]:.3g}-{t.support_tau_s[-1]:.3g} s" if t.support_tau_s else _NOWHERE_LEADING
+    )
     if name == "gauss_markov" and r.fit.tau_c_range_s:
         lo, hi = r.fit.tau_c_range_s
         support = f"T {r.fit.tau_c_s:.3g} s ({lo:.3g}-{hi:.3g}); " + support
