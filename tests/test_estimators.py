@@ -223,3 +223,16 @@ def test_every_number_a_strategy_takes_has_a_range_that_is_held(name: str, tmp_p
                 compensation.load(damaged)
             said = str(refused.value)
             assert said.startswith(f"{damaged}: malformed") and param in said and "\n" not in said
+
+
+@pytest.mark.parametrize("name", sorted(set(compensation.VARIANTS) - {"oracle"}))
+def test_every_grid_a_strategy_takes_is_refused_empty(name: str) -> None:
+    # An empty list of candidates (mlp's decays or hidden_sizes, kohonen's sizes or sigmas) was taken by
+    # make and failed in fit ("no fold could be fitted (too few blocks)"; kohonen's sigmas in min()).
+    strategy = compensation.make(name)
+    for param, value in strategy.params().items():
+        if isinstance(value, list) and value:
+            # (a network's layers are refused by its constructor, in its words: "must be 1 to 4 ...")
+            said = rf"^([a-z_]+: )?{param}(: each candidate)? (is .*, expected one or more|must be)"
+            with pytest.raises(ValueError, match=said):
+                compensation.make(name, **{param: []})

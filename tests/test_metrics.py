@@ -66,6 +66,22 @@ def test_accumulator_in_chunks_equals_one_pass():
     np.testing.assert_array_equal(kept.pos_ned_m[-1], e.pos_ned_m[-1])
 
 
+def test_a_diverged_chunk_leaves_the_largest_error_not_a_number() -> None:
+    # A NaN in the errors (a solution that diverged) had the largest horizontal error read 0.0 (Python's
+    # max(0.0, nan)) where every other figure read NaN; in a chunked run it kept the value from before.
+    n = 20
+    pos = np.ones((n, 3))
+    pos[5, 0] = np.nan
+    e = NavErrors(
+        t=np.arange(n) * 0.1, pos_ned_m=pos, vel_ned_mps=np.zeros((n, 3)), att_rpy_rad=np.zeros((n, 3))
+    )
+    assert np.isnan(summarize(e).max_horizontal_m)
+    acc = DriftAccumulator()
+    acc.add(NavErrors(e.t[:10], e.pos_ned_m[:10], e.vel_ned_mps[:10], e.att_rpy_rad[:10]))
+    acc.add(NavErrors(e.t[10:], e.pos_ned_m[10:], e.vel_ned_mps[10:], e.att_rpy_rad[10:]))
+    assert np.isnan(acc.summary().max_horizontal_m)
+
+
 def _random_pair(n: int, seed: int) -> tuple[NavSeries, NavSeries]:
     """A truth wandering over the globe (both hemispheres, the antimeridian) and an estimate off it by
     metres, the longitude error sometimes across ±π."""

@@ -446,6 +446,22 @@ def test_dataset_names_and_a_missing_one(tmp_path: Path) -> None:
     refusal(lambda: io.read(dataset="unit/../x", root=tmp_path).beside_reference(), "expected FOLDER/NAME")
     # The file's name given for the dataset's: said so (before: no such file unit/a.npz.npz).
     refusal(lambda: io.read(dataset="unit/a.npz", root=tmp_path), "the name without .npz (unit/a)")
+    # The library's refusals name its arguments, not the command line's flags (they had said --dataset).
+    with pytest.raises(ValueError, match=r"^dataset 'unit/a\.npz'"):
+        io.read(dataset="unit/a.npz", root=tmp_path)
+
+
+def test_an_origin_not_in_radians_or_not_three_numbers_is_refused(tmp_path: Path) -> None:
+    # The library takes the origin in radians (the command line in degrees): (45, 7, 100) given in degrees
+    # had placed the room at 58.3° N (45 rad), NaN made every latitude NaN, and two numbers failed in
+    # numpy's words.
+    (tmp_path / "unit").mkdir()
+    _write(tmp_path / "unit" / "a.npz")
+    for origin, said in [((45.0, 7.0, 100.0), "in radians"), ((np.nan, 0.0, 0.0), "in radians"),
+                         ((0.7, 0.1), "expected (lat, lon, h)")]:  # fmt: skip
+        refusal(lambda o=origin: io.read(dataset="unit/a", root=tmp_path, origin=o), "origin", said)
+    rec = io.read(dataset="unit/a", root=tmp_path, origin=(np.radians(47.4), np.radians(8.5), 400.0))
+    assert rec.beside_reference().latitude_known
 
 
 def test_the_room_is_placed_at_45_degrees_or_where_given(tmp_path: Path) -> None:

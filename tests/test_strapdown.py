@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from sins.core import earth
+from sins.core.series import ImuRates
 from sins.nav import strapdown, trajectory
 from sins.nav.metrics import DriftAccumulator, nav_errors, summarize
 from sins.nav.motion import Accelerate, Climb, Hold, Rotate, SegmentMotion, Start, Turn
@@ -260,6 +261,10 @@ def test_bad_arguments_are_refused():
             strapdown.integrate(bad, init)
     with pytest.raises(ValueError, match="t must increase"):
         strapdown.integrate(dataclasses.replace(imu, t=imu.t[::-1].copy()), init)
+    # Rates, what most readers give: an AttributeError ('ImuRates' object has no attribute 'dtheta_b').
+    rates = ImuRates(t=imu.t[1:], omega_ib_b=imu.dtheta_b, f_ib_b=imu.dv_b)
+    with pytest.raises(TypeError, match=r"expected ImuIncrements, got ImuRates \(rates: integrate rates"):
+        strapdown.integrate(rates, init)  # type: ignore[arg-type]
 
 
 def test_a_damp_loop_shorter_than_two_steps_is_refused_as_a_scenario_refuses_it() -> None:

@@ -263,6 +263,17 @@ def test_a_long_runs_thinned_series_stay_bounded():
     assert len(run.runs["none"].errors.t) <= pipeline.MAX_KEPT + 2
 
 
+@pytest.mark.parametrize("keep_hz", [0.0, -1.0, float("nan")])
+def test_a_rate_of_kept_samples_that_is_not_positive_is_refused_as_itself(keep_hz):
+    # 0 divided by zero, -1 kept every sample, NaN was blamed on the scenario file ("cannot convert").
+    hold = {"type": "hold", "duration_s": 5.0}
+    sc = scenario.from_dict(
+        {"name": "still", "imu": {"rate_hz": 10}, "initial": {"lat_deg": 45.0}, "segment": [hold]}
+    )
+    with pytest.raises(ValueError, match=r"^keep_hz .*: expected a positive rate of kept samples"):
+        pipeline.run_scenario(sc, keep_hz=keep_hz)
+
+
 def test_the_compiled_recursions_equal_the_array_code_they_replace():
     # Each compiled loop against the numpy/scipy code it replaced (written out here), to the last bit:
     # the same operations in the same order, so equal, not close.

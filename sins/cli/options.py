@@ -182,7 +182,7 @@ def _origin(text: str) -> tuple[float, float, float]:
         lat, lon, h = (float(p) for p in parts)
     except ValueError:
         raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
-    from sins.scenario import MAX_LAT_DEG  # a scenario's bound: the navigation is singular at a pole
+    from sins.core.earth import MAX_LAT_DEG  # the navigation is singular at a pole
 
     if not (abs(lat) <= MAX_LAT_DEG and abs(lon) <= 360.0 and abs(h) <= MAX_HEIGHT_M):
         raise SinsInputError(f"--origin {text!r}: latitude ±{MAX_LAT_DEG:g}°, longitude ±360°, height ±1e5 m")

@@ -264,6 +264,8 @@ class Strategy(ABC):
         for name, allowed in self.param_ranges.items():
             value = getattr(self, name)
             items = value if isinstance(value, list | tuple) else [value]
+            if not items:  # an empty grid had passed here and failed in fit ("no fold could be fitted")
+                raise ValueError(f"{self.label}: {name} is {value!r}, expected one or more of {allowed}")
             if not all(allowed.holds(v) for v in items):
                 raise ValueError(f"{self.label}: {name} is {value!r}, expected {allowed}")
 

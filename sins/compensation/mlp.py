@@ -416,7 +416,13 @@ class ResidualMLP(ResidualStrategy):
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
-        self.hidden_sizes = tuple(check_hidden(tuple(hs), "hidden_sizes") for hs in hidden_sizes)
+        # One or more candidates, each a tuple of layer sizes: [] had failed in fit ("no fold could be
+        # fitted"), and [16] (one candidate's sizes, not a list of them) in Python's words.
+        if not isinstance(hidden_sizes, list | tuple) or not hidden_sizes:
+            raise ValueError(f"hidden_sizes is {hidden_sizes!r}, expected one or more tuples of layer sizes")
+        self.hidden_sizes = tuple(
+            check_hidden(hs, "hidden_sizes: each candidate") for hs in hidden_sizes
+        )  # a bare number is no tuple of sizes: check_hidden refuses it
         self.decays = tuple(float(d) for d in decays)
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:

@@ -32,6 +32,9 @@ B = A * (1.0 - F)
 GM = 3.986004418e14
 #: Earth rotation rate, rad/s.
 OMEGA_IE = 7.292115e-5
+#: The largest latitude sins navigates at, degrees: the latitude/longitude mechanisation is singular at a
+#: pole (a scenario's ``[initial] lat_deg``, an origin given to a reader or a command).
+MAX_LAT_DEG = 89.9
 #: Normal gravity at the equator and at the poles, m/s² (WGS84).
 GAMMA_E = 9.7803253359
 GAMMA_P = 9.8321849378
@@ -135,6 +138,7 @@ __all__ = [
     "GAMMA_E",
     "GAMMA_P",
     "GM",
+    "MAX_LAT_DEG",
     "OMEGA_IE",
     "A",
     "B",

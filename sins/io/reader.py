@@ -12,10 +12,12 @@ start with ``_``).
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+from sins.core.earth import MAX_LAT_DEG
 from sins.core.series import NavSeries
 from sins.errors import LateStartError, SinsInputError
 from sins.io import rig
@@ -82,6 +84,7 @@ def read(
     """
     if (source is None) == (dataset is None):
         raise SinsInputError("read: give a recording's path or a dataset's name (one of them)")
+    _check_origin(origin)
     given = {"topic": topic, "columns": columns, "units": units, "frame": frame, "rate_hz": rate_hz,
              "truth_topic": truth_topic, "origin": origin, "t_start": t_start}  # fmt: skip
     if dataset is not None:
@@ -128,6 +131,23 @@ def read(
     return dataclasses.replace(
         rec, truth=reference, truth_from=given_from, heading_known=True, latitude_known=True
     )
+
+
+def _check_origin(origin: tuple[float, float, float] | None) -> None:
+    """Refuse an origin that is not three finite numbers within the navigation's bounds, in radians: given
+    in degrees by mistake, ``(45.0, 7.0, 100.0)`` had placed the frame at 58.3° N, and NaN every latitude."""
+    if origin is None:
+        return
+    try:
+        lat, lon, h = (float(x) for x in origin)
+    except (TypeError, ValueError):
+        raise SinsInputError(f"origin {origin!r}: expected (lat, lon, h) in rad, rad, m") from None
+    max_lat = math.radians(MAX_LAT_DEG)
+    if not (abs(lat) <= max_lat and abs(lon) <= 2.0 * math.pi and abs(h) <= 1e5):
+        raise SinsInputError(
+            f"origin ({lat:g}, {lon:g}, {h:g}): expected (lat, lon, h) in radians and metres, the latitude "
+            f"within ±{max_lat:.4g} rad (±{MAX_LAT_DEG:g}°), the longitude ±2π, the height ±1e5 m"
+        )
 
 
 def _start(t_start: float | None, reference: NavSeries | None) -> float | None:

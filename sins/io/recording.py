@@ -319,7 +319,7 @@ def _read_path(
     if rate_hz is not None and not RATE_HZ_RANGE[0] <= rate_hz <= RATE_HZ_RANGE[1]:
         low, high = RATE_HZ_RANGE
         raise SinsInputError(
-            f"--rate {rate_hz:g}: a sampling rate is within {low:g} Hz to {high:g} Hz ({path})"
+            f"{path}: a sampling rate of {rate_hz:g} Hz given; a rate is within {low:g} Hz to {high:g} Hz"
         )
     kind = recording_kind(path)
     _check_options(path, kind, topic=topic, columns=columns, truth_topic=truth_topic, origin=origin)

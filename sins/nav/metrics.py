@@ -287,7 +287,8 @@ class DriftAccumulator:
         hor = errors.horizontal_m if horizontal is None else horizontal
         if self._t0 is None:
             self._t0 = float(errors.t[0])
-        self._max_hor = max(self._max_hor, float(hor.max()))
+        # np.maximum, not max(): a NaN (a diverged solution) stays NaN, where max(0.0, nan) read 0.0
+        self._max_hor = float(np.maximum(self._max_hor, hor.max()))
         self._sum_hor2 += float(np.dot(hor, hor))
         self._max_att = np.maximum(self._max_att, _max_abs_columns(np.ascontiguousarray(errors.att_rpy_rad)))
         if self.keep_every:

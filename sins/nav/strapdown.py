@@ -391,7 +391,13 @@ def moved(state: Array, to: InitialState) -> Array:
 def _check_increments(imu: ImuIncrements) -> None:
     """Refuse increments the compiled kernel would read past the end of, or integrate backwards: ``t``
     (n+1,) increasing, ``dtheta_b`` and ``dv_b`` (n, 3). The kernel checks no bounds (it is compiled for
-    speed), so a mismatch gave results that changed from run to run, not an error."""
+    speed), so a mismatch gave results that changed from run to run, not an error. Rates (most readers'
+    form) are refused with what converts them, where they failed on a missing attribute."""
+    if not isinstance(imu, ImuIncrements):
+        raise TypeError(
+            f"increments: expected ImuIncrements, got {type(imu).__name__} (rates: integrate "
+            "rates.to_increments())"
+        )
     t, dtheta, dv = np.shape(imu.t), np.shape(imu.dtheta_b), np.shape(imu.dv_b)
     if len(dtheta) != 2 or dtheta[1] != 3 or dv != dtheta or t != (dtheta[0] + 1,):
         raise ValueError(
@@ -428,8 +434,8 @@ def advance(
     states : NavSeries of the kept states after the chunk's steps
     state : the updated state (a new array)
     """
-    n = len(imu.dtheta_b)
     _check_increments(imu)
+    n = len(imu.dtheta_b)
     mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s, imu.t)
     state = np.array(state, dtype=float)
     first = int(state[_COUNTDOWN])

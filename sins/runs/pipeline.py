@@ -147,6 +147,8 @@ def run_units(
     """
     if len(units) != len(nav_seeds):
         raise ValueError(f"{len(units)} units but {len(nav_seeds)} navigation seeds")
+    if not 0.0 < keep_hz < math.inf:  # 0 divided by zero, -1 kept every sample, NaN blamed the scenario
+        raise ValueError(f"keep_hz {keep_hz!r}: expected a positive rate of kept samples, Hz")
     with input_errors(sc.source or sc.name):
         motion = scenario.build_motion(sc)
         keep_every = _keep_every(sc, motion, keep_hz)

@@ -9,6 +9,7 @@ import numpy as np
 
 from sins import io
 from sins.core import earth
+from sins.core.earth import MAX_LAT_DEG
 from sins.core.series import NavSeries
 from sins.errors import SinsInputError
 from sins.nav import motion, trajectory
@@ -161,10 +162,6 @@ def sample_count(scenario: Scenario, motion_: motion.Motion | None = None) -> fl
     """
     m = build_motion(scenario) if motion_ is None else motion_
     return float(trajectory.interval_count(m.t_end - m.t_start, scenario.rate_hz))
-
-
-#: The largest latitude a trajectory may reach, degrees: the bound of ``[initial] lat_deg``.
-MAX_LAT_DEG = 89.9
 
 
 def check_latitude(scenario: Scenario, truth: NavSeries) -> None:

@@ -49,11 +49,11 @@ def npz_path(name: str, root: str | os.PathLike[str] | None = None) -> Path:
     folder, _, stem = name.partition("/")
     if not folder or not stem or "/" in stem or stem in (".", "..") or folder in (".", ".."):
         raise SinsInputError(
-            f"--dataset {name!r}: expected FOLDER/NAME (NAME.npz in a folder of the data root)"
+            f"dataset {name!r}: expected FOLDER/NAME (NAME.npz in a folder of the data root)"
         )
     if stem.lower().endswith(".npz"):
         raise SinsInputError(
-            f"--dataset {name!r}: the name without .npz ({folder}/{stem[:-4]}), or the file's path"
+            f"dataset {name!r}: the name without .npz ({folder}/{stem[:-4]}), or the file's path"
         )
     return dataset_file(folder, f"{stem}.npz", root)
 
