@@ -454,6 +454,17 @@ def test_a_symbolic_link_is_followed_and_stays_a_link(files: Path, tmp_path: Pat
     assert _digests([rig]) == before
 
 
+def test_bias_only_on_a_rig_recording_is_one_line(files: Path, tmp_path: Path) -> None:
+    # A walk's `sins fit rig.csv --strategy bias_only` ended in a traceback of 21 lines (the progress
+    # bar's unit asked make() for a strategy fitted against a trajectory only), whose hint named the
+    # very command run; ferraris and oracle were refused in one line.
+    rig = files / "rig.csv"
+    rc, _, err = run_cli(["fit", str(rig), "--strategy", "bias_only", "--out", str(tmp_path / "m.json")])
+    assert rc == 2 and "bias_only is fitted against a trajectory's reference, and this is a rig" in err, err
+    assert_one_line(err, [rig])
+    assert not (tmp_path / "m.json").exists()
+
+
 def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
     """``sins simulate --imu A --truth B``: where the second write fails (``/dev/full``: no space), the
     first is not left replaced beside it; before, the new IMU file stood beside another run's truth (or

@@ -62,7 +62,11 @@ def progress_unit(name: str) -> str:
     from sins import compensation
     from sins.compensation.mlp import MLP
 
-    return "epochs" if isinstance(compensation.make(name), MLP) else "trainings"
+    try:
+        strategy = compensation.make(name)
+    except ValueError:  # bias_only, an unknown name: the fit refuses it in one line (a traceback, here)
+        return "trainings"
+    return "epochs" if isinstance(strategy, MLP) else "trainings"
 
 
 def fit_rig(
@@ -87,7 +91,8 @@ def fit_rig(
 
     if name == "bias_only":
         raise SinsInputError(
-            f"--strategy bias_only: fits a trajectory's reference; {where} is a rig recording"
+            f"{where}: bias_only is fitted against a trajectory's reference, and this is a rig recording "
+            "(the other strategies fit one)"
         )
     lines: list[str] = []
     angles = any(p.angle_rad is not None for p in data.phases)
