@@ -465,6 +465,21 @@ def test_bias_only_on_a_rig_recording_is_one_line(files: Path, tmp_path: Path) -
     assert not (tmp_path / "m.json").exists()
 
 
+def test_a_fit_whose_reader_goes_away_keeps_its_model(files: Path, tmp_path: Path) -> None:
+    # `sins fit … | head -2`: the pipe's reader gone, the fit's print met a broken pipe and the command
+    # ended there, its model (done) thrown away ("none of its outputs written"). Now the rest of what it
+    # prints goes nowhere, the model lands, and it exits with SIGPIPE's status, quietly.
+    model = tmp_path / "m.json"
+    sins = Path(sys.executable).parent / "sins"
+    argv = [str(sins), "fit", str(files / "rig.csv"), "--strategy", "regression", "--out", str(model)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # every print meets a closed pipe
+    err = proc.stderr.read().decode()
+    assert proc.wait(120) == 141 and "none of its outputs written" not in err, err
+    assert json.loads(model.read_text())["strategy"] == "regression"
+
+
 def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
     """``sins simulate --imu A --truth B``: where the second write fails (``/dev/full``: no space), the
     first is not left replaced beside it; before, the new IMU file stood beside another run's truth (or

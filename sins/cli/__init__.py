@@ -36,7 +36,7 @@ from sins.cli import (
     strategies,
 )
 from sins.cli.common import Subparsers
-from sins.cli.signals import Seen, Terminated, signals_as_exceptions
+from sins.cli.signals import Seen, Terminated, pipe_outliving_its_reader, signals_as_exceptions
 from sins.errors import MissingInputError, SinsInputError
 
 #: Every subcommand, in the order ``sins --help`` lists them.
@@ -169,10 +169,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     seen: Seen | None = None
     try:
         # argv None: this process is the command (its console script), held off signals after it
-        with signals_as_exceptions(process=argv is None) as seen, _together(args.command, discarded):
+        with (
+            signals_as_exceptions(process=argv is None) as seen,
+            pipe_outliving_its_reader() as out,
+            _together(args.command, discarded),
+        ):
             status = int(args.func(args))
+            out.flush()  # a reader gone is found here at the latest: the outputs land all the same
             seen.landing()  # its outputs land now, whatever signal comes (sins.cli.signals)
-            return status
+            return 141 if out.broken and status == 0 else status
     except MissingInputError as exc:
         flag = _FLAG_FOR.get(exc.needs)
         print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)

@@ -15,9 +15,12 @@ replaced some files and not others, or all of them and then exited 130 without a
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
+from typing import Any, TextIO
 
 
 class Terminated(BaseException):
@@ -87,4 +90,55 @@ def signals_as_exceptions(*, process: bool = False) -> Iterator[Seen]:
                 signal.signal(s, handler)
 
 
-__all__ = ["ENDING", "Seen", "Terminated", "signals_as_exceptions"]
+class PipeOut:
+    """The standard output a command prints to, which outlives its reader: where the reader goes away
+    (``sins fit … | head -2``), the rest of what is printed goes nowhere and the command goes on, its
+    outputs landing as they would (:attr:`broken` says so: the command then exits 141, SIGPIPE's). A
+    broken pipe had ended the command where it printed: a fit done, its model thrown away."""
+
+    def __init__(self, out: TextIO) -> None:
+        self._out = out
+        self.broken = False
+
+    def write(self, text: str) -> int:
+        """Write ``text`` while a reader reads; after, take it and drop it."""
+        if not self.broken:
+            try:
+                return self._out.write(text)
+            except BrokenPipeError:
+                self._gone()
+        return len(text)
+
+    def flush(self) -> None:
+        """Flush while a reader reads (a reader gone found here too)."""
+        if not self.broken:
+            try:
+                self._out.flush()
+            except BrokenPipeError:
+                self._gone()
+
+    def _gone(self) -> None:
+        """The reader went away: what the stream still holds, and the interpreter's flush at exit, go to
+        the null device, quietly (Python had said "Exception ignored … BrokenPipeError" at exit)."""
+        self.broken = True
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # a stream with no descriptor
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._out.fileno())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._out, name)
+
+
+@contextlib.contextmanager
+def pipe_outliving_its_reader() -> Iterator[PipeOut]:
+    """Within the block, ``sys.stdout`` is a :class:`PipeOut` of it (flushed at the block's end, where a
+    reader gone is found at the latest); the stream before is restored after."""
+    out = PipeOut(sys.stdout)
+    sys.stdout = out
+    try:
+        yield out
+        out.flush()
+    finally:
+        sys.stdout = out._out
+
+
+__all__ = ["ENDING", "PipeOut", "Seen", "Terminated", "pipe_outliving_its_reader", "signals_as_exceptions"]
