@@ -600,6 +600,30 @@ def _rig_unit(files: Path) -> str:
     return provenance.read_provenance(files / "rig.csv").sensor
 
 
+def test_readings_a_model_corrected_already_are_neither_judged_nor_fitted_on(
+    files: Path, tmp_path: Path
+) -> None:
+    """``sins correct`` refuses its own output (the model twice); ``evaluate`` had judged a model on it
+    (the corrected readings shown as "raw", the model's figure a double correction) and ``fit`` had made
+    a model of what the correction left, its unit that of the raw readings, so that it passed the unit
+    check on them later. Both refuse it now, in one line saying why; the raw recording is taken."""
+    model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
+    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    corrected = tmp_path / "c.csv"
+    assert run_cli(["correct", str(model), str(rec), "--out", str(corrected)])[0] == 0
+    truth, refit = str(files / "truth.csv"), str(tmp_path / "r.json")
+    for argv, why in (
+        (["evaluate", str(model), str(corrected), "--truth", truth], "judging a model on them applies"),
+        (["fit", str(corrected), "--truth", truth, "--strategy", "regression", "--out", refit],
+         "a model fitted on them is of what that correction left"),
+    ):  # fmt: skip
+        rc, _, err = run_cli(argv)
+        assert rc == 2 and f"{corrected}: already corrected" in err and why in err, err
+        assert_one_line(err, [corrected])
+    assert not (tmp_path / "r.json").exists()
+    assert run_cli(["evaluate", str(model), str(rec), "--truth", truth])[0] == 0
+
+
 def test_a_model_of_another_unit_is_refused_on_every_path(files: Path, tmp_path: Path) -> None:
     """The model was fitted on the rig's simulated unit (its file says which): the tactical unit
     simulated in ``inc.csv`` is another one, for ``correct`` and ``evaluate`` alike."""

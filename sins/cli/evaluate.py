@@ -33,6 +33,9 @@ if TYPE_CHECKING:
     from sins.compensation.evaluation import Evaluation
     from sins.core.series import CalibrationData, ReferencedRecording
 
+#: Why evaluate refuses readings a model corrected already (:func:`sins.cli.options.read_recording`).
+_EVALUATE_RAW = "judging a model on them applies a correction twice, and calls the corrected readings raw"
+
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins import compensation, io
@@ -54,7 +57,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     recording, dataset = (paths or [None])[0], (names or [None])[0]
     where = dataset or str(recording)
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        rec = read_recording(args, recording, dataset, args.truth)
+        rec = read_recording(args, recording, dataset, args.truth, raw=_EVALUATE_RAW)
     referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
     if rec.rig is None and not rec.has_trajectory:
         missing = io.recording.missing_reference(rec)
@@ -91,7 +94,7 @@ def _evaluate_several(
     recordings = {}
     for name, path, dataset in inputs:
         with progress_bar(f"reading {name}", ""):
-            rec = read_recording(args, path, dataset)
+            rec = read_recording(args, path, dataset, raw=_EVALUATE_RAW)
         referenced.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))
         if not rec.has_trajectory:
             raise SinsInputError(

@@ -26,6 +26,9 @@ GRADES = ("consumer", "industrial", "tactical", "navigation")
 if TYPE_CHECKING:
     from sins.compensation.fitting import FitOutcome
 
+#: Why a fit refuses readings a model corrected already (:func:`sins.cli.options.read_recording`).
+_FIT_RAW = "a model fitted on them is of what that correction left, and would pass for the unit's whole model"
+
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from sins import compensation, io
@@ -75,7 +78,7 @@ def _fit_several(args: argparse.Namespace) -> FitOutcome:
         for kind, name in named:
             bar.set_description(f"reading {name}")
             if kind == "path":
-                got = read_recording(args, name, None)
+                got = read_recording(args, name, None, raw=_FIT_RAW)
             else:  # the format options given are for the paths beside it
                 got = read_recording(args, None, name)  # a reader option not applying: refused
             if got.rig is not None or not got.has_trajectory:
@@ -114,7 +117,7 @@ def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | Non
     from sins.compensation import fitting
 
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
-        rec = read_recording(args, recording, dataset, args.truth)
+        rec = read_recording(args, recording, dataset, args.truth, raw=_FIT_RAW)
     if rec.rig is not None:
         if args.screen != "refused":
             raise SinsInputError(

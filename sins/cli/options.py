@@ -123,14 +123,18 @@ def read_recording(
     truth: str | os.PathLike[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
     options: dict[str, Any] | None = None,
+    raw: str = "",
 ) -> Recording:
     """A command's recording through :func:`sins.io.read`: a path with :func:`add_recording_options`'s
     flags (or the reader ``options`` given), or a dataset's name (the refusals said in the command's own
-    flags)."""
+    flags); ``raw``: a recording a model corrected already is refused, for that reason."""
     from sins import io
+    from sins.io.provenance import read_provenance
 
     if (recording is None) == (dataset is None):
         raise SinsInputError("give a RECORDING or --dataset NAME (one of them)")
+    if raw and recording is not None and (by := read_provenance(recording).corrected_by):
+        raise SinsInputError(f"{recording}: already corrected ({by}); {raw}: give the raw recording")
     chosen = recording_options(args) if options is None else options
     if dataset is not None:
         if truth is not None:
@@ -164,15 +168,11 @@ def check_distinct(paths: list[str], datasets: list[str], command: str) -> None:
 
 def recording_options(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of :func:`sins.io.read` from :func:`add_recording_options`'s flags."""
+    origin = None if args.origin is None else _origin(args.origin)
     return {
-        "topic": args.topic,
-        "truth_topic": args.truth_topic,
-        "columns": args.columns,
-        "units": args.units,
-        "frame": args.frame,
-        "rate_hz": args.rate,
-        "origin": None if args.origin is None else _origin(args.origin),
-    }
+        "topic": args.topic, "truth_topic": args.truth_topic, "columns": args.columns, "units": args.units,
+        "frame": args.frame, "rate_hz": args.rate, "origin": origin,
+    }  # fmt: skip
 
 
 def _origin(text: str) -> tuple[float, float, float]:
