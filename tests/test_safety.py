@@ -624,6 +624,22 @@ def test_readings_a_model_corrected_already_are_neither_judged_nor_fitted_on(
     assert run_cli(["evaluate", str(model), str(rec), "--truth", truth])[0] == 0
 
 
+def test_a_correction_that_no_reader_would_read_back_is_not_written(files: Path, tmp_path: Path) -> None:
+    # A model whose gyro bias is 1e11 rad/s (within a model file's bounds, 1e12) had written corrected
+    # readings of -1e11 rad/s, which sins inspect then refused (beyond 1e4 rad/s): sins wrote a file it
+    # does not read. The correction is refused now, nothing written.
+    model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
+    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    doc = json.loads(model.read_text())
+    doc["state"]["B0_"] = [1e11, 0.0, 0.0]
+    model.write_text(json.dumps(doc))
+    out = tmp_path / "c.csv"
+    rc, _, err = run_cli(["correct", str(model), str(rec), "--out", str(out)])
+    assert rc == 2 and "reach a rate of 1.0" in err and "beyond the 10000 rad/s" in err, err
+    assert_one_line(err, [model])
+    assert not out.exists()
+
+
 def test_a_model_of_another_unit_is_refused_on_every_path(files: Path, tmp_path: Path) -> None:
     """The model was fitted on the rig's simulated unit (its file says which): the tactical unit
     simulated in ``inc.csv`` is another one, for ``correct`` and ``evaluate`` alike."""

@@ -80,7 +80,28 @@ def _corrected(
         out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
+    _check_readable(out, f"{args.model} on {where}")
     return out, None if rows_temp is None else {"temp": rows_temp}
+
+
+def _check_readable(out: ImuRates | ImuIncrements, where: str) -> None:
+    """Refuse corrected readings that no reader of sins would read back (beyond its rate and force
+    limits, or not finite): a model whose bias is 1e11 rad/s (within a model file's bounds) had written a
+    file that ``sins inspect`` then refused."""
+    import numpy as np
+
+    from sins.core.series import ImuRates
+    from sins.io.formats import MAX_FORCE_MPS2, MAX_RATE_RADPS
+
+    _, gyro, accel = (out.t, out.omega_ib_b, out.f_ib_b) if isinstance(out, ImuRates) else out.mean_rates()
+    for what, values, limit, unit in (("rate", gyro, MAX_RATE_RADPS, "rad/s"),
+                                      ("specific force", accel, MAX_FORCE_MPS2, "m/s²")):  # fmt: skip
+        worst = float(np.max(np.abs(values), initial=0.0))
+        if not worst <= limit:  # NaN too
+            raise SinsInputError(
+                f"{where}: the corrected readings reach a {what} of {worst:g} {unit}, beyond the {limit:g} "
+                f"{unit} a recording may hold: a damaged model? (nothing written)"
+            )
 
 
 def _readings(rec: Recording) -> tuple[ImuRates | ImuIncrements, Array | None, Array | None]:
