@@ -166,14 +166,22 @@ def test_fit_and_evaluate_on_a_recording(tmp_path: Path, capsys: pytest.CaptureF
     after = np.array([v["rms_after"] for v in channels.values()])
     # What is left is the white noise, divided by (1 + scale factor): consumer units have percent-level ones.
     np.testing.assert_allclose(after, floor, rtol=0.05)
-    # The last 0.3 of each phase is what the fit held back: a held-back judgement. The whole recording,
-    # or its last half, holds rows the model was fitted on, and is said to.
+    # The last 0.3 of each phase is what the fit held back: a held-back judgement. The whole recording
+    # holds rows the model was fitted on, and is said to; its last half, 0.2 of 0.5 in the fit, is 40 %
+    # fitted on, and its last 0.9 67 %, said from half on (both had been said to be the model's own
+    # readings, a share of 1.0).
     assert json.loads(out.read_text())["fitted_on_this_recording"] is False
     capsys.readouterr()
-    for last in ([], ["--last", "0.5"]):
-        assert main(["evaluate", str(model_path), str(rec), *last, "--json", str(out)]) == 0
-        assert json.loads(out.read_text())["fitted_on_this_recording"] is True
-        assert "the model was fitted on these readings" in capsys.readouterr().out
+    assert main(["evaluate", str(model_path), str(rec), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["fitted_on_this_recording"] is True
+    assert "the model was fitted on these readings" in capsys.readouterr().out
+    assert main(["evaluate", str(model_path), str(rec), "--last", "0.5", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["share_in_fit"] == pytest.approx(0.4) and doc["fitted_on_this_recording"] is False
+    assert "model's fit" not in capsys.readouterr().out
+    assert main(["evaluate", str(model_path), str(rec), "--last", "0.9", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["share_in_fit"] == pytest.approx(0.6 / 0.9)
+    assert "about 67% of these readings were in the model's fit" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -83,8 +83,12 @@ def evaluate_rig(
 
     fitted_here, share = _in_fit(strategy, readings_of(data), marks_of(data))
     held_back = float((getattr(strategy, "fitted_on_", None) or {}).get("held_back") or 0.0)
-    if fitted_here and last and last <= held_back:
-        fitted_here, share = False, None  # the part of each phase its fit held back: held back
+    if fitted_here and last and held_back:
+        # The last `last` of each phase, judged, and the last `held_back` of it, which the fit held back:
+        # the rest was in the fit (--last 0.5 of a fit holding back 0.2: 60 %, where it read "fitted on
+        # these readings" and a share of 1.0, the marks being the whole recording's).
+        inside = max(0.0, last - held_back) / last
+        fitted_here, share = False, (inside or None)
     if last:
         try:
             _, data = data.split(last)
