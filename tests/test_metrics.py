@@ -165,3 +165,21 @@ def test_accumulator_with_the_horizontal_given_equals_without():
     a.add(errors)
     b.add(errors, horizontal)
     assert a.summary() == b.summary()
+
+
+def test_a_container_of_mismatched_shapes_is_refused_where_it_is_made() -> None:
+    # A NavSeries whose latitude was shorter than its times failed in nav_errors in numpy's words
+    # ("could not broadcast"), and one whose q_nb had 3 columns was taken; ImuRates and CalibrationData
+    # alike. Each is refused where it is made, naming the container, the field and both shapes.
+    from sins.core.series import CalibrationData, ImuRates
+
+    n, z = 5, np.zeros(5)
+    with pytest.raises(ValueError, match=r"^NavSeries\.lat: expected shape \(5,\) for 5 rows, got \(4,\)"):
+        NavSeries(t=np.arange(n), lat=z[:4], lon=z, h=z, v_n=np.zeros((n, 3)), q_nb=np.zeros((n, 4)))
+    with pytest.raises(ValueError, match=r"^NavSeries\.q_nb: expected shape \(5, 4\)"):
+        NavSeries(t=np.arange(n), lat=z, lon=z, h=z, v_n=np.zeros((n, 3)), q_nb=np.zeros((n, 3)))
+    with pytest.raises(ValueError, match=r"^ImuRates\.omega_ib_b: expected shape \(5, 3\)"):
+        ImuRates(t=np.arange(n), omega_ib_b=np.zeros((n, 2)), f_ib_b=np.zeros((n, 3)))
+    with pytest.raises(ValueError, match=r"^CalibrationData\.temp: expected shape \(5,\)"):
+        three = np.zeros((n, 3))
+        CalibrationData(np.arange(n), three, three, three, three, temp=z[:3])

@@ -30,6 +30,17 @@ STRETCH_SHORTEST_S = 0.5
 STRETCH_LONGEST_S = 60.0
 
 
+def _check_shapes(kind: str, rows: int, **fields: tuple[Array, tuple[int, ...]]) -> None:
+    """Refuse fields whose shapes are not the ones given (``rows`` the series' length): ``ValueError``
+    naming the container, the field and both shapes. Shapes only, no copy: a container is made for every
+    chunk of a stream. A mismatch had been taken and failed later in numpy's words, or gave a figure (a
+    NavSeries whose ``q_nb`` had 3 columns)."""
+    for name, (value, shape) in fields.items():
+        got = np.shape(value)
+        if got != shape:
+            raise ValueError(f"{kind}.{name}: expected shape {shape} for {rows} rows, got {got}")
+
+
 @dataclass(frozen=True)
 class NavSeries:
     """Navigation states at ``n`` times.
@@ -49,6 +60,11 @@ class NavSeries:
     h: Array
     v_n: Array
     q_nb: Array
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        _check_shapes("NavSeries", n, t=(self.t, (n,)), lat=(self.lat, (n,)), lon=(self.lon, (n,)),
+                      h=(self.h, (n,)), v_n=(self.v_n, (n, 3)), q_nb=(self.q_nb, (n, 4)))  # fmt: skip
 
     def __len__(self) -> int:
         return len(self.t)
@@ -107,6 +123,12 @@ class ImuIncrements:
     dtheta_b: Array
     dv_b: Array
 
+    def __post_init__(self) -> None:
+        n = len(self.dtheta_b)
+        edges = (0,) if n == 0 and len(self.t) == 0 else (n + 1,)  # no rows: no boundary needed either
+        _check_shapes("ImuIncrements", n, t=(self.t, edges), dtheta_b=(self.dtheta_b, (n, 3)),
+                      dv_b=(self.dv_b, (n, 3)))  # fmt: skip
+
     def __len__(self) -> int:
         return len(self.dtheta_b)
 
@@ -132,6 +154,11 @@ class ImuRates:
     t: Array
     omega_ib_b: Array
     f_ib_b: Array
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        _check_shapes("ImuRates", n, t=(self.t, (n,)), omega_ib_b=(self.omega_ib_b, (n, 3)),
+                      f_ib_b=(self.f_ib_b, (n, 3)))  # fmt: skip
 
     def __len__(self) -> int:
         return len(self.t)
@@ -201,6 +228,13 @@ class CalibrationData:
     temp: Array | None = None
     phases: tuple[RigPhase, ...] = ()
     source: str = ""
+
+    def __post_init__(self) -> None:
+        n, three = len(self.t), (len(self.t), 3)
+        temp = {} if self.temp is None else {"temp": (self.temp, (n,))}
+        _check_shapes("CalibrationData", n, t=(self.t, (n,)), gyro=(self.gyro, three),
+                      accel=(self.accel, three), ref_gyro=(self.ref_gyro, three),
+                      ref_accel=(self.ref_accel, three), **temp)  # fmt: skip
 
     def __len__(self) -> int:
         return len(self.t)
