@@ -236,3 +236,13 @@ def test_every_grid_a_strategy_takes_is_refused_empty(name: str) -> None:
             said = rf"^([a-z_]+: )?{param}(: each candidate)? (is .*, expected one or more|must be)"
             with pytest.raises(ValueError, match=said):
                 compensation.make(name, **{param: []})
+
+
+def test_a_temperature_of_the_wrong_length_is_said_in_the_increments_terms() -> None:
+    # Ten temperatures for ten increments (eleven times) read "temp must be (10,), got (9,)": sizes the
+    # caller never passed (the midpoints' made from them).
+    rng = np.random.default_rng(3)
+    dtheta, dv = rng.normal(size=(10, 3)), rng.normal(size=(10, 3))
+    imu = ImuIncrements(t=np.arange(11) * 0.01, dtheta_b=dtheta, dv_b=dv)
+    with pytest.raises(ValueError, match=r"^temp must be \(11,\) \(at imu\.t\), got \(10,\)"):
+        compensation.make("none").correct_increments(imu, temp=np.zeros(10))

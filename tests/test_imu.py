@@ -1164,3 +1164,21 @@ def test_an_hour_at_100_hz_with_the_baseline_effects():
     ):
         np.testing.assert_allclose(err_g, bg + lin_g, rtol=0, atol=Z * dens_g / np.sqrt(span))
         np.testing.assert_allclose(err_a, ba + lin_a, rtol=0, atol=Z * dens_a / np.sqrt(span))
+
+
+@pytest.mark.parametrize("t", [[0.0, 0.01, 0.01, 0.02, 0.03, 0.04], [0.0, 0.01, 0.02, 0.015, 0.03, 0.04]])
+def test_times_that_do_not_increase_are_refused_not_integrated(t: list[float]) -> None:
+    # A repeated or backward stamp had made corrupt_rates and corrupt_increments NaN rows (numpy's
+    # divide-by-zero warnings) and ImuRates.to_increments increments of the wrong sign, without a word.
+    t_s = np.array(t)
+    rates = ImuRates(t=t_s, omega_ib_b=np.zeros((6, 3)), f_ib_b=np.tile([0.0, 0.0, -9.8], (6, 1)))
+    model = ImuModel((Noise("gyro", 1e-3), Noise("accel", 1e-3)))
+    increments = ImuIncrements(t=t_s, dtheta_b=np.zeros((5, 3)), dv_b=np.zeros((5, 3)))
+    calls = {
+        "ImuRates.to_increments": rates.to_increments,
+        "corrupt_rates": lambda: model.corrupt_rates(rates, seed=1),
+        "corrupt_increments": lambda: model.corrupt_increments(increments, seed=1),
+    }
+    for what, call in calls.items():
+        with pytest.raises(ValueError, match=rf"^{what}: t must increase from each sample to the next"):
+            call()

@@ -158,6 +158,8 @@ class Strategy(ABC):
         sensor read ``time_offset_s_`` later first where the strategy has one."""
         imu = self.aligned_increments(imu)
         dt = np.diff(imu.t)
+        if temp is not None and np.shape(temp) != np.shape(imu.t):  # in the caller's terms
+            raise ValueError(f"temp must be {np.shape(imu.t)} (at imu.t), got {np.shape(temp)}")
         mid_temp = None if temp is None else 0.5 * (np.asarray(temp)[:-1] + np.asarray(temp)[1:])
         omega_ib_b, f_ib_b = self.correct(imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None], mid_temp)
         return ImuIncrements(

@@ -41,6 +41,18 @@ def _check_shapes(kind: str, rows: int, **fields: tuple[Array, tuple[int, ...]])
             raise ValueError(f"{kind}.{name}: expected shape {shape} for {rows} rows, got {got}")
 
 
+def check_increasing(t: Array, what: str) -> None:
+    """Refuse times that do not increase from each sample to the next: ``ValueError`` naming ``what`` and
+    the first row. Integrating or differentiating over a zero or backward step had given NaN readings, or
+    increments of the wrong sign, without a word (the containers check shapes only)."""
+    steps = np.diff(np.asarray(t, dtype=float))
+    bad = np.flatnonzero(~(steps > 0.0))
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(f"{what}: t must increase from each sample to the next (row {k + 1}: "
+                         f"{float(t[k]):.9g} s, then {float(t[k + 1]):.9g} s)")  # fmt: skip
+
+
 @dataclass(frozen=True)
 class NavSeries:
     """Navigation states at ``n`` times.
@@ -172,6 +184,7 @@ class ImuRates:
         """
         if len(self.t) < 2:
             raise ValueError("rate-form IMU data need at least two samples to form an interval")
+        check_increasing(self.t, "ImuRates.to_increments")
         dt = np.diff(self.t)
         out = []
         for x in (self.omega_ib_b, self.f_ib_b):
@@ -466,4 +479,5 @@ __all__ = [
     "NavSeries",
     "ReferencedRecording",
     "RigPhase",
+    "check_increasing",
 ]

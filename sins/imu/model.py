@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.core.series import ImuIncrements, ImuRates
+from sins.core.series import ImuIncrements, ImuRates, check_increasing
 from sins.imu.effect_set import EffectSet, check_temp, shift_samples
 from sins.imu.effects import Noise, QuantizationNoise
 from sins.imu.numerics import random_stream
@@ -75,6 +75,7 @@ class ImuModel(EffectSet):
         ImuRates with the readings
         """
         t = rates.t
+        check_increasing(t, "corrupt_rates")
         omega_dot = (
             np.gradient(rates.omega_ib_b, t, axis=0) if len(t) > 1 else np.zeros_like(rates.omega_ib_b)
         )
@@ -129,6 +130,7 @@ class ImuModel(EffectSet):
         t = imu.t
         if len(t) < 2:
             return imu
+        check_increasing(t, "corrupt_increments")
         temp = check_temp(temp, t)
         step = float(np.median(np.diff(t))) if dt_nominal is None else dt_nominal
         stream = IncrementStream(self, seed, step)
