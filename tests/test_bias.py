@@ -377,6 +377,13 @@ def test_refusals_without_a_reference(tmp_path: Path, capsys: pytest.CaptureFixt
     err = refused("integrate", str(csv))
     assert "no reference trajectory" in err and "--truth TRUTH.csv" in err and "--align SECONDS" in err
     assert "--lat DEG" in refused("bias", str(csv))
+    # The library says what it misses in its own terms; the command line adds its flag.
+    from sins.characterise import bias as library_bias
+    from sins.errors import MissingInputError
+
+    with pytest.raises(MissingInputError) as missing:
+        library_bias.recording_bias(io.read(csv))
+    assert missing.value.needs == "lat" and "--" not in str(missing.value)
     assert "latitude" in refused("bias", str(csv), "--lat", "91")
     assert "a height within ±1e5 m" in refused("bias", str(csv), "--lat", "45", "--height", "1e12")
     # A gyro bias far above Earth's level rate: no heading to gyrocompass, and none given.

@@ -59,7 +59,7 @@ from sins.characterise.rests import check_rest_rows, earth_rate_rows, first_rows
 from sins.characterise.still import motion, still_rows
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 from sins.imu import CHANNELS, DEG_PER_H, UG
 from sins.io.recording import Recording
 
@@ -534,10 +534,10 @@ def recording_bias(
     where = "given"
     if lat is None:
         if read is None:
-            raise SinsInputError(
-                f"{rec.source}: no latitude: give it with --lat DEG (the recording has no fixes or reference "
-                "to read it from); Earth's rate and gravity depend on it"
-            )
+            raise MissingInputError(
+                f"{rec.source}: no latitude (lat): the recording has no fixes or reference to read it from, "
+                "and Earth's rate and gravity depend on it", needs="lat",
+            )  # fmt: skip
         lat, where = read[0], read[2]
         h = read[1] if h is None else h
     how = "given"

@@ -63,7 +63,8 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
 #: needs them; ``check`` runs campaigns), and those that write nothing.
 _AS_DONE = ("campaign", "check", "scenarios", "effects", "strategies")
 #: The flag that gives what a :class:`MissingInputError` says is missing.
-_FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topic": "--truth-topic TOPIC"}
+_FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topic": "--truth-topic TOPIC",
+             "lat": "--lat DEG", "origin": "--origin LAT,LON,H", "heading": "--heading DEG"}  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:

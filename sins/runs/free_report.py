@@ -12,7 +12,7 @@ import numpy as np
 
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, ImuRates, NavSeries
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 from sins.runs.replay import FreeStart, still_drift
 
 if TYPE_CHECKING:
@@ -38,9 +38,7 @@ def start_position(rec: Recording, origin: tuple[float, float, float] | None) ->
         return origin
     if rec.fixes is not None and len(rec.fixes.t):
         return float(rec.fixes.lat[0]), float(rec.fixes.lon[0]), float(rec.fixes.h[0])
-    raise SinsInputError(
-        f"{rec.source}: no start position: give it with --origin LAT,LON,H (degrees, degrees, m)"
-    )
+    raise MissingInputError(f"{rec.source}: no start position (origin): the recording has no fix", "origin")
 
 
 def increments(rec: Recording) -> ImuIncrements:

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.series import ImuIncrements, NavSeries
-from sins.errors import SinsInputError
+from sins.errors import MissingInputError, SinsInputError
 from sins.nav import budget, strapdown
 from sins.nav.metrics import nav_errors, summarize
 from sins.nav.vertical import VerticalMode
@@ -131,21 +131,21 @@ def free_start(
     k = int(np.searchsorted(imu.t, imu.t[0] + align_s - 1e-9))
     if k >= len(imu.t) - 1:
         raise SinsInputError(
-            f"{source}: --align {align_s:g}: the recording spans {imu.t[-1] - imu.t[0]:.6g} s, leaving "
-            "nothing to navigate after the alignment"
+            f"{source}: an alignment of {align_s:g} s: the recording spans {imu.t[-1] - imu.t[0]:.6g} s, "
+            "leaving nothing to navigate after the alignment"
         )
     dt = np.diff(imu.t[: k + 1])[:, None]
     t, readings = 0.5 * (imu.t[:k] + imu.t[1 : k + 1]), np.hstack([imu.dtheta_b[:k], imu.dv_b[:k]]) / dt
     moved = motion(t, readings)
     if moved is not None:
-        raise SinsInputError(f"{source}: --align {align_s:g}: the unit moves in it: {moved}")
+        raise SinsInputError(f"{source}: an alignment of {align_s:g} s: the unit moves in it: {moved}")
     rest = bias.estimate_bias(t, readings, lat, h, source=source, location="the start given")
     a = rest.attitude
     if heading is not None:
         rest = bias.in_attitude(rest, (a.roll, a.pitch, heading), "levelled, heading given")
     elif a.yaw is None:
-        raise SinsInputError(
-            f"{source}: --align: the heading is not resolved: {a.heading_note}; give it with --heading DEG"
+        raise MissingInputError(
+            f"{source}: the alignment does not resolve the heading: {a.heading_note}", needs="heading"
         )
     tilt, yaw_sigma = bias.alignment_accuracy(rest, *levels)
     att = rest.attitude
