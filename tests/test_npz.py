@@ -3,6 +3,7 @@ and the open-loop attitude of the raw gyro against SOURCE.md's figures (an indep
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +16,7 @@ from scipy.spatial.transform import Rotation
 from sins import io
 from sins.compensation import referenced
 from sins.core import earth
+from sins.core.series import NavSeries
 from sins.io import datasets, inspection
 from sins.io.frame_check import REFERENCE_LAG_S
 
@@ -638,3 +640,21 @@ def test_marks_know_a_part_of_readings_wherever_it_is_cut() -> None:
     assert len(changed) <= 2 * provenance.MARK_ROWS
     # Too short to tell: no share, not a share of 0.
     assert provenance.shared_share(provenance.readings_marks(gyro[:200], accel[:200]), [whole]) is None
+
+
+def test_a_reference_that_never_turns_beside_a_turning_gyro_is_found_without_a_numpy_warning() -> None:
+    # A reference held at one attitude beside a gyro swinging at 0.5 rad/s: the turns' correlation was
+    # 0/0, NaN with numpy's "invalid value encountered"; it is no agreement (0), and the finding says the
+    # reference barely turns.
+    from sins.io.frame_check import reference_findings
+
+    t = np.arange(0.0, 20.0, 0.005)
+    zero, rng = np.zeros(len(t)), np.random.default_rng(2)
+    still = NavSeries(t=t, lat=zero + 0.8, lon=zero, h=zero, v_n=np.zeros((len(t), 3)),
+                      q_nb=np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1)))  # fmt: skip
+    w = np.outer(0.5 * np.sin(2.0 * np.pi * t / 4.0), [0.0, 0.0, 1.0]) + rng.normal(0, 1e-3, (len(t), 3))
+    f = np.tile([0.0, 0.0, -9.81], (len(t), 1)) + rng.normal(0, 1e-2, (len(t), 3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        found = reference_findings(still, t, w, f)
+    assert [x.code for x in found] == ["reference_attitude"] and "barely turns" in found[0].what, found

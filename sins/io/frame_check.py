@@ -574,8 +574,13 @@ def _correlation(gyro: Array, turns: Array) -> float:
     readings, left out)."""
     kept = np.isfinite(gyro[:, 0])
     gyro, turns = gyro[kept], turns[kept]
+    if not len(gyro):
+        return 0.0
     a, b = turns - turns.mean(axis=0), gyro - gyro.mean(axis=0)
-    return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
+    scale = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
+    # No turn on either side (a reference that holds still over the readings, or none of them left):
+    # nothing agrees, where 0/0 had printed "correlation nan" beside numpy's warning.
+    return float(np.sum(a * b)) / scale if scale > 0.0 else 0.0
 
 
 #: Frames named first, and what they are.
