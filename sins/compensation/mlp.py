@@ -421,7 +421,7 @@ class ResidualMLP(ResidualStrategy):
         if not isinstance(hidden_sizes, list | tuple) or not hidden_sizes:
             raise ValueError(f"hidden_sizes is {hidden_sizes!r}, expected one or more tuples of layer sizes")
         self.hidden_sizes = tuple(
-            check_hidden(hs, "hidden_sizes: each candidate") for hs in hidden_sizes
+            check_hidden(hs, "hidden_sizes") for hs in hidden_sizes
         )  # a bare number is no tuple of sizes: check_hidden refuses it
         self.decays = tuple(float(d) for d in decays)
 
