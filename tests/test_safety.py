@@ -576,9 +576,7 @@ def test_a_corrected_file_says_so_and_is_not_corrected_twice_unless_told(files: 
     is refused unless ``--again``, which adds a second line."""
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
     # The rig's model was fitted on another simulated unit: read this recording as the same one.
-    text = rec.read_text().replace(
-        "sensor: simulated tactical unit (unit seed 1)", "sensor: " + _rig_unit(files)
-    )
+    text = rec.read_text().replace("sensor: " + _unit_of(files / "inc.csv"), "sensor: " + _rig_unit(files))
     rec.write_text(text)
     out = tmp_path / "c.csv"
     rc, _, err = run_cli(["correct", str(model), str(rec), "--out", str(out)])
@@ -600,6 +598,11 @@ def _rig_unit(files: Path) -> str:
     return provenance.read_provenance(files / "rig.csv").sensor
 
 
+def _unit_of(recording: Path) -> str:
+    """A recording's ``sensor`` line (a simulated unit's: its IMU file, unit seed and content digest)."""
+    return provenance.read_provenance(recording).sensor
+
+
 def test_readings_a_model_corrected_already_are_neither_judged_nor_fitted_on(
     files: Path, tmp_path: Path
 ) -> None:
@@ -608,7 +611,7 @@ def test_readings_a_model_corrected_already_are_neither_judged_nor_fitted_on(
     a model of what the correction left, its unit that of the raw readings, so that it passed the unit
     check on them later. Both refuse it now, in one line saying why; the raw recording is taken."""
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
-    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    rec.write_text(rec.read_text().replace(_unit_of(rec), _rig_unit(files)))
     corrected = tmp_path / "c.csv"
     assert run_cli(["correct", str(model), str(rec), "--out", str(corrected)])[0] == 0
     truth, refit = str(files / "truth.csv"), str(tmp_path / "r.json")
@@ -629,7 +632,7 @@ def test_a_correction_that_no_reader_would_read_back_is_not_written(files: Path,
     # readings of -1e11 rad/s, which sins inspect then refused (beyond 1e4 rad/s): sins wrote a file it
     # does not read. The correction is refused now, nothing written.
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
-    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    rec.write_text(rec.read_text().replace(_unit_of(rec), _rig_unit(files)))
     doc = json.loads(model.read_text())
     doc["state"]["B0_"] = [1e11, 0.0, 0.0]
     model.write_text(json.dumps(doc))
@@ -638,6 +641,20 @@ def test_a_correction_that_no_reader_would_read_back_is_not_written(files: Path,
     assert rc == 2 and "reach a rate of 1.0" in err and "beyond the 10000 rad/s" in err, err
     assert_one_line(err, [model])
     assert not out.exists()
+
+
+def test_a_simulated_unit_is_told_by_its_content_not_its_files_name(tmp_path: Path) -> None:
+    # A consumer unit in a file named tactical.toml read as "simulated tactical unit (unit seed 1)", as
+    # the tactical preset's did, and a model of the one corrected the other (gyro x 1381 -> 1358 °/h).
+    # The sensor line now holds the unit's content digest: another content under the same name is
+    # another unit, and a copy elsewhere of the same file is the same.
+    from sins.cli.common import simulated_unit
+
+    for folder, grade in (("a", "tactical"), ("b", "tactical"), ("c", "consumer")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "tactical.toml").write_text(to_toml({"grade": grade, "unit_seed": 1}))
+    a, b, c = (simulated_unit(tmp_path / f / "tactical.toml") for f in "abc")
+    assert a == b and a != c and a.startswith("simulated tactical unit (unit seed 1, content ")
 
 
 def test_a_model_of_another_unit_is_refused_on_every_path(files: Path, tmp_path: Path) -> None:
@@ -700,7 +717,7 @@ def test_sigterm_while_writing_leaves_no_temporary_file(
     as Ctrl-C does, every ``finally`` run (exit 143, one line); SIGHUP (a closed terminal) alike, where
     it had left the temporary file and said nothing (exit 129)."""
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
-    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    rec.write_text(rec.read_text().replace(_unit_of(rec), _rig_unit(files)))
     out, ready = tmp_path / "out" / "c.csv", tmp_path / "ready"
     out.parent.mkdir()
     child = subprocess.Popen(
@@ -760,7 +777,7 @@ def test_a_swallowed_interrupt_still_ends_the_command(files: Path, tmp_path: Pat
     seen now ends the command as interrupted (130, one line, nothing written), however it was swallowed;
     one that comes while the outputs land, after the work, is too late to undo them and is held off."""
     model, rec = _copy(files, tmp_path, "m.json", "inc.csv")
-    rec.write_text(rec.read_text().replace("simulated tactical unit (unit seed 1)", _rig_unit(files)))
+    rec.write_text(rec.read_text().replace(_unit_of(rec), _rig_unit(files)))
     out = tmp_path / "out" / "c.csv"
     out.parent.mkdir()
     child = subprocess.run(

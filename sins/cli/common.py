@@ -184,14 +184,16 @@ def unit_of(rec: Recording) -> str:
 
 
 def simulated_unit(imu_file: Path | None) -> str:
-    """What a file of a simulated unit's readings says of the unit (its ``# sensor:`` line): the IMU file
-    and the unit it draws (a power-on seed is the same unit again)."""
+    """What a file of a simulated unit's readings says of the unit (its ``# sensor:`` line): the IMU file,
+    the unit it draws (a power-on seed is the same unit again) and its content's digest (a unit told by
+    its file's name alone had let a model of the tactical preset correct a consumer unit's file named
+    ``tactical.toml``)."""
     if imu_file is None:
         return "ideal IMU (simulated)"
     from sins import scenario
 
     spec = scenario.load_imu(imu_file)
-    return f"simulated {imu_file.stem} unit (unit seed {spec.unit_seed})"
+    return f"simulated {imu_file.stem} unit (unit seed {spec.unit_seed}, content {spec.digest()})"
 
 
 def scenario_inputs(sc: Scenario) -> list[Path | None]:

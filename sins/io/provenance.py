@@ -4,7 +4,7 @@ corrected them, and the clock its times count from.
 Comment lines at the top of a sins CSV, among any free comment, carry it (``#`` lines before the
 header; other readers skip them as comments)::
 
-    # sensor: simulated tactical unit (unit seed 1)
+    # sensor: simulated tactical unit (unit seed 1, content 75019f66)
     # corrected by: regression model m.json (sha256 3f1c…), fitted on rig.csv
     # time origin: 1413393212255760384 ns
 

@@ -115,6 +115,28 @@ class ImuSpec:
     withhold: tuple[str, ...]
     source: Path | None = None
 
+    def digest(self) -> str:
+        """The unit by its content, 8 hex digits of a SHA-256 over its grade, unit seed, effects (each
+        parameter's float64 bytes) and withheld names: not its file's name or comments. Two files that
+        name one unit alike but hold others (another bias, the same name) are two units; what a
+        simulated recording's ``sensor`` line says (:func:`sins.cli.common.simulated_unit`)."""
+        import dataclasses
+        import hashlib
+
+        import numpy as np
+
+        h = hashlib.sha256(repr((self.grade, self.unit_seed, sorted(self.withhold))).encode())
+        for effect in self.effects:
+            h.update(type(effect).__name__.encode())
+            for f in dataclasses.fields(effect):
+                value = getattr(effect, f.name)
+                try:  # numbers and arrays by their exact bytes; a name, a choice by its text
+                    said = np.asarray(value, dtype=float).tobytes()
+                except (TypeError, ValueError):
+                    said = repr(value).encode()
+                h.update(f.name.encode() + said)
+        return h.hexdigest()[:8]
+
     def model(self, run_seed: int | None = None) -> imu.ImuModel:
         """The unit's error model for one power-on (``run_seed`` draws its turn-on bias)."""
         from sins import imu
