@@ -18,6 +18,20 @@ class MissingInputError(SinsInputError):
         self.needs = needs
 
 
+class ArgumentError(SinsInputError):
+    """Bad input that names the library's own arguments (``names``, in ``template``'s ``{names}``): a
+    reader's option that does not apply, say. The command line says them as its flags
+    (:meth:`said`); the library's message names the arguments a caller passed."""
+
+    def __init__(self, template: str, names: tuple[str, ...]) -> None:
+        self.template, self.names = template, names
+        super().__init__(template.format(names=", ".join(names)))
+
+    def said(self, flags: dict[str, str]) -> str:
+        """The message with each argument named by its entry in ``flags`` (a CLI's ``--topic``)."""
+        return self.template.format(names=", ".join(flags.get(n, n) for n in self.names))
+
+
 class LateStartError(SinsInputError):
     """Increments whose first row does not end after the start they were given (``first_end_s``, s):
     the reader that took the start from a reference names that reference instead."""
@@ -35,6 +49,7 @@ def naming(where: str, exc: Exception) -> SinsInputError:
 
 
 __all__ = [
+    "ArgumentError",
     "LateStartError",
     "MissingInputError",
     "SinsInputError",

@@ -611,6 +611,10 @@ def test_an_origin_without_an_attitude_asks_for_one(
     assert main(["integrate", str(short_files["imu"]), "--origin", "45,0,0"]) == 2
     err = capsys.readouterr().err
     assert "--origin starts" in err and "give --attitude R,P,Y or --align SECONDS with it" in err
+    # Beside --truth it had asked for --attitude, which --truth then refused: a loop.
+    imu, truth = str(short_files["imu"]), str(short_files["truth"])
+    assert main(["integrate", imu, "--truth", truth, "--origin", "45,0,0"]) == 2
+    assert "--truth gives its start" in capsys.readouterr().err
 
 
 def test_a_truth_that_begins_late_is_named(
@@ -626,6 +630,22 @@ def test_a_truth_that_begins_late_is_named(
     assert main(["integrate", str(short_files["imu"]), "--truth", str(late)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"sins: error: {late}: begins at {t0:g} s, not before ") and err.count("\n") == 1
+
+
+def test_a_readers_option_that_does_not_apply_is_said_as_the_flag(
+    short_files: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The reader names its own arguments ("topic: does not apply", "rate_hz does not apply to a
+    # dataset"); the command line says its flags. And an option is taken by its whole name only: inspect
+    # has no --truth, which argparse's prefixes had read as --truth-topic.
+    imu = str(short_files["imu"])
+    assert main(["inspect", imu, "--topic", "/imu"]) == 2
+    assert capsys.readouterr().err == f"sins: error: --topic: does not apply to {imu}, a CSV file\n"
+    assert main(["inspect", "--dataset", "ferraris", "--rate", "100"]) == 2
+    assert "ferraris: --rate does not apply to a dataset" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["inspect", imu, "--truth", str(short_files["truth"])])
+    assert "unrecognized arguments: --truth" in capsys.readouterr().err
 
 
 def test_an_option_no_one_reads_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -225,7 +225,18 @@ def test_every_number_a_strategy_takes_has_a_range_that_is_held(name: str, tmp_p
             assert said.startswith(f"{damaged}: malformed") and param in said and "\n" not in said
 
 
-@pytest.mark.parametrize("name", sorted(set(compensation.VARIANTS) - {"oracle"}))
+#: The strategies with a list parameter (a grid of candidates, a network's layers).
+GRIDDED = sorted(
+    name for name in set(compensation.VARIANTS) - {"oracle"}
+    if any(isinstance(v, list) and v for v in compensation.make(name).params().values())
+)  # fmt: skip
+
+
+def test_the_gridded_strategies_are_the_learners() -> None:
+    assert set(GRIDDED) >= {"mlp", "kohonen"}
+
+
+@pytest.mark.parametrize("name", GRIDDED)
 def test_every_grid_a_strategy_takes_is_refused_empty(name: str) -> None:
     # An empty list of candidates (mlp's decays or hidden_sizes, kohonen's sizes or sigmas) was taken by
     # make and failed in fit ("no fold could be fitted (too few blocks)"; kohonen's sigmas in min()).

@@ -480,6 +480,42 @@ def test_a_fit_whose_reader_goes_away_keeps_its_model(files: Path, tmp_path: Pat
     assert json.loads(model.read_text())["strategy"] == "regression"
 
 
+def test_a_fit_keeps_its_model_when_both_streams_lose_their_reader(files: Path, tmp_path: Path) -> None:
+    # `sins fit … 2>&1 | head`: stderr lost its reader too, and the next note or progress line there met
+    # the broken pipe inside the work (stdout alone was guarded). Both streams are now.
+    model = tmp_path / "m.json"
+    sins = Path(sys.executable).parent / "sins"
+    argv = [str(sins), "fit", str(files / "rig.csv"), "--strategy", "regression", "--out", str(model)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    assert proc.stdout is not None
+    proc.stdout.close()
+    assert proc.wait(120) == 141
+    assert json.loads(model.read_text())["strategy"] == "regression"
+
+
+def test_a_command_whose_output_is_closed_runs_as_print_would(tmp_path: Path) -> None:
+    # `sins scenarios >&-` (cron, a daemon): Python's sys.stdout is None, which print takes and drops; the
+    # stream guard had raised an AttributeError on it, a traceback and exit 1.
+    sins = Path(sys.executable).parent / "sins"
+    proc = subprocess.run([str(sins), "scenarios"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                          text=True, timeout=120, preexec_fn=lambda: os.close(1))  # fmt: skip
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+
+
+def test_a_signal_its_parent_ignores_stays_ignored() -> None:
+    # `sins … &` from a script: Ctrl-C is not the background job's, and it had become so (the handler
+    # was installed over the ignored signal). A signal set to be ignored stays ignored within a command.
+    from sins.cli.signals import signals_as_exceptions
+
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with signals_as_exceptions():
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def test_a_commands_outputs_land_together_or_not_at_all(tmp_path: Path) -> None:
     """``sins simulate --imu A --truth B``: where the second write fails (``/dev/full``: no space), the
     first is not left replaced beside it; before, the new IMU file stood beside another run's truth (or
@@ -766,7 +802,7 @@ def late(pending):  # a Ctrl-C while the outputs land
 correct.row_progress = swallow
 deferred._rename = late if how == "landing" else rename
 from sins.cli import main
-sys.exit(main(sys.argv[2:]))
+sys.exit(main(sys.argv[2:], process=True))  # the console script's command
 """
 
 

@@ -54,8 +54,8 @@ from numpy.typing import NDArray
 
 from sins.aiding import alignment, ekf
 from sins.characterise.analysis import ChannelResult, characterise, residual
-from sins.characterise.mean_error import batch_means_sigma, white_sigma
-from sins.characterise.rests import check_rest_rows, earth_rate_rows, first_rows, rest_groups
+from sins.characterise.mean_error import batch_means_sigma, pooled_rests_sigma, white_sigma
+from sins.characterise.rests import EARTH_RATE_TOL, check_rest_rows, earth_rate_rows, first_rows, rest_groups
 from sins.characterise.still import motion, still_rows
 from sins.core import earth, rotation
 from sins.core.series import CalibrationData
@@ -241,6 +241,10 @@ class BiasEstimate:
             return self.rest_figure("gravity")
         return float(np.linalg.norm(self.vector("accel", "expected")))
 
+    def _rate_is_earths(self) -> bool:
+        """Whether the rests' reference rate is Earth's (:data:`sins.characterise.rests.EARTH_RATE_TOL`)."""
+        return abs(self.rest_figure("rate") / earth.OMEGA_IE - 1.0) <= EARTH_RATE_TOL
+
     def rest_figure(self, name: str) -> float:
         """A :class:`Rest` figure (``gravity``, ``rate``) averaged over the rests by their rows."""
         return float(sum(getattr(r, name) * r.rows for r in self.rests) / sum(r.rows for r in self.rests))
@@ -258,7 +262,10 @@ class BiasEstimate:
             "lat_deg": math.degrees(self.lat) if math.isfinite(self.lat) else None,
             "h_m": self.h if math.isfinite(self.h) else None,
             "location": self.location,
-            "earth_rate_radps": self.rest_figure("rate") if self.rests else earth.OMEGA_IE,
+            # Against a reference, its rate at rest is Earth's only where it says so (EuRoC's 69.9 °/h is
+            # its trajectory's own motion): that figure apart, Earth's rate null where it is not.
+            "earth_rate_radps": earth.OMEGA_IE if not self.rests or self._rate_is_earths() else None,
+            "reference_rate_radps": self.rest_figure("rate") if self.rests else None,
             "gravity_mps2": self.gravity,
             "attitude": {
                 "roll_deg": math.degrees(a.roll), "pitch_deg": math.degrees(a.pitch),
@@ -339,16 +346,34 @@ def _rests(t: Array, reference: Array, segments: tuple[tuple[int, int], ...]) ->
 
 
 def _standard_errors(
-    result: dict[str, ChannelResult], seconds: float, averaged: Array, segments: tuple[tuple[int, int], ...]
-) -> Array:
+    result: dict[str, ChannelResult], seconds: float, t: Array, averaged: Array,
+    segments: tuple[tuple[int, int], ...],
+) -> Array:  # fmt: skip
     """Each channel's (6,) standard error of its mean over ``seconds``: the larger of its noise model's
-    Allan deviation there (a removed ramp left out: it is the trend, reported apart) and the batch-means
-    standard error of what is averaged (:func:`sins.characterise.mean_error.batch_means_sigma`), which
-    needs no model: a model fitted as quantization alone falls as 1/τ, and on EuRoC's MH_01, whose Allan
-    curve rises over 5-40 ms (a vibration hump), it had said 2.67 °/h where white noise alone says 32.6."""
+    Allan deviation there and the batch-means standard error of what is averaged at times ``t``
+    (:func:`sins.characterise.mean_error.batch_means_sigma`), a resolved ramp left out of both (it is the
+    trend, reported apart: a 5 mg warm-up had put 27 µg into the batch means' figure where the noise
+    gave 0.4). The batch means need no model: a model fitted as quantization alone falls as 1/τ, and on
+    EuRoC's MH_01 accelerometers, whose Allan curve rises over 5-40 ms (a vibration hump), it had said
+    8.57 µg where the batch means say 48.6."""
     tau = np.array([seconds])
     model = np.array([math.sqrt(max(float(result[ch].fit.avar(tau)[0]), 0.0)) for ch in CHANNELS])
-    return np.asarray(np.fmax(model, batch_means_sigma(averaged, segments)), dtype=float)
+    slopes = np.array([r.ramp.value if r.ramp is not None and r.ramp.resolved else 0.0
+                       for r in (result[ch] for ch in CHANNELS)])  # fmt: skip
+    detrended = averaged - np.outer(np.asarray(t, dtype=float) - float(t[0]), slopes)
+    return np.asarray(np.fmax(model, batch_means_sigma(detrended, segments)), dtype=float)
+
+
+def _between_rests(
+    t: Array, reference: Array, averaged: Array, segments: tuple[tuple[int, int], ...]
+) -> Array:
+    """The standard error (6,) of the mean pooled over the rests (:func:`rest_groups`), their spread
+    beyond their noise counted (:func:`sins.characterise.mean_error.pooled_rests_sigma`); 0 for one
+    rest."""
+    groups = rest_groups(np.asarray(t, dtype=float), reference, segments)
+    if len(groups) < 2:
+        return np.zeros(averaged.shape[1])
+    return pooled_rests_sigma(averaged, groups)
 
 
 def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white: Array, expected: Array,
@@ -413,11 +438,12 @@ def estimate_bias(
     mean, n = readings[rows].mean(axis=0), int(rows.sum())
     white = white_sigma(averaged, res.segments)
     result = characterise(res, progress=progress).channels
-    sigma = _standard_errors(result, n * res.dt, averaged, res.segments)
+    sigma = _standard_errors(result, n * res.dt, t, averaged, res.segments)
     rests: tuple[Rest, ...] = ()
     if ref is not None:
         expected, bound = ref[rows].mean(axis=0), np.zeros(6)
         rests = _rests(np.asarray(t, dtype=float), ref, res.segments)
+        sigma = np.fmax(sigma, _between_rests(t, ref, averaged, res.segments))
         nan = math.nan  # rests in several attitudes pooled: no one attitude (each rest's in rests)
         att = (
             rests[0].attitude

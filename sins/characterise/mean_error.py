@@ -70,4 +70,29 @@ def batch_means_sigma(values: Array, segments: Sequence[tuple[int, int]]) -> Arr
     return np.asarray(np.sqrt(square / dof * size / rows), dtype=float)
 
 
-__all__ = ["BATCHES", "MIN_DOF", "batch_means_sigma", "white_sigma"]
+def pooled_rests_sigma(values: Array, groups: Sequence[Sequence[tuple[int, int]]]) -> Array:
+    """The standard error (c,) of the mean of ``values`` (n, c) pooled over rests (``groups``: each rest's
+    row ranges) where the rests may disagree beyond their noise: a random-effects model (DerSimonian and
+    Laird's): each rest's mean is the bias plus its own noise (its batch-means error) plus a spread
+    ``τ²`` common to the rests, estimated from how far their means scatter beyond their noise (0 where
+    they do not). The pooled mean weighs each rest by its rows, so its variance is the sum of the rests'
+    ``(rows/n)² (σ_r² + τ²)``. Ferraris's six holds, whose accelerometer biases lie 4e4 µg apart (its
+    scale factors and misalignments, seen in six attitudes), had been given ±25 µg, each hold's noise;
+    rests that agree keep their noise's figure. NaN with fewer than two rests."""
+    parts = [np.concatenate([np.asarray(values[a:b], dtype=float) for a, b in g]) for g in groups]
+    if len(parts) < 2:
+        return np.full(np.shape(values)[1], math.nan)
+    means = np.array([p.mean(axis=0) for p in parts])
+    se2 = np.array([batch_means_sigma(p, [(0, len(p))]) ** 2 for p in parts])
+    se2 = np.maximum(np.nan_to_num(se2, nan=np.inf), 1e-300)  # a rest too short to tell weighs nothing
+    w = 1.0 / se2
+    centre = (w * means).sum(axis=0) / w.sum(axis=0)
+    q = (w * (means - centre) ** 2).sum(axis=0)
+    c = w.sum(axis=0) - (w**2).sum(axis=0) / w.sum(axis=0)
+    tau2 = np.maximum(0.0, (q - (len(parts) - 1)) / np.maximum(c, 1e-300))
+    share = np.array([len(p) for p in parts], dtype=float)[:, None] / sum(len(p) for p in parts)
+    finite = np.where(np.isfinite(se2), se2, 0.0)
+    return np.asarray(np.sqrt((share**2 * (finite + tau2)).sum(axis=0)), dtype=float)
+
+
+__all__ = ["BATCHES", "MIN_DOF", "batch_means_sigma", "pooled_rests_sigma", "white_sigma"]

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import re
 import signal
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from sins import __version__
 from sins.cli import (
@@ -36,8 +36,8 @@ from sins.cli import (
     strategies,
 )
 from sins.cli.common import Subparsers
-from sins.cli.signals import Seen, Terminated, pipe_outliving_its_reader, signals_as_exceptions
-from sins.errors import MissingInputError, SinsInputError
+from sins.cli.signals import Seen, Terminated, pipes_outliving_their_readers, signals_as_exceptions
+from sins.errors import ArgumentError, MissingInputError, SinsInputError
 
 #: Every subcommand, in the order ``sins --help`` lists them.
 SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
@@ -62,16 +62,28 @@ SUBCOMMANDS: tuple[Callable[[Subparsers], None], ...] = (
 #: Commands whose outputs land as each is done, not together at the end (a campaign's parts: a resume
 #: needs them; ``check`` runs campaigns), and those that write nothing.
 _AS_DONE = ("campaign", "check", "scenarios", "effects", "strategies")
+#: The flag of each argument of :func:`sins.io.read` an :class:`~sins.errors.ArgumentError` names.
+_OPTION_FLAGS = {
+    "topic": "--topic", "truth_topic": "--truth-topic", "columns": "--columns", "units": "--units",
+    "frame": "--frame", "rate_hz": "--rate", "origin": "--origin", "truth": "--truth",
+}  # fmt: skip
 #: The flag that gives what a :class:`MissingInputError` says is missing.
 _FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topic": "--truth-topic TOPIC",
              "lat": "--lat DEG", "origin": "--origin LAT,LON,H", "heading": "--heading DEG"}  # fmt: skip
 
 
+class _Parser(argparse.ArgumentParser):
+    """Options by their whole names only (inspect's ``--truth`` had been taken for ``--truth-topic``)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **{**kwargs, "allow_abbrev": False})
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``sins`` command's argument parser, one subcommand per action."""
-    parser = argparse.ArgumentParser(prog="sins", description="Strapdown inertial navigation simulator.")
+    parser = _Parser(prog="sins", description="Strapdown inertial navigation simulator.")
     parser.add_argument("--version", action="version", version=f"sins {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
     for add in SUBCOMMANDS:
         add(sub)
     return parser
@@ -80,11 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _together(command: str, discarded: list[Path]) -> contextlib.AbstractContextManager[None]:
     """A command's outputs land together or not at all (:func:`sins.core.deferred.all_or_nothing`), but
     for :data:`_AS_DONE`."""
-    if command in _AS_DONE:
-        return contextlib.nullcontext()
     from sins.core.deferred import all_or_nothing  # plain os: nothing numerical before the work
 
-    return all_or_nothing(discarded)
+    return contextlib.nullcontext() if command in _AS_DONE else all_or_nothing(discarded)
 
 
 def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
@@ -163,56 +173,77 @@ def _subparser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentP
     return found.choices[name]
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+def main(argv: Sequence[str] | None = None, *, process: bool = False) -> int:
+    """Run the ``sins`` command on ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+    ``process``: this process is the command (:func:`console`, the console script's): after it every
+    signal is ignored until the process exits (:func:`sins.cli.signals.signals_as_exceptions`)."""
     args = parse(argv)
     discarded: list[Path] = []
     seen: Seen | None = None
     try:
-        # argv None: this process is the command (its console script), held off signals after it
         with (
-            signals_as_exceptions(process=argv is None) as seen,
-            pipe_outliving_its_reader() as out,
+            signals_as_exceptions(process=process) as seen,
+            pipes_outliving_their_readers() as pipes,
             _together(args.command, discarded),
         ):
             status = int(args.func(args))
-            out.flush()  # a reader gone is found here at the latest: the outputs land all the same
+            pipes.flush()  # a reader gone is found here at the latest: the outputs land all the same
             seen.landing()  # its outputs land now, whatever signal comes (sins.cli.signals)
-            return 141 if out.broken and status == 0 else status
-    except MissingInputError as exc:
-        flag = _FLAG_FOR.get(exc.needs)
-        print(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""), file=sys.stderr)
-        return 2
-    except SinsInputError as exc:
-        print(f"sins: error: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
-        # The reader of our output went away (`sins scenarios | head`): nothing to say, and nothing more
-        # to write to it; stdout is pointed at devnull so the interpreter's own flush at exit is quiet.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
-    except OSError as exc:  # a full disk or a permission while writing
-        print(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return _ended(signal.SIGINT)
-    except Terminated as exc:
-        return _ended(exc.signum)
-    except Exception:
-        if seen is None or not seen.signums:
-            raise
-        return _ended(seen.signums[0])  # a library swallowed the signal, then failed for want of it
+            status = 141 if pipes.broken and status == 0 else status
+    except Exception as exc:  # what is not bad input is raised again by _failed
+        status = _failed(exc, seen)
+    except (KeyboardInterrupt, Terminated) as exc:
+        status = _failed(exc, seen)
     finally:
         if discarded:
-            kept = ", ".join(str(p) for p in discarded)
-            print(f"sins: none of its outputs written ({kept}: not replaced)", file=sys.stderr)
+            _say(f"sins: none of its outputs written ({', '.join(map(str, discarded))}: not replaced)")
+    for late in seen.late if seen is not None else []:  # held off while the outputs landed: the caller's
+        signal.raise_signal(late)
+    return status
+
+
+def console() -> None:
+    """The ``sins`` console script: :func:`main` on the command line, as this process's whole command."""
+    sys.exit(main(process=True))
+
+
+def _failed(exc: BaseException, seen: Seen | None) -> int:
+    """The exit status of a command that raised ``exc``, its one line said. A signal seen before ends it
+    as interrupted whatever it raised (a library swallowed the signal, then failed for want of it: a
+    bag reader's error, numba's RuntimeError); anything else not bad input is raised again."""
+    if seen is not None and seen.signums:
+        return _ended(seen.signums[0])
+    if isinstance(exc, KeyboardInterrupt | Terminated):
+        return _ended(exc.signum if isinstance(exc, Terminated) else signal.SIGINT)
+    if isinstance(exc, ArgumentError):  # the reader's arguments, said as this command's flags
+        _say(f"sins: error: {exc.said(_OPTION_FLAGS)}")
+        return 2
+    if isinstance(exc, MissingInputError):
+        flag = _FLAG_FOR.get(exc.needs)
+        _say(f"sins: error: {exc}" + (f"; give it with {flag}" if flag else ""))
+        return 2
+    if isinstance(exc, SinsInputError):
+        _say(f"sins: error: {exc}")
+        return 2
+    if isinstance(exc, BrokenPipeError):  # a stream not wrapped: nothing more to write to it
+        return 141
+    if isinstance(exc, OSError):  # a full disk or a permission while writing
+        _say(f"sins: error: {exc.filename or ''}: {exc.strerror or exc}")
+        return 2
+    raise exc
+
+
+def _say(line: str) -> None:
+    """Print ``line`` on stderr, where a reader may have gone away (``2>&1 | head``): then nowhere."""
+    with contextlib.suppress(BrokenPipeError):
+        print(line, file=sys.stderr, flush=True)
 
 
 def _ended(signum: int) -> int:
     """Say that a signal ended the command; its exit status, 128 + the signal's number."""
     said = {int(signal.SIGINT): "interrupted", int(signal.SIGTERM): "terminated"}.get(signum, "hung up")
-    print(f"sins: {said}", file=sys.stderr)
+    _say(f"sins: {said}")
     return 128 + int(signum)
 
 
-__all__ = ["SUBCOMMANDS", "build_parser", "main", "parse"]
+__all__ = ["SUBCOMMANDS", "build_parser", "console", "main", "parse"]

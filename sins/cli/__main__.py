@@ -1,7 +1,5 @@
 """``python -m sins.cli``: the ``sins`` command."""
 
-import sys
+from sins.cli import console
 
-from sins.cli import main
-
-sys.exit(main())
+console()

@@ -55,6 +55,8 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
         if given is not None:
             raise SinsInputError(f"{flag} goes with --align SECONDS")
     if args.origin is not None and _free_options(args)["origin"] is None:  # a start, not a frame's place
+        if args.truth is not None:  # it would have asked for --attitude, which --truth then refused
+            raise SinsInputError("--origin starts a recording without a reference; --truth gives its start")
         raise SinsInputError(f"--origin starts {args.imu} without a reference: give --attitude R,P,Y or "
                              "--align SECONDS with it")  # fmt: skip
     with progress_bar("reading", "messages") as bar:  # a long bag takes a while (25,000 messages/s)

@@ -20,6 +20,7 @@ import signal
 import sys
 import threading
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any, TextIO
 
 
@@ -39,15 +40,19 @@ ENDING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasatt
 
 
 class Seen:
-    """The signals a command received (:func:`signals_as_exceptions`), in order."""
+    """The signals a command received (:func:`signals_as_exceptions`), in order; ``late``: those that
+    came while its outputs landed, held off then (delivered after, where the block is not the process's
+    whole command)."""
 
     def __init__(self) -> None:
         self.signums: list[int] = []
+        self.late: list[int] = []
         self._landing = False
 
     def handle(self, signum: int, frame: object) -> None:
         """The handler: record the signal, and raise it as the command's end (unless landing)."""
         if self._landing:
+            self.late.append(signum)
             return
         self.signums.append(signum)
         raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
@@ -60,7 +65,7 @@ class Seen:
 
     def landing(self) -> None:
         """The work is done and its outputs land now: a signal from here on is too late to undo them,
-        and is ignored (the raise of one seen and swallowed comes first)."""
+        and is held off (the raise of one seen and swallowed comes first)."""
         self.raise_if_any()
         self._landing = True
 
@@ -69,19 +74,24 @@ class Seen:
 def signals_as_exceptions(*, process: bool = False) -> Iterator[Seen]:
     """Within the block, SIGINT raises KeyboardInterrupt and SIGTERM and SIGHUP (:data:`ENDING`) raise
     :class:`Terminated` in the main thread, instead of ending the process at once with its files half
-    written, and each is recorded in the :class:`Seen` yielded; the handlers before are restored after,
-    unless the block is the ``process``'s whole command: then every signal is held off after it, until
-    the process exits (a Ctrl-C there had ended a command that had written its outputs with 130 and no
-    word). Elsewhere than the main thread, nothing changes (and nothing is recorded)."""
+    written, and each is recorded in the :class:`Seen` yielded. A signal its parent set to be ignored
+    (``sins … &`` from a script: Ctrl-C is not the job's) stays ignored. After the block the handlers
+    before are restored (a signal held off while the outputs landed is in :attr:`Seen.late`, for the
+    caller to deliver once the command is over: :func:`sins.cli.main`); where the
+    block is the ``process``'s whole command (the console script's), every signal is ignored instead
+    until the process exits (a Ctrl-C there had ended a command that had written its outputs with 130
+    and no word: the interpreter's exit puts back the default action of a handled signal, not of an
+    ignored one). Elsewhere than the main thread, nothing changes (and nothing is recorded)."""
     seen = Seen()
     if threading.current_thread() is not threading.main_thread():
         yield seen
         return
-    previous = {s: signal.signal(s, seen.handle) for s in (signal.SIGINT, *ENDING)}
+    taken = [s for s in (signal.SIGINT, *ENDING) if signal.getsignal(s) is not signal.SIG_IGN]
+    previous = {s: signal.signal(s, seen.handle) for s in taken}
     try:
         yield seen
     finally:
-        if process:  # ignored, not handled: the interpreter's exit puts back the default of a handled one
+        if process:
             seen._landing = True
             for s in previous:
                 signal.signal(s, signal.SIG_IGN)
@@ -91,18 +101,20 @@ def signals_as_exceptions(*, process: bool = False) -> Iterator[Seen]:
 
 
 class PipeOut:
-    """The standard output a command prints to, which outlives its reader: where the reader goes away
-    (``sins fit … | head -2``), the rest of what is printed goes nowhere and the command goes on, its
-    outputs landing as they would (:attr:`broken` says so: the command then exits 141, SIGPIPE's). A
-    broken pipe had ended the command where it printed: a fit done, its model thrown away."""
+    """A standard stream a command prints to, which outlives its reader: where the reader goes away
+    (``sins fit … | head -2``, or ``2>&1 | head``), the rest of what is printed goes nowhere and the
+    command goes on, its outputs landing as they would (:attr:`broken` says so: the command then exits
+    141, SIGPIPE's). A broken pipe had ended the command where it printed: a fit done, its model thrown
+    away. A stream that is not there (``>&-``: Python's ``None``) takes what is printed and drops it, as
+    ``print`` does."""
 
-    def __init__(self, out: TextIO) -> None:
+    def __init__(self, out: TextIO | None) -> None:
         self._out = out
         self.broken = False
 
     def write(self, text: str) -> int:
         """Write ``text`` while a reader reads; after, take it and drop it."""
-        if not self.broken:
+        if not self.broken and self._out is not None:
             try:
                 return self._out.write(text)
             except BrokenPipeError:
@@ -111,7 +123,7 @@ class PipeOut:
 
     def flush(self) -> None:
         """Flush while a reader reads (a reader gone found here too)."""
-        if not self.broken:
+        if not self.broken and self._out is not None:
             try:
                 self._out.flush()
             except BrokenPipeError:
@@ -122,23 +134,53 @@ class PipeOut:
         the null device, quietly (Python had said "Exception ignored … BrokenPipeError" at exit)."""
         self.broken = True
         with contextlib.suppress(OSError, ValueError, AttributeError):  # a stream with no descriptor
-            os.dup2(os.open(os.devnull, os.O_WRONLY), self._out.fileno())
+            null = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(null, self._out.fileno())  # type: ignore[union-attr]
+            finally:
+                os.close(null)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._out, name)
 
 
+@dataclass
+class Pipes:
+    """The two standard streams as :class:`PipeOut` (:func:`pipes_outliving_their_readers`)."""
+
+    out: PipeOut
+    err: PipeOut
+
+    @property
+    def broken(self) -> bool:
+        """Whether either stream's reader went away."""
+        return self.out.broken or self.err.broken
+
+    def flush(self) -> None:
+        """Flush both (a reader gone found here at the latest)."""
+        self.out.flush()
+        self.err.flush()
+
+
 @contextlib.contextmanager
-def pipe_outliving_its_reader() -> Iterator[PipeOut]:
-    """Within the block, ``sys.stdout`` is a :class:`PipeOut` of it (flushed at the block's end, where a
-    reader gone is found at the latest); the stream before is restored after."""
-    out = PipeOut(sys.stdout)
-    sys.stdout = out
+def pipes_outliving_their_readers() -> Iterator[Pipes]:
+    """Within the block, ``sys.stdout`` and ``sys.stderr`` are :class:`PipeOut` of themselves (flushed
+    at the block's end); the streams before are restored after."""
+    pipes = Pipes(PipeOut(sys.stdout), PipeOut(sys.stderr))
+    sys.stdout, sys.stderr = pipes.out, pipes.err
     try:
-        yield out
-        out.flush()
+        yield pipes
+        pipes.flush()
     finally:
-        sys.stdout = out._out
+        sys.stdout, sys.stderr = pipes.out._out, pipes.err._out
 
 
-__all__ = ["ENDING", "PipeOut", "Seen", "Terminated", "pipe_outliving_its_reader", "signals_as_exceptions"]
+__all__ = [
+    "ENDING",
+    "PipeOut",
+    "Pipes",
+    "Seen",
+    "Terminated",
+    "pipes_outliving_their_readers",
+    "signals_as_exceptions",
+]

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from sins.core.earth import MAX_LAT_DEG
 from sins.core.series import NavSeries
-from sins.errors import LateStartError, SinsInputError
+from sins.errors import ArgumentError, LateStartError, SinsInputError
 from sins.io import rig
 from sins.io.datasets import _read_dataset
 from sins.io.datasets.npz_folders import is_folder_name
@@ -98,7 +98,7 @@ def read(
                 if own
                 else "its reader fixes its units, axes and reference"
             )
-            raise SinsInputError(f"{dataset}: {', '.join(extra)} does not apply to a dataset ({fixed})")
+            raise ArgumentError(f"{dataset}: {{names}} does not apply to a dataset ({fixed})", tuple(extra))
         return _read_dataset(dataset, root, origin if own else None)
     path = Path(source)  # type: ignore[arg-type]
     if rig.is_rig_csv(path):

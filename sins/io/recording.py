@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
-from sins.errors import MissingInputError, SinsInputError
+from sins.errors import ArgumentError, MissingInputError, SinsInputError
 from sins.io import axes, bags, euroc, formats, frame_check, local, npz, provenance, rig
 from sins.io import columns as column_reader
 from sins.io import units as unitdefs
@@ -372,7 +372,7 @@ def _check_options(path: Path, kind: str, **given: object) -> None:
     }
     for name, value in given.items():
         if value is not None and kind not in applies[name]:
-            raise SinsInputError(f"{name}: does not apply to {path}, a {_described(kind)}")
+            raise ArgumentError(f"{{names}}: does not apply to {path}, a {_described(kind)}", (name,))
 
 
 def _described(kind: str) -> str:
