@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from sins.core.earth import MAX_LAT_DEG
 from sins.errors import SinsInputError
 from sins.scenario.schema import ImuSpec
 from sins.scenario.toml import MAX_SEED, Bound, TomlKeys, read_toml
@@ -24,7 +25,7 @@ MIN_DWELL_SAMPLES = 2
 #: Static bounds of every numeric rig-file field, by its place. A dwell is also at least
 #: :data:`MIN_DWELL_SAMPLES` samples; ``positions.count`` is one of the counts the rig knows.
 RIG_BOUNDS: dict[str, Bound] = {
-    "rig.lat_deg": Bound(-89.9, 89.9, "°", "the local level frame is singular at a pole"),
+    "rig.lat_deg": Bound(-MAX_LAT_DEG, MAX_LAT_DEG, "°", "the local level frame is singular at a pole"),
     "rig.lon_deg": Bound(-180.0, 360.0, "°"),
     "rig.alt_m": Bound(-1000.0, 10000.0, "m"),
     "rig.rate_hz": Bound(1.0, 100000.0, "Hz"),

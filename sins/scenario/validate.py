@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from sins.core.earth import MAX_LAT_DEG
 from sins.nav import motion
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 from sins.scenario.presets import preset_or_path
@@ -60,7 +61,9 @@ SCENARIO_BOUNDS: dict[str, Bound] = {
     "imu.temps_degc": Bound(-100.0, 200.0, "°C", "an IMU's operating range, with margin"),
     "compensation.validation": Bound(0.0, 1.0, "", "a fraction", low_open=True, high_open=True),
     "navigation.vertical_tau_s": Bound(0.0, MAX_DURATION_S, "s", low_open=True),
-    "initial.lat_deg": Bound(-89.9, 89.9, "°", "the latitude/longitude mechanisation is singular at a pole"),
+    "initial.lat_deg": Bound(
+        -MAX_LAT_DEG, MAX_LAT_DEG, "°", "the latitude/longitude mechanisation is singular at a pole"
+    ),
     "initial.lon_deg": Bound(-180.0, 360.0, "°"),
     "initial.alt_m": Bound(-1000.0, 100000.0, "m"),
     "initial.speed_mps": Bound(0.0, MAX_SPEED_MPS, "m/s"),
