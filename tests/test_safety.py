@@ -725,6 +725,14 @@ def test_one_file_column_read_into_two_channels_is_refused(files: Path) -> None:
 # --------------------------------------------------------------------------- SIGTERM
 
 
+def _as_at_a_terminal() -> None:
+    """A child's signals at their defaults, as a terminal's command has them: a suite run in the
+    background has SIGINT ignored, under nohup SIGHUP too, and sins keeps a signal its parent ignores
+    (``nohup sins …`` must survive its terminal)."""
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_DFL)
+
+
 CHILD = """
 import sys, time
 from pathlib import Path
@@ -758,7 +766,7 @@ def test_sigterm_while_writing_leaves_no_temporary_file(
     out.parent.mkdir()
     child = subprocess.Popen(
         [sys.executable, "-c", CHILD, str(ready), "correct", str(model), str(rec), "--out", str(out)],
-        stderr=subprocess.PIPE, text=True,
+        stderr=subprocess.PIPE, text=True, preexec_fn=_as_at_a_terminal,
     )  # fmt: skip
     try:
         wait_for(lambda: ready.exists() or child.poll() is not None, child.pid, "the child's write")
@@ -818,7 +826,7 @@ def test_a_swallowed_interrupt_still_ends_the_command(files: Path, tmp_path: Pat
     out.parent.mkdir()
     child = subprocess.run(
         [sys.executable, "-c", SWALLOWING_CHILD, how, "correct", str(model), str(rec), "--out", str(out)],
-        capture_output=True, text=True, timeout=120,
+        capture_output=True, text=True, timeout=120, preexec_fn=_as_at_a_terminal,
     )  # fmt: skip
     assert "Traceback" not in child.stderr, child.stderr
     if how == "landing":

@@ -10,6 +10,9 @@ also recorded (:class:`Seen`): a command that returns, or fails, after one was s
 And once the work is done its outputs land (:mod:`sins.core.deferred`): an interrupt in those renames had
 replaced some files and not others, or all of them and then exited 130 without a word. From
 :meth:`Seen.landing` on, the signals are held off: the command has done what it said.
+
+A reader that goes away (``| head``: SIGPIPE, Python's ``BrokenPipeError``) does not end the command
+either (:class:`PipeOut`): what it prints then goes nowhere, and its outputs land.
 """
 
 from __future__ import annotations
