@@ -790,7 +790,7 @@ how = sys.argv[1]
 
 def swallow(bar):  # a library's callback that swallows the Ctrl-C raised in it (numba's cache notice)
     def progress(done, total):
-        if how in ("go on", "fail"):
+        if how in ("go on", "fail", "bad input"):
             try:
                 os.kill(os.getpid(), signal.SIGINT)
                 time.sleep(1.0)
@@ -798,6 +798,9 @@ def swallow(bar):  # a library's callback that swallows the Ctrl-C raised in it 
                 pass
             if how == "fail":
                 raise RuntimeError("no compiled object yet")
+            if how == "bad input":  # a reader turning any library error into one of bad input
+                from sins.errors import SinsInputError
+                raise SinsInputError("failed for want of it")
     return progress
 
 rename = deferred._rename
@@ -814,7 +817,7 @@ sys.exit(main(sys.argv[2:], process=True))  # the console script's command
 """
 
 
-@pytest.mark.parametrize("how", ["go on", "fail", "landing"])
+@pytest.mark.parametrize("how", ["go on", "fail", "bad input", "landing"])
 def test_a_swallowed_interrupt_still_ends_the_command(files: Path, tmp_path: Path, how: str) -> None:
     """A Ctrl-C while numba's compilation cache called back into Python was swallowed there: the command
     went on and wrote its outputs (exit 0), or numba failed after it with a traceback (exit 1). A signal
