@@ -241,7 +241,7 @@ class BiasEstimate:
             return self.rest_figure("gravity")
         return float(np.linalg.norm(self.vector("accel", "expected")))
 
-    def _rate_is_earths(self) -> bool:
+    def rate_is_earths(self) -> bool:
         """Whether the rests' reference rate is Earth's (:data:`sins.characterise.rests.EARTH_RATE_TOL`)."""
         return abs(self.rest_figure("rate") / earth.OMEGA_IE - 1.0) <= EARTH_RATE_TOL
 
@@ -264,7 +264,7 @@ class BiasEstimate:
             "location": self.location,
             # Against a reference, its rate at rest is Earth's only where it says so (EuRoC's 69.9 °/h is
             # its trajectory's own motion): that figure apart, Earth's rate null where it is not.
-            "earth_rate_radps": earth.OMEGA_IE if not self.rests or self._rate_is_earths() else None,
+            "earth_rate_radps": earth.OMEGA_IE if not self.rests or self.rate_is_earths() else None,
             "reference_rate_radps": self.rest_figure("rate") if self.rests else None,
             "gravity_mps2": self.gravity,
             "attitude": {
@@ -334,10 +334,11 @@ def _from_reference(reference: Array) -> RestAttitude:
     return RestAttitude(roll, pitch, None, "reference", yaw_sigma=None, heading_note=note)
 
 
-def _rests(t: Array, reference: Array, segments: tuple[tuple[int, int], ...]) -> tuple[Rest, ...]:
-    """The rests (see :class:`Rest`) of the still ``segments`` of a per-row ``reference`` (n, 6)."""
+def _rests(t: Array, reference: Array, groups: list[list[tuple[int, int]]]) -> tuple[Rest, ...]:
+    """The rests (see :class:`Rest`) of a per-row ``reference`` (n, 6), each of its ``groups`` of still
+    row ranges (:func:`sins.characterise.rests.rest_groups`)."""
     out = []
-    for group in rest_groups(t, reference, segments):
+    for group in groups:
         ref = np.concatenate([reference[a:b] for a, b in group])
         mean = ref.mean(axis=0)
         out.append(Rest(float(t[group[0][0]]), float(t[group[-1][1] - 1]), len(ref), _from_reference(ref),
@@ -362,18 +363,6 @@ def _standard_errors(
                        for r in (result[ch] for ch in CHANNELS)])  # fmt: skip
     detrended = averaged - np.outer(np.asarray(t, dtype=float) - float(t[0]), slopes)
     return np.asarray(np.fmax(model, batch_means_sigma(detrended, segments)), dtype=float)
-
-
-def _between_rests(
-    t: Array, reference: Array, averaged: Array, segments: tuple[tuple[int, int], ...]
-) -> Array:
-    """The standard error (6,) of the mean pooled over the rests (:func:`rest_groups`), their spread
-    beyond their noise counted (:func:`sins.characterise.mean_error.pooled_rests_sigma`); 0 for one
-    rest."""
-    groups = rest_groups(np.asarray(t, dtype=float), reference, segments)
-    if len(groups) < 2:
-        return np.zeros(averaged.shape[1])
-    return pooled_rests_sigma(averaged, groups)
 
 
 def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white: Array, expected: Array,
@@ -442,8 +431,10 @@ def estimate_bias(
     rests: tuple[Rest, ...] = ()
     if ref is not None:
         expected, bound = ref[rows].mean(axis=0), np.zeros(6)
-        rests = _rests(np.asarray(t, dtype=float), ref, res.segments)
-        sigma = np.fmax(sigma, _between_rests(t, ref, averaged, res.segments))
+        groups = rest_groups(np.asarray(t, dtype=float), ref, res.segments)
+        rests = _rests(np.asarray(t, dtype=float), ref, groups)
+        if len(groups) > 1:  # rests that disagree beyond their noise count (mean_error.pooled_rests_sigma)
+            sigma = np.fmax(sigma, pooled_rests_sigma(averaged, groups))
         nan = math.nan  # rests in several attitudes pooled: no one attitude (each rest's in rests)
         att = (
             rests[0].attitude

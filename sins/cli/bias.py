@@ -128,7 +128,7 @@ def format_rests(e: BiasEstimate, where: str) -> list[str]:
 
     g, rate = e.gravity, e.rest_figure("rate") / DEG_PER_H
     earth_dph = earth.OMEGA_IE / DEG_PER_H
-    said = ("Earth's rate left out" if rate == 0.0 else "Earth's" if abs(rate / earth_dph - 1.0) < 0.01
+    said = ("Earth's rate left out" if rate == 0.0 else "Earth's" if e.rate_is_earths()
             else f"not Earth's {earth_dph:.4g} °/h: the reference's own motion at rest")  # fmt: skip
     lines = [
         f"taken away, the reference's rate and specific force, row by row: {rate:.4g} °/h ({said}) and "
