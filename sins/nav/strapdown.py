@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import earth
-from sins.core.series import ImuIncrements, NavSeries
+from sins.core.series import ImuIncrements, NavSeries, check_increasing
 from sins.nav.vertical import VERTICAL_MODES, VerticalMode
 
 Array = NDArray[np.float64]
@@ -389,22 +389,19 @@ def moved(state: Array, to: InitialState) -> Array:
 
 
 def _check_increments(imu: ImuIncrements) -> None:
-    """Refuse increments the compiled kernel would read past the end of, or integrate backwards: ``t``
-    (n+1,) increasing, ``dtheta_b`` and ``dv_b`` (n, 3). The kernel checks no bounds (it is compiled for
-    speed), so a mismatch gave results that changed from run to run, not an error. Rates (most readers'
+    """Refuse increments the compiled kernel would read past the end of, or integrate backwards. The
+    kernel checks no bounds (it is compiled for speed), so a mismatch gave results that changed from run
+    to run, not an error. :class:`ImuIncrements` holds its own shapes but for one: no rows and no
+    boundary either (a stream's empty chunk), which has no start to integrate from. Rates (most readers'
     form) are refused with what converts them, where they failed on a missing attribute."""
     if not isinstance(imu, ImuIncrements):
         raise TypeError(
             f"increments: expected ImuIncrements, got {type(imu).__name__} (rates: integrate "
             "rates.to_increments())"
         )
-    t, dtheta, dv = np.shape(imu.t), np.shape(imu.dtheta_b), np.shape(imu.dv_b)
-    if len(dtheta) != 2 or dtheta[1] != 3 or dv != dtheta or t != (dtheta[0] + 1,):
-        raise ValueError(
-            f"increments: t must be (n+1,) and dtheta_b, dv_b (n, 3); got t {t}, dtheta_b {dtheta}, dv_b {dv}"
-        )
-    if dtheta[0] and not np.all(np.diff(imu.t) > 0.0):
-        raise ValueError("increments: t must increase from each step to the next")
+    if len(imu.t) != len(imu.dtheta_b) + 1:
+        raise ValueError(f"increments: t must be (n+1,) for {len(imu.dtheta_b)} rows; got {np.shape(imu.t)}")
+    check_increasing(imu.t, "increments")
 
 
 def advance(
