@@ -42,6 +42,11 @@ class Terminated(BaseException):
 ENDING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
+def _ending(signum: int) -> BaseException:
+    """The exception a signal ends a command with: Ctrl-C's own, or :class:`Terminated`."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+
+
 class Seen:
     """The signals a command received (:func:`signals_as_exceptions`), in order; ``late``: those that
     came while its outputs landed, held off then (delivered after, where the block is not the process's
@@ -58,13 +63,12 @@ class Seen:
             self.late.append(signum)
             return
         self.signums.append(signum)
-        raise KeyboardInterrupt if signum == signal.SIGINT else Terminated(signum)
+        raise _ending(signum)
 
     def raise_if_any(self) -> None:
         """Raise the first signal seen, where something between its handler and here swallowed it."""
         if self.signums:
-            first = self.signums[0]
-            raise KeyboardInterrupt if first == signal.SIGINT else Terminated(first)
+            raise _ending(self.signums[0])
 
     def landing(self) -> None:
         """The work is done and its outputs land now: a signal from here on is too late to undo them,
