@@ -133,6 +133,8 @@ def _print_statistic(statistic: dict[str, Any], intervals: bool) -> None:
     for key in ("reference_clock", "reference_filled"):
         if key in statistic:
             print(f"  reference: {statistic[key]['says']}")
+    if "delays_per_sample" in statistic:
+        print(f"  {statistic['delays_per_sample']['says']}")
 
 
 def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -> None:

@@ -18,7 +18,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE, CHANNELS
 from sins.io.filled import spans_said
-from sins.unit_gap import across, clock, plausible, shrink, statistic
+from sins.unit_gap import across, clock, delays, plausible, shrink, statistic
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import BLOCK_S, baseline_fit, diagnose_intervals
@@ -92,7 +92,10 @@ def diagnose_one(
         d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
-    report = _with_reference(interval_report(d, holdout, chosen.to_dict()), inp)
+    report = interval_report(d, holdout, chosen.to_dict())
+    if asked == "auto":  # the delays per sample, where the reference allows (sins.unit_gap.delays)
+        report = delays.with_delays(report, data[0] if data else None, inp.referenced.reference, holdout)
+    report = _with_reference(report, inp)
     _, omega, force = inp.referenced.imu.mean_rates()
     readings = np.hstack([omega, force])
     return Diagnosed(inp.name, _with_plausibility(report, readings), len(inp.referenced.imu.t) - 1)

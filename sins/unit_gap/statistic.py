@@ -108,6 +108,25 @@ def per_sample_ratios(data: CalibrationData, reference: NavSeries | None) -> tup
     return out, where
 
 
+def rest_ratios(data: CalibrationData, reference: NavSeries) -> dict[str, float]:
+    """Per channel, the per-sample residual's noise over the sensor's own on the rows at rest alone
+    (:func:`rest_rows`; empty where fewer than 200 are): what the reference's differentiation adds where
+    nothing moves, which no delay of the sensor moves (a unit at rest has no rate to delay)."""
+    data = data.rows_with_reference()
+    rest = rest_rows(data.t, reference)
+    if int(rest.sum()) < _FEWEST_AT_REST:
+        return {}
+    out = {}
+    for sensor, readings, reference_input in (
+        ("gyro", data.gyro, data.ref_gyro), ("accel", data.accel, data.ref_accel)
+    ):  # fmt: skip
+        for a in range(3):
+            own = max(float(noise_floor(readings[:, a], rest)), TINY)
+            residual = readings[:, a] - reference_input[:, a]
+            out[f"{sensor}.{'xyz'[a]}"] = float(noise_level(residual, rest) / own)
+    return out
+
+
 def quality_figures(quality: ReferenceQuality | None) -> dict[str, Any]:
     """The interval fit's figures on the reference (its noise over an interval at rest against the
     sensor's), for the report."""
@@ -167,6 +186,7 @@ __all__ = [
     "choose",
     "per_sample_ratios",
     "quality_figures",
+    "rest_ratios",
     "rest_rows",
     "sensor_noise",
 ]
