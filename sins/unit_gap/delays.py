@@ -26,6 +26,7 @@ import dataclasses
 from typing import Any
 
 from sins.core.series import CalibrationData, NavSeries
+from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.unit_gap.statistic import rest_ratios
 
@@ -60,7 +61,12 @@ def with_delays(
             "has lags of its own: its clock, its filters)"
         )
         return _noted(report, {"tried": False, "rest_ratios": at_rest, "says": said})
-    found = diagnose(data, holdout, candidates=DELAYS)
+    try:
+        found = diagnose(data, holdout, candidates=DELAYS)
+    except (SinsInputError, ValueError) as exc:  # what the intervals diagnosed stands
+        return _noted(
+            report, {"tried": False, "rest_ratios": at_rest, "says": f"delays not tried per sample: {exc}"}
+        )
     # A sensor with a channel that a disturbance outside the library explains is not given a delay
     # here, as the search tries no candidate there: the per-sample search does not fit the disturbance,
     # and EuRoC's V1_02 with a 0.3 °/s hum on gyro x had a gyro delay of 0.1 ms named beside it.
