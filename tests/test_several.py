@@ -132,6 +132,30 @@ def test_a_unit_at_rest_takes_its_bias_from_its_rest_so_far() -> None:
     np.testing.assert_array_equal(unit_bias.bias_track(both, imu), track)
 
 
+def test_the_online_rule_holds_the_accelerometer_bias_to_the_recordings_own_spread() -> None:
+    """The online estimate's prior on a new recording's accelerometer bias is the spread of the training
+    recordings' own (standard deviation per axis, ddof 1, root mean square over the axes) raised to its
+    upper 95 % bound (chi-squared of r − 1 degrees of freedom; the quantiles from their tables: 0.1026
+    for 2, 0.3518 for 3), at least 1e-3 m/s²; without them, or with one recording, the rule keeps its
+    default (0.2 m/s²)."""
+    streams = [_bounded_flight(seed, bias=np.zeros(3), duration_s=10.0) for seed in range(31, 35)]
+    accel = np.array(
+        [[0.010, -0.020, 0.000], [0.030, 0.000, 0.010], [-0.010, 0.020, -0.010], [0.0, 0.0, 0.02]]
+    )
+    for r, quantile in ((3, 0.1026), (4, 0.3518)):
+        rows = accel[:r]
+        per_axis = [math.sqrt(sum((a - sum(c) / r) ** 2 for a in c) / (r - 1)) for c in rows.T]  # by hand
+        spread = math.sqrt(sum(v * v for v in per_axis) / 3) * math.sqrt((r - 1) / quantile)
+        rule = unit_bias.rule_from(np.zeros((r, 3)), streams[:r], accel_biases=rows)
+        assert rule.sigma_accel_mps2 == pytest.approx(spread, rel=2e-4), r  # the tables' 4 digits
+    same = unit_bias.rule_from(np.zeros((3, 3)), streams[:3], accel_biases=np.tile(accel[:1], (3, 1)))
+    assert same.sigma_accel_mps2 == 1e-3
+    default = unit_bias.BiasRule().sigma_accel_mps2
+    assert unit_bias.rule_from(np.zeros((3, 3)), streams[:3]).sigma_accel_mps2 == default
+    one = unit_bias.rule_from(np.zeros((1, 3)), streams[:1], accel_biases=accel[:1])
+    assert one.sigma_accel_mps2 == default
+
+
 def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() -> None:
     """A unit whose bias moves by 4e-3 rad/s between two days and 2e-4 within one, each rest reading its
     bias in flight plus a motor's 3e-4: trained on two recordings of each day, a new recording of day B
@@ -668,7 +692,7 @@ def test_a_unit_whose_readings_come_calibrated_keeps_its_gyro_as_read(
     readings that need nothing a fit on three recordings can add. Held back, every bias rule left one
     of them worse than its readings as they are (V1_03: 2.00° against 1.96°), so the model leaves the
     gyro as read, and a judged recording's open loop is the raw one to the bit. The rule of least
-    held-back mean (``online``, 0.95°; the readings 0.94°), which sins took before it weighed the
+    held-back mean (``online``, 0.97°; the readings 0.94°), which sins took before it weighed the
     readings, leaves the judged MH_05 worse than its raw readings (0.44° against 0.39°): what the bar of
     another unit forbids."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))

@@ -299,11 +299,9 @@ def choose_rule(
 ) -> BiasRule:
     """What ``strategy`` (fitted on ``recs``) does about a new recording's bias: the bias each recording's
     corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
-    mode is chosen on the open-loop attitude of held-back recordings (each recording in turn held back,
-    the seed model and the rule made from the others alone) by ``unit_bias.chosen_mode``: the simplest
-    within one standard error of the best among those no worse than the readings as they are on any of
-    them, :data:`~sins.compensation.unit_bias.READINGS` (the gyro left as read) where none is; ``mode``
-    names one instead."""
+    mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the seed
+    model and the rule made from the others) by ``unit_bias.chosen_mode``: the simplest within one standard
+    error of the best of those no worse than the readings on any, else ``READINGS`` (the gyro as read)."""
     from sins.compensation import interval_fit, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
@@ -327,7 +325,8 @@ def choose_rule(
                 np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
             )
             own = [seed.correct_increments(r.imu) for r in others]
-            base = unit_bias.rule_from(part.gyro_bias - part.gyro_bias.mean(axis=0), own, model_bias=seed.B0_)
+            rel = part.gyro_bias - part.gyro_bias.mean(axis=0)
+            base = unit_bias.rule_from(rel, own, model_bias=seed.B0_, accel_biases=part.accel_bias)
             stream = seed.correct_increments(rec.imu)
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
@@ -339,7 +338,8 @@ def choose_rule(
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
     return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
-                               held_back_deg=held, held_back_each_deg=each)  # fmt: skip
+                               accel_biases=fit_all.accel_bias, held_back_deg=held,
+                               held_back_each_deg=each)  # fmt: skip
 
 
 def _biases_only(seed: Any) -> Any:

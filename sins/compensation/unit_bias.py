@@ -31,9 +31,10 @@ estimated from the recording itself, by one of these :data:`MODES`:
     (4.4 m/s after 30 s for 1e-3 rad/s), while the true velocity stays within a few m/s. Every
     :data:`UPDATE_S` the bias is estimated again by least squares on the velocity so far (the true
     velocity as noise of ``sigma_v``, the initial tilt and velocity and the accelerometer's bias as
-    nuisances), regularised towards the prior by its spread: ``online`` from ``pooled``'s,
-    ``rest+online`` from ``rest``'s, ``nearest+online`` from ``nearest``'s. Readings are corrected by
-    the last estimate made before them (causal).
+    nuisances, the last held to the training recordings' own spread: :func:`accel_spread`), regularised
+    towards the prior by its spread: ``online`` from ``pooled``'s, ``rest+online`` from ``rest``'s,
+    ``nearest+online`` from ``nearest``'s. Readings are corrected by the last estimate made before them
+    (causal).
 
 Every mode that reads a rest (``rest``, ``nearest`` and their ``+online``) takes, while the unit rests,
 the rest's mean rate so far, weighted against the pooled prior by their precisions (the rest's standard
@@ -96,7 +97,8 @@ class BiasRule:
     the training recordings' standard deviation about it; ``rest_offset`` (3,): bias in motion less the
     bias at the opening rest, averaged over the training recordings that open with one (zero where none
     does); ``rest_spread`` (3,): its spread; ``sigma_v_mps``: the true velocity's size in the online
-    model; ``sigma_accel_mps2``: the accelerometer bias's prior size there; ``held_back_deg``: the
+    model; ``sigma_accel_mps2``: the accelerometer bias's prior size there (the training recordings' own
+    accelerometer biases' spread, :func:`rule_from`); ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
     and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
     order the model was fitted on them.
@@ -529,6 +531,7 @@ def rule_from(
     *,
     mode: str = "pooled",
     model_bias: Array | None = None,
+    accel_biases: Array | None = None,
     held_back_deg: dict[str, float] | None = None,
     held_back_each_deg: dict[str, list[float]] | None = None,
 ) -> BiasRule:
@@ -537,7 +540,8 @@ def rule_from(
     less what of ``model_bias`` (the gyro bias the model takes away, rad/s, the training recordings'
     mean bias) they do not determine (:func:`shrunk`); the spread their standard deviation (at least
     :data:`_MIN_SPREAD`); the rest offset the mean of bias less opening-rest rate over the recordings
-    that open with a rest."""
+    that open with a rest; with ``accel_biases`` (r, 3), each recording's own accelerometer bias (m/s²),
+    the online estimate's prior on the accelerometer's bias is their spread (:func:`accel_spread`)."""
     offsets, rates, ses, rested = [], [], [], []
     for b, s in zip(biases, streams, strict=True):
         dt = np.diff(s.t)
@@ -560,7 +564,31 @@ def rule_from(
         rest_rates_se=np.array(ses).reshape(-1, 3), rest_biases=np.array(rested).reshape(-1, 3),
         held_back_deg=held_back_deg or {}, held_back_each_deg=held_back_each_deg or {},
     )  # fmt: skip
+    if accel_biases is not None and len(accel_biases) > 1:
+        rule = replace(rule, sigma_accel_mps2=accel_spread(accel_biases))
     return replace(rule, nearest_spread=_nearest_spread(rule, spread))
+
+
+#: The least accelerometer-bias prior the online estimate takes, m/s² (0.1 mg): recordings whose biases
+#: happen to agree say little more.
+_MIN_ACCEL_SPREAD = 1e-3
+
+
+def accel_spread(accel_biases: Array) -> float:
+    """The online estimate's prior on a new recording's accelerometer bias, m/s²: the training
+    recordings' own biases (r, 3) about their mean (which the model takes away), their standard deviation
+    as the root mean square over the axes, raised to its upper 95 % bound (chi-squared of ``r − 1``
+    degrees of freedom: × 2.1 for six recordings, × 4.4 for three, × 16 for two) and at least
+    :data:`_MIN_ACCEL_SPREAD`. A few recordings say little of a spread, and a prior held too tight makes
+    the gyro's bias take up what the accelerometer's does. A fixed 0.2 m/s² had let the estimate trade
+    the gyro's bias for an accelerometer bias ten times any EuRoC recording's (0.011-0.018 m/s² about
+    their mean)."""
+    from scipy.stats import chi2
+
+    biases = np.asarray(accel_biases, dtype=float)
+    dof = len(biases) - 1
+    spread = float(np.sqrt(np.mean(biases.std(axis=0, ddof=1) ** 2)))
+    return float(max(spread * np.sqrt(dof / chi2.ppf(1.0 - DETERMINED, dof)), _MIN_ACCEL_SPREAD))
 
 
 def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
@@ -631,6 +659,7 @@ __all__ = [
     "TIE",
     "UPDATE_S",
     "BiasRule",
+    "accel_spread",
     "applied",
     "attitude_dcm",
     "bias_track",
