@@ -98,7 +98,7 @@ class BiasRule:
     bias at the opening rest, averaged over the training recordings that open with one (zero where none
     does); ``rest_spread`` (3,): its spread; ``sigma_v_mps``: the true velocity's size in the online
     model; ``sigma_accel_mps2``: the accelerometer bias's prior size there (the training recordings' own
-    accelerometer biases' spread, :func:`rule_from`); ``held_back_deg``: the
+    accelerometer biases' spread, :func:`accel_spread`); ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
     and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
     order the model was fitted on them.
@@ -541,7 +541,8 @@ def rule_from(
     mean bias) they do not determine (:func:`shrunk`); the spread their standard deviation (at least
     :data:`_MIN_SPREAD`); the rest offset the mean of bias less opening-rest rate over the recordings
     that open with a rest; with ``accel_biases`` (r, 3), each recording's own accelerometer bias (m/s²),
-    the online estimate's prior on the accelerometer's bias is their spread (:func:`accel_spread`)."""
+    the online estimate's prior on the accelerometer's bias is their spread's upper bound
+    (:func:`accel_spread`)."""
     offsets, rates, ses, rested = [], [], [], []
     for b, s in zip(biases, streams, strict=True):
         dt = np.diff(s.t)
