@@ -10,7 +10,6 @@ from typing import TYPE_CHECKING
 
 from sins.cli.common import Subparsers, check_outputs, check_plot, fixed_width, save_plot
 from sins.cli.options import (
-    MAX_HEIGHT_M,
     add_dataset,
     add_plot,
     add_recording_options,
@@ -27,6 +26,7 @@ if TYPE_CHECKING:
 
 def _cmd_bias(args: argparse.Namespace) -> int:
     from sins import io
+    from sins.core.earth import MAX_HEIGHT_M  # --origin's bound too (numpy: not at start-up)
 
     if (args.recording is None) == (args.dataset is None):
         raise SinsInputError("bias: give a RECORDING or --dataset NAME (one of them)")
@@ -34,7 +34,7 @@ def _cmd_bias(args: argparse.Namespace) -> int:
     check_plot(args)
     attitude = None if args.attitude is None else angles(args.attitude, "--attitude")
     lat = None if args.lat is None else latitude(args.lat)
-    if args.height is not None and not abs(args.height) <= MAX_HEIGHT_M:  # --origin's bound too
+    if args.height is not None and not abs(args.height) <= MAX_HEIGHT_M:
         raise SinsInputError(f"--height {args.height:g}: a height within ±1e5 m")
     estimate = _estimate(args, lat, attitude)
     print(format_bias(estimate))

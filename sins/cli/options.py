@@ -23,10 +23,6 @@ def positive(text: str) -> float:
     return value
 
 
-#: The largest height a command takes, m (``--origin``, ``sins bias --height``): gravity's series.
-MAX_HEIGHT_M = 1e5
-
-
 def finite(text: str) -> float:
     """An argument type: a finite number (``nan`` and ``inf`` refused)."""
     try:
@@ -182,7 +178,7 @@ def _origin(text: str) -> tuple[float, float, float]:
         lat, lon, h = (float(p) for p in parts)
     except ValueError:
         raise SinsInputError(f"--origin {text!r}: expected LAT,LON,H (degrees, degrees, metres)") from None
-    from sins.core.earth import MAX_LAT_DEG  # the navigation is singular at a pole
+    from sins.core.earth import MAX_HEIGHT_M, MAX_LAT_DEG  # the readers' bounds (numpy: not at start-up)
 
     if not (abs(lat) <= MAX_LAT_DEG and abs(lon) <= 360.0 and abs(h) <= MAX_HEIGHT_M):
         raise SinsInputError(f"--origin {text!r}: latitude ±{MAX_LAT_DEG:g}°, longitude ±360°, height ±1e5 m")
@@ -233,7 +229,6 @@ def dataset_inputs(name: str | None) -> list[Path]:
 
 
 __all__ = [
-    "MAX_HEIGHT_M",
     "add_dataset",
     "add_plot",
     "add_recording_options",

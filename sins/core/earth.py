@@ -35,6 +35,9 @@ OMEGA_IE = 7.292115e-5
 #: The largest latitude sins navigates at, degrees: the latitude/longitude mechanisation is singular at a
 #: pole (a scenario's ``[initial] lat_deg``, an origin given to a reader or a command).
 MAX_LAT_DEG = 89.9
+#: The largest height sins takes for an origin, m (an origin given to a reader or a command, ``sins bias
+#: --height``): normal gravity's series in height holds well below it.
+MAX_HEIGHT_M = 1e5
 #: Normal gravity at the equator and at the poles, m/s² (WGS84).
 GAMMA_E = 9.7803253359
 GAMMA_P = 9.8321849378
@@ -138,6 +141,7 @@ __all__ = [
     "GAMMA_E",
     "GAMMA_P",
     "GM",
+    "MAX_HEIGHT_M",
     "MAX_LAT_DEG",
     "OMEGA_IE",
     "A",

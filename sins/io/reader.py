@@ -17,7 +17,7 @@ import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-from sins.core.earth import MAX_LAT_DEG
+from sins.core.earth import MAX_HEIGHT_M, MAX_LAT_DEG
 from sins.core.series import NavSeries
 from sins.errors import ArgumentError, LateStartError, SinsInputError
 from sins.io import rig
@@ -143,7 +143,7 @@ def _check_origin(origin: tuple[float, float, float] | None) -> None:
     except (TypeError, ValueError):
         raise SinsInputError(f"origin {origin!r}: expected (lat, lon, h) in rad, rad, m") from None
     max_lat = math.radians(MAX_LAT_DEG)
-    if not (abs(lat) <= max_lat and abs(lon) <= 2.0 * math.pi and abs(h) <= 1e5):
+    if not (abs(lat) <= max_lat and abs(lon) <= 2.0 * math.pi and abs(h) <= MAX_HEIGHT_M):
         raise SinsInputError(
             f"origin ({lat:g}, {lon:g}, {h:g}): expected (lat, lon, h) in radians and metres, the latitude "
             f"within ±{max_lat:.4g} rad (±{MAX_LAT_DEG:g}°), the longitude ±2π, the height ±1e5 m"
