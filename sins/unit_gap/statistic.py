@@ -18,6 +18,7 @@ reference's noise over an interval at rest against the sensor's:
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -86,6 +87,15 @@ def rest_rows(t: Array, reference: NavSeries) -> NDArray[np.bool_]:
     return np.asarray(still[epoch] & inside, dtype=bool)
 
 
+def _channels(data: CalibrationData) -> Iterator[tuple[str, Array, Array]]:
+    """Each channel's name, readings and per-sample residual (reading less its reference input)."""
+    for sensor, readings, reference_input in (
+        ("gyro", data.gyro, data.ref_gyro), ("accel", data.accel, data.ref_accel)
+    ):  # fmt: skip
+        for a in range(3):
+            yield f"{sensor}.{'xyz'[a]}", readings[:, a], readings[:, a] - reference_input[:, a]
+
+
 def per_sample_ratios(data: CalibrationData, reference: NavSeries | None) -> tuple[dict[str, float], str]:
     """Per channel, the per-sample residual's noise (reading less its reference input, over every row
     with a reference) over the sensor's own: its readings' at rest (where the ``reference`` trajectory
@@ -93,17 +103,11 @@ def per_sample_ratios(data: CalibrationData, reference: NavSeries | None) -> tup
     data = data.rows_with_reference()
     rest = rest_rows(data.t, reference) if reference is not None else np.zeros(len(data.t), dtype=bool)
     at_rest = int(rest.sum()) >= _FEWEST_AT_REST
+    cubic = None if at_rest else np.concatenate([sensor_noise(data.gyro), sensor_noise(data.accel)])
     out = {}
-    for sensor, readings, reference_input in (
-        ("gyro", data.gyro, data.ref_gyro), ("accel", data.accel, data.ref_accel)
-    ):  # fmt: skip
-        if at_rest:
-            own = np.array([noise_floor(readings[:, a], rest) for a in range(3)])
-        else:
-            own = sensor_noise(readings)
-        for a in range(3):
-            level = noise_level(readings[:, a] - reference_input[:, a])
-            out[f"{sensor}.{'xyz'[a]}"] = float(level / max(float(own[a]), TINY))
+    for i, (ch, readings, residual) in enumerate(_channels(data)):
+        own = noise_floor(readings, rest) if cubic is None else cubic[i]
+        out[ch] = float(noise_level(residual) / max(float(own), TINY))
     where = f"its readings at rest ({int(rest.sum())} rows)" if at_rest else "a cubic through 11 readings"
     return out, where
 
@@ -117,15 +121,10 @@ def rest_ratios(data: CalibrationData, reference: NavSeries) -> dict[str, float]
     rest = rest_rows(data.t, reference)
     if int(rest.sum()) < _FEWEST_AT_REST:
         return {}
-    out = {}
-    for sensor, readings, reference_input in (
-        ("gyro", data.gyro, data.ref_gyro), ("accel", data.accel, data.ref_accel)
-    ):  # fmt: skip
-        for a in range(3):
-            own = max(float(noise_floor(readings[:, a], rest)), TINY)
-            residual = readings[:, a] - reference_input[:, a]
-            out[f"{sensor}.{'xyz'[a]}"] = float(noise_level(residual, rest) / own)
-    return out
+    return {
+        ch: float(noise_level(residual, rest) / max(float(noise_floor(readings, rest)), TINY))
+        for ch, readings, residual in _channels(data)
+    }
 
 
 def quality_figures(quality: ReferenceQuality | None) -> dict[str, Any]:
