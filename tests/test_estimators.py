@@ -68,6 +68,10 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     if name != "oracle":  # the oracle's model is a simulation's, not a file's
         assert list(params) == arguments
         assert type(strategy)(**params).params() == params
+        # The constructor keeps what it is given, each under its own name, neither converted nor checked
+        # (scikit-learn's rule): check_params holds them, and make, fit, save and load call it.
+        clone = type(strategy)(**params)
+        assert all(getattr(clone, k) is v for k, v in params.items()), name
     if name not in ("none", "oracle"):  # nothing to learn: nothing to refuse, nothing to be fitted first
         # Used before fit: said so (scikit-learn's NotFittedError), not an AttributeError from inside.
         with pytest.raises(compensation.NotFittedError, match="is not fitted: call fit"):
@@ -257,3 +261,46 @@ def test_a_temperature_of_the_wrong_length_is_said_in_the_increments_terms() -> 
     imu = ImuIncrements(t=np.arange(11) * 0.01, dtheta_b=dtheta, dv_b=dv)
     with pytest.raises(ValueError, match=r"^temp must be \(11,\) \(at imu\.t\), got \(10,\)"):
         compensation.make("none").correct_increments(imu, temp=np.zeros(10))
+
+
+@pytest.mark.parametrize(
+    ("name", "param", "value", "said"),
+    [
+        ("mlp_pure", "mode", "paper", "mlp_pure: mode is 'paper', expected one of modern, seed"),
+        ("mlp_pure", "hidden", (8,) * 5, "mlp_pure: hidden must be 1 to 4 layer sizes"),
+        ("mlp", "hidden_sizes", ((0,),), "mlp: hidden_sizes must be 1 to 4 layer sizes"),
+        ("mlp", "hidden_sizes", (16,), "mlp: hidden_sizes is (16,), expected one or more candidates"),
+        ("mlp_window", "hidden", (1.5,), "mlp_window: hidden is (1.5,), expected a whole number"),
+        ("kohonen_pure", "rows", 0, "kohonen_pure: rows is 0, expected a whole number"),
+        ("kohonen", "sizes", (0,), "kohonen: sizes is (0,), expected a whole number"),
+    ],
+)
+def test_a_parameter_set_after_the_constructor_is_held_by_fit_and_save(
+    name: str, param: str, value: object, said: str, tmp_path: Path
+) -> None:
+    """A network's or a map's own bounds were held by the constructor alone: ``mode = "paper"`` set
+    afterwards trained a network of neither kind and saved a file its own loader refused, and
+    ``hidden_sizes = ((0,),)`` failed inside numpy. Now fit and save refuse them, in one line naming the
+    strategy, before any training or writing (as load does)."""
+    import re
+
+    strategy = _make(name)
+    setattr(strategy, param, value)
+    with pytest.raises(ValueError, match=re.escape(said)):
+        strategy.fit(_data(name))
+    with pytest.raises(ValueError, match=re.escape(said)):
+        compensation.save(strategy, tmp_path / "model.json")
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("name", ["mlp_pure", "mlp_window"])
+def test_a_fit_leaves_the_callers_torch_stream_where_it_stood(name: str) -> None:
+    """A network's initial weights are drawn from torch's global generator, seeded for the fit; the
+    caller's own stream is given back as it was (before, ``fit`` re-seeded it)."""
+    import torch
+
+    torch.manual_seed(123)
+    expected = torch.rand(4)
+    torch.manual_seed(123)
+    _make(name).fit(_data(name))
+    assert torch.equal(torch.rand(4), expected)

@@ -31,6 +31,7 @@ FITS: dict[str, tuple[str, dict[str, Any]]] = {
     "none": ("none", {}),
     "regression": ("regression", {}),
     "regression_extended": ("regression_extended", {"squares": False}),
+    "regression_rest": ("regression_rest", {}),
     "mlp": ("mlp", {"hidden_sizes": ((4,),), "decays": (1e-4,), "folds": 2, "guard": False}),
     "mlp_pure": ("mlp_pure", {"hidden": (8, 8), "max_epochs": 5}),
     "kohonen": ("kohonen", {"sizes": (3,), "sigmas": (0.7,), "folds": 2, "guard": False}),
@@ -110,9 +111,13 @@ def test_a_network_larger_than_fit_can_make_is_refused_before_torch_is_imported(
     *messages, torch_imported = out.stdout.strip().splitlines()
     assert len(messages) == len(paths)
     for path, message, h in zip(paths, messages, hidden, strict=True):
-        # A string is not a list at all: refused by its kind, before the constructor's bounds.
-        said = "params.hidden is '32': expected a list" if h == "32" else "hidden must be 1 to 4 layer sizes"
+        # A string is not a list at all: refused by its kind; a layer beyond the widths by its range; too
+        # many layers by check_hidden.
+        said = {"32": "params.hidden is '32': expected a list", 5: "hidden must be 1 to 4 layer sizes"}.get(
+            h if isinstance(h, str) else len(h), "hidden is " + str(h)[:20]
+        )
         assert str(path) in message and said in message, message
+        assert h == "32" or len(h) == 5 or "expected a whole number from 1 to 256" in message, message
     assert torch_imported == "False"
 
 
@@ -135,11 +140,11 @@ MAP = ("state", "learners_", "gyro", "maps", 0)
         ("mlp", lambda d: _set(d, [64], "state", "learners_", "gyro", "hidden"), "none of the candidates"),
         ("mlp", lambda d: _set(d, [[1.0]], *ACCEL, "weights", 2), "weights[2] has shape"),
         ("mlp", lambda d: _set(d, [[100000000]], "params", "hidden_sizes"), "hidden_sizes must be"),
-        ("kohonen", lambda d: _set(d, [1000000], "params", "sizes"), "sizes must be a whole number"),
+        ("kohonen", lambda d: _set(d, [1000000], "params", "sizes"), "sizes is [1000000], expected a whole"),
         ("kohonen", lambda d: _set(d, [[1.0]], *MAP, "blend"), "blend has shape"),
         ("kohonen", lambda d: _set(d, [[0.0]] * 16, *MAP, "codebook"), "codebook has 16 nodes"),
         ("kohonen", lambda d: _set(d, [0, 9], *MAP, "winner_columns"), "winner_columns must be"),
-        ("kohonen_pure", lambda d: _set(d, 1000000, "params", "rows"), "rows must be a whole number"),
+        ("kohonen_pure", lambda d: _set(d, 1000000, "params", "rows"), "rows is 1000000, expected a whole"),
         ("kohonen_pure", lambda d: _set(d, 10**9, "params", "neighbours"), "neighbours is 1000000000"),
         ("regression", lambda d: _set(d, [[1.0, 2.0]], "state", "B_"), "B_ has shape (1, 2)"),
         ("regression", lambda d: _set(d, np.diag([-1.0] * 3).tolist(), "state", "B_"), "Singular matrix"),
@@ -222,14 +227,46 @@ def test_any_edit_of_any_model_file_loads_soundly_or_is_one_line(
     assert np.isfinite(w).all() and np.isfinite(f).all()
 
 
+_RELABEL = "is not a variant of"
+
+
+@pytest.mark.parametrize(
+    ("name", "edit", "said"),
+    [
+        ("regression_rest", lambda d: d.update(strategy="regression"), f"_rest' {_RELABEL} regression"),
+        ("regression", lambda d: d.update(strategy="regression_rest"), f"on' {_RELABEL} regression_"),
+        ("regression", lambda d: d.update(variant="mlp"), f"variant 'mlp' {_RELABEL} regression (its: regr"),
+        ("regression", lambda d: d.update(variant=7), f"variant 7 {_RELABEL} regression"),
+        ("regression_rest", lambda d: d["state"].pop("rest_rms_"), "state.rest_rms_ is missing"),
+        ("regression_rest", lambda d: d["state"].pop("motion_offset_"), "state.motion_offset_ is missing"),
+        ("regression_rest", lambda d: d["state"].update(rest_rms_=-1.0), "state.rest_rms_ is -1, expected"),
+    ],
+)  # fmt: skip
+def test_a_file_is_the_strategy_it_says_and_holds_all_it_needs(
+    models: dict[str, Path], tmp_path: Path, name: str, edit: Any, said: str
+) -> None:
+    """A file relabelled as another strategy loaded as it (a ``regression_rest`` file as least squares
+    calling itself ``regression_rest``, its rest rule dropped without a word), and a ``regression_rest``
+    file without its rest rule loaded and then failed at the first recording ("not fitted: call fit()
+    first"). Both are refused by ``load``, in one line naming the file."""
+    path = _edited(models, tmp_path, name, edit)
+    with pytest.raises(SinsInputError) as refused:
+        compensation.load(path)
+    message = str(refused.value)
+    assert str(path) in message and said in message and "\n" not in message, message
+    assert compensation.load(models[name]).label == name  # the file as written loads
+
+
 def test_a_loaded_model_refuses_nothing_sins_fits() -> None:
     """The bounds a model file is held to are those fit is held to: a network or map beyond them is
     refused when made, not only when loaded (a file sins writes, sins reads)."""
-    with pytest.raises(ValueError, match="hidden must be"):
+    with pytest.raises(ValueError, match=r"hidden is \(512,\), expected a whole number from 1 to 256"):
         compensation.make("mlp_pure", hidden=(512,))
-    with pytest.raises(ValueError, match="rows must be"):
+    with pytest.raises(ValueError, match="hidden must be 1 to 4 layer sizes"):
+        compensation.make("mlp_pure", hidden=(8,) * 5)
+    with pytest.raises(ValueError, match="rows is 64, expected a whole number from 1 to 32"):
         compensation.make("kohonen_pure", rows=64)
-    with pytest.raises(ValueError, match="sizes must be"):
+    with pytest.raises(ValueError, match=r"sizes is \(40,\), expected a whole number from 1 to 32"):
         compensation.make("kohonen", sizes=(40,))
 
 

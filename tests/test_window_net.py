@@ -135,8 +135,12 @@ def test_model_file_round_trip_and_a_damaged_network(tmp_path: Path) -> None:
 
 
 def test_parameters_out_of_bounds_are_refused() -> None:
-    with pytest.raises(ValueError, match="hidden"):
-        WindowNet(hidden=(1000,))
+    # The constructor keeps what it is given (scikit-learn's rule); check_params (make, fit, save and
+    # load call it) refuses it.
+    with pytest.raises(ValueError, match=r"^mlp_window: hidden is \(1000,\), expected a whole number"):
+        WindowNet(hidden=(1000,)).check_params()
+    with pytest.raises(ValueError, match=r"^mlp_window: hidden must be 1 to 3 layer sizes"):
+        WindowNet(hidden=(8, 8, 8, 8)).check_params()
     with pytest.raises(ValueError, match="ensemble is 0, expected a whole number from 1 to 16"):
         WindowNet(ensemble=0).check_params()
     assert window_net.FEATURES == 8 * (len(EDGES_S) - 1)

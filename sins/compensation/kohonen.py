@@ -90,12 +90,18 @@ class Kohonen(Strategy):
         neighbours: int = 4,
         seed: int = 0,
     ) -> None:
-        self.rows, self.cols = check_map(rows, "rows"), check_map(cols, "cols")
+        self.rows, self.cols = rows, cols  # kept as given; check_params holds them
         self.sigma = sigma
         self.learning_rate = learning_rate
         self.iterations = iterations
         self.neighbours = neighbours
         self.seed = seed
+
+    def check_params(self) -> None:
+        """As every strategy's, and ``rows``, ``cols`` within :func:`check_map`'s bounds."""
+        super().check_params()
+        check_map(self.rows, f"{self.label}: rows")
+        check_map(self.cols, f"{self.label}: cols")
 
     def fit(self, data: CalibrationData) -> Kohonen:
         """Train the map on standardised readings and store each node's mean error; returns self."""
@@ -203,14 +209,20 @@ class LocalLinearMap(ResidualStrategy):
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
-        self.sizes = tuple(check_map(n, "sizes") for n in sizes)
-        self.sigmas = tuple(float(s) for s in sigmas)
+        self.sizes = sizes  # kept as given; check_params holds them
+        self.sigmas = sigmas
         self.smoothing = smoothing
         self.slope_ridge = slope_ridge
         self.som_iterations = som_iterations
 
+    def check_params(self) -> None:
+        """As every strategy's, and each of ``sizes`` within :func:`check_map`'s bounds."""
+        super().check_params()
+        for n in self.sizes:
+            check_map(n, f"{self.label}: sizes")
+
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
-        return [{"size": n} for n in self.sizes]
+        return [{"size": int(n)} for n in self.sizes]
 
     @staticmethod
     def _groups(n_inputs: int) -> list[tuple[list[int], list[int]]]:
@@ -250,7 +262,7 @@ class LocalLinearMap(ResidualStrategy):
             codebook = batch_map(some[:, win_cols], grid, self.som_iterations)
             winners = _nearest(points.x[:, win_cols], codebook)
             placed.append(_Placed(win_cols, plane_cols, grid, codebook, winners))
-        widths = [float(config["sigma"])] if "sigma" in config else list(self.sigmas)
+        widths = [float(config["sigma"])] if "sigma" in config else [float(w) for w in self.sigmas]
         return {w: self._planes(points, sigma, placed, w) for w in widths}
 
     def _variants(self, config: dict[str, Any], learner: Any) -> list[tuple[dict[str, Any], Any]]:
@@ -314,7 +326,7 @@ class LocalLinearMap(ResidualStrategy):
         maps = learner.get("maps")
         if not isinstance(maps, list) or not 1 <= len(maps) <= len(self._groups(n_inputs)):
             raise ValueError(f"{where}.maps must be 1 to {len(self._groups(n_inputs))} maps")
-        allowed = {n for size in self.sizes for n in (size, size * size)}
+        allowed = {int(n) for size in self.sizes for n in (size, size * size)}
         for i, m in enumerate(maps):
             at = f"{where}.maps[{i}]"
             if not isinstance(m, dict):

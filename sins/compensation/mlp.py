@@ -51,6 +51,8 @@ Array = NDArray[np.float64]
 #: registry's variants fit (32), and twice as deep; a network is evaluated on a recording's rows at once,
 #: so its width sets the memory a correction takes (an hour at 100 Hz: 0.7 GB a layer of 256).
 MAX_LAYERS, MAX_WIDTH = 4, 256
+#: ``mlp_pure``'s ways of training (the module docstring).
+MODES = ("modern", "seed")
 
 
 def check_hidden(
@@ -132,9 +134,8 @@ class MLP(Strategy):
         validation: float = 0.2,
         seed: int = 0,
     ) -> None:
-        if mode not in ("modern", "seed"):
-            raise ValueError(f"mlp mode must be 'modern' or 'seed', got {mode!r}")
-        self.hidden = check_hidden(tuple(hidden), "hidden")
+        # Kept as given (scikit-learn's rule); check_params holds them, for make, fit, save and load alike.
+        self.hidden = hidden
         self.mode = mode
         self.alpha = alpha
         self.gain = gain
@@ -146,6 +147,15 @@ class MLP(Strategy):
         self.seed = seed
         #: Called as ``progress(epochs_done, max_epochs)`` after each epoch (a progress bar's); not saved.
         self.progress: Callable[[int, int], None] | None = None
+
+    def check_params(self) -> None:
+        """As every strategy's (:meth:`Strategy.check_params`), and ``mode`` one of :data:`MODES`,
+        ``hidden`` within :func:`check_hidden`'s bounds: set after the constructor, a ``mode`` of "paper"
+        had trained a network of neither kind and saved a file its own loader refused."""
+        super().check_params()
+        if self.mode not in MODES:
+            raise ValueError(f"{self.label}: mode is {self.mode!r}, expected one of {', '.join(MODES)}")
+        check_hidden(self.hidden, f"{self.label}: hidden")
 
     def _network(self, n_in: int) -> Any:
         import torch
@@ -170,7 +180,6 @@ class MLP(Strategy):
 
         data.check_readings()
         calibration.fit_seed_model(data)  # rows that do not determine a linear model teach no network
-        torch.manual_seed(self.seed)
         ok = data.has_reference
         if ok.sum() < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
@@ -187,7 +196,8 @@ class MLP(Strategy):
             self.y_mean_, self.y_scale_ = y.mean(axis=0), np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
         xs = torch.from_numpy((x - self.x_mean_) / self.x_scale_)
         ys = torch.from_numpy((y - self.y_mean_) / self.y_scale_)
-        net = self._network(xs.shape[1])
+        with seeded(self.seed):
+            net = self._network(xs.shape[1])
         if self.mode == "seed":
             self.epochs_, self.final_error_ = self._train_seed(net, xs, ys)
         else:
@@ -416,17 +426,29 @@ class ResidualMLP(ResidualStrategy):
         physics: bool = True,
     ) -> None:
         super().__init__(folds=folds, guard=guard, guard_z=guard_z, seed=seed, n_jobs=n_jobs, physics=physics)
-        # One or more candidates, each a tuple of layer sizes: [] had failed in fit ("no fold could be
-        # fitted"), and [16] (one candidate's sizes, not a list of them) in Python's words.
-        if not isinstance(hidden_sizes, list | tuple) or not hidden_sizes:
-            raise ValueError(f"hidden_sizes is {hidden_sizes!r}, expected one or more tuples of layer sizes")
-        self.hidden_sizes = tuple(
-            check_hidden(hs, "hidden_sizes") for hs in hidden_sizes
-        )  # a bare number is no tuple of sizes: check_hidden refuses it
-        self.decays = tuple(float(d) for d in decays)
+        self.hidden_sizes = hidden_sizes  # kept as given; check_params holds them
+        self.decays = decays
+
+    def check_params(self) -> None:
+        """As every strategy's, and ``hidden_sizes`` one or more candidates, each a list of layer sizes
+        within :func:`check_hidden`'s bounds: ``[]`` had failed in fit ("no fold could be fitted"), and
+        ``[16]`` (one candidate's sizes, not a list of them) in Python's words."""
+        super().check_params()
+        grid = self.hidden_sizes
+        if not (isinstance(grid, list | tuple) and grid and all(isinstance(h, list | tuple) for h in grid)):
+            raise ValueError(
+                f"{self.label}: hidden_sizes is {str(grid)[:60]}, expected one or more candidates, each a "
+                "list of layer sizes ([[16]]: one network of 16)"
+            )
+        self._hidden_grid()
+
+    def _hidden_grid(self) -> list[tuple[int, ...]]:
+        """The candidates of ``hidden_sizes``, each as :func:`check_hidden` gives it."""
+        return [check_hidden(h, f"{self.label}: hidden_sizes") for h in self.hidden_sizes]
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
-        return [{"hidden": list(h), "decay": d} for h in self.hidden_sizes for d in self.decays]
+        decays = [float(d) for d in self.decays]
+        return [{"hidden": list(h), "decay": d} for h in self._hidden_grid() for d in decays]
 
     def _train(self, config: dict[str, Any], points: Points, sigma: Array, seed: int) -> Any:
         snapshots = dict(self._lbfgs(config, points, sigma, seed))
@@ -449,8 +471,7 @@ class ResidualMLP(ResidualStrategy):
         import torch
 
         with _one_thread():
-            with _INIT_LOCK:  # torch's generator is global: seed and draw the weights as one step
-                torch.manual_seed(seed)
+            with seeded(seed):
                 net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
             x = torch.from_numpy(points.x)
             y = torch.from_numpy(points.y / sigma)
@@ -499,7 +520,7 @@ class ResidualMLP(ResidualStrategy):
         ``sigma`` (3,), and ``weights`` of the shapes :func:`_tanh_network` gives them."""
         super()._check_learner(learner, n_inputs, where)
         hidden = check_hidden(learner.get("hidden"), f"{where}.hidden")
-        if hidden not in self.hidden_sizes:
+        if hidden not in self._hidden_grid():
             raise ValueError(f"{where}.hidden {list(hidden)} is none of the candidates, params.hidden_sizes")
         state_array(learner, "sigma", (3,), where)
         shapes: list[tuple[int, ...]] = []
@@ -516,6 +537,20 @@ class ResidualMLP(ResidualStrategy):
 
 
 _INIT_LOCK = threading.Lock()
+
+
+@contextmanager
+def seeded(seed: int) -> Iterator[None]:
+    """torch's global generator seeded at ``seed`` for a network's initial weights (its layers draw from
+    it), and given back as it was afterwards: a fit leaves the caller's own torch stream where it stood.
+    One network at a time (a lock): the generator is global to the process, threads share it."""
+    import torch
+
+    with _INIT_LOCK, torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        yield
+
+
 _THREADS_LOCK = threading.Lock()
 _one_thread_depth = 0
 _threads_before = 0
@@ -637,6 +672,8 @@ __all__ = [
     "MAX_LAYERS",
     "MAX_WIDTH",
     "MLP",
+    "MODES",
     "ResidualMLP",
     "check_hidden",
+    "seeded",
 ]

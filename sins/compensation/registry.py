@@ -165,12 +165,24 @@ def save(strategy: Strategy, path: str | os.PathLike[str]) -> None:
     io.write_json(path, doc)
 
 
+def _variant(variant: Any, name: str) -> str:
+    """A model file's ``variant``, one of strategy ``name``'s (:data:`VARIANTS`, or ``bias_only`` of
+    ``regression``); else ``ValueError``. A ``regression_rest`` file relabelled ``regression`` had loaded
+    as least squares that called itself ``regression_rest``, its rest rule dropped without a word."""
+    of = {v: cls for v, (cls, _) in VARIANTS.items()} | {v: "regression" for v in REFERENCE_VARIANTS}
+    if not isinstance(variant, str) or of.get(variant) != name:
+        theirs = [v for v, cls in of.items() if cls == name]
+        raise ValueError(f"variant {short(variant)} is not a variant of {name} (its: {', '.join(theirs)})")
+    return variant
+
+
 def load(path: str | os.PathLike[str]) -> Strategy:
     """Read a strategy written by :func:`save`; refuse other formats and versions in one line.
 
     The parameters and state are checked (objects; every number finite and at most
-    :data:`MAX_MODEL_VALUE` in magnitude), the parameters against the strategy's bounds (its
-    constructor: a network's layers and widths, a map's nodes), the state's shapes and sizes against
+    :data:`MAX_MODEL_VALUE` in magnitude), the variant against the strategy (one of its own), the
+    parameters against the strategy's bounds (:meth:`Strategy.check_params`: a network's layers and
+    widths, a map's nodes), the state's shapes and sizes against
     the parameters before any array, network or map is made (:meth:`Strategy.check_state`: a file of
     70 kB cannot ask for a 6 GB network), and the model corrects a few probe readings; so a damaged file
     is refused here, in one line naming the file, rather than failing or printing NaN later.
@@ -200,14 +212,13 @@ def load(path: str | os.PathLike[str]) -> Strategy:
         _check_values(path, name, value, key)
     _check_params(path, name, params)
     try:
-        strategy = strategy_class(name)(**params)  # its parameters' own bounds (a network's size, a map's)
-        strategy.check_params()  # their ranges (a max_epochs of -3, a seed of 1.5)
+        variant = _variant(doc.get("variant", name), name)  # what the file says it is, first
+        strategy = strategy_class(name)(**params)
+        strategy.check_params()  # their kinds and ranges, a network's size, a map's
         # The state's shapes and sizes against the strategy's, before any array, network or map is made.
         strategy.check_state(state)
         strategy.set_state(state)
-        variant = doc.get("variant", name)
-        known = isinstance(variant, str) and (variant in VARIANTS or variant in REFERENCE_VARIANTS)
-        strategy.variant = variant if known else name
+        strategy.variant = variant
         # A probe: what the checks above do not see fails here, not in the middle of a run.
         gyro, accel = _PROBE
         gyro_c, accel_c = strategy.correct(gyro, accel, np.full(len(gyro), 20.0))

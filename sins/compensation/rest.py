@@ -19,10 +19,12 @@ that corrects its stream a chunk at a time (``sins run``) starts each chunk with
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import Array
+from sins.compensation.base import Array, state_array
 from sins.compensation.regression import Regression
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 
@@ -77,6 +79,16 @@ class RestAware(Regression):
         error = omega - data.ref_gyro
         self.motion_offset_ = np.asarray(error[moving].mean(axis=0) - error[still].mean(axis=0), dtype=float)
         return self
+
+    def check_state(self, state: dict[str, Any]) -> None:
+        """The seed model's arrays, then the rest rule's: ``rest_rms_`` a rate spread (rad/s, ≥ 0) and
+        ``motion_offset_`` (3,). A file without them had loaded and then failed at its first recording
+        ("not fitted: call fit() first"), which a user holding a model file cannot do."""
+        super().check_state(state)
+        rest_rms = state_array(state, "rest_rms_", ())
+        if rest_rms < 0.0:
+            raise ValueError(f"state.rest_rms_ is {float(rest_rms):g}, expected a rate spread of 0 or more")
+        state_array(state, "motion_offset_", (3,))
 
     def correct_rates(self, rates: ImuRates, temp: Array | None = None) -> ImuRates:
         """The seed model, then the gyro bias re-taken at each rest (module docstring)."""

@@ -33,7 +33,6 @@ which see a recording in order, apply the network too.
 from __future__ import annotations
 
 import itertools
-import threading
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -41,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, checked_array, state_array
-from sins.compensation.mlp import check_hidden
+from sins.compensation.mlp import check_hidden, seeded
 from sins.compensation.regression import Regression
 from sins.compensation.window import GyroWindow
 from sins.core.series import CalibrationData, ImuIncrements, ReferencedRecording
@@ -62,7 +61,6 @@ MAX_FOLDS = 6
 HOLD_LAST = 0.25
 #: The largest network a model file may ask for: layers and width.
 MAX_LAYERS, MAX_WIDTH = 3, 128
-_INIT_LOCK = threading.Lock()
 
 
 class WindowNet(GyroWindow):
@@ -91,9 +89,8 @@ class WindowNet(GyroWindow):
         g_sensitivity: bool = False,
     ) -> None:
         super().__init__(g_sensitivity=g_sensitivity)
-        # A layer of 1.5 neurons is refused, not made one of 1 (mlp's check, with mlp_window's bounds).
-        self.hidden = check_hidden(hidden, "mlp_window: hidden", MAX_LAYERS, MAX_WIDTH)
-        # Kept as given (scikit-learn's rule); check_params holds them to param_ranges.
+        # Kept as given (scikit-learn's rule); check_params holds them.
+        self.hidden = hidden
         self.weight_decay = weight_decay
         self.steps = steps
         self.ensemble = ensemble
@@ -101,6 +98,12 @@ class WindowNet(GyroWindow):
         self.guard_z = guard_z
         self.seed = seed
         self.progress: Callable[[int, int], None] | None = None
+
+    def check_params(self) -> None:
+        """As every strategy's, and ``hidden`` within mlp's :func:`~sins.compensation.mlp.check_hidden`
+        at :data:`MAX_LAYERS` of :data:`MAX_WIDTH`: a layer of 1.5 neurons is refused, not made one of 1."""
+        super().check_params()
+        check_hidden(self.hidden, f"{self.label}: hidden", MAX_LAYERS, MAX_WIDTH)
 
     def fit_beyond(self, data: CalibrationData) -> WindowNet:
         """One recording's per-sample references (the seed model set first): the network on its first
@@ -270,8 +273,7 @@ def _train_one(
 
     x_mean, x_scale = x.mean(axis=0), np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
     y_scale = np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
-    with _INIT_LOCK:  # torch's generator is global: seed and draw the weights as one step
-        torch.manual_seed(seed)
+    with seeded(seed):
         net = _network(x.shape[1], hidden)
     xt = torch.from_numpy(((x - x_mean) / x_scale).astype(np.float32))
     yt = torch.from_numpy((y / y_scale).astype(np.float32))
