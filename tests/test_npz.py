@@ -14,9 +14,11 @@ from conftest import dataset_folder, refusal
 from scipy.spatial.transform import Rotation
 
 from sins import io
+from sins.cli import main
 from sins.compensation import referenced
 from sins.core import earth
 from sins.core.series import NavSeries
+from sins.errors import SinsInputError
 from sins.io import datasets, inspection
 from sins.io.frame_check import REFERENCE_LAG_S
 
@@ -332,15 +334,24 @@ def test_a_constant_reference_and_swapped_columns_are_named_as_such(tmp_path: Pa
         refusal(lambda p=path: io.read(p).beside_reference(), str(path), said)
 
 
-def test_a_time_column_in_nanoseconds_is_named_and_places_no_clock(tmp_path: Path) -> None:
-    """The swing's time written in ns, read as s: its readings 5e6 s apart. The time's unit is the
-    mistake named; the clock search (shifts within 0.25 s) has no shift to try, so no clock is said
-    (it said the reference's clock lagged 5,000,000,000 ms: a shift of one reading's interval, ten
-    thousand times the search's reach)."""
+def test_a_time_column_in_another_unit_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The swing's time written in ns, read as s: its readings 5e6 s apart, no IMU's rate; and in
+    units of 1e-300 s. Every command refuses it when it is read, naming the time's unit (the clock
+    search had said the reference's clock lagged 5,000,000,000 ms; steps of 1e-300 s were integrated
+    without a word, and ``sins characterise`` failed inside scipy's splines). In ms read as s (0.2 Hz
+    here, a slow logger's rate) it is read, and ``sins inspect`` names the unit."""
     path = tmp_path / "swing.npz"
     _swinging(path)
     doc = dict(np.load(path))
-    np.savez(path, **{**doc, "t_s": doc["t_s"] * 1e9})
+    for scale, said in ((1e9, r"every 5e\+06 s \(2e-07 Hz\), no IMU's rate"), (1e-298, r"\(2e\+300 Hz\)")):
+        np.savez(path, **{**doc, "t_s": doc["t_s"] * scale})
+        with pytest.raises(SinsInputError, match=rf"^{path}: one reading .*{said}.*time column's unit$"):
+            io.read(path)
+        for command in ("integrate", "characterise"):
+            assert main([command, str(path)]) == 2
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and "time column's unit" in err, err
+    np.savez(path, **{**doc, "t_s": doc["t_s"] * 1e3})
     found = inspection.inspect(io.read(path))
     assert found.reference_lag is None
     assert [f.code for f in found.findings] == ["time_unit"], found.findings
@@ -417,6 +428,39 @@ def test_keys_not_of_the_form_are_said_not_read(tmp_path: Path, monkeypatch: pyt
     assert f"{path}: not read (not of the form): mag_uT, temp_c" in io.read(dataset="unit/rec").notes
     _write(path)
     assert not any("not read" in note for note in io.read(path).notes)
+
+
+def test_an_archive_that_lies_about_its_members_is_refused_before_it_is_read(tmp_path: Path) -> None:
+    """A member's header claims the array's shape; numpy allocates it before reading. A 20 kB file whose
+    t_s claimed 1e12 rows had asked for 7 TiB (a MemoryError's traceback), and one claiming (400, 300)
+    more than its member holds; a member flagged encrypted raised RuntimeError. Each is one line now."""
+    import io as bytes_io
+    import zipfile
+
+    good = _write(tmp_path / "good.npz")
+    for key, shape, said in (
+        ("t_s", (10**12,), "t_s has 1000000000000 rows; sins reads at most"),
+        ("gyro_rad_s", (400, 300), "gyro_rad_s's header claims shape (400, 300) (480000 bytes); the member"),
+    ):  # fmt: skip
+        path = tmp_path / f"{key}.npz"
+        with zipfile.ZipFile(path, "w") as archive:
+            for name, value in good.items():
+                member = bytes_io.BytesIO()
+                if name == key:
+                    header = {"descr": value.dtype.str, "fortran_order": False, "shape": shape}
+                    np.lib.format.write_array_header_1_0(member, header)
+                    member.write(value.tobytes())
+                else:
+                    np.save(member, value)
+                archive.writestr(f"{name}.npy", member.getvalue())
+        refusal(lambda p=path: io.read(p), str(path), said)
+    locked = bytearray((tmp_path / "good.npz").read_bytes())
+    for signature, flags_at in ((b"PK\x03\x04", 6), (b"PK\x01\x02", 8)):  # the local and central headers
+        at = locked.find(signature) + flags_at
+        locked[at] |= 1  # bit 0 of the general-purpose flags: encrypted
+    path = tmp_path / "locked.npz"
+    path.write_bytes(bytes(locked))
+    refusal(lambda: io.read(path), str(path), "not a readable .npz archive", "password required")
 
 
 def test_not_an_archive(tmp_path: Path) -> None:

@@ -4,6 +4,7 @@ layout and CSVs with their own columns and units (written here with numpy), read
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -420,6 +421,29 @@ def test_euroc_refusals_name_the_line(tmp_path: Path, capsys: pytest.CaptureFixt
     data.write_text("\n".join(lines) + "\n", encoding="utf-8")
     refusal(lambda: io.read(data), f"{data}:6:", "does not increase")
     _assert_one_line_error(main(["inspect", str(tmp_path / "bad")]), capsys.readouterr().err, ":6:")
+
+
+def test_a_euroc_reference_beyond_physics_or_not_a_file_is_named(tmp_path: Path) -> None:
+    """The reference's position and velocity are held to the ``.npz`` reader's bounds (1e6 m, 1e3 m/s):
+    one row at 1e300 m had fitted a model, 1e30 m/s integrated to a drift table. A folder or a FIFO where
+    the reference's file should be is named, not taken for a recording without a reference."""
+    _euroc(tmp_path / "bad")
+    ref = tmp_path / "bad" / "mav0" / "state_groundtruth_estimate0" / "data.csv"
+    good = ref.read_text(encoding="utf-8")
+    for column, value, said in ((1, "1e300", "column 2: 1e+300 m is beyond ±1e+06"),
+                                (9, "-2e3", "column 10: -2000 m/s is beyond ±1000")):  # fmt: skip
+        lines = good.splitlines()
+        cells = lines[7].split(",")
+        cells[column] = value
+        lines[7] = ",".join(cells)
+        ref.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        refusal(lambda: io.read(tmp_path / "bad"), f"{ref}:8: {said}")
+    ref.unlink()
+    ref.mkdir()
+    refusal(lambda: io.read(tmp_path / "bad"), str(ref))
+    ref.rmdir()
+    os.mkfifo(ref)
+    refusal(lambda: io.read(tmp_path / "bad"), str(ref))
 
 
 def test_an_asl_file_given_by_path_keeps_the_files_read_beside_it(

@@ -90,18 +90,12 @@ class Kohonen(Strategy):
         neighbours: int = 4,
         seed: int = 0,
     ) -> None:
-        self.rows, self.cols = rows, cols  # kept as given; check_params holds them
+        self.rows, self.cols = rows, cols  # kept as given; check_params holds them (param_ranges)
         self.sigma = sigma
         self.learning_rate = learning_rate
         self.iterations = iterations
         self.neighbours = neighbours
         self.seed = seed
-
-    def check_params(self) -> None:
-        """As every strategy's, and ``rows``, ``cols`` within :func:`check_map`'s bounds."""
-        super().check_params()
-        check_map(self.rows, f"{self.label}: rows")
-        check_map(self.cols, f"{self.label}: cols")
 
     def fit(self, data: CalibrationData) -> Kohonen:
         """Train the map on standardised readings and store each node's mean error; returns self."""
@@ -214,12 +208,6 @@ class LocalLinearMap(ResidualStrategy):
         self.smoothing = smoothing
         self.slope_ridge = slope_ridge
         self.som_iterations = som_iterations
-
-    def check_params(self) -> None:
-        """As every strategy's, and each of ``sizes`` within :func:`check_map`'s bounds."""
-        super().check_params()
-        for n in self.sizes:
-            check_map(n, f"{self.label}: sizes")
 
     def _candidates(self, sensor: str, n_inputs: int) -> list[dict[str, Any]]:
         return [{"size": int(n)} for n in self.sizes]

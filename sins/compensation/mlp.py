@@ -179,6 +179,7 @@ class MLP(Strategy):
         import torch
 
         data.check_readings()
+        self._net = None  # an earlier fit's network is not this one's, whether or not this one ends
         calibration.fit_seed_model(data)  # rows that do not determine a linear model teach no network
         ok = data.has_reference
         if ok.sum() < 10:

@@ -109,7 +109,9 @@ def _read_euroc(
     truth = None
     for folder, width in REFERENCES.items():
         ref = (mav or csv.parent) / folder / "data.csv"
-        if mav is not None and ref.is_file():
+        # A folder, a FIFO or a broken link where the reference's file should be is refused by name
+        # (check_input), not taken for a recording without a reference.
+        if mav is not None and (ref.exists() or ref.is_symlink()):
             truth, turned = _reference(ref, width, t0, origin, m, (stamps, values[:, 3:]))
             nominal = origin == local.NOMINAL_ORIGIN  # R's heading is never known (the module docstring)
             notes.append(
@@ -226,6 +228,9 @@ def _reference(
         k = int(np.argmax(np.abs(norm - 1.0) > 1e-3))
         raise SinsInputError(f"{path}:{k + 2}: q_RS has norm {norm[k]:.6g}, not a unit quaternion")
     t = (stamps - t0) / 1e9
+    _check_range(path, a[:, :3], 0, formats.MAX_POSITION_M, "m")
+    if width >= 10:
+        _check_range(path, a[:, 7:10], 7, formats.MAX_SPEED_MPS, "m/s")
     p = a[:, :3]
     v = a[:, 7:10] if width >= 10 else (np.gradient(p, t, axis=0) if len(t) > 1 else np.zeros_like(p))
     t_imu, f_imu = (readings[0] - t0) / 1e9, readings[1]
@@ -236,6 +241,19 @@ def _reference(
         source=str(path),
     )  # fmt: skip
     return track, turned
+
+
+def _check_range(path: Path, values: Array, first: int, limit: float, unit: str) -> None:
+    """Refuse a reference's position or velocity (``values``, its columns from ``first`` after the
+    stamp) beyond ``limit``, naming the line and column, as the ``.npz`` reader does: one row at 1e300 m
+    had fitted a model, and 1e30 m/s integrated to a drift table."""
+    bad = np.abs(values) > limit
+    if bad.any():
+        r, c = (int(i) for i in np.argwhere(bad)[0])
+        raise SinsInputError(
+            f"{path}:{r + 2}: column {first + c + 2}: {values[r, c]:g} {unit} is beyond ±{limit:g}, outside "
+            "any physical range"
+        )
 
 
 def _rate(path: Path) -> float | None:

@@ -110,6 +110,9 @@ MAX_TIME_S = 1e10
 MAX_RATE_RADPS = 1e4
 #: The largest specific force, m/s² (102,000 g; a gun launch reaches 50,000 g).
 MAX_FORCE_MPS2 = 1e6
+#: The largest reference position and speed taken as physical (a room frame: 1000 km, 1000 m/s).
+MAX_POSITION_M = 1e6
+MAX_SPEED_MPS = 1e3
 #: Truth files: the largest speed (m/s), the height range (m), the largest angle (degrees; yaw and
 #: longitude may be unwrapped over many turns).
 MAX_TRUTH_SPEED_MPS = 1e5
@@ -288,7 +291,9 @@ __all__ = [
     "INCREMENT_COLUMNS",
     "MAX_ANGLE_DEG",
     "MAX_FORCE_MPS2",
+    "MAX_POSITION_M",
     "MAX_RATE_RADPS",
+    "MAX_SPEED_MPS",
     "MAX_TIME_S",
     "MAX_TRUTH_SPEED_MPS",
     "RATE_COLUMNS",

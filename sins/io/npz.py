@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import os
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -48,9 +49,8 @@ REFERENCE_KEYS = ("q_wxyz", "v_m_s", "p_m")
 WIDTH = {"t_s": 1, "gyro_rad_s": 3, "accel_m_s2": 3, "q_wxyz": 4, "v_m_s": 3, "p_m": 3}
 #: The largest recording read, rows: 2^26 (a day at 777 Hz), about 3.5 GB of float64 once converted.
 MAX_ROWS = 1 << 26
-#: The largest reference position and speed taken as physical (a room frame: 1000 km, 1000 m/s).
-MAX_POSITION_M = 1e6
-MAX_SPEED_MPS = 1e3
+#: The largest reference position and speed taken as physical (:mod:`sins.io.formats`'s, as every reader).
+MAX_POSITION_M, MAX_SPEED_MPS = formats.MAX_POSITION_M, formats.MAX_SPEED_MPS
 
 
 def is_npz(path: Path) -> bool:
@@ -161,7 +161,9 @@ def _load(path: Path) -> tuple[dict[str, Array], list[str]]:
             unread = sorted(names - set(WIDTH))
     except SinsInputError:
         raise  # already one line naming the file and the key (it is a ValueError too)
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, EOFError, RuntimeError, zlib.error, zipfile.BadZipFile) as exc:
+        # RuntimeError: a member flagged encrypted ("password required"); zlib.error, EOFError: a
+        # compressed member damaged
         raise SinsInputError(f"{path}: not a readable .npz archive ({exc})") from None
     n = len(out["t_s"])
     for key, value in out.items():
@@ -172,8 +174,30 @@ def _load(path: Path) -> tuple[dict[str, Array], list[str]]:
     return out, unread
 
 
+def _claimed(path: Path, archive: np.lib.npyio.NpzFile, key: str) -> None:
+    """Refuse a member whose header asks for more rows than sins reads, or more bytes than the member
+    holds, before numpy allocates them: a 5 kB file whose header claims 1e12 rows had asked for 7 TiB."""
+    members = archive.zip
+    if members is None:  # (np.load of a path always opens its zip; closed, the read below says so)
+        return
+    info = members.getinfo(f"{key}.npy")
+    with members.open(info) as member:
+        fmt = np.lib.format
+        read = fmt.read_array_header_1_0 if fmt.read_magic(member) == (1, 0) else fmt.read_array_header_2_0
+        shape, _, dtype = read(member)
+    rows = int(shape[0]) if shape else 1
+    need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if rows > MAX_ROWS:
+        raise SinsInputError(f"{path}: {key} has {rows} rows; sins reads at most {MAX_ROWS}")
+    if need > info.file_size:
+        raise SinsInputError(
+            f"{path}: {key}'s header claims shape {shape} ({need} bytes); the member holds {info.file_size}"
+        )
+
+
 def _array(path: Path, archive: np.lib.npyio.NpzFile, key: str) -> Array:
     """One key as a float64 array of its :data:`WIDTH` columns, every value finite."""
+    _claimed(path, archive, key)
     raw = archive[key]
     width = WIDTH[key]
     shape_ok = raw.ndim == 1 if width == 1 else raw.ndim == 2 and raw.shape[1] == width

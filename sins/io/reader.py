@@ -17,6 +17,8 @@ import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+import numpy as np
+
 from sins.core.earth import MAX_HEIGHT_M, MAX_LAT_DEG
 from sins.core.series import NavSeries
 from sins.errors import ArgumentError, LateStartError, SinsInputError
@@ -24,7 +26,7 @@ from sins.io import rig
 from sins.io.datasets import _read_dataset
 from sins.io.datasets.npz_folders import is_folder_name
 from sins.io.formats import read_truth
-from sins.io.recording import Recording, _read_path, _rig_recording
+from sins.io.recording import RATE_HZ_RANGE, Recording, _read_path, _rig_recording
 from sins.io.tables import format_number
 
 
@@ -99,7 +101,7 @@ def read(
                 else "its reader fixes its units, axes and reference"
             )
             raise ArgumentError(f"{dataset}: {{names}} does not apply to a dataset ({fixed})", tuple(extra))
-        return _read_dataset(dataset, root, origin if own else None)
+        return _timed(_read_dataset(dataset, root, origin if own else None))
     path = Path(source)  # type: ignore[arg-type]
     if rig.is_rig_csv(path):
         extra = [k for k, v in {**given, "truth": truth}.items() if v is not None and k != "rate_hz"]
@@ -111,11 +113,12 @@ def read(
         rec = _rig_recording(path)
         if rate_hz is not None:
             rec = dataclasses.replace(rec, stated_rate_hz=float(rate_hz), stated_by="the given rate")
-        return rec
+        return _timed(rec)
     reference = truth if isinstance(truth, NavSeries) or truth is None else read_truth(truth)
     try:
         rec = _read_path(path, topic, columns, units, frame=frame, rate_hz=rate_hz, truth_topic=truth_topic,
                          origin=origin, t_start=_start(t_start, reference), progress=progress)  # fmt: skip
+        rec = _timed(rec)
     except LateStartError as exc:
         if t_start is not None or reference is None:
             raise
@@ -148,6 +151,24 @@ def _check_origin(origin: tuple[float, float, float] | None) -> None:
             f"origin ({lat:g}, {lon:g}, {h:g}): expected (lat, lon, h) in radians and metres, the latitude "
             f"within ±{max_lat:.4g} rad (±{MAX_LAT_DEG:g}°), the longitude ±2π, the height ±1e5 m"
         )
+
+
+def _timed(rec: Recording) -> Recording:
+    """``rec``, refused where its readings come at no IMU's rate (outside
+    :data:`~sins.io.recording.RATE_HZ_RANGE`, by the median interval): times in another unit, read as
+    seconds. Every command stops here, in one line, where steps of 1e-300 s had been integrated without a
+    word and ``sins characterise`` had failed inside scipy's splines."""
+    t = rec.imu.t
+    if len(t) < 2:
+        return rec
+    med = float(np.median(np.diff(t)))  # the readers hold the times increasing: med > 0
+    rate, (low, high) = 1.0 / med, RATE_HZ_RANGE
+    if not low <= rate <= high:
+        raise SinsInputError(
+            f"{rec.source}: one reading every {med:.3g} s ({rate:.3g} Hz), no IMU's rate (sins reads "
+            f"{low:g} Hz to {high:g} Hz): check the time column's unit"
+        )
+    return rec
 
 
 def _start(t_start: float | None, reference: NavSeries | None) -> float | None:
