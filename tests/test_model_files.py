@@ -129,6 +129,7 @@ def _set(doc: dict[str, Any], value: Any, *path: Any) -> None:
 
 ACCEL = ("state", "learners_", "accel")
 MAP = ("state", "learners_", "gyro", "maps", 0)
+FITTED_ON = ("state", "fitted_on_")
 
 
 @pytest.mark.parametrize(
@@ -159,8 +160,10 @@ MAP = ("state", "learners_", "gyro", "maps", 0)
         ("regression", lambda d: _set(d, "yes", "params", "robust"), "params.robust is 'yes': expected true"),
         ("regression", lambda d: _set(d, 1, "params", "foo"), "params.foo is not a parameter of regression"),
         ("regression", lambda d: _set(d, {"rate_hz": "200"}, "state", "fitted_on_"), "rate_hz is '200'"),
-        ("regression", lambda d: _set(d, {"frame": "xyz"}, "state", "fitted_on_"), "frame is 'xyz'"),
-        ("regression", lambda d: _set(d, {"marks": [[1, 2]]}, "state", "fitted_on_"), "marks is not a list"),
+        ("regression", lambda d: _set(d, {"rate_hz": None, "frame": "xyz"}, *FITTED_ON), "frame is 'xyz'"),
+        ("regression", lambda d: _set(d, {"rate_hz": 200, "marks": [[1, 2]]}, *FITTED_ON), "marks is not a"),
+        # Every fit writes the rate (null for a rig); a fitted_on_ without it met every rate unchecked.
+        ("regression", lambda d: _set(d, {"sensor": "unit 7"}, *FITTED_ON), "fitted_on_.rate_hz is missing"),
     ],
 )  # fmt: skip
 def test_a_model_of_the_wrong_shape_is_one_line_naming_the_key(

@@ -339,6 +339,8 @@ def _check_fitted_on(fitted: Any) -> None:
     null), axes that are not three letters of a right-handed frame, a unit's name that is not text."""
     if not isinstance(fitted, dict):
         raise ValueError("state.fitted_on_ is not an object")
+    if "rate_hz" not in fitted:  # every fit writes it; without it a model met every rate unchecked
+        raise ValueError("state.fitted_on_.rate_hz is missing: the rate fitted at, or null for a rig")
     rate = fitted.get("rate_hz")
     if rate is not None and (
         isinstance(rate, bool) or not isinstance(rate, int | float) or not 0.0 < rate <= _MAX_RATE_HZ
