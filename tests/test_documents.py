@@ -194,3 +194,24 @@ def test_a_report_is_standard_json_a_figure_that_is_not_finite_null(tmp_path: Pa
 
     back = json.loads(text, parse_constant=refuse)  # what a strict reader takes
     assert back["a"] is None and back["b"] == [1.5, None, [None, 2]] and back["c"] == {"d": None, "e": "NaN"}
+
+
+def test_a_key_given_twice_is_refused_and_a_byte_order_mark_read_past(tmp_path: Path) -> None:
+    """Python's parser keeps the last of a key given twice and drops the first without a word (a model
+    file edited by hand, with two ``"B0_"``); a byte-order mark an editor added made a model file "not
+    JSON", where the CSV readers read past one."""
+    from sins import imu
+    from sins.imu import calibration
+    from sins.imu import spec as imu_spec
+
+    rig = calibration.RigProcedure(position_dwell_s=4.0, rate_table=calibration.RateTable(dwell_s=2.0))
+    unit = imu_spec.draw_unit("tactical", 1, 101).only(*imu.BASELINE)
+    path = tmp_path / "m.json"
+    compensation.save(compensation.make("regression").fit(calibration.simulate_rig(rig, unit, seed=1)), path)
+    text = path.read_text()
+    twice = text.replace('"B0_": [', '"B0_": [0.0, 0.0, 0.0],\n    "B0_": [', 1)
+    assert twice != text
+    path.write_text(twice)
+    refusal(lambda: compensation.load(path), str(path), "not a sins model file (the key 'B0_' twice in one")
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert compensation.load(path).params() == compensation.make("regression").params()

@@ -85,7 +85,10 @@ def read_json(path: str | os.PathLike[str], what: str, missing_hint: str = "", s
         raise
     noun = f"sins {what}" if sins else what
     try:
-        doc = json.loads(raw.decode("utf-8"))
+        # utf-8-sig: a byte-order mark an editor added is read past, as the CSV readers do.
+        doc = json.loads(raw.decode("utf-8-sig"), object_pairs_hook=_unique)
+    except _TwiceError as exc:
+        raise SinsInputError(f"{path}: not a {noun} ({exc})") from None
     except UnicodeDecodeError as exc:
         why = f"not UTF-8: {exc.reason} at byte {exc.start}"
         raise SinsInputError(f"{path}: not a {noun} ({why})") from None
@@ -184,6 +187,23 @@ def _read_bytes(path: Path, noun: str) -> bytes:
         raise SinsInputError(f"{path}: no such {noun}") from None
     except OSError as exc:
         raise SinsInputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+
+class _TwiceError(ValueError):
+    """A key given twice in one JSON object."""
+
+
+def _unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's pairs as a dict, refusing a key given twice: Python's parser keeps the last one
+    and drops the first without a word (a model file edited by hand, two ``"B_"``)."""
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise _TwiceError(f"the key {short(key)} twice in one object")
+            seen.add(key)
+    return out
 
 
 def _why(exc: ValueError) -> str:
