@@ -477,11 +477,19 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
 def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:
     """What ``sins fit`` says of a new recording's bias: the rule's mode, or, where the model leaves the
     gyro as read, the held-back recordings the best rule left worse than their raw readings."""
-    from sins.compensation.unit_bias import MODES, READINGS
+    from sins.compensation.unit_bias import MODES, READINGS, behind_by, kept_modes
 
-    if rule.mode != READINGS:
-        return f"a new recording's bias: {rule.mode}{judged}"
     each, means = rule.held_back_each_deg, rule.held_back_deg
+    if rule.mode != READINGS:
+        kept = kept_modes(each, each.get("raw", [])) if rule.mode in each else []
+        best = min(kept, key=means.__getitem__, default=rule.mode)
+        if best == rule.mode:
+            return f"a new recording's bias: {rule.mode}{judged}"
+        behind, se = behind_by(each[rule.mode], each[best])
+        return (
+            f"a new recording's bias: {rule.mode}{judged}; {best} is ahead by {behind:.2f}°, no more than "
+            f"its standard error over these recordings ({se:.2f}°), so the simpler {rule.mode} is taken"
+        )
     best = min((m for m in MODES if m in means), key=means.__getitem__)
     worse = ", ".join(
         f"{name} {v:.2f}° against {raw:.2f}°"
