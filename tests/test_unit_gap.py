@@ -707,6 +707,18 @@ def test_recordings_of_two_units_are_not_diagnosed_as_one(
     err = capsys.readouterr().err
     assert "unitB/r: recordings of one unit are diagnosed together; unitA/r is unitA, this is unitB" in err
     assert err.count("\n") == 1
+    # One unit at two rates (a walk's 100 Hz copy of a EuRoC sequence beside the 200 Hz original) had
+    # been diagnosed as one unit, a g² sensitivity of 115 °/s/g² accepted on the copy and judged on the
+    # other; sins fit refuses such a pair. And an interval length asked of the per-sample statistic
+    # had changed the reference's line alone.
+    nu.write(tmp_path / "unitA" / "slow.npz", nu.recording(4, duration_s=40.0, rate_hz=50.0, unit_seed=3))
+    assert main(["gap", "--dataset", "unitA/r", "--dataset", "unitA/slow"]) == 2
+    err = capsys.readouterr().err
+    assert "unitA/slow: readings at 50 Hz; unitA/r at 100 Hz: recordings of one unit are diagnosed" in err
+    assert err.count("\n") == 1
+    assert main(["gap", "--dataset", "unitA/r", "--statistic", "samples", "--interval-s", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "unitA/r: an interval length goes with the interval statistic, not samples" in err
 
 
 @pytest.mark.parametrize("seconds", [1.0, 2.0, 10.0])

@@ -219,7 +219,7 @@ def add(sub: Subparsers) -> None:
         "intervals (default auto: intervals where the differentiated reference adds to the sensor's noise)",
     )  # fmt: skip
     p.add_argument(
-        "--interval-s", type=positive, default=1.0, metavar="S",
+        "--interval-s", type=positive, metavar="S",
         help="with the interval statistic: the interval between the reference epochs compared (default 1)",
     )  # fmt: skip
     p.add_argument("--model", metavar="IMU.toml", help="the simulation's IMU model (default: the baseline)")

@@ -48,6 +48,8 @@ from sins.nav import attitude
 
 Array = NDArray[np.float64]
 
+#: Two recordings' sample rates within this share of each other are one rate (one model, one unit's).
+SAME_RATE = 0.05
 #: Gauss–Newton on the gyro stops when no coefficient moves by more than this many standard errors.
 _CONVERGED_SE = 1e-3
 _MAX_ITERATIONS = 8
@@ -184,7 +186,7 @@ def check_one_unit(recs: list[ReferencedRecording]) -> None:
                 f"{rec.source}: recordings of one unit are fitted together; {first.source} is "
                 f"{first.sensor}, this is {rec.sensor}"
             )
-        if abs(rec.rate_hz - first.rate_hz) > 0.05 * first.rate_hz:
+        if abs(rec.rate_hz - first.rate_hz) > SAME_RATE * first.rate_hz:
             raise SinsInputError(
                 f"{rec.source}: readings at {rec.rate_hz:.6g} Hz; {first.source} at "
                 f"{first.rate_hz:.6g} Hz: one model is fitted on recordings at one rate"
@@ -364,6 +366,7 @@ def _result(
 
 
 __all__ = [
+    "SAME_RATE",
     "SeveralFit",
     "check_one_unit",
     "fit_several",

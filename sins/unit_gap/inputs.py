@@ -25,7 +25,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from sins.compensation import screening
+from sins.compensation.several import SAME_RATE
 from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
 from sins.io.recording import ideal_inputs
@@ -95,8 +98,10 @@ def read_gap_input(
 
 def check_one_unit(inputs: list[GapInput]) -> None:
     """Refuse recordings of two units (each's reference names its unit, as :func:`sins.io.read` finds
-    it): ``sins gap`` reads several recordings as one unit's, its verdicts across them and each one's
-    model judged on the next; ``sins fit`` refuses such a pair alike. One line, both named."""
+    it), or at two rates: ``sins gap`` reads several recordings as one unit's, its verdicts across them
+    and each one's model judged on the next; ``sins fit`` refuses such a pair alike. One line, both
+    named. A 100 Hz copy beside its 200 Hz original had been diagnosed as one unit's, a g² sensitivity
+    of 115 °/s/g² accepted on it and judged on the other."""
     named = [(i.name, r.sensor) for i in inputs if (r := i.referenced) is not None and r.sensor]
     for name, sensor in named[1:]:
         if sensor != named[0][1]:
@@ -104,6 +109,22 @@ def check_one_unit(inputs: list[GapInput]) -> None:
                 f"{name}: recordings of one unit are diagnosed together; {named[0][0]} is {named[0][1]}, "
                 f"this is {sensor} (diagnose each on its own)"
             )
+    rates = [(i.name, _rate_hz(i)) for i in inputs]
+    (first, first_hz), *others = rates
+    for name, rate in others:
+        if abs(rate - first_hz) > SAME_RATE * first_hz:
+            raise SinsInputError(
+                f"{name}: readings at {rate:.6g} Hz; {first} at {first_hz:.6g} Hz: recordings of one unit "
+                "are diagnosed together at one rate (diagnose each on its own)"
+            )
+
+
+def _rate_hz(gap_input: GapInput) -> float:
+    """A recording's median sample rate, Hz: its trajectory form's, or its per-sample form's (a rig's)."""
+    if gap_input.referenced is not None:
+        return gap_input.referenced.rate_hz
+    t = gap_input.samples()[0].t
+    return float(1.0 / np.median(np.diff(t)))
 
 
 def _check_csv(path: Path, truth: str | os.PathLike[str] | None, options: dict[str, Any] | None) -> None:

@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.interval_fit import IntervalFit
+from sins.compensation.intervals import INTERVAL_S
 from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
@@ -46,7 +47,7 @@ def diagnose_one(
     holdout: float = 0.3,
     model: tuple[str, ...] = BASELINE,
     asked: str = "auto",
-    interval_s: float = 1.0,
+    interval_s: float | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosed:
     """``inp`` diagnosed on the statistic ``asked`` for ("auto": :func:`sins.unit_gap.statistic.choose`).
@@ -64,6 +65,9 @@ def diagnose_one(
                 f"{inp.name}: {span:.3g} s of readings; a diagnosis against a trajectory needs at least "
                 f"{MIN_SPAN_S:g} s (two of the {BLOCK_S:g} s blocks whose last part it holds back)"
             )
+    if asked == "samples" and interval_s is not None:  # it had changed the reference's line alone
+        raise SinsInputError(f"{inp.name}: an interval length goes with the interval statistic, not samples")
+    interval_s = INTERVAL_S if interval_s is None else interval_s
     if asked == "intervals" and inp.referenced is None:
         raise SinsInputError(
             f"{inp.name}: --statistic intervals needs a reference trajectory; this one is per-sample inputs"
@@ -158,7 +162,7 @@ def _filled(report: GapReport, inp: GapInput) -> dict[str, Any]:
 
 
 def shrinks(
-    inputs: list[GapInput], results: list[Diagnosed], interval_s: float = 1.0
+    inputs: list[GapInput], results: list[Diagnosed], interval_s: float | None = None
 ) -> list[dict[str, Any]]:
     """Each recording's accepted effects fitted on it and judged on the next (the last on the first):
     :func:`sins.unit_gap.shrink.shrink`, where both have a reference trajectory."""
@@ -171,7 +175,9 @@ def shrinks(
                         "verdict": "needs a reference trajectory on both recordings"})  # fmt: skip
             continue
         try:
-            figures = shrink.shrink(a.referenced, b.referenced, results[i].report.diagnosis, interval_s)
+            figures = shrink.shrink(
+                a.referenced, b.referenced, results[i].report.diagnosis, interval_s or INTERVAL_S
+            )
         except (SinsInputError, ValueError) as exc:
             figures = {"verdict": f"not judged: {exc}"}
         out.append({**figures, "fitted_on": a.name, "judged_on": b.name})

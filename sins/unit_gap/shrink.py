@@ -192,7 +192,8 @@ def said(used: bool, without_deg: float, with_deg: float, raw_deg: float) -> str
         verdict = f"the accepted effects shrink the open-loop attitude error from {b:.3g}° to {a:.3g}°"
     else:
         verdict = (
-            f"the accepted effects do not shrink the open-loop attitude error ({b:.3g}° without, {a:.3g}°)"
+            f"the accepted effects do not shrink the open-loop attitude error ({b:.3g}° without, {a:.3g}° "
+            "with)"
         )
     if a >= r:
         return (
