@@ -178,6 +178,19 @@ PLANTED: dict[str, tuple[Callable[[], dict], Callable[[dict], tuple], str, str |
 }  # fmt: skip
 
 
+def test_a_file_sins_corrected_keeps_its_recordings_axes_unflagged(tmp_path: Path) -> None:
+    """``sins correct`` writes the readings on the axes of the recording it corrected, whatever they are
+    called (a EuRoC sequence's: x up), and says so in its header. ``sins inspect`` had flagged its
+    own output's axes and advised --frame, which would turn readings the model had already corrected."""
+    d = static()
+    path = write(tmp_path / "flu.csv", d["t"], d["w"] * FLU, d["f"] * FLU)
+    assert [f["code"] for f in inspect_cli(path)["findings"]] == ["axes"]
+    corrected = tmp_path / "corrected.csv"
+    said = "# corrected by: regression model m.json (sha256 0123456789abcdef), fitted on unit 7\n"
+    corrected.write_text(said + path.read_text())
+    assert inspect_cli(corrected)["findings"] == []
+
+
 @pytest.mark.parametrize("name", list(PLANTED))
 def test_each_planted_mistake_is_named_with_what_to_pass(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
