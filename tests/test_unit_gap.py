@@ -692,6 +692,13 @@ def test_sizes_within_a_units_reach_are_not_labelled() -> None:
         out["accel.size_effect"].startswith("y 3.87 m from the unit's centre")
         and "the reference's point" in out["accel.size_effect"]
     )
+    # A g² sensitivity, at 1 g, within a consumer unit's g-sensitivity bound (500 °/h/g): the 180 °/h/g²
+    # tools/gap_real_cases.py adds passes; EuRoC's MH_02 as it is (3.45e3) and a walk's 100 Hz copy of
+    # a sequence (4.14e5, unlabelled before) do not.
+    si = np.radians(1.0) / 3600.0 / 9.80665**2  # 1 °/h/g² in rad/s per (m/s²)²
+    g2 = {"gyro.g2_sensitivity": {"gyro.x": [180 * si, -180 * si, 0, 0, 0, 0], "gyro.y": [-3450 * si, 0]}}
+    said = implausible(g2, largest)["gyro.g2_sensitivity"]
+    assert said.startswith("y 3.45e+03 °/h/g²: beyond what a unit has") and "bound of 500 °/h" in said, said
 
 
 def test_recordings_of_two_units_are_not_diagnosed_as_one(

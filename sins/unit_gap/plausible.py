@@ -11,7 +11,11 @@ that the unit has it at that size. Three effects have a size beyond which no uni
   class sins knows;
 * ``*.scale_asymmetry``: ``ka`` is the difference of the scale factors for either sign: the same bound;
 * ``accel.size_effect``: the lever arm of an accelerometer from the unit's centre stays within the unit's
-  case (:data:`MAX_LEVER_ARM_M`); metres are a reference whose point is not the IMU's.
+  case (:data:`MAX_LEVER_ARM_M`); metres are a reference whose point is not the IMU's;
+* ``gyro.g2_sensitivity``: at 1 g, where sensitivities are specified, each coefficient's drift stays
+  within the class's g-sensitivity bound (a consumer unit's 500 °/h/g: 500 °/h/g²; sins's typical unit
+  has 3 °/h/g², the cases of ``tools/gap_real_cases.py`` add 180): a walk's 100 Hz copy of a EuRoC
+  sequence had 4e5 °/h/g² accepted, EuRoC's MH_02 as it is 3.5e3.
 
 The verdicts are left as they are: the label says what the size means, the gain what the data says.
 """
@@ -21,6 +25,8 @@ from __future__ import annotations
 import numpy as np
 
 from sins.compensation.identifiability import DEFAULT_GRADE, class_bounds
+from sins.core.earth import G0
+from sins.imu.spec import DEG_PER_H
 
 #: The largest lever arm of an accelerometer from a unit's centre, m: a board-level MEMS unit's case
 #: is a few centimetres across, the largest tactical units' about 15 cm.
@@ -34,6 +40,8 @@ def implausible(sizes: dict[str, dict[str, list[float]]], largest: dict[str, flo
     each channel's largest absolute reading over the recording, SI (rad/s, m/s²).
     """
     bound = class_bounds(DEFAULT_GRADE).bound
+    g2_limit = bound["gyro.g_sensitivity"] / G0  # rad/s per (m/s²)²: the g-sensitivity bound's at 1 g
+    g2_said = g2_limit * G0**2 / DEG_PER_H  # °/h at 1 g
     out = {}
     for effect, channels in sizes.items():
         sensor, kind = effect.split(".", 1)
@@ -41,7 +49,9 @@ def implausible(sizes: dict[str, dict[str, list[float]]], largest: dict[str, flo
         beyond = []
         for ch, values in channels.items():
             axis = ch.split(".")[1]
-            if kind == "scale_nonlinearity":
+            if kind == "g2_sensitivity" and float(np.max(np.abs(values))) > g2_limit:
+                beyond.append(f"{axis} {float(np.max(np.abs(values))) * G0**2 / DEG_PER_H:.3g} °/h/g²")
+            elif kind == "scale_nonlinearity":
                 error = abs(values[0]) * largest.get(ch, 0.0)
                 if error > scale_bound:
                     beyond.append(f"{axis} a {100 * error:.3g} % scale error at its largest input")
@@ -54,6 +64,8 @@ def implausible(sizes: dict[str, dict[str, list[float]]], largest: dict[str, flo
         limit = (
             f"a lever arm within {MAX_LEVER_ARM_M:g} m, its case"
             if kind == "size_effect"
+            else f"at 1 g, a {DEFAULT_GRADE} unit's g-sensitivity bound of {g2_said:.3g} °/h"
+            if kind == "g2_sensitivity"
             else f"a {DEFAULT_GRADE} unit's scale bound of {100 * scale_bound:g} %"
         )
         out[effect] = (
