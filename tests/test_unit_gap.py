@@ -391,6 +391,33 @@ def test_verdicts_across_recordings_and_the_shrink_on_the_other_in_degrees(
     assert doc["across"]["on_one_only"] == ["gyro.scale_asymmetry"]
 
 
+def test_a_sensors_two_random_biases_are_one_finding_where_a_recording_cannot_tell_them() -> None:
+    """EuRoC's MH_01 takes the gyro's rate random walk (8 nats ahead of the instability) and MH_03 its
+    bias instability with the walk indistinguishable (1.8 nats): across the two, each had read as
+    "found on one recording only". The walk holds on both now (tied on MH_03); the instability, which
+    MH_01 told apart from the walk, on one. A tie of other kinds stays as it is."""
+    from sins.gap.report import EffectScore, GapReport
+    from sins.unit_gap.across import lines, verdicts
+
+    def report(accepted: str, ties: tuple[str, ...], others: tuple[str, ...] = ()) -> GapReport:
+        taken = EffectScore(accepted, ("gyro.x",), 50.0, True, indistinguishable=ties)
+        rest = [EffectScore(n, ("gyro.x",), 40.0, False) for n in (*ties, *others)]
+        sizes = {accepted: {"gyro.x": [1e-4] if "walk" in accepted else [1e-3, 2.0]}}
+        return GapReport({}, [], [taken, *rest], [accepted], [], sizes=sizes)
+
+    mh01 = report("gyro.rate_random_walk", (), ("gyro.bias_instability",))
+    mh03 = report("gyro.bias_instability", ("gyro.rate_random_walk",))
+    across = verdicts([("MH_01", mh01), ("MH_03", mh03)])
+    walk, wander = across["effects"]["gyro.rate_random_walk"], across["effects"]["gyro.bias_instability"]
+    assert walk["holds_on"] == "all" and walk["tied_on"] == ["MH_03"]
+    assert wander["holds_on"] == "one only" and across["on_one_only"] == ["gyro.bias_instability"]
+    assert "tied with the other random bias" in "\n".join(lines(across))
+    # A tie between other kinds (a regressor effect's) is not a holding.
+    other = report("gyro.scale_asymmetry", ("gyro.scale_nonlinearity",))
+    across = verdicts([("a", report("gyro.scale_nonlinearity", ())), ("b", other)])
+    assert across["effects"]["gyro.scale_nonlinearity"]["holds_on"] == "one only"
+
+
 def test_a_shrink_is_said_against_the_raw_readings_too() -> None:
     """A shrink over a model worse than the readings is said against them, and a model no better than
     raw is said so (a walk's BROAD pair had read "from 4.38° to 1.57°" where the readings give 2.59°)."""

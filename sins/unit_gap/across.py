@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from sins.core.text import fixed_width
+from sins.gap.candidates import processes
 from sins.gap.report import GapReport, in_units
 
 #: The labels, by on how many of the recordings an effect was accepted.
@@ -25,14 +26,20 @@ ALL, SOME, ONE = "all", "some", "one only"
 
 def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
     """Every effect accepted on any of the named ``reports``: on which it holds, its label
-    (:data:`ALL`, :data:`SOME`, :data:`ONE`), and its sizes on each, per channel, in its units."""
+    (:data:`ALL`, :data:`SOME`, :data:`ONE`), and its sizes on each, per channel, in its units.
+
+    A sensor's two random biases (a bias instability, a rate random walk) are one finding where a
+    recording cannot tell them apart: one accepted there with the other named indistinguishable, the
+    other holds there too (``tied_on``). EuRoC's MH_01 took the gyro's walk and MH_03 its instability
+    (the walk tied), and each had read as found on one recording only."""
     names = [n for n, _ in reports]
     accepted: list[str] = []
     for _, r in reports:
         accepted += [e for e in r.diagnosis if e not in accepted]
     effects: dict[str, Any] = {}
     for e in accepted:
-        found = [n for n, r in reports if e in r.diagnosis]
+        tied = [n for n, r in reports if e not in r.diagnosis and _tied(e, r)]
+        found = [n for n, r in reports if e in r.diagnosis or n in tied]
         label = ALL if len(found) == len(reports) else ONE if len(found) == 1 else SOME
         sizes = {}
         for n, r in reports:
@@ -41,7 +48,7 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
                     ch: {"values": in_units(e, v)[0], "unit": in_units(e, v)[1]}
                     for ch, v in r.sizes[e].items()
                 }
-        effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes,
+        effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes, "tied_on": tied,
                       "signs_differ_on": _signs_differ(sizes, found)}  # fmt: skip
     return {
         "recordings": names,
@@ -50,6 +57,18 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
         "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
         "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
     }
+
+
+def _tied(effect: str, report: GapReport) -> bool:
+    """Whether ``report`` accepted the other random bias of ``effect``'s sensor and could not tell it from
+    ``effect`` (a random bias's alternative; other ties are left as they are)."""
+    if effect.split(".", 1)[1] not in processes():
+        return False
+    return any(
+        effect in score.indistinguishable
+        for score in report.effects
+        if score.accepted and score.name in report.diagnosis
+    )
 
 
 def _signs_differ(sizes: dict[str, dict[str, Any]], found: list[str]) -> list[str]:
@@ -93,6 +112,7 @@ def table_rows(across: dict[str, Any]) -> list[list[str]]:
         if v.get("signs_differ_on"):
             label += f", signs differ on {', '.join(ch.split('.')[1] for ch in v['signs_differ_on'])}"
         cells = [size_text(v["sizes"][n]) if n in v["found_on"] and n in v["sizes"] else
+                 "tied with the other random bias" if n in v.get("tied_on", []) else
                  ("accepted" if n in v["found_on"] else "-") for n in across["recordings"]]  # fmt: skip
         rows.append([e, label, *cells])
     return rows
