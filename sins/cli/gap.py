@@ -174,7 +174,7 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
         print("\nno channel is significantly above its noise floor: the model explains the data")
     threshold = f"{gap.SIGNIFICANT_NATS:.1f} nats"
     print(f"\ncandidate effects (withheld log-likelihood gain less {threshold}, and a random bias's")
-    print("allowance; the best above 0 is accepted, then the rest are scored again beside it):")
+    print("allowance; of those above 0, the one of greatest gain is accepted, the rest scored beside it):")
     for e in report.effects[:top]:
         mark = "accepted" if e.accepted else ""
         if e.not_accepted_because:
