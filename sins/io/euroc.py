@@ -247,9 +247,9 @@ def _check_range(path: Path, values: Array, first: int, limit: float, unit: str)
     """Refuse a reference's position or velocity (``values``, its columns from ``first`` after the
     stamp) beyond ``limit``, naming the line and column, as the ``.npz`` reader does: one row at 1e300 m
     had fitted a model, and 1e30 m/s integrated to a drift table."""
-    bad = np.abs(values) > limit
-    if bad.any():
-        r, c = (int(i) for i in np.argwhere(bad)[0])
+    found = formats.first_beyond(values, limit)
+    if found is not None:
+        r, c = found
         raise SinsInputError(
             f"{path}:{r + 2}: column {first + c + 2}: {values[r, c]:g} {unit} is beyond ±{limit:g}, outside "
             "any physical range"

@@ -137,6 +137,16 @@ def check_range(
         )
 
 
+def first_beyond(values: Array, limit: float) -> tuple[int, int] | None:
+    """The row and column of the first value of ``values`` (n, k) beyond ``±limit``, or None: what a
+    reader's refusal names (the ``.npz`` reader's by row, a EuRoC reference's by line)."""
+    bad = np.abs(values) > limit
+    if not bad.any():
+        return None
+    r, c = (int(i) for i in np.argwhere(bad)[0])
+    return r, c
+
+
 def _check_time(table: Table) -> None:
     check_range(table, "t", table.column("t"), -MAX_TIME_S, MAX_TIME_S, "time", "s")
 
@@ -303,6 +313,7 @@ __all__ = [
     "TRUTH_COLUMNS_UNSUFFIXED",
     "check_range",
     "check_readings",
+    "first_beyond",
     "imu_form",
     "increments_from_table",
     "rates_from_table",

@@ -225,9 +225,9 @@ def _array(path: Path, archive: np.lib.npyio.NpzFile, key: str) -> Array:
 
 
 def _check_range(path: Path, key: str, value: Array, limit: float, unit: str) -> None:
-    bad = np.abs(value) > limit
-    if bad.any():
-        r, c = (int(i) for i in np.argwhere(bad)[0])
+    found = formats.first_beyond(value, limit)
+    if found is not None:
+        r, c = found
         raise SinsInputError(
             f"{path}: {key}: row {r + 1}, column {c + 1}: {value[r, c]:g} {unit} is beyond ±{limit:g}, "
             "outside any physical range"
