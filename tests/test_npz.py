@@ -430,6 +430,21 @@ def test_keys_not_of_the_form_are_said_not_read(tmp_path: Path, monkeypatch: pyt
     assert not any("not read" in note for note in io.read(path).notes)
 
 
+def test_a_reference_beyond_a_room_is_named_by_row_and_column(tmp_path: Path) -> None:
+    """Positions within 1e6 m and speeds within 1e3 m/s (a room frame's), each refused beyond by its row
+    and column, as a EuRoC folder's reference is by its line (``sins.io.formats.first_beyond``)."""
+    path = tmp_path / "far.npz"
+    cases = (
+        ("p_m", (7, 1), 2e6, "p_m: row 8, column 2: 2e+06 m is beyond ±1e+06"),
+        ("v_m_s", (3, 2), -5e3, "v_m_s: row 4, column 3: -5000 m/s is beyond ±1000"),
+    )
+    for key, at, value, said in cases:
+        values = np.zeros((400, 3))
+        values[at] = value
+        _write(path, **{key: values})
+        refusal(lambda: io.read(path), str(path), said)
+
+
 def test_an_archive_that_lies_about_its_members_is_refused_before_it_is_read(tmp_path: Path) -> None:
     """A member's header claims the array's shape; numpy allocates it before reading. A 20 kB file whose
     t_s claimed 1e12 rows had asked for 7 TiB (a MemoryError's traceback), and one claiming (400, 300)
