@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sins.compensation.identifiability import DEFAULT_GRADE, class_bounds
+from sins.compensation.identifiability import DEFAULT_GRADE, G_SENSITIVITY, class_bounds
 from sins.core.earth import G0
 from sins.imu.spec import DEG_PER_H
 
@@ -40,7 +40,7 @@ def implausible(sizes: dict[str, dict[str, list[float]]], largest: dict[str, flo
     each channel's largest absolute reading over the recording, SI (rad/s, m/s²).
     """
     bound = class_bounds(DEFAULT_GRADE).bound
-    g2_limit = bound["gyro.g_sensitivity"] / G0  # rad/s per (m/s²)²: the g-sensitivity bound's at 1 g
+    g2_limit = bound[f"gyro.{G_SENSITIVITY}"] / G0  # rad/s per (m/s²)²: the g-sensitivity bound's at 1 g
     g2_said = g2_limit * G0**2 / DEG_PER_H  # °/h at 1 g
     out = {}
     for effect, channels in sizes.items():
