@@ -15,6 +15,7 @@ import pytest
 from sins import io
 from sins.cli import main
 from sins.core import earth
+from sins.errors import SinsInputError
 
 # 20 s still, then 10 s speeding up: a tactical unit, its power-on seed 3.
 SCENARIO = """\
@@ -240,6 +241,25 @@ def test_a_truth_shorter_than_the_imu_is_refused_or_cut_when_asked(folder: Path,
     assert "the first 999 of 3000 intervals" in captured.err
     assert "999 intervals against short.csv" in captured.out
     assert len(io.read_truth("sol.csv").t) == 1000
+
+
+def test_within_truth_cuts_the_readings_before_a_truth_file_begins_too() -> None:
+    """``--within-truth`` integrates "only the IMU intervals inside the truth's span": rate-form readings
+    that begin before a truth file had been refused all the same ("first sample at 0 s is outside the
+    truth's 5..10 s"), the tail alone cut. Now the intervals before it are left out, and said."""
+    from sins.core.series import ImuRates, NavSeries
+    from sins.runs.readings import run_inputs
+
+    t = np.arange(1001) / 100.0
+    rates = ImuRates(t=t, omega_ib_b=np.zeros((1001, 3)), f_ib_b=np.tile([0.0, 0.0, -9.81], (1001, 1)))
+    late = t[500:]
+    truth = NavSeries(t=late, lat=np.full(501, 0.8), lon=np.zeros(501), h=np.zeros(501),
+                      v_n=np.zeros((501, 3)), q_nb=np.tile([0.0, 0.0, 0.0, 1.0], (501, 1)))  # fmt: skip
+    rec = io.Recording(rates, "imu.csv", "sins csv", truth, truth_from="late.csv")
+    with pytest.raises(SinsInputError, match=r"first sample at 0 s is outside the truth's 5\.\.10 s"):
+        run_inputs(rec)
+    inputs = run_inputs(rec, within_truth=True)
+    assert inputs.before_truth == 500 and inputs.imu.t[0] == 5.0 and len(inputs.imu) == 500
 
 
 # --------------------------------------------------------------------------- gap on either form

@@ -200,10 +200,10 @@ def add(sub: Subparsers) -> None:
     )  # fmt: skip
     p.add_argument(
         "--within-truth", action="store_true",
-        help="integrate only the IMU intervals inside the truth's span (without it, an IMU that runs past "
-        "a truth file's end is refused; past the recording's own reference, a tail of up to 1 s or 1 %% of "
-        "the recording is cut with a note, a longer one refused; readings before the recording's own "
-        "reference begins are left out with a note)",
+        help="integrate only the IMU intervals inside the truth's span (without it, an IMU that starts "
+        "before or runs past a truth file is refused; past the recording's own reference, a tail of up to "
+        "1 s or 1 %% of the recording is cut with a note, a longer one refused; readings before the "
+        "recording's own reference begins are left out with a note)",
     )  # fmt: skip
     p.add_argument(
         "--vertical", choices=VERTICAL_MODES, default="free",

@@ -150,7 +150,8 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
     time). Rate form: the samples are integrated to increments between rows, and the run starts at the
     first row's time, which must lie within the truth. Against the recording's own reference (a motion
     capture that starts seconds after the IMU), the readings before its first time are left out
-    (``before_truth`` says how many intervals); against a truth file that is refused, as a mistake.
+    (``before_truth`` says how many intervals); against a truth file that is refused, as a mistake,
+    unless ``within_truth``.
 
     Raises
     ------
@@ -178,7 +179,9 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
     own = not rec.truth_from
     imu: ImuIncrements
     before = 0
-    if own and samples.t[0] < truth.t[0]:
+    # Before a truth file begins: a mistake unless only what lies within it was asked for (it had cut the
+    # tail alone, and refused a recording that starts before the truth it was given with).
+    if (own or within_truth) and samples.t[0] < truth.t[0]:
         before = int(np.searchsorted(samples.t, truth.t[0]))  # the first edge at or after the reference
         if before >= len(samples.t) - 1:
             raise SinsInputError(f"{where}: no reading lies within its own reference's time span")
