@@ -428,6 +428,10 @@ def test_rig_recording_of_a_tactical_unit(tmp_path, capsys):
         white = r["terms"]["white"]
         assert white["resolved"] and abs(white["value"] / unit - 1.0) <= 0.10, (ch, white)
         assert not r["terms"]["rate_random_walk"]["resolved"] and not r["terms"]["rate_ramp"]["resolved"], ch
+    # --static beside a rig recording had been ignored (its ref_ columns taken all the same): refused.
+    assert cli.main(["characterise", str(rig), "--static"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--static, but its ref_ columns are its reference" in err, err
 
 
 def test_rig_session_of_the_written_unit(tmp_path, capsys):

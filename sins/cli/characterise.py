@@ -44,6 +44,8 @@ def _characterise_inputs(args: argparse.Namespace) -> Residual:
         inputs = read_recording(args, None, args.dataset).reference_inputs()
         return reference.reference_residual(inputs[0], args.dataset)
     rec = read_recording(args, args.recording, None, args.truth)
+    if args.static and rec.rig is not None:  # it had been ignored: the ref_ columns taken all the same
+        raise SinsInputError(f"{args.recording}: --static, but its ref_ columns are its reference (drop it)")
     if args.truth is not None or rec.rig is not None:
         data, _ = pipeline.gap_data(rec)
         return reference.reference_residual(data, str(args.recording))
