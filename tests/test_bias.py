@@ -409,6 +409,14 @@ def test_refusals_without_a_reference(tmp_path: Path, capsys: pytest.CaptureFixt
         == 0
     )
     assert "heading given: 30.0000°" in capsys.readouterr().out
+    # The accelerometer written in g, read as m/s²: no bias nor scale error brings a rest to 0.102 g.
+    # It had given an accelerometer bias of 0.9 g, and an alignment that fell 1.9e6 m, without a word.
+    in_g = ImuRates(t=imu.t, omega_ib_b=imu.omega_ib_b, f_ib_b=imu.f_ib_b / 9.80665)
+    io.write_imu(tmp_path / "in_g.csv", in_g)
+    said = "at rest the specific force is 0.102 × gravity, beyond any accelerometer's bias or scale error"
+    assert said in refused("bias", str(tmp_path / "in_g.csv"), "--lat", "45")
+    assert said in refused("integrate", str(tmp_path / "in_g.csv"), "--origin", "45,7,0", "--align", "10")
+    assert main(["bias", str(tmp_path / "in_g.csv"), "--lat", "45", "--units", "accel=g"]) == 0
 
 
 def test_a_start_without_a_reference_refuses_a_heading_or_a_solution_that_is_not_finite(

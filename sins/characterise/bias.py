@@ -379,6 +379,22 @@ def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white
     return out
 
 
+#: A rest's specific force further than this share from normal gravity is no accelerometer's bias nor
+#: scale error (``sins inspect``'s bound between those and a unit mistaken): the readings' unit is wrong.
+GRAVITY_OFF = 0.15
+
+
+def _check_gravity(force: Array, lat: float, h: float, source: str) -> None:
+    """Refuse a rest whose mean specific force (rows, 3; m/s²) is no gravity a unit reads: readings in g
+    read as m/s² had given an accelerometer bias of 0.9 g and an alignment that fell 1.9e6 m."""
+    rho = float(np.linalg.norm(force.mean(axis=0))) / float(earth.normal_gravity(lat, h))
+    if abs(rho - 1.0) > GRAVITY_OFF:
+        raise SinsInputError(
+            f"{source}: at rest the specific force is {rho:.4g} × gravity, beyond any accelerometer's bias "
+            "or scale error: check its unit (sins inspect names it)"
+        )
+
+
 def estimate_bias(
     t: Array,
     readings: Array,
@@ -415,6 +431,10 @@ def estimate_bias(
         too few rows for the noise fit (one line naming ``source``), a channel without noise.
     """
     check_rest_rows(t, readings, reference, keep, source)
+    if reference is None:
+        _check_gravity(
+            np.asarray(readings, dtype=float)[keep if keep is not None else slice(None), 3:], lat, h, source
+        )
     res = residual(t, readings, None, source, keep)
     rows = np.zeros(len(t), dtype=bool)
     for a, b in res.segments:
