@@ -663,6 +663,7 @@ def alignment_accuracy(
 __all__ = [
     "BLOCKS",
     "DISPLAY",
+    "GRAVITY_OFF",
     "LEVEL_RATE_TOL",
     "MAX_GYROCOMPASS_LAT",
     "BiasEstimate",

@@ -14,7 +14,6 @@ import signal
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
 
 from sins import __version__
 from sins.cli import (
@@ -36,6 +35,7 @@ from sins.cli import (
     strategies,
 )
 from sins.cli.common import Subparsers
+from sins.cli.parser import Parser
 from sins.cli.signals import Seen, Terminated, pipes_outliving_their_readers, signals_as_exceptions
 from sins.errors import ArgumentError, MissingInputError, SinsInputError
 
@@ -72,18 +72,11 @@ _FLAG_FOR = {"truth": "--truth TRUTH.csv", "topic": "--topic TOPIC", "truth_topi
              "lat": "--lat DEG", "origin": "--origin LAT,LON,H", "heading": "--heading DEG"}  # fmt: skip
 
 
-class _Parser(argparse.ArgumentParser):
-    """Options by their whole names only (inspect's ``--truth`` had been taken for ``--truth-topic``)."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **{**kwargs, "allow_abbrev": False})
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The ``sins`` command's argument parser, one subcommand per action."""
-    parser = _Parser(prog="sins", description="Strapdown inertial navigation simulator.")
+    parser = Parser(prog="sins", description="Strapdown inertial navigation simulator.")
     parser.add_argument("--version", action="version", version=f"sins {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=Parser)
     for add in SUBCOMMANDS:
         add(sub)
     return parser
