@@ -663,3 +663,23 @@ def test_an_option_no_one_reads_is_refused(tmp_path: Path, capsys: pytest.Captur
     capsys.readouterr()
     assert main(["integrate", str(imu), "--truth", str(truth), "--vertical-tau-s", "1e-9"]) == 2
     assert "--vertical-tau-s goes with --vertical damp (the channel is free)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["bias", "x.csv", "--seconds", "0"], "sins bias: error: argument --seconds: must be a positive"),
+        (["integrate", "x.csv", "--vertical", "up"], "sins integrate: error: argument --vertical: invalid"),
+        (["fit", "x.csv", "--strategy", "regression"], "sins fit: error: the following arguments are"),
+        ([], "sins: error: the following arguments are required: COMMAND (sins --help)"),
+    ],
+)
+def test_an_option_of_the_wrong_form_is_one_line_naming_the_help(
+    argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """argparse's refusals had printed the command's usage first (eleven lines for ``sins bias
+    --seconds 0``, where ``--lat 95`` took one line): one line now, pointing at ``--help``."""
+    with pytest.raises(SystemExit) as ended:
+        main(argv)
+    err = capsys.readouterr().err
+    assert ended.value.code == 2 and err.count("\n") == 1 and said in err and "--help)" in err, err
