@@ -191,7 +191,7 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--truth", type=Path, metavar="TRUTH.csv", help="the truth (default: the recording's own reference)"
     )
-    p.add_argument("--json", type=Path, metavar="OUT.json")
+    p.add_argument("--json", type=Path, metavar="OUT.json", help="write the drift summary as JSON")
     p.add_argument(
         "--out", type=Path, metavar="SOLUTION.csv|.parquet",
         help="write the solution, one row per IMU time: t, lat_deg, lon_deg, h_m, vn, ve, vd, roll_deg, "
