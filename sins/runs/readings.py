@@ -169,11 +169,11 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
     if not rec.has_trajectory:
         raise io.recording.missing_reference(rec)
     where = rec.name
-    if rec.on_reference is not None:  # a dataset's own increments beside its reference
+    if rec.truth is None:  # a dataset's own increments beside its reference
+        assert rec.on_reference is not None
         samples: ImuIncrements | ImuRates = rec.on_reference.imu
         truth = rec.on_reference.reference
-    else:
-        assert rec.truth is not None
+    else:  # (a dataset's readings are its referenced form's, or, of a FOLDER/NAME, its file's as read)
         samples, truth = rec.imu, rec.truth
     truth_name = rec.truth_from or "its own reference"
     own = not rec.truth_from

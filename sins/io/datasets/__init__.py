@@ -107,23 +107,24 @@ def _read_dataset(
     SinsInputError
         for an unknown name (listing the known ones), or as the readers do.
     """
-    # A FOLDER/NAME's stamps: read once, its time origin and notes kept.
-    t0_ns: int | None = None
-    notes: tuple[str, ...] = ()
-    if is_folder_name(name):
+    if is_folder_name(name):  # its stamps read once: its time origin and notes kept
         own = _read_npz_recording(name, root, origin)
         if own.truth is None:  # readings alone: a command that needs a reference says so when it asks
             return dataclasses.replace(own, sensor=name.partition("/")[0], dataset=name)
-        trajectory: ReferencedRecording | None = _beside_own(own, name)
-        t0_ns, notes = own.t0_ns, own.notes
-    else:
-        trajectory = _load_reference(name, root, origin)
+        # Its readings and reference as the file holds them (rates, integrated as its path's are: the
+        # referenced form's trapezoid had ended EuRoC's V1_02 1.2 m off its path's), beside the
+        # referenced form the fits take (on_reference).
+        return dataclasses.replace(
+            own, kind="dataset", sensor=name.partition("/")[0], dataset=name,
+            on_reference=_beside_own(own, name), inputs_reader=lambda: _load_with_truth(name, root, origin),
+        )  # fmt: skip
+    trajectory = _load_reference(name, root, origin)
     if trajectory is not None:
         return Recording(
             trajectory.imu, trajectory.source, "dataset", trajectory.reference, _si("increment"),
             sensor=trajectory.sensor, heading_known=trajectory.heading_known,
             latitude_known=trajectory.latitude_known, dataset=name, on_reference=trajectory,
-            inputs_reader=lambda: _load_with_truth(name, root, origin), t0_ns=t0_ns, notes=notes,
+            inputs_reader=lambda: _load_with_truth(name, root, origin),
         )  # fmt: skip
     data = _load_with_truth(name, root)[0]
     imu = ImuRates(t=data.t, omega_ib_b=data.gyro, f_ib_b=data.accel)
