@@ -169,12 +169,11 @@ def run_inputs(rec: io.Recording, within_truth: bool = False) -> RunInputs:
     if not rec.has_trajectory:
         raise io.recording.missing_reference(rec)
     where = rec.name
-    if rec.truth is None:  # a dataset's own increments beside its reference
-        assert rec.on_reference is not None
-        samples: ImuIncrements | ImuRates = rec.on_reference.imu
-        truth = rec.on_reference.reference
-    else:  # (a dataset's readings are its referenced form's, or, of a FOLDER/NAME, its file's as read)
-        samples, truth = rec.imu, rec.truth
+    # Every reader gives a reference as the recording's truth (a dataset's beside its readings: its
+    # referenced form's increments, or a FOLDER/NAME's file as read), whatever it keeps for the fits.
+    assert rec.truth is not None
+    samples: ImuIncrements | ImuRates = rec.imu
+    truth = rec.truth
     truth_name = rec.truth_from or "its own reference"
     own = not rec.truth_from
     imu: ImuIncrements
