@@ -26,9 +26,12 @@ from conftest import communicate, wait_for
 from test_fuzz import IMU_MODEL, RIG, SCENARIO, assert_one_line, run_cli, to_toml
 
 from sins import io
+from sins.cli import main
 from sins.errors import SinsInputError
 from sins.io import provenance
+from sins.io.atomic import atomic_path
 from sins.io.datasets.root import data_root
+from sins.io.paths import check_writable
 from sins.io.recording import RATE_HZ_RANGE
 
 STATIC_ROWS = 2400  # two minutes at 20 Hz
@@ -600,6 +603,41 @@ def test_a_stated_rate_beyond_the_documented_limits_is_refused(files: Path, rate
     assert rc == 2 and "0.1 Hz to 100000 Hz" in err, err
     low, high = RATE_HZ_RANGE
     assert (low, high) == (0.1, 1e5)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["simulate", "S", "--imu", "", "--truth", "T"], ["fit", "", "--strategy", "regression", "--out", "M"],
+     ["fit", "RIG", "--strategy", "regression", "--out", ""], ["inspect", ""]],
+    ids=["output", "input", "model", "inspect"],
+)  # fmt: skip
+def test_an_empty_path_is_refused_as_empty(
+    files: Path, tmp_path: Path, argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``Path("")`` is ``.``: before, an empty output was "--out .: is a directory" and an empty
+    recording was read as the working folder ("a folder, but neither a ROS 2 bag ...")."""
+    named = {"S": files / "s.toml", "RIG": files / "rig.csv"}
+    named |= {"T": tmp_path / "t.csv", "M": tmp_path / "m.json"}
+    try:
+        rc = main([str(named.get(a, a)) if a else a for a in argv])
+    except SystemExit as ended:  # argparse's refusal (an empty path option)
+        rc = int(ended.code or 0)
+    err = capsys.readouterr().err
+    assert rc == 2 and "empty path" in err and err.count("\n") == 1, err
+    assert "is a directory" not in err and "neither a ROS" not in err, err
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_library_refuses_an_empty_path(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The readers and writers themselves, called from Python: ``""`` is not the working folder."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SinsInputError, match="empty path"):
+        io.read("")
+    with pytest.raises(SinsInputError, match="--out: an empty name"):
+        check_writable("", flag="--out")
+    with pytest.raises(SinsInputError, match="an empty name"), atomic_path(""):
+        pass
+    assert not list(tmp_path.iterdir())
 
 
 # --------------------------------------------------------------------------- corrected files

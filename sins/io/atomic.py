@@ -40,6 +40,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     (:mod:`sins.io.paths`). An ``OSError`` while writing (a full disk, a folder not writable) is raised
     again with ``path`` as its file name, not the temporary one.
     """
+    if not os.fspath(path).strip():  # Path("") is ".", the working folder
+        raise SinsInputError("an empty name, expected a file name to write")
     given = Path(path)
     if writes_in_place(given):  # /dev/null, /dev/full: written as they are, never renamed over
         try:

@@ -323,6 +323,8 @@ def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str
         ``[flag ]path: why``, naming the output as the user gave it.
     """
     shown = f"{flag} {path}" if flag else f"{path}"
+    if not os.fspath(path).strip():  # Path("") is ".", the working folder: name what was given
+        raise SinsInputError(f"{flag or 'output'}: an empty name, expected a file name to write")
     path = Path(path)
     if folder:
         if path.exists() and not path.is_dir():

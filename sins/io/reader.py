@@ -102,6 +102,8 @@ def read(
             )
             raise ArgumentError(f"{dataset}: {{names}} does not apply to a dataset ({fixed})", tuple(extra))
         return _timed(_read_dataset(dataset, root, origin if own else None))
+    if not os.fspath(source).strip():  # type: ignore[arg-type]  # Path("") is ".", the working folder
+        raise SinsInputError("read: an empty path, expected a recording's file or folder")
     path = Path(source)  # type: ignore[arg-type]
     if rig.is_rig_csv(path):
         extra = [k for k, v in {**given, "truth": truth}.items() if v is not None and k != "rate_hz"]
