@@ -433,7 +433,8 @@ def test_a_start_without_a_reference_refuses_a_heading_or_a_solution_that_is_not
     out = tmp_path / "s.csv"
     assert main(["integrate", str(path), "--origin", "45,0,0", "--attitude", "0,0,0", "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "the last position came out nan" in err and err.count("\n") == 1 and not out.exists(), err
+    assert "the position came out non-finite after 199999 s" in err and "free vertical" in err, err
+    assert "beyond a unit's ranges" in err and err.count("\n") == 1 and not out.exists(), err
     with pytest.raises(SystemExit) as info:
         main(["integrate", str(path), "--origin", "45,0,0", "--align", "60", "--heading", "nan"])
     assert info.value.code == 2 and "--heading: must be a finite number" in capsys.readouterr().err
@@ -658,3 +659,26 @@ def test_rests_that_agree_keep_their_noises_figure_and_rests_apart_their_spread(
     means = np.array([(noise + offsets)[a:b].mean() for ((a, b),) in groups])
     got = pooled_rests_sigma(noise + offsets, groups)[0]
     assert got == pytest.approx(means.std(ddof=1) / 2.0, rel=0.05)
+
+
+def test_a_free_solution_gone_non_finite_names_the_likely_causes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A still 100 Hz unit whose stamps are in ms, read as s: 30 s become 8.3 h at 0.1 Hz, over which
+    the free vertical channel (e-folding in about 9.5 min) leaves floating point. Before, "the last
+    position came out nan" and nothing of why; with the unit given it navigates."""
+    rng = np.random.default_rng(1)
+    n = 3000
+    t_ms = np.arange(n) * 10.0
+    f_ib_b = np.array([0.0, 0.0, -9.80665]) + rng.normal(0.0, 2e-3, (n, 3))
+    readings = np.column_stack([t_ms, rng.normal(0.0, 1e-3, (n, 3)), f_ib_b])
+    path = tmp_path / "ms.csv"
+    head = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    np.savetxt(path, readings, delimiter=",", fmt="%.10g", header=head, comments="")
+    argv = ["integrate", str(path), "--origin", "45,0,0", "--attitude", "0,0,0"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert "free vertical channel, which diverges over 8.33 h" in err, err
+    assert "times in another unit (the readings come at 0.1 Hz)" in err, err
+    assert main([*argv, "--vertical", "hold"]) == 0  # the channel held: finite, if nonsense
+    assert main([*argv, "--units", "t=ms"]) == 0

@@ -139,7 +139,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
                                   levels=levels, source=where)  # fmt: skip
         bar.set_description("integrating")
         sol = replay.navigate_free(imu, start, args.vertical, vertical_tau(args, imu.t))
-    check_finite({"the last position": float(sol.lat[-1] + sol.lon[-1] + sol.h[-1])}, where)  # NaN, inf
+    free_report.check_solution(sol, where, args.vertical)  # NaN, inf: what likely took it there
     report = free_report.free_report(
         where, start, sol, args.align, args.grade, heading_given=args.heading is not None
     )

@@ -50,6 +50,30 @@ def increments(rec: Recording) -> ImuIncrements:
     return rec.imu
 
 
+#: Below this rate (Hz) the stamps are likely in another unit than read (``sins inspect``'s bound).
+SLOW_HZ = 10.0
+
+
+def check_solution(sol: NavSeries, where: str, vertical: str) -> None:
+    """Refuse a navigation whose position came out non-finite, saying what likely took it there: a free
+    vertical channel diverges (e-folding in about 9.5 min near the ground) and over hours leaves floating
+    point; stamps in ms read as s make a 100 Hz recording 0.1 Hz and its minutes hours."""
+    if np.isfinite([sol.lat[-1], sol.lon[-1], sol.h[-1]]).all():
+        return
+    span_s = float(sol.t[-1] - sol.t[0])
+    why = []
+    if vertical == "free":
+        hours = f"{span_s / 3600:.3g} h"
+        why.append(f"a free vertical channel, which diverges over {hours} (--vertical hold or damp)")
+    rate_hz = (len(sol.t) - 1) / span_s if span_s > 0 else math.inf
+    if rate_hz < SLOW_HZ:
+        why.append(f"times in another unit (the readings come at {rate_hz:.3g} Hz)")
+    raise SinsInputError(
+        f"{where}: the position came out non-finite after {span_s:.6g} s; likely causes: "
+        + "; ".join([*why, "readings beyond a unit's ranges (sins inspect)"])
+    )
+
+
 def grade_levels(grade: str | None) -> tuple[float, float]:
     """A grade's bias levels, 1σ per axis (its unit-to-unit and turn-on spreads together), rad/s and m/s²."""
     if grade is None:
