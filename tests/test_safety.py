@@ -628,6 +628,17 @@ def test_an_empty_path_is_refused_as_empty(
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("flag", [["--rerun", "R"], ["--drive", "0:1"], ["--bias-from-rest"]])
+def test_what_judges_against_a_trajectory_is_refused_on_a_rig(
+    files: Path, tmp_path: Path, flag: list[str]
+) -> None:
+    """``--rerun`` on a rig recording had been ignored: exit 0, the table, and no file."""
+    argv = ["evaluate", str(files / "m.json"), str(files / "rig.csv"), *flag]
+    rc, _, err = run_cli([str(tmp_path / "e.rrd") if a == "R" else a for a in argv])
+    assert rc == 2 and f"{flag[0]}: against a trajectory only" in err and "rig.csv" in err, err
+    assert not list(tmp_path.iterdir())
+
+
 def test_the_library_refuses_an_empty_path(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The readers and writers themselves, called from Python: ``""`` is not the working folder."""
     monkeypatch.chdir(tmp_path)

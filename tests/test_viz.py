@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import gc
 import json
+import socket
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -15,6 +17,7 @@ import sins
 from sins import scenario
 from sins.cli import main
 from sins.core import earth
+from sins.errors import SinsInputError
 from sins.imu import CHANNELS, DEG_PER_H, MG
 from sins.runs import pipeline
 
@@ -302,6 +305,41 @@ def test_serve_works_headless_and_gives_the_address(drive) -> None:
     assert address.startswith(f"http://localhost:{web}/?url=rerun%2Bhttp") and str(grpc) in address
     with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=600) as page:  # a deadlock guard
         assert page.status == 200 and b"<html" in page.read().lower()
+    # The data's own server stays up once serve() has returned: it lived with a local recording stream,
+    # and a browser had got the viewer's page with nothing to show (the connection refused).
+    gc.collect()
+    with socket.create_connection(("127.0.0.1", grpc), timeout=10):
+        pass
+
+
+def test_serve_refuses_a_taken_port_before_the_run(drive, capsys: pytest.CaptureFixture[str]) -> None:
+    path, _ = drive
+    with socket.socket() as taken:
+        taken.bind(("0.0.0.0", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["run", str(path), "--serve", "--web-port", str(port)]) == 2
+    said = capsys.readouterr()
+    assert said.out == "" and f"--serve: port {port} is taken" in said.err, said  # no table: before the run
+
+
+def test_each_saved_run_is_a_recording_of_its_own(drive, tmp_path: Path) -> None:
+    """Two files of one scenario opened together: rerun pools files of one recording id, and every run of
+    a scenario had its name as its id (two power-ons drawn as one zig-zag per strategy)."""
+    rr = _rerun()
+    _, result = drive
+    ids = [
+        rr.chunk.RrdReader(sins.viz.viewer.save(result, tmp_path / f"{k}.rrd")).recordings()[0].recording_id
+        for k in range(2)
+    ]
+    assert ids[0] != ids[1] and result.scenario.name not in ids
+
+
+def test_an_rrd_name_says_its_flag_and_dev_null_is_taken(tmp_path: Path) -> None:
+    assert sins.viz.viewer.check_rrd_path("/dev/null") == Path("/dev/null")
+    assert sins.viz.viewer.check_rrd_path(tmp_path / ".rrd") == tmp_path / ".rrd"
+    with pytest.raises(SinsInputError, match=r"^--rerun .*x\.rrdx: a Rerun recording's name must end in"):
+        sins.viz.viewer.check_rrd_path(tmp_path / "x.rrdx", "--rerun")
 
 
 def test_a_gap_diagnosis_logs_its_withheld_residuals_and_where_they_part(tmp_path: Path) -> None:

@@ -25,7 +25,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     if args.rerun:
         from sins.viz import viewer as viz
 
-        viz.check_rrd_path(args.rerun)
+        viz.check_rrd_path(args.rerun, "--rerun")
     check_plot(args)
     inputs = [spec.source, spec.imu.source, spec.compensation.rig]
     for sc in spec.scenarios:

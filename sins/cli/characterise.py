@@ -78,7 +78,7 @@ def _cmd_characterise(args: argparse.Namespace) -> int:
     if args.rerun:
         from sins.viz import viewer as viz
 
-        viz.check_rrd_path(args.rerun)
+        viz.check_rrd_path(args.rerun, "--rerun")
     check_plot(args)
     outputs = {"--out": args.out, "--json": args.json, "--rerun": args.rerun, "--plot": args.plot}
     read = [args.recording, args.truth, *dataset_inputs(args.dataset)]

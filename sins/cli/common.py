@@ -116,7 +116,7 @@ def check_viewer_args(args: argparse.Namespace) -> None:
     if args.rerun:
         from sins.viz import viewer as viz
 
-        viz.check_rrd_path(args.rerun)  # its suffix; the place is check_outputs's
+        viz.check_rrd_path(args.rerun, "--rerun")  # its suffix; the place is check_outputs's
 
 
 def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:

@@ -45,7 +45,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     if args.rerun:
         from sins.viz import viewer as viz
 
-        viz.check_rrd_path(args.rerun)
+        viz.check_rrd_path(args.rerun, "--rerun")
     outputs = {"--json": args.json, "--plot": args.plot, "--rerun": args.rerun}
     paths, names = list(args.recording or []), list(args.dataset or [])
     check_outputs(outputs, [args.model, *paths, args.truth, *(p for d in names for p in dataset_inputs(d))])
@@ -119,10 +119,10 @@ def _evaluate_rig(
     """Per channel: RMS before and after, the bias left, and what is left beyond the white noise."""
     from sins.compensation import evaluation
 
-    if args.bias_from_rest or args.drive:
-        raise SinsInputError(
-            f"--bias-from-rest and --drive judge against a trajectory; {where} is a rig recording"
-        )
+    given = [f for f, v in (("--bias-from-rest", args.bias_from_rest), ("--drive", args.drive),
+                            ("--rerun", args.rerun)) if v]  # fmt: skip
+    if given:  # --rerun had been ignored: no file, exit 0
+        raise SinsInputError(f"{', '.join(given)}: against a trajectory only; {where} is a rig recording")
     with progress_bar("judging", ""):
         result = evaluation.evaluate_rig(strategy, data, title, last=args.last)
     assert result.channels is not None  # a rig's judgement is by channel

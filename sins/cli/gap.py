@@ -30,7 +30,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.rerun:
         from sins.viz import viewer as viz
 
-        viz.check_rrd_path(args.rerun)
+        viz.check_rrd_path(args.rerun, "--rerun")
     read = [*(args.recording or []), args.truth, args.model]
     read += [p for d in (args.dataset or []) for p in dataset_inputs(d)]
     check_outputs({"--json": args.json, "--rerun": args.rerun}, read)

@@ -30,6 +30,8 @@ if TYPE_CHECKING:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     check_viewer_args(args)  # before the imports below: --spawn without a display is refused at once
+    if args.serve:
+        _check_ports(args.web_port or 9090, 9876)
     check_plot(args)
     from sins import io, scenario
     from sins.runs import pipeline
@@ -95,6 +97,19 @@ def _port(text: str) -> int:
     if value > 65535:
         raise argparse.ArgumentTypeError(f"must be a port, 1 to 65535, got {text}")
     return value
+
+
+def _check_ports(*ports: int) -> None:
+    """``--serve``'s ports free before the run, not after it (an hour's drive had run to be refused)."""
+    import socket
+
+    for port in ports:
+        with socket.socket() as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as rerun's: a closed one's wait
+            try:
+                probe.bind(("0.0.0.0", port))  # where rerun's servers listen
+            except OSError as exc:
+                raise SinsInputError(f"--serve: port {port} is taken ({exc.strerror or exc})") from None
 
 
 def guard_notes(strategies: dict[str, Any]) -> list[str]:

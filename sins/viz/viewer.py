@@ -2,25 +2,24 @@
 
 What a run looks like in the viewer, against the ``sim_time`` timeline (seconds):
 
-- ``world/<run>/path`` and ``world/<run>/vehicle``: the truth's and each
-  strategy's trajectory as a 3D path in the start point's north-east-down
-  frame (metres from the start point), and the vehicle's pose along it
-  (``C_nb`` as a rotation, drawn as body axes);
-- ``errors/<quantity>/<strategy>``: horizontal and down position error (m),
-  velocity error magnitude (m/s), roll, pitch and yaw error (°);
-- ``imu/<channel>/<strategy>``: the error of the IMU stream each strategy
-  integrated (reading − ideal; ``none`` is the raw error) in °/h and mg;
+- ``world/<run>/path`` and ``world/<run>/vehicle``: the truth's and each strategy's trajectory as a 3D path
+  in the start point's north-east-down frame (metres from the start point: a flat frame, so a path that
+  drifted hundreds of km lies off by the Earth's curvature there, which the error panels do not), and the
+  vehicle's pose along it (``C_nb`` as a rotation, drawn as body axes);
+- ``errors/<quantity>/<strategy>``: horizontal and down position error (m), velocity error magnitude
+  (m/s), roll, pitch and yaw error (°);
+- ``imu/<channel>/<strategy>``: the error of the IMU stream each strategy integrated (reading − ideal;
+  ``none`` is the raw error) in °/h and mg;
 - ``scenario`` and ``summary``: the scenario's description and the run's table;
 - with ``[gnss]`` (aided runs): ``aided/<axis>/<strategy>`` the aided north, east, down position and
   yaw errors, beside ``<strategy> ±3σ`` from the filter's covariance; ``aided/horizontal_m/<strategy>``
   with the ``fixes`` (points at 0) and the ``outages`` (a step over each window);
   ``aided/bias/<channel>/<strategy>`` the estimated bias beside the unit's ``true`` one, °/h and mg.
 
-Display series are the :class:`~sins.runs.pipeline.ScenarioRun`'s thinned ones:
-navigation errors every ``round(rate / keep_hz)``-th sample plus the last
-(so the last logged error is the run's final error, exactly), IMU errors as
-block means over as many intervals. Whole series go out in one
-``send_columns`` call per entity.
+Display series are the :class:`~sins.runs.pipeline.ScenarioRun`'s thinned ones: navigation errors every
+``round(rate / keep_hz)``-th sample plus the last (so the last logged error is the run's final error,
+exactly), IMU errors as block means over as many intervals. Whole series go out in one ``send_columns``
+call per entity.
 
 :func:`log_run` logs one more run beside those already in a recording (a
 campaign's Monte-Carlo members, say) under a path prefix of its own.
@@ -48,6 +47,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport
 from sins.imu import CHANNELS, display_unit
 from sins.io.atomic import atomic_path
+from sins.io.paths import writes_in_place
 from sins.runs.pipeline import AidedRun, ScenarioRun, StrategyRun
 
 APPLICATION_ID = "sins"
@@ -151,20 +151,12 @@ def log_run(
     log_path(rec, name, run.solution, origin, prefix=prefix, axis_length_m=axis_length_m)
     rgb = colour(name)
     for panel, values in error_series(run).items():
-        entity = _join(prefix, "errors", panel, name)
-        rec.log(entity, rr.SeriesLines(names=[name], colors=[rgb]), static=True)
-        rec.send_columns(entity, indexes=_time(run.errors.t), columns=rr.Scalars.columns(scalars=values))
+        _line(rec, _join(prefix, "errors", panel, name), name, rgb, run.errors.t, values)
     if run.sensor_error is not None and sensor_t is not None:
         label = "raw" if name == "none" else name
         for i, channel in enumerate(CHANNELS):
-            unit = display_unit(channel)[0]
             entity = _join(prefix, "imu", imu_entity(channel), label)
-            rec.log(entity, rr.SeriesLines(names=[label], colors=[rgb]), static=True)
-            rec.send_columns(
-                entity,
-                indexes=_time(sensor_t),
-                columns=rr.Scalars.columns(scalars=run.sensor_error[:, i] / unit),
-            )
+            _line(rec, entity, label, rgb, sensor_t, run.sensor_error[:, i] / display_unit(channel)[0])
 
 
 #: Aided panels: entity name, title, the error series' column and the filter state's index (for ±3σ).
@@ -311,19 +303,27 @@ def blueprint(
     )
 
 
+def _stream(name: str) -> rr.RecordingStream:
+    """A recording of its own (rerun's random id: two files of one scenario opened together had been
+    pooled into one recording, two power-ons drawn as one line), named for the viewer's list."""
+    rec = rr.RecordingStream(APPLICATION_ID)
+    rec.send_recording_name(name)
+    return rec
+
+
 def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id=result.scenario.name)
+    rec = _stream(result.scenario.name)
     return rec, blueprint(
         list(result.runs), with_imu=result.sensor_t is not None, with_aided=bool(result.aided)
     )
 
 
-def check_rrd_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` as a Path if it names a ``.rrd``, else one line (its place is ``check_outputs``'s)."""
-    path = Path(path)
-    if path.suffix != ".rrd":
-        raise SinsInputError(f"{path}: a Rerun recording's name must end in .rrd")
-    return path
+def check_rrd_path(path: str | os.PathLike[str], flag: str = "") -> Path:
+    """``path`` as a Path if it names a ``.rrd`` (or ``/dev/null``, written in place), else one line that
+    ``flag`` (``--rerun``) begins; its place is ``check_outputs``'s."""
+    if not Path(path).name.endswith(".rrd") and not writes_in_place(Path(path)):
+        raise SinsInputError(f"{f'{flag} ' if flag else ''}{path}: a Rerun recording's name must end in .rrd")
+    return Path(path)
 
 
 def _write(
@@ -374,10 +374,8 @@ def spawn(result: ScenarioRun, *, summary: str = "") -> None:
     saved = {k: os.environ.get(k) for k in VIEWER_ENV}
     os.environ.update({k: saved[k] or v for k, v in VIEWER_ENV.items()})  # the child inherits it
     try:
-        if viewer.exists():
-            rr.spawn(executable_path=str(viewer), recording=rec, default_blueprint=bp)
-        else:
-            rr.spawn(recording=rec, default_blueprint=bp)
+        rr.spawn(executable_path=str(viewer) if viewer.exists() else None, recording=rec,
+                 default_blueprint=bp)  # fmt: skip
     finally:
         for k, v in saved.items():
             if v is None:
@@ -388,8 +386,12 @@ def spawn(result: ScenarioRun, *, summary: str = "") -> None:
     rec.flush()
 
 
+_SERVED: list[rr.RecordingStream] = []  # the streams serve() serves, held while the process lives
+
+
 def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_port: int = 9876) -> str:
-    """Serve the run to the web viewer; returns the address to open. Keep the process alive to serve."""
+    """Serve the run to the web viewer; returns the address to open. The data are served for as long as
+    the process lives."""
     rec, bp = _recording(result)
     try:
         grpc_url = rec.serve_grpc(grpc_port=grpc_port, default_blueprint=bp)
@@ -398,6 +400,7 @@ def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_
         raise SinsInputError(f"cannot serve the web viewer on ports {web_port}/{grpc_port}: {exc}") from None
     log_scenario_run(rec, result, summary=summary)
     rec.flush()
+    _SERVED.append(rec)  # its gRPC server lives as long as the stream: a local had closed it on return
     from urllib.parse import quote
 
     return f"http://localhost:{web_port}/?url={quote(grpc_url, safe='')}"
@@ -420,11 +423,8 @@ def log_gap(rec: rr.RecordingStream, report: GapReport, *, prefix: str = "") -> 
                 entity, indexes=_time(t), columns=rr.Scalars.columns(scalars=residual[:, i] / unit)
             )
         for label, value in (("floor_plus", floor), ("floor_minus", -floor)):
-            entity = _join(prefix, "gap", imu_entity(channel), label)
-            rec.log(entity, rr.SeriesLines(names=["noise floor"], colors=[GREEN]), static=True)
-            rec.send_columns(
-                entity, indexes=_time(t[[0, -1]]), columns=rr.Scalars.columns(scalars=np.full(2, value))
-            )
+            _line(rec, _join(prefix, "gap", imu_entity(channel), label), "noise floor", GREEN, t[[0, -1]],
+                  np.full(2, value))  # fmt: skip
     _log_gap_localisation(rec, report, prefix)
     lines = ["| channel | before/floor | after/floor |", "|---|---|---|"]
     for channel, v in report.channels.items():
@@ -482,7 +482,7 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
         for place, name in enumerate(named, 1):
             slug = _slug(name) or "recording"
             prefixes[name] = slug if slug not in prefixes.values() else f"{slug}_{place}"
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id="gap")
+    rec = _stream("gap")
     panels = [_gap_panel(report, prefixes[name], name) for name, report in named.items()]
     bp = rrb.Blueprint(panels[0] if len(panels) == 1 else rrb.Tabs(*panels))
 
@@ -531,7 +531,7 @@ def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, s
     a ``.rrd``
     file: per correction, its total, heading and inclination error over time, degrees (NaN outside the
     judged rows, so that the rests the benchmark does not count show as gaps)."""
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id="open_loop")
+    rec = _stream("open_loop")
     axis = _whole_run()
     parts = ("total", "heading", "inclination")
     views = [
@@ -569,7 +569,7 @@ def save_campaign(rows: dict[str, list[Any]], path: str | os.PathLike[str]) -> P
     ``rows`` is the results table as columns (``pyarrow.Table.to_pydict()`` of ``results.parquet``); the
     series need the campaign's ``series_hz`` > 0.
     """
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id="campaign")
+    rec = _stream("campaign")
     scenarios = list(dict.fromkeys(rows["scenario"]))
     strategies = list(dict.fromkeys(rows["strategy"]))
     views = []
@@ -647,7 +647,7 @@ def save_characterisation(
     result: Characterisation, closing: ClosingCheck, path: str | os.PathLike[str]
 ) -> Path:
     """Write a characterisation's Allan curves to a ``.rrd`` file (through a temporary name)."""
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id="characterise")
+    rec = _stream("characterise")
     views = [
         rrb.TimeSeriesView(
             origin=f"characterise/{imu_entity(ch)}",
