@@ -347,6 +347,21 @@ def test_huge_integer(tmp_path: Path) -> None:
     refusal(lambda: scenario.load(path), str(path), "initial.alt_m")
 
 
+@pytest.mark.parametrize(
+    ("model", "said"),
+    [("", "no such file or imu preset: ''"), (".", "'.' is a folder, expected an IMU file or preset"),
+     ("unit.toml", "'unit.toml' no such file (in ")],
+)  # fmt: skip
+def test_an_imu_model_that_names_no_file_is_said_at_its_key(tmp_path: Path, model: str, said: str) -> None:
+    """Before, ``model = ""`` and ``"."`` were ".: is a directory, expected a IMU file" and a missing
+    file "unit.toml: no such IMU file": the scenario and its key lost."""
+    doc = _edit(BASE, lambda d: d.update(imu={"model": model}))
+    path = tmp_path / "s.toml"
+    path.write_text(_toml(doc), encoding="utf-8")
+    message = refusal(lambda: scenario.load(path), f"{path}: imu.model: ", said)
+    assert "a IMU" not in message
+
+
 def test_truth_file_missing(tmp_path: Path) -> None:
     doc = {"name": "rec", "truth": {"file": "recordings/truth.csv"}}
     path = tmp_path / "rec.toml"

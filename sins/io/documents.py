@@ -172,16 +172,21 @@ def _path(path: str | os.PathLike[str], what: str) -> Path:
     return Path(text)
 
 
+def _a(noun: str) -> str:
+    """``noun`` with its article: "an IMU file", "a rig file"."""
+    return f"{'an' if noun[:1] in 'AEIOUaeiou' else 'a'} {noun}"
+
+
 def _read_bytes(path: Path, noun: str) -> bytes:
     """The file's bytes. Its kind is looked at before it is opened: opening a pipe waits for a writer,
     and reading ``/dev/zero`` never ends."""
     try:
         info = path.stat()
         if stat.S_ISDIR(info.st_mode):
-            raise SinsInputError(f"{path}: is a directory, expected a {noun}")
+            raise SinsInputError(f"{path}: is a directory, expected {_a(noun)}")
         check_input(path)  # a FIFO or a device, refused before it is opened
         if info.st_size > MAX_BYTES:
-            raise SinsInputError(f"{path}: {info.st_size} bytes, more than a {noun} may hold ({MAX_BYTES})")
+            raise SinsInputError(f"{path}: {info.st_size} bytes, more than {_a(noun)} may hold ({MAX_BYTES})")
         return path.read_bytes()
     except FileNotFoundError:
         raise SinsInputError(f"{path}: no such {noun}") from None

@@ -62,11 +62,12 @@ def resolve_preset(name_or_path: str | os.PathLike[str], kind: PresetKind = "") 
     SinsInputError
         it is neither an existing file nor a preset; the message lists the presets of ``kind``.
     """
-    path = find_preset(name_or_path, kind)
+    path = find_preset(name_or_path, kind) if str(name_or_path).strip() else None
     if path is None:
         known = presets(kind)
         raise SinsInputError(
-            f"{name_or_path}: no such {_WHAT[kind]} file or preset (presets: {', '.join(known) or 'none'})"
+            f"{str(name_or_path) or repr('')}: no such {_WHAT[kind]} file or preset (presets: "
+            f"{', '.join(known) or 'none'})"
         )
     return path
 
@@ -75,9 +76,13 @@ def preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Pa
     """The file a TOML key names: a path relative to ``base`` (the naming file's folder), or a preset
     name of ``kind``; a one-line error naming the file and key if it is neither."""
     value = keys.string(key)
-    path = find_preset(value, kind, base)
+    path = find_preset(value, kind, base) if value.strip() else None  # "" would be base itself
     if path is None:
         raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
+    if path.is_dir() or not path.exists():  # said with the file and key that name it, not the path alone
+        why = "is a folder" if path.is_dir() else f"no such file (in {path.parent})"
+        article = "an" if kind == "imu" else "a"
+        raise keys.error(f"{value!r} {why}, expected {article} {_WHAT[kind]} file or preset", key)
     return path
 
 
