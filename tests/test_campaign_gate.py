@@ -270,3 +270,45 @@ def test_the_gate_refuses_to_test_nothing_and_fails_a_figure_gone_nan() -> None:
     assert len(checks) == 3 * len(gate.GATED)  # every figure tested, none dropped
     assert checks[("a/x", "max_horizontal_m")].verdict == "regressed"
     assert [k for k, c in checks.items() if c.verdict != "holds"] == [("a/x", "max_horizontal_m")]
+
+
+def test_a_baseline_of_too_few_units_to_fail_is_refused() -> None:
+    """The signed-rank test's least one-sided p-value over n paired units is 2^-n: below the per-test
+    level's reach, a strategy made ten times worse had "held" (6 and 12 units, 42 figures)."""
+    tests = 3 * len(gate.GATED)
+    needed = gate.units_needed(tests)
+    assert 2.0**-needed < gate.FALSE_ALARM / tests <= 2.0 ** -(needed - 1)  # the least that can fail
+    rng = np.random.default_rng(17)
+    for units in (needed - 1, needed):
+        values = _draw(rng, units)
+        base, worse = (
+            _summary(values, list(range(units))),
+            _summary(
+                {g: {f: 10 * v for f, v in figs.items()} for g, figs in values.items()}, list(range(units))
+            ),
+        )
+        if units < needed:
+            refusal(lambda b=base, w=worse: gate.compare(b, w), f"{units} units cannot show a regression")
+        else:  # with one more unit every figure ten times worse fails
+            assert all(c.verdict == "regressed" for c in gate.compare(base, worse))
+
+
+def test_last_digit_differences_hold_and_a_real_one_fails() -> None:
+    """Another machine's kernels move a figure's last digits (7.7e-11 seen between the shipped baseline
+    and a run): one sign of that noise had failed the gate (p = 1.8e-12 for x (1 - 1e-12)). A growth
+    of 1e-6, a thousand times the floor, still fails."""
+    rng = np.random.default_rng(19)
+    values = _draw(rng, 40)
+    base = _summary(values, list(range(40)))
+    for factor, verdict in ((1 + 1e-12, "holds"), (1 + 1e-6, "regressed")):
+        now = {g: {f: v * factor for f, v in figs.items()} for g, figs in values.items()}
+        checks = gate.compare(base, _summary(now, list(range(40))))
+        assert {c.verdict for c in checks} == {verdict}, factor
+        assert factor > 1 + 1e-9 or {c.test for c in checks} == {"identical"}
+
+
+def test_a_group_the_baseline_lacks_is_named_as_not_judged() -> None:
+    rng = np.random.default_rng(23)
+    values = _draw(rng, 20)
+    base = _summary({g: v for g, v in values.items() if g != "a/y"}, list(range(20)))
+    assert gate.unjudged(base, _summary(values, list(range(20)))) == ["a/y"]

@@ -402,6 +402,15 @@ def test_sins_documents_are_replaced_only_by_their_own_kind(files: Path, tmp_pat
         with pytest.raises(SinsInputError, match="holds text that is not JSON; sins writes JSON"):
             replaceable(path, "t", "json")
         replaceable(path, "t", "text")
+    # A campaign's summary is a campaign baseline (the shipped one): the suite's --update-baseline, and
+    # any report, had replaced it (it opens "sins-..." as a report does); only a campaign's replaces it.
+    campaign = Path(__file__).parents[1] / "sins" / "scenarios" / "campaign" / "tactical_drives_baseline.json"
+    replaceable(campaign, "c", "sins-campaign-summary")
+    for kind in ("sins.quality-baseline", "json", "sins.compensation"):
+        with pytest.raises(SinsInputError, match="holds a campaign's summary"):
+            replaceable(campaign, "c", kind)
+    with pytest.raises(SinsInputError, match="holds a quality baseline"):
+        replaceable(baseline, "b", "sins-campaign-summary")
 
 
 def device(folder: Path, name: str) -> Path:

@@ -26,6 +26,7 @@ from typing import Any
 from sins.campaign import folder, results
 from sins.campaign.spec import CampaignSpec
 from sins.campaign.unit import task
+from sins.core import deferred
 from sins.errors import SinsInputError
 
 #: Tasks per worker the units are split into: enough that a slow task does not idle the others at the
@@ -131,9 +132,10 @@ def run(
             ran += len(todo)
             parts = folder.check_parts(out, spec, parts.identity)
             rejected += parts.rejected
-        table = results.join(out, spec, parts.tables)
-        summary = results.summarise(table, spec)
-        results.write_summary(out, summary)
+        with deferred.all_or_nothing():  # the table and its summary land together (a signal between had
+            table = results.join(out, spec, parts.tables)  # left the table alone)
+            summary = results.summarise(table, spec)
+            results.write_summary(out, summary)
     return CampaignRun(out, ran, resumed, time.perf_counter() - start, summary, tuple(rejected))
 
 
@@ -239,6 +241,11 @@ def _connect(address: str) -> Any:
         return Client(address, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise SinsInputError(f"--scheduler {address}: cannot reach a dask scheduler there ({exc})") from None
+    except ValueError as exc:  # not an address at all ("missing port number", an unknown protocol)
+        why = " ".join(str(exc).split())
+        raise SinsInputError(
+            f"--scheduler {address}: not a dask scheduler's address, tcp://HOST:PORT ({why})"
+        ) from None
 
 
 def log_progress(stream: Any = sys.stdout) -> Callable[[int, int], None]:

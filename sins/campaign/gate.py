@@ -39,6 +39,11 @@ FALSE_ALARM = 0.01
 #: figure the baseline holds per unit is.
 GATED = SUMMARISED
 
+#: A paired difference within this fraction of the figure is floating point's last digits, not a change:
+#: the shipped baseline and a run on another machine differ by up to 7.7e-11 (other kernels), and the
+#: signed-rank test had failed a figure multiplied by 1 - 1e-12 (p = 1.8e-12), one sign of noise.
+FLOAT_NOISE = 1e-9
+
 Verdict = Literal["holds", "regressed", "missing"]
 
 
@@ -58,6 +63,7 @@ def compare(baseline: dict[str, Any], summary: dict[str, Any], alpha: float = FA
     """Every figure of every group of ``baseline`` (a ``summary.json``, :func:`check_baseline`) against
     ``summary``: each one is tested, none dropped."""
     check_baseline(baseline, "baseline")
+    check_power(baseline, "baseline", alpha)
     prepared = []
     for group, base in baseline["groups"].items():
         now = summary["groups"].get(group)
@@ -91,6 +97,7 @@ def _prepare(
     if base["values"]["unit_seed"] == now["values"]["unit_seed"]:
         ok = np.isfinite(b) & np.isfinite(n)
         d = n[ok] - b[ok]
+        d[np.abs(d) <= FLOAT_NOISE * np.maximum(np.abs(n[ok]), np.abs(b[ok]))] = 0.0
         if not d.any():
             return Check(group, figure, "identical", ratio, 1.0, "holds"), None
         return Check(group, figure, "paired", ratio, float("nan"), "holds"), ("paired", d, None)
@@ -119,6 +126,17 @@ def _p_values(samples: list[_Samples | None]) -> list[float | None]:
         for i, value in zip(rows, np.atleast_1d(p).tolist(), strict=True):
             out[i] = float(value)
     return out
+
+
+def units_needed(tests: int, alpha: float = FALSE_ALARM) -> int:
+    """The fewest units whose paired test can fail a figure at ``alpha / tests``: the signed-rank test's
+    smallest one-sided p-value over ``n`` units is ``2**-n`` (every difference worse)."""
+    return math.floor(math.log2(max(1, tests) / alpha)) + 1
+
+
+def unjudged(baseline: dict[str, Any], summary: dict[str, Any]) -> list[str]:
+    """The groups ``summary`` holds that ``baseline`` does not (a strategy added since): not judged."""
+    return [g for g in summary["groups"] if g not in baseline["groups"]]
 
 
 def _tied(samples: _Samples) -> bool:
@@ -176,6 +194,22 @@ def check_baseline(doc: dict[str, Any], source: str | Path, spec: CampaignSpec |
                 _check_figure(f"{where}.values.{printable(figure)}", figure, figures, len(seeds))
         if spec is not None:
             _check_group(where, name, spec)
+
+
+def check_power(doc: dict[str, Any], source: str | Path, alpha: float = FALSE_ALARM) -> None:
+    """Refuse a baseline (checked by :func:`check_baseline`) of fewer units than any of its figures could
+    fail with at ``alpha`` over them all (:func:`units_needed`): such a gate had said "all figures hold"
+    of a strategy ten times worse. :func:`compare` and ``sins check`` (before the runs, and before writing
+    a baseline) call it."""
+    groups = doc["groups"]
+    tests = sum(len(g["values"]) - 1 for g in groups.values())
+    units = min(len(g["values"]["unit_seed"]) for g in groups.values())
+    if units < units_needed(tests, alpha):
+        raise SinsInputError(
+            f"{source}: {units} units cannot show a regression: each of its {tests} figures is tested at "
+            f"{alpha / tests:.2g}, and the least p-value {units} paired units give is "
+            f"{2.0**-units:.2g}; a baseline needs {units_needed(tests, alpha)} units or more"
+        )
 
 
 def _check_figure(where: str, figure: str, figures: Any, units: int) -> None:

@@ -91,18 +91,21 @@ def _check_campaign(args: argparse.Namespace, path: Path) -> int:
         inputs = [spec.source, spec.imu.source, spec.compensation.rig]
         for sc in spec.scenarios:
             inputs += scenario_inputs(sc)
-        check_outputs({"--baseline": args.baseline}, inputs)  # before the campaign, not after it
+        # before the campaign, not after it; a quality baseline is not replaced by a campaign's, nor this
+        check_outputs({"--baseline": args.baseline}, inputs, kinds={"--baseline": results.SUMMARY_FORMAT})
     elif not Path(args.baseline).exists():
         raise SinsInputError(f"{args.baseline}: no such campaign baseline; create it with --update-baseline")
     else:  # the whole baseline checked before any work: one that tests nothing or drops a figure is refused
         baseline = results.read_summary(args.baseline)
         gate.check_baseline(baseline, args.baseline, spec)
+        gate.check_power(baseline, args.baseline)
     with tempfile.TemporaryDirectory() as tmp, progress_bar(f"campaign {spec.name}", "unit") as bar:
         done = engine.run(spec, Path(tmp) / "out", progress=row_progress(bar))
     if baseline is None:
         new = gate.baseline_of(done.summary)
         try:
             gate.check_baseline(new, args.baseline, spec)
+            gate.check_power(new, args.baseline)
         except SinsInputError as exc:
             raise SinsInputError(f"the campaign's figures cannot be a baseline: {exc}") from None
         io.write_json(args.baseline, new)
@@ -114,6 +117,8 @@ def _check_campaign(args: argparse.Namespace, path: Path) -> int:
         for c in checks
     ]
     print(fixed_width(["scenario/strategy", "figure", "test", "median now/base", "p", "verdict"], rows))
+    for name in gate.unjudged(baseline, done.summary):
+        print(f"not in the baseline, not judged: {name}")
     bad = [c for c in checks if c.verdict != "holds"]
     each = gate.FALSE_ALARM / max(1, len(checks))
     level = f"false-alarm rate {gate.FALSE_ALARM:g} over the {len(checks)} tests, each at {each:.2g}"

@@ -139,7 +139,8 @@ def read_only(path: Path, shown: str) -> None:
 #: (:data:`_DOCUMENTS`): ``csv`` a table as text, ``toml`` an IMU file, ``text`` any other text.
 KINDS = ("json", "csv", "toml", "text", "image", "rrd", "parquet")
 #: sins's JSON documents that are inputs, by their ``format``: only an output of the same replaces one.
-_DOCUMENTS = {"sins.compensation": "a compensation model", "sins.quality-baseline": "a quality baseline"}
+_DOCUMENTS = {"sins.compensation": "a compensation model", "sins.quality-baseline": "a quality baseline",
+              "sins-campaign-summary": "a campaign's summary (a campaign baseline)"}  # fmt: skip
 #: The first bytes of the files that are not text which sins reads or writes, and what each is.
 _SIGNATURES = (
     (b"PK\x03\x04", "a zip archive (an .npz recording?)"),
