@@ -328,11 +328,13 @@ def test_each_saved_run_is_a_recording_of_its_own(drive, tmp_path: Path) -> None
     a scenario had its name as its id (two power-ons drawn as one zig-zag per strategy)."""
     rr = _rerun()
     _, result = drive
-    ids = [
-        rr.chunk.RrdReader(sins.viz.viewer.save(result, tmp_path / f"{k}.rrd")).recordings()[0].recording_id
-        for k in range(2)
-    ]
+    readers = [rr.chunk.RrdReader(sins.viz.viewer.save(result, tmp_path / f"{k}.rrd")) for k in range(2)]
+    ids = [r.recordings()[0].recording_id for r in readers]
     assert ids[0] != ids[1] and result.scenario.name not in ids
+    batches = [c.to_record_batch() for c in readers[0].stream() if c.entity_path == "/__properties"]
+    key = "RecordingInfo:name"
+    names = [b.column(key).to_pylist() for b in batches if key in b.schema.names]
+    assert names == [[[result.scenario.name]]], names  # the recording's name in the viewer's list
 
 
 def test_an_rrd_name_says_its_flag_and_dev_null_is_taken(tmp_path: Path) -> None:

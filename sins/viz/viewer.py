@@ -303,16 +303,8 @@ def blueprint(
     )
 
 
-def _stream(name: str) -> rr.RecordingStream:
-    """A recording of its own (rerun's random id: two files of one scenario opened together had been
-    pooled into one recording, two power-ons drawn as one line), named for the viewer's list."""
-    rec = rr.RecordingStream(APPLICATION_ID)
-    rec.send_recording_name(name)
-    return rec
-
-
 def _recording(result: ScenarioRun) -> tuple[rr.RecordingStream, rrb.Blueprint]:
-    rec = _stream(result.scenario.name)
+    rec = rr.RecordingStream(APPLICATION_ID)  # rerun's random id: files opened together stay apart
     return rec, blueprint(
         list(result.runs), with_imu=result.sensor_t is not None, with_aided=bool(result.aided)
     )
@@ -327,13 +319,17 @@ def check_rrd_path(path: str | os.PathLike[str], flag: str = "") -> Path:
 
 
 def _write(
-    path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None]
-) -> Path:
+    path: str | os.PathLike[str], rec: rr.RecordingStream, bp: rrb.Blueprint, log: Callable[[], None],
+    name: str,
+) -> Path:  # fmt: skip
     """Log into memory (a few MB: a one-hour drive's 8), then write through a temporary name by Python:
-    a full disk is one line (rerun's file sink had hung in its flush past SIGINT, or raised a traceback)."""
+    a full disk is one line (rerun's file sink had hung in its flush past SIGINT, or raised a traceback).
+    ``name``: the recording's in the viewer's list (each has rerun's random id: files opened together had
+    been pooled into one recording where they shared one)."""
     path = check_rrd_path(path)
     stream = rec.binary_stream()
     rec.send_blueprint(bp, make_active=False, make_default=True)
+    rec.send_recording_name(name)  # after the blueprint: before it, the viewer had not applied it
     log()
     data = stream.read(flush=True) or b""
     rec.disconnect()
@@ -345,7 +341,8 @@ def _write(
 def save(result: ScenarioRun, path: str | os.PathLike[str], *, summary: str = "") -> Path:
     """Write the run to a ``.rrd`` file."""
     rec, bp = _recording(result)
-    return _write(path, rec, bp, lambda: log_scenario_run(rec, result, summary=summary))
+    log = lambda: log_scenario_run(rec, result, summary=summary)  # noqa: E731
+    return _write(path, rec, bp, log, result.scenario.name)
 
 
 NO_DISPLAY = "no display to open the native viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
@@ -376,6 +373,7 @@ def spawn(result: ScenarioRun, *, summary: str = "") -> None:
     try:
         rr.spawn(executable_path=str(viewer) if viewer.exists() else None, recording=rec,
                  default_blueprint=bp)  # fmt: skip
+        rec.send_recording_name(result.scenario.name)  # after the blueprint (_write)
     finally:
         for k, v in saved.items():
             if v is None:
@@ -398,6 +396,7 @@ def serve(result: ScenarioRun, *, summary: str = "", web_port: int = 9090, grpc_
         rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=grpc_url)
     except Exception as exc:  # rerun raises its own error types for a port in use
         raise SinsInputError(f"cannot serve the web viewer on ports {web_port}/{grpc_port}: {exc}") from None
+    rec.send_recording_name(result.scenario.name)  # after the blueprint (_write)
     log_scenario_run(rec, result, summary=summary)
     rec.flush()
     _SERVED.append(rec)  # its gRPC server lives as long as the stream: a local had closed it on return
@@ -482,7 +481,7 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
         for place, name in enumerate(named, 1):
             slug = _slug(name) or "recording"
             prefixes[name] = slug if slug not in prefixes.values() else f"{slug}_{place}"
-    rec = _stream("gap")
+    rec = rr.RecordingStream(APPLICATION_ID)
     panels = [_gap_panel(report, prefixes[name], name) for name, report in named.items()]
     bp = rrb.Blueprint(panels[0] if len(panels) == 1 else rrb.Tabs(*panels))
 
@@ -490,7 +489,7 @@ def save_gap(reports: GapReport | dict[str, GapReport], path: str | os.PathLike[
         for name, report in named.items():
             log_gap(rec, report, prefix=prefixes[name])
 
-    return _write(path, rec, bp, log)
+    return _write(path, rec, bp, log, "gap")
 
 
 def _gap_panel(report: GapReport, prefix: str, name: str) -> Any:
@@ -531,7 +530,7 @@ def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, s
     a ``.rrd``
     file: per correction, its total, heading and inclination error over time, degrees (NaN outside the
     judged rows, so that the rests the benchmark does not count show as gaps)."""
-    rec = _stream("open_loop")
+    rec = rr.RecordingStream(APPLICATION_ID)
     axis = _whole_run()
     parts = ("total", "heading", "inclination")
     views = [
@@ -554,7 +553,7 @@ def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, s
                 rec.log(entity, rr.SeriesLines(colors=[colour(label)], names=[label]), static=True)
                 rec.send_columns(entity, indexes=_time(run.t), columns=rr.Scalars.columns(scalars=values))
 
-    return _write(path, rec, bp, log)
+    return _write(path, rec, bp, log, "open_loop")
 
 
 #: The percentiles of a campaign's horizontal error drawn over time, per strategy (a band and its median).
@@ -569,7 +568,7 @@ def save_campaign(rows: dict[str, list[Any]], path: str | os.PathLike[str]) -> P
     ``rows`` is the results table as columns (``pyarrow.Table.to_pydict()`` of ``results.parquet``); the
     series need the campaign's ``series_hz`` > 0.
     """
-    rec = _stream("campaign")
+    rec = rr.RecordingStream(APPLICATION_ID)
     scenarios = list(dict.fromkeys(rows["scenario"]))
     strategies = list(dict.fromkeys(rows["strategy"]))
     views = []
@@ -589,7 +588,7 @@ def save_campaign(rows: dict[str, list[Any]], path: str | os.PathLike[str]) -> P
                        if (s, g) == (sc, st)]  # fmt: skip
                 _log_campaign_group(rec, sc, st, rows, idx)
 
-    return _write(path, rec, bp, log)
+    return _write(path, rec, bp, log, "campaign")
 
 
 def _log_campaign_group(
@@ -647,7 +646,7 @@ def save_characterisation(
     result: Characterisation, closing: ClosingCheck, path: str | os.PathLike[str]
 ) -> Path:
     """Write a characterisation's Allan curves to a ``.rrd`` file (through a temporary name)."""
-    rec = _stream("characterise")
+    rec = rr.RecordingStream(APPLICATION_ID)
     views = [
         rrb.TimeSeriesView(
             origin=f"characterise/{imu_entity(ch)}",
@@ -662,7 +661,7 @@ def save_characterisation(
             column_shares=[3, 1],
         )
     )
-    return _write(path, rec, bp, lambda: log_characterisation(rec, result, closing))
+    return _write(path, rec, bp, lambda: log_characterisation(rec, result, closing), "characterise")
 
 
 __all__ = [
