@@ -362,6 +362,18 @@ def test_an_imu_model_that_names_no_file_is_said_at_its_key(tmp_path: Path, mode
     assert "a IMU" not in message
 
 
+def test_an_unknown_key_is_told_the_keys_taken_and_a_misspelt_one_is_named(tmp_path: Path) -> None:
+    """Before, an unknown key listed the keys the file happened to give ("keys used here: none" for
+    ``[gnss] sigma``), and ``lat_dg`` was "initial.lat_deg: missing required key", the typo unnamed."""
+    path = tmp_path / "s.toml"
+    path.write_text(_toml(_edit(BASE, lambda d: d.update(gnss={"sigma": 2.0}))), encoding="utf-8")
+    message = refusal(lambda: scenario.load(path), f"{path}: gnss.sigma: unknown key (keys taken here: ")
+    assert "sigma_m" in message and "rate_hz" in message
+    path.write_text(_toml(_edit(BASE, lambda d: d["initial"].update(lat_dg=d["initial"].pop("lat_deg")))))
+    said = "initial.lat_deg: missing required key ('lat_dg' is given: misspelt?)"
+    refusal(lambda: scenario.load(path), said)
+
+
 def test_truth_file_missing(tmp_path: Path) -> None:
     doc = {"name": "rec", "truth": {"file": "recordings/truth.csv"}}
     path = tmp_path / "rec.toml"

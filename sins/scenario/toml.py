@@ -7,6 +7,7 @@ read through it.
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
@@ -56,6 +57,7 @@ class TomlKeys:
             raise self.error(f"expected a table, got {_kind(table)}")
         self.table = table
         self.used: set[str] = set()
+        self.asked: set[str] = set()  # every key looked for, there or not: the keys this table takes
 
     def error(self, message: str, key: str | None = None) -> SinsInputError:
         """The one-line error to raise for ``key`` (or the table), naming the file and key."""
@@ -63,13 +65,17 @@ class TomlKeys:
         return SinsInputError(f"{self.source}: {place}: {message}" if place else f"{self.source}: {message}")
 
     def has(self, key: str) -> bool:
-        """Whether the table has ``key`` (without marking it used)."""
+        """Whether the table has ``key`` (without marking it used; it is one the table takes)."""
+        self.asked.add(key)
         return key in self.table
 
     def _default(self, key: str, default: Any) -> Any:
         """The default for an absent key, or the error for an absent required one."""
         if default is _MISSING:
-            raise self.error("missing required key", key)
+            given = [k for k in self.table if k not in self.asked]  # not read yet: perhaps a misspelling
+            near = difflib.get_close_matches(key, given, n=1, cutoff=0.85)
+            hint = f" ({near[0]!r} is given: misspelt?)" if near else ""
+            raise self.error(f"missing required key{hint}", key)
         return default
 
     def get(self, key: str) -> Any:
@@ -88,7 +94,7 @@ class TomlKeys:
         high_open: bool = False,
     ) -> float:
         """A finite number within ``low`` and ``high`` (open where ``*_open``); ``default`` if absent."""
-        if key not in self.table:
+        if not self.has(key):
             return float(self._default(key, default))
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -110,7 +116,7 @@ class TomlKeys:
         """A finite number within ``bound``; ``default`` if absent. The message of a value outside
         gives the bound, its unit and why it is there."""
         value = self.number(key, default)
-        if key in self.table:
+        if self.has(key):
             self._check_bound(key, value, bound)
         return value
 
@@ -127,7 +133,7 @@ class TomlKeys:
     def bounded_numbers(self, key: str, bound: Bound, default: Any = _MISSING) -> list[float]:
         """A non-empty array of finite numbers, each within ``bound``; ``default`` if absent."""
         values = self.numbers(key, default)
-        if key in self.table:
+        if self.has(key):
             for i, v in enumerate(values):
                 self._check_bound(key, v, bound, f"item {i + 1}: ")
         return values
@@ -137,7 +143,7 @@ class TomlKeys:
 
         A float with a whole value (``3.0``) is taken; ``1.5``, ``1e300`` or a boolean are refused.
         """
-        if key not in self.table:
+        if not self.has(key):
             return default
         value = self.get(key)
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -150,7 +156,7 @@ class TomlKeys:
 
     def string(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> str:
         """A string, one of ``choices`` when given; ``default`` if absent."""
-        if key not in self.table:
+        if not self.has(key):
             return str(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, str):
@@ -170,7 +176,7 @@ class TomlKeys:
 
     def numbers(self, key: str, default: Any = _MISSING) -> list[float]:
         """A non-empty array of finite numbers."""
-        if key not in self.table:
+        if not self.has(key):
             return list(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, list) or not value:
@@ -184,7 +190,7 @@ class TomlKeys:
 
     def strings(self, key: str, default: Any = _MISSING, choices: tuple[str, ...] = ()) -> list[str]:
         """An array of strings, each among ``choices`` when given, none twice."""
-        if key not in self.table:
+        if not self.has(key):
             return list(self._default(key, default))
         value = self.get(key)
         if not isinstance(value, list):
@@ -201,7 +207,7 @@ class TomlKeys:
 
     def boolean(self, key: str, default: bool) -> bool:
         """A boolean; ``default`` if absent."""
-        if key not in self.table:
+        if not self.has(key):
             return default
         value = self.get(key)
         if not isinstance(value, bool):
@@ -210,7 +216,7 @@ class TomlKeys:
 
     def tables(self, key: str) -> list[TomlKeys]:
         """The array of tables ``[[key]]``, each as a :class:`TomlKeys`; empty if absent."""
-        if key not in self.table:
+        if not self.has(key):
             return []
         value = self.get(key)
         if not isinstance(value, list):
@@ -219,15 +225,15 @@ class TomlKeys:
 
     def sub(self, key: str) -> TomlKeys:
         """The sub-table ``key`` as a :class:`TomlKeys` (empty if absent)."""
-        value = self.get(key) if key in self.table else {}
+        value = self.get(key) if self.has(key) else {}
         return TomlKeys(self.source, key, value)
 
     def done(self, allowed: tuple[str, ...] = ()) -> None:
         """Refuse keys that were never read (unknown or not valid in this context)."""
         for key in self.table:
             if key not in self.used and key not in allowed:
-                known = ", ".join(sorted(self.used | set(allowed))) or "none"
-                raise self.error(f"unknown key (keys used here: {known})", key)
+                known = ", ".join(sorted(self.asked | set(allowed))) or "none"
+                raise self.error(f"unknown key (keys taken here: {known})", key)
 
 
 def _kind(value: Any) -> str:
