@@ -1097,3 +1097,39 @@ def test_a_recording_the_system_will_not_let_sins_read_is_said_so(
     with pytest.raises(SinsInputError) as info:
         io.read(path)
     assert str(info.value) == f"{path}: cannot read: Permission denied", info.value
+
+
+def test_the_disk_check_counts_what_an_output_takes_where_it_lands(tmp_path: Path) -> None:
+    """``/dev/null`` takes no room (before, a run was refused by /dev's free space: "/dev/null would need
+    up to 180 GB, /dev has 12.6 GB free"); a link is counted where its target lies."""
+    from sins.io.limits import check_disk
+
+    check_disk({Path("/dev/null"): 1e18}, "s.toml")
+    far = tmp_path / "far"
+    far.mkdir()
+    link = tmp_path / "out.csv"
+    link.symlink_to(far / "out.csv")
+    with pytest.raises(SinsInputError, match=f"{far} has .* free"):
+        check_disk({link: 1e18}, "s.toml")
+
+
+def test_a_commands_own_stream_is_not_an_output(tmp_path: Path) -> None:
+    """``--json /dev/stdout`` with the output redirected to a file had replaced that file with the JSON
+    (the printed table, written to the replaced file, lost), and into a pipe it failed "cannot write in
+    /proc/N/fd". Refused in one line, nothing written; a terminal is a character device, written in place."""
+    log = tmp_path / "log.txt"
+    with open(log, "w") as out:
+        done = subprocess.run(
+            [sys.executable, "-c", "import sins.cli; sins.cli.console()", "run", "static", "--json",
+             "/dev/stdout"], stdout=out, stderr=subprocess.STDOUT, timeout=600, check=False,
+        )  # fmt: skip
+    text = log.read_text()
+    assert done.returncode == 2 and "--json /dev/stdout: is this command's own stream" in text, text
+    assert text.count("\n") == 1 and not list(tmp_path.glob(".*tmp"))
+    with pytest.raises(SinsInputError, match="own stream"), open(log, "w") as out:
+        os.dup2(out.fileno(), 1000)
+        try:
+            with atomic_path("/proc/self/fd/1000"):
+                pass
+        finally:
+            os.close(1000)

@@ -20,7 +20,7 @@ from typing import TextIO
 
 from sins.core import deferred
 from sins.errors import SinsInputError
-from sins.io.paths import read_only, target, writes_in_place
+from sins.io.paths import own_stream, read_only, target, writes_in_place
 
 #: The process's umask, read once at import (reading it means setting it, which threads would race).
 _UMASK = os.umask(0o022)
@@ -49,6 +49,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         except OSError as exc:  # /dev/full: no space
             raise OSError(exc.errno, exc.strerror or str(exc), str(given)) from None
         return
+    own_stream(given, str(given))  # /dev/stdout redirected to a file had replaced that file
     path = target(given)  # a symbolic link: its target is replaced, the link kept
     directory = path.parent
     if not directory.is_dir():

@@ -8,8 +8,10 @@ one line that names the file and the size it would need (:func:`check_disk`, :fu
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
+import stat
 from pathlib import Path
 
 from sins.errors import SinsInputError
@@ -75,7 +77,11 @@ def check_disk(outputs: dict[Path, float], source: str | os.PathLike[str]) -> No
     """
     by_folder: dict[Path, list[Path]] = {}
     for path in outputs:
-        by_folder.setdefault(Path(path).parent, []).append(Path(path))
+        real = Path(os.path.realpath(path))  # a link's target is what is written (sins.io.atomic)
+        with contextlib.suppress(OSError):
+            if stat.S_ISCHR(real.stat().st_mode):  # /dev/null takes no room: /dev's is not the question
+                continue
+        by_folder.setdefault(real.parent, []).append(Path(path))
     devices: dict[int, tuple[Path, float, list[Path]]] = {}
     for folder, paths in by_folder.items():
         try:

@@ -113,6 +113,27 @@ def writes_in_place(path: str | os.PathLike[str]) -> bool:
         return False
 
 
+#: The names of a process's own streams: ``/dev/stdout``, ``/dev/fd/1``, ``/proc/self/fd/1``.
+_STREAM = re.compile(r"\A/(dev/std(in|out|err)|dev/fd/\d+|proc/(self|\d+)/fd/\d+)\Z")
+
+
+def own_stream(path: str | os.PathLike[str], shown: str) -> None:
+    """Refuse a process's stream (``/dev/stdout``) as an output unless it is a terminal, written in place:
+    redirected to a file, the file was replaced (the command's printed table with it, written to the
+    file replaced), and to a pipe it could not be written ("cannot write in /proc/N/fd").
+
+    Raises
+    ------
+    SinsInputError
+        ``shown: is this command's own output stream ...``.
+    """
+    if _STREAM.match(os.path.abspath(path)) and not writes_in_place(path):
+        raise SinsInputError(
+            f"{shown}: is this command's own stream (a file or pipe here), which sins does not write "
+            "through: name a file (or /dev/null)"
+        )
+
+
 def read_only(path: Path, shown: str) -> None:
     """Refuse to replace an existing file that no one may write (no write bit in its mode): whoever
     marked it so meant it kept, and a rename over it needs only the folder's permission (root's
@@ -336,6 +357,7 @@ def check_writable(path: str | os.PathLike[str], folder: bool = False, flag: str
         if not probe.is_dir():
             raise SinsInputError(f"{shown}: cannot create the folder: {probe} is not a folder")
     else:
+        own_stream(path, shown)
         real = target(path)
         if real.is_dir():
             raise SinsInputError(f"{shown}: is a directory, expected a file name to write")
@@ -468,6 +490,7 @@ __all__ = [
     "check_named",
     "check_outputs",
     "check_writable",
+    "own_stream",
     "read_only",
     "replaceable",
     "target",
