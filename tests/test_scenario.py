@@ -374,6 +374,23 @@ def test_an_unknown_key_is_told_the_keys_taken_and_a_misspelt_one_is_named(tmp_p
     refusal(lambda: scenario.load(path), said)
 
 
+def test_a_damping_time_for_a_channel_not_damped_is_refused(tmp_path: Path) -> None:
+    """It had run without a word (the time matters to ``damp`` alone), where ``sins integrate`` refused
+    ``--vertical-tau-s`` beside a free channel."""
+    path = tmp_path / "s.toml"
+    for mode in ("free", "hold"):
+        doc = _edit(BASE, lambda d, m=mode: d.update(navigation={"vertical": m, "vertical_tau_s": 5.0}))
+        path.write_text(_toml(doc), encoding="utf-8")
+        refusal(
+            lambda: scenario.load(path),
+            f'navigation.vertical_tau_s: goes with vertical = "damp" (the channel is {mode})',
+        )
+    path.write_text(
+        _toml(_edit(BASE, lambda d: d.update(navigation={"vertical": "damp", "vertical_tau_s": 5.0})))
+    )
+    assert scenario.load(path).vertical_tau_s == 5.0
+
+
 def test_truth_file_missing(tmp_path: Path) -> None:
     doc = {"name": "rec", "truth": {"file": "recordings/truth.csv"}}
     path = tmp_path / "rec.toml"

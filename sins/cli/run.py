@@ -65,7 +65,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     imu_note = f", IMU {sc.imu_model.stem} (seed {sc.imu_seed})" if sc.imu_model else ", ideal IMU"
     report = [
         f"scenario {sc.name}: {sc.description or path}\n"
-        f"{n} samples at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s){imu_note}, vertical channel {sc.vertical}; "
+        f"{n} sample{'s' * (n != 1)} at {sc.rate_hz:g} Hz ({n / sc.rate_hz:g} s){imu_note}, vertical channel "
+        f"{sc.vertical}; "
         "errors are estimate - truth",
         format_table(summaries),
     ]

@@ -219,6 +219,8 @@ def _compensation(comp: TomlKeys, imu_model: Path | None, base: Path) -> Compens
 def _navigation(nav: TomlKeys, rate_hz: float) -> tuple[VerticalMode, float]:
     """The ``[navigation]`` table: the vertical channel's mode and damping time (s)."""
     vertical = nav.choice("vertical", VERTICAL_MODES, "free")
+    if vertical != "damp" and nav.has("vertical_tau_s"):  # as sins integrate's --vertical-tau-s: not ignored
+        raise nav.error(f'goes with vertical = "damp" (the channel is {vertical})', "vertical_tau_s")
     tau = nav.bounded("vertical_tau_s", _B["navigation.vertical_tau_s"], 10.0)
     if tau < MIN_TAU_SAMPLES / rate_hz:
         raise nav.error(
