@@ -223,6 +223,7 @@ VALUES = (*REG, "values")
         (lambda d: _set(d, None, *VALUES, "final_horizontal_m", 3), "horizontal_m[3]: expected a finite"),
         (lambda d: _set(d, math.nan, *VALUES, "residual_gyro_x", 0), "residual_gyro_x[0]: expected a finite"),
         (lambda d: _set(d, "1.0", *VALUES, "residual_gyro_x", 0), "residual_gyro_x[0]: expected a finite"),
+        (lambda d: _set(d, -1.0, *VALUES, "final_horizontal_m", 0), "[0]: expected a finite number >= 0"),
         (lambda d: _drop(d, *VALUES, "bias_left_gyro_z"), "has no bias_left_gyro_z"),
         (lambda d: _set(d, [1.0] * 40, *VALUES, "colour"), "colour: not a figure"),
         (lambda d: _rename(d, "car_drive/none"), "no scenario"),
@@ -230,7 +231,8 @@ VALUES = (*REG, "values")
     ],
     ids=["groups-empty", "groups-missing", "groups-mistyped", "group-mistyped", "values-missing",
          "unit_seed-missing", "unit_seed-mistyped", "unit_seed-empty", "unit_seed-twice", "figure-null",
-         "figure-empty", "value-null", "value-nan", "value-text", "figure-dropped", "figure-unknown",
+         "figure-empty", "value-null", "value-nan", "value-text", "value-negative", "figure-dropped",
+         "figure-unknown",
          "scenario-unknown", "strategy-unknown"],
 )  # fmt: skip
 def test_a_baseline_that_would_test_less_than_it_says_is_refused_before_the_campaign(

@@ -219,8 +219,10 @@ def _check_figure(where: str, figure: str, figures: Any, units: int) -> None:
         size = f"{len(figures)} values" if isinstance(figures, list) else type(figures).__name__
         raise SinsInputError(f"{where}: expected {units} numbers, one per unit_seed, got {size}")
     for i, x in enumerate(figures):
-        if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
-            raise SinsInputError(f"{where}[{i}]: expected a finite number, got {short(x)}")
+        if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x) or x < 0:
+            raise SinsInputError(
+                f"{where}[{i}]: expected a finite number >= 0 (an error's size), got {short(x)}"
+            )
 
 
 def _check_group(where: str, name: str, spec: CampaignSpec) -> None:
