@@ -742,3 +742,24 @@ def test_an_npz_integrates_alike_by_its_path_and_as_a_dataset(
     assert summaries[0] == summaries[1]
     rec = io.read(dataset="unit/rec")
     assert rec.on_reference is not None and rec.on_reference.imu.t[0] == rec.imu.t[0]
+
+
+@needs_euroc
+def test_a_drive_where_the_reference_pitches_steeply_reads_its_angle() -> None:
+    """EuRoC's body x points up, so its reference's pitch lies near -90° (MH_01 reaches 74° in 10-60 s):
+    roll and yaw errors grow and cancel there (a helper read roll 9.2° and yaw 10.7° RMS beside an angle
+    of 4.1°). The drive's table carries the angle (the JSON's ``attitude_angle_rms_deg``), and the pitch
+    is said, checked here against scipy's Euler angles of the reference."""
+    from sins import compensation
+    from sins.compensation import evaluation
+
+    rec = io.read(dataset="euroc/MH_01_easy", root=EUROC.parent).beside_reference()
+    rec = referenced.between(rec, 10.0, 30.0)
+    result = evaluation.evaluate_referenced(compensation.make("none"), rec, "MH_01", drive=(12.0, 28.0))
+    text = "\n".join(result.lines)
+    inside = (rec.reference.t >= 12.0) & (rec.reference.t <= 28.0)
+    pitch = Rotation.from_quat(rec.reference.q_nb[inside]).as_euler("ZYX", degrees=True)[:, 1]
+    assert f"the reference pitches to {np.max(np.abs(pitch)):.0f}° here" in text, text
+    assert np.max(np.abs(pitch)) > evaluation.STEEP_PITCH_DEG
+    drive = result.to_dict()["drive"]["none (raw readings)"]
+    assert "angle °" in text and f"{drive['attitude_angle_rms_deg']:.4f}" in text

@@ -15,6 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
+from sins.core import rotation
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
 from sins.io import frame_check
@@ -304,6 +307,10 @@ def _fitted_lines(whole: bool | None, share: float | None) -> list[str]:
     return []
 
 
+#: Beyond this reference pitch (degrees) a drive's roll and yaw errors are said to be ill-conditioned.
+STEEP_PITCH_DEG = 60.0
+
+
 def _drive(
     strategy: Strategy,
     rec: ReferencedRecording,
@@ -321,14 +328,21 @@ def _drive(
             stage(f"free inertial: {label}")
         d = referenced.drive_errors(s, rec, start, end)
         out[label] = d.to_dict()
-        figures = [*d.attitude_rms_deg, *d.velocity_rms_mps]
+        figures = [*d.attitude_rms_deg, d.attitude_angle_rms_deg, *d.velocity_rms_mps]
         rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])
     start, end = d.start_s, d.end_s  # the window as navigated: its end clipped to the reference's last epoch
     lines.append(
         f"\nfree inertial from the reference's state at {start:g} s to {end:g} s (vertical held), RMS errors"
     )
-    head = ["readings", "roll °", "pitch °", "yaw °", "vN m/s", "vE m/s", "vD m/s", "hor end m"]
+    head = ["readings", "roll °", "pitch °", "yaw °", "angle °", "vN m/s", "vE m/s", "vD m/s", "hor end m"]
     lines.append(fixed_width(head, rows))
+    inside = (rec.reference.t >= start) & (rec.reference.t <= end)
+    steepest = float(np.degrees(np.max(np.abs(rotation.euler_from_quat(rec.reference.q_nb[inside])[1]))))
+    if steepest > STEEP_PITCH_DEG:  # EuRoC's body x points up: its pitch lies near -90°
+        lines.append(
+            f"the reference pitches to {steepest:.0f}° here, where roll and yaw are ill-conditioned (their "
+            "errors grow and cancel): the attitude error's angle is the figure to read"
+        )
     return out
 
 
@@ -338,6 +352,7 @@ __all__ = [
     "OPEN_LOOP_HEAD",
     "PART_FITTED_HERE",
     "RAW",
+    "STEEP_PITCH_DEG",
     "Evaluation",
     "across",
     "evaluate_referenced",
