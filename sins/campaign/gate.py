@@ -243,10 +243,14 @@ def _aided_figures(spec: CampaignSpec, group: str) -> set[str]:
 
 __all__ = [
     "FALSE_ALARM",
+    "FLOAT_NOISE",
     "GATED",
     "Check",
     "Verdict",
     "baseline_of",
     "check_baseline",
+    "check_power",
     "compare",
+    "units_needed",
+    "unjudged",
 ]

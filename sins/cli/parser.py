@@ -35,4 +35,7 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} ({self.prog} --help)\n")
 
 
-__all__ = ["Parser"]
+__all__ = [
+    "Parser",
+    "path",
+]

@@ -337,7 +337,8 @@ def _drive(
     head = ["readings", "roll °", "pitch °", "yaw °", "angle °", "vN m/s", "vE m/s", "vD m/s", "hor end m"]
     lines.append(fixed_width(head, rows))
     inside = (rec.reference.t >= start) & (rec.reference.t <= end)
-    steepest = float(np.degrees(np.max(np.abs(rotation.euler_from_quat(rec.reference.q_nb[inside])[1]))))
+    pitch = rotation.euler_from_quat(rec.reference.q_nb[inside])[1]
+    steepest = float(np.degrees(np.max(np.abs(pitch)))) if pitch.size else 0.0
     if steepest > STEEP_PITCH_DEG:  # EuRoC's body x points up: its pitch lies near -90°
         lines.append(
             f"the reference pitches to {steepest:.0f}° here, where roll and yaw are ill-conditioned (their "

@@ -189,7 +189,9 @@ def _noise_accuracy(start: FreeStart) -> tuple[float, float]:
 
 
 __all__ = [
+    "SLOW_HZ",
     "FreeReport",
+    "check_solution",
     "expected_growth",
     "free_report",
     "grade_levels",
