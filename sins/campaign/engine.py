@@ -14,7 +14,6 @@ import logging
 import math
 import os
 import signal
-import sys
 import threading
 import time
 import warnings
@@ -248,19 +247,6 @@ def _connect(address: str) -> Any:
         ) from None
 
 
-def log_progress(stream: Any = sys.stdout) -> Callable[[int, int], None]:
-    """A progress callback printing a plain line at each tenth of the units (for logs and CI)."""
-    last = [-1]
-
-    def report(done: int, total: int) -> None:
-        tenth = 10 * done // total
-        if tenth != last[0]:
-            last[0] = tenth
-            print(f"campaign: {done}/{total} units", file=stream, flush=True)
-
-    return report
-
-
 def _local_cluster(n: int) -> Any:
     """A local cluster of ``n`` worker processes, one thread each, that Ctrl-C does not reach.
 
@@ -368,7 +354,6 @@ __all__ = [
     "WORKERS_WAIT_S",
     "CampaignRun",
     "batches",
-    "log_progress",
     "run",
     "units_per_task",
 ]

@@ -49,11 +49,6 @@ NAMES = {
 }
 
 
-#: The datasets whose reference is a trajectory (attitude and velocity at its own epochs) rather than
-#: per-sample inputs: :func:`_load_reference` gives them; a BROAD trial's name is any ``broad_NN``.
-TRAJECTORY_REFERENCES = ("psins_vehicle", "broad_NN")
-
-
 def names(root: str | os.PathLike[str] | None = None) -> dict[str, str]:
     """:data:`NAMES`, with every BROAD trial in the data root's ``broad_mocap/`` (a user who has more of
     BROAD's 39 trials puts them there; each ``NN_*.mat`` is ``broad_NN``) and every ``.npz`` recording in
@@ -177,7 +172,6 @@ __all__ = [
     "FERRARIS_RATE_HZ",
     "FERRARIS_SECTIONS",
     "NAMES",
-    "TRAJECTORY_REFERENCES",
     "data_root",
     "names",
 ]
