@@ -44,6 +44,7 @@ CONFINED = {
     "dask": {"sins.campaign.engine"},
     "distributed": {"sins.campaign.engine"},
     "rosbags": {"sins.io.bags"},
+    "filterpy": {"sins.aiding.ekf"},
 }
 
 
