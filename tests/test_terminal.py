@@ -11,6 +11,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -81,11 +82,10 @@ def test_the_viewer_sins_spawns_runs_without_analytics(monkeypatch: pytest.Monke
     monkeypatch.setattr(viz, "has_display", lambda: True)
     monkeypatch.setattr(viz.rr, "spawn", lambda **_: seen.update(CI=__import__("os").environ.get("CI")))
     monkeypatch.setattr(viz, "log_scenario_run", lambda *a, **k: None)
-    monkeypatch.setattr(
-        viz, "_recording", lambda result: (type("R", (), {"flush": lambda self: None})(), None)
-    )
+    stream = type("R", (), {"flush": lambda self: None, "send_recording_name": lambda self, name: None})
+    monkeypatch.setattr(viz, "_recording", lambda result: (stream(), None))
     monkeypatch.delenv("CI", raising=False)
-    viz.spawn(None)  # type: ignore[arg-type]
+    viz.spawn(SimpleNamespace(scenario=SimpleNamespace(name="s")))  # type: ignore[arg-type]
     assert seen == {"CI": "1"} and "CI" not in __import__("os").environ
 
 
