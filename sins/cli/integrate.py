@@ -79,12 +79,9 @@ def _cmd_integrate(args: argparse.Namespace) -> int:
         print(f"sins: note: {where}: the first {rec.before_truth} intervals come before {against} begins "
               f"at {rec.imu.t[0]:g} s; integrating from there", file=sys.stderr)  # fmt: skip
     if len(rec.imu) + rec.before_truth < rec.intervals:
-        print(
-            f"sins: note: {where}: integrating {'' if rec.before_truth else 'the first '}{len(rec.imu)} of "
-            f"{rec.intervals} intervals, "
-            f"to {rec.imu.t[-1]:g} s where {against} ends (--within-truth)",
-            file=sys.stderr,
-        )
+        first = "" if rec.before_truth else "the first "
+        print(f"sins: note: {where}: integrating {first}{len(rec.imu)} of {rec.intervals} intervals, to "
+              f"{rec.imu.t[-1]:g} s where {against} ends (--within-truth)", file=sys.stderr)  # fmt: skip
     print(f"{where}: {len(rec.imu)} intervals against {against}; errors are estimate - truth")
     print(format_table({"none": summary}))
     if args.json:
@@ -138,10 +135,11 @@ def _integrate_free(args: argparse.Namespace) -> int:
         start = replay.free_start(imu, origin, attitude=attitude, align_s=args.align, heading=heading,
                                   levels=levels, source=where)  # fmt: skip
         bar.set_description("integrating")
-        sol = replay.navigate_free(imu, start, args.vertical, vertical_tau(args, imu.t))
+        vertical = (args.vertical, vertical_tau(args, imu.t))
+        sol = replay.navigate_free(imu, start, *vertical)
     free_report.check_solution(sol, where, args.vertical)  # NaN, inf: what likely took it there
     report = free_report.free_report(
-        where, start, sol, args.align, args.grade, heading_given=args.heading is not None
+        where, start, sol, args.align, args.grade, heading_given=args.heading is not None, vertical=vertical
     )
     print("\n".join(report.lines))
     if args.json:
@@ -151,7 +149,7 @@ def _integrate_free(args: argparse.Namespace) -> int:
         from sins.viz import plots
 
         title = f"sins integrate {where}: no reference, {start.how} start"
-        growth = free_report.expected_growth(start, sol)
+        growth = free_report.expected_growth(start, sol, vertical)
         save_plot(args.plot, lambda: plots.solution_figure(sol, title, growth), title)
     return 0
 

@@ -13,6 +13,7 @@ import numpy as np
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.errors import MissingInputError, SinsInputError
+from sins.nav.vertical import VerticalMode
 from sins.runs.replay import FreeStart, still_drift
 
 if TYPE_CHECKING:
@@ -87,13 +88,14 @@ def grade_levels(grade: str | None) -> tuple[float, float]:
     )
 
 
-def expected_growth(start: FreeStart, sol: NavSeries) -> list[tuple[str, Any, Any, str]]:
-    """The growth the rest's biases predict, for the picture (horizontal and height)."""
-
+def expected_growth(
+    start: FreeStart, sol: NavSeries, vertical: tuple[VerticalMode, float] = ("free", 10.0)
+) -> list[tuple[str, Any, Any, str]]:
+    """The growth the rest's biases predict (:func:`sins.runs.replay.still_drift`, the vertical channel
+    as ``vertical``: its mode and damping time), for the picture (horizontal and height)."""
     if start.rest is None:
         return []
-    t = sol.t - sol.t[0]
-    ned = still_drift(start.rest, t)
+    ned = still_drift(start.rest, sol.t - sol.t[0], *vertical)
     return [("from the rest's biases", sol.t, np.hypot(ned[:, 0], ned[:, 1]), "horizontal"),
             ("from the rest's biases", sol.t, -ned[:, 2], "down")]  # fmt: skip
 
@@ -105,9 +107,12 @@ def free_report(
     align_s: float | None = None,
     grade: str | None = None,
     heading_given: bool = False,
+    vertical: tuple[VerticalMode, float] = ("free", 10.0),
 ) -> FreeReport:
     """What a navigation without a reference says: its start, the alignment on ``align_s`` seconds of rest
-    (with ``grade``'s bias levels, its heading given or gyrocompassed) and the solution's offsets."""
+    (with ``grade``'s bias levels, its heading given or gyrocompassed) and the solution's offsets, beside
+    what the rest's biases predict with the vertical channel as navigated (``vertical``: its mode and
+    damping time)."""
 
     init = start.initial
     offset = earth.ned_offset(sol.lat[-1], sol.lon[-1], sol.h[-1], init.lat, init.lon, init.h)
@@ -125,13 +130,15 @@ def free_report(
     }  # fmt: skip
     if start.rest is not None:
         doc["alignment"] = _alignment(start, align_s, grade, heading_given, lines)
-        predicted = still_drift(start.rest, np.array([span]))[0]
+        predicted = still_drift(start.rest, np.array([span]), *vertical)[0]
         doc["predicted_offset_ned_m"] = [float(x) for x in predicted]
         level = float(np.hypot(predicted[0], predicted[1]))
+        channel = {"free": "free: the vertical accelerometer bias and the level velocity's Coriolis force",
+                   "hold": "held", "damp": "damped"}[vertical[0]]  # fmt: skip
         lines.append(
             f"a unit still all along drifts by its rest's biases alone: {level:.4g} m level, "
-            f"{-predicted[2]:+.4g} m up after {span:.4g} s (level gyro bias through the Schuler loop, the "
-            "vertical accelerometer bias through the free vertical channel)"
+            f"{-predicted[2]:+.4g} m up after {span:.4g} s (its rest's mean readings navigated: the level "
+            f"gyro bias through the Schuler loop, the vertical channel {channel})"
         )
     else:
         lines.append(f"attitude given: roll {roll:.4f}°, pitch {pitch:.4f}°, yaw {yaw:.4f}°")
