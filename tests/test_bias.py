@@ -711,3 +711,18 @@ def test_a_free_solution_gone_non_finite_names_the_likely_causes(
     assert "times in another unit (the readings come at 0.1 Hz)" in err, err
     assert main([*argv, "--vertical", "hold"]) == 0  # the channel held: finite, if nonsense
     assert main([*argv, "--units", "t=ms"]) == 0
+
+
+def test_a_gap_in_a_still_recording_is_said(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``sins bias`` averaged across 5 s without readings without a word (``sins integrate`` says so)."""
+    imu, _ = still_unit(200.0, np.zeros(3), np.zeros(3), _nav_noise())
+    keep = np.r_[0:5000, 5500 : len(imu.t)]
+    io.write_imu(
+        tmp_path / "gap.csv",
+        ImuRates(t=imu.t[keep], omega_ib_b=imu.omega_ib_b[keep], f_ib_b=imu.f_ib_b[keep]),
+    )
+    assert main(["bias", str(tmp_path / "gap.csv"), "--lat", str(LAT_DEG)]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "1 gap(s) in the readings (the longest 5.01 s at 49.99 s), the rows on either side averaged" in err
+    ), err

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -51,6 +52,7 @@ def _estimate(
     args: argparse.Namespace, lat: float | None, attitude: tuple[float, float, float] | None
 ) -> BiasEstimate:
     from sins.characterise import bias
+    from sins.io.inspection import gaps_note
 
     if args.dataset is not None:
         if lat is not None or attitude is not None or args.height is not None:
@@ -65,6 +67,8 @@ def _estimate(
                                      location=bias.location_of(rec), seconds=args.seconds)  # fmt: skip
     with progress_bar("reading", "messages") as bar:
         rec = read_recording(args, args.recording, None, progress=row_progress(bar))
+    if note := gaps_note(rec.imu.t, "the rows on either side averaged as one rest"):
+        print(f"sins: note: {rec.name}: {note}", file=sys.stderr)
     with progress_bar("fitting the noise", "channels") as bar:
         return bias.recording_bias(rec, lat, args.height, attitude, args.seconds, progress=row_progress(bar))
 

@@ -164,16 +164,17 @@ def _as_read(finding: Finding) -> Finding:
 # --------------------------------------------------------------------------- time
 
 
-def gaps_note(t: Array) -> str:
+def gaps_note(t: Array, across: str = "each integrated across as one interval") -> str:
     """The stretches without readings in the stamps ``t`` (s, increasing), as :func:`inspect` finds them,
-    in a sentence: how many, the longest, and that an integration crosses each as one interval ("" for
-    none: ``sins integrate`` says it, which crossed a 5 s gap without a word)."""
+    in a sentence: how many, the longest, and what ``across`` them is done ("" for none: ``sins
+    integrate`` says it, which crossed a 5 s gap without a word; ``sins bias``, which averaged across one
+    as silently)."""
     found = _stamps(t)[2]
     if not found:
         return ""
     g = max(found, key=lambda g: g.length_s)
     return (f"{len(found)} gap(s) in the readings (the longest {g.length_s:.3g} s at {g.start_s:.6g} s), "
-            "each integrated across as one interval (sins inspect lists them)")  # fmt: skip
+            f"{across} (sins inspect lists them)")  # fmt: skip
 
 
 def _stamps(t: Array) -> tuple[float, float, tuple[Gap, ...]]:
