@@ -72,6 +72,7 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
         # (scikit-learn's rule): check_params holds them, and make, fit, save and load call it.
         clone = type(strategy)(**params)
         assert all(getattr(clone, k) is v for k, v in params.items()), name
+        assert clone.label == name  # its variant told by its parameters (mlp_seed's had said mlp_pure)
     if name not in ("none", "oracle"):  # nothing to learn: nothing to refuse, nothing to be fitted first
         # Used before fit: said so (scikit-learn's NotFittedError), not an AttributeError from inside.
         with pytest.raises(compensation.NotFittedError, match="is not fitted: call fit"):

@@ -138,8 +138,14 @@ class Strategy(ABC):
 
     @property
     def label(self) -> str:
-        """What to call it in reports: its variant's name, else its class's."""
-        return self.variant or self.name
+        """What to call it in reports: the variant it was made or loaded as, else the one its parameters
+        make it (:meth:`kind`: a clone ``type(s)(**s.params())`` of ``mlp_seed`` had said ``mlp_pure``)."""
+        return self.variant or self.kind()
+
+    def kind(self) -> str:
+        """The registered variant its parameters make it, where one of them changes what it is
+        (``Regression(robust=True)`` is ``regression_robust``); here its class's name."""
+        return self.name
 
     def predict_error(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """The error believed to be in each reading: ``readings - correct(readings)``."""

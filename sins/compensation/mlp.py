@@ -148,6 +148,10 @@ class MLP(Strategy):
         #: Called as ``progress(epochs_done, max_epochs)`` after each epoch (a progress bar's); not saved.
         self.progress: Callable[[int, int], None] | None = None
 
+    def kind(self) -> str:
+        """``mlp_seed`` where trained as the seed paper does (``mode="seed"``)."""
+        return "mlp_seed" if self.mode == "seed" else self.name
+
     def check_params(self) -> None:
         """As every strategy's (:meth:`Strategy.check_params`), and ``mode`` one of :data:`MODES`,
         ``hidden`` within :func:`check_hidden`'s bounds: set after the constructor, a ``mode`` of "paper"

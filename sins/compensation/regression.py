@@ -29,6 +29,10 @@ class Regression(Strategy):
         self.huber_k = huber_k
         self.g_sensitivity = g_sensitivity
 
+    def kind(self) -> str:
+        """``regression_robust`` where Huber-weighted (a subclass keeps its own name)."""
+        return "regression_robust" if self.robust is True and self.name == "regression" else self.name
+
     def fit(self, data: CalibrationData) -> Regression:
         """Fit the seed model by least squares (Huber-weighted if ``robust``), then :meth:`fit_beyond`;
         returns self."""
