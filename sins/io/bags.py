@@ -263,9 +263,7 @@ def _row(msgtype: str, msg: Any, received: int) -> tuple[Any, ...]:
 
 
 def _increasing(path: Path, topic: str, stamps: NDArray[np.int64]) -> None:
-    bad = np.flatnonzero(np.diff(stamps) <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
+    if (k := formats.first_not_increasing(stamps)) is not None:
         raise SinsInputError(
             f"{path}: topic {topic}: message {k + 1}'s header stamp {stamps[k]} ns does not increase "
             f"(message {k}'s is {stamps[k - 1]} ns)"

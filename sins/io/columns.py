@@ -184,9 +184,7 @@ def _check_time(table: formats.Table, t: Array, from_file: bool) -> None:
     if not from_file:
         return
     column = table.columns[0]
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        r = int(bad[0]) + 1
+    if (r := formats.first_not_increasing(t)) is not None:
         line = formats.line_of_row(table.path, table.first_data_line - 1, r)
         raise SinsInputError(
             f"{table.path}:{line}: column {column!r}: time {formats.format_number(t[r])} s does not "

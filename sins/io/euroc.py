@@ -156,9 +156,7 @@ def _read_asl_csv(path: Path, width: int) -> tuple[NDArray[np.int64], Array]:
     if not stamps:
         raise SinsInputError(f"{path}: no data rows after the header")
     t = np.array(stamps, dtype=np.int64)
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
+    if (k := formats.first_not_increasing(t)) is not None:
         raise SinsInputError(
             f"{path}:{k + 2}: column {names[0]!r}: stamp {t[k]} ns does not increase (previous {t[k - 1]} ns)"
         )

@@ -48,6 +48,7 @@ from sins.io.json_files import read_json_document as read_json_document
 from sins.io.json_files import write_json as write_json
 from sins.io.tables import WRITE_BLOCK_ROWS as WRITE_BLOCK_ROWS
 from sins.io.tables import Table, format_number, line_of_row, read_header, read_table, write_table
+from sins.io.tables import first_not_increasing as first_not_increasing
 from sins.io.tables import read_columns as read_columns
 
 Array = NDArray[np.float64]

@@ -87,9 +87,7 @@ def _read_npz(
     path = Path(path)
     arrays, unread = _load(path)
     t_abs = arrays["t_s"].reshape(-1)
-    bad = np.flatnonzero(np.diff(t_abs) <= 0.0)
-    if bad.size:
-        k = int(bad[0]) + 1
+    if (k := formats.first_not_increasing(t_abs)) is not None:
         raise SinsInputError(
             f"{path}: t_s: row {k + 1}: {float(t_abs[k])!r} s does not increase "
             f"(row {k}: {float(t_abs[k - 1])!r} s)"

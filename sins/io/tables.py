@@ -116,9 +116,7 @@ def read_table(
         )
     if "t" in columns:
         t = data[:, columns.index("t")]
-        dt = np.diff(t)
-        if (dt <= 0).any():
-            r = int(np.argmax(dt <= 0)) + 1
+        if (r := first_not_increasing(t)) is not None:
             raise SinsInputError(
                 f"{path}:{line_of_row(path, header_line, r)}: column 't': time {format_number(t[r])} "
                 f"does not increase (previous {format_number(t[r - 1])})"
@@ -279,6 +277,13 @@ def _read_slow(
     return np.array(rows, dtype=float).reshape(len(rows), len(wanted))
 
 
+def first_not_increasing(t: NDArray[np.float64] | NDArray[np.int64]) -> int | None:
+    """The first row of the stamps ``t`` that does not come after the row before it, or None: what every
+    reader's refusal names (by row, line or message, beside the two stamps)."""
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    return int(bad[0]) + 1 if bad.size else None
+
+
 def line_of_row(path: Path, header_line: int, row: int) -> int:
     """The file line holding data row ``row`` (0-based), counting blank and comment lines (a Parquet
     file's row, 1-based)."""
@@ -324,6 +329,7 @@ def write_table(
 __all__ = [
     "WRITE_BLOCK_ROWS",
     "Table",
+    "first_not_increasing",
     "format_number",
     "line_of_row",
     "open_text",
