@@ -264,6 +264,26 @@ def test_bad_arguments_are_refused():
         strapdown.integrate(rates, init)  # type: ignore[arg-type]
 
 
+def test_a_stretch_of_intervals_integrates_as_the_whole_does_from_its_start():
+    """``ImuIncrements.steps(a, b)``: intervals a..b with their b - a + 1 bounding times (a plain slice of
+    ``t`` alike is one short); integrated from the whole run's state at ``t[a]`` it ends where the whole
+    run is at ``t[b]`` (1e-12 rad, 1 µm: the same arithmetic from a state rounded to its stored form)."""
+    turning = SegmentMotion.from_segments(
+        Start(D(45), D(10), 100.0, 10.0, 0.0, 0.0, 0.0), [Turn(10.0, D(90), 1.0)]
+    )
+    truth, imu = trajectory.generate(turning, 100.0)
+    whole = strapdown.integrate(imu, strapdown.InitialState.from_series(truth))
+    part = imu.steps(300, 700)
+    assert len(part) == 400 and part.t[0] == imu.t[300] and part.t[-1] == imu.t[700]
+    assert len(imu.steps(300)) == len(imu) - 300 and imu.steps().t.tolist() == imu.t.tolist()
+    start = strapdown.InitialState.from_series(whole, 300)
+    sol = strapdown.integrate(part, start)
+    np.testing.assert_allclose(
+        [sol.lat[-1], sol.lon[-1]], [whole.lat[700], whole.lon[700]], rtol=0, atol=1e-12
+    )
+    assert sol.h[-1] == pytest.approx(whole.h[700], abs=1e-6)
+
+
 def test_a_damp_loop_shorter_than_two_steps_is_refused_as_a_scenario_refuses_it() -> None:
     """The loop's explicit update is unstable below a step: ``integrate`` gave NaN for a 0.1 s loop at
     10 Hz where a scenario refused it; the library refuses it now, at the scenario's bound."""

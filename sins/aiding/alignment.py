@@ -385,7 +385,7 @@ def in_motion_run(
     """
     start = in_motion_start(imu, fixes, config, motion)
     k = start.index
-    rest = ImuIncrements(t=imu.t[k:], dtheta_b=imu.dtheta_b[k:], dv_b=imu.dv_b[k:])
+    rest = imu.steps(k)
     rows = np.arange(len(fixes))
     later = fixes.select((rows > start.fix_row) & (fixes.t >= rest.t[0]))
     return start, ekf.run(rest, later, config, start.initial, P0=start.P0)

@@ -71,7 +71,7 @@ def aided_through_outages(
         # The raw readings from the aided state at the window's start (after its last fix).
         inside = window_rows(imu.t, window.start_s, window.end_s)
         k, last = int(inside[0]) - 1, int(inside[-1])
-        seg = ImuIncrements(t=imu.t[k : last + 1], dtheta_b=imu.dtheta_b[k:last], dv_b=imu.dv_b[k:last])
+        seg = imu.steps(k, last)
         alone = strapdown.integrate(seg, strapdown.InitialState.from_series(result.nav, k))
         free.append(float(nav_errors(alone.at(-1), at_imu.at(last)).horizontal_m[0]))
     return RecordingOutages(

@@ -584,7 +584,7 @@ def drive_errors(
             f"{rec.source or 'recording'}: {start_s:g}..{end_s:g} s is not within the reference "
             f"({rec.reference.t[0]:g}..{rec.reference.t[-1]:g} s)"
         )
-    seg = ImuIncrements(t=imu.t[a : b + 1], dtheta_b=imu.dtheta_b[a:b], dv_b=imu.dv_b[a:b])
+    seg = imu.steps(a, b)
     truth = rec.reference.interpolate(seg.t)
     solution = strapdown.integrate(
         seg, strapdown.InitialState.from_series(truth, 0), vertical="hold", h_ref=truth.h
@@ -612,7 +612,7 @@ def between(rec: ReferencedRecording, start_s: float, end_s: float) -> Reference
     b = int(np.searchsorted(t, end_s, side="right")) - 1
     inside = np.flatnonzero((rec.reference.t >= t[a]) & (rec.reference.t <= t[b]))
     return ReferencedRecording(
-        imu=ImuIncrements(t=t[a : b + 1], dtheta_b=rec.imu.dtheta_b[a:b], dv_b=rec.imu.dv_b[a:b]),
+        imu=rec.imu.steps(a, b),
         reference=rec.reference.at(inside),
         judged=None if rec.judged is None else rec.judged[a : b + 1],
         sensor=rec.sensor,

@@ -151,6 +151,12 @@ class ImuIncrements:
         mid = 0.5 * (self.t[:-1] + self.t[1:])
         return mid, self.dtheta_b / dt, self.dv_b / dt
 
+    def steps(self, a: int = 0, b: int | None = None) -> ImuIncrements:
+        """The intervals ``a`` to ``b`` (exclusive; None: to the end): their increments and the ``b - a + 1``
+        times that bound them (``t[a : b + 1]``, where a plain slice of ``t`` alike is one short)."""
+        b = len(self) if b is None else b
+        return ImuIncrements(t=self.t[a : b + 1], dtheta_b=self.dtheta_b[a:b], dv_b=self.dv_b[a:b])
+
 
 @dataclass(frozen=True)
 class ImuRates:

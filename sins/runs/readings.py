@@ -224,7 +224,7 @@ def _from(samples: ImuIncrements | ImuRates, k: int) -> ImuIncrements | ImuRates
     """The readings from row ``k`` (increments: from the interval starting at edge ``k``)."""
     if isinstance(samples, ImuRates):
         return ImuRates(t=samples.t[k:], omega_ib_b=samples.omega_ib_b[k:], f_ib_b=samples.f_ib_b[k:])
-    return ImuIncrements(t=samples.t[k:], dtheta_b=samples.dtheta_b[k:], dv_b=samples.dv_b[k:])
+    return samples.steps(k)
 
 
 def gap_data(rec: io.Recording) -> tuple[CalibrationData, NavSeries | None]:

@@ -161,7 +161,7 @@ def navigate_free(
     """Integrate ``imu`` from ``start`` (from its ``index``); held or damped, the vertical channel goes
     to the start's height."""
     k = start.index
-    part = imu if k == 0 else ImuIncrements(t=imu.t[k:], dtheta_b=imu.dtheta_b[k:], dv_b=imu.dv_b[k:])
+    part = imu if k == 0 else imu.steps(k)
     h_ref = None if vertical == "free" else np.full(len(part.t), start.initial.h)
     return strapdown.integrate(
         part, start.initial, vertical=vertical, h_ref=h_ref, vertical_tau_s=vertical_tau_s
