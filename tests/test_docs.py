@@ -45,3 +45,22 @@ def test_every_page_is_in_the_navigation():
 
     on_disk = {str(p.relative_to(ROOT / "docs")) for p in (ROOT / "docs").rglob("*.md")}
     assert on_disk == pages(nav)
+
+
+def test_every_whole_scenario_the_guides_show_loads(tmp_path):
+    """A guide's scenario file (a ```toml block with a trajectory) loads as shown: the scenarios guide's
+    first example had kept ``vertical_tau_s`` beside a free channel once sins refused that pairing."""
+    import re
+
+    from sins import scenario
+
+    shown = 0
+    for page in sorted((ROOT / "docs").rglob("*.md")):
+        for k, block in enumerate(re.findall(r"```toml\n(.*?)```", page.read_text(), re.S)):
+            if not re.search(r"^\[\[(segment|waypoint)\]\]|^\[truth\]", block, re.M) or "model =" in block:
+                continue  # a fragment, or one naming files of its own
+            path = tmp_path / f"{page.stem}_{k}.toml"
+            path.write_text(block)
+            scenario.load(path)
+            shown += 1
+    assert shown >= 1
