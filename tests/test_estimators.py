@@ -305,3 +305,14 @@ def test_a_fit_leaves_the_callers_torch_stream_where_it_stood(name: str) -> None
     torch.manual_seed(123)
     _make(name).fit(_data(name))
     assert torch.equal(torch.rand(4), expected)
+
+
+def test_a_name_a_fitted_strategy_never_learns_is_said_so() -> None:
+    """``coef_`` on a fitted ``regression`` had been "not fitted: call fit() first"; unfitted, it is."""
+    fitted = _make("regression").fit(_data("regression"))
+    with pytest.raises(
+        AttributeError, match=r"Regression learned no coef_ \(it learned: A0_, A_, B0_, B_, K_"
+    ):
+        _ = fitted.coef_  # type: ignore[attr-defined]
+    with pytest.raises(compensation.NotFittedError, match="is not fitted: call fit"):
+        _ = _make("regression").B0_

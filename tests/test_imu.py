@@ -1182,3 +1182,23 @@ def test_times_that_do_not_increase_are_refused_not_integrated(t: list[float]) -
     for what, call in calls.items():
         with pytest.raises(ValueError, match=rf"^{what}: t must increase from each sample to the next"):
             call()
+
+
+def test_rates_check_their_temperature_and_an_effect_keeps_its_own_parameters() -> None:
+    """``corrupt_rates`` takes the temperature as ``corrupt_increments`` does (one value of length 1 had
+    been broadcast to every sample, NaN had made NaN readings); an effect's parameters are its own copy,
+    read-only (a caller's array changed after the check had changed the frozen model)."""
+    n = 201
+    rates = ImuRates(t=np.arange(n) / 100.0, omega_ib_b=np.zeros((n, 3)), f_ib_b=np.zeros((n, 3)))
+    unit = ImuModel((TemperatureBias("gyro", c1=np.full(3, 1e-5)),))
+    for temp, said in ((np.array([30.0]), "one value per sample time"), (np.full(n, np.nan), "finite")):
+        with pytest.raises(ValueError, match=said):
+            unit.corrupt_rates(rates, temp=temp)
+    warm = unit.corrupt_rates(rates, temp=np.full(n, 30.0))
+    np.testing.assert_allclose(warm.omega_ib_b, 1e-4, rtol=1e-12)  # c1 (T - T0), T0 20 °C
+    b = np.array([1e-5, 0.0, 0.0])
+    model = ImuModel((Bias("gyro", b),))
+    b[0] = np.nan
+    assert np.isfinite(model.corrupt_rates(rates).omega_ib_b).all()
+    with pytest.raises(ValueError, match="read-only"):
+        model.effects[0].value[0] = 1.0  # type: ignore[attr-defined]

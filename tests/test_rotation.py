@@ -598,3 +598,21 @@ def test_broadcasting_of_scalars_and_batches() -> None:
     np.testing.assert_allclose(
         C, Rotation.from_euler("ZYX", [[y, -0.2, 0.1] for y in yaw]).as_matrix(), atol=4e-15
     )
+
+
+@pytest.mark.parametrize("distance", [0.0, 1e-14, 1e-12, 1e-10, 1e-9, 1e-8, 2e-8, 1e-7, 1e-6, 1e-3])
+def test_euler_angles_round_trip_near_the_lock(distance: float) -> None:
+    """``distance`` rad from ±90° pitch, ZYX Euler angles and back: within 1e-7 rad of scipy's rotation
+    (the lock's threshold, 1e-8, with the rounding it trades against); the lock had been taken at 1e-12,
+    where 1e-12 from it gave 5e-4 rad. The compiled metrics (``sins.nav.metrics``) read the same angles."""
+    from sins.nav import metrics
+
+    rng = np.random.default_rng(7)
+    yaw, roll = rng.uniform(-3.0, 3.0, (2, 100))
+    sign = rng.choice([-1.0, 1.0], 100)
+    truth = Rotation.from_euler("ZYX", np.column_stack([yaw, sign * (np.pi / 2 - distance), roll]))
+    angles = rotation.euler_from_quat(truth.as_quat())
+    back = Rotation.from_quat(rotation.quat_from_euler(*angles))
+    assert np.max((back * truth.inv()).magnitude()) < 1e-7
+    compiled = metrics._euler_angles(np.ascontiguousarray(truth.as_quat()))
+    np.testing.assert_allclose(compiled, np.column_stack(angles), rtol=0, atol=1e-12)

@@ -297,3 +297,36 @@ def test_a_damp_loop_shorter_than_two_steps_is_refused_as_a_scenario_refuses_it(
         strapdown.integrate(imu, start, vertical="damp", vertical_tau_s=0.1)
     sol = strapdown.integrate(imu, start, vertical="damp", vertical_tau_s=0.2)
     assert np.abs(sol.h - 100.0).max() < 1e-6
+
+
+def test_the_library_refuses_what_it_would_integrate_wrongly():
+    """Found by a walk through the library: each had run without a word (a step back in a batch's times,
+    degrees for an initial latitude, unsorted times beyond a series, waypoints passed backwards), or
+    failed inside numpy or the compiled kernel."""
+    from sins.core.series import NavSeries
+    from sins.nav.motion import WaypointMotion
+
+    truth, imu = trajectory.generate(stationary(10.0, 10.0), 100.0)
+    init = strapdown.InitialState.from_series(truth)
+    d, v = np.stack([imu.dtheta_b] * 2), np.stack([imu.dv_b] * 2)
+    back = imu.t.copy()
+    back[5] = back[4] - 1e-3
+    with pytest.raises(ValueError, match="integrate_batch: t must increase"):
+        strapdown.integrate_batch(back, d, v, init)
+    with pytest.raises(ValueError, match=r"t must have shape \(1001,\) for 1000 increments"):
+        strapdown.integrate_batch(imu.t[:-1], d, v, init)
+    assert strapdown.integrate_batch(imu.t, d[:0], v[:0], init) == []
+    with pytest.raises(ValueError, match=r"degrees given for radians"):
+        dataclasses.replace(init, lat=45.0)
+    with pytest.raises(ValueError, match="not all zero"):
+        dataclasses.replace(init, q_nb=np.zeros(4))
+    series: NavSeries = truth
+    with pytest.raises(ValueError, match="outside"):
+        series.interpolate([3.0, 1.0, 17.0, 2.0])  # before: h at 17 s extrapolated
+    with pytest.raises(ValueError, match="1-D"):
+        series.interpolate(1.5)
+    for speeds, said in (([10.0, -5.0, 10.0], "speeds > 0"), ([10.0, 10.0], "m speeds")):
+        with pytest.raises(ValueError, match=said):
+            WaypointMotion.from_waypoints(0.7, 0.1, 0.0, [[0, 0, 0], [100, 0, 0], [200, 0, 0]], speeds)
+    with pytest.raises(ValueError, match="degrees given for radians"):
+        WaypointMotion.from_waypoints(45.0, 0.1, 0.0, [[0, 0, 0], [100, 0, 0]], [10.0, 10.0])

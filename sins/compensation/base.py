@@ -105,6 +105,10 @@ class Strategy(ABC):
         # Called only where the attribute is missing: a learned one (ending in "_") before fit said so,
         # not an AttributeError deep inside a correction ("'Regression' object has no attribute 'B0_'").
         if name.endswith("_") and not name.startswith("__"):
+            learned = sorted(k for k in vars(self) if k.endswith("_") and not k.startswith("_"))
+            if learned:  # fitted: a name it never learns (coef_) had been "not fitted: call fit() first"
+                said = ", ".join(learned)
+                raise AttributeError(f"{type(self).__name__} learned no {name} (it learned: {said})")
             raise NotFittedError(f"{type(self).__name__} is not fitted: call fit() first (it sets {name})")
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 

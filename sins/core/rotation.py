@@ -212,6 +212,10 @@ def euler_from_dcm(C: ArrayLike) -> tuple[Array, Array, Array]:
     )
 
 
+#: How near ±90° pitch, as ``cos(pitch)``, ZYX Euler angles are taken as locked (roll 0, yaw the rest).
+GIMBAL_LOCK = 1e-8
+
+
 def _euler(
     c00: Array, c10: Array, c20: Array, c21: Array, c22: Array, c01: Array, c11: Array
 ) -> tuple[Array, Array, Array]:
@@ -219,7 +223,10 @@ def _euler(
     # rotation matrix's elements (at most 1): a square root of the squares is within an ulp of hypot's
     # overflow-safe one and four times cheaper (the campaign kernel computes it at every sample).
     pitch = np.arctan2(-c20, np.sqrt(c00 * c00 + c10 * c10))
-    locked = c21 * c21 + c22 * c22 < 1e-24  # |(c21, c22)| < 1e-12
+    # Within 1e-8 of ±90° roll and yaw are one angle: (c21, c22) and (c00, c10) are cos(pitch) long and
+    # their rounding (1e-16) turned 1e-12 from the lock into 5e-4 rad of round-trip error; taken as
+    # locked there, the error is at most the 1e-8 left out, either side of it.
+    locked = c21 * c21 + c22 * c22 < GIMBAL_LOCK**2
     roll = np.where(locked, 0.0, np.arctan2(c21, c22))
     yaw = np.where(locked, np.arctan2(-c01, c11), np.arctan2(c10, c00))
     return roll, pitch, yaw
@@ -302,6 +309,7 @@ def euler_rates_to_body_rate(
 
 
 __all__ = [
+    "GIMBAL_LOCK",
     "cross",
     "dcm_from_euler",
     "dcm_from_quat",

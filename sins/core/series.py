@@ -101,10 +101,12 @@ class NavSeries:
     def interpolate(self, t: Array) -> NavSeries:
         """States at times ``t`` (within the span): linear in position and velocity, slerp in attitude."""
         t = np.asarray(t, dtype=float)
-        if t.size and (t[0] < self.t[0] - 1e-9 or t[-1] > self.t[-1] + 1e-9):
-            raise ValueError(
-                f"cannot interpolate at {t[0]:.6g}..{t[-1]:.6g} s outside {self.t[0]:.6g}..{self.t[-1]:.6g} s"
-            )
+        if t.ndim != 1 or len(self.t) < 2:  # a scalar had been an IndexError, one row NaN
+            raise ValueError(f"interpolate: t must be 1-D (got {t.ndim}-D) and the series 2 rows or more")
+        # By the extremes, not the ends: unsorted times beyond the span had been extrapolated.
+        if t.size and (t.min() < self.t[0] - 1e-9 or t.max() > self.t[-1] + 1e-9):
+            raise ValueError(f"cannot interpolate at {t.min():.6g}..{t.max():.6g} s outside "
+                             f"{self.t[0]:.6g}..{self.t[-1]:.6g} s")  # fmt: skip
         i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2)
         w = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
         lerp = lambda a: a[i] + (a[i + 1] - a[i]) * (w if a.ndim == 1 else w[:, None])  # noqa: E731

@@ -76,6 +76,7 @@ class ImuModel(EffectSet):
         """
         t = rates.t
         check_increasing(t, "corrupt_rates")
+        temp = check_temp(temp, t)  # as corrupt_increments: one of length 1 had been broadcast to all
         omega_dot = (
             np.gradient(rates.omega_ib_b, t, axis=0) if len(t) > 1 else np.zeros_like(rates.omega_ib_b)
         )

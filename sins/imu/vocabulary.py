@@ -132,7 +132,9 @@ def parameter_field(shape: tuple[int, ...] = (3,), fill: float = 0.0, check: str
 
 
 def _as_parameter(x: Any, name: str, shape: tuple[int, ...], check: str) -> Array:
-    a = np.asarray(x, dtype=float)
+    # A copy, read-only: the caller's array had stayed the frozen effect's own, so a value changed after
+    # the check (b[0] = nan) changed the model.
+    a = np.array(x, dtype=float)
     if shape == (3,) and a.shape == ():
         a = np.full(3, float(a))
     if a.shape != shape or np.isnan(a).any() or (check != "positive" and not np.isfinite(a).all()):
@@ -143,6 +145,7 @@ def _as_parameter(x: Any, name: str, shape: tuple[int, ...], check: str) -> Arra
         raise ValueError(f"{name}: must be positive")
     if check == "nonneg" and (a < 0).any():
         raise ValueError(f"{name}: must be non-negative")
+    a.flags.writeable = False
     return a
 
 

@@ -450,10 +450,19 @@ class WaypointMotion:
             waypoint, down to height
         speeds : (m,) speed at each waypoint, m/s, > 0
         """
-        p = np.asarray(points_ned, dtype=float) - np.asarray(points_ned, dtype=float)[0]
+        p = np.asarray(points_ned, dtype=float)
         s = np.asarray(speeds, dtype=float)
+        # The scenario reader checks these for its files; called directly, a negative speed had run the
+        # path backwards, a repeated point given NaN, degrees for lat0 a path beyond the pole.
+        if p.ndim != 2 or p.shape[1] != 3 or len(p) < 2 or s.shape != (len(p),):
+            raise ValueError(f"waypoints: (m, 3) points, m >= 2, and m speeds, got {p.shape} and {s.shape}")
+        p = p - p[0]
         chord = np.diff(p, axis=0)
         dist = np.linalg.norm(chord, axis=1)
+        if not (np.isfinite(p).all() and np.isfinite(s).all() and (s > 0).all() and (dist > 0).all()):
+            raise ValueError("waypoints: finite points, each apart from the one before, and speeds > 0 m/s")
+        if not abs(lat0) <= 0.5 * np.pi:
+            raise ValueError(f"waypoints: lat0 is {lat0!r} rad, beyond ±π/2 (degrees given for radians?)")
         dt = dist / (0.5 * (s[:-1] + s[1:]))
         knots = t_start + np.concatenate([[0.0], np.cumsum(dt)])
         direction = np.empty_like(p)

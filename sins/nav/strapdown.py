@@ -71,6 +71,17 @@ class InitialState:
     v_n: Array
     q_nb: Array
 
+    def __post_init__(self) -> None:
+        # As motion.Start's: 45.0 given for 45° is 45 rad, beyond the pole, and had integrated without a
+        # word; a zero quaternion has no attitude (NaN through the run).
+        if not abs(self.lat) <= 0.5 * np.pi:
+            raise ValueError(
+                f"InitialState.lat is {self.lat!r} rad, beyond ±π/2 (degrees given for radians?)"
+            )
+        q = np.asarray(self.q_nb, dtype=float)
+        if q.shape != (4,) or not np.isfinite(q).all() or not np.linalg.norm(q) > 0.0:
+            raise ValueError(f"InitialState.q_nb must be 4 finite numbers, not all zero (x, y, z, w): {q!r}")
+
     @classmethod
     def from_series(cls, series: NavSeries, index: int = 0) -> InitialState:
         """The state at ``index`` of a series (typically a truth's first row)."""
@@ -515,7 +526,13 @@ def integrate_batch(
             f"dtheta_b and dv_b must both have shape (m, n, 3), got {dtheta_b.shape}, {dv_b.shape}"
         )
     streams, n, _ = dtheta_b.shape
-    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s, np.asarray(t))
+    t = np.asarray(t, dtype=float)
+    if t.shape != (n + 1,):  # the compiled kernel checks no bounds: a short t had been read past its end
+        raise ValueError(f"t must have shape ({n + 1},) for {n} increments, got {t.shape}")
+    check_increasing(t, "integrate_batch")  # as integrate's: a step back had integrated without a word
+    if streams == 0:  # m calls of integrate, m = 0
+        return []
+    mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, initial.h, vertical_tau_s, t)
     state = np.tile(start(initial), (streams, 1))
     lat = np.empty((streams, n + 1))
     lon = np.empty((streams, n + 1))
