@@ -330,3 +330,18 @@ def test_the_library_refuses_what_it_would_integrate_wrongly():
             WaypointMotion.from_waypoints(0.7, 0.1, 0.0, [[0, 0, 0], [100, 0, 0], [200, 0, 0]], speeds)
     with pytest.raises(ValueError, match="degrees given for radians"):
         WaypointMotion.from_waypoints(45.0, 0.1, 0.0, [[0, 0, 0], [100, 0, 0]], [10.0, 10.0])
+
+
+def test_chunks_that_do_not_follow_each_other_are_refused():
+    """``advance`` had integrated a chunk 1 s after the last one ended, or one back in time, as if it
+    followed (the walk's library user); chunks that follow still equal one call, to the bit."""
+    truth, imu = trajectory.generate(stationary(10.0, 20.0), 100.0)
+    init = strapdown.InitialState.from_series(truth)
+    state = strapdown.start(init)
+    _, state = strapdown.advance(state, imu.steps(0, 1000))
+    for a, b in ((1100, 1500), (500, 900)):
+        with pytest.raises(ValueError, match="not where the last ended"):
+            strapdown.advance(state, imu.steps(a, b))
+    second, state = strapdown.advance(state, imu.steps(1000))
+    whole = strapdown.integrate(imu, init)
+    assert second.lat[-1] == whole.lat[-1] and second.h[-1] == whole.h[-1]

@@ -98,7 +98,8 @@ class InitialState:
 _LAT, _LON, _H, _V, _Q = 0, 1, 2, 3, 6
 _LAT_P, _H_P, _V_P, _DT_P, _DTH_P, _DV_P, _STEPS, _COUNTDOWN = 10, 11, 12, 15, 16, 19, 22, 23
 _SIN_LAT, _COS_LAT = 24, 25
-STATE_SIZE = 26
+_T_END = 26  # the last time integrated to (NaN before the first chunk): the next chunk must start there
+STATE_SIZE = 27
 
 
 @numba.njit(cache=True, inline="always")
@@ -364,6 +365,7 @@ def start(initial: InitialState, every: int = 1) -> Array:
     q = np.asarray(initial.q_nb, dtype=float)
     state[_Q : _Q + 4] = q / np.linalg.norm(q)
     state[_COUNTDOWN] = every
+    state[_T_END] = np.nan
     return state
 
 
@@ -426,7 +428,7 @@ def advance(
 ) -> tuple[NavSeries, Array]:
     """Integrate one chunk of an IMU stream, continuing from ``state``.
 
-    Chunks must follow each other (each chunk's ``imu.t[0]`` is the previous
+    Chunks must follow each other, or ``ValueError`` (each chunk's ``imu.t[0]`` is the previous
     chunk's last time); the result is identical to integrating in one call.
 
     Parameters
@@ -446,6 +448,16 @@ def advance(
     n = len(imu.dtheta_b)
     mode, h_ref_arr, k1, k2 = _vertical_args(vertical, h_ref, n, float(state[_H]), vertical_tau_s, imu.t)
     state = np.array(state, dtype=float)
+    if len(state) != STATE_SIZE:
+        raise ValueError(f"state must have {STATE_SIZE} values (from start or advance), got {len(state)}")
+    end = state[_T_END]
+    if np.isfinite(end) and n and abs(float(imu.t[0]) - end) > 1e-9 * max(1.0, abs(end)):
+        # A gap or a step back between chunks had been integrated as if the chunks followed each other.
+        raise ValueError(
+            f"advance: the chunk starts at {float(imu.t[0])!r} s, not where the last ended ({end!r} s)"
+        )
+    if n:
+        state[_T_END] = float(imu.t[-1])
     first = int(state[_COUNTDOWN])
     m = 0 if n < first else 1 + (n - first) // every
     lat, lon, h, v, q = _alloc(m)
