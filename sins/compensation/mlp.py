@@ -214,7 +214,7 @@ class MLP(Strategy):
             else:
                 held[int(len(data) * (1 - self.validation)) :] = True
             val_mask = torch.from_numpy(held[rows])
-            with _one_thread():  # see _one_thread; 2 threads took 25x the CPU time on a busy machine
+            with one_thread():  # see one_thread; 2 threads took 25x the CPU time on a busy machine
                 self.epochs_, self.final_error_ = self._train_modern(net, xs, ys, val_mask)
         self.weights_ = [p.detach().numpy().copy() for p in net.parameters()]
         self._net = net
@@ -475,7 +475,7 @@ class ResidualMLP(ResidualStrategy):
         :data:`CHECKPOINTS`); training goes on from where the last length left it."""
         import torch
 
-        with _one_thread():
+        with one_thread():
             with seeded(seed):
                 net = _tanh_network(points.x.shape[1], tuple(config["hidden"]))
             x = torch.from_numpy(points.x)
@@ -562,7 +562,7 @@ _threads_before = 0
 
 
 @contextmanager
-def _one_thread() -> Iterator[None]:
+def one_thread() -> Iterator[None]:
     """Torch on one thread for the while: the residual networks are small (a thread is as fast), and a
     sum split over threads rounds differently, which L-BFGS's line search turns into another solution:
     the same fit gave 486 m and 614 m of drift on the quality suite on one and two threads. Nested and
@@ -680,5 +680,6 @@ __all__ = [
     "MODES",
     "ResidualMLP",
     "check_hidden",
+    "one_thread",
     "seeded",
 ]

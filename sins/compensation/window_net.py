@@ -127,7 +127,7 @@ class WindowNet(GyroWindow):
         """
         from concurrent.futures import ThreadPoolExecutor
 
-        from sins.compensation.mlp import _one_thread
+        from sins.compensation.mlp import one_thread
 
         sets = [self._examples(p) for p in parts]
         if sum(len(y) for _, y in sets) < 50:
@@ -135,7 +135,7 @@ class WindowNet(GyroWindow):
         folds = _folds(len(sets))
         total = (len(folds) + 1) * self.ensemble
         self._done = 0
-        with _one_thread(), ThreadPoolExecutor(2) as pool:
+        with one_thread(), ThreadPoolExecutor(2) as pool:
             trained = list(pool.map(lambda held: self._train([s for i, s in enumerate(sets) if i not in held],
                                                              total=total), folds))  # fmt: skip
         if recordings is not None:
@@ -152,7 +152,7 @@ class WindowNet(GyroWindow):
             self.held_back_gain_ > self.guard_z * self.held_back_gain_se_ if self.guard else np.ones(3, bool)
         )
         self.axes_ = keep.astype(float)
-        with _one_thread():
+        with one_thread():
             self.networks_ = self._train(sets, total=total) if keep.any() else []
         return self
 
