@@ -24,7 +24,8 @@ from scipy.spatial.transform import Rotation
 
 from sins import compensation, io
 from sins.cli import main
-from sins.compensation import interval_fit, referenced, several, unit_bias
+from sins.compensation import evaluation, interval_fit, referenced, several, unit_bias
+from sins.compensation.evaluation import Evaluation
 from sins.compensation.kohonen import LocalLinearMap
 from sins.compensation.regression import Regression
 from sins.core.series import ImuIncrements, ImuRates
@@ -512,6 +513,15 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert "the model was fitted on 1 of the 2 recordings judged (unit/r0)" in capsys.readouterr().out
     for key in ("open_loop_attitude", "open_loop_attitude_raw"):
         assert both["mean"][key]["aoe_deg"] == np.mean([d[key]["aoe_deg"] for d in singles.values()])
+    # Each recording the correction left worse than its raw readings is named (a mean had hidden them).
+    figures = {"a": (10.0, 2.0), "b": (1.0, 1.5), "c": (4.0, 4.0)}  # raw, corrected
+    judged = {
+        n: Evaluation([], {"open_loop_attitude_raw": {"aoe_deg": r}, "open_loop_attitude": {"aoe_deg": c}})
+        for n, (r, c) in figures.items()
+    }
+    said = evaluation.across(judged, "m")
+    assert said.document["worse_than_raw"] == ["b"] and both["worse_than_raw"] == []
+    assert said.lines[-1] == "worse than the raw readings on 1 of the 3: b (+0.5°)"
     # A file and a dataset mixed: the same readings, the same figures.
     mixed = ["evaluate", str(model), str(tmp_path / "unit" / "r2.npz"), "--dataset", "unit/r0"]
     assert main([*mixed, "--json", str(tmp_path / "mixed.json")]) == 0

@@ -264,7 +264,10 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     rest, own, _ = _rest_prior(rule, imu)
     head = f"a new recording's gyro bias (rule {rule.mode}): "
     if not rest:
-        return head + "it opens moving, so its prior is the training recordings' mean"
+        return head + (
+            "it opens moving, so its prior is the training recordings' mean bias as far as they "
+            "determine it (none on an axis where they cannot tell it from zero: shrunk)"
+        )
     rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
     head += f"{rest_s}'s mean rate so far while it rests; "
     if rule.mode.startswith("rest"):
