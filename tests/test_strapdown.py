@@ -345,3 +345,21 @@ def test_chunks_that_do_not_follow_each_other_are_refused():
     second, state = strapdown.advance(state, imu.steps(1000))
     whole = strapdown.integrate(imu, init)
     assert second.lat[-1] == whole.lat[-1] and second.h[-1] == whole.h[-1]
+
+
+def test_a_series_holds_unit_quaternions_and_its_own_rows():
+    """Twice a unit quaternion had been taken as given (its Euler angles 0.86 rad off); one a printed
+    reference rounds (1e-6 off) is taken, and so is one within 1e-3 (``QUAT_NORM_TOL``), beyond which
+    it is refused. ``at`` past the end had given an empty series."""
+    truth, _ = trajectory.generate(stationary(10.0, 1.0), 10.0)
+    for scale, ok in ((1 + 1e-6, True), (1.0005, True), (1.002, False), (2.0, False)):
+        q = truth.q_nb.copy()
+        q[3] *= scale
+        if ok:
+            dataclasses.replace(truth, q_nb=q)
+        else:
+            with pytest.raises(ValueError, match=r"q_nb: row 3 has norm .*, not 1"):
+                dataclasses.replace(truth, q_nb=q)
+    assert len(truth.at(-1)) == 1
+    with pytest.raises(IndexError, match=f"the series has {len(truth)} rows"):
+        truth.at(len(truth))

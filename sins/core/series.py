@@ -53,6 +53,11 @@ def check_increasing(t: Array, what: str) -> None:
                          f"{float(t[k]):.9g} s, then {float(t[k + 1]):.9g} s)")  # fmt: skip
 
 
+#: How far from 1 a :class:`NavSeries` quaternion's norm may lie: a thousand times what a reference printed
+#: to six or seven digits, or read as single precision, is off by.
+QUAT_NORM_TOL = 1e-3
+
+
 @dataclass(frozen=True)
 class NavSeries:
     """Navigation states at ``n`` times.
@@ -77,6 +82,13 @@ class NavSeries:
         n = len(self.t)
         _check_shapes("NavSeries", n, t=(self.t, (n,)), lat=(self.lat, (n,)), lon=(self.lon, (n,)),
                       h=(self.h, (n,)), v_n=(self.v_n, (n, 3)), q_nb=(self.q_nb, (n, 4)))  # fmt: skip
+        # Unit quaternions, to within what a printed or single-precision one keeps (1e-6): twice one had
+        # been taken as given, its Euler angles off by 0.86 rad; 1.001 times one made 0.12° of error.
+        off = np.abs(np.einsum("ij,ij->i", self.q_nb, self.q_nb) - 1.0) > 2 * QUAT_NORM_TOL
+        if off.any():
+            k = int(np.argmax(off))
+            norm = float(np.linalg.norm(self.q_nb[k]))
+            raise ValueError(f"NavSeries.q_nb: row {k} has norm {norm:.9g}, not 1 (a unit quaternion each)")
 
     def __len__(self) -> int:
         return len(self.t)
@@ -88,6 +100,8 @@ class NavSeries:
     def at(self, index: int | slice | NDArray[np.integer]) -> NavSeries:
         """The states at ``index`` (an int keeps a length-1 series)."""
         if isinstance(index, int | np.integer):
+            if not -len(self.t) <= index < len(self.t):  # a row past the end had given an empty series
+                raise IndexError(f"NavSeries.at({index}): the series has {len(self.t)} rows")
             index = slice(index, index + 1 if index != -1 else None)
         return NavSeries(
             t=self.t[index],
@@ -477,6 +491,7 @@ class ReferencedRecording:
 
 
 __all__ = [
+    "QUAT_NORM_TOL",
     "STEADY_FORCE",
     "STEADY_RATE",
     "STRETCH_LONGEST_S",
