@@ -61,6 +61,7 @@ from sins.core import earth, rotation
 from sins.core.series import CalibrationData
 from sins.errors import MissingInputError, SinsInputError
 from sins.imu import CHANNELS, DEG_PER_H, UG
+from sins.io.inspection import GRAVITY_OFF
 from sins.io.recording import Recording
 
 Array = NDArray[np.float64]
@@ -379,13 +380,10 @@ def _channels(result: dict[str, ChannelResult], mean: Array, sigma: Array, white
     return out
 
 
-#: A rest's specific force further than this share from normal gravity is no accelerometer's bias nor
-#: scale error (``sins inspect``'s bound between those and a unit mistaken): the readings' unit is wrong.
-GRAVITY_OFF = 0.15
-
-
 def _check_gravity(force: Array, lat: float, h: float, source: str) -> None:
-    """Refuse a rest whose mean specific force (rows, 3; m/s²) is no gravity a unit reads: readings in g
+    """Refuse a rest whose mean specific force (rows, 3; m/s²) lies beyond ``sins inspect``'s bound
+    (:data:`sins.io.inspection.GRAVITY_OFF`) from normal gravity, where no bias or scale error explains
+    it but a unit mistaken does: readings in g
     read as m/s² had given an accelerometer bias of 0.9 g and an alignment that fell 1.9e6 m."""
     rho = float(np.linalg.norm(force.mean(axis=0))) / float(earth.normal_gravity(lat, h))
     if abs(rho - 1.0) > GRAVITY_OFF:
@@ -663,7 +661,6 @@ def alignment_accuracy(
 __all__ = [
     "BLOCKS",
     "DISPLAY",
-    "GRAVITY_OFF",
     "LEVEL_RATE_TOL",
     "MAX_GYROCOMPASS_LAT",
     "BiasEstimate",

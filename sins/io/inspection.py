@@ -44,6 +44,9 @@ GRAVITY = 9.806
 #: Gravity's size at rest counts as right within this fraction (latitude ±0.27 %, a consumer unit's
 #: 13 mg bias 1.3 %).
 GRAVITY_TOL = 0.015
+#: Beyond this fraction of gravity at rest no accelerometer bias or scale error explains the size: the
+#: readings' unit or form is wrong (``sins bias`` and ``sins integrate --align`` refuse such a rest).
+GRAVITY_OFF = 0.15
 #: A unit's factor is named when the size at rest is within this fraction of what it gives.
 UNIT_TOL = 0.05
 #: The fastest rate any IMU measures (4000 °/s), rad/s.
@@ -410,7 +413,7 @@ def _gravity_findings(rec: Recording, rest: Rest, med: float) -> list[Finding]:
     if unit is not None:
         return [Finding(f"{key}_unit", f"{seen}: the {key} readings are in {unit}",
                         option="units", value=_units_with(rec, **{key: unit}))]  # fmt: skip
-    if abs(rho - 1.0) < 0.15:
+    if abs(rho - 1.0) < GRAVITY_OFF:
         off = 100 * (rho - 1.0)
         if rec.form == "increment":
             what = (f"{seen} (dv over the stamped intervals): the intervals are {off:+.1f} % off their "
@@ -512,6 +515,7 @@ def _clip_finding(c: Clipping) -> Finding:
 __all__ = [
     "FULL_SCALES",
     "GRAVITY",
+    "GRAVITY_OFF",
     "GRAVITY_TOL",
     "JITTER_TOL",
     "MAX_GYRO_RADPS",
