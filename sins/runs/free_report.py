@@ -13,6 +13,7 @@ import numpy as np
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.errors import MissingInputError, SinsInputError
+from sins.io.inspection import PLAUSIBLE_HZ
 from sins.nav.vertical import VerticalMode
 from sins.runs.replay import FreeStart, still_drift
 
@@ -51,10 +52,6 @@ def increments(rec: Recording) -> ImuIncrements:
     return rec.imu
 
 
-#: Below this rate (Hz) the stamps are likely in another unit than read (``sins inspect``'s bound).
-SLOW_HZ = 10.0
-
-
 def check_solution(sol: NavSeries, where: str, vertical: str) -> None:
     """Refuse a navigation whose position came out non-finite, saying what likely took it there: a free
     vertical channel diverges (e-folding in about 9.5 min near the ground) and over hours leaves floating
@@ -67,7 +64,7 @@ def check_solution(sol: NavSeries, where: str, vertical: str) -> None:
         hours = f"{span_s / 3600:.3g} h"
         why.append(f"a free vertical channel, which diverges over {hours} (--vertical hold or damp)")
     rate_hz = (len(sol.t) - 1) / span_s if span_s > 0 else math.inf
-    if rate_hz < SLOW_HZ:
+    if rate_hz < PLAUSIBLE_HZ[0]:  # no IMU's rate (sins inspect's bound): stamps in another unit
         why.append(f"times in another unit (the readings come at {rate_hz:.3g} Hz)")
     raise SinsInputError(
         f"{where}: the position came out non-finite after {span_s:.6g} s; likely causes: "
@@ -196,7 +193,6 @@ def _noise_accuracy(start: FreeStart) -> tuple[float, float]:
 
 
 __all__ = [
-    "SLOW_HZ",
     "FreeReport",
     "check_solution",
     "expected_growth",

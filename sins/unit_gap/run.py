@@ -176,8 +176,9 @@ def shrinks(
             continue
         try:
             figures = shrink.shrink(
-                a.referenced, b.referenced, results[i].report.diagnosis, interval_s or INTERVAL_S
-            )
+                a.referenced, b.referenced, results[i].report.diagnosis,
+                INTERVAL_S if interval_s is None else interval_s,
+            )  # fmt: skip
         except (SinsInputError, ValueError) as exc:
             figures = {"verdict": f"not judged: {exc}"}
         out.append({**figures, "fitted_on": a.name, "judged_on": b.name})
