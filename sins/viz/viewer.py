@@ -329,7 +329,7 @@ def _write(
     path = check_rrd_path(path)
     stream = rec.binary_stream()
     rec.send_blueprint(bp, make_active=False, make_default=True)
-    rec.send_recording_name(name)  # after the blueprint: before it, the viewer had not applied it
+    rec.send_recording_name(name)  # once the blueprint is sent, as spawn and serve send it
     log()
     data = stream.read(flush=True) or b""
     rec.disconnect()
