@@ -119,6 +119,9 @@ def check_viewer_args(args: argparse.Namespace) -> None:
         viz.check_rrd_path(args.rerun, "--rerun")  # its suffix; the place is check_outputs's
 
 
+WEB_PORT, DATA_PORT = 9090, 9876  # --serve's: the web viewer's (--web-port's default), the data's
+
+
 def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
     """Hand the run to Rerun as the flags ask: save, spawn the native viewer, serve the web viewer."""
     if not (args.rerun or args.spawn or args.serve):
@@ -132,7 +135,8 @@ def show(args: argparse.Namespace, result: ScenarioRun, summary: str) -> None:
         viz.spawn(result, summary=summary)
     if args.serve:
         try:
-            address = viz.serve(result, summary=summary, web_port=args.web_port or 9090)
+            web = args.web_port or WEB_PORT
+            address = viz.serve(result, summary=summary, web_port=web, grpc_port=DATA_PORT)
         except SinsInputError as exc:
             raise SinsInputError(f"--serve: {exc}") from None
         from sins.core import deferred
@@ -223,9 +227,11 @@ def save_plot(path: Path, figure: Callable[[], Any], title: str) -> None:
 
 
 __all__ = [
+    "DATA_PORT",
     "HOUR_S",
     "MIN_RATE_S",
     "NO_DISPLAY",
+    "WEB_PORT",
     "Subparsers",
     "check_finite",
     "check_outputs",

@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sins.cli.common import (
+    DATA_PORT,
+    WEB_PORT,
     Subparsers,
     check_finite,
     check_outputs,
@@ -31,7 +33,7 @@ if TYPE_CHECKING:
 def _cmd_run(args: argparse.Namespace) -> int:
     check_viewer_args(args)  # before the imports below: --spawn without a display is refused at once
     if args.serve:
-        _check_ports(args.web_port or 9090, 9876)
+        _check_ports(args.web_port or WEB_PORT, DATA_PORT)
     check_plot(args)
     from sins import io, scenario
     from sins.runs import pipeline
@@ -224,7 +226,9 @@ def add(sub: Subparsers) -> None:
         "--serve", action="store_true",
         help="serve the run to the Rerun web viewer (prints the address; Ctrl-C stops)",
     )  # fmt: skip
-    p.add_argument("--web-port", type=_port, metavar="N", help="port of --serve's web viewer (default 9090)")
+    p.add_argument(
+        "--web-port", type=_port, metavar="N", help=f"port of --serve's web viewer (default {WEB_PORT})"
+    )
     add_plot(p, "the errors against time, per strategy")
     p.set_defaults(func=_cmd_run)
 

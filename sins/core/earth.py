@@ -48,6 +48,13 @@ _SOMIGLIANA_K = (B * GAMMA_P) / (A * GAMMA_E) - 1.0
 _M = OMEGA_IE**2 * A**2 * B / GM
 
 
+def check_latitude(lat: float, what: str) -> None:
+    """Refuse a latitude beyond ±π/2 rad (NaN too): 45.0 given for 45° is 45 rad, beyond the pole, which
+    a trajectory or an integration then ran on. ``ValueError`` naming ``what`` (``Start.lat``)."""
+    if not abs(lat) <= 0.5 * np.pi:
+        raise ValueError(f"{what} is {lat!r} rad, beyond ±π/2 (degrees given for radians?)")
+
+
 def radii(lat: Floats) -> tuple[Floats, Floats]:
     """Meridian and prime-vertical radii of curvature ``(R_M, R_N)`` in metres."""
     r_m, r_n, _ = radii_and_gravity_from_sin2(np.sin(lat) ** 2, 0.0)
@@ -147,6 +154,7 @@ __all__ = [
     "A",
     "B",
     "F",
+    "check_latitude",
     "earth_rate_n",
     "lla_to_ecef",
     "local_ned",

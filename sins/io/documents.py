@@ -172,7 +172,7 @@ def _path(path: str | os.PathLike[str], what: str) -> Path:
     return Path(text)
 
 
-def _a(noun: str) -> str:
+def with_article(noun: str) -> str:
     """``noun`` with its article: "an IMU file", "a rig file"."""
     return f"{'an' if noun[:1] in 'AEIOUaeiou' else 'a'} {noun}"
 
@@ -183,10 +183,12 @@ def _read_bytes(path: Path, noun: str) -> bytes:
     try:
         info = path.stat()
         if stat.S_ISDIR(info.st_mode):
-            raise SinsInputError(f"{path}: is a directory, expected {_a(noun)}")
+            raise SinsInputError(f"{path}: is a directory, expected {with_article(noun)}")
         check_input(path)  # a FIFO or a device, refused before it is opened
         if info.st_size > MAX_BYTES:
-            raise SinsInputError(f"{path}: {info.st_size} bytes, more than {_a(noun)} may hold ({MAX_BYTES})")
+            raise SinsInputError(
+                f"{path}: {info.st_size} bytes, more than {with_article(noun)} may hold ({MAX_BYTES})"
+            )
         return path.read_bytes()
     except FileNotFoundError:
         raise SinsInputError(f"{path}: no such {noun}") from None
@@ -231,4 +233,5 @@ __all__ = [
     "read_json",
     "read_toml",
     "short",
+    "with_article",
 ]

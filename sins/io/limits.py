@@ -78,7 +78,7 @@ def check_disk(outputs: dict[Path, float], source: str | os.PathLike[str]) -> No
     by_folder: dict[Path, list[Path]] = {}
     for path in outputs:
         real = Path(os.path.realpath(path))  # a link's target is what is written (sins.io.atomic)
-        with contextlib.suppress(OSError):
+        with contextlib.suppress(OSError):  # paths.writes_in_place's test: paths imports this module
             if stat.S_ISCHR(real.stat().st_mode):  # /dev/null takes no room: /dev's is not the question
                 continue
         by_folder.setdefault(real.parent, []).append(Path(path))

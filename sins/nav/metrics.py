@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import earth
+from sins.core.rotation import GIMBAL_LOCK
 from sins.core.series import NavSeries
 
 Array = NDArray[np.float64]
@@ -156,7 +157,7 @@ def _euler(x: float, y: float, z: float, w: float) -> tuple[float, float, float]
     c00, c10 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z)
     c20, c21, c22 = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
     pitch = np.arctan2(-c20, np.sqrt(c00 * c00 + c10 * c10))
-    if c21 * c21 + c22 * c22 < 1e-16:  # gimbal lock (rotation.GIMBAL_LOCK): roll 0, yaw takes the rest
+    if c21 * c21 + c22 * c22 < GIMBAL_LOCK * GIMBAL_LOCK:  # gimbal lock: roll 0, yaw takes the rest
         return 0.0, pitch, np.arctan2(-2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))
     return np.arctan2(c21, c22), pitch, np.arctan2(c10, c00)
 

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.core import rotation
-from sins.core.earth import E2, G0, radii
+from sins.core.earth import E2, G0, check_latitude, radii
 from sins.nav.pulses import Channel
 
 if TYPE_CHECKING:
@@ -112,9 +112,7 @@ class Start:
     yaw: float = 0.0
 
     def __post_init__(self) -> None:
-        # Radians: 45.0 given for 45° is 45 rad, a latitude beyond the pole that a trajectory then ran on.
-        if not abs(self.lat) <= 0.5 * np.pi:
-            raise ValueError(f"Start.lat is {self.lat!r} rad, beyond ±π/2 (degrees given for radians?)")
+        check_latitude(self.lat, "Start.lat")
         for name in ("lon", "h", "speed", "roll", "pitch", "yaw"):
             if not np.isfinite(getattr(self, name)):
                 raise ValueError(f"Start.{name} is {getattr(self, name)!r}, not finite")
@@ -461,8 +459,7 @@ class WaypointMotion:
         dist = np.linalg.norm(chord, axis=1)
         if not (np.isfinite(p).all() and np.isfinite(s).all() and (s > 0).all() and (dist > 0).all()):
             raise ValueError("waypoints: finite points, each apart from the one before, and speeds > 0 m/s")
-        if not abs(lat0) <= 0.5 * np.pi:
-            raise ValueError(f"waypoints: lat0 is {lat0!r} rad, beyond ±π/2 (degrees given for radians?)")
+        check_latitude(lat0, "waypoints: lat0")
         dt = dist / (0.5 * (s[:-1] + s[1:]))
         knots = t_start + np.concatenate([[0.0], np.cumsum(dt)])
         direction = np.empty_like(p)

@@ -72,12 +72,9 @@ class InitialState:
     q_nb: Array
 
     def __post_init__(self) -> None:
-        # As motion.Start's: 45.0 given for 45° is 45 rad, beyond the pole, and had integrated without a
-        # word; a zero quaternion has no attitude (NaN through the run).
-        if not abs(self.lat) <= 0.5 * np.pi:
-            raise ValueError(
-                f"InitialState.lat is {self.lat!r} rad, beyond ±π/2 (degrees given for radians?)"
-            )
+        # As motion.Start's: degrees for the latitude had integrated without a word; a zero quaternion has
+        # no attitude (NaN through the run).
+        earth.check_latitude(self.lat, "InitialState.lat")
         q = np.asarray(self.q_nb, dtype=float)
         if q.shape != (4,) or not np.isfinite(q).all() or not np.linalg.norm(q) > 0.0:
             raise ValueError(f"InitialState.q_nb must be 4 finite numbers, not all zero (x, y, z, w): {q!r}")

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Literal
 
 from sins.errors import SinsInputError
+from sins.io.documents import with_article
 from sins.scenario.toml import TomlKeys
 
 #: A kind of preset: scenarios (``""``, the folder's top level), rig procedures, IMU models or campaigns.
@@ -81,8 +82,7 @@ def preset_or_path(keys: TomlKeys, key: str, kind: PresetKind, base: Path) -> Pa
         raise keys.error(f"no such file or {kind or 'scenario'} preset: {value!r}", key)
     if path.is_dir() or not path.exists():  # said with the file and key that name it, not the path alone
         why = "is a folder" if path.is_dir() else f"no such file (in {path.parent})"
-        article = "an" if kind == "imu" else "a"
-        raise keys.error(f"{value!r} {why}, expected {article} {_WHAT[kind]} file or preset", key)
+        raise keys.error(f"{value!r} {why}, expected {with_article(_WHAT[kind])} file or preset", key)
     return path
 
 
