@@ -62,8 +62,10 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     )
     dropped = f"; the readings only, not {left} (judge the model on the original)" if left else ""
     print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}{dropped}")
-    if strategy.leaves_gyro_as_read():
-        print("its gyro as read: the model's fit found every bias rule worse than the raw readings held back")
+    if strategy.leaves_gyro_as_read(_readings(rec)[0]):
+        print(
+            "its gyro as read: the model's fit found the bias rules for it worse than raw readings held back"
+        )
     return 0
 
 
@@ -72,9 +74,9 @@ def _corrected(
 ) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
     """The readings corrected in the form sins holds them in, and the temperature column to keep (the
     model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
-    from sins.compensation import referenced
+    from sins.compensation import fitted_on
 
-    referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit)
+    fitted_on.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit)
     imu, temp, rows_temp = _readings(rec)
     try:
         out = strategy.correct_recording(imu, temp)  # a model fitted on several: its bias rule too

@@ -39,7 +39,7 @@ _EVALUATE_RAW = "judging a model on them applies a correction twice, and calls t
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from sins import compensation, io
-    from sins.compensation import referenced
+    from sins.compensation import fitted_on
 
     check_plot(args)
     if args.rerun:
@@ -58,7 +58,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     where = dataset or str(recording)
     with progress_bar(f"reading {where}", ""):  # a dataset or a long bag takes seconds
         rec = read_recording(args, recording, dataset, args.truth, raw=_EVALUATE_RAW)
-    referenced.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
+    fitted_on.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit_of(rec))
     if rec.rig is None and not rec.has_trajectory:
         missing = io.recording.missing_reference(rec)
         if missing.needs == "truth_topic":  # a bag with several pose topics: name one
@@ -84,7 +84,7 @@ def _evaluate_several(
     one's AOE and the mean. Every recording is read and checked before any is judged: a bad one is
     refused before minutes of work."""
     from sins import io
-    from sins.compensation import evaluation, referenced
+    from sins.compensation import evaluation, fitted_on
 
     one_only = {"--truth": args.truth, "--plot": args.plot, "--rerun": args.rerun, "--drive": args.drive}
     given = [flag for flag, value in one_only.items() if value]
@@ -95,7 +95,7 @@ def _evaluate_several(
     for name, path, dataset in inputs:
         with progress_bar(f"reading {name}", ""):
             rec = read_recording(args, path, dataset, raw=_EVALUATE_RAW)
-        referenced.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))
+        fitted_on.check_fitted_on(strategy, rec, f"{args.model} on {name}", sensor=unit_of(rec))
         if not rec.has_trajectory:
             raise SinsInputError(
                 f"{name}: several recordings are judged open loop against their trajectories, and this one "

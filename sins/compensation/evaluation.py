@@ -46,8 +46,8 @@ PART_FITTED_HERE = (
 )
 #: What ``sins evaluate`` says of a model that leaves the gyro as read (its bias rule ``readings``).
 GYRO_AS_READ = (
-    "the model leaves the gyro as read (its fit found every bias rule worse than the raw readings on a "
-    "held-back recording): its open loop is the raw one"
+    "the model leaves the gyro as read (its fit found the bias rules for this recording, or for every one, "
+    "worse than the raw readings on a held-back recording): its open loop is the raw one"
 )
 
 
@@ -81,7 +81,7 @@ def evaluate_rig(
         naming ``where``: a ``last`` the phases cannot be split at.
     """
     from sins.compensation.base import residual_rms
-    from sins.compensation.referenced import marks_of, readings_of
+    from sins.compensation.fitted_on import marks_of, readings_of
     from sins.imu import display_unit
 
     fitted_here, share = _in_fit(strategy, readings_of(data), marks_of(data))
@@ -132,9 +132,9 @@ def evaluate_referenced(
     against the reference; over the ``last`` fraction of the recording or all of it; with ``drive``
     (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
     ``stage(text)`` is told each open loop as it starts."""
-    from sins.compensation import referenced
+    from sins.compensation import fitted_on, referenced
 
-    fitted_here, share = _in_fit(strategy, referenced.readings_of(rec), referenced.marks_of(rec))
+    fitted_here, share = _in_fit(strategy, fitted_on.readings_of(rec), fitted_on.marks_of(rec))
     if last:
         span = rec.imu.t[-1] - rec.imu.t[0]
         rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
@@ -166,7 +166,7 @@ def evaluate_referenced(
     if unit and not rec.sensor:  # a unit's check needs the recording to name one (a path's may not)
         lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
     lines += _fitted_lines(fitted_here, share)
-    as_read = strategy.leaves_gyro_as_read()
+    as_read = strategy.leaves_gyro_as_read(rec.imu)
     if as_read:
         lines.append(GYRO_AS_READ)
     elif said := _prior_said(strategy, rec):

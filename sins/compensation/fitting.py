@@ -84,7 +84,7 @@ def fit_rig(
     back), its seed model's coefficients reviewed against a ``grade`` unit's before the model is written.
     ``where`` names the recording in messages, ``sensor`` the unit in the model file."""
     from sins import compensation
-    from sins.compensation import referenced
+    from sins.compensation import fitted_on
     from sins.compensation.mlp import MLP
     from sins.compensation.regression import Regression
     from sins.compensation.residual import ResidualStrategy
@@ -119,7 +119,7 @@ def fit_rig(
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
-        "readings": [referenced.readings_of(data)], "marks": [referenced.marks_of(data)],
+        "readings": [fitted_on.readings_of(data)], "marks": [fitted_on.marks_of(data)],
         "held_back": validation or 0.0,
     }  # fmt: skip
     return FitOutcome(strategy, lines, document)
@@ -447,6 +447,7 @@ def _several_document(
             else f" (not chosen on held-back recordings: that takes three or more, here {len(names)})"
         )  # fmt: skip
         lines.append(_rule_line(rule, names, judged))
+        lines += _moving_line(rule)
         document["bias_rule"] = rule.to_dict()
     return document
 
@@ -474,10 +475,23 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
     return out
 
 
+def _moving_line(rule: BiasRule) -> list[str]:
+    """What ``sins fit`` says a recording that opens moving takes, where the rule reads an opening rest
+    and chose it on held-back recordings (``BiasRule.moving_mode``)."""
+    from sins.compensation.unit_bias import READINGS, REST_FREE
+
+    if not rule.moving_mode:
+        return []
+    held = ", ".join(f"{m} {rule.held_back_deg[m]:.2f}°" for m in REST_FREE if m in rule.held_back_deg)
+    took = "its gyro left as read" if rule.moving_mode == READINGS else rule.moving_mode
+    return [f"a new recording that opens moving (no rest to read): {took} (held back, mean: {held})"]
+
+
 def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:
     """What ``sins fit`` says of a new recording's bias: the rule's mode, or, where the model leaves the
     gyro as read, the held-back recordings the best rule left worse than their raw readings."""
-    from sins.compensation.unit_bias import MODES, READINGS, behind_by, kept_modes
+    from sins.compensation.rule_choice import behind_by, kept_modes
+    from sins.compensation.unit_bias import MODES, READINGS
 
     each, means = rule.held_back_each_deg, rule.held_back_deg
     if rule.mode != READINGS:

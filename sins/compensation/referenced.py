@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from sins import compensation
 from sins.compensation import Strategy, identifiability, interval_fit, screening
+from sins.compensation.fitted_on import fitted_on, marks_of, readings_of
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.compensation.regression import Regression
@@ -29,7 +30,7 @@ from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError, naming
-from sins.io.recording import Recording, beside_trajectory
+from sins.io.recording import beside_trajectory
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
 from sins.nav.metrics import nav_errors
@@ -302,16 +303,18 @@ def choose_rule(
     mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the seed
     model and the rule made from the others) by ``unit_bias.chosen_mode``: the simplest within one standard
     error of the best of those no worse than the readings on any, else ``READINGS`` (the gyro as read)."""
-    from sins.compensation import interval_fit, several, unit_bias
+    from sins.compensation import interval_fit, rule_choice, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
     left = np.array([interval_fit.fit_biases(_with_imu(rec, s), interval_s=interval_s).seed.B0
                      for rec, s in zip(recs, streams, strict=True)])  # fmt: skip
     held: dict[str, float] = {}
     each: dict[str, list[float]] = {}
+    moving = ""  # a mode given, or too few recordings to judge one: the mode's own fallback
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
         raw: list[float] = []
+        opens_moving: list[bool] = []
         biases_alone = getattr(strategy, "variant", None) == BIAS_ONLY  # its own correction, held back too
         for k, rec in enumerate(recs):
             if stage is not None:
@@ -328,18 +331,24 @@ def choose_rule(
             rel = part.gyro_bias - part.gyro_bias.mean(axis=0)
             base = unit_bias.rule_from(rel, own, model_bias=seed.B0_, accel_biases=part.accel_bias)
             stream = seed.correct_increments(rec.imu)
+            opens_moving.append(unit_bias.opens_moving(stream))
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
                 scores[m].append(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
+        # What a recording that opens moving takes, judged on the held-back recordings (all of them: the
+        # modes it chooses among read no rest), and the rest-reading modes judged by it where they open so.
+        moving = rule_choice.moving_mode(scores, raw)
+        scores = rule_choice.rescored(scores, raw, opens_moving, moving)
         held = {m: float(np.mean(v)) for m, v in scores.items()}
-        mode = unit_bias.chosen_mode(scores, raw)
+        mode = rule_choice.chosen_mode(scores, raw)
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
-    return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
+    rule = unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
                                accel_biases=fit_all.accel_bias, held_back_deg=held,
                                held_back_each_deg=each)  # fmt: skip
+    return replace(rule, moving_mode=moving) if rule.mode in unit_bias.FROM_REST else rule
 
 
 def _biases_only(seed: Any) -> Any:
@@ -378,35 +387,6 @@ def _joined(parts: list[CalibrationData]) -> CalibrationData:
 
 def _with_imu(rec: ReferencedRecording, imu: ImuIncrements) -> ReferencedRecording:
     return replace(rec, imu=imu)
-
-
-def fitted_on(rec: ReferencedRecording) -> dict[str, Any]:
-    """What a model file records of the recording it was fitted on: the unit, its rate, the reference,
-    the file's axes the readings were read on (where said), and the readings' digest
-    (:func:`readings_of`)."""
-    said = {"frame": rec.frame} if rec.frame else {}
-    return {"sensor": rec.sensor, "rate_hz": rec.rate_hz, "reference": rec.reference_name, **said,
-            "readings": [readings_of(rec)], "marks": [marks_of(rec)]}  # fmt: skip
-
-
-def readings_of(rec: ReferencedRecording | CalibrationData) -> str:
-    """The digest of the readings a fit takes (:func:`sins.io.provenance.readings_digest`): a recording's
-    increments, a rig's rates and forces."""
-    from sins.io.provenance import readings_digest
-
-    if isinstance(rec, CalibrationData):
-        return readings_digest(rec.t, rec.gyro, rec.accel)
-    return readings_digest(rec.imu.t, rec.imu.dtheta_b, rec.imu.dv_b)
-
-
-def marks_of(rec: ReferencedRecording | CalibrationData) -> list[str]:
-    """The marks of the readings a fit takes (:func:`sins.io.provenance.readings_marks`), by which a part
-    cut from them is known: a rig's rates and forces, a recording's increments."""
-    from sins.io.provenance import readings_marks
-
-    if isinstance(rec, CalibrationData):
-        return readings_marks(rec.gyro, rec.accel)
-    return readings_marks(rec.imu.dtheta_b, rec.imu.dv_b)
 
 
 def _bias_only(rec: ReferencedRecording, interval_s: float, grade: str) -> Fitted:
@@ -635,46 +615,6 @@ def from_recording(imu: ImuRates | ImuIncrements, truth: NavSeries, source: str)
     return beside_trajectory(imu, truth, source)
 
 
-def check_fitted_on(
-    strategy: Strategy,
-    rec: ReferencedRecording | CalibrationData | Recording,
-    where: str,
-    sensor: str | None = None,
-) -> None:
-    """Refuse a model fitted on another unit (both named: ``sensor``, else the recording's own), on
-    readings read on other axes (``--frame``: its matrices are in the axes it was fitted on; both
-    said) or, when it reads the sensors at time offsets or tracks rests (both set in samples' terms), at
-    another rate (more than 5 % apart).
-
-    Raises
-    ------
-    SinsInputError
-        naming both units, both axes or both rates.
-    """
-    fitted = getattr(strategy, "fitted_on_", None)
-    if not isinstance(fitted, dict):
-        return
-    sensor = getattr(rec, "sensor", "") if sensor is None else sensor
-    if fitted.get("sensor") and sensor and fitted["sensor"] != sensor:
-        folder = " (a data root's FOLDER/NAME takes its folder for its unit)" if f"{sensor}/" in where else ""
-        said = f"the model was fitted on {fitted['sensor']}; this recording is {sensor}{folder}"
-        raise SinsInputError(f"{where}: {said}")
-    frame = getattr(rec, "frame", "")
-    if fitted.get("frame") and frame and fitted["frame"] != frame:
-        raise SinsInputError(
-            f"{where}: the model was fitted on readings taken on the file's axes as {fitted['frame']}; this "
-            f"recording is read as {frame} (read it with --frame {fitted['frame']}, or fit again)"
-        )
-    rate = fitted.get("rate_hz")
-    t = rec.imu.t if isinstance(rec, ReferencedRecording | Recording) else rec.t
-    here = float(1.0 / np.median(np.diff(t)))
-    if isinstance(rate, int | float) and not isinstance(rate, bool) and abs(here - rate) > 0.05 * rate:
-        raise SinsInputError(
-            f"{where}: the model was fitted on readings at {rate:.6g} Hz, its time offsets in those terms; "
-            f"this recording is at {here:.6g} Hz (fit a model on readings at its rate)"
-        )
-
-
 __all__ = [
     "BIAS_ONLY",
     "MIN_OPENING_REST_S",
@@ -683,18 +623,14 @@ __all__ = [
     "FittedSeveral",
     "OpenLoop",
     "between",
-    "check_fitted_on",
     "choose_rule",
     "corrected",
     "drive_errors",
     "fit",
     "fit_several",
-    "fitted_on",
     "frame_turn",
     "from_recording",
-    "marks_of",
     "open_loop",
     "open_loop_attitude",
     "opening_rest",
-    "readings_of",
 ]

@@ -12,12 +12,12 @@ estimated from the recording itself, by one of these :data:`MODES`:
     the mean rate over the recording's opening rest (:func:`opening_rest`, found from the readings: the
     specific force's direction and the mean rate both steady), plus the training recordings' own
     difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
-    tremor: the bias at rest is not the bias in motion); ``pooled`` where the recording opens moving.
+    tremor: the bias at rest is not the bias in motion).
 ``nearest``
     the bias of the training recordings whose opening rests read most like this recording's: each
     training recording weighted by how likely its rest's mean rate is this one's, given the two rests'
     own noise and how far a rest says what the bias in flight will be (the training recordings' spread
-    of bias in motion less bias at rest); ``pooled`` where the recording opens moving, no training
+    of bias in motion less bias at rest); ``pooled`` where no training
     recording opened with a rest, or none lies within reach (:data:`NEAREST_CHI2`). A unit's bias moves
     most between power-ups and days, and a rest of a few seconds tells the day's bias apart where the
     days differ by more than a rest's noise and its motors' effect: the prior is then the day's, not the
@@ -40,12 +40,16 @@ Every mode that reads a rest (``rest``, ``nearest`` and their ``+online``) takes
 the rest's mean rate so far, weighted against the pooled prior by their precisions (the rest's standard
 error from its rates' spread so far): the bias at rest is what a resting unit's readings tell, and a
 recording that never moves is corrected by its own readings, not by the prior.
+A recording that opens moving has no rest to read: under those modes it takes the rule's
+``moving_mode``, ``pooled`` or ``online`` (or the readings as read), chosen on the same held-back
+recordings (:func:`sins.compensation.rule_choice.moving_mode`); a model file written before it was kept
+takes the mode's own fallback (``pooled``, or ``online`` for a ``+online`` mode).
 
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
 from its own reference. A mode is taken only where it is no worse than the readings as they are on every
-held-back recording and better on their mean (:func:`chosen_mode`); where none is, the rule is
-:data:`READINGS`: the model leaves the gyro as read (a
+held-back recording and better on their mean (:mod:`sins.compensation.rule_choice`); where none is,
+the rule is :data:`READINGS`: the model leaves the gyro as read (a
 unit whose readings come calibrated already, its bias removed by its maker or its converter, gains
 nothing from a model fitted on a few recordings and loses what the fit's own errors add).
 """
@@ -66,6 +70,10 @@ Array = NDArray[np.float64]
 
 #: The ways of estimating a recording's bias (see the module docstring).
 MODES = ("pooled", "rest", "online", "rest+online", "nearest", "nearest+online")
+#: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`), and those that read
+#: none: what a recording that opens moving takes under a rule of the first (``BiasRule.moving_mode``).
+FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
+REST_FREE = ("pooled", "online")
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -101,7 +109,9 @@ class BiasRule:
     accelerometer biases' spread, :func:`accel_spread`); ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
     and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
-    order the model was fitted on them.
+    order the model was fitted on them; ``moving_mode``: what a recording that opens moving takes where
+    ``mode`` reads a rest (:func:`for_recording`; "" in a model file written before: the mode's own
+    fallback).
     """
 
     mode: str = "pooled"
@@ -117,10 +127,15 @@ class BiasRule:
     nearest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
+    moving_mode: str = ""
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
             raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join((*MODES, READINGS))})")
+        if self.moving_mode not in ("", *REST_FREE, READINGS):
+            raise ValueError(
+                f"bias rule moving_mode {self.moving_mode!r} (known: {', '.join((*REST_FREE, READINGS))})"
+            )
         for key in ("prior", "spread", "rest_offset", "rest_spread", "nearest_spread"):
             value = np.asarray(getattr(self, key), dtype=float)
             if value.shape != (3,) or not np.isfinite(value).all():
@@ -151,6 +166,7 @@ class BiasRule:
             "rest_biases": self.rest_biases.tolist(), "nearest_spread": self.nearest_spread.tolist(),
             "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
+            **({"moving_mode": self.moving_mode} if self.moving_mode else {}),
         }  # fmt: skip
 
     @classmethod
@@ -194,8 +210,19 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
     return k * n if k * n * dt >= MIN_REST_S else 0
 
 
-#: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`).
-_FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
+def opens_moving(imu: ImuIncrements) -> bool:
+    """Whether a recording (its corrected increments ``imu``) opens without a rest (:func:`opening_rest`)."""
+    dt = np.diff(imu.t)
+    return not opening_rest(imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None], float(np.median(dt)))
+
+
+def for_recording(rule: BiasRule, imu: ImuIncrements) -> BiasRule:
+    """The rule as it applies to one recording (its corrected increments ``imu``): under a mode that reads
+    an opening rest, a recording that opens moving takes the rule's ``moving_mode`` (where the model file
+    keeps one); every other recording the rule itself."""
+    if not rule.moving_mode or rule.mode not in FROM_REST or not opens_moving(imu):
+        return rule
+    return with_mode(rule, rule.moving_mode)
 
 
 def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, Array]:
@@ -203,7 +230,7 @@ def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, 
     rest's length in steps (0: it opens moving, or the mode takes nothing from a rest), the prior it
     gives with its spread (``rest``: the rest's mean rate plus the training recordings' motion offset;
     ``nearest``: :func:`nearest_prior`), or None and the pooled spread where it gives none."""
-    if rule.mode not in _FROM_REST:
+    if rule.mode not in FROM_REST:
         return 0, None, rule.spread
     dt = np.diff(imu.t)
     omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
@@ -221,6 +248,7 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
     from the readings before it only. ``ValueError`` under :data:`READINGS`, which takes no bias: the gyro
     is kept as read (:func:`applied`), not the model's correction of it."""
+    rule = for_recording(rule, imu)
     if rule.mode == READINGS:
         raise ValueError("the readings rule takes no bias: the gyro is kept as read (unit_bias.applied)")
     track = np.tile(rule.prior, (len(imu.t) - 1, 1))
@@ -259,10 +287,12 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     """Where the rule took the prior of a recording's gyro bias (its corrected increments ``imu``), in
     words ("" for a rule that takes no prior from the recording): what ``sins evaluate`` says, so that a
     judged figure can be read with the rule's reason beside it."""
-    if rule.mode not in _FROM_REST:
+    if rule.mode not in FROM_REST:
         return ""
     rest, own, _ = _rest_prior(rule, imu)
     head = f"a new recording's gyro bias (rule {rule.mode}): "
+    if not rest and rule.moving_mode:
+        return head + f"it opens moving, so it takes {_MOVING_SAID[rule.moving_mode]}"
     if not rest:
         return head + (
             "it opens moving, so its prior is the training recordings' mean bias as far as they "
@@ -277,6 +307,17 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
         return head + f"the rest reads like no training recording's{said}, so after it their mean"
     return head + "the rest reads like some training recordings' rests: after it, their bias"
+
+
+#: What a recording that opens moving takes, in words (:func:`prior_said`).
+_MOVING_SAID = {
+    "pooled": "the training recordings' mean bias as far as they determine it (the rule chosen held back for "
+    "a recording that opens moving)",
+    "online": "an online estimate from the training recordings' mean bias (the rule chosen held back for a "
+    "recording that opens moving)",
+    READINGS: "its gyro as read: every rule that reads no rest left a held-back recording worse than its raw "
+    "readings",
+}
 
 
 def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
@@ -463,50 +504,6 @@ def attitude_dcm(q: Array) -> Array:
     return np.asarray(rotation.dcm_from_quat(q), dtype=float)
 
 
-#: A held-back mean within this share of the readings' ties with them: a rounding's difference, no gain.
-TIE = 1e-9
-
-
-def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
-    """The mode a rule takes from its open-loop attitude over held-back recordings (``scores``: each
-    mode's, deg, one per recording; ``raw``: the readings' as they are); :data:`READINGS` where none is
-    kept. Kept: no worse than the readings on any of them, and better on their mean (by more than
-    :data:`TIE`): a correction worse than the readings on a recording it was not fitted on may be so on
-    the next, and one that only ties with them (a ``bias_only`` prior that gives back the bias it takes)
-    adds nothing. Of those, the first in :data:`MODES`' order (simplest first: what it takes from the
-    training recordings and from the recording grows along it) whose mean lies within one standard error
-    of the best one's, the error that of their differences recording by recording (the one-standard-error
-    rule of cross-validation): three or six held-back recordings cannot tell modes closer than that apart,
-    and the simpler one is less of a guess on a unit the recordings have not shown."""
-    kept = kept_modes(scores, raw)
-    if not kept:
-        return READINGS
-    best = min(kept, key=lambda m: float(np.mean(scores[m])))
-    for mode in kept:
-        behind, se = behind_by(scores[mode], scores[best])
-        # Two modes that differ on one recording alone are behind by exactly their standard error (a/n
-        # both): the boundary is within, or rounding's last digit chose (0.9028570299975037 against
-        # 0.9028570299975038 on EuRoC's three, the simpler lost).
-        if behind <= se * (1.0 + 1e-9):
-            return mode
-    raise AssertionError("the best mode is within its own standard error")  # pragma: no cover
-
-
-def kept_modes(scores: dict[str, list[float]], raw: list[float]) -> list[str]:
-    """The modes of ``scores`` (in :data:`MODES`' order) :func:`chosen_mode` keeps: no worse than the
-    readings on any held-back recording, and better on their mean by more than :data:`TIE`."""
-    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in MODES if m in scores]
-    return [m for m in given if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < bar]
-
-
-def behind_by(scores: list[float], best: list[float]) -> tuple[float, float]:
-    """How far a mode's held-back figures (deg, one per recording) lie behind the best one's on their
-    mean, and that difference's standard error recording by recording (0 for one recording)."""
-    gap = np.asarray(scores, dtype=float) - np.asarray(best, dtype=float)
-    se = float(gap.std(ddof=1) / np.sqrt(len(gap))) if len(gap) > 1 else 0.0
-    return float(gap.mean()), se
-
-
 def with_mode(rule: BiasRule, mode: str) -> BiasRule:
     """``rule`` with another mode."""
     return replace(rule, mode=mode)
@@ -518,7 +515,7 @@ def applied(
     """A whole recording's correction under ``rule``: ``corrected`` (the model's correction of
     ``readings``, in their form) less the rule's bias; under :data:`READINGS`, the gyro of ``readings``
     as read beside ``corrected``'s accelerometer."""
-    if rule.mode != READINGS:
+    if for_recording(rule, steps_of(corrected)).mode != READINGS:
         return corrected_any(rule, corrected)
     if isinstance(readings, ImuIncrements) and isinstance(corrected, ImuIncrements):
         return ImuIncrements(t=corrected.t, dtheta_b=readings.dtheta_b, dv_b=corrected.dv_b)
@@ -531,15 +528,21 @@ def corrected_any(rule: BiasRule, readings: ImuRates | ImuIncrements) -> ImuRate
     mean rates (a sample is corrected by the estimate of the steps before it; the first by the prior)."""
     if isinstance(readings, ImuIncrements):
         return corrected(rule, readings)
+    track = bias_track(rule, steps_of(readings))
+    per_sample = np.vstack([track[:1], track])
+    return ImuRates(t=readings.t, omega_ib_b=readings.omega_ib_b - per_sample, f_ib_b=readings.f_ib_b)
+
+
+def steps_of(readings: ImuRates | ImuIncrements) -> ImuIncrements:
+    """Readings in either form as increments: rates through their steps' mean rates (trapezoids)."""
+    if isinstance(readings, ImuIncrements):
+        return readings
     dt = np.diff(readings.t)[:, None]
-    steps = ImuIncrements(
+    return ImuIncrements(
         t=readings.t,
         dtheta_b=0.5 * (readings.omega_ib_b[:-1] + readings.omega_ib_b[1:]) * dt,
         dv_b=0.5 * (readings.f_ib_b[:-1] + readings.f_ib_b[1:]) * dt,
     )
-    track = bias_track(rule, steps)
-    per_sample = np.vstack([track[:1], track])
-    return ImuRates(t=readings.t, omega_ib_b=readings.omega_ib_b - per_sample, f_ib_b=readings.f_ib_b)
 
 
 def rule_from(
@@ -667,30 +670,31 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 
 __all__ = [
     "DETERMINED",
+    "FROM_REST",
     "MIN_REST_S",
     "MODES",
     "NEAREST_CHI2",
     "READINGS",
+    "REST_FREE",
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
-    "TIE",
     "UPDATE_S",
     "BiasRule",
     "accel_spread",
     "applied",
     "attitude_dcm",
-    "behind_by",
     "bias_track",
-    "chosen_mode",
     "corrected",
     "corrected_any",
-    "kept_modes",
+    "for_recording",
     "nearest_prior",
     "open_loop_deg",
     "opening_rest",
+    "opens_moving",
     "prior_said",
     "rule_from",
     "shrunk",
+    "steps_of",
     "with_mode",
 ]
