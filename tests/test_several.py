@@ -855,3 +855,10 @@ def test_what_a_moving_opener_takes_is_chosen_on_the_held_back_recordings() -> N
     # Where pooled and online lie within one standard error, the simpler is taken, as for the rule.
     near = {**scores, "pooled": [5.3, 2.4, 3.6, 3.3, 4.7, 3.0]}
     assert rule_choice.moving_mode(near, raw) == "pooled"
+    # Recordings that all open moving: every rest-reading mode is then `online` on each, and `online`,
+    # which it is, is named (the order alone had named `rest`: a helper's unit of trimmed openings).
+    every = rule_choice.rescored(scores, raw, [True] * 6, "online")
+    assert all(every[m] == scores["online"] for m in unit_bias.FROM_REST)
+    assert rule_choice.chosen_mode(every, raw) == "rest"  # MODES' order
+    assert rule_choice.chosen_mode(every, raw, rule_choice.simplest_first("online")) == "online"
+    assert rule_choice.simplest_first("pooled") == unit_bias.MODES

@@ -46,8 +46,8 @@ PART_FITTED_HERE = (
 )
 #: What ``sins evaluate`` says of a model that leaves the gyro as read (its bias rule ``readings``).
 GYRO_AS_READ = (
-    "the model leaves the gyro as read (its fit found the bias rules for this recording, or for every one, "
-    "worse than the raw readings on a held-back recording): its open loop is the raw one"
+    "the model leaves the gyro as read (its fit found every bias rule worse than the raw readings on a "
+    "held-back recording): its open loop is the raw one"
 )
 
 
@@ -167,9 +167,8 @@ def evaluate_referenced(
         lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
     lines += _fitted_lines(fitted_here, share)
     as_read = strategy.leaves_gyro_as_read(rec.imu)
-    if as_read:
-        lines.append(GYRO_AS_READ)
-    elif said := _prior_said(strategy, rec):
+    # A recording left as read for opening moving says so in the rule's words; the rule `readings`, here.
+    if said := _prior_said(strategy, rec) or (GYRO_AS_READ if as_read else ""):
         lines.append(said)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)

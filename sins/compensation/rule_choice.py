@@ -20,18 +20,19 @@ from sins.compensation.unit_bias import FROM_REST, MODES, READINGS, REST_FREE
 TIE = 1e-9
 
 
-def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
+def chosen_mode(scores: dict[str, list[float]], raw: list[float], order: tuple[str, ...] = MODES) -> str:
     """The mode a rule takes from its open-loop attitude over held-back recordings (``scores``: each
     mode's, deg, one per recording; ``raw``: the readings' as they are); :data:`READINGS` where none is
     kept. Kept: no worse than the readings on any of them, and better on their mean (by more than
     :data:`TIE`): a correction worse than the readings on a recording it was not fitted on may be so on
     the next, and one that only ties with them (a ``bias_only`` prior that gives back the bias it takes)
-    adds nothing. Of those, the first in :data:`MODES`' order (simplest first: what it takes from the
-    training recordings and from the recording grows along it) whose mean lies within one standard error
+    adds nothing. Of those, the first in ``order`` (:data:`MODES`', or :func:`simplest_first`'s: simplest
+    first, what it takes from the training recordings and from the recording grows along it) whose mean
+    lies within one standard error
     of the best one's, the error that of their differences recording by recording (the one-standard-error
     rule of cross-validation): three or six held-back recordings cannot tell modes closer than that apart,
     and the simpler one is less of a guess on a unit the recordings have not shown."""
-    kept = kept_modes(scores, raw)
+    kept = kept_modes(scores, raw, order)
     if not kept:
         return READINGS
     best = min(kept, key=lambda m: float(np.mean(scores[m])))
@@ -45,10 +46,10 @@ def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
     raise AssertionError("the best mode is within its own standard error")  # pragma: no cover
 
 
-def kept_modes(scores: dict[str, list[float]], raw: list[float]) -> list[str]:
-    """The modes of ``scores`` (in :data:`MODES`' order) :func:`chosen_mode` keeps: no worse than the
-    readings on any held-back recording, and better on their mean by more than :data:`TIE`."""
-    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in MODES if m in scores]
+def kept_modes(scores: dict[str, list[float]], raw: list[float], order: tuple[str, ...] = MODES) -> list[str]:
+    """The modes of ``scores`` (in ``order``) :func:`chosen_mode` keeps: no worse than the readings on any
+    held-back recording, and better on their mean by more than :data:`TIE`."""
+    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in order if m in scores]
     return [m for m in given if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < bar]
 
 
@@ -72,6 +73,17 @@ def moving_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
     return chosen_mode({m: scores[m] for m in REST_FREE if m in scores}, raw)
 
 
+def simplest_first(moving: str) -> tuple[str, ...]:
+    """The modes, simplest first, where a recording that opens moving takes ``moving``: :data:`MODES`'
+    order, but under ``online`` a rest-reading mode is ``online`` and more (a rest read where there is
+    one), so ``online`` comes before them. Else a unit whose recordings all open moving, on which every
+    rest-reading mode ties with ``online``, took ``rest`` by the order alone (a helper's unit of trimmed
+    EuRoC openings: ``rest`` named, ``online`` done)."""
+    if moving != "online":
+        return MODES
+    return ("pooled", "online", *(m for m in MODES if m not in REST_FREE))
+
+
 def rescored(
     scores: dict[str, list[float]], raw: list[float], opens_moving: list[bool], moving: str
 ) -> dict[str, list[float]]:
@@ -85,4 +97,4 @@ def rescored(
     return out
 
 
-__all__ = ["TIE", "behind_by", "chosen_mode", "kept_modes", "moving_mode", "rescored"]
+__all__ = ["TIE", "behind_by", "chosen_mode", "kept_modes", "moving_mode", "rescored", "simplest_first"]

@@ -316,7 +316,7 @@ _MOVING_SAID = {
     "online": "an online estimate from the training recordings' mean bias (the rule chosen held back for a "
     "recording that opens moving)",
     READINGS: "its gyro as read: every rule that reads no rest left a held-back recording worse than its raw "
-    "readings",
+    "readings (its open loop is the raw one)",
 }
 
 
