@@ -621,15 +621,10 @@ def test_a_numpy_unit_read_calibrated_is_left_as_read_in_either_form(seed: int) 
     fitted = referenced.fit_several("regression", recs)
     rule = fitted.rule
     assert rule is not None and rule.mode == unit_bias.READINGS
-    each = rule.held_back_each_deg
-    raw = np.array(each["raw"])
+    raw = np.array(rule.held_back_each_deg["raw"])
     for mode in unit_bias.MODES:
-        assert len(each[mode]) == len(recs)
-    # The modes that read no rest each leave one worse; the recordings open moving, so the rest-reading
-    # modes are judged by what such a recording then takes: the readings as read (no gain, so not kept).
-    for mode in unit_bias.REST_FREE:
-        assert np.any(np.array(each[mode]) > raw), mode
-    assert rule_choice.kept_modes(each, list(raw)) == []
+        assert len(rule.held_back_each_deg[mode]) == len(recs)
+        assert np.any(np.array(rule.held_back_each_deg[mode]) > raw), mode
     imu = recs[0].imu
     out = fitted.strategy.correct_recording(imu)
     assert isinstance(out, ImuIncrements)
@@ -792,73 +787,3 @@ def test_a_gap_in_the_readings_is_said_not_blamed_on_the_reference(
     said = capsys.readouterr().out
     step = doc["t_s"][half] - doc["t_s"][half - 1]
     assert f"1 gap(s) in the readings (the longest {step:.3g} s at " in said, said
-
-
-def test_a_recording_that_opens_moving_takes_the_mode_chosen_for_it() -> None:
-    """Under a rule that reads an opening rest, a recording with none takes the rule's ``moving_mode``:
-    exactly what that mode does (``online``: the velocity-bounded estimate, to the bit), where a model
-    file written before it was kept took ``pooled`` (kept so: the old file corrects as it did); a
-    recording that opens with a rest keeps the rule's own mode whatever ``moving_mode`` says. Under
-    ``readings`` a moving opener's gyro is left as read and a resting one is corrected."""
-    bias = np.array([0.004, -0.006, 0.003])
-    moving = _bounded_flight(7, bias=bias)
-    resting = _bounded_flight(7, bias=bias, rest_s=4.0)
-    old = unit_bias.BiasRule(mode="rest", prior=np.zeros(3), spread=np.full(3, 5e-3), rest_offset=np.zeros(3))
-    rule = replace(old, moving_mode="online")
-    online = unit_bias.bias_track(unit_bias.with_mode(old, "online"), moving)
-    np.testing.assert_array_equal(unit_bias.bias_track(rule, moving), online)
-    np.testing.assert_array_equal(unit_bias.bias_track(old, moving), 0.0)  # the old file: pooled's prior
-    # The online estimate is the better one here: across gravity it leaves less than half the bias the
-    # pooled prior (zero) leaves (measured: 29 % and 6 % after 120 s).
-    assert np.all(np.abs(online[-1, :2] - bias[:2]) < 0.5 * np.abs(bias[:2])), online[-1]
-    np.testing.assert_array_equal(unit_bias.bias_track(rule, resting), unit_bias.bias_track(old, resting))
-    as_read = replace(old, moving_mode=unit_bias.READINGS)
-    out = unit_bias.applied(as_read, moving, unit_bias.corrected(old, moving))
-    assert np.array_equal(out.dtheta_b, moving.dtheta_b)
-    out = unit_bias.applied(as_read, resting, resting)
-    np.testing.assert_array_equal(out.dtheta_b, unit_bias.corrected(old, resting).dtheta_b)
-    assert "opens moving, so it takes an online estimate" in unit_bias.prior_said(rule, moving)
-    assert "its gyro as read" in unit_bias.prior_said(as_read, moving)
-    # The model file keeps it (and a file without it reads as before); a mode it cannot take is refused.
-    assert unit_bias.BiasRule.from_dict(rule.to_dict()).moving_mode == "online"
-    assert "moving_mode" not in old.to_dict()
-    assert unit_bias.BiasRule.from_dict(old.to_dict()).moving_mode == ""
-    with pytest.raises(ValueError, match=r"bias rule moving_mode 'rest' \(known: pooled, online, readings\)"):
-        replace(old, moving_mode="rest")
-
-
-def test_what_a_moving_opener_takes_is_chosen_on_the_held_back_recordings() -> None:
-    """``moving_mode`` is :func:`rule_choice.chosen_mode` among the modes that read no rest, on the same
-    held-back figures; the rest-reading modes are then judged, on the held-back recordings that open
-    moving, by what such a recording takes. EuRoC's six (``bias_only``, held back: pooled 9.88, 5.96,
-    7.13, 4.55, 8.64, 3.78; online 5.17, 2.56, 3.49, 3.44, 4.55, 3.05; MH_01 and MH_03 open moving)
-    take ``online`` for a moving opener, as their ``+online`` mode did by its own fallback."""
-    raw = [117.05, 136.19, 129.69, 109.57, 110.62, 100.88]
-    scores = {
-        "pooled": [9.88, 5.96, 7.13, 4.55, 8.64, 3.78], "rest": [9.88, 5.96, 11.9, 2.24, 7.85, 4.06],
-        "online": [5.17, 2.56, 3.49, 3.44, 4.55, 3.05], "rest+online": [5.17, 2.56, 8.84, 2.65, 2.99, 4.14],
-        "nearest": [9.88, 5.96, 3.08, 1.23, 4.36, 3.98],
-        "nearest+online": [5.17, 2.56, 1.88, 1.05, 3.71, 3.06],
-    }  # fmt: skip
-    assert rule_choice.moving_mode(scores, raw) == "online"
-    opens_moving = [True, True, False, False, False, False]
-    again = rule_choice.rescored(scores, raw, opens_moving, "online")
-    assert again["nearest"] == [5.17, 2.56, 3.08, 1.23, 4.36, 3.98] and again["pooled"] == scores["pooled"]
-    assert rule_choice.chosen_mode(again, raw) == "nearest+online"
-    # A unit whose rest-free modes each leave a held-back recording worse than its readings: a moving
-    # opener is left as read, and a rest-reading mode is judged on it by the readings' own figure.
-    worse = {**scores, "pooled": [118.0, *scores["pooled"][1:]], "online": [120.0, *scores["online"][1:]]}
-    assert rule_choice.moving_mode(worse, raw) == unit_bias.READINGS
-    judged = rule_choice.rescored(worse, raw, opens_moving, unit_bias.READINGS)
-    assert judged["rest"][:2] == raw[:2] and judged["rest"][2:] == scores["rest"][2:]
-    assert rule_choice.chosen_mode(judged, raw) == "nearest+online"
-    # Where pooled and online lie within one standard error, the simpler is taken, as for the rule.
-    near = {**scores, "pooled": [5.3, 2.4, 3.6, 3.3, 4.7, 3.0]}
-    assert rule_choice.moving_mode(near, raw) == "pooled"
-    # Recordings that all open moving: every rest-reading mode is then `online` on each, and `online`,
-    # which it is, is named (the order alone had named `rest`: a helper's unit of trimmed openings).
-    every = rule_choice.rescored(scores, raw, [True] * 6, "online")
-    assert all(every[m] == scores["online"] for m in unit_bias.FROM_REST)
-    assert rule_choice.chosen_mode(every, raw) == "rest"  # MODES' order
-    assert rule_choice.chosen_mode(every, raw, rule_choice.simplest_first("online")) == "online"
-    assert rule_choice.simplest_first("pooled") == unit_bias.MODES

@@ -197,24 +197,13 @@ class Strategy(ABC):
 
         return unit_bias.applied(unit_bias.BiasRule.from_dict(rule), readings, out)
 
-    def leaves_gyro_as_read(self, readings: ImuRates | ImuIncrements | None = None) -> bool:
+    def leaves_gyro_as_read(self) -> bool:
         """Whether :meth:`correct_recording` keeps the gyro as read: the model's fit on several recordings
-        found every bias rule worse than the raw readings on a held-back one (the rule ``readings``), or,
-        for ``readings`` that open moving, every rule that reads no rest (its ``moving_mode``)."""
-        from sins.compensation import unit_bias
+        found every bias rule worse than the raw readings on a held-back one (the rule ``readings``)."""
+        from sins.compensation.unit_bias import READINGS
 
         rule = getattr(self, "unit_bias_", None)
-        if not isinstance(rule, dict):
-            return False
-        bias_rule = unit_bias.BiasRule.from_dict(rule)
-        if readings is not None and bias_rule.moving_mode == unit_bias.READINGS:
-            out = (
-                self.correct_rates(readings)
-                if isinstance(readings, ImuRates)
-                else self.correct_increments(readings)
-            )
-            bias_rule = unit_bias.for_recording(bias_rule, unit_bias.steps_of(out))
-        return bias_rule.mode == unit_bias.READINGS
+        return isinstance(rule, dict) and rule.get("mode") == READINGS
 
     def aligned_rates(self, rates: ImuRates) -> ImuRates:
         """``rates`` with each sensor read ``time_offset_s_`` later (linear interpolation; the ends

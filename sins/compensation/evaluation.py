@@ -166,9 +166,10 @@ def evaluate_referenced(
     if unit and not rec.sensor:  # a unit's check needs the recording to name one (a path's may not)
         lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
     lines += _fitted_lines(fitted_here, share)
-    as_read = strategy.leaves_gyro_as_read(rec.imu)
-    # A recording left as read for opening moving says so in the rule's words; the rule `readings`, here.
-    if said := _prior_said(strategy, rec) or (GYRO_AS_READ if as_read else ""):
+    as_read = strategy.leaves_gyro_as_read()
+    if as_read:
+        lines.append(GYRO_AS_READ)
+    elif said := _prior_said(strategy, rec):
         lines.append(said)
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)

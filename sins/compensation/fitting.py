@@ -447,7 +447,6 @@ def _several_document(
             else f" (not chosen on held-back recordings: that takes three or more, here {len(names)})"
         )  # fmt: skip
         lines.append(_rule_line(rule, names, judged))
-        lines += _moving_line(rule)
         document["bias_rule"] = rule.to_dict()
     return document
 
@@ -473,18 +472,6 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
                 "or a reference's clock off)"
             )
     return out
-
-
-def _moving_line(rule: BiasRule) -> list[str]:
-    """What ``sins fit`` says a recording that opens moving takes, where the rule reads an opening rest
-    and chose it on held-back recordings (``BiasRule.moving_mode``)."""
-    from sins.compensation.unit_bias import READINGS, REST_FREE
-
-    if not rule.moving_mode:
-        return []
-    held = ", ".join(f"{m} {rule.held_back_deg[m]:.2f}°" for m in REST_FREE if m in rule.held_back_deg)
-    took = "its gyro left as read" if rule.moving_mode == READINGS else rule.moving_mode
-    return [f"a new recording that opens moving (no rest to read): {took} (held back, mean: {held})"]
 
 
 def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:

@@ -300,10 +300,10 @@ def choose_rule(
 ) -> BiasRule:
     """What ``strategy`` (fitted on ``recs``) does about a new recording's bias: the bias each recording's
     corrected readings still hold (fitted against its reference) gives the rule's prior and spread; the
-    mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the model
-    of :func:`_held_back_model` and the rule made from the others) by ``rule_choice.chosen_mode``: the
-    simplest within one standard error of the best of those no worse than the readings on any, else
-    ``READINGS`` (the gyro as read); a recording that opens moving by ``rule_choice.moving_mode``."""
+    mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the seed
+    model and the rule made from the others) by ``rule_choice.chosen_mode``: the simplest within one
+    standard error of the best of those no worse than the readings on any, else ``READINGS`` (the gyro as
+    read)."""
     from sins.compensation import interval_fit, rule_choice, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
@@ -311,66 +311,37 @@ def choose_rule(
                      for rec, s in zip(recs, streams, strict=True)])  # fmt: skip
     held: dict[str, float] = {}
     each: dict[str, list[float]] = {}
-    moving = ""  # a mode given, or too few recordings to judge one: the mode's own fallback
     if mode is None and len(recs) >= 3:
         scores: dict[str, list[float]] = {m: [] for m in unit_bias.MODES}
         raw: list[float] = []
-        opens_moving: list[bool] = []
         biases_alone = getattr(strategy, "variant", None) == BIAS_ONLY  # its own correction, held back too
         for k, rec in enumerate(recs):
             if stage is not None:
                 stage(f"the bias rule: recording {k + 1} of {len(recs)} held back")
             others = [r for i, r in enumerate(recs) if i != k]
             part = several.fit_several(others, interval_s=interval_s)
-            seed = _held_back_model(strategy, others, part, biases_alone)
+            seed = Regression(g_sensitivity=False).set_fit(
+                _biases_only(part.seed) if biases_alone else part.seed
+            )
+            seed.time_offset_s_ = (
+                np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
+            )
             own = [seed.correct_increments(r.imu) for r in others]
             rel = part.gyro_bias - part.gyro_bias.mean(axis=0)
             base = unit_bias.rule_from(rel, own, model_bias=seed.B0_, accel_biases=part.accel_bias)
             stream = seed.correct_increments(rec.imu)
-            opens_moving.append(unit_bias.opens_moving(stream))
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in unit_bias.MODES:
                 scores[m].append(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
-        # What a recording that opens moving takes, judged on the held-back recordings (all of them: the
-        # modes it chooses among read no rest), and the rest-reading modes judged by it where they open so.
-        moving = rule_choice.moving_mode(scores, raw)
-        scores = rule_choice.rescored(scores, raw, opens_moving, moving)
         held = {m: float(np.mean(v)) for m, v in scores.items()}
-        mode = rule_choice.chosen_mode(scores, raw, rule_choice.simplest_first(moving))
+        mode = rule_choice.chosen_mode(scores, raw)
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
-    rule = unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
+    return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
                                accel_biases=fit_all.accel_bias, held_back_deg=held,
                                held_back_each_deg=each)  # fmt: skip
-    return replace(rule, moving_mode=moving) if rule.mode in unit_bias.FROM_REST else rule
-
-
-def _held_back_model(
-    strategy: Strategy, others: list[ReferencedRecording], part: SeveralFit, biases_alone: bool
-) -> Regression:
-    """The model a held-back recording is judged with, made from the ``others`` (``part``, their seed
-    model): the seed model, its biases alone for ``bias_only``; for a strategy that adds terms of its own
-    to the seed model (``regression_rest``'s rests in operation, ``regression_window``'s windows), those
-    fitted on the others as on all, so that the rule is chosen on its own correction (the seed model where
-    the others hold too little for them: ``regression_rest`` with no rest among them)."""
-    from sins.compensation import interval_fit
-
-    seed = Regression(g_sensitivity=False).set_fit(_biases_only(part.seed) if biases_alone else part.seed)
-    seed.time_offset_s_ = (
-        np.zeros(2) if biases_alone else np.array([part.time_offset_s, part.accel_time_offset_s])
-    )
-    if not isinstance(strategy, Regression) or type(strategy).fit_beyond is Regression.fit_beyond:
-        return seed
-    own = type(strategy)(**strategy.params()).set_fit(part.seed)
-    own.time_offset_s_ = seed.time_offset_s_
-    refs = [_at_mean_bias(interval_fit.interval_reference(rec, part.for_recording(r)), part, r)
-            for r, rec in enumerate(others)]  # fmt: skip
-    try:
-        return own.fit_beyond(_joined(refs))
-    except ValueError:
-        return seed
 
 
 def _biases_only(seed: Any) -> Any:

@@ -1,38 +1,32 @@
 """How a bias rule's mode is chosen on held-back recordings: each training recording judged by its
 open-loop attitude with the rule made from the others (``sins.compensation.referenced.choose_rule`` makes
-the figures; this module reads them).
-
-A mode is kept only where it is no worse than the readings as they are on every held-back recording and
-better on their mean; of those kept, the simplest within one standard error of the best is taken
-(:func:`chosen_mode`). A recording that opens moving gives the modes that read an opening rest nothing to
-read; what it takes instead is chosen the same way among the modes that read none
-(:func:`moving_mode`), and the rest-reading modes are judged on the held-back recordings that open moving
-by what they would then do (:func:`rescored`).
+the figures; this module reads them). A mode is kept only where it is no worse than the readings as they
+are on every held-back recording and better on their mean; of those kept, the simplest within one
+standard error of the best is taken (:func:`chosen_mode`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sins.compensation.unit_bias import FROM_REST, MODES, READINGS, REST_FREE
+from sins.compensation.unit_bias import MODES, READINGS
 
 #: A held-back mean within this share of the readings' ties with them: a rounding's difference, no gain.
 TIE = 1e-9
 
 
-def chosen_mode(scores: dict[str, list[float]], raw: list[float], order: tuple[str, ...] = MODES) -> str:
+def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
     """The mode a rule takes from its open-loop attitude over held-back recordings (``scores``: each
     mode's, deg, one per recording; ``raw``: the readings' as they are); :data:`READINGS` where none is
     kept. Kept: no worse than the readings on any of them, and better on their mean (by more than
     :data:`TIE`): a correction worse than the readings on a recording it was not fitted on may be so on
     the next, and one that only ties with them (a ``bias_only`` prior that gives back the bias it takes)
-    adds nothing. Of those, the first in ``order`` (:data:`MODES`', or :func:`simplest_first`'s: simplest
-    first, what it takes from the training recordings and from the recording grows along it) whose mean
-    lies within one standard error
+    adds nothing. Of those, the first in :data:`MODES`' order (simplest first: what it takes from the
+    training recordings and from the recording grows along it) whose mean lies within one standard error
     of the best one's, the error that of their differences recording by recording (the one-standard-error
     rule of cross-validation): three or six held-back recordings cannot tell modes closer than that apart,
     and the simpler one is less of a guess on a unit the recordings have not shown."""
-    kept = kept_modes(scores, raw, order)
+    kept = kept_modes(scores, raw)
     if not kept:
         return READINGS
     best = min(kept, key=lambda m: float(np.mean(scores[m])))
@@ -46,10 +40,10 @@ def chosen_mode(scores: dict[str, list[float]], raw: list[float], order: tuple[s
     raise AssertionError("the best mode is within its own standard error")  # pragma: no cover
 
 
-def kept_modes(scores: dict[str, list[float]], raw: list[float], order: tuple[str, ...] = MODES) -> list[str]:
-    """The modes of ``scores`` (in ``order``) :func:`chosen_mode` keeps: no worse than the readings on any
-    held-back recording, and better on their mean by more than :data:`TIE`."""
-    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in order if m in scores]
+def kept_modes(scores: dict[str, list[float]], raw: list[float]) -> list[str]:
+    """The modes of ``scores`` (in :data:`MODES`' order) :func:`chosen_mode` keeps: no worse than the
+    readings on any held-back recording, and better on their mean by more than :data:`TIE`."""
+    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in MODES if m in scores]
     return [m for m in given if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < bar]
 
 
@@ -61,40 +55,4 @@ def behind_by(scores: list[float], best: list[float]) -> tuple[float, float]:
     return float(gap.mean()), se
 
 
-def moving_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
-    """What a recording that opens moving takes under a rule whose mode reads an opening rest: the mode
-    :func:`chosen_mode` takes among those that read none (:data:`~sins.compensation.unit_bias.REST_FREE`)
-    on the same held-back recordings, or :data:`READINGS`. Before, it was the rest-reading mode's own
-    fallback (``pooled``, or ``online`` for a ``+online`` mode), which no held-back recording had judged
-    where the training recordings all opened with a rest: a helper's unit (EuRoC read calibrated with a
-    new power-up's bias and a shared scale error and misalignment drawn by numpy) took ``rest`` on three
-    that did, and its judged recordings, which opened moving, were left worse than their raw readings by
-    its pooled prior where ``online`` would not have."""
-    return chosen_mode({m: scores[m] for m in REST_FREE if m in scores}, raw)
-
-
-def simplest_first(moving: str) -> tuple[str, ...]:
-    """The modes, simplest first, where a recording that opens moving takes ``moving``: :data:`MODES`'
-    order, but under ``online`` a rest-reading mode is ``online`` and more (a rest read where there is
-    one), so ``online`` comes before them. Else a unit whose recordings all open moving, on which every
-    rest-reading mode ties with ``online``, took ``rest`` by the order alone (a helper's unit of trimmed
-    EuRoC openings: ``rest`` named, ``online`` done)."""
-    if moving != "online":
-        return MODES
-    return ("pooled", "online", *(m for m in MODES if m not in REST_FREE))
-
-
-def rescored(
-    scores: dict[str, list[float]], raw: list[float], opens_moving: list[bool], moving: str
-) -> dict[str, list[float]]:
-    """``scores`` with every rest-reading mode's figure on a held-back recording that opens moving made
-    what the rule would then do: ``moving``'s figure (or the readings', under :data:`READINGS`)."""
-    out = {m: list(v) for m, v in scores.items()}
-    instead = raw if moving == READINGS else scores[moving]
-    for m in (m for m in FROM_REST if m in out):
-        pairs = enumerate(zip(out[m], opens_moving, strict=True))
-        out[m] = [instead[k] if moved else v for k, (v, moved) in pairs]
-    return out
-
-
-__all__ = ["TIE", "behind_by", "chosen_mode", "kept_modes", "moving_mode", "rescored", "simplest_first"]
+__all__ = ["TIE", "behind_by", "chosen_mode", "kept_modes"]

@@ -12,12 +12,12 @@ estimated from the recording itself, by one of these :data:`MODES`:
     the mean rate over the recording's opening rest (:func:`opening_rest`, found from the readings: the
     specific force's direction and the mean rate both steady), plus the training recordings' own
     difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
-    tremor: the bias at rest is not the bias in motion).
+    tremor: the bias at rest is not the bias in motion); ``pooled`` where the recording opens moving.
 ``nearest``
     the bias of the training recordings whose opening rests read most like this recording's: each
     training recording weighted by how likely its rest's mean rate is this one's, given the two rests'
     own noise and how far a rest says what the bias in flight will be (the training recordings' spread
-    of bias in motion less bias at rest); ``pooled`` where no training
+    of bias in motion less bias at rest); ``pooled`` where the recording opens moving, no training
     recording opened with a rest, or none lies within reach (:data:`NEAREST_CHI2`). A unit's bias moves
     most between power-ups and days, and a rest of a few seconds tells the day's bias apart where the
     days differ by more than a rest's noise and its motors' effect: the prior is then the day's, not the
@@ -40,10 +40,6 @@ Every mode that reads a rest (``rest``, ``nearest`` and their ``+online``) takes
 the rest's mean rate so far, weighted against the pooled prior by their precisions (the rest's standard
 error from its rates' spread so far): the bias at rest is what a resting unit's readings tell, and a
 recording that never moves is corrected by its own readings, not by the prior.
-A recording that opens moving has no rest to read: under those modes it takes the rule's
-``moving_mode``, ``pooled`` or ``online`` (or the readings as read), chosen on the same held-back
-recordings (:func:`sins.compensation.rule_choice.moving_mode`); a model file written before it was kept
-takes the mode's own fallback (``pooled``, or ``online`` for a ``+online`` mode).
 
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
@@ -70,10 +66,6 @@ Array = NDArray[np.float64]
 
 #: The ways of estimating a recording's bias (see the module docstring).
 MODES = ("pooled", "rest", "online", "rest+online", "nearest", "nearest+online")
-#: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`), and those that read
-#: none: what a recording that opens moving takes under a rule of the first (``BiasRule.moving_mode``).
-FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
-REST_FREE = ("pooled", "online")
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -109,9 +101,7 @@ class BiasRule:
     accelerometer biases' spread, :func:`accel_spread`); ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
     and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
-    order the model was fitted on them; ``moving_mode``: what a recording that opens moving takes where
-    ``mode`` reads a rest (:func:`for_recording`; "" in a model file written before: the mode's own
-    fallback).
+    order the model was fitted on them.
     """
 
     mode: str = "pooled"
@@ -127,15 +117,10 @@ class BiasRule:
     nearest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
-    moving_mode: str = ""
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
             raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join((*MODES, READINGS))})")
-        if self.moving_mode not in ("", *REST_FREE, READINGS):
-            raise ValueError(
-                f"bias rule moving_mode {self.moving_mode!r} (known: {', '.join((*REST_FREE, READINGS))})"
-            )
         for key in ("prior", "spread", "rest_offset", "rest_spread", "nearest_spread"):
             value = np.asarray(getattr(self, key), dtype=float)
             if value.shape != (3,) or not np.isfinite(value).all():
@@ -166,7 +151,6 @@ class BiasRule:
             "rest_biases": self.rest_biases.tolist(), "nearest_spread": self.nearest_spread.tolist(),
             "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
-            **({"moving_mode": self.moving_mode} if self.moving_mode else {}),
         }  # fmt: skip
 
     @classmethod
@@ -210,19 +194,8 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
     return k * n if k * n * dt >= MIN_REST_S else 0
 
 
-def opens_moving(imu: ImuIncrements) -> bool:
-    """Whether a recording (its corrected increments ``imu``) opens without a rest (:func:`opening_rest`)."""
-    dt = np.diff(imu.t)
-    return not opening_rest(imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None], float(np.median(dt)))
-
-
-def for_recording(rule: BiasRule, imu: ImuIncrements) -> BiasRule:
-    """The rule as it applies to one recording (its corrected increments ``imu``): under a mode that reads
-    an opening rest, a recording that opens moving takes the rule's ``moving_mode`` (where the model file
-    keeps one); every other recording the rule itself."""
-    if not rule.moving_mode or rule.mode not in FROM_REST or not opens_moving(imu):
-        return rule
-    return with_mode(rule, rule.moving_mode)
+#: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`).
+_FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
 
 
 def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, Array]:
@@ -230,7 +203,7 @@ def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, 
     rest's length in steps (0: it opens moving, or the mode takes nothing from a rest), the prior it
     gives with its spread (``rest``: the rest's mean rate plus the training recordings' motion offset;
     ``nearest``: :func:`nearest_prior`), or None and the pooled spread where it gives none."""
-    if rule.mode not in FROM_REST:
+    if rule.mode not in _FROM_REST:
         return 0, None, rule.spread
     dt = np.diff(imu.t)
     omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
@@ -248,7 +221,6 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     """The bias the rule takes for each step of ``imu`` (corrected readings), rad/s (n, 3): at each step,
     from the readings before it only. ``ValueError`` under :data:`READINGS`, which takes no bias: the gyro
     is kept as read (:func:`applied`), not the model's correction of it."""
-    rule = for_recording(rule, imu)
     if rule.mode == READINGS:
         raise ValueError("the readings rule takes no bias: the gyro is kept as read (unit_bias.applied)")
     track = np.tile(rule.prior, (len(imu.t) - 1, 1))
@@ -287,12 +259,10 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     """Where the rule took the prior of a recording's gyro bias (its corrected increments ``imu``), in
     words ("" for a rule that takes no prior from the recording): what ``sins evaluate`` says, so that a
     judged figure can be read with the rule's reason beside it."""
-    if rule.mode not in FROM_REST:
+    if rule.mode not in _FROM_REST:
         return ""
     rest, own, _ = _rest_prior(rule, imu)
     head = f"a new recording's gyro bias (rule {rule.mode}): "
-    if not rest and rule.moving_mode:
-        return head + f"it opens moving, so it takes {_MOVING_SAID[rule.moving_mode]}"
     if not rest:
         return head + (
             "it opens moving, so its prior is the training recordings' mean bias as far as they "
@@ -307,17 +277,6 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
         return head + f"the rest reads like no training recording's{said}, so after it their mean"
     return head + "the rest reads like some training recordings' rests: after it, their bias"
-
-
-#: What a recording that opens moving takes, in words (:func:`prior_said`).
-_MOVING_SAID = {
-    "pooled": "the training recordings' mean bias as far as they determine it (the rule chosen held back for "
-    "a recording that opens moving)",
-    "online": "an online estimate from the training recordings' mean bias (the rule chosen held back for a "
-    "recording that opens moving)",
-    READINGS: "its gyro as read: every rule that reads no rest left a held-back recording worse than its raw "
-    "readings (its open loop is the raw one)",
-}
 
 
 def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
@@ -515,7 +474,7 @@ def applied(
     """A whole recording's correction under ``rule``: ``corrected`` (the model's correction of
     ``readings``, in their form) less the rule's bias; under :data:`READINGS`, the gyro of ``readings``
     as read beside ``corrected``'s accelerometer."""
-    if for_recording(rule, steps_of(corrected)).mode != READINGS:
+    if rule.mode != READINGS:
         return corrected_any(rule, corrected)
     if isinstance(readings, ImuIncrements) and isinstance(corrected, ImuIncrements):
         return ImuIncrements(t=corrected.t, dtheta_b=readings.dtheta_b, dv_b=corrected.dv_b)
@@ -528,21 +487,15 @@ def corrected_any(rule: BiasRule, readings: ImuRates | ImuIncrements) -> ImuRate
     mean rates (a sample is corrected by the estimate of the steps before it; the first by the prior)."""
     if isinstance(readings, ImuIncrements):
         return corrected(rule, readings)
-    track = bias_track(rule, steps_of(readings))
-    per_sample = np.vstack([track[:1], track])
-    return ImuRates(t=readings.t, omega_ib_b=readings.omega_ib_b - per_sample, f_ib_b=readings.f_ib_b)
-
-
-def steps_of(readings: ImuRates | ImuIncrements) -> ImuIncrements:
-    """Readings in either form as increments: rates through their steps' mean rates (trapezoids)."""
-    if isinstance(readings, ImuIncrements):
-        return readings
     dt = np.diff(readings.t)[:, None]
-    return ImuIncrements(
+    steps = ImuIncrements(
         t=readings.t,
         dtheta_b=0.5 * (readings.omega_ib_b[:-1] + readings.omega_ib_b[1:]) * dt,
         dv_b=0.5 * (readings.f_ib_b[:-1] + readings.f_ib_b[1:]) * dt,
     )
+    track = bias_track(rule, steps)
+    per_sample = np.vstack([track[:1], track])
+    return ImuRates(t=readings.t, omega_ib_b=readings.omega_ib_b - per_sample, f_ib_b=readings.f_ib_b)
 
 
 def rule_from(
@@ -670,12 +623,10 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 
 __all__ = [
     "DETERMINED",
-    "FROM_REST",
     "MIN_REST_S",
     "MODES",
     "NEAREST_CHI2",
     "READINGS",
-    "REST_FREE",
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
@@ -687,14 +638,11 @@ __all__ = [
     "bias_track",
     "corrected",
     "corrected_any",
-    "for_recording",
     "nearest_prior",
     "open_loop_deg",
     "opening_rest",
-    "opens_moving",
     "prior_said",
     "rule_from",
     "shrunk",
-    "steps_of",
     "with_mode",
 ]
