@@ -159,11 +159,12 @@ def _learner_lines(strategy: Any, how: str) -> list[str]:
         gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
         lines.append(f"{ch:<8} {base:<26} learner's held-back gain {gain:+7.2f} % ± {se:.2f} %  -> "
                      f"{'learned' if used else base}{forced}")  # fmt: skip
+    over = " over the held-back recordings" if "recordings held back" in how else ""
     rule = (
         "the guard is off: the learner corrects every channel, whatever its held-back gain"
         if not strategy.guard
         else f"the guard keeps the learner where its held-back gain exceeds {strategy.guard_z:g} standard "
-        "errors, least squares (and its terms) elsewhere"
+        f"errors{over}, least squares (and its terms) elsewhere"
     )
     said = (
         f"the learner corrects {', '.join(learned)}" if learned else "the learner adds nothing: least squares"

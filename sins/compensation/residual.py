@@ -34,9 +34,11 @@ reason for the design:
   would have gone on to are not chosen unless the held-back loss turns down again after rising twice).
 * **An honest guard.** Per channel, the chosen learner's held-back gain over
   regression and the terms (sum of squared residuals) is compared with its
-  sampling error over the held-back blocks; a channel whose gain is not above
-  ``guard_z`` standard errors predicts their correction (unless ``guard=False``).
-  The terms pass the same test against regression alone.
+  sampling error over the held-back blocks, or, where the folds are recordings, over the recordings
+  (a new recording is the draw a model meets; blocks of one recording share its day, its motion and
+  its reference, and their spread had passed a learner that gained on one of three recordings and
+  lost on the other two); a channel whose gain is not above ``guard_z`` standard errors predicts
+  their correction (unless ``guard=False``). The terms pass the same test against regression alone.
 
 Subclasses supply the learner: its candidate settings, training and prediction.
 """
@@ -165,10 +167,12 @@ class _Trial:
         self.gains.append(gain)
         self.base.append(base)
 
-    def verdicts(self, z: float) -> list[dict[str, Any]]:
+    def verdicts(self, z: float, by_fold: bool = False) -> list[dict[str, Any]]:
         """Per channel: the gain and its standard error as fractions of regression's sum of squares,
-        and whether the gain is above ``z`` of them (blocks taken as independent draws)."""
-        gains, base = np.vstack(self.gains), np.vstack(self.base)
+        and whether the gain is above ``z`` of them: the held-back blocks taken as independent draws, or
+        (``by_fold``, where each fold is a recording) the folds, each its blocks' sum."""
+        base = np.vstack(self.base)
+        gains = np.array([g.sum(axis=0) for g in self.gains]) if by_fold else np.vstack(self.gains)
         out = []
         for c in range(gains.shape[1]):
             total, base_sse, b = float(gains[:, c].sum()), float(base[:, c].sum()), len(gains)
@@ -305,7 +309,9 @@ class ResidualStrategy(Strategy):
         # Physics first: the terms least squares carries, each channel's chosen on the held-back blocks.
         groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
         if self.physics:
-            groups = terms.choose(x_terms, [(train, t) for _, train, t in folds], block, self.guard_z)
+            groups = terms.choose(
+                x_terms, [(train, t) for _, train, t in folds], block, self.guard_z, by_fold=kept is not None
+            )
         targets = self._targets(whole, data) if given is None else given
         self.terms_ = {
             ch: {"groups": list(g), "coef": terms.fit(terms.design(g, c, x_terms), targets[:, c]).tolist()}
@@ -332,7 +338,7 @@ class ResidualStrategy(Strategy):
                 raise ValueError(f"{data.source or 'recording'}: no fold could be fitted (too few blocks)")
             best = min(trials[sensor].values(), key=lambda t: t.score)
             self.configs_[sensor] = best.config
-            for c, verdict in enumerate(best.verdicts(self.guard_z)):
+            for c, verdict in enumerate(best.verdicts(self.guard_z, by_fold=kept is not None)):
                 self.guard_[CHANNELS[3 * si + c]] = verdict
                 used[3 * si + c] = verdict["earns_its_place"] or not self.guard
             points = aggregate(scaled[sensor], targets[:, cols], block, self.repeats_[sensor])

@@ -159,10 +159,12 @@ def choose(
     fold_targets: list[tuple[NDArray[np.bool_], Array]],
     block: NDArray[np.intp],
     z: float,
+    by_fold: bool = False,
 ) -> list[tuple[str, ...]]:
     """Each channel's groups: ``fold_targets`` holds, per fold, its training rows and regression's
     residual (n, 6) as refitted on them; a subset's gain is the drop in the held-back rows' sum of
-    squares, per block, over the folds, and the groups are taken forward (:func:`_forward`).
+    squares, per block over the folds (``by_fold``: per fold, each a recording), and the groups are taken
+    forward (:func:`_forward`).
 
     Every subset of a channel is fitted from the Gram matrix of its design with every group (the
     columns scaled to unit RMS on the training rows), so a fold costs one pass over the rows a channel.
@@ -193,9 +195,11 @@ def choose(
                 gains[s].append(
                     np.asarray(np.bincount(index, weights=y * y - e * e, minlength=n_blocks), float)
                 )
-        chosen.append(
-            _forward(options, {s: np.concatenate(g) if g else np.zeros(0) for s, g in gains.items()}, z)
-        )
+        drawn = {
+            s: (np.array([b.sum() for b in g]) if by_fold else np.concatenate(g)) if g else np.zeros(0)
+            for s, g in gains.items()
+        }
+        chosen.append(_forward(options, drawn, z))
     return chosen
 
 
