@@ -305,7 +305,7 @@ def test_recordings_of_two_units_or_rates_are_refused() -> None:
     refusal(lambda: referenced.fit_several("regression", [first, other]), "one unit", "another unit")
 
 
-def test_a_learner_leaves_each_recordings_own_bias_to_the_rule() -> None:
+def test_a_learner_leaves_each_recordings_own_bias_to_the_rule(monkeypatch: pytest.MonkeyPatch) -> None:
     """Three numpy recordings of one unit, its biases drawn anew for each (0.1 °/s), its other errors
     linear. ``kohonen`` fitted on them learns beside the seed model on readings taken to the recordings'
     mean bias: the bias each recording's corrected readings still hold then spreads as the unit's own
@@ -318,8 +318,21 @@ def test_a_learner_leaves_each_recordings_own_bias_to_the_rule() -> None:
     it (before, on least squares refitted on the per-sample references, which took the g-sensitivity the
     intervals held at zero: an aliased EuRoC unit's MH_02 6.67° where ``regression`` gave 3.46°, with no
     learner used)."""
+    from sins.compensation import residual, terms
+
     recs, _, _ = recordings(10, count=3)
+    counted: list[bool] = []  # how the guard and the terms took their standard errors: over recordings?
+    verdicts, choose = residual._Trial.verdicts, terms.choose
+    monkeypatch.setattr(
+        residual._Trial,
+        "verdicts",
+        lambda self, z, by_fold=False: counted.append(by_fold) or verdicts(self, z, by_fold),
+    )
+    monkeypatch.setattr(
+        terms, "choose", lambda *a, by_fold=False: counted.append(by_fold) or choose(*a, by_fold=by_fold)
+    )
     out = referenced.fit_several("kohonen", recs)
+    assert counted and all(counted), counted
     seed = Regression().set_fit(out.several.seed).get_state()
     base = out.strategy.base_  # type: ignore[attr-defined]
     assert all(np.array_equal(np.asarray(base[k]), np.asarray(v)) for k, v in seed.items()), (base, seed)
