@@ -296,6 +296,7 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     assert said == used
     assert ("the learner adds nothing: least squares (the guard keeps the learner where its held-back gain "
             "exceeds 2 standard errors" in out) == (not used)  # fmt: skip
+    assert "over the held-back recordings" not in out  # one rig: its folds are blocks, not recordings
     assert main(["fit", str(rec), "--strategy", "kohonen", "--no-guard", "--out", str(tmp_path / "k0.json"),
                  "--json", str(tmp_path / "k0.fit.json")]) == 0  # fmt: skip
     out = capsys.readouterr().out

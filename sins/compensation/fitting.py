@@ -125,10 +125,13 @@ def fit_rig(
     return FitOutcome(strategy, lines, document)
 
 
-def _guard_report(strategy: Any, how: str, unit: str) -> tuple[list[str], dict[str, Any]]:
+def _guard_report(
+    strategy: Any, how: str, unit: str, by_recording: bool = False
+) -> tuple[list[str], dict[str, Any]]:
     """A learned strategy's guard, in lines and as its document (``guard``, ``learned_on``; or
     ``mlp_window``'s ``window_guard``, its gain in ``unit``), and nothing for the others. ``how``: on what
-    the learner was chosen, with ``{folds}`` and ``{blocks}`` (default: folds of held-back blocks)."""
+    the learner was chosen, with ``{folds}`` and ``{blocks}`` (default: folds of held-back blocks);
+    ``by_recording``: the folds are recordings, the guard's standard errors over them."""
     from sins.compensation.residual import ResidualStrategy
     from sins.compensation.window_net import WindowNet
 
@@ -138,14 +141,14 @@ def _guard_report(strategy: Any, how: str, unit: str) -> tuple[list[str], dict[s
         document = {"guard": {ch: bool(g["earns_its_place"]) for ch, g in strategy.guard_.items()},
                     "learned_on": used}  # fmt: skip
         return _learner_lines(
-            strategy, how.format(folds=strategy.cv_folds_, blocks=strategy.blocks_)
+            strategy, how.format(folds=strategy.cv_folds_, blocks=strategy.blocks_), by_recording
         ), document
     if isinstance(strategy, WindowNet) and hasattr(strategy, "held_back_gain_"):
         return _window_lines(strategy, unit)
     return [], {}
 
 
-def _learner_lines(strategy: Any, how: str) -> list[str]:
+def _learner_lines(strategy: Any, how: str, by_recording: bool = False) -> list[str]:
     """What a learned strategy chose (``how``: on what it was chosen), then its guard per channel: the
     physics terms each took, the learner's held-back gain over them, what the model uses there (the
     learner where the guard kept it, or everywhere with the guard off), and the same in words."""
@@ -159,7 +162,7 @@ def _learner_lines(strategy: Any, how: str) -> list[str]:
         gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
         lines.append(f"{ch:<8} {base:<26} learner's held-back gain {gain:+7.2f} % ± {se:.2f} %  -> "
                      f"{'learned' if used else base}{forced}")  # fmt: skip
-    over = " over the held-back recordings" if "recordings held back" in how else ""
+    over = " over the held-back recordings" if by_recording else ""
     rule = (
         "the guard is off: the learner corrects every channel, whatever its held-back gain"
         if not strategy.guard
@@ -376,7 +379,7 @@ def fit_several(
     document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]
     strategy = fitted.strategy
     how = "its learner chosen with each of the {folds} recordings held back whole ({blocks} blocks)"
-    said, found = _guard_report(strategy, how, "deg")
+    said, found = _guard_report(strategy, how, "deg", by_recording=True)
     lines += said
     document |= found
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
