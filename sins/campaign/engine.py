@@ -235,8 +235,15 @@ class _DeferredInterrupt:
 
 def _connect(address: str) -> Any:
     from dask.distributed import Client
+    from distributed.comm import parse_address
+    from distributed.comm.registry import get_backend
 
     try:
+        # The address read before a client is made: Client starts its event loop's thread first, and a
+        # loaded machine (the test suite's other workers) let distributed's own 10 s wait for that thread
+        # lapse, an AssertionError of distributed's, before "garbage" was read as no address at all.
+        scheme, location = parse_address(address)
+        get_backend(scheme).resolve_address(location)
         return Client(address, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise SinsInputError(f"--scheduler {address}: cannot reach a dask scheduler there ({exc})") from None
