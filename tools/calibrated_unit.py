@@ -29,15 +29,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import euroc_benchmark
 
 
+def own_bias(rec: dict[str, np.ndarray]) -> np.ndarray:
+    """A ``.npz`` recording's (its arrays by key) own constant gyro bias, rad/s (3,): the mean over its steps
+    of the gyro (the step's mean) less the reference's rate (each step's turn by scipy's ``Rotation``)."""
+    w = rec["gyro_rad_s"].astype(float)
+    ref = Rotation.from_quat(rec["q_wxyz"].astype(float), scalar_first=True)
+    rate = (ref[:-1].inv() * ref[1:]).as_rotvec() / np.diff(rec["t_s"])[:, None]
+    return np.asarray(np.mean(0.5 * (w[:-1] + w[1:]) - rate, axis=0), dtype=float)
+
+
 def calibrated(source: Path, folder: Path) -> np.ndarray:
     """The ``.npz`` recording ``source`` written into ``folder`` under its name with its own constant gyro
     bias taken out (the module docstring); returns that bias, rad/s (3,)."""
     with np.load(source) as z:
         a = {k: np.asarray(z[k]) for k in z.files}
-    t, w = a["t_s"], a["gyro_rad_s"].astype(float)
-    ref = Rotation.from_quat(a["q_wxyz"].astype(float), scalar_first=True)
-    rate = (ref[:-1].inv() * ref[1:]).as_rotvec() / np.diff(t)[:, None]
-    bias = np.mean(0.5 * (w[:-1] + w[1:]) - rate, axis=0)
+    bias = own_bias(a)
+    w = a["gyro_rad_s"].astype(float)
     np.savez(folder / source.name, **{**a, "gyro_rad_s": (w - bias).astype(a["gyro_rad_s"].dtype)})
     return bias
 

@@ -54,6 +54,7 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import euroc_benchmark
+from calibrated_unit import own_bias
 
 from sins.io.datasets import data_root
 
@@ -67,20 +68,6 @@ _OFF_DIAGONAL = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
 
 def _signed(rng: np.random.Generator, lo: float, hi: float, n: int = 3) -> np.ndarray:
     return rng.uniform(lo, hi, n) * rng.choice([-1.0, 1.0], n)
-
-
-def _rotations(q_wxyz: np.ndarray) -> Rotation:
-    q = np.asarray(q_wxyz, dtype=float)
-    return Rotation.from_quat(q[:, [1, 2, 3, 0]])
-
-
-def own_bias(rec: dict[str, np.ndarray]) -> np.ndarray:
-    """A sequence's constant gyro bias, rad/s: the mean over its steps of the gyro (the step's mean) less
-    the reference's rate (each step's turn by finite differences of the attitudes)."""
-    gyro = rec["gyro_rad_s"].astype(float)
-    r = _rotations(rec["q_wxyz"])
-    rate = (r[:-1].inv() * r[1:]).as_rotvec() / np.diff(rec["t_s"])[:, None]
-    return np.asarray((0.5 * (gyro[:-1] + gyro[1:]) - rate).mean(axis=0), dtype=float)
 
 
 def _drawn(rng: np.random.Generator, source: Path) -> list[str]:
@@ -123,7 +110,8 @@ def make_unit(seed: int, kind: str, source: Path, out: Path) -> None:
             m = turn.as_matrix()
             gyro = gyro @ m.T + _signed(rng, 0.05, 0.2) * _DEG
             rec["accel_m_s2"] = rec["accel_m_s2"].astype(float) @ m.T
-            rec["q_wxyz"] = (_rotations(rec["q_wxyz"]) * turn.inv()).as_quat()[:, [3, 0, 1, 2]]
+            body = Rotation.from_quat(rec["q_wxyz"].astype(float), scalar_first=True)
+            rec["q_wxyz"] = (body * turn.inv()).as_quat(scalar_first=True)
         elif kind == "trim":
             keep = rec["t_s"] >= rec["t_s"][0] + rng.uniform(0.0, 20.0)
             rec = {k: v[keep] for k, v in rec.items()}
