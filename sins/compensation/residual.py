@@ -285,7 +285,6 @@ class ResidualStrategy(Strategy):
         started = time.perf_counter()
         self.__dict__.pop("_restored", None)
         kept = None if recordings is None else _with_reference(recordings, data)
-        by_recording = kept is not None  # the folds are recordings: the guard counts them, not blocks
         data = data.rows_with_reference()
         if len(data) < 10:
             raise ValueError(f"{data.source or 'recording'}: too few rows with a reference to train on")
@@ -311,7 +310,7 @@ class ResidualStrategy(Strategy):
         groups: list[tuple[str, ...]] = [() for _ in CHANNELS]
         if self.physics:
             groups = terms.choose(
-                x_terms, [(train, t) for _, train, t in folds], block, self.guard_z, by_fold=by_recording
+                x_terms, [(train, t) for _, train, t in folds], block, self.guard_z, by_fold=kept is not None
             )
         targets = self._targets(whole, data) if given is None else given
         self.terms_ = {
@@ -339,7 +338,7 @@ class ResidualStrategy(Strategy):
                 raise ValueError(f"{data.source or 'recording'}: no fold could be fitted (too few blocks)")
             best = min(trials[sensor].values(), key=lambda t: t.score)
             self.configs_[sensor] = best.config
-            for c, verdict in enumerate(best.verdicts(self.guard_z, by_fold=by_recording)):
+            for c, verdict in enumerate(best.verdicts(self.guard_z, by_fold=kept is not None)):
                 self.guard_[CHANNELS[3 * si + c]] = verdict
                 used[3 * si + c] = verdict["earns_its_place"] or not self.guard
             points = aggregate(scaled[sensor], targets[:, cols], block, self.repeats_[sensor])
