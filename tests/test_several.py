@@ -833,3 +833,18 @@ def test_the_learners_guard_counts_recordings_not_blocks_where_recordings_are_th
     assert terms._forward(options, {(): np.zeros(300), ("g2",): np.concatenate(per_fold)}, 2.0) == ("g2",)
     sums = np.array([g.sum() for g in per_fold])
     assert terms._forward(options, {(): np.zeros(3), ("g2",): sums}, 2.0) == ()
+
+
+def test_every_guard_judges_against_the_standard_error_of_a_sum() -> None:
+    """The one statistic of every guard (the residual learners', the physics terms', mlp_window's): the
+    standard error of a sum of n independent draws, n times scipy's standard error of their mean, per
+    column; with one draw there is no spread to judge by, and nothing passes (infinite)."""
+    from scipy.stats import sem
+
+    from sins.compensation.base import sum_standard_error
+
+    draws = np.random.default_rng(3).standard_normal((7, 3)) * [1.0, 0.1, 5.0]
+    np.testing.assert_allclose(sum_standard_error(draws), 7 * sem(draws, axis=0), rtol=1e-12)
+    assert sum_standard_error(draws[:, 0]) == pytest.approx(7 * sem(draws[:, 0]), rel=1e-12)
+    assert sum_standard_error([0.4]) == np.inf
+    assert np.isinf(sum_standard_error(draws[:1])).all() and sum_standard_error(draws[:1]).shape == (3,)

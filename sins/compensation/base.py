@@ -432,6 +432,19 @@ SEED_RANGE = ParamRange(0, 2**32 - 1, whole=True)
 GUARD_Z_RANGE = ParamRange(0, 100)
 
 
+def sum_standard_error(draws: NDArray[np.floating] | list[float]) -> Any:
+    """The standard error of the sum of independent draws along the first axis: ``√n`` times their
+    sample standard deviation; infinite with fewer than two (no spread to judge by). What every guard
+    judges a held-back gain's sum against (``gain > z · this``): the residual learners'
+    (:mod:`~sins.compensation.residual`), the physics terms' forward selection
+    (:mod:`~sins.compensation.terms`) and ``mlp_window``'s; the draws are the held-back blocks, or the
+    recordings where each recording is a fold (the sampling unit a new recording is)."""
+    x = np.asarray(draws, dtype=float)
+    if len(x) < 2:
+        return np.full(x.shape[1:], np.inf) if x.ndim > 1 else np.inf
+    return np.sqrt(len(x) * x.var(axis=0, ddof=1))
+
+
 def param_kind(default: Any) -> str:
     """What a parameter whose default is ``default`` must be, in words ("" where any value may do)."""
     if isinstance(default, bool):
@@ -596,5 +609,6 @@ __all__ = [
     "param_kind",
     "residual_rms",
     "state_array",
+    "sum_standard_error",
     "wrong_kind",
 ]

@@ -58,7 +58,14 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from sins.compensation import terms
-from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, Strategy, state_array
+from sins.compensation.base import (
+    GUARD_Z_RANGE,
+    SEED_RANGE,
+    ParamRange,
+    Strategy,
+    state_array,
+    sum_standard_error,
+)
 from sins.compensation.points import (
     MIN_REPEATS,
     Points,
@@ -175,8 +182,8 @@ class _Trial:
         gains = np.array([g.sum(axis=0) for g in self.gains]) if by_fold else np.vstack(self.gains)
         out = []
         for c in range(gains.shape[1]):
-            total, base_sse, b = float(gains[:, c].sum()), float(base[:, c].sum()), len(gains)
-            se = float(np.sqrt(b * gains[:, c].var(ddof=1))) if b > 1 else np.inf
+            total, base_sse = float(gains[:, c].sum()), float(base[:, c].sum())
+            se = float(sum_standard_error(gains[:, c]))
             out.append({
                 "gain_fraction": total / base_sse if base_sse > 0 else 0.0,
                 "gain_se_fraction": se / base_sse if base_sse > 0 else 0.0,

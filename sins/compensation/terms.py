@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation.base import sum_standard_error
 from sins.imu import vocabulary
 
 Array = NDArray[np.float64]
@@ -219,7 +220,7 @@ def _forward(
             g = gains[s]
             step = g - base
             total = float(step.sum())
-            se = float(np.sqrt(len(step) * step.var(ddof=1))) if len(step) > 1 else np.inf
+            se = float(sum_standard_error(step))
             if total > z * se and total > best_gain:
                 best, best_gain, best_g = s, total, g
         if best is None:

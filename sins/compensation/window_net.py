@@ -39,7 +39,14 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import GUARD_Z_RANGE, SEED_RANGE, ParamRange, checked_array, state_array
+from sins.compensation.base import (
+    GUARD_Z_RANGE,
+    SEED_RANGE,
+    ParamRange,
+    checked_array,
+    state_array,
+    sum_standard_error,
+)
 from sins.compensation.mlp import check_hidden, seeded
 from sins.compensation.regression import Regression
 from sins.compensation.window import GyroWindow
@@ -142,12 +149,12 @@ class WindowNet(GyroWindow):
             gains = np.array([self._open_loop_gain(nets, recordings[i]) for nets, held in zip(trained, folds,
                               strict=True) for i in held])  # fmt: skip
             self.held_back_gain_ = np.full(3, gains.mean())
-            self.held_back_gain_se_ = np.full(3, gains.std(ddof=1) / np.sqrt(len(gains)))
+            self.held_back_gain_se_ = np.full(3, sum_standard_error(gains) / len(gains))  # of the mean
         else:
             per_fold = np.array([sum(_sse_gain(nets, sets[i]) for i in held) for nets, held in
                                  zip(trained, folds, strict=True)])  # fmt: skip
             self.held_back_gain_ = per_fold.sum(axis=0)
-            self.held_back_gain_se_ = np.sqrt(len(folds)) * per_fold.std(axis=0, ddof=1)
+            self.held_back_gain_se_ = sum_standard_error(per_fold)
         keep = (
             self.held_back_gain_ > self.guard_z * self.held_back_gain_se_ if self.guard else np.ones(3, bool)
         )
