@@ -196,6 +196,46 @@ def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() ->
     assert "opens moving" in unit_bias.prior_said(rule, moving)
 
 
+def test_nearest_weighs_the_matched_days_bias_against_the_rests_own_reading() -> None:
+    """``nearest``'s prior is the least-variance combination, per axis, of the matched training
+    recordings' bias (which missed by ``nearest_spread`` held back) and this rest's reading plus their
+    own bias in motion less at rest (missing by the two rests' noise and twice the offsets' spread),
+    written here by hand for one match; the matches alone where the matches predicted to nothing (a
+    unit of a few days), the rest's reading where they missed by far more (each recording a new
+    power-up: a helper's unit had a judged rest read like a training recording's and took its bias,
+    4.64° raw to 17.01°). The matches alone, too, where fewer than three training recordings have a
+    rest (their miss was not measured) and in a rule written before (no ``nearest_blend``)."""
+    rates = np.array([[1e-3, 2e-3, -1e-3], [9e-3, -6e-3, 5e-3], [-8e-3, 7e-3, 6e-3]])
+    off = np.array([[2e-4, -1e-4, 3e-4], [-3e-4, 2e-4, 1e-4], [1e-4, 1e-4, -2e-4]])
+    biases = rates + off  # bias in motion, each rest's own
+    rule = unit_bias.BiasRule(
+        mode="nearest", rest_rates=rates, rest_rates_se=np.full((3, 3), 1e-4), rest_biases=biases,
+        rest_spread=np.full(3, 2e-4), nearest_spread=np.array([1e-3, 5e-4, 2e-3]), nearest_blend=True,
+    )  # fmt: skip
+    rest, rest_se = rates[0] + np.array([3e-4, -2e-4, 1e-4]), np.full(3, 1.5e-4)  # near the first only
+    match = unit_bias.nearest_prior(rule, rest, rest_se)
+    assert match is not None
+    np.testing.assert_allclose(match, biases[0], atol=1e-9)  # the others are 24 standard deviations away
+    own = rest + (biases[0] - rates[0])
+    var_match, var_own = rule.nearest_spread**2, 1.5e-4**2 + 1e-4**2 + 2 * 2e-4**2
+    expected = (var_own * biases[0] + var_match * own) / (var_match + var_own)
+    np.testing.assert_allclose(unit_bias.blended_nearest_prior(rule, rest, rest_se), expected, atol=1e-12)
+    days = replace(rule, nearest_spread=np.full(3, 1e-9))
+    np.testing.assert_allclose(unit_bias.blended_nearest_prior(days, rest, rest_se), biases[0], atol=1e-9)
+    draws = replace(rule, nearest_spread=np.full(3, 1.0))
+    np.testing.assert_allclose(unit_bias.blended_nearest_prior(draws, rest, rest_se), own, atol=1e-9)
+    assert unit_bias.blended_nearest_prior(rule, rest + 0.03, rest_se) is None  # near none: pooled
+    two = replace(rule, rest_rates=rates[:2], rest_rates_se=rule.rest_rates_se[:2], rest_biases=biases[:2])
+    np.testing.assert_allclose(unit_bias.blended_nearest_prior(two, rest, rest_se), biases[0], atol=1e-9)
+    # The model file's rule: written with the flag, read back with it; a rule written before reads as
+    # it was fitted, the matches alone.
+    assert unit_bias.BiasRule.from_dict(rule.to_dict()).nearest_blend is True
+    old = {k: v for k, v in rule.to_dict().items() if k != "nearest_blend"}
+    assert unit_bias.BiasRule.from_dict(old).nearest_blend is False
+    with pytest.raises(ValueError, match="nearest_blend"):
+        unit_bias.BiasRule.from_dict({**rule.to_dict(), "nearest_blend": "yes"})
+
+
 def test_a_mean_bias_the_training_recordings_do_not_determine_is_left_to_the_readings() -> None:
     """A new recording's prior keeps of the model's mean gyro bias what the training recordings determine
     (``unit_bias.shrunk``): all of it but a sliver where they agree on a bias far from zero (EuRoC's six:

@@ -81,6 +81,9 @@ MIN_REST_S = 1.0
 #: distance (the 99th percentile of chi-squared with 3 degrees of freedom: the three axes' differences,
 #: each in its standard deviations): beyond every one, the day is new, and the prior is ``pooled``.
 NEAREST_CHI2 = 11.34
+#: The training recordings with an opening rest that measure what ``nearest``'s matches miss by (each
+#: predicted from the others: with two, one match each and nothing to weigh it by).
+MEASURED_RESTS = 3
 #: How often the online estimate is made again, s.
 UPDATE_S = 2.0
 #: Normal gravity's size for the velocity model, m/s² (the latitude is not known; only the horizontal
@@ -115,6 +118,7 @@ class BiasRule:
     rest_rates_se: Array = field(default_factory=lambda: np.zeros((0, 3)))
     rest_biases: Array = field(default_factory=lambda: np.zeros((0, 3)))
     nearest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
+    nearest_blend: bool = False
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
 
@@ -140,6 +144,8 @@ class BiasRule:
             raise ValueError("bias rule: sigma_v_mps and sigma_accel_mps2 must be in (0, 1000)")
         if np.any(self.spread <= 0.0) or np.any(self.rest_spread <= 0.0):
             raise ValueError("bias rule: spreads must be positive")
+        if not isinstance(self.nearest_blend, bool):
+            raise ValueError("bias rule nearest_blend: expected true or false")
 
     def to_dict(self) -> dict[str, Any]:
         """The rule as a JSON object (what a model file keeps)."""
@@ -149,7 +155,7 @@ class BiasRule:
             "sigma_v_mps": self.sigma_v_mps, "sigma_accel_mps2": self.sigma_accel_mps2,
             "rest_rates": self.rest_rates.tolist(), "rest_rates_se": self.rest_rates_se.tolist(),
             "rest_biases": self.rest_biases.tolist(), "nearest_spread": self.nearest_spread.tolist(),
-            "held_back_deg": dict(self.held_back_deg),
+            "nearest_blend": self.nearest_blend, "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
         }  # fmt: skip
 
@@ -213,7 +219,8 @@ def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, 
     still = omega[:rest]
     if rule.mode.startswith("rest"):
         return rest, still.mean(axis=0) + rule.rest_offset, rule.rest_spread
-    near = nearest_prior(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt))))
+    prior_of = blended_nearest_prior if rule.nearest_blend else nearest_prior
+    near = prior_of(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt))))
     return rest, near, (rule.spread if near is None else rule.nearest_spread)
 
 
@@ -311,6 +318,18 @@ def nearest_prior(
     rests' noise and the spread of bias in motion less bias at rest (``rest_spread``); None where no
     training recording's rest lies within :data:`NEAREST_CHI2` (``leave_out``: one training recording
     left out, to judge the others' prediction of it)."""
+    matched = _matches(rule, rest_rate, rest_se, leave_out)
+    if matched is None:
+        return None
+    w, keep = matched
+    return np.asarray(w @ rule.rest_biases[keep], dtype=float)
+
+
+def _matches(
+    rule: BiasRule, rest_rate: Array, rest_se: Array, leave_out: int | None = None
+) -> tuple[Array, NDArray[np.bool_]] | None:
+    """The training recordings (a mask) whose rests lie within :data:`NEAREST_CHI2` of this rest and
+    their normalised likelihood weights; None where none does."""
     keep = np.ones(len(rule.rest_rates), dtype=bool)
     if leave_out is not None:
         keep[leave_out] = False
@@ -320,7 +339,32 @@ def nearest_prior(
     if d2.min() > NEAREST_CHI2:
         return None
     w = np.exp(-0.5 * (d2 - d2.min()))
-    return np.asarray((w[:, None] * rule.rest_biases[keep]).sum(axis=0) / w.sum(), dtype=float)
+    return w / w.sum(), keep
+
+
+def blended_nearest_prior(rule: BiasRule, rest_rate: Array, rest_se: Array) -> Array | None:
+    """``nearest``'s prior, weighed against the rest's own reading: the matched training recordings'
+    biases (:func:`nearest_prior`), which missed by :attr:`BiasRule.nearest_spread` on the training
+    recordings held back, and this rest's mean rate plus the matched recordings' own bias in motion less
+    at rest, which misses by the two rests' noise and two offsets' spread; per axis, each weighted by the
+    other's variance (the least-variance combination of two estimates). Where the training recordings
+    are of a few days, the matches predict a day's bias to a fraction of what a rest read beside running
+    motors does, and the prior is theirs; where each recording is a new power-up, a match is another
+    draw, its miss as large as the spread of the unit's biases, and the prior is the rest's. Where fewer
+    than :data:`MEASURED_RESTS` training recordings have a rest, the matches' miss was not measured (the
+    spread stands in for it) and the matches stand alone. None where no training recording's rest is
+    near."""
+    matched = _matches(rule, rest_rate, rest_se)
+    if matched is None:
+        return None
+    w, keep = matched
+    if len(rule.rest_rates) < MEASURED_RESTS:
+        return np.asarray(w @ rule.rest_biases[keep], dtype=float)
+    near = w @ rule.rest_biases[keep]
+    from_rest = rest_rate + w @ (rule.rest_biases[keep] - rule.rest_rates[keep])
+    var_near = rule.nearest_spread**2
+    var_rest = rest_se**2 + w @ rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
+    return np.asarray((var_rest * near + var_near * from_rest) / (var_near + var_rest), dtype=float)
 
 
 def _rest_se(omega: Array, dt: float) -> Array:
@@ -540,7 +584,7 @@ def rule_from(
     )  # fmt: skip
     if accel_biases is not None and len(accel_biases) > 1:
         rule = replace(rule, sigma_accel_mps2=accel_spread(accel_biases))
-    return replace(rule, nearest_spread=_nearest_spread(rule, spread))
+    return replace(rule, nearest_spread=_nearest_spread(rule, spread), nearest_blend=True)
 
 
 #: The least accelerometer-bias prior the online estimate takes, m/s² (0.1 mg): recordings whose biases
@@ -569,7 +613,7 @@ def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
     """What ``nearest``'s prior missed by on the training recordings with a rest, each predicted from the
     others (RMS per axis; a recording none of the others is near is predicted by the pooled prior, as a
     new one would be); the pooled spread where fewer than three have a rest."""
-    if len(rule.rest_rates) < 3:
+    if len(rule.rest_rates) < MEASURED_RESTS:
         return pooled
     misses = []
     for i in range(len(rule.rest_rates)):
@@ -623,6 +667,7 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 
 __all__ = [
     "DETERMINED",
+    "MEASURED_RESTS",
     "MIN_REST_S",
     "MODES",
     "NEAREST_CHI2",
@@ -636,6 +681,7 @@ __all__ = [
     "applied",
     "attitude_dcm",
     "bias_track",
+    "blended_nearest_prior",
     "corrected",
     "corrected_any",
     "nearest_prior",
