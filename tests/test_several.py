@@ -188,6 +188,7 @@ def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() ->
         np.testing.assert_array_equal(unit_bias.bias_track(rule, other)[-1], rule.prior)
     # What sins evaluate says of each, beside the judged figures.
     assert "reads like some training recordings' rests" in unit_bias.prior_said(rule, new)
+    assert "weighed against the rest's own reading" in unit_bias.prior_said(rule, new)  # four rests
     said = unit_bias.prior_said(rule, far)
     assert "reads like no training recording's (" in said and "another unit, a new day?)" in said
     # 0.03 rad/s from its day on every axis, against rests that differ by their noise and motors (3e-4):

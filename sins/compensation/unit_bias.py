@@ -283,7 +283,9 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
         far = _rest_distance(rule, imu, rest)
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
         return head + f"the rest reads like no training recording's{said}, so after it their mean"
-    return head + "the rest reads like some training recordings' rests: after it, their bias"
+    said = "the rest reads like some training recordings' rests: after it, their bias"
+    weighed = rule.nearest_blend and len(rule.rest_rates) >= MEASURED_RESTS
+    return head + said + (" weighed against the rest's own reading by what each missed by" if weighed else "")
 
 
 def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
@@ -343,28 +345,30 @@ def _matches(
 
 
 def blended_nearest_prior(rule: BiasRule, rest_rate: Array, rest_se: Array) -> Array | None:
-    """``nearest``'s prior, weighed against the rest's own reading: the matched training recordings'
-    biases (:func:`nearest_prior`), which missed by :attr:`BiasRule.nearest_spread` on the training
-    recordings held back, and this rest's mean rate plus the matched recordings' own bias in motion less
-    at rest, which misses by the two rests' noise and two offsets' spread; per axis, each weighted by the
-    other's variance (the least-variance combination of two estimates). Where the training recordings
-    are of a few days, the matches predict a day's bias to a fraction of what a rest read beside running
-    motors does, and the prior is theirs; where each recording is a new power-up, a match is another
-    draw, its miss as large as the spread of the unit's biases, and the prior is the rest's. Where fewer
-    than :data:`MEASURED_RESTS` training recordings have a rest, the matches' miss was not measured (the
-    spread stands in for it) and the matches stand alone. None where no training recording's rest is
-    near."""
+    """``nearest``'s prior: the matched training recordings' biases (:func:`nearest_prior`, which missed
+    by :attr:`BiasRule.nearest_spread` held back) and this rest's mean rate plus their own bias in motion
+    less at rest (which misses by the two rests' noise and two offsets' spread), per axis each weighted by
+    the other's variance (:func:`_matches_share`). A unit of a few days keeps the matches; one whose every
+    recording is a new power-up, where a match is one more draw, the rest's reading. None where no
+    training recording's rest is near."""
     matched = _matches(rule, rest_rate, rest_se)
     if matched is None:
         return None
     w, keep = matched
-    if len(rule.rest_rates) < MEASURED_RESTS:
-        return np.asarray(w @ rule.rest_biases[keep], dtype=float)
     near = w @ rule.rest_biases[keep]
     from_rest = rest_rate + w @ (rule.rest_biases[keep] - rule.rest_rates[keep])
+    share = _matches_share(rule, rest_se, w, keep)
+    return np.asarray(share * near + (1.0 - share) * from_rest, dtype=float)
+
+
+def _matches_share(rule: BiasRule, rest_se: Array, w: Array, keep: NDArray[np.bool_]) -> Array:
+    """Per axis, the matches' share of :func:`blended_nearest_prior`: the rest's reading's variance over
+    the two variances' sum; 1 with fewer than :data:`MEASURED_RESTS` training rests (a miss unmeasured)."""
+    if len(rule.rest_rates) < MEASURED_RESTS:
+        return np.ones(3)
     var_near = rule.nearest_spread**2
     var_rest = rest_se**2 + w @ rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
-    return np.asarray((var_rest * near + var_near * from_rest) / (var_near + var_rest), dtype=float)
+    return np.asarray(var_rest / (var_near + var_rest), dtype=float)
 
 
 def _rest_se(omega: Array, dt: float) -> Array:
