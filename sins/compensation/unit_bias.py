@@ -22,7 +22,8 @@ estimated from the recording itself, by one of these :data:`MODES`:
     most between power-ups and days, and a rest of a few seconds tells the day's bias apart where the
     days differ by more than a rest's noise and its motors' effect: the prior is then the day's, not the
     mean of all days. Its spread is what such priors missed by on the training recordings, each in turn
-    predicted from the others (leave one out).
+    predicted from the others (leave one out); with three training rests or more, the day's bias is
+    weighed against the rest's own reading by what each misses by (:func:`blended_nearest_prior`).
 ``online``
     the bias's horizontal components (and what of the vertical one the motion reveals) estimated as the
     recording goes, from the one thing every recording of a vehicle that stays within reach knows: its
