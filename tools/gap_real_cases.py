@@ -26,7 +26,9 @@ reading differs from it by the unit's errors, a few per cent of the effect at mo
 written into a temporary data root (never the project's or the shared data) and diagnosed as a user does,
 ``sins gap --dataset FOLDER/NAME --json OUT`` in a process of its own, as is the base unmodified. A library
 case passes where the added effect is in the diagnosis and the base's diagnosis lacks it; a disturbance
-passes where ``outside`` names its channel. Prints one row per case and the totals, by base.
+passes where ``outside`` names its channel. Prints one row per case and the totals, by base; beside them
+the library cases passed where an effect the report lists as indistinguishable from one it accepts
+(``indistinguishable_from``) counts as named, in the case and in the base alike.
 """
 
 from __future__ import annotations
@@ -197,6 +199,8 @@ def diagnose(root: Path, name: str, timeout_s: float) -> dict[str, Any]:
         "outside": [(o["channel"], o["kind"]) for o in report["outside"]],
         "statistic": report.get("statistic", {}).get("kind"), "wall_s": wall,
         "sizes": report.get("sizes", {}),
+        "tied": sorted({t for e in report["effects"] if e.get("accepted")
+                        for t in e.get("indistinguishable_from", [])}),
     }  # fmt: skip
 
 
@@ -217,20 +221,26 @@ def run_base(base: str, cases: list[str], root: Path, jobs: int, timeout_s: floa
     clean = results[0]
     for (case, name), result in zip(names, results, strict=True):
         oracle = oracle_nats(root, names[0][1], name, case) if case != "clean" else float("nan")
-        rows.append(
-            {"base": base, "case": case, **result, "oracle": oracle, "passed": judged(case, result, clean)}
-        )
+        rows.append({
+            "base": base, "case": case, **result, "oracle": oracle, "passed": judged(case, result, clean),
+            "passed_or_tied": judged(case, result, clean, tied=True),
+        })  # fmt: skip
     return rows
 
 
-def judged(case: str, result: dict[str, Any], clean: dict[str, Any]) -> bool | None:
+def judged(case: str, result: dict[str, Any], clean: dict[str, Any], tied: bool = False) -> bool | None:
     """A library case: its effect diagnosed, and not in the base's diagnosis; a disturbance: its channel
-    named in ``outside``; the base itself: None."""
+    named in ``outside``; the base itself: None. With ``tied``, an effect the report lists as
+    indistinguishable from one it accepts counts as named (in the case and in the base alike)."""
     if case == "clean" or "error" in result:
         return None if case == "clean" else False
     if case in OUTSIDE:
         return any(ch == OUTSIDE[case] for ch, _ in result["outside"])
-    return case in result["diagnosis"] and case not in clean.get("diagnosis", [])
+
+    def named(r: dict[str, Any]) -> list[str]:
+        return [*r.get("diagnosis", []), *(r.get("tied", []) if tied else [])]
+
+    return case in named(result) and case not in named(clean)
 
 
 def summary(rows: list[dict[str, Any]]) -> None:
@@ -252,13 +262,14 @@ def summary(rows: list[dict[str, Any]]) -> None:
         if lib or out:
             print(
                 f"{label}: library effects named beyond the base's diagnosis {_passes(lib)} of {len(lib)} "
-                f"({_passes(seen)} of the {len(seen)} observable); outside disturbances flagged on their "
-                f"channel {_passes(out)} of {len(out)}"
+                f"({_passes(seen)} of the {len(seen)} observable; named or listed as indistinguishable from "
+                f"one named {_passes(lib, 'passed_or_tied')} and {_passes(seen, 'passed_or_tied')}); "
+                f"outside disturbances flagged on their channel {_passes(out)} of {len(out)}"
             )
 
 
-def _passes(rows: list[dict[str, Any]]) -> int:
-    return sum(bool(r["passed"]) for r in rows)
+def _passes(rows: list[dict[str, Any]], key: str = "passed") -> int:
+    return sum(bool(r.get(key)) for r in rows)
 
 
 def main() -> int:
