@@ -196,12 +196,16 @@ def choose(
                 gains[s].append(
                     np.asarray(np.bincount(index, weights=y * y - e * e, minlength=n_blocks), float)
                 )
-        drawn = {
-            s: (np.array([b.sum() for b in g]) if by_fold else np.concatenate(g)) if g else np.zeros(0)
-            for s, g in gains.items()
-        }
-        chosen.append(_forward(options, drawn, z))
+        chosen.append(_forward(options, {s: _draws(g, by_fold) for s, g in gains.items()}, z))
     return chosen
+
+
+def _draws(per_fold: list[Array], by_fold: bool) -> Array:
+    """A subset's held-back gains as the guard's draws: every fold's blocks one after another, or
+    (``by_fold``, each fold a recording) one sum per fold; none where no fold was held back."""
+    if not per_fold:
+        return np.zeros(0)
+    return np.array([g.sum() for g in per_fold]) if by_fold else np.concatenate(per_fold)
 
 
 def _forward(
