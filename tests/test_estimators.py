@@ -157,6 +157,14 @@ def test_every_strategy_keeps_the_estimator_laws(name: str, tmp_path: Path) -> N
     np.testing.assert_array_equal(w2, w)
     np.testing.assert_array_equal(f2, f)
     np.testing.assert_array_equal(back.correct_increments(steps, temp).dtheta_b, by_steps.dtheta_b)
+    # A key it never learns (a misspelt unit_bias_) is refused by name: it had been loaded and then
+    # ignored, the model correcting without the rule its file meant to give it.
+    doc = json.loads(path.read_text())
+    doc["state"]["unit_bais_"] = {"mode": "pooled"}
+    path.write_text(json.dumps(doc))
+    said = rf"{path}: malformed {back.name} model .*state\.unit_bais_ is not a fitted attribute of {back.name}"
+    with pytest.raises(SinsInputError, match=said):
+        compensation.load(path)
 
 
 def test_every_saved_strategy_is_a_registered_variant() -> None:

@@ -38,6 +38,7 @@ from sins.core import rowwise
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 from sins.errors import SinsInputError
 from sins.imu import CHANNELS, ImuModel
+from sins.io.documents import printable
 
 Array = NDArray[np.float64]
 
@@ -116,6 +117,9 @@ class Strategy(ABC):
     #: Each numeric constructor parameter's range (every element's, for a list): what
     #: :meth:`check_params` holds it to. A subclass extends its parent's.
     param_ranges: ClassVar[dict[str, ParamRange]] = {}
+    #: The fitted attributes a model file of it may hold (:meth:`check_state` refuses any other, so that a
+    #: misspelt ``unit_bias_`` is not loaded and then ignored). A subclass extends its parent's.
+    state_keys: ClassVar[tuple[str, ...]] = ("fitted_on_", "time_offset_s_", "unit_bias_")
     #: The variant it was made as (``regression_robust`` is a ``regression``; :func:`make` sets it).
     variant: str = ""
     #: How late the gyro and the accelerometer read, s (see the module docstring); set by a fit against a
@@ -241,10 +245,11 @@ class Strategy(ABC):
         """Refuse a saved state this strategy (as constructed) cannot hold, before any array, network or
         map of it is made: ``ValueError`` naming the key and what it must be.
         :func:`~sins.compensation.load` calls it before :meth:`set_state`. Here: every key a fitted
-        attribute (ending in ``_``); strategies add their own shapes and sizes."""
-        odd = [k for k in state if not k.endswith("_")]
+        attribute of this strategy (:attr:`state_keys`); strategies add their own shapes and sizes."""
+        odd = [k for k in state if k not in self.state_keys]
         if odd:
-            raise ValueError(f"state.{odd[0]} is not a fitted attribute")
+            key, its = printable(odd[0])[:80], ", ".join(sorted(self.state_keys))
+            raise ValueError(f"state.{key} is not a fitted attribute of {self.name} (its: {its})")
         if "fitted_on_" in state:
             _check_fitted_on(state["fitted_on_"])
         if "unit_bias_" in state:

@@ -91,6 +91,8 @@ class Ferraris(Strategy):
     """
 
     name = "ferraris"
+    state_keys = (*Strategy.state_keys, "A_", "A0_", "A_se_", "A0_se_", "placement_rad_", "K_", "B0_",
+                  "K_se_", "B0_se_", "B_", "B_se_")  # fmt: skip
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "turn_sd_deg": ParamRange(0, 90),
         "batches": ParamRange(1, 1000, whole=True),

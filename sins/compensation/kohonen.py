@@ -70,6 +70,7 @@ class Kohonen(Strategy):
     """
 
     name = "kohonen_pure"
+    state_keys = (*Strategy.state_keys, "x_mean_", "x_scale_", "codebook_", "node_error_", "node_count_")
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "rows": ParamRange(1, MAX_SIDE, whole=True),
         "cols": ParamRange(1, MAX_SIDE, whole=True),

@@ -21,6 +21,7 @@ class Regression(Strategy):
     """
 
     name = "regression"
+    state_keys = (*Strategy.state_keys, "B0_", "B_", "K_", "A0_", "A_")
     #: ``huber_k`` in robust standard deviations: below about 0.1 every row is down-weighted alike.
     param_ranges: ClassVar[dict[str, ParamRange]] = {"huber_k": ParamRange(0, 100, above=True)}
 
@@ -113,6 +114,7 @@ class ExtendedRegression(Strategy):
     """
 
     name = "regression_extended"
+    state_keys = (*Strategy.state_keys, "uses_temp_", "coef_")
     #: ``t0``, °C: the temperature the thermal terms are taken about.
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "t0": ParamRange(-273.15, 1000),

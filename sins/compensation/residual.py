@@ -220,6 +220,9 @@ class ResidualStrategy(Strategy):
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "folds": ParamRange(2, 50, whole=True), "guard_z": GUARD_Z_RANGE, "seed": SEED_RANGE,
         "n_jobs": ParamRange(1, 256, whole=True, none=True)}  # fmt: skip
+    state_keys = Strategy.state_keys + tuple(
+        "base_ uses_temp_ scaling_ box_ blocks_ cv_folds_ terms_ repeats_ sigma_ configs_ cv_scores_ guard_ "
+        "used_ fit_seconds_ learners_".split())  # fmt: skip
 
     def __init__(
         self,
@@ -577,12 +580,10 @@ class ResidualStrategy(Strategy):
         return w, f
 
     def _base_strategy(self) -> Regression:
-        base: Regression | None = getattr(self, "_base", None)
-        if base is None:
-            base = Regression()
-            base.set_state(self.base_)
-            self._base = base
-        return base
+        if getattr(self, "_base", None) is None:  # a loaded model: made once, on first use
+            self._base = Regression()
+            self._base.set_state(self.base_)
+        return self._base
 
     def _learner(self, sensor: str) -> Any:
         cache = self.__dict__.setdefault("_restored", {})
@@ -643,9 +644,8 @@ class ResidualStrategy(Strategy):
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore the state; the learners are rebuilt from it on first use."""
-        plain = {k: v for k, v in state.items() if k not in ("learners_", "used_")}
-        for k, v in plain.items():
-            setattr(self, k, v)
+        for k, v in state.items():
+            setattr(self, k, v)  # sigma_, used_ and learners_ then made of their kinds
         self.sigma_ = np.asarray(state["sigma_"], dtype=float)
         self.used_ = np.asarray(state["used_"], dtype=bool)
         self.learners_ = dict(state["learners_"])

@@ -46,6 +46,7 @@ class RestAware(Regression):
     """The seed model with the gyro bias re-taken at every rest in operation (see the module docstring)."""
 
     name = "regression_rest"
+    state_keys = (*Regression.state_keys, "rest_rms_", "motion_offset_")
 
     def fit_beyond(self, data: CalibrationData) -> RestAware:
         """The rest detector's threshold and the motion offset, after the seed model; returns self.

@@ -84,6 +84,8 @@ class WindowRegression(GyroWindow):
     the module docstring)."""
 
     name = "regression_window"
+    state_keys = (*GyroWindow.state_keys, "feature_mean_", "feature_scale_", "ridge_", "coef_",
+                  "held_back_gain_", "held_back_gain_se_")  # fmt: skip
 
     def fit_beyond(self, data: CalibrationData) -> WindowRegression:
         """The window's ridge per gyro axis, after the seed model; returns self.

@@ -75,6 +75,7 @@ class WindowNet(GyroWindow):
     docstring)."""
 
     name = "mlp_window"
+    state_keys = (*GyroWindow.state_keys, "held_back_gain_", "held_back_gain_se_", "axes_", "networks_")
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "hidden": ParamRange(1, MAX_WIDTH, whole=True),
         "weight_decay": ParamRange(0, 10),
