@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python tools/gap_real_cases.py [--bases euroc/MH_01_easy broad_05 ...] [--jobs 2]
-        [--effects NAME ...] [--save CASES.json] [--root DIR]
+        [--effects NAME ...] [--scale X] [--save CASES.json] [--root DIR]
     .venv/bin/python tools/gap_real_cases.py --load CASES.json
 
 Each base is a real recording in the ``.npz`` form of ``shared/data/euroc`` (its SOURCE.md): a EuRoC
@@ -111,8 +111,9 @@ def delayed(x: np.ndarray, tau_s: float, dt: float) -> np.ndarray:
     return np.asarray(shifted[n : 2 * n])
 
 
-def added(case: str, a: dict[str, np.ndarray], seed: int = 0) -> dict[str, np.ndarray]:
-    """The base's arrays with ``case`` added to the readings (see the module docstring)."""
+def added(case: str, a: dict[str, np.ndarray], seed: int = 0, scale: float = 1.0) -> dict[str, np.ndarray]:
+    """The base's arrays with ``case`` added to the readings (see the module docstring), its size
+    ``scale`` times the docstring's."""
     out = {k: v.astype(float) for k, v in a.items()}
     t, w, f = out["t_s"], out["gyro_rad_s"], out["accel_m_s2"]
     dt = float(np.median(np.diff(t)))
@@ -120,29 +121,29 @@ def added(case: str, a: dict[str, np.ndarray], seed: int = 0) -> dict[str, np.nd
     half = t >= t[0] + 0.5 * (t[-1] - t[0])
     wave = np.sin(2 * np.pi * (t - t[0]) / 37.0)
     if case == "gyro.time_offset":
-        out["gyro_rad_s"] = delayed(w, 5e-3, dt)
+        out["gyro_rad_s"] = delayed(w, scale * 5e-3, dt)
     elif case == "accel.time_offset":
-        out["accel_m_s2"] = delayed(f, 5e-3, dt)
+        out["accel_m_s2"] = delayed(f, scale * 5e-3, dt)
     elif case == "gyro.scale_nonlinearity":
-        k2 = 0.005 / np.sqrt(np.mean(w**2, axis=0))
+        k2 = scale * 0.005 / np.sqrt(np.mean(w**2, axis=0))
         out["gyro_rad_s"] = w + k2 * w * w
     elif case == "accel.scale_nonlinearity":
-        out["accel_m_s2"] = f + 2000e-6 / G * f * f
+        out["accel_m_s2"] = f + scale * 2000e-6 / G * f * f
     elif case == "gyro.scale_asymmetry":
-        out["gyro_rad_s"] = w + 5000e-6 * np.abs(w)
+        out["gyro_rad_s"] = w + scale * 5000e-6 * np.abs(w)
     elif case == "accel.scale_asymmetry":
-        out["accel_m_s2"] = f + 2000e-6 * np.abs(f)
+        out["accel_m_s2"] = f + scale * 2000e-6 * np.abs(f)
     elif case == "gyro.g2_sensitivity":
-        g2 = 0.05 * DEG / G**2 * rng.choice([-1.0, 1.0], (3, 3, 3))
+        g2 = scale * 0.05 * DEG / G**2 * rng.choice([-1.0, 1.0], (3, 3, 3))
         out["gyro_rad_s"] = w + np.einsum("ijk,nj,nk->ni", g2, f, f)
     elif case == "gyro.x sinusoid":
-        out["gyro_rad_s"] = w + np.outer(0.3 * DEG * wave, [1.0, 0.0, 0.0])
+        out["gyro_rad_s"] = w + np.outer(scale * 0.3 * DEG * wave, [1.0, 0.0, 0.0])
     elif case == "gyro.y step":
-        out["gyro_rad_s"] = w + np.outer(0.3 * DEG * half, [0.0, 1.0, 0.0])
+        out["gyro_rad_s"] = w + np.outer(scale * 0.3 * DEG * half, [0.0, 1.0, 0.0])
     elif case == "accel.y sinusoid":
-        out["accel_m_s2"] = f + np.outer(10 * MG * wave, [0.0, 1.0, 0.0])
+        out["accel_m_s2"] = f + np.outer(scale * 10 * MG * wave, [0.0, 1.0, 0.0])
     elif case == "accel.x step":
-        out["accel_m_s2"] = f + np.outer(10 * MG * half, [1.0, 0.0, 0.0])
+        out["accel_m_s2"] = f + np.outer(scale * 10 * MG * half, [1.0, 0.0, 0.0])
     elif case != "clean":
         raise ValueError(f"unknown case {case!r}")
     return out
@@ -204,8 +205,11 @@ def diagnose(root: Path, name: str, timeout_s: float) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def run_base(base: str, cases: list[str], root: Path, jobs: int, timeout_s: float) -> list[dict[str, Any]]:
-    """Every case of one base, written and diagnosed; the clean base first."""
+def run_base(
+    base: str, cases: list[str], root: Path, jobs: int, timeout_s: float, scale: float = 1.0
+) -> list[dict[str, Any]]:
+    """Every case of one base, written and diagnosed; the clean base first; each effect ``scale`` times
+    its size."""
     arrays = base_arrays(base)
     folder = root / "cases"
     folder.mkdir(parents=True, exist_ok=True)
@@ -213,7 +217,7 @@ def run_base(base: str, cases: list[str], root: Path, jobs: int, timeout_s: floa
     names = []
     for case in ["clean", *cases]:
         name = f"{tag}__{case.replace(' ', '_')}"
-        np.savez(folder / f"{name}.npz", **added(case, arrays))  # type: ignore[arg-type]
+        np.savez(folder / f"{name}.npz", **added(case, arrays, scale=scale))  # type: ignore[arg-type]
         names.append((case, name))
     with ThreadPoolExecutor(jobs) as pool:
         results = list(pool.map(lambda cn: diagnose(root, cn[1], timeout_s), names))
@@ -279,6 +283,7 @@ def main() -> int:
         "--effects", nargs="+", default=[*LIBRARY, *OUTSIDE], help="cases (effect names or disturbances)"
     )
     p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--scale", type=float, default=1.0, help="every effect this many times its size")
     p.add_argument("--timeout-s", type=float, default=600.0)
     p.add_argument("--root", type=Path, help="the temporary data root (default: a new temporary folder)")
     p.add_argument("--save", type=Path)
@@ -291,7 +296,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="sins-gap-cases-") as tmp:
         root = args.root or Path(tmp)
         for base in args.bases:
-            rows += run_base(base, args.effects, root, args.jobs, args.timeout_s)
+            rows += run_base(base, args.effects, root, args.jobs, args.timeout_s, args.scale)
             print(f"done {base}", file=sys.stderr)
     if args.save:
         args.save.write_text(json.dumps(rows, indent=1))
