@@ -1,5 +1,5 @@
 """The PSINS FOG/MEMS vehicle recording (../shared/data/psins_fog_mems_vehicle), read by
-:func:`sins.io.datasets.psins_vehicle._read_psins_vehicle`.
+:func:`sins.io.datasets.psins_vehicle.read_psins_vehicle`.
 
 The file never stands still (the vehicle drives at 11.5–15.8 m/s throughout), so the checks that
 need a still unit (|f| = g, |ω| = Earth rate) are done on the quietest stretch for gravity and are
@@ -28,8 +28,8 @@ from sins.io.datasets.psins_vehicle import (
     PSINS_VEHICLE_FILE,
     PSINS_VEHICLE_FOLDER,
     PsinsAlignment,
-    _read_psins_vehicle,
     psins_alignment,
+    read_psins_vehicle,
 )
 from sins.io.datasets.root import ENV_VAR
 
@@ -52,7 +52,7 @@ def _need_data() -> None:
 @pytest.fixture(scope="module")
 def at_100hz() -> tuple[CalibrationData, NavSeries]:
     _need_data()
-    data, nav = _read_psins_vehicle()
+    data, nav = read_psins_vehicle()
     assert nav is not None
     return data, nav
 
@@ -60,7 +60,7 @@ def at_100hz() -> tuple[CalibrationData, NavSeries]:
 @pytest.fixture(scope="module")
 def at_10hz() -> CalibrationData:
     _need_data()
-    return _read_psins_vehicle(rate="fog")[0]
+    return read_psins_vehicle(rate="fog")[0]
 
 
 @pytest.fixture(scope="module")
@@ -272,7 +272,7 @@ def test_gap_navigates_the_simulated_unit_beside_the_real_one(
 def test_synthetic_file_reads(tmp_path: Path) -> None:
     # The refusals below damage this file one way at a time; whole, it reads.
     _write(tmp_path, **synthetic_recording())
-    data, nav = _read_psins_vehicle(tmp_path)
+    data, nav = read_psins_vehicle(tmp_path)
     assert nav is not None and len(nav) == 200
     assert np.allclose(data.accel, [0.0, 0.0, -9.8])
     assert abs(psins_alignment(tmp_path).offset_s) < 0.002
@@ -280,7 +280,7 @@ def test_synthetic_file_reads(tmp_path: Path) -> None:
 
 def test_missing_folder_or_file(tmp_path: Path) -> None:
     refusal(
-        lambda: _read_psins_vehicle(tmp_path),
+        lambda: read_psins_vehicle(tmp_path),
         str(tmp_path / PSINS_VEHICLE_FOLDER),
         "no such data folder",
         ENV_VAR,
@@ -293,36 +293,36 @@ def test_corrupt_files(tmp_path: Path) -> None:
     path = _write(tmp_path, **synthetic_recording())
     whole = path.read_bytes()
     path.write_bytes(b"not a mat file at all" * 20)
-    refusal(lambda: _read_psins_vehicle(tmp_path), str(path), "not a MATLAB 5 MAT file")
+    refusal(lambda: read_psins_vehicle(tmp_path), str(path), "not a MATLAB 5 MAT file")
     path.write_bytes(whole[: len(whole) // 2])
-    refusal(lambda: _read_psins_vehicle(tmp_path), str(path), "damaged MAT file")
+    refusal(lambda: read_psins_vehicle(tmp_path), str(path), "damaged MAT file")
     path.write_bytes(b"")
-    refusal(lambda: _read_psins_vehicle(tmp_path), str(path), "not a MATLAB 5 MAT file")
+    refusal(lambda: read_psins_vehicle(tmp_path), str(path), "not a MATLAB 5 MAT file")
 
 
 def test_bad_variables(tmp_path: Path) -> None:
     good = synthetic_recording()
     _write(tmp_path, mimu=good["mimu"])
-    refusal(lambda: _read_psins_vehicle(tmp_path), "no variable 'fogavp'")
+    refusal(lambda: read_psins_vehicle(tmp_path), "no variable 'fogavp'")
     _write(tmp_path, mimu=good["mimu"][:, :6], fogavp=good["fogavp"])
-    refusal(lambda: _read_psins_vehicle(tmp_path), "variable 'mimu'", "(n, 7)", "(2001, 6)")
+    refusal(lambda: read_psins_vehicle(tmp_path), "variable 'mimu'", "(n, 7)", "(2001, 6)")
     _write(tmp_path, mimu=good["mimu"], fogavp=good["fogavp"][:50])
-    refusal(lambda: _read_psins_vehicle(tmp_path), "variable 'fogavp'", "more than 100", "found 50")
+    refusal(lambda: read_psins_vehicle(tmp_path), "variable 'fogavp'", "more than 100", "found 50")
     nan = good["mimu"].copy()
     nan[7, 2] = np.nan
     _write(tmp_path, mimu=nan, fogavp=good["fogavp"])
-    refusal(lambda: _read_psins_vehicle(tmp_path), "variable 'mimu'", "row 8, column 3", "nan")
+    refusal(lambda: read_psins_vehicle(tmp_path), "variable 'mimu'", "row 8, column 3", "nan")
     back = good["fogavp"].copy()
     back[30, 9] = back[29, 9]
     _write(tmp_path, mimu=good["mimu"], fogavp=back)
-    refusal(lambda: _read_psins_vehicle(tmp_path), "variable 'fogavp'", "row 31", "not after")
+    refusal(lambda: read_psins_vehicle(tmp_path), "variable 'fogavp'", "row 31", "not after")
     late = good["fogavp"].copy()
     late[:, 9] += 15.0
     _write(tmp_path, mimu=good["mimu"], fogavp=late)
-    refusal(lambda: _read_psins_vehicle(tmp_path), "share fewer than 100")
+    refusal(lambda: read_psins_vehicle(tmp_path), "share fewer than 100")
     still = good["fogavp"].copy()
     still[:, 0:3] = 0.0
     _write(tmp_path, mimu=good["mimu"], fogavp=still)
-    refusal(lambda: _read_psins_vehicle(tmp_path), "turns about fewer than two axes")
+    refusal(lambda: read_psins_vehicle(tmp_path), "turns about fewer than two axes")
     _write(tmp_path, **good)
-    refusal(lambda: _read_psins_vehicle(tmp_path, rate="fast"), "rate 'fast'")  # type: ignore[arg-type]
+    refusal(lambda: read_psins_vehicle(tmp_path, rate="fast"), "rate 'fast'")  # type: ignore[arg-type]

@@ -103,9 +103,9 @@ def psins_vehicle_outages(
         the recording is not under ``root`` (default ``SINS_DATA`` or ``../shared/data``), or an outage
         window ends before it starts.
     """
-    from sins.io.datasets.psins_vehicle import _read_psins_vehicle, psins_alignment
+    from sins.io.datasets.psins_vehicle import psins_alignment, read_psins_vehicle
 
-    data, fog = _read_psins_vehicle(root)
+    data, fog = read_psins_vehicle(root)
     assert fog is not None  # the recording holds its FOG-INS solution
     arm = psins_alignment(root).lever_arm_m  # the MEMS from the FOG-INS, MEMS axes
     dt = 0.01  # the MEMS's increments: row k covers the 10 ms before t + 5 ms

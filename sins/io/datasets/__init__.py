@@ -35,7 +35,7 @@ from sins.io.datasets.npz_folders import (
     npz_names,
 )
 from sins.io.datasets.psins_lasergyro import _read_psins_lasergyro
-from sins.io.datasets.psins_vehicle import _read_psins_vehicle
+from sins.io.datasets.psins_vehicle import read_psins_vehicle
 from sins.io.datasets.root import ENV_VAR, data_root
 from sins.io.recording import Recording
 
@@ -144,7 +144,7 @@ def _load_with_truth(
     if name == "psins_vehicle":
         # The reference is a 10 Hz navigation solution: at the MEMS's 100 Hz it lacks the 5-30 Hz
         # vibration the MEMS sees, which would pass for a sensor gap.
-        data, nav = _read_psins_vehicle(root, rate="fog")
+        data, nav = read_psins_vehicle(root, rate="fog")
         if nav is None:
             return data, None
         inside = np.flatnonzero((data.t >= nav.t[0]) & (data.t <= nav.t[-1]))

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from sins.core import earth, rotation
 from sins.core.series import ImuIncrements, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError
-from sins.io.datasets.psins_vehicle import _PSINS_TO_SINS, _load, _path, _read_psins_vehicle, psins_alignment
+from sins.io.datasets.psins_vehicle import _PSINS_TO_SINS, _load, _path, psins_alignment, read_psins_vehicle
 
 Array = NDArray[np.float64]
 
@@ -26,7 +26,7 @@ def _read_psins_vehicle_reference(root: str | os.PathLike[str] | None = None) ->
 
     ``imu.t`` are the MEMS's stamps (each row integrates the 10 ms before its stamp; the first row's
     interval starts one step before the first stamp); the reference is
-    :func:`~sins.io.datasets.psins_vehicle._read_psins_vehicle`'s solution of the MEMS body (attitude),
+    :func:`~sins.io.datasets.psins_vehicle.read_psins_vehicle`'s solution of the MEMS body (attitude),
     on the MEMS clock, within the increments' span, with the FOG-INS's position and velocity moved to
     the MEMS's place by the lever arm :func:`~sins.io.datasets.psins_vehicle.psins_alignment` estimates
     (0.19 m: at the vehicle's roll rates its velocity differs by up to 0.06 m/s). Every step is judged.
@@ -34,11 +34,11 @@ def _read_psins_vehicle_reference(root: str | os.PathLike[str] | None = None) ->
     Raises
     ------
     SinsInputError
-        as :func:`~sins.io.datasets.psins_vehicle._read_psins_vehicle`.
+        as :func:`~sins.io.datasets.psins_vehicle.read_psins_vehicle`.
     """
     path = _path(root)
     mems, _ = _load(path)
-    _, nav = _read_psins_vehicle(root)
+    _, nav = read_psins_vehicle(root)
     assert nav is not None  # the file always has its FOG-INS solution
     t = np.r_[mems.t_end[0] - mems.dt[0], mems.t_end]
     inside = (nav.t >= t[0]) & (nav.t <= t[-1])

@@ -3,7 +3,7 @@ Gongmin Yan, NWPU; github.com/WangShanpeng/PSINS ``data/transfer_align_fog_mems.
     100 s of a MEMS IMU (100 Hz increments) beside the navigation solution of a
     fibre-optic-gyro INS (10 Hz attitude, velocity, position) on a vehicle driving
     north at 12–16 m/s while the mount rolls through ±32°.
-    :func:`_read_psins_vehicle` returns the MEMS readings beside a reference derived
+    :func:`read_psins_vehicle` returns the MEMS readings beside a reference derived
     from the FOG-INS solution as :class:`~sins.core.series.CalibrationData`, and the
     FOG-INS solution as a :class:`~sins.core.series.NavSeries`.
 """
@@ -53,7 +53,7 @@ _OFFSET_STEP_S = 0.001
 
 @dataclass(frozen=True)
 class PsinsAlignment:
-    """How :func:`_read_psins_vehicle` puts the FOG-INS reference on the MEMS, as estimated from the data.
+    """How :func:`read_psins_vehicle` puts the FOG-INS reference on the MEMS, as estimated from the data.
 
     Attributes
     ----------
@@ -76,7 +76,7 @@ class PsinsAlignment:
         return np.degrees(Rotation.from_matrix(self.c_mems_fog).as_rotvec())
 
 
-def _read_psins_vehicle(
+def read_psins_vehicle(
     root: str | os.PathLike[str] | None = None, *, rate: Literal["mems", "fog"] = "mems"
 ) -> tuple[CalibrationData, NavSeries | None]:
     """The MEMS readings of ``transfer_align_fog_mems.mat`` against the FOG-INS solution.
@@ -175,7 +175,7 @@ def _read_psins_vehicle(
 
 
 def psins_alignment(root: str | os.PathLike[str] | None = None) -> PsinsAlignment:
-    """The time offset, mounting rotation and lever arm :func:`_read_psins_vehicle` estimates and applies.
+    """The time offset, mounting rotation and lever arm :func:`read_psins_vehicle` estimates and applies.
 
     Parameters
     ----------
@@ -184,7 +184,7 @@ def psins_alignment(root: str | os.PathLike[str] | None = None) -> PsinsAlignmen
     Raises
     ------
     SinsInputError
-        as :func:`_read_psins_vehicle`.
+        as :func:`read_psins_vehicle`.
     """
     path = _path(root)
     mems, nav = _load(path)
@@ -485,4 +485,5 @@ __all__ = [
     "PSINS_VEHICLE_FOLDER",
     "PsinsAlignment",
     "psins_alignment",
+    "read_psins_vehicle",
 ]
