@@ -119,6 +119,9 @@ def _read_npz(
         )
         if turned:
             notes.append(f"{path}: {turned}")
+        v_w, lagged = local.on_positions_clock(t, v_w, p_w)
+        if lagged:
+            notes.append(f"{path}: {lagged}")
         truth = local.enu_track(
             t,
             p_w,
