@@ -3,7 +3,8 @@
 Usage::
 
     .venv/bin/python tools/another_unit.py [--parts 3] [--strategies regression mlp_window ...]
-        [--gaps N] [--screen refused|always|never] [--calibrated] [--json OUT.json] [--keep DIR]
+        [--gaps N] [--screen refused|always|never] [--calibrated] [--backward] [--json OUT.json]
+        [--keep DIR]
 
 sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
 with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
@@ -17,6 +18,12 @@ open-loop table; what must hold is that no correction is worse than the raw read
 capture's lost markers (the attitude slerped by scipy, the velocity a straight line; placed with a fixed
 seed), the judged parts as they are; ``--screen`` is handed to ``sins fit``
 (:mod:`sins.compensation.screening`).
+
+``--backward``: each part's reference written as the published preprocessing for learned gyro correction
+writes a motion capture's (Brossard et al. 2020, its TUM-VI branch): positions (here the reference's
+velocity integrated by the trapezoid rule) and the velocity a backward difference of them, its first row
+zero: half a step late, which ``sins`` reads on the positions' clock
+(:func:`sins.io.local.on_positions_clock`).
 
 ``--calibrated``: each part with its own constant gyro bias taken out (``tools/calibrated_unit.py``'s
 ``calibrated``, numpy and scipy alone): the unit as it would read calibrated at every power-up.
@@ -73,6 +80,18 @@ def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -
     return names
 
 
+def backward(path: Path) -> None:
+    """The part at ``path`` written again with positions and a backward-difference velocity
+    (``--backward``)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    a = dict(np.load(path))
+    p_m = cumulative_trapezoid(a["v_m_s"], a["t_s"], axis=0, initial=0.0)
+    v = np.zeros_like(p_m)
+    v[1:] = np.diff(p_m, axis=0) / np.diff(a["t_s"])[:, None]
+    np.savez(path, **{**a, "p_m": p_m, "v_m_s": v})
+
+
 def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:
     """The ``.npz`` recording at ``path`` written again with ``gaps`` 1 s gaps of its reference filled
     (the attitude slerped, the velocity a straight line between the gap's ends)."""
@@ -94,6 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--gaps", type=int, default=0, help="1 s gaps filled in each training part's reference")
     p.add_argument("--screen", choices=("refused", "always", "never"), help="handed to sins fit")
     p.add_argument("--calibrated", action="store_true", help="each part's own gyro bias taken out")
+    p.add_argument("--backward", action="store_true", help="velocities a backward difference of positions")
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
@@ -107,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
                     with_gaps(folder / f"{name}.npz", args.gaps, rng)
                 if args.calibrated:
                     calibrated(folder / f"{name}.npz", folder)  # written again under its name
+                if args.backward:
+                    backward(folder / f"{name}.npz")
 
     return euroc_benchmark.run_on_unit(
         write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep,
