@@ -27,15 +27,11 @@ estimated from the recording itself, by one of these :data:`MODES`:
 ``online``
     the bias's horizontal components (and what of the vertical one the motion reveals) estimated as the
     recording goes, from the one thing every recording of a vehicle that stays within reach knows: its
-    velocity stays bounded. A gyro bias tilts the attitude the gyro integrates, the tilt turns gravity
-    into a horizontal specific force, and the velocity that force integrates to grows as ``g b t²/2``
-    (4.4 m/s after 30 s for 1e-3 rad/s), while the true velocity stays within a few m/s. Every
-    :data:`UPDATE_S` the bias is estimated again by least squares on the velocity so far (the true
-    velocity as noise of ``sigma_v``, the initial tilt and velocity and the accelerometer's bias as
-    nuisances, the last held to the training recordings' own spread: :func:`accel_spread`), regularised
-    towards the prior by its spread: ``online`` from ``pooled``'s, ``rest+online`` from ``rest``'s,
-    ``nearest+online`` from ``nearest``'s. Readings are corrected by the last estimate made before them
-    (causal).
+    velocity stays bounded (:mod:`sins.compensation.online_bias`; the true velocity as noise of
+    ``sigma_v``, the accelerometer's bias held to the training recordings' own spread:
+    :func:`accel_spread`), regularised towards the prior by its spread: ``online`` from ``pooled``'s,
+    ``rest+online`` from ``rest``'s, ``nearest+online`` from ``nearest``'s. Readings are corrected by
+    the last estimate made before them (causal).
 
 Every mode that reads a rest (``rest``, ``nearest`` and their ``+online``) takes, while the unit rests,
 the rest's mean rate so far, weighted against the pooled prior by their precisions (the rest's standard
@@ -56,10 +52,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation import online_bias
 from sins.core.series import ImuIncrements, ImuRates, ReferencedRecording
 from sins.nav import attitude
 
@@ -85,11 +81,6 @@ NEAREST_CHI2 = 11.34
 #: The training recordings with an opening rest that measure what ``nearest``'s matches miss by (each
 #: predicted from the others: with two, one match each and nothing to weigh it by).
 MEASURED_RESTS = 3
-#: How often the online estimate is made again, s.
-UPDATE_S = 2.0
-#: Normal gravity's size for the velocity model, m/s² (the latitude is not known; only the horizontal
-#: components are used, where its size scales the tilt's effect by less than 0.3 %).
-_G = 9.81
 
 
 @dataclass(frozen=True)
@@ -159,6 +150,12 @@ class BiasRule:
             "nearest_blend": self.nearest_blend, "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
         }  # fmt: skip
+
+    @property
+    def misses_measured(self) -> bool:
+        """Whether the training rests measure what ``nearest``'s matches miss by: at least
+        :data:`MEASURED_RESTS` of them (each predicted from the others)."""
+        return len(self.rest_rates) >= MEASURED_RESTS
 
     @classmethod
     def from_dict(cls, doc: dict[str, Any]) -> BiasRule:
@@ -237,7 +234,7 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     if own is not None:  # before the rest has ended nothing better than the pooled prior is known
         track[rest:] = own
     if rule.mode in ("online", "rest+online", "nearest+online"):
-        track = _online(imu, track, prior, sigma, rule)
+        track = online_bias.estimate(imu, track, prior, sigma, rule.sigma_v_mps, rule.sigma_accel_mps2)
     if rest:  # while the unit rests, its own readings so far tell its bias (the rest's, not the flight's)
         track[:rest] = _resting(rule, imu, rest)
     return track
@@ -285,7 +282,7 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
         return head + f"the rest reads like no training recording's{said}, so after it their mean"
     said = "the rest reads like some training recordings' rests: after it, their bias"
-    weighed = rule.nearest_blend and len(rule.rest_rates) >= MEASURED_RESTS
+    weighed = rule.nearest_blend and rule.misses_measured
     return head + said + (" weighed against the rest's own reading by what each missed by" if weighed else "")
 
 
@@ -365,7 +362,7 @@ def blended_nearest_prior(rule: BiasRule, rest_rate: Array, rest_se: Array) -> A
 def _matches_share(rule: BiasRule, rest_se: Array, w: Array, keep: NDArray[np.bool_]) -> Array:
     """Per axis, the matches' share of :func:`blended_nearest_prior`: the rest's reading's variance over
     the two variances' sum; 1 with fewer than :data:`MEASURED_RESTS` training rests (a miss unmeasured)."""
-    if len(rule.rest_rates) < MEASURED_RESTS:
+    if not rule.misses_measured:
         return np.ones(3)
     var_near = rule.nearest_spread**2
     var_rest = rest_se**2 + w @ rule.rest_rates_se[keep] ** 2 + 2.0 * rule.rest_spread**2
@@ -389,127 +386,6 @@ def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
     """``imu`` with :func:`bias_track`'s bias taken away."""
     dt = np.diff(imu.t)
     return ImuIncrements(t=imu.t, dtheta_b=imu.dtheta_b - bias_track(rule, imu) * dt[:, None], dv_b=imu.dv_b)
-
-
-def _online(imu: ImuIncrements, track: Array, prior: Array, sigma: Array, rule: BiasRule) -> Array:
-    """The velocity-bounded estimate (module docstring), every :data:`UPDATE_S`, from the readings
-    before each update; ``track`` holds what is used before the first."""
-    dt = np.diff(imu.t)
-    step = max(1, round(UPDATE_S / float(np.median(dt))))
-    at = np.arange(step, len(imu.t), step)
-    if not len(at):
-        return track
-    first = slice(0, _LEVELLING_ROWS)  # all that levelling reads of the specific force
-    c0 = attitude_dcm(_levelled(imu.dv_b[first] / dt[first, None])[None, :])[0]
-    v, s, i_s = _velocity_terms(imu.dtheta_b - prior * dt[:, None], imu.dv_b, dt, c0, at)
-    t = (imu.t - imu.t[0])[at]
-    zero, one = np.zeros(len(at)), np.ones(len(at))
-    # Unknowns: the true velocity at the start (2), the initial tilt (2), the bias change (3), the
-    # accelerometer's bias (3); two rows (east, north) per update time. A bias change δ tilts the frame
-    # by S δ (S = ∫ C dt), which moves the velocity by g ∫ S δ; an accelerometer bias by -∫ C b_a = -S b_a.
-    rows_e = np.column_stack([-one, zero, zero, -_G * t, _G * i_s[:, 1], s[:, 0]])
-    rows_n = np.column_stack([zero, -one, _G * t, zero, -_G * i_s[:, 0], s[:, 1]])
-    design = np.stack([rows_e, rows_n], axis=1) / rule.sigma_v_mps  # (m, 2, 10)
-    target = v[:, :2] / rule.sigma_v_mps
-    prior_rows = np.diag(
-        np.r_[1 / 2.0, 1 / 2.0, 1 / 0.2, 1 / 0.2, 1 / sigma, np.full(3, 1 / rule.sigma_accel_mps2)]
-    )
-    # Running sums of the normal equations: the estimate at each update from the rows before it.
-    grams = prior_rows.T @ prior_rows + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
-    rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
-    thetas = np.linalg.solve(grams, rhss[:, :, None])[:, :, 0]
-    out = track.copy()
-    ends = np.r_[at[1:], len(out)]
-    out[at[0] :] = np.repeat(prior + thetas[:, 4:7], ends - at, axis=0)
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
-def _velocity_terms(
-    dtheta: Array, dv: Array, dt: Array, c0: Array, at: NDArray[np.int64]
-) -> tuple[Array, Array, Array]:  # pragma: no cover  (compiled)
-    """One pass over the steps: the attitude ``C`` (body to the levelled frame) the increments ``dtheta``
-    integrate to from ``c0``, the velocity the specific force's increments ``dv`` make in it less
-    gravity's, ``S = ∫ C dt`` and ``∫ S dt``; returned at the step boundaries ``at``: velocity (m, 3),
-    ``S`` and ``∫ S dt`` (m, 3, 3). Scalar arithmetic throughout (no array is made within the loop)."""
-    m = len(at)
-    v_at = np.zeros((m, 3))
-    s_at = np.zeros((m, 3, 3))
-    is_at = np.zeros((m, 3, 3))
-    c = c0.copy()
-    turned = np.empty((3, 3))
-    v = np.zeros(3)
-    s = np.zeros((3, 3))
-    i_s = np.zeros((3, 3))
-    j = 0
-    for k in range(len(dt) + 1):
-        while j < m and at[j] == k:
-            v_at[j, :] = v
-            s_at[j, :, :] = s
-            is_at[j, :, :] = i_s
-            j += 1
-        if k == len(dt):
-            break
-        h = dt[k]
-        px, py, pz = dtheta[k, 0], dtheta[k, 1], dtheta[k, 2]
-        ax, ay, az = dv[k, 0], dv[k, 1], dv[k, 2]
-        # The step's velocity increment turned by half the step's own turn (first order), into the frame.
-        mx = ax + 0.5 * (py * az - pz * ay)
-        my = ay + 0.5 * (pz * ax - px * az)
-        mz = az + 0.5 * (px * ay - py * ax)
-        for r in range(3):
-            v[r] += c[r, 0] * mx + c[r, 1] * my + c[r, 2] * mz
-            for q in range(3):
-                i_s[r, q] += s[r, q] * h + 0.5 * c[r, q] * h * h
-                s[r, q] += c[r, q] * h
-        v[2] -= _G * h
-        # C ← C Exp(φ), Rodrigues: Exp(φ) = I + a [φ]× + b [φ]×², a = sin θ/θ, b = (1 − cos θ)/θ².
-        th2 = px * px + py * py + pz * pz
-        if th2 > 1e-24:
-            th = np.sqrt(th2)
-            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
-        else:
-            a, b = 1.0, 0.5
-        e00, e11, e22 = (
-            1.0 - b * (py * py + pz * pz),
-            1.0 - b * (px * px + pz * pz),
-            1.0 - b * (px * px + py * py),
-        )
-        e01, e10 = -a * pz + b * px * py, a * pz + b * px * py
-        e02, e20 = a * py + b * px * pz, -a * py + b * px * pz
-        e12, e21 = -a * px + b * py * pz, a * px + b * py * pz
-        for r in range(3):
-            c0r, c1r, c2r = c[r, 0], c[r, 1], c[r, 2]
-            turned[r, 0] = c0r * e00 + c1r * e10 + c2r * e20
-            turned[r, 1] = c0r * e01 + c1r * e11 + c2r * e21
-            turned[r, 2] = c0r * e02 + c1r * e12 + c2r * e22
-        c[:, :] = turned
-    return v_at, s_at, is_at
-
-
-#: The rows of specific force the online rule levels its frame by.
-_LEVELLING_ROWS = 20
-
-
-def _levelled(force: Array) -> Array:
-    """A scalar-last quaternion of the body in a frame with z up, levelled by the mean of the first
-    :data:`_LEVELLING_ROWS` readings of specific force (0.1 s at 200 Hz; its heading arbitrary)."""
-    up = force[: max(1, min(len(force), _LEVELLING_ROWS))].mean(axis=0)
-    z = up / np.linalg.norm(up)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    from sins.core import rotation
-
-    return np.asarray(rotation.quat_from_dcm(np.array([x, y, z])), dtype=float)
-
-
-def attitude_dcm(q: Array) -> Array:
-    """Direction cosine matrices of scalar-last quaternions (body to frame)."""
-    from sins.core import rotation
-
-    return np.asarray(rotation.dcm_from_quat(q), dtype=float)
 
 
 def with_mode(rule: BiasRule, mode: str) -> BiasRule:
@@ -618,7 +494,7 @@ def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
     """What ``nearest``'s prior missed by on the training recordings with a rest, each predicted from the
     others (RMS per axis; a recording none of the others is near is predicted by the pooled prior, as a
     new one would be); the pooled spread where fewer than three have a rest."""
-    if len(rule.rest_rates) < MEASURED_RESTS:
+    if not rule.misses_measured:
         return pooled
     misses = []
     for i in range(len(rule.rest_rates)):
@@ -680,11 +556,9 @@ __all__ = [
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
-    "UPDATE_S",
     "BiasRule",
     "accel_spread",
     "applied",
-    "attitude_dcm",
     "bias_track",
     "blended_nearest_prior",
     "corrected",
