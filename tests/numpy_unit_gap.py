@@ -15,7 +15,9 @@ and differentiated per sample some 140 times.
 
 Effects (added to the readings from the true inputs, each sensor reading its own axes):
 ``gyro.scale_asymmetry`` ``ka |ω_i|``; ``gyro.motion_bias`` ``b |ω|² / (|ω|² + ω₀²)``, ω₀ = 5 °/s;
-``gyro.time_offset`` the gyro's input ``τ`` late; ``gyro.y step`` a bias step on gyro y half way;
+``gyro.time_offset`` the gyro's input ``τ`` late; ``accel.time_offset`` the accelerometer's 5 ms late on
+every axis, ``accel.time_offset (both signs)`` +5, -5 and +5 ms on x, y and z (no one clock); ``gyro.y step``
+a bias step on gyro y half way;
 ``gyro.bias_instability`` a first-order Gauss-Markov bias on every gyro axis (τ = 10 s, 0.3 °/s);
 ``gyro.rate_random_walk`` a walk on every gyro axis (:data:`WALK_DENSITY`).
 """
@@ -79,13 +81,16 @@ def recording(
     delay = 5e-3 * size if effect == "gyro.time_offset" else 0.0
     w = np.stack([np.interp(t - delay, t_fine, omega[:, i]) for i in range(3)], axis=1)
     f = f_b[::fine]
+    if effect.startswith("accel.time_offset"):  # each axis's input τ late: 5 ms, or of both signs
+        taus = 5e-3 * size * (np.array([1.0, -1.0, 1.0]) if "both signs" in effect else np.ones(3))
+        f = np.stack([np.interp(t - taus[i], t_fine, f_b[:, i]) for i in range(3)], axis=1)
     gyro = w + b0 + w @ b.T + rng.normal(0.0, 0.05 * DEG, w.shape)
     accel = f + a0 + f @ a.T + rng.normal(0.0, 0.01, f.shape)
     if effect == "gyro.scale_asymmetry":
         gyro += 3000e-6 * size * np.abs(w)
     elif effect == "gyro.motion_bias":
         gyro += motion_bias(w, size * np.array([300.0, -200.0, 250.0]) * DPH)
-    elif effect == "gyro.time_offset":
+    elif effect == "gyro.time_offset" or effect.startswith("accel.time_offset"):
         pass  # read late above
     elif effect == "gyro.y step":
         gyro[:, 1] += size * 0.3 * DEG * (t >= 0.5 * t[-1])

@@ -50,6 +50,8 @@ from sins.unit_gap.outside import Tried, beside_wander, explains_as_well, try_di
 Array = NDArray[np.float64]
 Rows = NDArray[np.bool_]
 
+#: Why a delay that the intervals favour is not accepted: one sensor's readings run on one clock.
+BOTH_SIGNS = "its axes are late by delays of both signs, which one sensor's clock is not"
 #: Intervals are withheld at the end of blocks of this length, s: short beside a recording's kinds of
 #: motion (a rest, a turn, a drive), so that every kind is both fitted and judged.
 BLOCK_S = 10.0
@@ -65,6 +67,7 @@ class Candidate:
     sensor: str
     per_axis: tuple[Array, Array, Array]
     phis: Array | None = None
+    delay: bool = False  # a time offset: one column per axis, its coefficient the axis's delay
 
     def columns(self, axes: list[int]) -> Array:
         """Its columns on ``axes``, side by side."""
@@ -105,6 +108,7 @@ class Trial:
     gains: Array
     allowance: float = 0.0
     fit_scores: Array | None = None  # a random bias's: per component, fit log-likelihood less BIC's penalty
+    both_signs: bool = False  # a delay whose axes are late by delays of both signs: no one clock's
 
     def gain(self, aside: set[int]) -> float:
         """The gain over the components not set aside."""
@@ -180,7 +184,7 @@ def candidates(res: IntervalResiduals) -> list[Candidate]:
             continue
         else:
             per_axis = tuple(res.columns(sensor, cls.columns(res.steps, sensor, a), a) for a in range(3))
-        out.append(Candidate(name, sensor, per_axis))  # type: ignore[arg-type]
+        out.append(Candidate(name, sensor, per_axis, delay=cls.candidate == "delay"))  # type: ignore[arg-type]
     return out
 
 
@@ -229,7 +233,12 @@ def diagnose_intervals(
             scores[t.candidate.name] = EffectScore(
                 t.candidate.name, _names(t.candidate.sensor, aside), t.score(aside), False
             )
-        positive = [t for t in trials if t.score(states[t.candidate.sensor].aside) > 0.0]
+        for t in trials:
+            if t.both_signs and scores[t.candidate.name].score > 0.0:
+                scores[t.candidate.name] = dataclasses.replace(
+                    scores[t.candidate.name], not_accepted_because=BOTH_SIGNS
+                )
+        positive = [t for t in trials if t.score(states[t.candidate.sensor].aside) > 0.0 and not t.both_signs]
         if not positive:
             break
         best = max(positive, key=lambda t: t.gain(states[t.candidate.sensor].aside))
@@ -292,9 +301,24 @@ def _round(
             scores = wandering.fit_loglik(after) - fit.bic_penalty(1)  # its one more parameter, φ
             trials.append(Trial(cand, cross_gains(fit, before, wandering, after), allowance, scores))
             continue
-        _, after = st.fit.solve(st.columns(cand))
-        trials.append(Trial(cand, st.fit.gains(before, after)))
+        coef, after = st.fit.solve(st.columns(cand))
+        trials.append(Trial(cand, st.fit.gains(before, after), both_signs=_both_signs(st, cand, coef)))
     return trials
+
+
+def _both_signs(st: SensorState, cand: Candidate, coef: Array) -> bool:
+    """Whether ``cand``, a delay fitted beside ``st``'s model (``coef``, the columns of
+    :meth:`SensorState.columns` with it), makes its sensor's axes late by delays of both signs. One
+    sensor's readings run on one clock, and a delay added to them is sized with one sign on every axis
+    (EuRoC's thirteen bases and BROAD's two trials with 5 ms added: 1.8-13 ms); BROAD's hand-held trial
+    18 as it is, read from where it starts moving, had its accelerometer's intervals take x -2.4, y +0.9,
+    z +1.9 ms, which no clock is (as per sample: :func:`sins.unit_gap.delays.one_clock`)."""
+    if not cand.delay:
+        return False
+    axes = [a for a in range(3) if a not in st.aside]
+    at = st.baseline.shape[2] + sum(c.columns(axes).shape[2] for c in st.accepted)
+    delays = coef[at : at + len(axes)]
+    return bool(np.any(delays > 0.0) and np.any(delays < 0.0))
 
 
 def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Outside]:
@@ -429,11 +453,14 @@ def significant_ratio(withheld: int) -> float:
 def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], list[str]]:
     """Per channel, the withheld RMS before and after the accepted effects and the noise floor, as
     mean rates over the intervals (rad/s, m/s²); and the channels left unexplained (above the floor by
-    :func:`significant_ratio`, or taken by a disturbance outside the library)."""
+    :func:`significant_ratio`, or taken by a disturbance outside the library, or where a delay of both
+    signs predicts the withheld intervals: :data:`BOTH_SIGNS`)."""
     span = float(np.median(d.residuals.span))
     ratio = significant_ratio(int(d.withheld.sum()))
     figures, unexplained = {}, []
-    disturbed = {o.channel for o in d.outside}
+    disturbed = {o.channel for o in d.outside} | {
+        ch for e in d.effects if e.score > 0.0 and e.not_accepted_because == BOTH_SIGNS for ch in e.channels
+    }
     for sensor in ("gyro", "accel"):
         for a in range(3):
             ch = f"{sensor}.{'xyz'[a]}"
@@ -452,6 +479,7 @@ def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], 
 
 __all__ = [
     "BLOCK_S",
+    "BOTH_SIGNS",
     "Candidate",
     "IntervalDiagnosis",
     "SensorState",
