@@ -608,6 +608,29 @@ def test_a_delay_of_both_signs_on_intervals_is_no_clock(tmp_path: Path) -> None:
     assert {"accel.x", "accel.y", "accel.z"} <= set(both.unexplained), both.unexplained
 
 
+def test_the_accelerometer_is_judged_with_the_gyro_as_corrected(tmp_path: Path) -> None:
+    """numpy's unit with its gyro 5 ms late and no accelerometer effect beyond the baseline, on ten
+    motions: the accelerometer's velocity change is turned by the gyro's attitude, and with the gyro as
+    read its intervals had an accelerometer effect or disturbance named on six of the ten
+    (``accel.size_effect``, ``accel.motion_bias``, an oscillation); judged with the gyro corrected by
+    what its diagnosis fitted (:mod:`sins.unit_gap.through_attitude`), on none, and the report says
+    what it read before."""
+    named_before, named = [], []
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(datasets.ENV_VAR, str(tmp_path))
+        for seed in range(3, 13):
+            nu.write(tmp_path / "unit" / f"late{seed}.npz", nu.recording(seed, "gyro.time_offset"))
+            report = diagnose_one(read_gap_input(None, dataset=f"unit/late{seed}")).report
+            assert "gyro.time_offset" in report.diagnosis, (seed, report.diagnosis)
+            note = report.statistic["accel_with_gyro_corrected"]
+            assert note["gyro_taken_out"] == ["gyro.time_offset"], note
+            named_before += note["accel_before"]
+            named += [n for n in report.diagnosis if n.startswith("accel")]
+            named += [o.channel for o in report.outside if o.channel.startswith("accel")]
+    assert not named, named
+    assert len(named_before) >= 3, named_before  # what the test guards against: it was there before
+
+
 def test_the_psins_drive_lands_near_its_floor() -> None:
     """Issue 44: the PSINS drive's residuals stood at 0.67-0.84 of a floor that the differentiated 10 Hz
     reference's anti-correlated noise lifted; with its lag-one correlation taken in they stand near 1."""

@@ -39,6 +39,9 @@ class Tried:
     outside: Outside
     columns: Array
     gain: float
+    #: (n, q) the disturbance per step of the readings, one column a coefficient (``columns`` are these
+    #: moved into the intervals' residuals).
+    per_step: Array
     fit_score: float = 0.0
 
 
@@ -81,7 +84,8 @@ def try_disturbances(
         best = max(boundaries, key=lambda k0: _reduction(sf, basis, left_w, _masked(bias, k0)))
         step = _masked(bias, best)
         what = Outside(CHANNELS[channel], "bias step", 0.0, 0.0, t_s=float(res.t[res.iv.start[best]]))
-        out.append(_tried(sf, current, step, what, axis))
+        from_step = (np.arange(len(res.dt)) >= res.iv.start[best]).astype(float)[:, None]
+        out.append(_tried(sf, current, step, what, axis, from_step))
     span = float(res.t[-1] - res.t[0])
     shortest = 2.5 * float(np.median(res.span))
     if span / 2.0 > shortest:
@@ -91,7 +95,7 @@ def try_disturbances(
         waves = {float(p): _wave(res, sensor, axis, float(p)) for p in periods}
         best_p = max(waves, key=lambda p: _reduction(sf, basis, left_w, waves[p]))
         what = Outside(CHANNELS[channel], "periodic", 0.0, 0.0, period_s=best_p)
-        out.append(_tried(sf, current, waves[best_p], what, axis))
+        out.append(_tried(sf, current, waves[best_p], what, axis, _phases(res, best_p)))
     return out
 
 
@@ -101,13 +105,17 @@ def _masked(bias: Array, k0: int) -> Array:
     return out
 
 
+def _phases(res: IntervalResiduals, period_s: float) -> Array:
+    """(n, 2) an oscillation's cosine and sine at the middle of every step."""
+    phase = 2.0 * np.pi * 0.5 * (res.t[:-1] + res.t[1:]) / period_s
+    return np.column_stack([np.cos(phase), np.sin(phase)])
+
+
 def _wave(res: IntervalResiduals, sensor: str, axis: int, period_s: float) -> Array:
-    mid = 0.5 * (res.t[:-1] + res.t[1:])
-    phase = 2.0 * np.pi * mid / period_s
-    return res.columns(sensor, np.column_stack([np.cos(phase), np.sin(phase)]), axis)
+    return res.columns(sensor, _phases(res, period_s), axis)
 
 
-def _tried(sf: SensorFit, current: Array, columns: Array, what: Outside, axis: int) -> Tried:
+def _tried(sf: SensorFit, current: Array, columns: Array, what: Outside, axis: int, per_step: Array) -> Tried:
     """The disturbance's columns fitted beside the current ones: its size and its withheld gain on
     its own component."""
     _, before = sf.solve(current)
@@ -118,7 +126,7 @@ def _tried(sf: SensorFit, current: Array, columns: Array, what: Outside, axis: i
     score = gain - SIGNIFICANT_NATS
     fit_score = float(sf.fit_loglik(after)[axis]) - sf.bic_penalty(_parameters(what))
     outside = Outside(what.channel, what.kind, size, score, what.t_s, what.period_s)
-    return Tried(outside, columns, gain, fit_score)
+    return Tried(outside, columns, gain, per_step, fit_score)
 
 
 def explains_as_well(

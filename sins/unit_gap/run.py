@@ -19,7 +19,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE, CHANNELS
 from sins.io.filled import spans_said
-from sins.unit_gap import across, clock, delays, plausible, shrink, statistic
+from sins.unit_gap import across, clock, delays, plausible, shrink, statistic, through_attitude
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import BLOCK_S, baseline_fit, diagnose_intervals
@@ -96,7 +96,10 @@ def diagnose_one(
         d = diagnose_intervals(inp.referenced, holdout, interval_s, progress, baseline)
     except ValueError as exc:
         raise SinsInputError(f"{inp.name}: {exc}") from None
+    d, attitude_note = through_attitude.accel_rediagnosed(inp.referenced, d, holdout, interval_s, progress)
     report = interval_report(d, holdout, chosen.to_dict())
+    if attitude_note:
+        report = _with_statistic(report, {**report.statistic, "accel_with_gyro_corrected": attitude_note})
     if asked == "auto":  # the delays per sample, where the reference allows (sins.unit_gap.delays)
         report = delays.with_delays(report, data[0] if data else None, inp.referenced.reference, holdout)
     report = _with_reference(report, inp)

@@ -68,6 +68,8 @@ class Candidate:
     per_axis: tuple[Array, Array, Array]
     phis: Array | None = None
     delay: bool = False  # a time offset: one column per axis, its coefficient the axis's delay
+    #: Per axis, (n, p): the error per step of the readings that ``per_axis`` moves into the residuals.
+    per_step: tuple[Array, Array, Array] | None = None
 
     def columns(self, axes: list[int]) -> Array:
         """Its columns on ``axes``, side by side."""
@@ -84,6 +86,8 @@ class SensorState:
     aside: set[int] = field(default_factory=set)  # axes a disturbance outside the library explains
     phis: Array = field(default_factory=lambda: NO_WANDER)  # the wander its noise may take
     disturbances: list[Array] = field(default_factory=list)  # their columns (k, 3, q), every component
+    #: The disturbances per step of the readings: (axis, (n, q)), as :attr:`disturbances`.
+    disturbance_steps: list[tuple[int, Array]] = field(default_factory=list)
 
     def columns(self, extra: Candidate | None = None) -> Array:
         """The baseline's and the accepted candidates' columns (and ``extra``'s), on the axes not set
@@ -135,6 +139,9 @@ class IntervalDiagnosis:
     sizes: dict[str, dict[str, list[float]]]  # accepted effect -> channel -> its coefficients, SI
     fit: Rows
     withheld: Rows
+    #: Per sensor, the disturbances found on the channels the library leaves (:func:`_leftover`), per
+    #: step of the readings: (axis, (n, q)).
+    leftover_steps: dict[str, list[tuple[int, Array]]] = field(default_factory=dict)
 
 
 def withheld_intervals(t_mid: Array, holdout: float, block_s: float = BLOCK_S) -> Rows:
@@ -178,13 +185,16 @@ def candidates(res: IntervalResiduals) -> list[Candidate]:
     ]
     for name, cls in vocabulary.effects_where(lambda t: t.candidate in ("regressors", "delay")):
         sensor = name.split(".")[0]
-        if cls.candidate == "delay":
-            per_axis = tuple(res.delay(sensor, a) for a in range(3))
+        if cls.candidate == "delay":  # the reading τ late: -τ times its rate of change
+            per_step = tuple(-(res.rate_change[sensor][:, a] / res.dt)[:, None] for a in range(3))
         elif cls.needs_temp and res.steps.temp_offset is None:
             continue
         else:
-            per_axis = tuple(res.columns(sensor, cls.columns(res.steps, sensor, a), a) for a in range(3))
-        out.append(Candidate(name, sensor, per_axis, delay=cls.candidate == "delay"))  # type: ignore[arg-type]
+            per_step = tuple(np.asarray(cls.columns(res.steps, sensor, a), dtype=float) for a in range(3))
+        per_axis = tuple(res.columns(sensor, u, a) for a, u in enumerate(per_step))
+        out.append(
+            Candidate(name, sensor, per_axis, delay=cls.candidate == "delay", per_step=per_step)  # type: ignore[arg-type]
+        )
     return out
 
 
@@ -254,7 +264,8 @@ def diagnose_intervals(
             for c in remaining
             if c.name != taken.name and not (bias and c.phis is not None and c.sensor == taken.sensor)
         ]
-    outside += _leftover(states, res)
+    leftover, leftover_steps = _leftover(states, res)
+    outside += leftover
     left = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
     after = {s: _predicted_away(st, left[s]) for s, st in states.items()}
     ordered = [scores[n] for n in accepted] + sorted(
@@ -263,7 +274,7 @@ def diagnose_intervals(
     return IntervalDiagnosis(
         res, baseline, states, before, after, left, ordered, accepted,
         sorted(outside, key=lambda o: CHANNELS.index(o.channel)), _sizes(states, float(np.median(res.span))),
-        fit, withheld,
+        fit, withheld, leftover_steps,
     )  # fmt: skip
 
 
@@ -338,7 +349,9 @@ def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Out
         if disturbance is not None:
             found.append(disturbance)
             st.aside.add(axis)
-            st.disturbances.append(next(t.columns for t in tried if t.outside is disturbance))
+            chosen = next(t for t in tried if t.outside is disturbance)
+            st.disturbances.append(chosen.columns)
+            st.disturbance_steps.append((axis, chosen.per_step))
     if found:  # the noise is the model's, as when an effect is accepted (_accept)
         st.fit = SensorFit.of(st.fit.y, st.fit.fit, st.fit.withheld, st.fit.joined, st.columns(), st.phis)
     return found
@@ -372,9 +385,13 @@ def _accept(
     accepted.append(name)
 
 
-def _leftover(states: dict[str, SensorState], res: IntervalResiduals) -> list[Outside]:
-    """A step or an oscillation significant on a channel the library leaves: a gap all the same."""
-    out = []
+def _leftover(
+    states: dict[str, SensorState], res: IntervalResiduals
+) -> tuple[list[Outside], dict[str, list[tuple[int, Array]]]]:
+    """A step or an oscillation significant on a channel the library leaves: a gap all the same; and
+    per sensor, each one per step of the readings (axis, (n, q))."""
+    out: list[Outside] = []
+    steps: dict[str, list[tuple[int, Array]]] = {}
     for sensor, st in states.items():
         current = st.columns()
         _, left = st.fit.solve(current)
@@ -385,7 +402,9 @@ def _leftover(states: dict[str, SensorState], res: IntervalResiduals) -> list[Ou
             found = explains_as_well(tried, 0.0)
             if found is not None:
                 out.append(found)
-    return out
+                chosen = next(t for t in tried if t.outside is found)
+                steps.setdefault(sensor, []).append((axis, chosen.per_step))
+    return out, steps
 
 
 def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, list[float]]]:
