@@ -133,8 +133,9 @@ def _print_statistic(statistic: dict[str, Any], intervals: bool) -> None:
     for key in ("reference_clock", "reference_filled"):
         if key in statistic:
             print(f"  reference: {statistic[key]['says']}")
-    if "delays_per_sample" in statistic:
-        print(f"  {statistic['delays_per_sample']['says']}")
+    for key in ("accel_with_gyro_corrected", "delays_per_sample"):
+        if key in statistic:
+            print(f"  {statistic[key]['says']}")
 
 
 def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -> None:

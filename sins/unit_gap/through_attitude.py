@@ -76,9 +76,15 @@ def accel_rediagnosed(
     error, names = found
     dt = np.diff(rec.imu.t)[:, None]
     imu = dataclasses.replace(rec.imu, dtheta_b=rec.imu.dtheta_b - error * dt)
-    again = diagnose_intervals(dataclasses.replace(rec, imu=imu), holdout, interval_s, progress)
+    try:
+        again = diagnose_intervals(dataclasses.replace(rec, imu=imu), holdout, interval_s, progress)
+    except ValueError as exc:  # the first diagnosis stands, and the report says why
+        return d, {"gyro_taken_out": names, "says": f"the accelerometer not diagnosed again: {exc}"}
     if len(again.residuals.iv) != len(d.residuals.iv) or bool(np.any(again.withheld != d.withheld)):
-        return d, {"says": "the accelerometer not diagnosed again: its intervals differ once corrected"}
+        return d, {
+            "gyro_taken_out": names,
+            "says": "the accelerometer not diagnosed again: its intervals differ once the gyro is corrected",
+        }
     merged = _merged(d, again)
     before, after = _accel_verdicts(d), _accel_verdicts(merged)
     said = ", ".join(names)
