@@ -31,7 +31,9 @@ def reference_clock(
     """How the reference's clock sits against the readings' (``lag_s``, positive where the reference
     lags; the correlations of the turns there and as stamped) and, where the diagnosis sized a
     ``gyro.time_offset`` (``sizes``, the report's, SI), whether that offset is within :data:`AGREE_S` of the
-    clock's lead; ``says``: one line for the report. None where the gyro turns too little to tell."""
+    clock's lead, and where it sized ``accel.time_offset``, that offset and its difference from the gyro's
+    (``accel_less_gyro_s``); ``says``: one line for the report. None where the gyro turns too little to
+    tell."""
     lag = frame_check.recording_lag(rec)
     if lag is None:
         return None
@@ -55,6 +57,16 @@ def reference_clock(
             says += (
                 f": the gyro's time offset ({1e3 * delay:.2f} ms) is {1e3 * (delay + lag.lag_s):+.2f} ms "
                 "beyond that clock's, the sensor's own delay as far as these data tell"
+            )
+    accel = [v[0] for v in sizes.get("accel.time_offset", {}).values()]
+    if accel:  # a reference's clock moves both sensors' offsets alike: their difference is the sensors'
+        out["accel_time_offset_s"] = float(np.mean(accel))
+        says += f"; the accelerometer's time offset {1e3 * out['accel_time_offset_s']:.2f} ms"
+        if offsets:
+            out["accel_less_gyro_s"] = out["accel_time_offset_s"] - out["gyro_time_offset_s"]
+            says += (
+                f", {1e3 * out['accel_less_gyro_s']:+.2f} ms from the gyro's: the sensors' own difference, "
+                "which no reference's clock moves"
             )
     out["says"] = says
     return out
