@@ -2,14 +2,16 @@
 
 Usage::
 
-    .venv/bin/python tools/gap_real_cases.py [--bases euroc/MH_01_easy broad_05 ...] [--jobs 2]
-        [--effects NAME ...] [--scale X] [--save CASES.json] [--root DIR]
+    .venv/bin/python tools/gap_real_cases.py [--bases euroc/MH_01_easy broad_05 broad_05:mocap120:moving ...]
+        [--jobs 2] [--effects NAME ...] [--scale X] [--save CASES.json] [--root DIR]
     .venv/bin/python tools/gap_real_cases.py --load CASES.json
 
 Each base is a real recording in the ``.npz`` form of ``shared/data/euroc`` (its SOURCE.md): a EuRoC
 sequence as it is, or a BROAD trial written in that form here (its longest stretch with every reading and
 the optical reference finite: ``opt_quat`` the attitude of the IMU in the optical ENU frame, ``opt_pos`` the
-position, the velocity a quadratic Savitzky-Golay derivative of it over 0.1 s). To each, with numpy alone
+position, the velocity a quadratic Savitzky-Golay derivative of it over 0.1 s; ``broad_NN:mocap120`` with its
+reference as the published preprocessing writes a 120 Hz motion capture's, ``:moving`` from where it starts
+moving, as a recording without an opening rest arrives: :func:`base_arrays`). To each, with numpy alone
 (not ``sins.imu``), one effect is added to the readings, at a MEMS unit's size:
 
 * ``gyro.time_offset``, ``accel.time_offset``: the sensor's readings 5 ms late (a band-limited delay:
@@ -47,6 +49,7 @@ from typing import Any
 import numpy as np
 import scipy.io
 from scipy.signal import savgol_filter
+from scipy.spatial.transform import Rotation, Slerp
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("SINS_DATA", ROOT.parent / "shared" / "data"))
@@ -93,11 +96,47 @@ def broad_npz(trial: str) -> dict[str, np.ndarray]:
 
 
 def base_arrays(base: str) -> dict[str, np.ndarray]:
-    """The base recording's arrays: a EuRoC ``.npz`` as it is, a BROAD trial converted."""
+    """The base recording's arrays: a EuRoC ``.npz`` as it is, a BROAD trial converted (``broad_NN``; with
+    ``:mocap120``, its reference as :func:`as_mocap120` writes it; with ``:moving``, from one second after
+    its ``movement`` flag first rises, so that it opens moving)."""
     if base.startswith("broad_"):
-        return broad_npz(base.removeprefix("broad_"))
+        trial, *forms = base.removeprefix("broad_").split(":")
+        if set(forms) - {"mocap120", "moving"}:
+            raise SystemExit(f"{base}: unknown form (known: broad_NN[:mocap120][:moving])")
+        a = broad_npz(trial)
+        if "moving" in forms:
+            m = scipy.io.loadmat(str(next((SHARED / "broad_mocap").glob(f"{trial}_*.mat"))), squeeze_me=True)
+            start = np.flatnonzero(np.asarray(m["movement"]).astype(bool))[0] / BROAD_RATE_HZ + 1.0
+            keep = a["t_s"] >= start
+            a = {k: v[keep] for k, v in a.items()}
+            a["p_m"] = a["p_m"] - a["p_m"][0]
+        return as_mocap120(a) if "mocap120" in forms else a
+    if ":" in base:
+        raise SystemExit(f"{base}: forms are for BROAD's trials (broad_NN[:mocap120][:moving])")
     with np.load(SHARED / f"{base}.npz") as z:
         return {k: np.asarray(z[k]) for k in z.files}
+
+
+def as_mocap120(a: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``a`` with its reference as the published preprocessing of a 120 Hz motion capture writes one
+    (Brossard et al.'s TUM-VI branch, ``mbrossar/denoise-imu-gyro``): the attitude slerped to 120 Hz and
+    back to the readings' stamps, the positions linearly, the velocity a backward difference of the
+    positions (its first row zero), the positions from the first; the readings within the capture's span."""
+    t = a["t_s"]
+    t_capture = np.arange(t[0], t[-1], 1.0 / 120.0)
+    attitude = Rotation.from_quat(a["q_wxyz"][:, [1, 2, 3, 0]])
+    captured = Slerp(t, attitude)(t_capture)
+    inside = (t >= t_capture[0]) & (t <= t_capture[-1])
+    t_in = t[inside]
+    q = Slerp(t_capture, captured)(t_in).as_quat()[:, [3, 0, 1, 2]]
+    p_capture = np.column_stack([np.interp(t_capture, t, a["p_m"][:, i]) for i in range(3)])
+    p = np.column_stack([np.interp(t_in, t_capture, p_capture[:, i]) for i in range(3)])
+    v = np.zeros_like(p)
+    v[1:] = np.diff(p, axis=0) / np.diff(t_in)[:, None]
+    return {
+        "t_s": t_in, "gyro_rad_s": a["gyro_rad_s"][inside], "accel_m_s2": a["accel_m_s2"][inside],
+        "q_wxyz": q, "v_m_s": v, "p_m": p - p[0],
+    }  # fmt: skip
 
 
 def delayed(x: np.ndarray, tau_s: float, dt: float) -> np.ndarray:
@@ -213,7 +252,7 @@ def run_base(
     arrays = base_arrays(base)
     folder = root / "cases"
     folder.mkdir(parents=True, exist_ok=True)
-    tag = base.replace("/", "_")
+    tag = base.replace("/", "_").replace(":", "_")
     names = []
     for case in ["clean", *cases]:
         name = f"{tag}__{case.replace(' ', '_')}"
