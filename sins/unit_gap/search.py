@@ -34,7 +34,7 @@ from sins.core.series import ReferencedRecording
 from sins.gap.floor import SIGNIFICANT_RATIO, TINY, noise_level
 from sins.gap.report import EffectScore, Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS
-from sins.imu import CHANNELS, vocabulary
+from sins.imu import CHANNELS, Effect, vocabulary
 from sins.unit_gap.fitter import (
     INSTABILITY,
     NO_WANDER,
@@ -68,8 +68,6 @@ class Candidate:
     per_axis: tuple[Array, Array, Array]
     phis: Array | None = None
     delay: bool = False  # a time offset: one column per axis, its coefficient the axis's delay
-    #: Per axis, (n, p): the error per step of the readings that ``per_axis`` moves into the residuals.
-    per_step: tuple[Array, Array, Array] | None = None
 
     def columns(self, axes: list[int]) -> Array:
         """Its columns on ``axes``, side by side."""
@@ -183,19 +181,30 @@ def candidates(res: IntervalResiduals) -> list[Candidate]:
         for sensor in ("gyro", "accel")
         for kind, phis in (("bias_instability", INSTABILITY), ("rate_random_walk", RANDOM_WALK))
     ]
-    for name, cls in vocabulary.effects_where(lambda t: t.candidate in ("regressors", "delay")):
-        sensor = name.split(".")[0]
-        if cls.candidate == "delay":  # the reading τ late: -τ times its rate of change
-            per_step = tuple(-(res.rate_change[sensor][:, a] / res.dt)[:, None] for a in range(3))
-        elif cls.needs_temp and res.steps.temp_offset is None:
+    for name, cls in _with_columns():
+        if cls.needs_temp and res.steps.temp_offset is None:
             continue
-        else:
-            per_step = tuple(np.asarray(cls.columns(res.steps, sensor, a), dtype=float) for a in range(3))
-        per_axis = tuple(res.columns(sensor, u, a) for a, u in enumerate(per_step))
-        out.append(
-            Candidate(name, sensor, per_axis, delay=cls.candidate == "delay", per_step=per_step)  # type: ignore[arg-type]
-        )
+        sensor = name.split(".")[0]
+        per_axis = tuple(res.columns(sensor, step_columns(res, name, a), a) for a in range(3))
+        out.append(Candidate(name, sensor, per_axis, delay=cls.candidate == "delay"))  # type: ignore[arg-type]
     return out
+
+
+def _with_columns() -> list[tuple[str, type[Effect]]]:
+    """The library's effects with columns on intervals: regressors and delays."""
+    return vocabulary.effects_where(lambda t: t.candidate in ("regressors", "delay"))
+
+
+def step_columns(res: IntervalResiduals, name: str, axis: int) -> Array:
+    """(n, p): the error per step of the readings, one column a coefficient, that library effect
+    ``name`` makes on axis ``axis`` (its candidate's columns are these moved into the residuals): a
+    regressor's own columns, a delay's ``-τ`` times the reading's rate of change. Made again where
+    needed rather than kept: a long recording's steps times every candidate's columns."""
+    cls = dict(_with_columns())[name]
+    sensor = name.split(".")[0]
+    if cls.candidate == "delay":
+        return np.asarray(-(res.rate_change[sensor][:, axis] / res.dt)[:, None], dtype=float)
+    return np.asarray(cls.columns(res.steps, sensor, axis), dtype=float)
 
 
 def not_on_intervals() -> dict[str, str]:
@@ -510,5 +519,6 @@ __all__ = [
     "interval_noise_level",
     "not_on_intervals",
     "significant_ratio",
+    "step_columns",
     "withheld_intervals",
 ]

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from sins.core.series import ReferencedRecording
 from sins.imu import CHANNELS
-from sins.unit_gap.search import IntervalDiagnosis, diagnose_intervals
+from sins.unit_gap.search import IntervalDiagnosis, diagnose_intervals, step_columns
 
 Array = NDArray[np.float64]
 
@@ -41,10 +41,10 @@ def gyro_error(d: IntervalDiagnosis) -> tuple[Array, list[str]] | None:
     parts: list[tuple[int, Array, Array]] = []  # (axis, per step (n, q), its columns (k, 3, q))
     names = []
     for cand in st.accepted:
-        if cand.per_step is None:  # a random bias: its path is the noise model's
+        if cand.phis is not None:  # a random bias: its path is the noise model's
             continue
         names.append(cand.name)
-        parts += [(a, cand.per_step[a], cand.per_axis[a]) for a in axes]
+        parts += [(a, step_columns(res, cand.name, a), cand.per_axis[a]) for a in axes]
     for axis, u in [*st.disturbance_steps, *d.leftover_steps.get("gyro", [])]:
         parts.append((axis, u, res.columns("gyro", u, axis)))
     names += [f"{o.channel} {o.kind}" for o in d.outside if o.channel.startswith("gyro")]
