@@ -203,7 +203,7 @@ def step_columns(res: IntervalResiduals, name: str, axis: int) -> Array:
     cls = dict(_with_columns())[name]
     sensor = name.split(".")[0]
     if cls.candidate == "delay":
-        return np.asarray(-(res.rate_change[sensor][:, axis] / res.dt)[:, None], dtype=float)
+        return res.delay_steps(sensor, axis)
     return np.asarray(cls.columns(res.steps, sensor, axis), dtype=float)
 
 
@@ -330,7 +330,7 @@ def _both_signs(st: SensorState, cand: Candidate, coef: Array) -> bool:
     """Whether ``cand``, a delay fitted beside ``st``'s model (``coef``, the columns of
     :meth:`SensorState.columns` with it), makes its sensor's axes late by delays of both signs. One
     sensor's readings run on one clock, and a delay added to them is sized with one sign on every axis
-    (EuRoC's thirteen bases and BROAD's two trials with 5 ms added: 1.8-13 ms); BROAD's hand-held trial
+    (EuRoC's eleven sequences and BROAD's two trials with 5 ms added: 1.8-13 ms); BROAD's hand-held trial
     18 as it is, read from where it starts moving, had its accelerometer's intervals take x -2.4, y +0.9,
     z +1.9 ms, which no clock is (as per sample: :func:`sins.unit_gap.delays.one_clock`)."""
     if not cand.delay:
