@@ -80,7 +80,8 @@ def diagnose_one(
     )
     if chosen.kind == "samples":
         found = _on_samples(inp, data, holdout, model, progress, chosen)
-        if asked == "auto" and baseline is not None and _every_channel_left(found, chosen):
+        baseline_model = tuple(model) == tuple(BASELINE)  # the intervals take no other
+        if asked == "auto" and baseline is not None and baseline_model and _every_channel_left(found, chosen):
             return _intervals_instead(inp, found, baseline, holdout, interval_s, progress, chosen)
         return found
     if tuple(model) != tuple(BASELINE):
