@@ -645,7 +645,10 @@ def test_a_flight_without_a_rest_is_judged_on_intervals_where_samples_leave_ever
     channel was left unexplained. Where that happens the intervals are tried and taken if they leave
     fewer: there, one (gyro y), as on the whole recording's intervals; the report says why. The PSINS
     drive, without a rest either, stays on samples (its per-sample diagnosis leaves one channel:
-    ``test_the_psins_drive_lands_near_its_floor``)."""
+    ``test_the_psins_drive_lands_near_its_floor``). The delays are tried per sample beside the intervals
+    with the reference judged in motion (:func:`sins.unit_gap.delays.reference_ratios`): none found on
+    the flight as it is, its accelerometer 5 ms late named and sized within 0.1 ms on every axis (4.99-5.01
+    ms; before, without a rest, they were not tried, and the intervals do not see it)."""
     _needs("euroc/V1_02_medium")
     with np.load(Path(datasets.data_root()) / "euroc" / "V1_02_medium.npz") as z:
         arrays = {k: np.asarray(z[k]) for k in z.files}
@@ -653,13 +656,22 @@ def test_a_flight_without_a_rest_is_judged_on_intervals_where_samples_leave_ever
     rows = slice(moving[0] + 200, moving[-1] - 200)
     cut = {k: v[rows] for k, v in arrays.items()}
     cut["p_m"] = cut["p_m"] - cut["p_m"][0]
+    sys.path.insert(0, str(ROOT / "tools"))
+    import gap_real_cases as cases
+
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv(datasets.ENV_VAR, str(tmp_path))
         nu.write(tmp_path / "cases" / "moving.npz", cut)
         report = diagnose_one(read_gap_input(None, dataset="cases/moving")).report
+        nu.write(tmp_path / "cases" / "late.npz", cases.added("accel.time_offset", cut))
+        late = diagnose_one(read_gap_input(None, dataset="cases/late")).report
     assert report.statistic["sensor_noise_from"] == "a cubic through 11 readings", report.statistic
     assert report.statistic["kind"] == "intervals" and "every channel was left" in report.statistic["why"]
     assert len(report.unexplained) <= 1, report.unexplained
+    tried = report.statistic["delays_per_sample"]
+    assert tried["tried"] and not tried["added"], tried
+    assert late.statistic["delays_per_sample"]["added"] == ["accel.time_offset"], late.statistic
+    assert all(abs(v[0] - 5e-3) < 1e-4 for v in late.sizes["accel.time_offset"].values()), late.sizes
 
 
 def test_the_psins_drive_lands_near_its_floor() -> None:
