@@ -4,9 +4,11 @@ The accelerometer's residual over an interval is the velocity change its reading
 attitude the gyro integrates within the interval (:mod:`sins.unit_gap.intervals`). An error of the gyro
 turns that attitude, and gravity turned with it shows on the accelerometer's channels: EuRoC's MH_01
 with 0.3 °/s of hum on gyro x (``tools/gap_real_cases.py``) had accel y flagged with the same 37.8 s
-period, BROAD's trial 05 with a bias step on gyro y had accel x flagged stepping at the same second, and
-a gyro scale nonlinearity brought ``accel.size_effect`` with it on MH_01 (a disturbance on the gyro is
-fitted on the gyro, so the accelerometer keeps what the gyro's error did to it).
+period, BROAD's trial 05 (as a 120 Hz capture's reference, from where it moves) with a bias step on gyro
+y had accel x flagged stepping at the same second, a gyro scale nonlinearity brought ``accel.size_effect``
+with it on MH_01, and numpy's unit with its gyro 5 ms late had accelerometer effects named on six of ten
+motions (a disturbance on the gyro is fitted on the gyro, so the accelerometer keeps what the gyro's
+error did to it).
 
 So where the gyro's diagnosis fitted anything beyond its baseline (accepted effects with columns, and
 disturbances outside the library), its readings are corrected by that fit, per step, and the recording
