@@ -3,8 +3,8 @@
 Usage::
 
     .venv/bin/python tools/another_unit.py [--parts 3] [--strategies regression mlp_window ...]
-        [--gaps N] [--screen refused|always|never] [--calibrated] [--backward] [--json OUT.json]
-        [--keep DIR]
+        [--gaps N] [--screen refused|always|never] [--calibrated] [--backward | --mocap120]
+        [--json OUT.json] [--keep DIR]
 
 sins holds two BROAD trials of unit B (``broad_05``: slow rotations, ``broad_18``: fast translations, each
 with rests). Each is cut into ``--parts`` consecutive recordings and written in the ``.npz`` form of
@@ -23,7 +23,10 @@ seed), the judged parts as they are; ``--screen`` is handed to ``sins fit``
 writes a motion capture's (Brossard et al. 2020, its TUM-VI branch): positions (here the reference's
 velocity integrated by the trapezoid rule) and the velocity a backward difference of them, its first row
 zero: half a step late, which ``sins`` reads on the positions' clock
-(:func:`sins.io.local.on_positions_clock`).
+(:func:`sins.io.local.on_positions_clock`). ``--mocap120``: the same, and the capture at 120 Hz, as that
+preprocessing reads a 120 Hz motion capture onto the IMU's stamps: the attitude slerped to 120 Hz and back,
+the positions linearly, the readings within the capture's span (``tools/gap_real_cases.py``'s
+``as_mocap120``).
 
 ``--calibrated``: each part with its own constant gyro bias taken out (``tools/calibrated_unit.py``'s
 ``calibrated``, numpy and scipy alone): the unit as it would read calibrated at every power-up.
@@ -92,6 +95,17 @@ def backward(path: Path) -> None:
     np.savez(path, **{**a, "p_m": p_m, "v_m_s": v})
 
 
+def mocap120(path: Path) -> None:
+    """The part at ``path`` written again as a 120 Hz motion capture's reference arrives from the
+    published preprocessing (``--mocap120``)."""
+    import gap_real_cases
+    from scipy.integrate import cumulative_trapezoid
+
+    a = dict(np.load(path))
+    a["p_m"] = cumulative_trapezoid(a["v_m_s"], a["t_s"], axis=0, initial=0.0)
+    np.savez(path, **gap_real_cases.as_mocap120(a))
+
+
 def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:
     """The ``.npz`` recording at ``path`` written again with ``gaps`` 1 s gaps of its reference filled
     (the attitude slerped, the velocity a straight line between the gap's ends)."""
@@ -113,7 +127,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--gaps", type=int, default=0, help="1 s gaps filled in each training part's reference")
     p.add_argument("--screen", choices=("refused", "always", "never"), help="handed to sins fit")
     p.add_argument("--calibrated", action="store_true", help="each part's own gyro bias taken out")
-    p.add_argument("--backward", action="store_true", help="velocities a backward difference of positions")
+    form = p.add_mutually_exclusive_group()
+    form.add_argument("--backward", action="store_true", help="velocities a backward difference of positions")
+    form.add_argument("--mocap120", action="store_true", help="as a 120 Hz motion capture's preprocessing")
     p.add_argument("--json", type=Path)
     p.add_argument("--keep", type=Path, help="write the .npz recordings here (a data root) and keep them")
     args = p.parse_args(argv)
@@ -129,6 +145,8 @@ def main(argv: list[str] | None = None) -> int:
                     calibrated(folder / f"{name}.npz", folder)  # written again under its name
                 if args.backward:
                     backward(folder / f"{name}.npz")
+                if args.mocap120:
+                    mocap120(folder / f"{name}.npz")
 
     return euroc_benchmark.run_on_unit(
         write, "broad_b", args.train, args.judge, args.strategies, json_out=args.json, keep=args.keep,
