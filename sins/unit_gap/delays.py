@@ -50,10 +50,11 @@ def with_delays(
     if data is None:
         return report
     at_rest, where = reference_ratios(data, reference)
+    untried: dict[str, Any] = {"tried": False, "rest_ratios": at_rest, "ratios_measured": where}
     gyro = {ch: r for ch, r in at_rest.items() if ch.startswith("gyro")}
     if not gyro:
         said = "delays not tried per sample: the reference's noise not measured per sample"
-        return _noted(report, {"tried": False, "rest_ratios": at_rest, "says": said})
+        return _noted(report, {**untried, "says": said})
     mean = sum(gyro.values()) / len(gyro)
     if mean > DELAY_RATIO:
         said = (
@@ -61,13 +62,11 @@ def with_delays(
             f"noise (the mean over its axes), beyond {DELAY_RATIO:g}x (a reference that noisy per sample "
             "has lags of its own: its clock, its filters)"
         )
-        return _noted(report, {"tried": False, "rest_ratios": at_rest, "says": said})
+        return _noted(report, {**untried, "says": said})
     try:
         found = diagnose(data, holdout, candidates=DELAYS)
     except (SinsInputError, ValueError) as exc:  # what the intervals diagnosed stands
-        return _noted(
-            report, {"tried": False, "rest_ratios": at_rest, "says": f"delays not tried per sample: {exc}"}
-        )
+        return _noted(report, {**untried, "says": f"delays not tried per sample: {exc}"})
     # A sensor with a channel that a disturbance outside the library explains is not given a delay
     # here, as the search tries no candidate there: the per-sample search does not fit the disturbance,
     # and EuRoC's V1_02 with a 0.3 °/s hum on gyro x had a gyro delay of 0.1 ms named beside it.
@@ -80,6 +79,7 @@ def with_delays(
     note: dict[str, Any] = {
         "tried": True,
         "rest_ratios": at_rest,
+        "ratios_measured": where,
         "accepted": list(found.diagnosis),
         "added": added,
         "beside_a_disturbance": [n for n in found.diagnosis if n not in (*report.diagnosis, *added)],
