@@ -748,6 +748,18 @@ def test_a_hum_on_one_sensor_flags_that_channel_alone_beside_a_real_units_wander
     assert report.outside[0].period_s == pytest.approx(37.0, rel=0.05)
 
 
+def test_a_hum_on_the_gyro_is_not_echoed_on_the_accelerometer(tmp_path: Path) -> None:
+    """EuRoC's MH_01_easy with a 0.3 °/s sinusoid of 37 s on gyro x: flagged on gyro x alone. The
+    accelerometer's velocity change is turned by the gyro's attitude, and accel y had been flagged with
+    the same period beside it; judged with the gyro corrected by what its diagnosis fitted
+    (:mod:`sins.unit_gap.through_attitude`), it is not, and the report says what it read before."""
+    report = _real_cases(tmp_path, "euroc/MH_01_easy", ("gyro.x sinusoid",))[1]["gyro.x sinusoid"]
+    assert [(o.channel, o.kind) for o in report.outside] == [("gyro.x", "periodic")], report.outside
+    note = report.statistic["accel_with_gyro_corrected"]
+    assert note["gyro_taken_out"] == ["gyro.x periodic"], note
+    assert note["accel_before"] == ["accel.y periodic"], note
+
+
 def test_a_reference_filled_by_interpolation_is_set_aside_from_the_intervals(tmp_path: Path) -> None:
     """EuRoC's MH_01 with three 1 s gaps of its reference filled as a converter fills them (the attitude
     slerped by scipy, the position and velocity straight lines): ``sins gap`` sets the gaps' inner epochs
