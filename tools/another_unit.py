@@ -83,27 +83,31 @@ def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -
     return names
 
 
-def backward(path: Path) -> None:
-    """The part at ``path`` written again with positions and a backward-difference velocity
-    (``--backward``)."""
+def _with_positions(path: Path) -> dict[str, np.ndarray]:
+    """The part at ``path`` with its positions: its reference's velocity integrated by the trapezoid rule
+    (the parts are written with none)."""
     from scipy.integrate import cumulative_trapezoid
 
     a = dict(np.load(path))
-    p_m = cumulative_trapezoid(a["v_m_s"], a["t_s"], axis=0, initial=0.0)
-    v = np.zeros_like(p_m)
-    v[1:] = np.diff(p_m, axis=0) / np.diff(a["t_s"])[:, None]
-    np.savez(path, **{**a, "p_m": p_m, "v_m_s": v})
+    a["p_m"] = cumulative_trapezoid(a["v_m_s"], a["t_s"], axis=0, initial=0.0)
+    return a
+
+
+def backward(path: Path) -> None:
+    """The part at ``path`` written again with positions and a backward-difference velocity
+    (``--backward``)."""
+    a = _with_positions(path)
+    v = np.zeros_like(a["p_m"])
+    v[1:] = np.diff(a["p_m"], axis=0) / np.diff(a["t_s"])[:, None]
+    np.savez(path, **{**a, "v_m_s": v})
 
 
 def mocap120(path: Path) -> None:
     """The part at ``path`` written again as a 120 Hz motion capture's reference arrives from the
     published preprocessing (``--mocap120``)."""
     import gap_real_cases
-    from scipy.integrate import cumulative_trapezoid
 
-    a = dict(np.load(path))
-    a["p_m"] = cumulative_trapezoid(a["v_m_s"], a["t_s"], axis=0, initial=0.0)
-    np.savez(path, **gap_real_cases.as_mocap120(a))
+    np.savez(path, **gap_real_cases.as_mocap120(_with_positions(path)))
 
 
 def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:

@@ -36,6 +36,7 @@ the library cases passed where an effect the report lists as indistinguishable f
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import subprocess
@@ -75,10 +76,15 @@ BROAD_RATE_HZ = 285.714
 OBSERVABLE_NATS = 9.0
 
 
+@functools.cache
+def _broad_mat(trial: str) -> dict[str, Any]:
+    """A BROAD trial's ``.mat`` file as scipy reads it (read once: the ``:moving`` form reads it twice)."""
+    return dict(scipy.io.loadmat(str(next((SHARED / "broad_mocap").glob(f"{trial}_*.mat"))), squeeze_me=True))
+
+
 def broad_npz(trial: str) -> dict[str, np.ndarray]:
     """A BROAD trial in the ``.npz`` form (see the module docstring)."""
-    path = next((SHARED / "broad_mocap").glob(f"{trial}_*.mat"))
-    m = scipy.io.loadmat(str(path), squeeze_me=True)
+    m = _broad_mat(trial)
     cols = [np.asarray(m[k], dtype=float) for k in ("imu_gyr", "imu_acc", "opt_quat", "opt_pos")]
     ok = np.isfinite(np.hstack(cols)).all(axis=1)
     edges = np.diff(np.r_[0, ok.astype(int), 0])
@@ -105,8 +111,8 @@ def base_arrays(base: str) -> dict[str, np.ndarray]:
             raise SystemExit(f"{base}: unknown form (known: broad_NN[:mocap120][:moving])")
         a = broad_npz(trial)
         if "moving" in forms:
-            m = scipy.io.loadmat(str(next((SHARED / "broad_mocap").glob(f"{trial}_*.mat"))), squeeze_me=True)
-            start = np.flatnonzero(np.asarray(m["movement"]).astype(bool))[0] / BROAD_RATE_HZ + 1.0
+            moving = np.asarray(_broad_mat(trial)["movement"]).astype(bool)
+            start = np.flatnonzero(moving)[0] / BROAD_RATE_HZ + 1.0
             keep = a["t_s"] >= start
             a = {k: v[keep] for k, v in a.items()}
             a["p_m"] = a["p_m"] - a["p_m"][0]

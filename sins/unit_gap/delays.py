@@ -29,7 +29,8 @@ from typing import Any
 from sins.core.series import CalibrationData, NavSeries
 from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
-from sins.unit_gap.statistic import per_sample_ratios, rest_ratios
+from sins.unit_gap.clock import BOTH_SIGNS, one_clock
+from sins.unit_gap.statistic import IN_MOTION, per_sample_ratios, rest_ratios
 
 #: The reference's attitude per sample at rest, its residual's noise over the gyro's own averaged over the
 #: gyro's channels, within which the delays are tried per sample: the reference's own noise there at
@@ -106,7 +107,7 @@ def reference_ratios(data: CalibrationData, reference: NavSeries) -> tuple[dict[
     at_rest = rest_ratios(data, reference)
     if at_rest:
         return at_rest, "at rest"
-    return per_sample_ratios(data, reference)[0], "in motion (no rest; against a cubic through 11 readings)"
+    return per_sample_ratios(data, reference)[0], f"in motion (no rest; against {IN_MOTION})"
 
 
 def _said(
@@ -123,25 +124,15 @@ def _said(
         if name in report.diagnosis:
             why = "; named on the intervals too"
         elif not one_clock(sizes_ms[name]):
-            why = "; not named: its axes are late by delays of both signs, which one sensor's clock is not"
+            why = f"; not named: {BOTH_SIGNS}"
         elif name not in added:
             why = "; not named: a disturbance outside the library is on that sensor"
         parts.append(f"{name} ({sized} ms{why})")
     return f"{head}: {'; '.join(parts)}"
 
 
-def one_clock(sizes_ms: dict[str, float]) -> bool:
-    """Whether a sensor's delays per axis (ms) can be one clock's: all of one sign. A delay added to a
-    sensor's readings is sized within a fifth on every axis (EuRoC's four bases with the accelerometer
-    5 and 10 ms late: 4.0-5.2 and 9.9-10.7 ms, each found with thousands of nats); a reference whose
-    velocity is differentiated from its positions had its accelerometer named per sample, x -1.43 ms
-    and y +0.72 ms at 21 nats, which no sensor's clock is."""
-    values = list(sizes_ms.values())
-    return all(v > 0 for v in values) or all(v < 0 for v in values)
-
-
 def _noted(report: GapReport, note: dict[str, Any]) -> GapReport:
     return dataclasses.replace(report, statistic={**report.statistic, "delays_per_sample": note})
 
 
-__all__ = ["DELAYS", "DELAY_RATIO", "one_clock", "reference_ratios", "with_delays"]
+__all__ = ["DELAYS", "DELAY_RATIO", "reference_ratios", "with_delays"]

@@ -133,13 +133,10 @@ class IntervalResiduals:
 
     def delay_steps(self, sensor: str, axis: int) -> Array:
         """(n, 1) what reading axis ``axis`` of ``sensor`` a second later changes each step's reading
-        by, per second of delay, in the sensor's units: minus its rate of change."""
+        by, per second of delay, in the sensor's units: minus its rate of change (the time offset's
+        column, moved into the residuals by :meth:`columns`: the readings lag the reference by its
+        coefficient)."""
         return np.asarray(-(self.rate_change[sensor][:, axis] / self.dt)[:, None], dtype=float)
-
-    def delay(self, sensor: str, axis: int) -> Array:
-        """(k, 3, 1) how reading axis ``axis`` of ``sensor`` a second later moves each residual (the
-        time offset's column: the readings lag the reference by its coefficient)."""
-        return self.columns(sensor, self.delay_steps(sensor, axis), axis)
 
 
 def step_inputs(corrected: ImuIncrements) -> StepInputs:

@@ -146,8 +146,8 @@ def _every_channel_left(found: Diagnosed, chosen: statistic.Statistic) -> bool:
     what it cannot follow for the sensor's noise (a drone's vibration: EuRoC's V1_02 read from where it
     moves had the reading less its reference at 0.32-0.49 of that noise, which no residual is), and the
     per-sample residual holds what no library effect explains per sample."""
-    measured_at_rest = str(chosen.figures.get("sensor_noise_from", "")).startswith("its readings at rest")
-    return not measured_at_rest and set(found.report.unexplained) >= set(CHANNELS)
+    in_motion = chosen.figures.get("sensor_noise_from") == statistic.IN_MOTION
+    return in_motion and set(found.report.unexplained) >= set(CHANNELS)
 
 
 def _intervals_instead(

@@ -35,6 +35,7 @@ from sins.gap.floor import SIGNIFICANT_RATIO, TINY, noise_level
 from sins.gap.report import EffectScore, Outside
 from sins.gap.scoring import SIGNIFICANT_NATS, TIE_NATS
 from sins.imu import CHANNELS, Effect, vocabulary
+from sins.unit_gap.clock import BOTH_SIGNS, one_clock
 from sins.unit_gap.fitter import (
     INSTABILITY,
     NO_WANDER,
@@ -50,8 +51,6 @@ from sins.unit_gap.outside import Tried, beside_wander, explains_as_well, try_di
 Array = NDArray[np.float64]
 Rows = NDArray[np.bool_]
 
-#: Why a delay that the intervals favour is not accepted: one sensor's readings run on one clock.
-BOTH_SIGNS = "its axes are late by delays of both signs, which one sensor's clock is not"
 #: Intervals are withheld at the end of blocks of this length, s: short beside a recording's kinds of
 #: motion (a rest, a turn, a drive), so that every kind is both fitted and judged.
 BLOCK_S = 10.0
@@ -83,9 +82,9 @@ class SensorState:
     accepted: list[Candidate] = field(default_factory=list)
     aside: set[int] = field(default_factory=set)  # axes a disturbance outside the library explains
     phis: Array = field(default_factory=lambda: NO_WANDER)  # the wander its noise may take
-    disturbances: list[Array] = field(default_factory=list)  # their columns (k, 3, q), every component
-    #: The disturbances per step of the readings: (axis, (n, q)), as :attr:`disturbances`.
-    disturbance_steps: list[tuple[int, Array]] = field(default_factory=list)
+    #: The disturbances set aside for their channels: their columns (k, 3, q), every component, and per
+    #: step of the readings.
+    disturbances: list[Tried] = field(default_factory=list)
 
     def columns(self, extra: Candidate | None = None) -> Array:
         """The baseline's and the accepted candidates' columns (and ``extra``'s), on the axes not set
@@ -97,7 +96,7 @@ class SensorState:
         blocks = [self.baseline] + [c.columns(axes) for c in self.accepted]
         if extra is not None:
             blocks.append(extra.columns(axes))
-        return np.concatenate(blocks + self.disturbances, axis=2)
+        return np.concatenate(blocks + [t.columns for t in self.disturbances], axis=2)
 
 
 @dataclass(frozen=True)
@@ -137,9 +136,8 @@ class IntervalDiagnosis:
     sizes: dict[str, dict[str, list[float]]]  # accepted effect -> channel -> its coefficients, SI
     fit: Rows
     withheld: Rows
-    #: Per sensor, the disturbances found on the channels the library leaves (:func:`_leftover`), per
-    #: step of the readings: (axis, (n, q)).
-    leftover_steps: dict[str, list[tuple[int, Array]]] = field(default_factory=dict)
+    #: Per sensor, the disturbances found on the channels the library leaves (:func:`_leftover`).
+    leftover: dict[str, list[Tried]] = field(default_factory=dict)
 
 
 def withheld_intervals(t_mid: Array, holdout: float, block_s: float = BLOCK_S) -> Rows:
@@ -221,9 +219,11 @@ def diagnose_intervals(
     interval_s: float = 1.0,
     progress: Callable[[str], None] | None = None,
     baseline: IntervalFit | None = None,
+    sensors: tuple[str, ...] = ("gyro", "accel"),
 ) -> IntervalDiagnosis:
     """The gap diagnosis of ``rec`` on its reference's intervals (see the module docstring);
-    ``baseline``: :func:`baseline_fit`'s, if the caller has it.
+    ``baseline``: :func:`baseline_fit`'s, if the caller has it; ``sensors``: those searched (each
+    sensor's search is its own; the others keep their baseline).
 
     Raises
     ------
@@ -241,7 +241,7 @@ def diagnose_intervals(
             SensorFit.of(res.residual[sensor], fit, withheld, res.joined, base), base
         )
     before = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
-    remaining = candidates(res)
+    remaining = [c for c in candidates(res) if c.sensor in sensors]
     scores: dict[str, EffectScore] = {}
     accepted: list[str] = []
     outside: list[Outside] = []
@@ -273,8 +273,8 @@ def diagnose_intervals(
             for c in remaining
             if c.name != taken.name and not (bias and c.phis is not None and c.sensor == taken.sensor)
         ]
-    leftover, leftover_steps = _leftover(states, res)
-    outside += leftover
+    leftover = _leftover({s: states[s] for s in sensors}, res)
+    outside += [t.outside for found in leftover.values() for t in found]
     left = {s: st.fit.solve(st.columns())[1] for s, st in states.items()}
     after = {s: _predicted_away(st, left[s]) for s, st in states.items()}
     ordered = [scores[n] for n in accepted] + sorted(
@@ -283,7 +283,7 @@ def diagnose_intervals(
     return IntervalDiagnosis(
         res, baseline, states, before, after, left, ordered, accepted,
         sorted(outside, key=lambda o: CHANNELS.index(o.channel)), _sizes(states, float(np.median(res.span))),
-        fit, withheld, leftover_steps,
+        fit, withheld, leftover,
     )  # fmt: skip
 
 
@@ -328,17 +328,14 @@ def _round(
 
 def _both_signs(st: SensorState, cand: Candidate, coef: Array) -> bool:
     """Whether ``cand``, a delay fitted beside ``st``'s model (``coef``, the columns of
-    :meth:`SensorState.columns` with it), makes its sensor's axes late by delays of both signs. One
-    sensor's readings run on one clock, and a delay added to them is sized with one sign on every axis
-    (EuRoC's eleven sequences and BROAD's two trials with 5 ms added: 1.8-13 ms); BROAD's hand-held trial
-    18 as it is, read from where it starts moving, had its accelerometer's intervals take x -2.4, y +0.9,
-    z +1.9 ms, which no clock is (as per sample: :func:`sins.unit_gap.delays.one_clock`)."""
+    :meth:`SensorState.columns` with it), makes its sensor's axes late by delays no one clock gives
+    (:func:`sins.unit_gap.clock.one_clock`; with 5 ms added to EuRoC's eleven sequences and BROAD's two
+    trials, every delay accepted had one sign, 1.8-13 ms)."""
     if not cand.delay:
         return False
     axes = [a for a in range(3) if a not in st.aside]
     at = st.baseline.shape[2] + sum(c.columns(axes).shape[2] for c in st.accepted)
-    delays = coef[at : at + len(axes)]
-    return bool(np.any(delays > 0.0) and np.any(delays < 0.0))
+    return not one_clock({f"{cand.sensor}.{'xyz'[a]}": float(coef[at + i]) for i, a in enumerate(axes)})
 
 
 def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Outside]:
@@ -358,9 +355,7 @@ def _set_aside(st: SensorState, res: IntervalResiduals, best: Trial) -> list[Out
         if disturbance is not None:
             found.append(disturbance)
             st.aside.add(axis)
-            chosen = next(t for t in tried if t.outside is disturbance)
-            st.disturbances.append(chosen.columns)
-            st.disturbance_steps.append((axis, chosen.per_step))
+            st.disturbances.append(next(t for t in tried if t.outside is disturbance))
     if found:  # the noise is the model's, as when an effect is accepted (_accept)
         st.fit = SensorFit.of(st.fit.y, st.fit.fit, st.fit.withheld, st.fit.joined, st.columns(), st.phis)
     return found
@@ -394,13 +389,10 @@ def _accept(
     accepted.append(name)
 
 
-def _leftover(
-    states: dict[str, SensorState], res: IntervalResiduals
-) -> tuple[list[Outside], dict[str, list[tuple[int, Array]]]]:
-    """A step or an oscillation significant on a channel the library leaves: a gap all the same; and
-    per sensor, each one per step of the readings (axis, (n, q))."""
-    out: list[Outside] = []
-    steps: dict[str, list[tuple[int, Array]]] = {}
+def _leftover(states: dict[str, SensorState], res: IntervalResiduals) -> dict[str, list[Tried]]:
+    """Per sensor, a step or an oscillation significant on a channel the library leaves: a gap all the
+    same."""
+    out: dict[str, list[Tried]] = {}
     for sensor, st in states.items():
         current = st.columns()
         _, left = st.fit.solve(current)
@@ -410,10 +402,8 @@ def _leftover(
             tried: list[Tried] = try_disturbances(st.fit, res, sensor, axis, current, left)
             found = explains_as_well(tried, 0.0)
             if found is not None:
-                out.append(found)
-                chosen = next(t for t in tried if t.outside is found)
-                steps.setdefault(sensor, []).append((axis, chosen.per_step))
-    return out, steps
+                out.setdefault(sensor, []).append(next(t for t in tried if t.outside is found))
+    return out
 
 
 def _sizes(states: dict[str, SensorState], span: float) -> dict[str, dict[str, list[float]]]:
@@ -507,7 +497,6 @@ def channel_figures(d: IntervalDiagnosis) -> tuple[dict[str, dict[str, float]], 
 
 __all__ = [
     "BLOCK_S",
-    "BOTH_SIGNS",
     "Candidate",
     "IntervalDiagnosis",
     "SensorState",

@@ -41,6 +41,9 @@ REFERENCE_RATIO = 1.2
 #: over 11 readings follows a rate that turns over 50 ms at 200 Hz).
 _WINDOW, _DEGREE = 11, 3
 STATISTICS = ("auto", "samples", "intervals")
+#: Where the sensor's noise was measured without 200 rows at rest (``sensor_noise_from``): in motion,
+#: where what the cubic cannot follow passes for noise.
+IN_MOTION = "a cubic through 11 readings"
 
 
 @dataclass(frozen=True)
@@ -108,7 +111,7 @@ def per_sample_ratios(data: CalibrationData, reference: NavSeries | None) -> tup
     for i, (ch, readings, residual) in enumerate(_channels(data)):
         own = noise_floor(readings, rest) if cubic is None else cubic[i]
         out[ch] = float(noise_level(residual) / max(float(own), TINY))
-    where = f"its readings at rest ({int(rest.sum())} rows)" if at_rest else "a cubic through 11 readings"
+    where = f"its readings at rest ({int(rest.sum())} rows)" if at_rest else IN_MOTION
     return out, where
 
 
@@ -180,6 +183,7 @@ def choose(
 
 
 __all__ = [
+    "IN_MOTION",
     "REFERENCE_RATIO",
     "STATISTICS",
     "Statistic",

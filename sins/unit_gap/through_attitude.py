@@ -11,10 +11,11 @@ motions (a disturbance on the gyro is fitted on the gyro, so the accelerometer k
 error did to it).
 
 So where the gyro's diagnosis fitted anything beyond its baseline (accepted effects with columns, and
-disturbances outside the library), its readings are corrected by that fit, per step, and the recording
-is diagnosed again (:func:`accel_rediagnosed`): the accelerometer's half of that diagnosis is the
-report's, the gyro's half stays the first's. A random bias is not taken out: it has no columns (its
-path is the intervals' noise model's). The report says what the accelerometer's verdicts were before.
+disturbances outside the library), its readings are corrected by that fit, per step, and the
+accelerometer is searched again on them (:func:`accel_rediagnosed`; each sensor's search is its own, so
+the gyro's is not repeated): that is the report's accelerometer, the gyro's stays the first's. A
+random bias is not taken out: it has no columns (its path is the intervals' noise model's). The report
+says what the accelerometer's verdicts were before.
 """
 
 from __future__ import annotations
@@ -47,8 +48,8 @@ def gyro_error(d: IntervalDiagnosis) -> tuple[Array, list[str]] | None:
             continue
         names.append(cand.name)
         parts += [(a, step_columns(res, cand.name, a), cand.per_axis[a]) for a in axes]
-    for axis, u in [*st.disturbance_steps, *d.leftover_steps.get("gyro", [])]:
-        parts.append((axis, u, res.columns("gyro", u, axis)))
+    for t in [*st.disturbances, *d.leftover.get("gyro", [])]:
+        parts.append(("xyz".index(t.outside.channel[-1]), t.per_step, t.columns))
     names += [f"{o.channel} {o.kind}" for o in d.outside if o.channel.startswith("gyro")]
     if not parts:
         return None
@@ -79,7 +80,9 @@ def accel_rediagnosed(
     dt = np.diff(rec.imu.t)[:, None]
     imu = dataclasses.replace(rec.imu, dtheta_b=rec.imu.dtheta_b - error * dt)
     try:
-        again = diagnose_intervals(dataclasses.replace(rec, imu=imu), holdout, interval_s, progress)
+        again = diagnose_intervals(
+            dataclasses.replace(rec, imu=imu), holdout, interval_s, progress, sensors=("accel",)
+        )
     except ValueError as exc:  # the first diagnosis stands, and the report says why
         return d, {"gyro_taken_out": names, "says": f"the accelerometer not diagnosed again: {exc}"}
     if len(again.residuals.iv) != len(d.residuals.iv) or bool(np.any(again.withheld != d.withheld)):
@@ -129,7 +132,7 @@ def _merged(d: IntervalDiagnosis, again: IntervalDiagnosis) -> IntervalDiagnosis
             **{k: v for k, v in d.sizes.items() if gyro(k)},
             **{k: v for k, v in again.sizes.items() if not gyro(k)},
         },
-        leftover_steps={**again.leftover_steps, "gyro": d.leftover_steps.get("gyro", [])},
+        leftover={**again.leftover, "gyro": d.leftover.get("gyro", [])},
     )
 
 
