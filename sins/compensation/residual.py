@@ -498,24 +498,25 @@ class ResidualStrategy(Strategy):
         return terms.predict(groups, coef, x, channels)
 
     def _residual(self, sensor: str, x: Array, memo: dict[str, Any] | None = None) -> Array:
-        """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner
-        goes on along its edge slope (a one-sided difference over the last 0.1 % of the range) for up
-        to a quarter of the range, and holds from there: a scale factor's curve that the rig followed
-        to 250 °/s is better continued to 300 than cut flat, and guessed no further. ``memo``: what the
-        learner may keep between the passes of one correction over the same rows (:meth:`_predict`)."""
+        """The learned residual at scaled inputs ``x``. Beyond the box the rig covered, the learner goes
+        on along each input's slope at the box's edge (a one-sided difference over the last 0.1 % of the
+        range; not one carried beyond along another input already, which read 6,000 m/s² at a landing)
+        for up to a quarter of the range, and holds from there: a scale factor's curve that the rig
+        followed to 250 °/s is better continued to 300 than cut flat, and guessed no further. ``memo``:
+        what the learner may keep between the passes of one correction over the same rows."""
         lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
         width = np.maximum(hi - lo, 1e-12)
         reach, inside, beyond = _boxed(np.ascontiguousarray(x), lo - 0.25 * width, hi + 0.25 * width, lo, hi)
         learner = self._learner(sensor)
-        pred: Array = self._predict(learner, inside, memo)
+        at_edge: Array = self._predict(learner, inside, memo)
+        pred = at_edge.copy()
         for d in range(x.shape[1]):
-            rows = beyond[reach[beyond, d] != inside[beyond, d]]
-            if rows.size == 0:
+            if (rows := beyond[reach[beyond, d] != inside[beyond, d]]).size == 0:
                 continue
             step = EDGE_STEP * width[d] * np.sign(reach[rows, d] - inside[rows, d])
             back = inside[rows].copy()
             back[:, d] -= step
-            slope = (pred[rows] - self._predict(learner, back)) / step[:, None]
+            slope = (at_edge[rows] - self._predict(learner, back)) / step[:, None]
             pred[rows] += slope * (reach[rows, d] - inside[rows, d])[:, None]
         return pred
 
