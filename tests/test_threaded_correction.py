@@ -201,3 +201,50 @@ def test_beyond_the_box_a_learner_goes_on_along_each_inputs_edge_slope() -> None
     got = model._residual("accel", x)
     np.testing.assert_allclose(got, reach @ a, rtol=0.0, atol=1e-12)
     assert np.abs(got[150:] - np.clip(x[150:], lo, hi) @ a).max() > 1e-3  # the rows did go on
+
+
+@pytest.mark.parametrize("name", ["kohonen", "mlp"])
+def test_a_learned_correction_says_where_it_reads_beyond_its_training_inputs(
+    name: str,
+    fitted: dict[str, tuple[CalibrationData, Any]],
+    tmp_path: Any,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``beyond_box``: the readings at which a learner reads beyond the box of inputs it was trained on
+    by more than a twentieth of its width (on its faces, the static holds at ±1 g, noise crosses it: 41 %
+    of the rig's readings did, by a hair). The rig's own readings lie within it; at three times the
+    rig's specific force every reading lies beyond (the box holds ±1 g at most), and so does every
+    reading whose rate on an axis is more than 1.2 times the rig's fastest reference rate on it (the
+    box's width on a rate is twice that rate: a twentieth of it is a tenth of the rate, and regression's
+    scale takes a few per cent). A model without a learner reads none beyond. ``sins correct`` says so,
+    and the line's count is the method's."""
+    from sins.cli import main
+    from sins.compensation import evaluation
+    from sins.io import rig
+
+    fit, model = fitted[name]
+    own = model.beyond_box(fit.gyro, fit.accel, fit.temp)
+    assert not own.any(), own.mean()
+    fast = 3.0 * fit.gyro
+    beyond = model.beyond_box(fast, 3.0 * fit.accel, fit.temp)
+    assert beyond.all()
+    beyond_rate = model.beyond_box(fast, fit.accel, fit.temp)
+    outside = (np.abs(fast) > 1.2 * np.abs(fit.ref_gyro).max(axis=0)).any(axis=1)
+    assert outside.any() and beyond_rate[outside].all()
+    plain = compensation.make("regression").fit(fit.rows(slice(0, len(fit), 8)))
+    assert not plain.beyond_box(fast, 3.0 * fit.accel).any()
+    # Said by the command that applies it, with the method's count.
+    shocked = fit.rows(slice(0, len(fit), 16))
+    shocked = CalibrationData(
+        t=shocked.t, gyro=shocked.gyro, accel=np.where(np.arange(len(shocked))[:, None] % 50 == 0,
+                                                        3.0 * shocked.accel, shocked.accel),
+        ref_gyro=shocked.ref_gyro, ref_accel=shocked.ref_accel, temp=shocked.temp, phases=shocked.phases,
+    )  # fmt: skip
+    rig.write_recording(tmp_path / "rig.csv", shocked)
+    compensation.save(model, tmp_path / "m.json")
+    assert main(["correct", str(tmp_path / "m.json"), str(tmp_path / "rig.csv"), "--out",
+                 str(tmp_path / "c.csv")]) == 0  # fmt: skip
+    n = int(model.beyond_box(shocked.gyro, shocked.accel, shocked.temp).sum())
+    assert n >= len(shocked) // 50
+    said = evaluation.BEYOND_TRAINING.split("{n}")[0] + f"{n} readings"
+    assert said in capsys.readouterr().out

@@ -40,7 +40,7 @@ def _cmd_correct(args: argparse.Namespace) -> int:
         rec = read_recording(args, args.recording, args.dataset)
         unit = unit_of(rec)
         bar.set_description(f"correcting {where}")
-        out, extra = _corrected(args, strategy, rec, where, unit)
+        out, extra, beyond = _corrected(args, strategy, rec, where, unit)
     fitted_on = getattr(strategy, "fitted_on_", {}) or {}
     lines = [
         f"sins {__version__}: {where} corrected by {args.model} ({strategy.label})",
@@ -62,6 +62,8 @@ def _cmd_correct(args: argparse.Namespace) -> int:
     )
     dropped = f"; the readings only, not {left} (judge the model on the original)" if left else ""
     print(f"wrote {args.out}: {len(out)} rows in {form} form, {where} corrected by {strategy.label}{dropped}")
+    if beyond:
+        print(beyond)
     if strategy.leaves_gyro_as_read():
         print("its gyro as read: the model's fit found every bias rule worse than the raw readings held back")
     return 0
@@ -69,10 +71,11 @@ def _cmd_correct(args: argparse.Namespace) -> int:
 
 def _corrected(
     args: argparse.Namespace, strategy: Strategy, rec: Recording, where: str, unit: str
-) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None]:
-    """The readings corrected in the form sins holds them in, and the temperature column to keep (the
-    model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
-    from sins.compensation import fitted_on
+) -> tuple[ImuRates | ImuIncrements, dict[str, Any] | None, str]:
+    """The readings corrected in the form sins holds them in, the temperature column to keep, and where
+    a learned part read beyond its training inputs (:func:`sins.compensation.evaluation.beyond_training`;
+    the model refused first if it was fitted on another unit: ``unit``, or the recording's own)."""
+    from sins.compensation import evaluation, fitted_on
 
     fitted_on.check_fitted_on(strategy, rec, f"{args.model} on {where}", sensor=unit)
     imu, temp, rows_temp = _readings(rec)
@@ -81,7 +84,8 @@ def _corrected(
     except ValueError as exc:
         raise SinsInputError(f"{args.model} on {where}: {exc}") from None
     _check_readable(out, f"{args.model} on {where}")
-    return out, None if rows_temp is None else {"temp": rows_temp}
+    beyond = evaluation.beyond_training(strategy, imu, temp)[1]
+    return out, None if rows_temp is None else {"temp": rows_temp}, beyond
 
 
 def _check_readable(out: ImuRates | ImuIncrements, where: str) -> None:

@@ -155,6 +155,11 @@ class Strategy(ABC):
         (``Regression(robust=True)`` is ``regression_robust``); here its class's name."""
         return self.name
 
+    def beyond_box(self, gyro: Array, accel: Array, temp: Array | None = None) -> NDArray[np.bool_]:
+        """The readings (n, 3 each) at which a learned part of the model reads beyond the inputs it was
+        trained on; none for a model without one (the learners' own: ``ResidualStrategy.beyond_box``)."""
+        return np.zeros(len(gyro), dtype=bool)
+
     def predict_error(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
         """The error believed to be in each reading: ``readings - correct(readings)``."""
         omega_ib_b, f_ib_b = self.correct(gyro, accel, temp)

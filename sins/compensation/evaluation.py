@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sins.core import rotation
 from sins.core.text import fixed_width
@@ -28,7 +29,7 @@ from sins.io.provenance import PART_SHARE
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
     from sins.compensation.referenced import OpenLoop
-    from sins.core.series import CalibrationData, ReferencedRecording
+    from sins.core.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
 
 #: The open-loop table's columns.
 OPEN_LOOP_HEAD = ["readings", "total", "heading", "inclination", "AOE"]
@@ -49,6 +50,37 @@ GYRO_AS_READ = (
     "the model leaves the gyro as read (its fit found every bias rule worse than the raw readings on a "
     "held-back recording): its open loop is the raw one"
 )
+
+#: What ``sins evaluate`` and ``sins correct`` say where a learned part reads beyond its training inputs.
+BEYOND_TRAINING = (
+    "the learned correction reads beyond the inputs it was trained on at {n} readings ({share:.2g} %, the "
+    "first {first_s:.1f} s in): there it goes on along its slope at their edge for a quarter of their "
+    "range, and holds beyond"
+)
+
+
+def beyond_training(
+    strategy: Strategy, readings: ImuRates | ImuIncrements, temp: NDArray[np.float64] | None = None
+) -> tuple[dict[str, Any], str]:
+    """Where a learned part of ``strategy`` reads beyond the inputs it was trained on
+    (:meth:`Strategy.beyond_box`) over ``readings`` (rates, or increments as their mean rates; ``temp``
+    at ``readings.t``): the count and share of such readings (the JSON's ``beyond_training_box``) and a
+    line saying so ("" where none). A landing's 3.4 g lay beyond EuRoC's learners' box on all three
+    accelerometer inputs."""
+    from sins.core.series import ImuIncrements
+
+    if isinstance(readings, ImuIncrements):
+        t, omega_ib_b, f_ib_b = readings.mean_rates()
+        temp = None if temp is None else 0.5 * (temp[:-1] + temp[1:])
+    else:
+        t, omega_ib_b, f_ib_b = readings.t, readings.omega_ib_b, readings.f_ib_b
+    beyond = strategy.beyond_box(omega_ib_b, f_ib_b, temp)
+    n = int(beyond.sum())
+    document = {"readings": n, "share": n / max(len(beyond), 1)}
+    if not n:
+        return document, ""
+    first_s = float(t[int(np.argmax(beyond))] - readings.t[0])
+    return document, BEYOND_TRAINING.format(n=n, share=100.0 * n / len(beyond), first_s=first_s)
 
 
 @dataclass(frozen=True)
@@ -166,6 +198,8 @@ def evaluate_referenced(
     if unit and not rec.sensor:  # a unit's check needs the recording to name one (a path's may not)
         lines.append(f"the recording names no unit: it is judged as {unit}'s, the model's")
     lines += _fitted_lines(fitted_here, share)
+    beyond, beyond_said = beyond_training(strategy, rec.imu)
+    lines += [beyond_said] if beyond_said else []
     as_read = strategy.leaves_gyro_as_read()
     if as_read:
         lines.append(GYRO_AS_READ)
@@ -181,6 +215,7 @@ def evaluate_referenced(
         "fitted_on_this_recording": _fitted(fitted_here, share),
         "share_in_fit": share,
         "gyro_as_read": as_read,
+        "beyond_training_box": beyond,
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
@@ -353,6 +388,7 @@ def _drive(
 
 
 __all__ = [
+    "BEYOND_TRAINING",
     "FITTED_HERE",
     "GYRO_AS_READ",
     "OPEN_LOOP_HEAD",
@@ -361,6 +397,7 @@ __all__ = [
     "STEEP_PITCH_DEG",
     "Evaluation",
     "across",
+    "beyond_training",
     "evaluate_referenced",
     "evaluate_rig",
 ]

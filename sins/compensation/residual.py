@@ -89,6 +89,8 @@ _MIN_TEMP_SPAN = 2.0
 #: The one-sided difference that gives a learner's edge slope, as a fraction of the box: small enough to
 #: stay within the edge node of a map whose data sit on the box's face (static holds at ±1 g).
 EDGE_STEP = 1e-3
+#: ``beyond_box``'s share of the box's width (on its face, a static hold at ±1 g, noise crosses it).
+BEYOND_SAID = 0.05
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
 #: Rows a correction solves at a time: its passes run chunk by chunk (every step is row by row), in a few
@@ -520,6 +522,21 @@ class ResidualStrategy(Strategy):
             pred[rows] += slope * (reach[rows, d] - inside[rows, d])[:, None]
         return pred
 
+    def beyond_box(self, gyro: Array, accel: Array, temp: Array | None = None) -> NDArray[np.bool_]:
+        """The readings at which a learner used reads beyond the box of inputs it was trained on by more
+        than :data:`BEYOND_SAID` of its width (:meth:`_residual`), at regression's correction of them."""
+        out = np.zeros(len(gyro), dtype=bool)
+        if not self.used_.any() or len(gyro) == 0:
+            return out
+        x = self._scaled(*self._base_strategy().correct(gyro, accel), None if temp is None else temp)
+        for si, sensor in enumerate(SENSORS):
+            if self.used_[3 * si : 3 * si + 3].any():
+                lo, hi = (np.asarray(b, dtype=float) for b in self.box_[sensor])
+                columns = _columns(sensor, x)
+                margin = BEYOND_SAID * (hi - lo)
+                out |= ((columns < lo - margin) | (columns > hi + margin)).any(axis=1)
+        return out
+
     # ------------------------------------------------------------------ use
 
     def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
@@ -634,7 +651,7 @@ class ResidualStrategy(Strategy):
                 self._check_learner(learners[sensor], n_inputs[sensor], f"state.learners_.{sensor}")
             elif any(used[3 * SENSORS.index(sensor) : 3 * SENSORS.index(sensor) + 3]):
                 raise ValueError(f"state.learners_ has no {sensor} learner, which used_ says corrects")
-        _check_terms(state.get("terms_", {}), uses_temp)
+        terms.check_state(state.get("terms_", {}), uses_temp)
 
     def _check_learner(self, learner: Any, n_inputs: int, where: str) -> None:
         """Refuse a learner's state that :meth:`_learner_from_state` cannot make a learner of, on inputs
@@ -662,29 +679,12 @@ def _finite(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and bool(np.isfinite(value))
 
 
-def _check_terms(chosen: Any, uses_temp: bool) -> None:
-    """Each channel's terms in a saved state: known groups, and as many coefficients as their columns."""
-    if not isinstance(chosen, dict):
-        raise ValueError("state.terms_ must be an object by channel")
-    one = terms.TermInputs(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1) if uses_temp else None)
-    for ch, entry in chosen.items():
-        where = f"state.terms_.{ch}"
-        if ch not in CHANNELS or not isinstance(entry, dict) or not isinstance(entry.get("groups"), list):
-            raise ValueError(f"{where} must be a channel's terms (groups and coef)")
-        groups = entry["groups"]
-        if not all(g in terms.GROUPS for g in groups) or ("temperature" in groups and not uses_temp):
-            raise ValueError(
-                f"{where}.groups must be among {', '.join(terms.GROUPS)} (temperature if fitted with it)"
-            )
-        columns = terms.design(groups, CHANNELS.index(ch), one).shape[1]
-        state_array(entry, "coef", (columns,), where)
-
-
 def _key(config: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v}" for k, v in sorted(config.items()))
 
 
 __all__ = [
+    "BEYOND_SAID",
     "CORRECT_ROWS",
     "EDGE_STEP",
     "MIN_REPEATS",

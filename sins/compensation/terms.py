@@ -41,8 +41,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import sum_standard_error
-from sins.imu import vocabulary
+from sins.compensation.base import state_array, sum_standard_error
+from sins.imu import CHANNELS, vocabulary
 
 Array = NDArray[np.float64]
 
@@ -258,9 +258,29 @@ def predict(groups: list[tuple[str, ...]], coef: list[Array], x: TermInputs, cha
     return out
 
 
+def check_state(chosen: Any, uses_temp: bool) -> None:
+    """Each channel's terms in a saved state (a model file's ``terms_``): known groups, and as many
+    coefficients as their columns; ``ValueError`` naming the channel."""
+    if not isinstance(chosen, dict):
+        raise ValueError("state.terms_ must be an object by channel")
+    one = TermInputs(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1) if uses_temp else None)
+    known = groups()
+    for ch, entry in chosen.items():
+        where = f"state.terms_.{ch}"
+        if ch not in CHANNELS or not isinstance(entry, dict) or not isinstance(entry.get("groups"), list):
+            raise ValueError(f"{where} must be a channel's terms (groups and coef)")
+        chosen_groups = entry["groups"]
+        if not all(g in known for g in chosen_groups) or ("temperature" in chosen_groups and not uses_temp):
+            among = ", ".join(known)
+            raise ValueError(f"{where}.groups must be among {among} (temperature if fitted with it)")
+        columns = design(chosen_groups, CHANNELS.index(ch), one).shape[1]
+        state_array(entry, "coef", (columns,), where)
+
+
 __all__ = [
     "SHOWN",
     "TermInputs",
+    "check_state",
     "choose",
     "design",
     "fit",
