@@ -45,7 +45,7 @@ RAW_SOURCE = {"MH_02_easy": 123.1, "MH_04_difficult": 130.3, "V1_01_easy": 114.1
 BROSSARD = {"MH_02_easy": 1.39, "MH_04_difficult": 1.40, "V1_01_easy": 1.13, "V1_03_difficult": 2.70,
             "V2_02_medium": 3.85}  # fmt: skip
 STRATEGIES = ["regression", "bias_only", "regression_robust", "regression_rest", "regression_window",
-              "mlp", "kohonen", "mlp_window"]  # fmt: skip
+              "mlp", "kohonen", "mlp_window", "mlp_pure", "mlp_seed", "kohonen_pure"]  # fmt: skip
 
 
 def _run(argv: list[str], quiet: bool = True) -> int:
