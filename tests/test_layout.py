@@ -40,7 +40,7 @@ CONFINED = {
     "rerun": {"sins.viz.viewer"},
     "matplotlib": {"sins.viz.plots"},
     "torch": {"sins.compensation.mlp", "sins.compensation.window_net"},
-    "minisom": {"sins.compensation.kohonen"},
+    "minisom": {"sins.compensation.kohonen_pure"},
     "dask": {"sins.campaign.engine"},
     "distributed": {"sins.campaign.engine"},
     "rosbags": {"sins.io.bags"},

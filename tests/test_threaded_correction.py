@@ -248,3 +248,25 @@ def test_a_learned_correction_says_where_it_reads_beyond_its_training_inputs(
     assert n >= len(shocked) // 50
     said = evaluation.BEYOND_TRAINING.split("{n}")[0] + f"{n} readings"
     assert said in capsys.readouterr().out
+
+
+def test_the_seed_papers_map_corrects_as_numpys_nearest_nodes_do() -> None:
+    """``kohonen_pure``'s correction, compiled and on two threads from 65,536 rows: each reading less the
+    inverse-distance mean of its four nearest nodes' errors. Against numpy's brute force written here
+    (every node's distance, sorted): equal to the last bit, on both paths (a few rows and 70,000)."""
+    fit = calibration.simulate_rig(FAST, imu_spec.draw_unit("consumer", 3, 104), seed=4)
+    model = compensation.make("kohonen_pure", rows=8, cols=8, iterations=5000)
+    model.fit(fit.rows(slice(0, None, 4)))
+    rng = np.random.default_rng(9)
+    rows = rng.integers(0, len(fit), 70_000)
+    gyro = fit.gyro[rows] * rng.uniform(0.5, 1.5, (len(rows), 1))
+    accel = fit.accel[rows] + rng.normal(0.0, 0.5, (len(rows), 3))
+    xs = (np.hstack([gyro, accel]) - model.x_mean_) / model.x_scale_
+    d = np.sqrt(((xs[:, None, :] - model.codebook_[None, :, :]) ** 2).sum(axis=2))
+    near = np.argsort(d, axis=1, kind="stable")[:, :4]
+    w = 1.0 / np.maximum(np.take_along_axis(d, near, axis=1), 1e-9)
+    err = (w[:, :, None] * model.node_error_[near]).sum(axis=1) / w.sum(axis=1)[:, None]
+    for n in (50, len(rows)):  # one thread, then two on halves
+        g, a = model.correct(gyro[:n], accel[:n])
+        np.testing.assert_array_equal(g, gyro[:n] - err[:n, :3])
+        np.testing.assert_array_equal(a, accel[:n] - err[:n, 3:])

@@ -1,5 +1,5 @@
-"""Self-organising-map strategies: ``kohonen`` learns what regression leaves with a local linear map;
-``kohonen_pure`` is the seed paper's map from readings to errors (minisom).
+"""``kohonen``: what regression leaves, learned with a self-organising local linear map (the seed paper's
+map from readings to errors, ``kohonen_pure``, is :mod:`sins.compensation.kohonen_pure`).
 
 ``kohonen`` (:class:`LocalLinearMap`) is the one to pick: the seed model's
 least-squares fit first, then the self-organising local linear map of Ritter,
@@ -16,12 +16,6 @@ squares, with a penalty that makes lattice neighbours' models agree (the map's
 cooperation: nodes no data reached inherit their neighbours' planes) and a
 small ridge. Map size and σ are chosen on held-back blocks.
 
-``kohonen_pure`` (:class:`Kohonen`) keeps the seed paper's question askable.
-The seed paper's idea for g-dependent errors: normalise the inputs, let a
-Kohonen map place its codebook vectors over the input space, store for each
-node the mean error of the calibration samples it wins, and predict by
-interpolation among the nodes nearest to a new input (inverse-distance
-weights over the ``neighbours`` nearest codebook vectors).
 """
 
 from __future__ import annotations
@@ -34,134 +28,17 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation.base import SEED_RANGE, ParamRange, Strategy, state_array
+from sins.compensation.base import ParamRange, state_array
 from sins.compensation.points import Points
 from sins.compensation.residual import ResidualStrategy
-from sins.core.series import CalibrationData
-from sins.imu import calibration
 
 Array = NDArray[np.float64]
-
-
-#: Rows per block of the (rows, nodes) distance matrices: 8192 × 400 nodes is 26 MB a matrix, where a
-#: 51,000-row rig whole took 160 MB each, three at a time (each row's nearest nodes are its own).
-_ROWS = 8192
 
 
 #: The largest map a model may hold: nodes a side (the registry's fits use 20 for ``kohonen_pure``, at
 #: most 12 for ``kohonen``). A correction compares every reading with every node, a block of 65,536 rows
 #: at a time: a 32 × 32 map holds that at 0.5 GB.
 MAX_SIDE = 32
-#: The most nodes a ``kohonen_pure`` prediction blends.
-MAX_NEIGHBOURS = 64
-
-
-class Kohonen(Strategy):
-    """The seed paper's self-organising map from readings to errors, ``kohonen_pure`` (module docstring).
-
-    Parameters
-    ----------
-    rows, cols : map size
-    sigma : initial neighbourhood radius (nodes)
-    learning_rate : initial learning rate
-    iterations : training iterations (random samples)
-    neighbours : codebook vectors interpolated for a prediction
-    seed : minisom's random seed
-    """
-
-    name = "kohonen_pure"
-    state_keys = (*Strategy.state_keys, "x_mean_", "x_scale_", "codebook_", "node_error_", "node_count_")
-    param_ranges: ClassVar[dict[str, ParamRange]] = {
-        "rows": ParamRange(1, MAX_SIDE, whole=True),
-        "cols": ParamRange(1, MAX_SIDE, whole=True),
-        "sigma": ParamRange(0, 100, above=True),
-        "learning_rate": ParamRange(0, 10, above=True),
-        "iterations": ParamRange(1, 10**8, whole=True),
-        "neighbours": ParamRange(1, MAX_NEIGHBOURS, whole=True),
-        "seed": SEED_RANGE,
-    }
-
-    def __init__(
-        self,
-        rows: int = 20,
-        cols: int = 20,
-        sigma: float = 2.0,
-        learning_rate: float = 0.5,
-        iterations: int = 60000,
-        neighbours: int = 4,
-        seed: int = 0,
-    ) -> None:
-        self.rows, self.cols = rows, cols  # kept as given; check_params holds them (param_ranges)
-        self.sigma = sigma
-        self.learning_rate = learning_rate
-        self.iterations = iterations
-        self.neighbours = neighbours
-        self.seed = seed
-
-    def fit(self, data: CalibrationData) -> Kohonen:
-        """Train the map on standardised readings and store each node's mean error; returns self."""
-        from minisom import MiniSom
-
-        data.check_readings()
-        calibration.fit_seed_model(data)  # rows that do not determine a linear model teach no map
-        ok = data.has_reference
-        x = np.hstack([data.gyro, data.accel])[ok]
-        y = np.hstack([data.gyro - data.ref_gyro, data.accel - data.ref_accel])[ok]
-        if len(x) < self.rows * self.cols:
-            raise ValueError(f"{data.source or 'recording'}: fewer samples than map nodes")
-        self.x_mean_ = x.mean(axis=0)
-        self.x_scale_ = np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
-        xs = (x - self.x_mean_) / self.x_scale_
-        som = MiniSom(self.rows, self.cols, xs.shape[1], sigma=self.sigma, learning_rate=self.learning_rate,
-                      random_seed=self.seed)  # fmt: skip
-        som.pca_weights_init(xs)
-        som.train_random(xs, self.iterations)
-        codebook = som.get_weights().reshape(-1, xs.shape[1])
-        winners = np.concatenate(
-            [self._nearest(xs[a : a + _ROWS], codebook, 1)[:, 0] for a in range(0, len(xs), _ROWS)]
-        )
-        sums = np.zeros((len(codebook), 6))
-        np.add.at(sums, winners, y)
-        counts = np.bincount(winners, minlength=len(codebook))
-        values = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], np.nan)
-        # Nodes that won nothing take the mean of the nodes nearest to them that did.
-        empty = np.flatnonzero(counts == 0)
-        if empty.size:
-            filled = np.flatnonzero(counts > 0)
-            near = self._nearest(codebook[empty], codebook[filled], min(3, filled.size))
-            values[empty] = values[filled][near].mean(axis=1)
-        self.codebook_, self.node_error_, self.node_count_ = codebook, values, counts.astype(float)
-        return self
-
-    @staticmethod
-    def _nearest(x: Array, codebook: Array, k: int) -> NDArray[np.intp]:
-        d2 = (x * x).sum(axis=1)[:, None] - 2.0 * x @ codebook.T + (codebook * codebook).sum(axis=1)[None, :]
-        return np.argsort(d2, axis=1)[:, :k] if k > 1 else np.argmin(d2, axis=1)[:, None]
-
-    def check_state(self, state: dict[str, Any]) -> None:
-        """A map of ``rows`` × ``cols`` nodes (:func:`check_map`): ``codebook_`` and ``node_error_``
-        (nodes, 6), ``node_count_`` (nodes,), the inputs' scales (6, none zero)."""
-        super().check_state(state)
-        nodes = check_map(self.rows, "params.rows") * check_map(self.cols, "params.cols")
-        for key, shape in (("codebook_", (nodes, 6)), ("node_error_", (nodes, 6)), ("node_count_", (nodes,)),
-                           ("x_mean_", (6,)), ("x_scale_", (6,))):  # fmt: skip
-            state_array(state, key, shape)
-        if not (state_array(state, "x_scale_", (6,)) != 0).all():
-            raise ValueError("state.x_scale_ holds a zero (the inputs are divided by it)")
-
-    def correct(self, gyro: Array, accel: Array, temp: Array | None = None) -> tuple[Array, Array]:
-        """Subtract the ``neighbours`` nearest nodes' errors, inverse-distance weighted (``temp`` unused)."""
-        xs = (np.hstack([gyro, accel]) - self.x_mean_) / self.x_scale_
-        k = min(self.neighbours, len(self.codebook_))
-        err = np.empty((len(xs), 6))
-        for start in range(0, len(xs), _ROWS):  # bounded memory for the distance matrix
-            part = xs[start : start + _ROWS]
-            idx = self._nearest(part, self.codebook_, k)
-            d = np.sqrt(((part[:, None, :] - self.codebook_[idx]) ** 2).sum(axis=2))
-            w = 1.0 / np.maximum(d, 1e-9)
-            weighted = (w[:, :, None] * self.node_error_[idx]).sum(axis=1)
-            err[start : start + len(part)] = weighted / w.sum(axis=1)[:, None]
-        return gyro - err[:, :3], accel - err[:, 3:]
 
 
 # --------------------------------------------------------------------------- physics first
@@ -680,9 +557,7 @@ class _MapLearner:
 
 
 __all__ = [
-    "MAX_NEIGHBOURS",
     "MAX_SIDE",
-    "Kohonen",
     "LocalLinearMap",
     "batch_map",
     "check_map",

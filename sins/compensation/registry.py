@@ -36,7 +36,7 @@ CLASSES: dict[str, str] = {
     "mlp": "sins.compensation.mlp:ResidualMLP",
     "mlp_pure": "sins.compensation.mlp:MLP",
     "kohonen": "sins.compensation.kohonen:LocalLinearMap",
-    "kohonen_pure": "sins.compensation.kohonen:Kohonen",
+    "kohonen_pure": "sins.compensation.kohonen_pure:Kohonen",
     "ferraris": "sins.compensation.ferraris:Ferraris",
 }
 
