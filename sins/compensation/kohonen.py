@@ -475,22 +475,29 @@ _SCANNED_NODES = 256
 
 
 @numba.njit(cache=True, nogil=True)
+def row_squared_distances(x: Array, i: int, nodes_t: Array, out: Array) -> None:  # pragma: no cover
+    """Into ``out`` (k,): row ``i`` of ``x``'s squared Euclidean distance from each node of ``nodes_t``
+    (w, k: the codebook transposed), every squared difference summed over the columns in order, as
+    scipy's k-d tree sums them, column by column (a loop over the nodes the compiler vectorises)."""
+    out[:] = 0.0
+    for c in range(nodes_t.shape[0]):
+        xc = x[i, c]
+        for j in range(nodes_t.shape[1]):
+            e = xc - nodes_t[c, j]
+            out[j] += e * e
+
+
+@numba.njit(cache=True, nogil=True)
 def _two_nearest(x: Array, codebook: Array) -> tuple[NDArray[np.intp], Array]:  # pragma: no cover  (compiled)
-    """Each row's nearest two nodes (n, 2) and their Euclidean distances (n, 2), nearest first: every
-    squared difference summed over the columns in order, as scipy's k-d tree sums them (a row's
-    distances to every node formed column by column, a loop over the nodes the compiler vectorises)."""
-    n, k, w = x.shape[0], codebook.shape[0], x.shape[1]
+    """Each row's nearest two nodes (n, 2) and their Euclidean distances (n, 2), nearest first
+    (:func:`row_squared_distances`)."""
+    n, k = x.shape[0], codebook.shape[0]
     nodes = np.ascontiguousarray(codebook.T)  # (w, k)
     near = np.zeros((n, 2), dtype=np.intp)
     dist = np.empty((n, 2))
     d = np.empty(k)
     for i in range(n):
-        d[:] = 0.0
-        for c in range(w):
-            xc = x[i, c]
-            for j in range(k):
-                e = xc - nodes[c, j]
-                d[j] += e * e
+        row_squared_distances(x, i, nodes, d)
         d1, d2, j1, j2 = np.inf, np.inf, 0, 0
         for j in range(k):
             dj = d[j]
@@ -563,4 +570,5 @@ __all__ = [
     "check_map",
     "lattice",
     "neighbourhood_weights",
+    "row_squared_distances",
 ]

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation.base import SEED_RANGE, ParamRange, Strategy, state_array
-from sins.compensation.kohonen import MAX_SIDE, check_map
+from sins.compensation.kohonen import MAX_SIDE, check_map, row_squared_distances
 from sins.core.series import CalibrationData
 from sins.imu import calibration
 
@@ -152,20 +152,14 @@ def _inverse_distance(
     xs: Array, codebook_t: Array, node_error: Array, k: int, out: Array
 ) -> None:  # pragma: no cover  (compiled)
     """Into ``out`` (n, e): each row of ``xs`` (n, d)'s ``k`` nearest nodes of the map (``codebook_t``
-    (d, m): its codebook transposed, so that a row's distances to every node run along memory) by
+    (d, m): its codebook transposed, :func:`~sins.compensation.kohonen.row_squared_distances`) by
     Euclidean distance (ties to the lower node), their ``node_error`` rows (m, e) weighted by the inverse
     distance (at least 1e-9), summed nearest first and divided by the weights' sum."""
-    n, dim = xs.shape
-    m = codebook_t.shape[1]
+    n, m = xs.shape[0], codebook_t.shape[1]
     d2 = np.empty(m)
     best_d2, best_i = np.empty(k), np.empty(k, dtype=np.int64)
     for r in range(n):
-        d2[:] = 0.0
-        for c in range(dim):
-            x = xs[r, c]
-            for j in range(m):
-                diff = x - codebook_t[c, j]
-                d2[j] += diff * diff
+        row_squared_distances(xs, r, codebook_t, d2)
         count = 0
         for j in range(m):
             if count < k:
