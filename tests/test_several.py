@@ -6,6 +6,7 @@ a bounded-velocity recording below) and EuRoC's real recordings (skipped without
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -889,3 +890,31 @@ def test_every_guard_judges_against_the_standard_error_of_a_sum() -> None:
     assert sum_standard_error(draws[:, 0]) == pytest.approx(7 * sem(draws[:, 0]), rel=1e-12)
     assert sum_standard_error([0.4]) == np.inf
     assert np.isinf(sum_standard_error(draws[:1])).all() and sum_standard_error(draws[:1]).shape == (3,)
+
+
+def test_the_strategies_that_replace_the_seed_model_are_told_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sins fit`` on several recordings prints the shared seed model; for a strategy that corrects with
+    a fit of its own from readings to errors (the seed paper's networks, ``regression_extended``), it
+    says the seed model gives the recordings' biases and the bias rule, not the correction."""
+    from sins.compensation import registry
+
+    recs, _, _ = recordings(9)
+    for k, rec in enumerate(recs[:2]):
+        write_npz(tmp_path, f"r{k}", rec)
+    monkeypatch.setenv("SINS_DATA", str(tmp_path.parent))
+    said = "corrects with its own fit from readings to errors"
+    for name, says in (("regression", False), ("regression_extended", True)):
+        capsys.readouterr()
+        datasets = ["--dataset", f"{tmp_path.name}/r0", "--dataset", f"{tmp_path.name}/r1"]
+        out = str(tmp_path / f"{name}.json")
+        assert main(["fit", *datasets, "--strategy", name, "--bias-rule", "pooled", "--out", out]) == 0
+        assert (f"{name} {said}" in capsys.readouterr().out) is says, name
+
+    made = {}
+    for name in registry.strategy_names():
+        with contextlib.suppress(ValueError):  # bias_only is made by the fit itself
+            made[name] = compensation.make(name)
+    replacing = {name for name, s in made.items() if referenced.replaces_seed_model(s)}
+    assert replacing == {"regression_extended", "mlp_pure", "mlp_seed", "kohonen_pure", "ferraris"}

@@ -387,6 +387,13 @@ def fit_several(
     return FitOutcome(fitted.strategy, lines, document)
 
 
+#: Said under the shared seed model of a strategy that corrects with a fit of its own.
+_REPLACED = (
+    "{label} corrects with its own fit from readings to errors, on every recording at their mean bias, not "
+    "with this seed model, which gives each recording's bias and chooses the bias rule"
+)
+
+
 def _several_document(
     fitted: Any, names: list[str], clocks: list[float | None], grade: str, lines: list[str]
 ) -> dict[str, Any]:
@@ -398,11 +405,12 @@ def _several_document(
         f"{sum(fit.intervals)} intervals of {fit.interval_s:g} s"
     )
     table = coefficients.engineering(fit.seed, g_sensitivity=fit.g_sensitivity)
-    from sins.compensation.referenced import BIAS_ONLY
+    from sins.compensation.referenced import BIAS_ONLY, replaces_seed_model
 
     if fitted.strategy.label == BIAS_ONLY:  # its model keeps the biases alone: the rest is not applied
         table = [c for c in table if c.term == "bias"]
     lines += coefficient_lines(table, "the shared seed model (± 1σ; the bias is the recordings' mean)")
+    lines += [_REPLACED.format(label=fitted.strategy.label)] if replaces_seed_model(fitted.strategy) else []
     per_hour = np.degrees(1.0) * 3600.0
     rows, biases = [], []
     for rec_name, b, se, a, n, lag in zip(

@@ -250,6 +250,13 @@ def _several_determined(
     return fit_all, review
 
 
+def replaces_seed_model(strategy: Strategy) -> bool:
+    """Whether ``strategy`` corrects with a fit of its own from readings to errors (the seed paper's
+    networks, ``regression_extended``), not with the seed model (with or without a learner on top of it):
+    fitted on several recordings, the seed model still gives each recording's bias and the bias rule."""
+    return strategy.name != "none" and not isinstance(strategy, Regression | ResidualStrategy | WindowNet)
+
+
 def _learn_several(
     strategy: Strategy, name: str, recs: list[ReferencedRecording], fit_all: SeveralFit,
     progress: Callable[[int, int], None] | None, say: Callable[[str], None],
@@ -626,4 +633,5 @@ __all__ = [
     "open_loop",
     "open_loop_attitude",
     "opening_rest",
+    "replaces_seed_model",
 ]
