@@ -183,7 +183,7 @@ def candidates(res: IntervalResiduals) -> list[Candidate]:
         if cls.needs_temp and res.steps.temp_offset is None:
             continue
         sensor = name.split(".")[0]
-        per_axis = tuple(res.columns(sensor, step_columns(res, name, a), a) for a in range(3))
+        per_axis = tuple(res.columns(sensor, _effect_steps(res, cls, sensor, a), a) for a in range(3))
         out.append(Candidate(name, sensor, per_axis, delay=cls.candidate == "delay"))  # type: ignore[arg-type]
     return out
 
@@ -198,8 +198,12 @@ def step_columns(res: IntervalResiduals, name: str, axis: int) -> Array:
     ``name`` makes on axis ``axis`` (its candidate's columns are these moved into the residuals): a
     regressor's own columns, a delay's ``-τ`` times the reading's rate of change. Made again where
     needed rather than kept: a long recording's steps times every candidate's columns."""
-    cls = dict(_with_columns())[name]
-    sensor = name.split(".")[0]
+    return _effect_steps(res, dict(_with_columns())[name], name.split(".")[0], axis)
+
+
+def _effect_steps(res: IntervalResiduals, cls: type[Effect], sensor: str, axis: int) -> Array:
+    """:func:`step_columns` of effect class ``cls`` on ``sensor``, the class at hand (:func:`candidates`
+    looks each up once, not once an axis)."""
     if cls.candidate == "delay":
         return res.delay_steps(sensor, axis)
     return np.asarray(cls.columns(res.steps, sensor, axis), dtype=float)
