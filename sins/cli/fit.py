@@ -100,15 +100,24 @@ def _check_args(args: argparse.Namespace) -> None:
         raise SinsInputError(
             "the oracle knows a simulated unit's true model; it cannot be fitted to a recording"
         )
-    from sins.compensation import strategy_names
+    from sins.compensation import network_guard, strategy_names
 
     if args.strategy not in strategy_names():
         raise SinsInputError(
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    if args.no_guard and args.strategy not in (guarded := strategy_names(taking="guard")):  # imports them all
-        raise SinsInputError(f"--no-guard: {args.strategy} has no guard (only {', '.join(guarded)} do)")
+    guarded = strategy_names(taking="guard")  # imports them all
+    several = len(args.recording) + len(args.dataset or []) > 1
+    if (
+        args.no_guard
+        and args.strategy not in guarded
+        and not (several and network_guard.guards(args.strategy))
+    ):
+        raise SinsInputError(
+            f"--no-guard: {args.strategy} has no guard (only {', '.join(guarded)} do; "
+            "mlp_pure, mlp_seed and kohonen_pure on several recordings)"
+        )
 
 
 def _fit_one(args: argparse.Namespace, recording: str | None, dataset: str | None, where: str) -> FitOutcome:
@@ -176,7 +185,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--no-guard", action="store_true",
         help="mlp, kohonen, mlp_window: use the learned correction on every channel, even where it does not "
-        "beat regression on held-back blocks (recordings)",
+        "beat regression on held-back blocks (recordings); mlp_pure, mlp_seed, kohonen_pure on several "
+        "recordings: write the network without judging it against regression on held-back recordings",
     )  # fmt: skip
     p.add_argument(
         "--screen", choices=("refused", "always", "never"), default="refused",

@@ -362,15 +362,26 @@ def fit_several(
 ) -> FitOutcome:
     """Strategy ``name`` fitted on several recordings of one unit (``names`` name them): one shared model,
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
-    that does best on held-back recordings)."""
-    from sins.compensation import referenced
+    that does best on held-back recordings). A network that replaces the seed model is written only where
+    it beats least squares on held-back recordings (:mod:`sins.compensation.network_guard`; ``guard``)."""
+    from sins.compensation import network_guard, referenced
+
+    def fit(strategy_name: str, on: list[ReferencedRecording], **more: Any) -> referenced.FittedSeveral:
+        network = network_guard.guards(strategy_name)  # no guard of its own to lift
+        return referenced.fit_several(
+            strategy_name, on, interval_s=interval_s, params={} if guard or network else {"guard": False},
+            rule_mode=rule_mode, grade=grade, screen=screen, **more,
+        )  # fmt: skip
 
     clocks = [frame_check.recording_lag(r) for r in recs]
+    verdict = None
     with _clock_named(list(zip(names, clocks, strict=True))):
-        fitted = referenced.fit_several(
-            name, list(recs), interval_s=interval_s, params={} if guard else {"guard": False},
-            progress=progress, rule_mode=rule_mode, stage=stage, grade=grade, screen=screen,
-        )  # fmt: skip
+        if guard and network_guard.guards(name):
+            verdict = network_guard.judged(
+                name, list(recs), list(names), lambda n, on: fit(n, on).strategy, stage
+            )
+        written = name if verdict is None or verdict.kept else network_guard.BASELINE
+        fitted = fit(written, list(recs), progress=progress, stage=stage)
     lines: list[str] = []
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)
@@ -382,6 +393,11 @@ def fit_several(
     said, found = _guard_report(strategy, how, "deg", by_recording=True)
     lines += said
     document |= found
+    if verdict is not None:  # kept in the model file too, as the learners' guards are
+        lines += verdict.lines()
+        strategy.fitted_on_["network_guard"] = document["network_guard"] = verdict.to_dict()
+    elif not guard and network_guard.guards(name):
+        lines.append(f"the guard is off: {name} is written without being judged held back")
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)
