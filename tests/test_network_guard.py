@@ -44,6 +44,10 @@ def test_a_unit_whose_errors_are_the_seed_models_gets_least_squares_not_the_netw
     assert doc["mean_gain_deg"] < 0.0, doc
     assert outcome.strategy.fitted_on_["network_guard"] == doc
     assert any("kohonen_pure held back against least squares" in line for line in outcome.lines)
+    # With the guard off the network is written as fitted, unjudged, and the fit says so.
+    unguarded = fitting.fit_several("kohonen_pure", recs, ["a", "b", "c"], guard=False)
+    assert unguarded.strategy.name == "kohonen_pure" and "network_guard" not in unguarded.document
+    assert "the guard is off: kohonen_pure is written without being judged held back" in unguarded.lines
 
 
 def test_two_recordings_cannot_judge_a_network_and_least_squares_is_written() -> None:
