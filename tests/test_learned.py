@@ -311,7 +311,9 @@ def test_fit_prints_what_it_chose_and_the_guard(tmp_path: Path, capsys: pytest.C
     )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--no-guard" in err and not (tmp_path / "r.json").exists()
-    assert "(only mlp, mlp_window, kohonen do)" in err  # the registry's: the constructors taking a guard
+    # The registry's (the constructors taking a guard), and the networks whose guard is held-back recordings.
+    networks = "mlp_pure, mlp_seed and kohonen_pure on several recordings"
+    assert f"(only mlp, mlp_window, kohonen do; {networks})" in err
 
 
 def test_a_fit_shows_a_progress_bar_on_a_terminal_and_none_in_a_log(tmp_path: Path):
