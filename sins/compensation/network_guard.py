@@ -151,7 +151,8 @@ def judged(
         if stage is not None:
             stage(f"the network's guard: recording {k + 1} of {len(recs)} held back")
         others = [r for i, r in enumerate(recs) if i != k]
-        for strategy_name, out in ((name, network), (BASELINE, baseline)):
+        # Least squares first: a fold whose shared model is refused is found before a network trains.
+        for strategy_name, out in ((BASELINE, baseline), (name, network)):
             try:
                 corrected = fit(strategy_name, others).correct_recording(rec.imu)
             except SinsInputError as exc:
