@@ -107,13 +107,11 @@ def _check_args(args: argparse.Namespace) -> None:
             f"unknown strategy {args.strategy!r} (known: {', '.join(strategy_names())}; "
             "sins strategies lists them)"
         )
-    guarded = strategy_names(taking="guard")  # imports them all
+    if not args.no_guard:
+        return
+    guarded = strategy_names(taking="guard")  # imports them all: only where --no-guard is given
     several = len(args.recording) + len(args.dataset or []) > 1
-    if (
-        args.no_guard
-        and args.strategy not in guarded
-        and not (several and network_guard.guards(args.strategy))
-    ):
+    if args.strategy not in guarded and not (several and network_guard.guards(args.strategy)):
         raise SinsInputError(
             f"--no-guard: {args.strategy} has no guard (only {', '.join(guarded)} do; "
             "mlp_pure, mlp_seed and kohonen_pure on several recordings)"
