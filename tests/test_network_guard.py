@@ -87,3 +87,18 @@ def test_no_guard_on_one_recording_is_refused_for_a_network(capsys: pytest.Captu
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--no-guard: kohonen_pure has no guard" in err[0], err
     assert "kohonen_pure on several recordings" in err[0]
+
+
+def test_a_network_fitted_on_one_recording_is_said_to_be_unjudged() -> None:
+    """One recording has none to hold back whole: the network is written as fitted, and the fit says it
+    was not judged against least squares; least squares' own fit says nothing of the kind."""
+    recs, _, _ = recordings(4)
+    network = fitting.fit_referenced("kohonen_pure", recs[0], where="a")
+    assert network.strategy.name == "kohonen_pure"
+    said = [line for line in network.lines if "written unjudged" in line]
+    assert said == [
+        "kohonen_pure is written unjudged: its guard judges it against least squares with each recording "
+        "held back whole, on 3 recordings or more of the unit"
+    ], network.lines
+    plain = fitting.fit_referenced("regression", recs[0], where="a")
+    assert not any("unjudged" in line for line in plain.lines)

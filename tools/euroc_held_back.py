@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python tools/euroc_held_back.py [--strategies regression kohonen mlp] [--guard]
-        [--folder euroc]
+        [--folder euroc] [--channels]
 
 Each of the published split's six training recordings is held back in turn: every strategy is fitted on
 the other five (``sins.compensation.referenced.fit_several``, its own bias rule chosen on them), the
@@ -12,7 +12,12 @@ evaluate`` corrects it (``correct_recording``: the model, then its rule for the 
 judged by its open-loop attitude (AOE, ``sins.compensation.unit_bias.open_loop_deg``). It says what a
 rule fitted on the training recordings alone can know of lifting the guard; no judged sequence is read.
 Prints each recording's AOE per strategy, their means, and each learner's mean difference from the first
-strategy with its standard error. About 10 min on 2 cores.
+strategy with its standard error. With ``--channels``, also what each model leaves of every channel on
+the held-back recording, as ``tools/euroc_channels.py`` takes it on the judged ones (the RMS over the
+reference's intervals of about 1 s, less the recording's own mean: the gyro's turn in millidegrees, the
+accelerometer's velocity change in mm/s), and each strategy's mean difference from the first, per channel,
+with its standard error over the recordings: the open-loop attitude judges the gyro alone, and the
+networks correct the accelerometer too. About 10 min on 2 cores.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import time
 
 import numpy as np
 from euroc_benchmark import TRAIN  # the published split's training sequences (tools/ is on the path)
+from euroc_channels import CHANNELS, SCALE, residuals
 
 from sins import io
 from sins.compensation import referenced, registry, unit_bias
@@ -32,10 +38,12 @@ def main() -> None:
     p.add_argument("--strategies", nargs="+", default=["regression", "kohonen", "mlp"])
     p.add_argument("--guard", action="store_true", help="keep the learners' guard (as sins fit does)")
     p.add_argument("--folder", default="euroc", help="the data root's folder of the .npz recordings")
+    p.add_argument("--channels", action="store_true", help="also every channel on the intervals")
     args = p.parse_args()
     recs = [io.read(dataset=f"{args.folder}/{name}").beside_reference() for name in TRAIN]
     guarded = set(registry.strategy_names(taking="guard"))
     aoe: dict[str, list[float]] = {s: [] for s in args.strategies}
+    left: dict[str, list[np.ndarray]] = {s: [] for s in args.strategies}  # per channel, less the mean
     for k, (name, rec) in enumerate(zip(TRAIN, recs, strict=True)):
         others = [r for i, r in enumerate(recs) if i != k]
         for s in args.strategies:
@@ -43,6 +51,8 @@ def main() -> None:
             params = {"guard": False} if s in guarded and not args.guard else None
             model = referenced.fit_several(s, others, params=params).strategy
             aoe[s].append(unit_bias.open_loop_deg(model.correct_recording(rec.imu), rec))
+            if args.channels:
+                left[s].append(np.std(residuals(model, rec) * SCALE, axis=0))
             took = time.perf_counter() - started
             print(f"{name:<16} {s:<12} {aoe[s][-1]:7.3f}°  ({took:.0f} s)", flush=True)
     first = args.strategies[0]
@@ -52,6 +62,25 @@ def main() -> None:
         d = np.array(aoe[s]) - np.array(aoe[first])
         se = d.std(ddof=1) / np.sqrt(len(d))
         print(f"{s} - {first}: {d.mean():+.2f}° ± {se:.2f}° (mean ± standard error)")
+    if args.channels:
+        _channels(left, first)
+
+
+def _channels(left: dict[str, list[np.ndarray]], first: str) -> None:
+    """Each strategy's mean per channel over the held-back recordings, and its difference from ``first``'s
+    in per cent of ``first``'s mean, ± the standard error of that difference over the recordings."""
+    print("per channel, less each recording's mean (gyro mdeg, accel mm/s per interval), mean over them:")
+    base = np.array(left[first])
+    for s, values in left.items():
+        mine = np.array(values)
+        cells = []
+        for c, channel in enumerate(CHANNELS):
+            cell = f"{channel} {mine[:, c].mean():6.1f}"
+            if s != first:
+                d = 100.0 * (mine[:, c] - base[:, c]) / base[:, c].mean()
+                cell += f" ({d.mean():+.1f} ± {d.std(ddof=1) / np.sqrt(len(d)):.1f} %)"
+            cells.append(cell)
+        print(f"  {s:<12} " + "  ".join(cells))
 
 
 if __name__ == "__main__":

@@ -117,6 +117,7 @@ def fit_rig(
     lines += said
     document |= found
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
+    lines += _unjudged_network(name, strategy.label)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
         "readings": [fitted_on.readings_of(data)], "marks": [fitted_on.marks_of(data)],
@@ -297,7 +298,21 @@ def fit_referenced(
     if name != referenced.BIAS_ONLY:
         document |= _offsets(fit, lines)
     said, found = _guard_report(fitted.strategy, "", "squared error")  # the learners' guard, as elsewhere
+    said += _unjudged_network(name, fitted.strategy.label)
     return FitOutcome(fitted.strategy, lines + said, document | found)
+
+
+def _unjudged_network(name: str, label: str) -> list[str]:
+    """Said where a network the guard judges (:func:`sins.compensation.network_guard.guards`) is fitted on
+    one recording: the guard holds recordings back whole, and one recording has none to spare."""
+    from sins.compensation import network_guard
+
+    if not network_guard.guards(name):
+        return []
+    return [
+        f"{label} is written unjudged: its guard judges it against least squares with each recording held "
+        f"back whole, on {network_guard.MIN_RECORDINGS} recordings or more of the unit"
+    ]
 
 
 def _screen_lines(names: list[str], aside: Sequence[Any], residuals: list[Any]) -> list[str]:
