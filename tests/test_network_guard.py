@@ -8,8 +8,11 @@ import numpy as np
 import pytest
 from numpy_units import recordings
 
+from sins import imu
 from sins.cli import main
 from sins.compensation import fitting, network_guard
+from sins.imu import calibration
+from sins.imu import spec as imu_spec
 
 
 def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors() -> None:
@@ -102,3 +105,16 @@ def test_a_network_fitted_on_one_recording_is_said_to_be_unjudged() -> None:
     ], network.lines
     plain = fitting.fit_referenced("regression", recs[0], where="a")
     assert not any("unjudged" in line for line in plain.lines)
+    # A rig recording is always fitted alone: a fit on several takes recordings beside a trajectory.
+    rig = calibration.simulate_rig(
+        calibration.RigProcedure(position_dwell_s=4.0, rate_table=calibration.RateTable(dwell_s=2.0)),
+        imu_spec.draw_unit("consumer", 6, 106).only(*imu.BASELINE),
+        seed=6,
+    )
+    on_rig = fitting.fit_rig("kohonen_pure", rig, where="rig.csv", sensor="unit")
+    assert on_rig.strategy.name == "kohonen_pure"
+    assert [line for line in on_rig.lines if "unjudged" in line] == [
+        "kohonen_pure is written unjudged: its guard judges it against least squares with each recording "
+        "held back whole, on 3 recordings or more beside their reference trajectories (a rig recording is "
+        "fitted alone)"
+    ]

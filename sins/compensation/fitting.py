@@ -117,7 +117,7 @@ def fit_rig(
     lines += said
     document |= found
     checks = _rig_seed_review(strategy, part, where, grade, lines, document)
-    lines += _unjudged_network(name, strategy.label)
+    lines += _unjudged_network(name, strategy.label, rig=True)
     strategy.fitted_on_ = {
         "sensor": sensor, "rate_hz": None, "reference": "rig", "checks": checks,
         "readings": [fitted_on.readings_of(data)], "marks": [fitted_on.marks_of(data)],
@@ -302,16 +302,18 @@ def fit_referenced(
     return FitOutcome(fitted.strategy, lines + said, document | found)
 
 
-def _unjudged_network(name: str, label: str) -> list[str]:
+def _unjudged_network(name: str, label: str, *, rig: bool = False) -> list[str]:
     """Said where a network the guard judges (:func:`sins.compensation.network_guard.guards`) is fitted on
-    one recording: the guard holds recordings back whole, and one recording has none to spare."""
+    one recording: the guard holds recordings back whole, and one recording has none to spare (a rig
+    recording cannot be fitted with others: a fit on several takes recordings beside a trajectory)."""
     from sins.compensation import network_guard
 
     if not network_guard.guards(name):
         return []
+    where = "beside their reference trajectories (a rig recording is fitted alone)" if rig else "of the unit"
     return [
         f"{label} is written unjudged: its guard judges it against least squares with each recording held "
-        f"back whole, on {network_guard.MIN_RECORDINGS} recordings or more of the unit"
+        f"back whole, on {network_guard.MIN_RECORDINGS} recordings or more {where}"
     ]
 
 
