@@ -4,34 +4,71 @@ errors are the seed model's own, where least squares is exact and no network can
 
 from __future__ import annotations
 
+import copy
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numpy_units import recordings
 
-from sins import imu
+from sins import compensation, imu
 from sins.cli import main
 from sins.compensation import fitting, network_guard
+from sins.compensation.base import Strategy
+from sins.compensation.regression import Regression
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
 
 
+def _guard(label: str, aoe: tuple[float, ...], hybrid: tuple[float, ...], accel: tuple[float, ...]) -> object:
+    """A guard on recordings a, b, c: least squares' AOE 1.3, 2.1, 3.2° and accelerometer spread 1 m/s on
+    every axis, the network's ``aoe`` (whole) and ``hybrid`` (with least squares' accelerometer), deg,
+    and its accelerometer's spread ``accel`` m/s on every axis."""
+    same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
+    return network_guard.NetworkGuard(
+        label, ("a", "b", "c"), aoe, (1.3, 2.1, 3.2), hybrid, same(accel), same((1.0, 1.0, 1.0))
+    )
+
+
 def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors() -> None:
-    """Gains 0.3, 0.1, 0.2°: mean 0.2°, standard error 0.1/√3 = 0.0577°, 3.5 of them: kept. Gains 0.3,
-    -0.2, 0.2°: mean 0.1°, standard deviation √(0.14/2) = 0.2646°, standard error 0.1528°: refused."""
-    kept = network_guard.NetworkGuard("kohonen_pure", ("a", "b", "c"), (1.0, 2.0, 3.0), (1.3, 2.1, 3.2))
-    assert kept.mean_gain_deg == pytest.approx(0.2)
-    assert kept.standard_error_deg == pytest.approx(0.1 / np.sqrt(3.0))
-    assert kept.kept and kept.to_dict()["written"] == "kohonen_pure"
-    assert kept.lines()[-1].endswith("above 2 standard errors: kohonen_pure is written")
-    refused = network_guard.NetworkGuard("mlp_seed", ("a", "b", "c"), (1.0, 2.2, 3.0), (1.3, 2.0, 3.2))
-    assert refused.mean_gain_deg == pytest.approx(0.1)
-    assert refused.standard_error_deg == pytest.approx(np.sqrt(0.14 / 2.0) / np.sqrt(3.0))
-    assert not refused.kept
-    doc = refused.to_dict()
+    """The accelerometer first. Spreads 0.90, 0.92, 0.88 of least squares': gains 10, 8, 12 %, mean 10 %,
+    standard error 2/√3 = 1.15 %: kept, and the gyro judged with the network whole: gains 0.3, 0.1,
+    0.2°, mean 0.2°, standard error 0.1/√3 = 0.0577°, 3.5 of them: kept. Spreads 0.90, 1.05, 0.95: gains
+    10, -5, 5 %, mean 3.3 %, standard error 4.4 %: least squares' accelerometer, and the gyro judged
+    with it (``hybrid``): gains 0.3, -0.2, 0.2°, mean 0.1°, standard deviation √(0.14/2) = 0.2646°,
+    standard error 0.1528°: refused; gains 0.3, 0.1, 0.2° with it: written with least squares'
+    accelerometer."""
+    kept = _guard("kohonen_pure", (1.0, 2.0, 3.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88))
+    assert kept.accel_gains_pct == pytest.approx([10.0, 8.0, 12.0])  # type: ignore[attr-defined]
+    assert kept.accel_kept and kept.mean_gain_deg == pytest.approx(0.2)  # type: ignore[attr-defined]
+    assert kept.standard_error_deg == pytest.approx(0.1 / np.sqrt(3.0))  # type: ignore[attr-defined]
+    doc = kept.to_dict()  # type: ignore[attr-defined]
+    assert kept.kept and doc["written"] == "kohonen_pure" and doc["accelerometer"] == "kohonen_pure"  # type: ignore[attr-defined]
+    assert doc["accel_mean_gain_pct"] == pytest.approx(10.0)
+    assert doc["accel_standard_error_pct"] == pytest.approx(2.0 / np.sqrt(3.0))
+    assert kept.lines()[-1].endswith("above 2 standard errors: kohonen_pure is written")  # type: ignore[attr-defined]
+    assert kept.lines()[-2].endswith("above 2 standard errors: the network's is kept")  # type: ignore[attr-defined]
+    refused = _guard("mlp_seed", (9.0, 9.0, 9.0), (1.0, 2.3, 3.0), (0.90, 1.05, 0.95))
+    assert refused.accel_gains_pct == pytest.approx([10.0, -5.0, 5.0])  # type: ignore[attr-defined]
+    assert not refused.accel_kept and refused.mean_gain_deg == pytest.approx(0.1)  # type: ignore[attr-defined]
+    assert refused.standard_error_deg == pytest.approx(np.sqrt(0.14 / 2.0) / np.sqrt(3.0))  # type: ignore[attr-defined]
+    assert not refused.kept  # type: ignore[attr-defined]
+    doc = refused.to_dict()  # type: ignore[attr-defined]
     assert doc["written"] == "regression" and doc["earns_its_place"] is False
-    assert doc["network_aoe_deg"] == [1.0, 2.2, 3.0] and doc["recordings"] == ["a", "b", "c"]
-    assert "least squares' model (regression) is written, not mlp_seed's" in refused.lines()[-1]
-    assert refused.lines()[2] == "  b: 2.200° against 2.000°"
+    assert doc["accelerometer"] == "regression" and doc["accel_earns_its_place"] is False
+    assert doc["network_aoe_deg"] == [9.0, 9.0, 9.0] and doc["hybrid_aoe_deg"] == [1.0, 2.3, 3.0]
+    assert doc["recordings"] == ["a", "b", "c"]
+    assert "least squares' model (regression) is written, not mlp_seed's" in refused.lines()[-1]  # type: ignore[attr-defined]
+    assert refused.lines()[2] == (  # type: ignore[attr-defined]
+        "  b: accelerometer 1050.0 1050.0 1050.0 against 1000.0 1000.0 1000.0 mm/s; AOE 2.300° against 2.100°"
+    )
+    hybrid = _guard("mlp_pure", (9.0, 9.0, 9.0), (1.0, 2.0, 3.0), (0.90, 1.05, 0.95))
+    doc = hybrid.to_dict()  # type: ignore[attr-defined]
+    assert hybrid.kept and doc["written"] == "mlp_pure" and doc["accelerometer"] == "regression"  # type: ignore[attr-defined]
+    assert hybrid.lines()[-1].endswith("mlp_pure is written with least squares' accelerometer")  # type: ignore[attr-defined]
+    with pytest.raises(ValueError, match="every figure one per recording"):
+        network_guard.NetworkGuard("mlp_pure", ("a", "b", "c"), (1.0, 2.0, 3.0), (1.3, 2.1, 3.2))
 
 
 def test_a_unit_whose_errors_are_the_seed_models_gets_least_squares_not_the_network() -> None:
@@ -118,3 +155,77 @@ def test_a_network_fitted_on_one_recording_is_said_to_be_unjudged() -> None:
         "held back whole, on 3 recordings or more beside their reference trajectories (a rig recording is "
         "fitted alone)"
     ]
+
+
+class _Seeded(Strategy):
+    """A stand-in for a network: the seed model's inverse through :meth:`correct` (as a network's own
+    correction runs), so that what the guard puts in place of its accelerometer is seen."""
+
+    name = "seeded"
+
+    def __init__(self, B: np.ndarray, A: np.ndarray) -> None:
+        self.B, self.A = B, A
+
+    def fit(self, data: object) -> _Seeded:  # type: ignore[override]
+        return self
+
+    def correct(self, gyro: np.ndarray, accel: np.ndarray, temp: np.ndarray | None = None) -> tuple:  # type: ignore[type-arg]
+        z = np.zeros(3)
+        return calibration.invert_seed_model(z, self.B, np.zeros((3, 3)), z, self.A, gyro, accel)
+
+
+def test_a_network_whose_accelerometer_loses_held_back_is_judged_with_least_squares_one() -> None:
+    """Three recordings of a calibrated numpy unit (no gyro bias, scale or delay; accelerometer
+    misalignment of 0.3 %). The stand-in network corrects the gyro exactly and the accelerometer with a
+    scale 2 % off; least squares the other way round (gyro 1 % off, accelerometer exact). Held back, the
+    network's accelerometer leaves more of every recording's velocity change (a 2 % scale of gravity's
+    and the motion's changing share, against the sensor's 1 cm/s noise), so least squares' replaces it,
+    and the gyro, judged with it, wins on every recording: the network is written with least squares'
+    accelerometer. The accelerometer does not move the AOE here (no bias rule reads it)."""
+    recs, unit, _ = recordings(8, calibrated=True)
+    a_true = unit.A  # type: ignore[attr-defined]
+    baseline = Regression()
+    baseline.B0_, baseline.B_, baseline.K_ = np.zeros(3), 0.01 * np.eye(3), np.zeros((3, 3))
+    baseline.A0_, baseline.A_ = np.zeros(3), a_true
+    network = _Seeded(np.zeros((3, 3)), a_true + 0.02 * np.eye(3))
+    fits = {network_guard.BASELINE: baseline, "mlp_pure": network}
+    verdict = network_guard.judged("mlp_pure", recs, ["a", "b", "c"], lambda name, on: fits[name])
+    assert (verdict.accel_gains_pct < 0.0).all() and not verdict.accel_kept, verdict
+    assert verdict.hybrid_deg == pytest.approx(verdict.network_deg, rel=1e-9)
+    assert (verdict.gains_deg > 0.0).all() and verdict.kept, verdict
+    assert verdict.to_dict()["accelerometer"] == "regression" and verdict.to_dict()["written"] == "mlp_pure"
+
+
+def test_the_written_network_corrects_its_accelerometer_as_least_squares_does(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Where the guard keeps the network for its gyro and not its accelerometer, the model written is the
+    network with least squares' accelerometer: its force equals least squares' model's to rounding, its
+    rate the network's own; the model file keeps both to the bit, and one whose ``accel_seed_`` is not
+    (4, 3) is refused in one line naming the file."""
+    recs, _, _ = recordings(4)
+    names = ["a", "b", "c"]
+    verdict = _guard("kohonen_pure", (9.0, 9.0, 9.0), (1.0, 2.0, 3.0), (0.90, 1.05, 0.95))
+    monkeypatch.setattr(network_guard, "judged", lambda *args: verdict)
+    written = fitting.fit_several("kohonen_pure", recs, names).strategy
+    least_squares = fitting.fit_several("regression", recs, names).strategy
+    assert written.name == "kohonen_pure" and written.accel_seed_.shape == (4, 3)
+    alone = copy.copy(written)
+    del alone.accel_seed_
+    gyro, accel = recs[1].imu.dtheta_b / 0.01, recs[1].imu.dv_b / 0.01
+    rate, force = written.correct(gyro, accel)
+    assert np.array_equal(rate, alone.correct(gyro, accel)[0])
+    np.testing.assert_allclose(force, least_squares.correct(gyro, accel)[1], rtol=0.0, atol=1e-12)
+    assert not np.allclose(force, alone.correct(gyro, accel)[1], rtol=0.0, atol=1e-6)
+    path = tmp_path / "m.json"
+    compensation.save(written, path)
+    again = compensation.load(path)
+    assert np.array_equal(again.accel_seed_, written.accel_seed_)
+    assert all(np.array_equal(x, y) for x, y in zip(again.correct(gyro, accel), (rate, force), strict=True))
+    doc = json.loads(path.read_text())
+    doc["state"]["accel_seed_"] = doc["state"]["accel_seed_"][1:]
+    path.write_text(json.dumps(doc))
+    assert main(["correct", str(path), "absent.csv", "--out", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "m.json" in err[0], err
+    assert "accel_seed_ has shape (3, 3), expected (4, 3)" in err[0], err

@@ -7,7 +7,9 @@ Usage::
 
 Each of the published split's six training recordings is held back in turn: every strategy is fitted on
 the other five (``sins.compensation.referenced.fit_several``, its own bias rule chosen on them), the
-learners with their guard lifted unless ``--guard``, and the held-back recording is corrected as ``sins
+learners with their guard lifted unless ``--guard`` (with it, the seed paper's networks are fitted as
+``sins fit`` fits them, ``sins.compensation.fitting.fit_several``: their own guard holds each of the five
+back in turn, and the line says what it wrote), and the held-back recording is corrected as ``sins
 evaluate`` corrects it (``correct_recording``: the model, then its rule for the recording's own bias) and
 judged by its open-loop attitude (AOE, ``sins.compensation.unit_bias.open_loop_deg``). It says what a
 rule fitted on the training recordings alone can know of lifting the guard; no judged sequence is read.
@@ -30,7 +32,7 @@ from euroc_benchmark import TRAIN  # the published split's training sequences (t
 from euroc_channels import CHANNELS, SCALE, residuals
 
 from sins import io
-from sins.compensation import referenced, registry, unit_bias
+from sins.compensation import fitting, network_guard, referenced, registry, unit_bias
 
 
 def main() -> None:
@@ -49,12 +51,19 @@ def main() -> None:
         for s in args.strategies:
             started = time.perf_counter()
             params = {"guard": False} if s in guarded and not args.guard else None
-            model = referenced.fit_several(s, others, params=params).strategy
+            written = ""
+            if args.guard and network_guard.guards(s):  # as sins fit writes it, its guard five-fold
+                names = [n for i, n in enumerate(TRAIN) if i != k]
+                model = fitting.fit_several(s, others, names).strategy
+                accel = "least squares'" if hasattr(model, "accel_seed_") else "its own"
+                written = f"  wrote {model.name}" + (f", {accel} accelerometer" if model.name == s else "")
+            else:
+                model = referenced.fit_several(s, others, params=params).strategy
             aoe[s].append(unit_bias.open_loop_deg(model.correct_recording(rec.imu), rec))
             if args.channels:
                 left[s].append(np.std(residuals(model, rec) * SCALE, axis=0))
             took = time.perf_counter() - started
-            print(f"{name:<16} {s:<12} {aoe[s][-1]:7.3f}°  ({took:.0f} s)", flush=True)
+            print(f"{name:<16} {s:<12} {aoe[s][-1]:7.3f}°  ({took:.0f} s){written}", flush=True)
     first = args.strategies[0]
     for s, values in aoe.items():
         print(f"{s:<12} " + " ".join(f"{v:6.2f}" for v in values) + f"   mean {np.mean(values):.2f}°")

@@ -82,7 +82,13 @@ def _shaped_correct(correct: Callable[..., Any]) -> Callable[..., Any]:
             raise ValueError(f"gyro and accel must both be (n, 3), got {g} and {a}")
         if temp is not None and np.shape(temp) != (g[0],):
             raise ValueError(f"temp must be ({g[0]},), got {np.shape(temp)}")
-        return correct(self, gyro, accel, temp)
+        omega_ib_b, f_ib_b = correct(self, gyro, accel, temp)
+        seed = vars(self).get("accel_seed_")
+        if seed is None:
+            return omega_ib_b, f_ib_b
+        # accel = n + A0 + A n, the seed model's accelerometer, solved for n (Strategy.accel_seed_).
+        a0, a_m = np.asarray(seed[0], dtype=float), np.asarray(seed[1:], dtype=float)
+        return omega_ib_b, np.asarray(np.linalg.solve(np.eye(3) + a_m, (np.asarray(accel) - a0).T).T)
 
     return shaped
 
@@ -132,6 +138,12 @@ class Strategy(ABC):
     #: recordings of one unit (:class:`sins.compensation.unit_bias.BiasRule` as a dict; applied by
     #: :meth:`correct_recording`); absent otherwise.
     unit_bias_: dict[str, Any]
+    #: The seed model's accelerometer, ``[A0; A]`` (4, 3: the bias, m/s², then the matrix of
+    #: ``accel = n + A0 + A n``), that corrects the accelerometer in place of the strategy's own
+    #: correction: set on a network whose gyro earned its place held back and whose accelerometer did
+    #: not (:mod:`sins.compensation.network_guard`; the networks' :attr:`state_keys` hold it); absent
+    #: otherwise.
+    accel_seed_: Array
     #: Called as ``progress(done, total)`` while a long fit trains (the learners set it up in their
     #: constructors; absent on the others).
     progress: Callable[[int, int], None] | None
@@ -257,6 +269,10 @@ class Strategy(ABC):
             raise ValueError(f"state.{key} is not a fitted attribute of {self.name} (its: {its})")
         if "fitted_on_" in state:
             _check_fitted_on(state["fitted_on_"])
+        if "accel_seed_" in state:
+            seed = state_array(state, "accel_seed_", (4, 3))
+            if abs(np.linalg.det(np.eye(3) + seed[1:])) < 1e-6:  # solved for the force: invertible
+                raise ValueError("state.accel_seed_: I + A is singular (its rows 2-4 are A)")
         if "unit_bias_" in state:
             from sins.compensation import unit_bias
 

@@ -399,6 +399,10 @@ def fit_several(
             )
         written = name if verdict is None or verdict.kept else network_guard.BASELINE
         fitted = fit(written, list(recs), progress=progress, stage=stage)
+        if verdict is not None and verdict.kept and not verdict.accel_kept:
+            # Least squares' accelerometer in place of the network's, its bias rule chosen with the
+            # network's: the model each of the guard's folds judged.
+            fitted.strategy.accel_seed_ = np.vstack([fitted.several.seed.A0, fitted.several.seed.A])
     lines: list[str] = []
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)

@@ -5,7 +5,8 @@ An interval spans whole steps of the readings (increments) between two reference
 boundaries; its ends carry the reference's attitude and velocity, and the navigation frame's own turn
 over it in inertial space (Earth's rate, and the transport rate of a moving reference: what a gyro's
 increments include and a reference fixed to the Earth does not). :func:`shift_increments` reads a
-sensor later by a time offset, exactly for rates constant over each step.
+sensor later by a time offset, exactly for rates constant over each step. :func:`velocity_residual`
+is what the accelerometer leaves of each interval's velocity change once corrected.
 """
 
 from __future__ import annotations
@@ -232,6 +233,21 @@ def lever(iv: Intervals, imu: ImuIncrements, seed: SeedModelFit, dt: Array) -> A
     )
 
 
+def velocity_residual(iv: Intervals, rot: Array, dv_b: Array, dt: Array) -> Array:
+    """Each interval's velocity change by the reference less the one the readings make, m/s (k, 3), in
+    the body's axes at the interval's start (each component, as near as the turn within the interval
+    allows, one accelerometer's): ``rot`` (n + 1, 3, 3) the attitude the gyro's increments compose to
+    from any start (a turn of the whole leaves the body's axes alone), ``dv_b`` (n, 3) the increments,
+    each turned by the attitude in the middle of its step (gravity and the Coriolis terms are
+    :func:`expected_dv`'s)."""
+    middle = 0.5 * (rot[:-1] + rot[1:])
+    made = np.vstack([np.zeros((1, 3)), np.cumsum(np.einsum("jab,jb->ja", middle, dv_b), axis=0)])
+    return np.asarray(
+        np.einsum("kba,kb->ka", dcm(iv.q_start), expected_dv(iv, dt))
+        - np.einsum("kba,kb->ka", rot[iv.start], made[iv.stop] - made[iv.start])
+    )
+
+
 def dcm(q: Array) -> Array:
     """Direction cosine matrices (k, 3, 3) of scalar-last quaternions (k, 4)."""
     return np.asarray(rotation.dcm_from_quat(q), dtype=float)
@@ -248,4 +264,5 @@ __all__ = [
     "shift_derivative",
     "shift_increments",
     "shifted",
+    "velocity_residual",
 ]

@@ -38,8 +38,8 @@ from sins.compensation.intervals import (
     choose_intervals,
     correct_increments,
     dcm,
-    expected_dv,
     shift_derivative,
+    velocity_residual,
 )
 from sins.core import rotation
 from sins.core.series import ImuIncrements, ReferencedRecording
@@ -173,12 +173,7 @@ def interval_residuals(rec: ReferencedRecording, seed: SeedModelFit, interval_s:
         rotation.quat_from_dcm(np.einsum("kji,kjl->kil", r_meas, iv.body_turn()))
     )
     middle = 0.5 * (rot[:-1] + rot[1:])
-    made = np.cumsum(np.einsum("jab,jb->ja", middle, corrected.dv_b), axis=0)
-    made = np.vstack([np.zeros((1, 3)), made])
-    c_ref = dcm(iv.q_start)
-    accel = np.einsum("kba,kb->ka", c_ref, expected_dv(iv, dt)) - np.einsum(
-        "kba,kb->ka", r_a, made[iv.stop] - made[iv.start]
-    )
+    accel = velocity_residual(iv, rot, corrected.dv_b, dt)
     steps = step_inputs(corrected)
     return IntervalResiduals(
         iv=iv,
