@@ -16,10 +16,11 @@ open-loop attitude error (AOE, the benchmark's metric: :func:`sins.compensation.
 of that model: the network is written only where its mean gain over least squares exceeds
 :data:`GUARD_Z` standard errors; elsewhere least squares' model is (what the recordings determine), and
 the fit says why. A network whose accelerometer alone earns its place is not written: the guard keeps a
-network for the gyro, which the benchmark judges. Blocks of one recording share
-its day, its motion and its reference, so the recordings are the folds, as the other guards' are; with
-fewer than :data:`MIN_RECORDINGS` none can be held back and leave several to fit on, and the network has
-not shown what it adds.
+network for the gyro, which the benchmark judges (beside least squares' gyro, BROAD's networks'
+accelerometers moved the open-loop attitude through the rests the bias rule finds). Blocks of one
+recording share its day, its motion and its reference, so the recordings are the folds, as the other
+guards' are; with fewer than :data:`MIN_RECORDINGS` none can be held back and leave several to fit on,
+and the network has not shown what it adds.
 """
 
 from __future__ import annotations
@@ -189,7 +190,8 @@ def velocity_spread(corrected: ImuIncrements, rec: ReferencedRecording) -> np.nd
     """What ``corrected`` (``rec``'s readings corrected) leaves of each interval's velocity change
     (:func:`sins.compensation.intervals.velocity_residual`, intervals of
     :data:`~sins.compensation.intervals.INTERVAL_S`), its spread over the intervals per axis, m/s (3,):
-    each recording's own mean left out, as its bias is the bias rule's and not the model's."""
+    each recording's own mean left out, as its own accelerometer bias is no model's (the models correct
+    at the recordings' mean bias)."""
     from sins.compensation import intervals
     from sins.nav import attitude
 
