@@ -139,7 +139,8 @@ class NetworkGuard:
         head = (
             f"{self.label} held back against least squares (each recording in turn, both fitted on the "
             "others): the accelerometer by what it leaves of each interval's velocity change (its spread "
-            "over the intervals, x y z), then the gyro by the open-loop attitude error (AOE)"
+            "over the intervals, x y z), then the gyro by the open-loop attitude error (AOE) of the model "
+            "it would write (with least squares' accelerometer where the network's is not kept)"
         )
         mean, error = _mean_and_error(self.accel_gains_pct)
         accel = f"accelerometer: mean gain {mean:+.1f} % ± {error:.1f} %, " + (
