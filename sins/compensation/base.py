@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from sins.core import rowwise
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates
 from sins.errors import SinsInputError
-from sins.imu import CHANNELS, ImuModel
+from sins.imu import CHANNELS, ImuModel, calibration
 from sins.io.documents import printable
 
 Array = NDArray[np.float64]
@@ -86,9 +86,10 @@ def _shaped_correct(correct: Callable[..., Any]) -> Callable[..., Any]:
         seed = vars(self).get("accel_seed_")
         if seed is None:
             return omega_ib_b, f_ib_b
-        # accel = n + A0 + A n, the seed model's accelerometer, solved for n (Strategy.accel_seed_).
+        # The seed model's accelerometer (Strategy.accel_seed_), inverted as least squares inverts it.
+        zeros = np.zeros((3, 3))
         a0, a_m = np.asarray(seed[0], dtype=float), np.asarray(seed[1:], dtype=float)
-        return omega_ib_b, np.asarray(np.linalg.solve(np.eye(3) + a_m, (np.asarray(accel) - a0).T).T)
+        return omega_ib_b, calibration.invert_seed_model(zeros[0], zeros, zeros, a0, a_m, gyro, accel)[1]
 
     return shaped
 

@@ -182,9 +182,11 @@ class NetworkGuard:
 
 def _mean_and_error(gains: np.ndarray) -> tuple[float, float]:
     """The mean of per-recording ``gains`` and its standard error (NaN with fewer than two)."""
+    from sins.compensation.base import sum_standard_error
+
     if len(gains) < 2:
         return float("nan"), float("nan")
-    return float(gains.mean()), float(gains.std(ddof=1) / np.sqrt(len(gains)))
+    return float(gains.mean()), float(sum_standard_error(gains)) / len(gains)
 
 
 def velocity_spread(corrected: ImuIncrements, rec: ReferencedRecording) -> np.ndarray:
@@ -257,15 +259,15 @@ def _fold(network: Strategy, baseline: Strategy, rec: ReferencedRecording) -> tu
     assert isinstance(baseline, Regression)  # least squares' model: the seed model's coefficients
     hybrid = copy.copy(network)
     hybrid.accel_seed_ = np.vstack([baseline.A0_, baseline.A_])
-    out = {}
+    corrected: dict[str, ImuIncrements] = {}
     for key, model in (("network", network), ("baseline", baseline), ("hybrid", hybrid)):
-        corrected = model.correct_recording(rec.imu)
-        assert isinstance(corrected, ImuIncrements)  # a recording's readings are its increments
-        out[key] = (unit_bias.open_loop_deg(corrected, rec), velocity_spread(corrected, rec))
-    return (
-        out["network"][0], out["baseline"][0], out["hybrid"][0],
-        tuple(out["network"][1].tolist()), tuple(out["hybrid"][1].tolist()),
-    )  # fmt: skip
+        imu = model.correct_recording(rec.imu)
+        assert isinstance(imu, ImuIncrements)  # a recording's readings are its increments
+        corrected[key] = imu
+    aoe = {key: unit_bias.open_loop_deg(imu, rec) for key, imu in corrected.items()}
+    # Least squares' accelerometer is judged beside the network's gyro (the hybrid), not its own.
+    spread = {key: tuple(velocity_spread(corrected[key], rec).tolist()) for key in ("network", "hybrid")}
+    return aoe["network"], aoe["baseline"], aoe["hybrid"], spread["network"], spread["hybrid"]
 
 
 __all__ = [
