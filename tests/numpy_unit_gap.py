@@ -54,11 +54,12 @@ def motion_bias(omega: np.ndarray, b: np.ndarray, half_rate: float = 5.0 * DEG) 
 def recording(
     seed: int, effect: str = "clean", *, duration_s: float = 150.0, rate_hz: float = 100.0,
     ref_angle_deg: float = 0.05, ref_mps: float = 0.005, size: float = 1.0, unit_seed: int = 0,
-    rests: bool = True,
+    rests: bool = True, clock_s: float = 0.0,
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """The ``.npz`` arrays of one recording (see the module docstring): the motion drawn from ``seed``,
     the unit (its bias, scale and misalignment) from ``unit_seed`` (one unit over several recordings),
-    ``effect`` at ``size`` times its stated size added."""
+    ``effect`` at ``size`` times its stated size added; ``clock_s`` both sensors' inputs read that much
+    later still (a reference whose clock runs ahead of the readings' by ``clock_s``)."""
     rng, unit = np.random.default_rng([seed, 1]), np.random.default_rng([unit_seed, 2])
     b0, b = DEG * unit.normal(0.0, 0.1, 3), unit.normal(0.0, 3e-3, (3, 3))
     a0, a = unit.normal(0.0, 0.05, 3), unit.normal(0.0, 3e-3, (3, 3))
@@ -78,11 +79,13 @@ def recording(
     a_n = va * 2 * np.pi * vf * np.cos(2 * np.pi * vf * t_fine[:, None] + vp)
     f_b = att.inv().apply(a_n - np.array([0.0, 0.0, G]))
     t = np.arange(n + 1) / rate_hz
-    delay = 5e-3 * size if effect == "gyro.time_offset" else 0.0
+    delay = clock_s + (5e-3 * size if effect == "gyro.time_offset" else 0.0)
     w = np.stack([np.interp(t - delay, t_fine, omega[:, i]) for i in range(3)], axis=1)
     f = f_b[::fine]
+    taus = np.full(3, clock_s)
     if effect.startswith("accel.time_offset"):  # each axis's input τ late: 5 ms, or of both signs
-        taus = 5e-3 * size * (np.array([1.0, -1.0, 1.0]) if "both signs" in effect else np.ones(3))
+        taus += 5e-3 * size * (np.array([1.0, -1.0, 1.0]) if "both signs" in effect else np.ones(3))
+    if np.any(taus != 0.0):
         f = np.stack([np.interp(t - taus[i], t_fine, f_b[:, i]) for i in range(3)], axis=1)
     gyro = w + b0 + w @ b.T + rng.normal(0.0, 0.05 * DEG, w.shape)
     accel = f + a0 + f @ a.T + rng.normal(0.0, 0.01, f.shape)

@@ -220,9 +220,33 @@ def _with_reference(report: GapReport, inp: GapInput) -> GapReport:
     if inp.filled_s:
         report = _with_statistic(report, {**report.statistic, "reference_filled": _filled(report, inp)})
     found = clock.reference_clock(inp.referenced, report.sizes)
+    shared = clock.shared_delay(report.sizes)
+    if shared is not None:
+        report = _clock_not_named(report, shared["of_the_clock"], shared["says"])
+        found = found or {"says": "its clock not measured (the gyro turns too little)"}
+        found = {**found, "shared_delay": shared, "says": f"{found['says']}; {shared['says']}"}
     if found is None:
         return report
     return _with_statistic(report, {**report.statistic, "reference_clock": found})
+
+
+def _clock_not_named(report: GapReport, names: list[str], why: str) -> GapReport:
+    """The report without ``names`` (time offsets taken for the reference's clock,
+    :func:`sins.unit_gap.clock.shared_delay`) in its diagnosis, each scored as not accepted and why; their
+    sizes stay, as the model the shrink fits keeps them (:func:`modelled`)."""
+    effects = [
+        dataclasses.replace(e, accepted=False, not_accepted_because=why) if e.name in names else e
+        for e in report.effects
+    ]
+    diagnosis = [n for n in report.diagnosis if n not in names]
+    return dataclasses.replace(report, diagnosis=diagnosis, effects=effects)
+
+
+def modelled(report: GapReport) -> list[str]:
+    """The effects the model of ``report``'s recording holds: its diagnosis and the time offsets it took
+    for the reference's clock (which a model fitted against that reference needs all the same)."""
+    shared = report.statistic.get("reference_clock", {}).get("shared_delay", {})
+    return [*report.diagnosis, *(n for n in shared.get("of_the_clock", []) if n not in report.diagnosis)]
 
 
 def _filled(report: GapReport, inp: GapInput) -> dict[str, Any]:
@@ -248,7 +272,7 @@ def shrinks(
             continue
         try:
             figures = shrink.shrink(
-                a.referenced, b.referenced, results[i].report.diagnosis,
+                a.referenced, b.referenced, modelled(results[i].report),
                 INTERVAL_S if interval_s is None else interval_s,
             )  # fmt: skip
         except (SinsInputError, ValueError) as exc:
@@ -266,6 +290,7 @@ __all__ = [
     "MIN_SPAN_S",
     "Diagnosed",
     "diagnose_one",
+    "modelled",
     "shrinks",
     "verdicts",
 ]
