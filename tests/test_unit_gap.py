@@ -512,6 +512,8 @@ def test_broad_trials_say_what_the_reference_limits_and_agree_or_are_labelled(
         assert shared["own_s"] == pytest.approx(-c["accel_less_gyro_s"]), shared
         assert "gyro.time_offset" in r["diagnosis"] and "accel.time_offset" not in r["diagnosis"]
     assert "not named as either sensor's" in clocks[0]["says"]
+    printed = capsys.readouterr().out  # the clock's sizes are printed, said to be the clock's
+    assert "accel.time_offset: x 2.58, z 2.46 ms (the reference's clock, not named: above)" in printed
     across = doc["across"]
     assert "gyro.time_offset" in across["on_all"] and "accel.time_offset" not in across["effects"]
     for v in across["effects"].values():

@@ -191,17 +191,10 @@ def _print_gap_report(name: str, n_rows: int, report: GapReport, top: int = 8) -
     print(f"unexplained: {', '.join(report.unexplained) or 'none'}")
     for o in report.outside:
         print(f"  {o.channel}: {o.what()}, which no library effect explains as well")
-    from sins.gap.report import in_units
-    from sins.unit_gap.across import size_text
+    from sins.unit_gap.across import size_lines
 
-    for effect, channels in report.sizes.items():
-        shown = {
-            ch: {"values": in_units(effect, v)[0], "unit": in_units(effect, v)[1]}
-            for ch, v in channels.items()
-        }
-        print(f"  {effect}: {size_text(shown)}")
-        if beyond := report.implausible.get(effect):
-            print(f"    implausible: {beyond}")
+    for line in size_lines(report):
+        print(f"  {line}")
 
 
 def add(sub: Subparsers) -> None:

@@ -82,6 +82,25 @@ def _signs_differ(sizes: dict[str, dict[str, Any]], found: list[str]) -> list[st
     return out
 
 
+def size_lines(report: GapReport) -> list[str]:
+    """One recording's accepted effects' sizes, a line each as ``sins gap`` prints them: a delay taken for
+    the reference's clock (``statistic.reference_clock.shared_delay``) said so, a size no unit has
+    (``implausible``) with why on the next line."""
+    shared = report.statistic.get("reference_clock", {}).get("shared_delay", {})
+    of_the_clock = set(shared.get("of_the_clock", [])) - set(report.diagnosis)
+    lines = []
+    for effect, channels in report.sizes.items():
+        shown = {
+            ch: {"values": in_units(effect, v)[0], "unit": in_units(effect, v)[1]}
+            for ch, v in channels.items()
+        }
+        clock = " (the reference's clock, not named: above)" if effect in of_the_clock else ""
+        lines.append(f"{effect}: {size_text(shown)}{clock}")
+        if beyond := report.implausible.get(effect):
+            lines.append(f"  implausible: {beyond}")
+    return lines
+
+
 def size_text(per_channel: dict[str, Any]) -> str:
     """One recording's sizes of an effect, short: per channel its value (where each value has a
     parameter of its own, a random bias's σ and τ, all of them; for several of one parameter, the
@@ -143,6 +162,7 @@ __all__ = [
     "ONE",
     "SOME",
     "lines",
+    "size_lines",
     "size_text",
     "table_rows",
     "verdicts",

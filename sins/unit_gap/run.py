@@ -220,13 +220,11 @@ def _with_reference(report: GapReport, inp: GapInput) -> GapReport:
     if inp.filled_s:
         report = _with_statistic(report, {**report.statistic, "reference_filled": _filled(report, inp)})
     found = clock.reference_clock(inp.referenced, report.sizes)
-    shared = clock.shared_delay(report.sizes)
-    if shared is not None:
-        report = _clock_not_named(report, shared["of_the_clock"], shared["says"])
-        found = found or {"says": "its clock not measured (the gyro turns too little)"}
-        found = {**found, "shared_delay": shared, "says": f"{found['says']}; {shared['says']}"}
     if found is None:
         return report
+    if "shared_delay" in found:
+        why = "the delay both sensors share, taken for the reference's clock (statistic.reference_clock)"
+        report = _clock_not_named(report, found["shared_delay"]["of_the_clock"], why)
     return _with_statistic(report, {**report.statistic, "reference_clock": found})
 
 
