@@ -514,8 +514,11 @@ def test_broad_trials_say_what_the_reference_limits_and_agree_or_are_labelled(
     assert "not named as either sensor's" in clocks[0]["says"]
     printed = capsys.readouterr().out  # the clock's sizes are printed, said to be the clock's
     assert "accel.time_offset: x 2.58, z 2.46 ms (the reference's clock, not named: above)" in printed
+    assert "the reference's clock (not named): broad_05 2.52 ms, broad_18 2.88 ms" in printed
     across = doc["across"]
     assert "gyro.time_offset" in across["on_all"] and "accel.time_offset" not in across["effects"]
+    assert across["reference_clock_s"] == {r["recording"]: c["shared_delay"]["shared_s"] for r, c in zip(
+        doc["recordings"], clocks, strict=True)}  # fmt: skip
     for v in across["effects"].values():
         assert v["holds_on"] in ("all", "some", "one only") and (v["holds_on"] == "all") == (
             len(v["found_on"]) == 2

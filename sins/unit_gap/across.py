@@ -19,6 +19,7 @@ import numpy as np
 from sins.core.text import fixed_width
 from sins.gap.candidates import processes
 from sins.gap.report import GapReport, in_units
+from sins.unit_gap.clock import of_the_clock
 
 #: The labels, by on how many of the recordings an effect was accepted.
 ALL, SOME, ONE = "all", "some", "one only"
@@ -50,9 +51,12 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
                 }
         effects[e] = {"found_on": found, "holds_on": label, "sizes": sizes, "tied_on": tied,
                       "signs_differ_on": _signs_differ(sizes, found)}  # fmt: skip
+    shared = {n: r.statistic.get("reference_clock", {}).get("shared_delay") for n, r in reports}
     return {
         "recordings": names,
         "effects": effects,
+        # The delay both sensors share on each recording, taken for its reference's clock (s).
+        "reference_clock_s": {n: v["shared_s"] for n, v in shared.items() if v},
         "on_all": [e for e, v in effects.items() if v["holds_on"] == ALL],
         "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
         "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
@@ -86,15 +90,14 @@ def size_lines(report: GapReport) -> list[str]:
     """One recording's accepted effects' sizes, a line each as ``sins gap`` prints them: a delay taken for
     the reference's clock (``statistic.reference_clock.shared_delay``) said so, a size no unit has
     (``implausible``) with why on the next line."""
-    shared = report.statistic.get("reference_clock", {}).get("shared_delay", {})
-    of_the_clock = set(shared.get("of_the_clock", [])) - set(report.diagnosis)
+    clocks = set(of_the_clock(report.statistic)) - set(report.diagnosis)
     lines = []
     for effect, channels in report.sizes.items():
         shown = {
             ch: {"values": in_units(effect, v)[0], "unit": in_units(effect, v)[1]}
             for ch, v in channels.items()
         }
-        clock = " (the reference's clock, not named: above)" if effect in of_the_clock else ""
+        clock = " (the reference's clock, not named: above)" if effect in clocks else ""
         lines.append(f"{effect}: {size_text(shown)}{clock}")
         if beyond := report.implausible.get(effect):
             lines.append(f"  implausible: {beyond}")
@@ -145,6 +148,9 @@ def lines(across: dict[str, Any]) -> list[str]:
     out.append(fixed_width(["effect", "holds on", *across["recordings"]], table_rows(across)))
     if across["on_one_only"]:
         out.append(f"found on one recording only: {', '.join(across['on_one_only'])}")
+    if clocks := across.get("reference_clock_s"):
+        each = ", ".join(f"{n} {1e3 * v:.2f} ms" for n, v in clocks.items())
+        out.append(f"a delay both sensors share, the reference's clock (not named): {each}")
     differ = [
         f"{e} ({', '.join(v['signs_differ_on'])})"
         for e, v in across["effects"].items()

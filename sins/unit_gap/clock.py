@@ -161,6 +161,12 @@ def shared_delay(sizes: Mapping[str, Mapping[str, list[float]]]) -> dict[str, An
     }  # fmt: skip
 
 
+def of_the_clock(statistic: Mapping[str, Any]) -> list[str]:
+    """The time offsets a report (its ``statistic``) took for the reference's clock and did not name
+    (:func:`shared_delay`, as :func:`reference_clock` holds it); none where it took none."""
+    return list(statistic.get("reference_clock", {}).get("shared_delay", {}).get("of_the_clock", []))
+
+
 def _spread(per_axis: list[float]) -> float:
     """A sensor's spread of its fitted delay over its axes (s): their standard deviation, or
     :data:`AGREE_S` where a single axis gives none."""
@@ -171,4 +177,13 @@ _WORD = {"gyro": "gyro", "accel": "accelerometer"}
 #: The sensors' time offsets, in the order :func:`shared_delay` reads them.
 DELAY_NAMES = ("gyro.time_offset", "accel.time_offset")
 
-__all__ = ["AGREE_S", "APART_SE", "BOTH_SIGNS", "DELAY_NAMES", "one_clock", "reference_clock", "shared_delay"]
+__all__ = [
+    "AGREE_S",
+    "APART_SE",
+    "BOTH_SIGNS",
+    "DELAY_NAMES",
+    "of_the_clock",
+    "one_clock",
+    "reference_clock",
+    "shared_delay",
+]

@@ -243,8 +243,8 @@ def _clock_not_named(report: GapReport, names: list[str], why: str) -> GapReport
 def modelled(report: GapReport) -> list[str]:
     """The effects the model of ``report``'s recording holds: its diagnosis and the time offsets it took
     for the reference's clock (which a model fitted against that reference needs all the same)."""
-    shared = report.statistic.get("reference_clock", {}).get("shared_delay", {})
-    return [*report.diagnosis, *(n for n in shared.get("of_the_clock", []) if n not in report.diagnosis)]
+    clocks = clock.of_the_clock(report.statistic)
+    return [*report.diagnosis, *(n for n in clocks if n not in report.diagnosis)]
 
 
 def _filled(report: GapReport, inp: GapInput) -> dict[str, Any]:
