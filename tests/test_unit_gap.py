@@ -973,7 +973,7 @@ def test_sizes_of_opposite_signs_on_all_recordings_are_labelled() -> None:
 
     def report(x: float, y: float) -> Any:
         sizes = {"accel.time_offset": {"accel.x": [x], "accel.y": [y]}}
-        return SimpleNamespace(diagnosis=["accel.time_offset"], sizes=sizes)
+        return SimpleNamespace(diagnosis=["accel.time_offset"], sizes=sizes, statistic={})
 
     found = across.verdicts([("a", report(2.87e-3, 1e-3)), ("b", report(-2.01e-3, 2e-3))])
     effect = found["effects"]["accel.time_offset"]
