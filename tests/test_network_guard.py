@@ -71,6 +71,39 @@ def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors
         network_guard.NetworkGuard("mlp_pure", ("a", "b", "c"), (1.0, 2.0, 3.0), (1.3, 2.1, 3.2))
 
 
+def test_an_accelerometer_that_earns_its_place_is_written_beside_least_squares_gyro() -> None:
+    """The network's accelerometer 10, 8, 12 % ahead (kept, as above) and its gyro behind (AOE 9° on
+    each): beside least squares' gyro and bias rule, whose AOE held back is least squares' own (1.3, 2.1,
+    3.2°), the network is written for its accelerometer alone; 0.1° behind on one recording, it is not,
+    and least squares' model is written."""
+    same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
+
+    def guard(seed_gyro: tuple[float, ...]) -> network_guard.NetworkGuard:
+        return network_guard.NetworkGuard(
+            "kohonen_pure", ("a", "b", "c"), (9.0, 9.0, 9.0), (1.3, 2.1, 3.2), (9.0, 9.0, 9.0),
+            same((0.90, 0.92, 0.88)), same((1.0, 1.0, 1.0)), seed_gyro,
+        )  # fmt: skip
+
+    alone = guard((1.3, 2.1, 3.2 + 1e-13))  # the same gyro by another path: rounding
+    assert alone.accel_kept and not alone.kept and alone.accel_alone
+    doc = alone.to_dict()
+    assert (doc["written"], doc["accelerometer"], doc["gyro"]) == (
+        "kohonen_pure",
+        "kohonen_pure",
+        "regression",
+    )
+    assert doc["seed_gyro_aoe_deg"] == [1.3, 2.1, 3.2 + 1e-13]
+    assert (
+        "kohonen_pure's accelerometer is written beside least squares' gyro and bias rule"
+        in alone.lines()[-1]
+    )
+    behind = guard((1.3, 2.2, 3.2))
+    assert not behind.accel_alone and behind.to_dict()["written"] == "regression"
+    assert behind.seed_gyro_gain_deg == pytest.approx(-0.1 / 3.0)
+    unmeasured = guard(())
+    assert not unmeasured.accel_alone and unmeasured.to_dict()["written"] == "regression"
+
+
 def test_a_unit_whose_errors_are_the_seed_models_gets_least_squares_not_the_network() -> None:
     """Three recordings of a numpy unit whose errors are exactly the seed model's (bias, scale,
     misalignment, delays, white noise), each with its own bias: least squares fits the unit's own model,
@@ -229,3 +262,72 @@ def test_the_written_network_corrects_its_accelerometer_as_least_squares_does(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "m.json" in err[0], err
     assert "accel_seed_ has shape (3, 3), expected (4, 3)" in err[0], err
+
+
+def test_a_network_whose_gyro_loses_and_accelerometer_wins_gets_least_squares_gyro() -> None:
+    """The other way round from the test above, on the same calibrated numpy unit: the stand-in network
+    corrects the accelerometer exactly and the gyro with a scale 1 % off; least squares the gyro exactly
+    and the accelerometer 2 % off. Held back the network's accelerometer wins on every recording and its
+    gyro loses on every one; least squares' gyro beside the network's accelerometer leaves least squares'
+    AOE (no bias rule reads the accelerometer here), so the network is written for its accelerometer
+    alone (it had been least squares' model whole)."""
+    recs, unit, _ = recordings(8, calibrated=True)
+    a_true = unit.A  # type: ignore[attr-defined]
+    baseline = Regression()
+    baseline.B0_, baseline.B_, baseline.K_ = np.zeros(3), np.zeros((3, 3)), np.zeros((3, 3))
+    baseline.A0_, baseline.A_ = np.zeros(3), a_true + 0.02 * np.eye(3)
+    network = _Seeded(0.01 * np.eye(3), a_true)
+    fits = {network_guard.BASELINE: baseline, "mlp_pure": network}
+    verdict = network_guard.judged("mlp_pure", recs, ["a", "b", "c"], lambda name, on: fits[name])
+    assert (verdict.accel_gains_pct > 0.0).all() and verdict.accel_kept, verdict
+    assert (verdict.gains_deg < 0.0).all() and not verdict.kept, verdict
+    assert verdict.seed_gyro_deg == pytest.approx(verdict.baseline_deg, rel=1e-12), verdict
+    assert verdict.accel_alone and verdict.to_dict()["gyro"] == "regression", verdict
+    written = network_guard.with_seed_gyro(network, baseline)
+    gyro, accel = recs[1].imu.dtheta_b / 0.01, recs[1].imu.dv_b / 0.01
+    rate, force = written.correct(gyro, accel)
+    np.testing.assert_allclose(rate, baseline.correct(gyro, accel)[0], rtol=0.0, atol=1e-15)
+    assert np.array_equal(force, network.correct(gyro, accel)[1])
+
+
+def test_the_network_written_for_its_accelerometer_keeps_least_squares_gyro_and_rule(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Where the guard writes the network for its accelerometer alone, the model written corrects the
+    gyro as least squares' model fitted on the same recordings does (to rounding) and takes a new
+    recording's bias by least squares' rule (the same rule, to the bit), its force the network's own;
+    the model file keeps ``gyro_seed_`` to the bit, and one that is not (11, 3) is refused in one line
+    naming the file."""
+    recs, _, _ = recordings(4)
+    names = ["a", "b", "c"]
+    same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
+    verdict = network_guard.NetworkGuard(
+        "kohonen_pure", tuple(names), (9.0, 9.0, 9.0), (1.3, 2.1, 3.2), (9.0, 9.0, 9.0),
+        same((0.90, 0.92, 0.88)), same((1.0, 1.0, 1.0)), (1.3, 2.1, 3.2),
+    )  # fmt: skip
+    monkeypatch.setattr(network_guard, "judged", lambda *args: verdict)
+    outcome = fitting.fit_several("kohonen_pure", recs, names)
+    written = outcome.strategy
+    least_squares = fitting.fit_several("regression", recs, names).strategy
+    assert written.name == "kohonen_pure" and written.gyro_seed_.shape == (11, 3)
+    assert written.unit_bias_ == least_squares.unit_bias_
+    assert outcome.document["bias_rule"] == least_squares.unit_bias_
+    alone = copy.copy(written)
+    del alone.gyro_seed_
+    gyro, accel = recs[1].imu.dtheta_b / 0.01, recs[1].imu.dv_b / 0.01
+    rate, force = written.correct(gyro, accel)
+    np.testing.assert_allclose(rate, least_squares.correct(gyro, accel)[0], rtol=0.0, atol=1e-12)
+    assert np.array_equal(force, alone.correct(gyro, accel)[1])
+    assert not np.allclose(rate, alone.correct(gyro, accel)[0], rtol=0.0, atol=1e-6)
+    path = tmp_path / "m.json"
+    compensation.save(written, path)
+    again = compensation.load(path)
+    assert np.array_equal(again.gyro_seed_, written.gyro_seed_)
+    assert all(np.array_equal(x, y) for x, y in zip(again.correct(gyro, accel), (rate, force), strict=True))
+    doc = json.loads(path.read_text())
+    doc["state"]["gyro_seed_"] = doc["state"]["gyro_seed_"][1:]
+    path.write_text(json.dumps(doc))
+    assert main(["correct", str(path), "absent.csv", "--out", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "m.json" in err[0], err
+    assert "gyro_seed_ has shape (10, 3), expected (11, 3)" in err[0], err

@@ -84,14 +84,24 @@ def _shaped_correct(correct: Callable[..., Any]) -> Callable[..., Any]:
             raise ValueError(f"temp must be ({g[0]},), got {np.shape(temp)}")
         omega_ib_b, f_ib_b = correct(self, gyro, accel, temp)
         seed = vars(self).get("accel_seed_")
-        if seed is None:
-            return omega_ib_b, f_ib_b
-        # The seed model's accelerometer (Strategy.accel_seed_), inverted as least squares inverts it.
-        zeros = np.zeros((3, 3))
-        a0, a_m = np.asarray(seed[0], dtype=float), np.asarray(seed[1:], dtype=float)
-        return omega_ib_b, calibration.invert_seed_model(zeros[0], zeros, zeros, a0, a_m, gyro, accel)[1]
+        if seed is not None:
+            # The seed model's accelerometer (Strategy.accel_seed_), inverted as least squares inverts it.
+            zeros = np.zeros((3, 3))
+            a0, a_m = np.asarray(seed[0], dtype=float), np.asarray(seed[1:], dtype=float)
+            f_ib_b = calibration.invert_seed_model(zeros[0], zeros, zeros, a0, a_m, gyro, accel)[1]
+        whole = vars(self).get("gyro_seed_")
+        if whole is not None:  # the seed model's gyro (Strategy.gyro_seed_), least squares' to the bit
+            omega_ib_b = calibration.invert_seed_model(*seed_arrays(whole), gyro, accel)[0]
+        return omega_ib_b, f_ib_b
 
     return shaped
+
+
+def seed_arrays(rows: Array) -> tuple[Array, Array, Array, Array, Array]:
+    """The seed model's ``B0, B, K, A0, A`` from its rows ``[B0; B; K; A0; A]`` (11, 3), as
+    :attr:`Strategy.gyro_seed_` holds them."""
+    m = np.asarray(rows, dtype=float)
+    return m[0], m[1:4], m[4:7], m[7], m[8:11]
 
 
 class NotFittedError(ValueError, AttributeError):
@@ -145,6 +155,11 @@ class Strategy(ABC):
     #: not (:mod:`sins.compensation.network_guard`; the networks' :attr:`state_keys` hold it); absent
     #: otherwise.
     accel_seed_: Array
+    #: The whole seed model, ``[B0; B; K; A0; A]`` (11, 3; :func:`seed_arrays`), whose gyro correction
+    #: replaces the strategy's own: set on a network whose accelerometer earned its place held back and
+    #: whose gyro did not, beside least squares' bias rule (:mod:`sins.compensation.network_guard`; the
+    #: networks' :attr:`state_keys` hold it); absent otherwise.
+    gyro_seed_: Array
     #: Called as ``progress(done, total)`` while a long fit trains (the learners set it up in their
     #: constructors; absent on the others).
     progress: Callable[[int, int], None] | None
@@ -274,6 +289,10 @@ class Strategy(ABC):
             seed = state_array(state, "accel_seed_", (4, 3))
             if abs(np.linalg.det(np.eye(3) + seed[1:])) < 1e-6:  # solved for the force: invertible
                 raise ValueError("state.accel_seed_: I + A is singular (its rows 2-4 are A)")
+        if "gyro_seed_" in state:
+            _, b_m, _, _, a_m = seed_arrays(state_array(state, "gyro_seed_", (11, 3)))
+            if min(abs(np.linalg.det(np.eye(3) + m)) for m in (b_m, a_m)) < 1e-6:
+                raise ValueError("state.gyro_seed_: I + B or I + A is singular (rows 2-4 are B, 9-11 A)")
         if "unit_bias_" in state:
             from sins.compensation import unit_bias
 
@@ -635,6 +654,7 @@ __all__ = [
     "is_param_kind",
     "param_kind",
     "residual_rms",
+    "seed_arrays",
     "state_array",
     "sum_standard_error",
     "wrong_kind",

@@ -10,6 +10,7 @@ returns a :class:`FitOutcome`: the fitted strategy, the lines a command prints a
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -397,12 +398,18 @@ def fit_several(
             verdict = network_guard.judged(
                 name, list(recs), list(names), lambda n, on: fit(n, on).strategy, stage
             )
-        written = name if verdict is None or verdict.kept else network_guard.BASELINE
-        fitted = fit(written, list(recs), progress=progress, stage=stage)
+        network = verdict is None or verdict.kept or verdict.accel_alone
+        fitted = fit(name if network else network_guard.BASELINE, list(recs), progress=progress, stage=stage)
         if verdict is not None and verdict.kept and not verdict.accel_kept:
             # Least squares' accelerometer in place of the network's, its bias rule chosen with the
             # network's: the model each of the guard's folds judged.
             fitted.strategy.accel_seed_ = np.vstack([fitted.several.seed.A0, fitted.several.seed.A])
+        if verdict is not None and verdict.accel_alone:
+            # The network's accelerometer beside least squares' gyro and least squares' rule, as the
+            # guard's folds judged it (network_guard.with_seed_gyro).
+            least = fit(network_guard.BASELINE, list(recs), stage=stage)
+            strategy = network_guard.with_seed_gyro(fitted.strategy, least.strategy)
+            fitted = dataclasses.replace(fitted, strategy=strategy, rule=least.rule)
     lines: list[str] = []
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)

@@ -45,8 +45,8 @@ class Kohonen(Strategy):
     """
 
     name = "kohonen_pure"
-    state_keys = (*Strategy.state_keys, "accel_seed_", "x_mean_", "x_scale_", "codebook_", "node_error_",
-                  "node_count_")  # fmt: skip
+    state_keys = (*Strategy.state_keys, "accel_seed_", "gyro_seed_", "x_mean_", "x_scale_", "codebook_",
+                  "node_error_", "node_count_")  # fmt: skip
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "rows": ParamRange(1, MAX_SIDE, whole=True),
         "cols": ParamRange(1, MAX_SIDE, whole=True),

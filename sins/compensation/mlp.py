@@ -108,8 +108,8 @@ class MLP(Strategy):
     """
 
     name = "mlp_pure"
-    state_keys = (*Strategy.state_keys, "accel_seed_", "uses_temp_", "x_mean_", "x_scale_", "y_mean_",
-                  "y_scale_", "epochs_", "final_error_", "weights_")  # fmt: skip
+    state_keys = (*Strategy.state_keys, "accel_seed_", "gyro_seed_", "uses_temp_", "x_mean_", "x_scale_",
+                  "y_mean_", "y_scale_", "epochs_", "final_error_", "weights_")  # fmt: skip
     #: ``validation`` a share of the rows: none or all of them leaves nothing to train or to stop by.
     param_ranges: ClassVar[dict[str, ParamRange]] = {
         "hidden": ParamRange(1, MAX_WIDTH, whole=True),
