@@ -90,7 +90,7 @@ def _shaped_correct(correct: Callable[..., Any]) -> Callable[..., Any]:
             a0, a_m = np.asarray(seed[0], dtype=float), np.asarray(seed[1:], dtype=float)
             f_ib_b = calibration.invert_seed_model(zeros[0], zeros, zeros, a0, a_m, gyro, accel)[1]
         whole = vars(self).get("gyro_seed_")
-        if whole is not None:  # the seed model's gyro (Strategy.gyro_seed_), least squares' to the bit
+        if whole is not None:  # the seed model's gyro (Strategy.gyro_seed_): least squares' own correction
             omega_ib_b = calibration.invert_seed_model(*seed_arrays(whole), gyro, accel)[0]
         return omega_ib_b, f_ib_b
 
