@@ -18,10 +18,11 @@ of that model: the network is written only where its mean gain over least square
 the fit says why. Where the network's accelerometer earns its place and its gyro does not, the network's
 accelerometer is written beside least squares' gyro and least squares' bias rule
 (:attr:`sins.compensation.base.Strategy.gyro_seed_`), where held back that gyro's AOE is not behind least
-squares' on the mean (under a rule without an online estimate it is least squares' to the bit; the online
-estimate reads the accelerometer). Beside the network's own rule it had not been: that rule's rest
-offsets are the network gyro's (BROAD's unit B: 34.6, -12.4, 21.5 °/h against least squares' 92.3, 15.6,
--9.1), which moved the open-loop attitude by a mean of -0.03° ± 0.24° held back. Blocks of one
+squares' on the mean (under a rule without an online estimate it is least squares' to rounding; the
+online estimate reads the accelerometer). Beside the network's own rule it had not been: that rule's rest
+offsets are the network gyro's (BROAD's unit B, `kohonen_pure`: 34.6, -12.4, 21.5 °/h against least
+squares' 92.3, 15.6, -9.1), which moved `mlp_seed`'s held-back open-loop attitude by -0.03° ± 0.24° on
+the mean. Blocks of one
 recording share its day, its motion and its reference, so the recordings are the folds, as the other
 guards' are; with fewer than :data:`MIN_RECORDINGS` none can be held back and leave several to fit on,
 and the network has not shown what it adds.
