@@ -21,13 +21,20 @@ from sins.imu import calibration
 from sins.imu import spec as imu_spec
 
 
-def _guard(label: str, aoe: tuple[float, ...], hybrid: tuple[float, ...], accel: tuple[float, ...]) -> object:
+def _guard(
+    label: str,
+    aoe: tuple[float, ...],
+    hybrid: tuple[float, ...],
+    accel: tuple[float, ...],
+    seed_gyro: tuple[float, ...] = (),
+) -> network_guard.NetworkGuard:
     """A guard on recordings a, b, c: least squares' AOE 1.3, 2.1, 3.2° and accelerometer spread 1 m/s on
     every axis, the network's ``aoe`` (whole) and ``hybrid`` (with least squares' accelerometer), deg,
-    and its accelerometer's spread ``accel`` m/s on every axis."""
+    its accelerometer's spread ``accel`` m/s on every axis, and ``seed_gyro`` (its accelerometer beside
+    least squares' gyro and rule; none: not measured), deg."""
     same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
     return network_guard.NetworkGuard(
-        label, ("a", "b", "c"), aoe, (1.3, 2.1, 3.2), hybrid, same(accel), same((1.0, 1.0, 1.0))
+        label, ("a", "b", "c"), aoe, (1.3, 2.1, 3.2), hybrid, same(accel), same((1.0, 1.0, 1.0)), seed_gyro
     )
 
 
@@ -40,33 +47,33 @@ def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors
     standard error 0.1528°: refused; gains 0.3, 0.1, 0.2° with it: written with least squares'
     accelerometer."""
     kept = _guard("kohonen_pure", (1.0, 2.0, 3.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88))
-    assert kept.accel_gains_pct == pytest.approx([10.0, 8.0, 12.0])  # type: ignore[attr-defined]
-    assert kept.accel_kept and kept.mean_gain_deg == pytest.approx(0.2)  # type: ignore[attr-defined]
-    assert kept.standard_error_deg == pytest.approx(0.1 / np.sqrt(3.0))  # type: ignore[attr-defined]
-    doc = kept.to_dict()  # type: ignore[attr-defined]
-    assert kept.kept and doc["written"] == "kohonen_pure" and doc["accelerometer"] == "kohonen_pure"  # type: ignore[attr-defined]
+    assert kept.accel_gains_pct == pytest.approx([10.0, 8.0, 12.0])
+    assert kept.accel_kept and kept.mean_gain_deg == pytest.approx(0.2)
+    assert kept.standard_error_deg == pytest.approx(0.1 / np.sqrt(3.0))
+    doc = kept.to_dict()
+    assert kept.kept and doc["written"] == "kohonen_pure" and doc["accelerometer"] == "kohonen_pure"
     assert doc["accel_mean_gain_pct"] == pytest.approx(10.0)
     assert doc["accel_standard_error_pct"] == pytest.approx(2.0 / np.sqrt(3.0))
-    assert kept.lines()[-1].endswith("above 2 standard errors: kohonen_pure is written")  # type: ignore[attr-defined]
-    assert kept.lines()[-2].endswith("above 2 standard errors: the network's is kept")  # type: ignore[attr-defined]
+    assert kept.lines()[-1].endswith("above 2 standard errors: kohonen_pure is written")
+    assert kept.lines()[-2].endswith("above 2 standard errors: the network's is kept")
     refused = _guard("mlp_seed", (9.0, 9.0, 9.0), (1.0, 2.3, 3.0), (0.90, 1.05, 0.95))
-    assert refused.accel_gains_pct == pytest.approx([10.0, -5.0, 5.0])  # type: ignore[attr-defined]
-    assert not refused.accel_kept and refused.mean_gain_deg == pytest.approx(0.1)  # type: ignore[attr-defined]
-    assert refused.standard_error_deg == pytest.approx(np.sqrt(0.14 / 2.0) / np.sqrt(3.0))  # type: ignore[attr-defined]
-    assert not refused.kept  # type: ignore[attr-defined]
-    doc = refused.to_dict()  # type: ignore[attr-defined]
+    assert refused.accel_gains_pct == pytest.approx([10.0, -5.0, 5.0])
+    assert not refused.accel_kept and refused.mean_gain_deg == pytest.approx(0.1)
+    assert refused.standard_error_deg == pytest.approx(np.sqrt(0.14 / 2.0) / np.sqrt(3.0))
+    assert not refused.kept
+    doc = refused.to_dict()
     assert doc["written"] == "regression" and doc["earns_its_place"] is False
     assert doc["accelerometer"] == "regression" and doc["accel_earns_its_place"] is False
     assert doc["network_aoe_deg"] == [9.0, 9.0, 9.0] and doc["hybrid_aoe_deg"] == [1.0, 2.3, 3.0]
     assert doc["recordings"] == ["a", "b", "c"]
-    assert "least squares' model (regression) is written, not mlp_seed's" in refused.lines()[-1]  # type: ignore[attr-defined]
-    assert refused.lines()[2] == (  # type: ignore[attr-defined]
+    assert "least squares' model (regression) is written, not mlp_seed's" in refused.lines()[-1]
+    assert refused.lines()[2] == (
         "  b: accelerometer 1050.0 1050.0 1050.0 against 1000.0 1000.0 1000.0 mm/s; AOE 2.300° against 2.100°"
     )
     hybrid = _guard("mlp_pure", (9.0, 9.0, 9.0), (1.0, 2.0, 3.0), (0.90, 1.05, 0.95))
-    doc = hybrid.to_dict()  # type: ignore[attr-defined]
-    assert hybrid.kept and doc["written"] == "mlp_pure" and doc["accelerometer"] == "regression"  # type: ignore[attr-defined]
-    assert hybrid.lines()[-1].endswith("mlp_pure is written with least squares' accelerometer")  # type: ignore[attr-defined]
+    doc = hybrid.to_dict()
+    assert hybrid.kept and doc["written"] == "mlp_pure" and doc["accelerometer"] == "regression"
+    assert hybrid.lines()[-1].endswith("mlp_pure is written with least squares' accelerometer")
     with pytest.raises(ValueError, match="every figure one per recording"):
         network_guard.NetworkGuard("mlp_pure", ("a", "b", "c"), (1.0, 2.0, 3.0), (1.3, 2.1, 3.2))
 
@@ -76,13 +83,9 @@ def test_an_accelerometer_that_earns_its_place_is_written_beside_least_squares_g
     each): beside least squares' gyro and bias rule, whose AOE held back is least squares' own (1.3, 2.1,
     3.2°), the network is written for its accelerometer alone; 0.1° behind on one recording, it is not,
     and least squares' model is written."""
-    same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
 
     def guard(seed_gyro: tuple[float, ...]) -> network_guard.NetworkGuard:
-        return network_guard.NetworkGuard(
-            "kohonen_pure", ("a", "b", "c"), (9.0, 9.0, 9.0), (1.3, 2.1, 3.2), (9.0, 9.0, 9.0),
-            same((0.90, 0.92, 0.88)), same((1.0, 1.0, 1.0)), seed_gyro,
-        )  # fmt: skip
+        return _guard("kohonen_pure", (9.0, 9.0, 9.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88), seed_gyro)
 
     alone = guard((1.3, 2.1, 3.2 + 1e-13))  # the same gyro by another path: rounding
     assert alone.accel_kept and not alone.kept and alone.accel_alone
@@ -316,11 +319,7 @@ def test_the_network_written_for_its_accelerometer_keeps_least_squares_gyro_and_
     naming the file."""
     recs, _, _ = recordings(4)
     names = ["a", "b", "c"]
-    same = lambda v: tuple((x, x, x) for x in v)  # noqa: E731
-    verdict = network_guard.NetworkGuard(
-        "kohonen_pure", tuple(names), (9.0, 9.0, 9.0), (1.3, 2.1, 3.2), (9.0, 9.0, 9.0),
-        same((0.90, 0.92, 0.88)), same((1.0, 1.0, 1.0)), (1.3, 2.1, 3.2),
-    )  # fmt: skip
+    verdict = _guard("kohonen_pure", (9.0, 9.0, 9.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88), (1.3, 2.1, 3.2))
     monkeypatch.setattr(network_guard, "judged", lambda *args: verdict)
     outcome = fitting.fit_several("kohonen_pure", recs, names)
     written = outcome.strategy

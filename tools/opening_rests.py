@@ -24,8 +24,7 @@ import numpy as np
 from sins import io
 from sins.compensation import registry
 from sins.compensation.unit_bias import opening_rest
-
-DEG_PER_H = np.pi / 180.0 / 3600.0
+from sins.imu import DEG_PER_H
 
 
 def main() -> None:

@@ -90,7 +90,7 @@ def size_lines(report: GapReport) -> list[str]:
     """One recording's accepted effects' sizes, a line each as ``sins gap`` prints them: a delay taken for
     the reference's clock (``statistic.reference_clock.shared_delay``) said so, a size no unit has
     (``implausible``) with why on the next line."""
-    clocks = set(of_the_clock(report.statistic)) - set(report.diagnosis)
+    clocks = of_the_clock(report.statistic)
     lines = []
     for effect, channels in report.sizes.items():
         shown = {
