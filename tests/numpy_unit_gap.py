@@ -54,15 +54,16 @@ def motion_bias(omega: np.ndarray, b: np.ndarray, half_rate: float = 5.0 * DEG) 
 def recording(
     seed: int, effect: str = "clean", *, duration_s: float = 150.0, rate_hz: float = 100.0,
     ref_angle_deg: float = 0.05, ref_mps: float = 0.005, size: float = 1.0, unit_seed: int = 0,
-    rests: bool = True, clock_s: float = 0.0,
+    rests: bool = True, clock_s: float = 0.0, world_tilt_deg: tuple[float, float] = (0.0, 0.0),
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """The ``.npz`` arrays of one recording (see the module docstring): the motion drawn from ``seed``,
     the unit (its bias, scale and misalignment) from ``unit_seed`` (one unit over several recordings),
     ``effect`` at ``size`` times its stated size added; ``clock_s`` both sensors' inputs read that much
-    later still (a reference whose clock runs ahead of the readings' by ``clock_s``)."""
-    rng, unit = np.random.default_rng([seed, 1]), np.random.default_rng([unit_seed, 2])
-    b0, b = DEG * unit.normal(0.0, 0.1, 3), unit.normal(0.0, 3e-3, (3, 3))
-    a0, a = unit.normal(0.0, 0.05, 3), unit.normal(0.0, 3e-3, (3, 3))
+    later still (a reference whose clock runs ahead of the readings' by ``clock_s``); ``world_tilt_deg``
+    (north, east) the reference's world frame turned by that rotation vector from the level room, its
+    z no longer up (a motion capture's frame set on a floor that is not level)."""
+    rng = np.random.default_rng([seed, 1])
+    b0, b, a0, a = unit_errors(unit_seed)
     fine = 10
     n = round(duration_s * rate_hz)
     t_fine = np.arange(n * fine + 1) / (rate_hz * fine)
@@ -106,13 +107,24 @@ def recording(
     elif effect != "clean":
         raise ValueError(f"unknown effect {effect!r}")
     noise = Rotation.from_rotvec(rng.normal(0.0, ref_angle_deg * DEG, (n + 1, 3)))
-    q_enu = (Rotation.from_matrix(ENU_FROM_NED) * att[::fine] * noise).as_quat()  # scalar last
-    v_enu = v_n[::fine] @ ENU_FROM_NED.T
+    north, east = world_tilt_deg
+    tilted = Rotation.from_rotvec(DEG * np.array([east, north, 0.0])) * Rotation.from_matrix(ENU_FROM_NED)
+    q_enu = (tilted * att[::fine] * noise).as_quat()  # scalar last
+    v_enu = tilted.apply(v_n[::fine])
     p_enu = np.concatenate([[np.zeros(3)], np.cumsum(0.5 * (v_enu[1:] + v_enu[:-1]) / rate_hz, axis=0)])
     return {
         "t_s": t, "gyro_rad_s": gyro, "accel_m_s2": accel, "q_wxyz": q_enu[:, [3, 0, 1, 2]],
         "v_m_s": v_enu + rng.normal(0.0, ref_mps, v_enu.shape), "p_m": p_enu,
     }  # fmt: skip
+
+
+def unit_errors(unit_seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The unit's gyro bias (rad/s) and scale-misalignment matrix, its accelerometer's bias (m/s²) and
+    matrix, drawn from ``unit_seed``: each reading is ``x + bias + M x`` of its true input ``x``."""
+    unit = np.random.default_rng([unit_seed, 2])
+    b0, b = DEG * unit.normal(0.0, 0.1, 3), unit.normal(0.0, 3e-3, (3, 3))
+    a0, a = unit.normal(0.0, 0.05, 3), unit.normal(0.0, 3e-3, (3, 3))
+    return b0, b, a0, a
 
 
 def _pace(t: np.ndarray, period: float = 40.0, rest: float = 10.0, ramp: float = 1.0) -> np.ndarray:

@@ -130,7 +130,7 @@ def _print_statistic(statistic: dict[str, Any], intervals: bool) -> None:
     key = "reference_limits" if intervals else "interval_quality"
     if key in statistic:
         print(f"  reference: {statistic[key]}")
-    for key in ("reference_clock", "reference_filled"):
+    for key in ("reference_tilt", "reference_clock", "reference_filled"):
         if key in statistic:
             print(f"  reference: {statistic[key]['says']}")
     for key in ("accel_with_gyro_corrected", "delays_per_sample"):

@@ -246,12 +246,15 @@ def fit_referenced(
     """Strategy ``name`` fitted on a recording beside its reference trajectory: the seed model on
     intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back);
     ``screen``: when the reference's gross errors are set aside (:mod:`sins.compensation.screening`)."""
-    from sins.compensation import referenced
+    from sins.compensation import referenced, world_tilt
 
     part = rec
     if validation:
         span = rec.imu.t[-1] - rec.imu.t[0]
         part = referenced.between(rec, rec.imu.t[0], rec.imu.t[-1] - validation * span)
+    # The reference levelled where tilted from gravity, estimated on what the fit reads.
+    part, tilt = world_tilt.levelled(part, interval_s)
+    rec = world_tilt.level(rec, tilt)
     clock = frame_check.recording_lag(rec)
     with _clock_named([(where, clock)]):
         fitted = referenced.fit(
@@ -269,7 +272,9 @@ def fit_referenced(
         f"fitted {fitted.strategy.label} on {where} ({rec.sensor or 'unit'} against {rec.reference_name}"
         f"{back}): {fit.intervals} intervals of {fit.interval_s:g} s",
         f"reference: {fit.quality.summary()}",
+        f"reference: {tilt.says}",
     ]
+    fitted.strategy.fitted_on_["reference_tilt"] = tilt.to_dict()
     if clock is not None:
         lines.append(f"reference: {clock_words(clock.lag_s)}")
     lines += _screen_lines([where], fitted.set_aside, [fitted.intervals.residuals])
@@ -294,6 +299,7 @@ def fit_referenced(
         "grade": grade,
         "held": held,
         "reference_clock_ms": None if clock is None else 1e3 * clock.lag_s,
+        "reference_tilt": tilt.to_dict(),
         "set_aside": [a.to_dict() for a in fitted.set_aside if a.found()],
     }
     if name != referenced.BIAS_ONLY:
@@ -382,7 +388,11 @@ def fit_several(
     each recording's own bias, and the rule a new recording's bias is taken by (``rule_mode``, or the one
     that does best on held-back recordings). A network that replaces the seed model is written only where
     it beats least squares on held-back recordings (:mod:`sins.compensation.network_guard`; ``guard``)."""
-    from sins.compensation import network_guard, referenced
+    from sins.compensation import network_guard, referenced, world_tilt
+
+    # Each reference's world frame levelled where it is tilted from gravity, once for every fit below.
+    tilts = [world_tilt.levelled(r, interval_s) for r in recs]
+    recs = [r for r, _ in tilts]
 
     def fit(strategy_name: str, on: list[ReferencedRecording], **more: Any) -> referenced.FittedSeveral:
         network = network_guard.guards(strategy_name)  # no guard of its own to lift
@@ -410,9 +420,11 @@ def fit_several(
             least = fit(network_guard.BASELINE, list(recs), stage=stage)
             strategy = network_guard.with_seed_gyro(fitted.strategy, least.strategy)
             fitted = dataclasses.replace(fitted, strategy=strategy, rule=least.rule)
-    lines: list[str] = []
+    lines = [f"{n}: reference: {t.says}" for n, (_, t) in zip(names, tilts, strict=True)]
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)
+    document["reference_tilt"] = {n: t.to_dict() for n, (_, t) in zip(names, tilts, strict=True)}
+    fitted.strategy.fitted_on_["reference_tilt"] = document["reference_tilt"]
     aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.found()]
     lines += _screen_lines(list(names), fitted.set_aside, list(fitted.several.residuals))
     document["set_aside"] = [{**a.to_dict(), "recording": n} for n, a in aside]

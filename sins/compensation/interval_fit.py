@@ -383,20 +383,27 @@ def _gyro_vector(seed: SeedModelFit, tau: float, g_sensitivity: bool, time_offse
     return np.concatenate(parts + ([np.array([tau])] if time_offset else []))
 
 
-#: Folds of contiguous intervals on which :func:`_keeps_k` judges the g-sensitivity.
+#: Folds of contiguous intervals on which :func:`predicts_held_back` judges columns (the g-sensitivity).
 _K_FOLDS = 5
 #: ... and the held-back gain it asks of K, in standard errors of that gain (the learners' guard rule).
 _K_GUARD_Z = 2.0
 
 
 def _keeps_k(x: Array, z: Array) -> tuple[bool, float, float]:
-    """Whether the gyro's g-sensitivity ``K`` predicts intervals it was not fitted on: least squares of
-    the pseudo-observations with and without K's columns on all folds but one, the held-back fold's
-    squared residuals compared, interval by interval. Returns the verdict, the gain (rad²) and its
+    """Whether the gyro's g-sensitivity ``K`` predicts intervals it was not fitted on
+    (:func:`predicts_held_back` without K's columns). Returns the verdict, the gain (rad²) and its
     standard error."""
+    return predicts_held_back(x, z, np.r_[0:12, 21 : x.shape[2]])
+
+
+def predicts_held_back(x: Array, z: Array, without: NDArray[np.intp]) -> tuple[bool, float, float]:
+    """Whether the columns of ``x`` (k, 3, p) not in ``without`` predict intervals they were not fitted
+    on: least squares of ``z`` (k, 3) with every column and with ``without`` alone on all of
+    :data:`_K_FOLDS` contiguous folds but one, the held-back fold's squared residuals compared, interval
+    by interval; the columns are kept where the gain exceeds :data:`_K_GUARD_Z` standard errors (the
+    learners' guard rule). Returns the verdict, the gain and its standard error."""
     k = len(z)
     fold = np.minimum(np.arange(k) * _K_FOLDS // k, _K_FOLDS - 1)
-    without = np.r_[0:12, 21 : x.shape[2]]
     diff = np.zeros(k)
     for f in range(_K_FOLDS):
         train, held = fold != f, fold == f
@@ -625,6 +632,7 @@ __all__ = [
     "fit_intervals",
     "gyro_problem",
     "interval_reference",
+    "predicts_held_back",
     "quality",
     "solve",
     "widened",

@@ -14,7 +14,10 @@ A reference's spans filled by interpolation (:mod:`sins.io.filled`: a converter'
 marker) are set aside from the trajectory form, as ``sins fit`` sets them aside: the diagnosis looks
 for what the unit's model lacks, and those spans are what the reference lacks (three 1 s slerped gaps
 in EuRoC's MH_01 made its clean diagnosis name a gyro y bias step). The per-sample form keeps them; the
-report says where they are (``statistic.reference_filled``).
+report says where they are (``statistic.reference_filled``). A reference whose world frame is tilted
+from gravity is levelled in the trajectory form (:mod:`sins.compensation.world_tilt`): the tilt leaves
+gravity in its horizontal axes, which the diagnosis would read as the accelerometer's error; the report
+gives the tilt (``statistic.reference_tilt``). The per-sample form reads the reference as given.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from sins.compensation import screening
+from sins.compensation import screening, world_tilt
 from sins.compensation.several import SAME_RATE
 from sins.core.series import CalibrationData, NavSeries, ReferencedRecording
 from sins.errors import MissingInputError, SinsInputError
@@ -47,6 +50,8 @@ class GapInput:
     _samples: Samples | None = field(default=None, repr=False)
     #: The reference's spans filled by interpolation, s, set aside from ``referenced``.
     filled_s: tuple[tuple[float, float], ...] = ()
+    #: The reference's world frame against gravity (None: per-sample reference inputs).
+    tilt: world_tilt.WorldTilt | None = None
 
     def samples(self) -> Samples:
         """The readings beside per-sample reference inputs, and the trajectory at their times (None
@@ -89,11 +94,12 @@ def read_gap_input(
     spans = screening.filled(referenced)
     if spans:
         referenced = screening.without(referenced, list(spans))
+    referenced, tilt = world_tilt.levelled(referenced)
     if rec.inputs_reader is not None:  # a dataset's own per-sample form
-        return GapInput(name, referenced, rec.inputs_reader, filled_s=spans)
+        return GapInput(name, referenced, rec.inputs_reader, filled_s=spans, tilt=tilt)
     if truth is not None:  # readings and a truth file: the exact ideal IMU, in either form
-        return GapInput(name, referenced, lambda: readings.gap_data(rec), filled_s=spans)
-    return GapInput(name, referenced, lambda: ideal_inputs(rec), filled_s=spans)
+        return GapInput(name, referenced, lambda: readings.gap_data(rec), filled_s=spans, tilt=tilt)
+    return GapInput(name, referenced, lambda: ideal_inputs(rec), filled_s=spans, tilt=tilt)
 
 
 def check_one_unit(inputs: list[GapInput]) -> None:

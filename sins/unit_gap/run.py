@@ -213,12 +213,14 @@ def _with_statistic(report: GapReport, chosen: dict[str, Any]) -> GapReport:
 
 def _with_reference(report: GapReport, inp: GapInput) -> GapReport:
     """The report with where the reference's clock sits (:mod:`sins.unit_gap.clock`), beside a
-    reference trajectory whose turns show it, and its spans filled by interpolation, where it has some
-    (:mod:`sins.unit_gap.inputs`)."""
+    reference trajectory whose turns show it, its spans filled by interpolation, where it has some, and
+    its world frame's tilt (:mod:`sins.unit_gap.inputs`)."""
     if inp.referenced is None:
         return report
     if inp.filled_s:
         report = _with_statistic(report, {**report.statistic, "reference_filled": _filled(report, inp)})
+    if inp.tilt is not None:
+        report = _with_statistic(report, {**report.statistic, "reference_tilt": inp.tilt.to_dict()})
     found = clock.reference_clock(inp.referenced, report.sizes)
     if found is None:
         return report
