@@ -17,14 +17,14 @@ readings corrected by the seed model and time offsets the intervals give
 (:func:`~sins.compensation.interval_fit.fit_intervals`, no g-sensitivity: the gyro's errors turn the
 attitude each velocity change is turned by, and a gyro 5 ms late had numpy's level room tilted by
 0.04-0.13°), each interval's velocity residual
-(:func:`~sins.compensation.intervals.velocity_residual`) is fitted by least squares on the
-accelerometer's lever arm (3), bias (3), scale and misalignment (9), and the world's tilt about north and
-east (2): with ``C_a`` the reference's attitude at the interval's start, a tilt ``δ`` leaves
-``C_aᵀ (δ × g) T`` over an interval of ``T`` (the seed fit's own lever arm, made without the tilt, had
-taken part of it). The reference is levelled (its attitude and velocity turned by ``Exp(−δ)``) where both
-of the tilt's standard errors are within :data:`DETERMINED_DEG`, the tilt is beyond
-:data:`SIGNIFICANT_CHI2` (chi-square of two degrees of freedom, 95 %), and it predicts intervals it was
-not fitted on (:func:`~sins.compensation.interval_fit.predicts_held_back`, the g-sensitivity's rule);
+(:func:`~sins.compensation.interval_fit.accel_problem`, the fit's own) is fitted by least squares on the
+accelerometer's bias (3), scale and misalignment (9) and lever arm (3), and the world's tilt about north
+and east (2): a tilt ``δ`` leaves ``(δ × g) T`` of the velocity change over an interval of ``T``, in NED
+(the seed fit's own lever arm, made without the tilt, had taken part of it). The reference is levelled
+(its attitude and velocity turned by ``Exp(−δ)``) where both of the tilt's standard errors are within
+:data:`DETERMINED_DEG`, the tilt is beyond :data:`SIGNIFICANT_CHI2` (chi-square of two degrees of
+freedom, 95 %), and it predicts intervals it was not fitted on
+(:func:`~sins.compensation.interval_fit.predicts_held_back`, the g-sensitivity's rule);
 elsewhere it is read as given. The last condition is BROAD's trial 18: a unit that hardly turns, with a
 step in its accelerometer, found 0.47° (chi-square 22) that did not predict held-back intervals, and
 levelled by it the raw readings' free-inertial velocity against the reference rose from 0.22 to 0.36
@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation import interval_fit, screening
-from sins.compensation.intervals import INTERVAL_S, choose_intervals, dcm, lever, velocity_residual
+from sins.compensation.intervals import INTERVAL_S, choose_intervals, expected_dv, lever
 from sins.core import earth, rotation
 from sins.core.series import ReferencedRecording
 from sins.nav import attitude
@@ -97,22 +97,26 @@ def estimate(rec: ReferencedRecording, interval_s: float = INTERVAL_S) -> WorldT
         iv = choose_intervals(rec, interval_s)
     except ValueError as exc:
         return WorldTilt(*nothing, False, f"the world frame's tilt is not estimated: {exc}; read as given")
-    imu, dt = seed.corrected(rec.imu), np.diff(rec.imu.t)
-    rot = dcm(attitude.propagate_increments(imu.dtheta_b, np.array([0.0, 0.0, 0.0, 1.0])))
-    y = velocity_residual(iv, rot, imu.dv_b, dt)
-    # The accelerometer's lever arm from the reference's point, fitted beside the tilt: the seed fit's
-    # own, made without the tilt, had taken part of it (numpy's 0.5° at 0.27-0.37° after it).
-    arm = np.einsum("kba,kbc->kac", dcm(iv.q_start), lever(iv, rec.imu, seed.seed, dt))
-    x = np.concatenate([arm, _design(iv, rot, imu.dv_b, dt)], axis=2)
+    dt = np.diff(rec.imu.t)
+    gyro = seed.corrected(rec.imu).dtheta_b
+    q_int = attitude.propagate_increments(gyro, np.array([0.0, 0.0, 0.0, 1.0]))
+    # The accelerometer's own problem at the seed model (bias, matrix and lever arm: the seed fit's
+    # lever arm, made without the tilt, had taken part of it, numpy's 0.5° at 0.27-0.37° after it),
+    # beside the tilt's two columns: a tilt δ leaves (δ × g) T of each interval's velocity change in NED.
+    x, y = interval_fit.accel_problem(
+        iv, rec.imu, dt, q_int, seed.seed.A0, seed.seed.A, seed.accel_time_offset_s, False,
+        expected_dv(iv, dt), lever(iv, rec.imu, seed.seed, dt),
+    )  # fmt: skip
+    x = np.asarray(np.concatenate([x, _tilt_columns(iv, dt)], axis=2), dtype=np.float64)
     a, b = x.reshape(-1, x.shape[2]), y.reshape(-1)
     dof = len(b) - a.shape[1]
     gram = a.T @ a
     if dof <= 0 or np.linalg.cond(gram) > 1e12:
         return WorldTilt(*nothing, False, "the world frame's tilt is not determined (the unit turns too "
                          "little to tell it from the accelerometer's bias); read as given")  # fmt: skip
-    theta = np.linalg.solve(gram, a.T @ b)
+    theta = np.asarray(np.linalg.solve(gram, a.T @ b), dtype=np.float64)
     resid = b - a @ theta
-    cov = float(resid @ resid) / dof * np.linalg.inv(gram)[-2:, -2:]
+    cov = np.asarray(float(resid @ resid) / dof * np.linalg.inv(gram)[-2:, -2:], dtype=np.float64)
     predicts = interval_fit.predicts_held_back(x, y, np.arange(x.shape[2] - 2))
     return _verdict(theta[-2:], cov, predicts)
 
@@ -142,22 +146,14 @@ def _verdict(tilt: Array, cov: Array, predicts: tuple[bool, float, float]) -> Wo
     return WorldTilt(tilt, cov, False, f"{size}, {why}: read as given")
 
 
-def _design(iv: Any, rot: Array, dv_b: Array, dt: Array) -> Array:
-    """Each interval's columns (k, 3, 14), in the body's axes at its start as
-    :func:`~sins.compensation.intervals.velocity_residual`'s residual: the accelerometer's bias (3) and
-    its scale and misalignment row-major (9), each as the velocity the readings it corrects would have
-    added, then the tilt about north and east (2)."""
-    middle = 0.5 * (rot[:-1] + rot[1:])
-    c_a = dcm(iv.q_start)
+def _tilt_columns(iv: Any, dt: Array) -> Array:
+    """Each interval's columns (k, 3, 2) of the tilt about north and east, in NED as
+    :func:`~sins.compensation.interval_fit.accel_problem`'s residual: ``(δ × g) T``, ``g`` down."""
     g = np.asarray(earth.normal_gravity(iv.lat, iv.h), dtype=float) * np.ones(len(iv))
-    out = np.empty((len(iv), 3, 14))
-    for k, (a, b) in enumerate(zip(iv.start, iv.stop, strict=True)):
-        turned = np.einsum("ba,jbc->jac", rot[a], middle[a:b])  # the steps' attitude in the start's axes
-        out[k, :, :3] = np.einsum("jac,j->ac", turned, dt[a:b])
-        out[k, :, 3:12] = np.einsum("jar,jc->arc", turned, dv_b[a:b]).reshape(3, 9)
-        span = float(dt[a:b].sum())
-        out[k, :, 12] = c_a[k].T @ np.array([0.0, -g[k], 0.0]) * span
-        out[k, :, 13] = c_a[k].T @ np.array([g[k], 0.0, 0.0]) * span
+    span = np.array([dt[a:b].sum() for a, b in zip(iv.start, iv.stop, strict=True)])
+    out = np.zeros((len(iv), 3, 2))
+    out[:, 1, 0] = -g * span  # about north: east's component
+    out[:, 0, 1] = g * span  # about east: north's component
     return out
 
 

@@ -94,7 +94,8 @@ def read_gap_input(
     spans = screening.filled(referenced)
     if spans:
         referenced = screening.without(referenced, list(spans))
-    referenced, tilt = world_tilt.levelled(referenced)
+    tilt = world_tilt.estimate(referenced)  # its filled spans already set aside (world_tilt.levelled's)
+    referenced = world_tilt.level(referenced, tilt)
     if rec.inputs_reader is not None:  # a dataset's own per-sample form
         return GapInput(name, referenced, rec.inputs_reader, filled_s=spans, tilt=tilt)
     if truth is not None:  # readings and a truth file: the exact ideal IMU, in either form
