@@ -39,7 +39,7 @@ run: $(STAMP)
 # the other worker idled).
 HEAVY_TESTS = tests/test_crossrig.py tests/test_learned.py tests/test_compensation.py
 LONG_TESTS = tests/test_gap.py tests/test_quality.py tests/test_campaign.py tests/test_campaign_gate.py \
-	tests/test_examples.py tests/test_unit_gap.py tests/test_characterise.py tests/test_fuzz.py \
+	tests/test_examples.py tests/test_unit_gap_real.py tests/test_unit_gap.py tests/test_characterise.py tests/test_fuzz.py \
 	tests/test_tour.py tests/test_campaign_folder.py tests/test_plots.py tests/test_bias.py \
 	tests/test_gap_independent.py tests/test_vocabulary.py
 longest_first = $(filter $(1),$(LONG_TESTS)) $(filter-out $(LONG_TESTS),$(1))
