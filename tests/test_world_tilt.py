@@ -3,6 +3,7 @@ hand figures, and a numpy recording's reference levelled by it (``tests/numpy_un
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -82,3 +83,26 @@ def test_a_fit_against_a_tilted_world_finds_the_units_accelerometer(tmp_path: Pa
     assert np.all(np.abs(model.A0_ - a0) < 3 * se), (model.A0_ - a0) / se
     assert np.max(np.abs(model.A_ - a)) < 1e-3, model.A_ - a
     assert np.max(np.abs(as_given.strategy.A_ - a)) > 5e-3
+
+
+def test_inspect_says_how_the_references_world_stands_against_gravity(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sins inspect`` beside a reference says what ``sins fit`` and ``sins gap`` will read of its world
+    frame: numpy's room turned 0.4° about north and -0.3° about east is levelled by a tilt within 3
+    standard errors of those, the level room (the same draws) is read as given; ``--json`` keeps it as
+    ``reference_tilt``."""
+    from sins.cli import main
+
+    found = {}
+    for name, tilt_deg in (("level", (0.0, 0.0)), ("tilted", (0.4, -0.3))):
+        path = nu.write(tmp_path / f"{name}.npz", nu.recording(3, "clean", world_tilt_deg=tilt_deg))
+        out = tmp_path / f"{name}.json"
+        assert main(["inspect", str(path), "--json", str(out)]) == 0
+        line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("the reference, as"))
+        found[name] = (line, json.loads(out.read_text())["reference_tilt"], tilt_deg)
+    for name, (line, tilt, truth_deg) in found.items():
+        assert tilt["levelled"] is (name == "tilted"), tilt
+        assert ("read levelled" if name == "tilted" else "read as given") in line, line
+        off = np.abs(np.asarray(tilt["tilt_deg"]) - truth_deg) / np.asarray(tilt["standard_error_deg"])
+        assert np.all(off < 3.0), (name, tilt)
