@@ -28,7 +28,8 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     with progress_bar("reading", "messages") as bar:
         rec = read_recording(args, args.recording, args.dataset, progress=row_progress(bar))
     result = inspection.inspect(rec)
-    tilt = reference_tilt(rec, result)
+    with progress_bar("the reference's world frame against gravity", ""):  # a fit on its intervals
+        tilt = reference_tilt(rec, result)
     print(format_inspection(rec, result, tilt))
     if args.json:
         io.write_report(

@@ -45,6 +45,7 @@ from sins.compensation.intervals import (
     correct_increments,
     dcm,
     expected_dv,
+    interval_sums,
     lever,
     shift_derivative,
     shift_increments,
@@ -434,9 +435,8 @@ def _gyro_design(q: Array, b_inv: Array, blocks: list[Array], extra: Array | Non
         if extra is not None:
             cols.append(extra[s0:s1])
         f = np.stack(cols, axis=2)
-        w = np.einsum("nab,nbp->nap", dcm(q[s0 + 1 : s1 + 1]), f)
-        total = np.concatenate([np.zeros((1, 3, width)), np.cumsum(w, axis=0)])
-        part = total[iv.stop[k0:k1] - s0] - total[iv.start[k0:k1] - s0]
+        w = np.matmul(dcm(q[s0 + 1 : s1 + 1]), f).reshape(s1 - s0, 3 * width)
+        part = interval_sums(w, iv.start[k0:k1] - s0, iv.stop[k0:k1] - s0).reshape(-1, 3, width)
         out[k0:k1] = np.einsum("kba,kbp->kap", dcm(q[iv.stop[k0:k1]]), part)
     return out
 
@@ -485,25 +485,43 @@ def accel_problem(
     ``expected`` :func:`~sins.compensation.intervals.expected_dv`, ``arm_matrix``
     :func:`~sins.compensation.intervals.lever`."""
     width = 16 if time_offset else 15
-    c_ref = dcm(iv.q_start)
-    q_a = dcm(q_int[iv.start])
+    # Interval k's velocity change in the reference's world is turn_k Σ_j mid_j u_j over its steps j, with
+    # turn_k = C_ref(k) Q(k)ᵀ (Q the attitude the corrected gyro integrates to, at the interval's start),
+    # mid_j that attitude at step j's middle (to first order) and u_j = (I + A)⁻¹ (dv_j − A0 dt_j) the
+    # step's corrected increment. Its derivatives: −Σ_j mid_j dt_j (I + A)⁻¹ e_r for A0_r, and
+    # −(Σ_j mid_j u_j,c) (I + A)⁻¹ e_r for A[r, c]: so only Σ_j mid_j ⊗ (dt_j, u_j) is summed over the
+    # steps (and Σ_j mid_j ∂u_j/∂τ for the time offset), a chunk of intervals at a time (interval_sums).
+    # A loop over the intervals, each step's 12 columns turned by its attitude, took half of a fit's time
+    # on EuRoC's six recordings.
+    turn = np.einsum("kab,kcb->kac", dcm(iv.q_start), dcm(q_int[iv.start]))
     a_inv = np.asarray(np.linalg.inv(np.eye(3) + A), dtype=float)
     dv = (shifted(imu.t, imu.dv_b, tau_a) - A0 * dt[:, None]) @ a_inv.T
-    cols = [-a_inv[:, r][None, :] * dt[:, None] for r in range(3)]
-    cols += [-a_inv[:, r][None, :] * dv[:, c : c + 1] for r in range(3) for c in range(3)]
-    if time_offset:
-        cols.append(shift_derivative(imu.t, imu.dv_b, tau_a) @ a_inv.T)
-    f = np.stack(cols, axis=2)
+    lag = shift_derivative(imu.t, imu.dv_b, tau_a) @ a_inv.T if time_offset else None
+    sums = np.empty((len(iv), 3, 3, 4))  # Σ mid_j u_j,c (c < 3) and Σ mid_j dt_j (last)
+    lagged = np.zeros((len(iv), 3))  # Σ mid_j ∂u_j/∂τ, with the time offset
+    per_chunk = max(1, _CHUNK_STEPS // max(1, int(np.max(iv.stop - iv.start))))
+    for k0 in range(0, len(iv), per_chunk):
+        k1 = min(len(iv), k0 + per_chunk)
+        s0, s1 = int(iv.start[k0]), int(iv.stop[k1 - 1])
+        rot = dcm(q_int[s0 : s1 + 1])
+        mid = 0.5 * (rot[:-1] + rot[1:])
+        u = np.concatenate([dv[s0:s1], dt[s0:s1, None]], axis=1)
+        per_step = (mid[:, :, :, None] * u[:, None, None, :]).reshape(len(u), 36)
+        if lag is not None:
+            per_step = np.concatenate([per_step, np.einsum("nab,nb->na", mid, lag[s0:s1])], axis=1)
+        part = interval_sums(per_step, iv.start[k0:k1] - s0, iv.stop[k0:k1] - s0)
+        sums[k0:k1] = part[:, :36].reshape(-1, 3, 3, 4)
+        if lag is not None:
+            lagged[k0:k1] = part[:, 36:]
+    turned = np.einsum("kab,kbcp->kacp", turn, sums)  # (k, 3, 3 [c], 4 [u_c, dt])
     x = np.empty((len(iv), 3, width))
-    y = np.empty((len(iv), 3))
-    for k, (a, b) in enumerate(zip(iv.start, iv.stop, strict=True)):
-        rot = dcm(q_int[a : b + 1])
-        mid = 0.5 * (rot[:-1] + rot[1:])  # the step's middle, to first order
-        c_nb = np.einsum("ab,jbd->jad", c_ref[k] @ q_a[k].T, mid)
-        y[k] = expected[k] - np.einsum("jab,jb->a", c_nb, dv[a:b])
-        x[k, :, :12] = np.einsum("jab,jbp->ap", c_nb, f[a:b, :, :12])
-        if time_offset:
-            x[k, :, 15] = np.einsum("jab,jb->a", c_nb, f[a:b, :, 12])
+    y = expected - np.einsum("kacc->ka", turned[:, :, :, :3])
+    x[:, :, :3] = -turned[:, :, :, 3] @ a_inv  # A0_r: −(turn Σ mid dt) (I + A)⁻¹ e_r
+    for r in range(3):
+        for c in range(3):
+            x[:, :, 3 + 3 * r + c] = -turned[:, :, :, c] @ a_inv[:, r]
+    if time_offset:
+        x[:, :, 15] = np.einsum("kab,kb->ka", turn, lagged)
     # The accelerometer's Δv is the reference point's plus Δ(C (ω × r)) = lever r: on y's side, −lever.
     # r is estimated whole in every pass (y holds none of it); the rest by increments.
     x[:, :, 12:15] = -arm_matrix

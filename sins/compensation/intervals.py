@@ -12,6 +12,7 @@ is what the accelerometer leaves of each interval's velocity change once correct
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -241,11 +242,30 @@ def velocity_residual(iv: Intervals, rot: Array, dv_b: Array, dt: Array) -> Arra
     each turned by the attitude in the middle of its step (gravity and the Coriolis terms are
     :func:`expected_dv`'s)."""
     middle = 0.5 * (rot[:-1] + rot[1:])
-    made = np.vstack([np.zeros((1, 3)), np.cumsum(np.einsum("jab,jb->ja", middle, dv_b), axis=0)])
+    made = interval_sums(np.einsum("jab,jb->ja", middle, dv_b), iv.start, iv.stop)
     return np.asarray(
         np.einsum("kba,kb->ka", dcm(iv.q_start), expected_dv(iv, dt))
-        - np.einsum("kba,kb->ka", rot[iv.start], made[iv.stop] - made[iv.start])
+        - np.einsum("kba,kb->ka", rot[iv.start], made)
     )
+
+
+def summing(start: NDArray[np.intp], stop: NDArray[np.intp], steps: int) -> Any:
+    """The intervals' indicator (k, ``steps``), a scipy sparse matrix: row ``k`` is 1 on the steps
+    ``start[k]`` to ``stop[k] − 1``. Its product with per-step rows (``steps``, q) sums each interval's
+    steps in their order (:func:`interval_sums`): a running sum over a EuRoC sequence's 36,000 steps of
+    39 columns took 9 ms where this takes 0.6 ms, and its differences lost digits to the sum before them."""
+    from scipy import sparse
+
+    lengths = np.asarray(stop) - np.asarray(start)
+    indptr = np.concatenate([[0], np.cumsum(lengths)])
+    indices = np.arange(indptr[-1]) - np.repeat(indptr[:-1] - start, lengths)
+    return sparse.csr_matrix((np.ones(indptr[-1]), indices, indptr), shape=(len(lengths), steps))
+
+
+def interval_sums(per_step: Array, start: NDArray[np.intp], stop: NDArray[np.intp]) -> Array:
+    """Each interval's sum of ``per_step`` (m, q) over its steps ``start[k]`` to ``stop[k] − 1``, (k, q)
+    (:func:`summing`)."""
+    return np.asarray(summing(start, stop, len(per_step)) @ per_step)
 
 
 def dcm(q: Array) -> Array:
@@ -260,9 +280,11 @@ __all__ = [
     "correct_increments",
     "dcm",
     "expected_dv",
+    "interval_sums",
     "lever",
     "shift_derivative",
     "shift_increments",
     "shifted",
+    "summing",
     "velocity_residual",
 ]

@@ -29,6 +29,8 @@ the variables are the sensor's noise, not the reference's).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +41,7 @@ from sins.compensation.intervals import (
     correct_increments,
     dcm,
     shift_derivative,
+    summing,
     velocity_residual,
 )
 from sins.core import rotation
@@ -118,9 +121,14 @@ class IntervalResiduals:
         column, in the sensor's units (rad/s, m/s²), move each interval's residual."""
         u = np.asarray(per_step, dtype=float).reshape(len(self.dt), -1)
         steps = self.maps[sensor][:, :, axis][:, :, None] * (u * self.dt[:, None])[:, None, :]
-        total = np.concatenate([np.zeros((1, *steps.shape[1:])), np.cumsum(steps, axis=0)])
-        part = total[self.iv.stop] - total[self.iv.start]
+        part = np.asarray(self._summing @ steps.reshape(len(u), -1)).reshape(len(self.iv), 3, -1)
         return np.asarray(np.einsum("kab,kbp->kap", self.left[sensor], part))
+
+    @cached_property
+    def _summing(self) -> Any:
+        """The intervals' indicator over the steps (:func:`sins.compensation.intervals.summing`), made
+        once: a diagnosis asks for some 900 sets of columns (a hum's periods on every channel)."""
+        return summing(self.iv.start, self.iv.stop, len(self.dt))
 
     def baseline(self, sensor: str, g_sensitivity: bool = True) -> Array:
         """(k, 3, p) the baseline's columns (the seed model's): each axis's bias and scale and
