@@ -265,7 +265,7 @@ def _gyro_design(rec: ReferencedRecording, iv: Intervals) -> tuple[Array, Array]
     """The gyro's columns (B0, B, K, τ) from the reference, first order in each interval's body axes,
     and the intervals' turn left by the raw readings (what the least squares would fit)."""
     imu, dt = rec.imu, np.diff(rec.imu.t)
-    span = np.array([dt[a:b].sum() for a, b in zip(iv.start, iv.stop, strict=True)])
+    span = iv.seconds(dt)
     r_ref = iv.body_turn()
     theta = rotation.rotvec_from_quat(rotation.quat_from_dcm(r_ref))
     force_b = np.einsum("kji,kj->ki", dcm(iv.q_start), expected_dv(iv, dt))
@@ -287,7 +287,7 @@ def _accel_design(rec: ReferencedRecording, iv: Intervals) -> tuple[Array, Array
     """The accelerometer's columns (A0, A, lever arm, τ) from the reference, first order in NED, and the
     intervals' velocity change left by the raw readings turned by the reference's attitude."""
     imu, dt = rec.imu, np.diff(rec.imu.t)
-    span = np.array([dt[a:b].sum() for a, b in zip(iv.start, iv.stop, strict=True)])
+    span = iv.seconds(dt)
     c_a, c_b = dcm(iv.q_start), dcm(iv.q_stop)
     c_mid = 0.5 * (c_a + c_b)
     expected = expected_dv(iv, dt)

@@ -55,6 +55,10 @@ class Intervals:
     def __len__(self) -> int:
         return len(self.start)
 
+    def seconds(self, dt: Array) -> Array:
+        """Each interval's length (k,), s: the lengths ``dt`` (n,) of its steps summed."""
+        return np.array([dt[a:b].sum() for a, b in zip(self.start, self.stop, strict=True)])
+
     def body_turn(self) -> Array:
         """The body's turn in inertial space over each interval by the reference, ``C_a^T Φ C_b`` (k, 3, 3),
         ``Φ`` the navigation frame's own turn (Earth's rate, and the transport rate of a moving
@@ -214,7 +218,7 @@ def expected_dv(iv: Intervals, dt: Array) -> Array:
     """Each interval's velocity change less what gravity and the Coriolis and transport terms make:
     what the specific force integrated in NED must give, m/s (k, 3)."""
     g = np.asarray(earth.normal_gravity(iv.lat, iv.h), dtype=float)
-    span = np.array([dt[a:b].sum() for a, b in zip(iv.start, iv.stop, strict=True)])
+    span = iv.seconds(dt)
     v_mean = 0.5 * (iv.v_start + iv.v_stop)
     w_ie = np.stack(np.broadcast_arrays(*earth.earth_rate_n(iv.lat)), axis=1)
     w_en = np.stack(earth.transport_rate_n(iv.lat, iv.h, v_mean[:, 0], v_mean[:, 1]), axis=1)

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation import interval_fit, screening
-from sins.compensation.intervals import INTERVAL_S, choose_intervals, expected_dv, lever
+from sins.compensation.intervals import INTERVAL_S, Intervals, choose_intervals, expected_dv, lever
 from sins.core import earth, rotation
 from sins.core.series import ReferencedRecording
 from sins.nav import attitude
@@ -146,11 +146,11 @@ def _verdict(tilt: Array, cov: Array, predicts: tuple[bool, float, float]) -> Wo
     return WorldTilt(tilt, cov, False, f"{size}, {why}: read as given")
 
 
-def _tilt_columns(iv: Any, dt: Array) -> Array:
+def _tilt_columns(iv: Intervals, dt: Array) -> Array:
     """Each interval's columns (k, 3, 2) of the tilt about north and east, in NED as
     :func:`~sins.compensation.interval_fit.accel_problem`'s residual: ``(δ × g) T``, ``g`` down."""
     g = np.asarray(earth.normal_gravity(iv.lat, iv.h), dtype=float) * np.ones(len(iv))
-    span = np.array([dt[a:b].sum() for a, b in zip(iv.start, iv.stop, strict=True)])
+    span = iv.seconds(dt)
     out = np.zeros((len(iv), 3, 2))
     out[:, 1, 0] = -g * span  # about north: east's component
     out[:, 0, 1] = g * span  # about east: north's component
