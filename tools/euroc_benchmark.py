@@ -117,7 +117,8 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
         guard = doc.get("network_guard")  # the seed paper's networks: least squares written where they lose
         results["fits"][strategy] = {"seconds": seconds, "bias_rule": doc.get("bias_rule", {}),
                                      "network_guard": guard}  # fmt: skip
-        mode = doc.get("bias_rule", {}).get("mode", "-")
+        rule = doc.get("bias_rule", {})
+        mode = rule.get("mode", "-") + (" (mixture)" if rule.get("mixture") else "")
         wrote = "" if guard is None else f"; its guard wrote {guard['written']}"
         print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {mode}{wrote})", file=sys.stderr)
         for name, judged in _evaluate(

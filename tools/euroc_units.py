@@ -4,7 +4,7 @@ change to the bias rule or to a strategy, on units nobody tuned to.
 Usage::
 
     .venv/bin/python tools/euroc_units.py [--seeds 301 302 ...] [--kinds calib power ...]
-        [--strategies regression bias_only ...] [--json OUT.json] [--keep DIR]
+        [--strategies regression bias_only ...] [--fit N] [--json OUT.json] [--keep DIR]
 
 Issue 40 asks that the same commands, on recordings of a unit sins does not hold, fitted on three and
 judged on three others, leave no judged recording worse than its raw readings. This tool makes such
@@ -27,7 +27,8 @@ per seed, of one of five kinds:
     30-120 s (a warm-up).
 
 Signs are random per axis. With ``rng = np.random.default_rng(seed)``, six of the eleven sequences are
-drawn (sorted names, ``rng.choice`` without replacement): the first three fitted, the last three judged,
+drawn (sorted names, ``rng.choice`` without replacement): the first three fitted, the last three judged
+(``--fit N``: ``N + 3`` drawn, the first ``N`` fitted: a unit of more recordings draws other sequences),
 each strategy fitted with ``sins fit --dataset`` and judged with ``sins evaluate`` as
 ``tools/euroc_benchmark.py`` does. Prints each unit's table, then per strategy the judged recordings
 left worse than their raw readings and the mean AOE.
@@ -63,6 +64,8 @@ DEFAULT_SEEDS = list(range(301, 311))
 STRATEGIES = ["regression", "bias_only", "regression_rest", "mlp", "kohonen"]
 _DEG = np.pi / 180.0
 _KEYS = ("t_s", "gyro_rad_s", "accel_m_s2", "q_wxyz", "v_m_s", "p_m")
+#: The recordings each unit is judged on.
+JUDGED = 3
 _OFF_DIAGONAL = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
 
 
@@ -70,25 +73,26 @@ def _signed(rng: np.random.Generator, lo: float, hi: float, n: int = 3) -> np.nd
     return rng.uniform(lo, hi, n) * rng.choice([-1.0, 1.0], n)
 
 
-def _drawn(rng: np.random.Generator, source: Path) -> list[str]:
-    """The unit's six sequences (its generator's first draw): the first three fitted, the last judged."""
+def _drawn(rng: np.random.Generator, source: Path, fitted: int = 3) -> list[str]:
+    """The unit's sequences (its generator's first draw): the first ``fitted`` fitted, the last three
+    judged."""
     names = sorted(p.stem for p in source.glob("*.npz"))
-    if len(names) < 6:
-        raise SystemExit(f"{source}: {len(names)} .npz sequences, a unit draws six")
-    return [str(n) for n in rng.choice(names, 6, replace=False)]
+    if len(names) < fitted + JUDGED:
+        raise SystemExit(f"{source}: {len(names)} .npz sequences, a unit draws {fitted + JUDGED}")
+    return [str(n) for n in rng.choice(names, fitted + JUDGED, replace=False)]
 
 
-def split_of(seed: int, source: Path) -> tuple[list[str], list[str]]:
+def split_of(seed: int, source: Path, fitted: int = 3) -> tuple[list[str], list[str]]:
     """The sequences unit ``seed`` fits on and is judged on (what :func:`make_unit` draws first)."""
-    picked = _drawn(np.random.default_rng(seed), source)
-    return picked[:3], picked[3:]
+    picked = _drawn(np.random.default_rng(seed), source, fitted)
+    return picked[:fitted], picked[fitted:]
 
 
-def make_unit(seed: int, kind: str, source: Path, out: Path) -> None:
+def make_unit(seed: int, kind: str, source: Path, out: Path, fitted: int = 3) -> None:
     """Unit ``seed`` of ``kind`` written into ``out``: one ``.npz`` per drawn sequence (:func:`split_of`),
     every key kept in its type."""
     rng = np.random.default_rng(seed)
-    picked = _drawn(rng, source)
+    picked = _drawn(rng, source, fitted)
     shared, turn = np.eye(3), Rotation.identity()
     if kind == "calib":
         shared = shared + np.diag(_signed(rng, 0.01, 0.03))
@@ -144,6 +148,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", nargs="+", type=int, default=DEFAULT_SEEDS)
     p.add_argument("--kinds", nargs="+", choices=KINDS, help="one per seed, or cycled (default: two each)")
     p.add_argument("--strategies", nargs="+", default=STRATEGIES)
+    p.add_argument(
+        "--fit",
+        type=int,
+        default=3,
+        choices=range(2, 9),
+        metavar="N",
+        help="recordings each unit is fitted on (default 3; judged on three others)",
+    )
     p.add_argument("--json", type=Path, help="write every unit's figures here")
     p.add_argument("--keep", type=Path, help="write the units here (a data root) and keep them")
     args = p.parse_args(argv)
@@ -154,11 +166,11 @@ def main(argv: list[str] | None = None) -> int:
         for i, seed in enumerate(args.seeds):
             kind = kinds[i % len(kinds)]
             folder = f"u{seed}_{kind}"
-            train, judge = split_of(seed, source)
+            train, judge = split_of(seed, source, args.fit)
             print(f"\n{folder}: fitted on {', '.join(train)}; judged on {', '.join(judge)}", flush=True)
             out_json = Path(work) / f"{folder}.json"
             euroc_benchmark.run_on_unit(
-                functools.partial(make_unit, seed, kind, source),
+                functools.partial(make_unit, seed, kind, source, fitted=args.fit),
                 folder, train, judge, args.strategies, json_out=out_json, keep=args.keep,
             )  # fmt: skip
             units[folder] = {"seed": seed, "kind": kind, **json.loads(out_json.read_text())}

@@ -546,20 +546,20 @@ def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:
     """What ``sins fit`` says of a new recording's bias: the rule's mode, or, where the model leaves the
     gyro as read, the held-back recordings the best rule left worse than their raw readings."""
     from sins.compensation.rule_choice import behind_by, kept_modes
-    from sins.compensation.unit_bias import MODES, READINGS
+    from sins.compensation.unit_bias import CHOICES, READINGS
 
-    each, means = rule.held_back_each_deg, rule.held_back_deg
+    each, means, choice = rule.held_back_each_deg, rule.held_back_deg, rule.choice
     if rule.mode != READINGS:
-        kept = kept_modes(each, each.get("raw", [])) if rule.mode in each else []
-        best = min(kept, key=means.__getitem__, default=rule.mode)
-        if best == rule.mode:
-            return f"a new recording's bias: {rule.mode}{judged}"
-        behind, se = behind_by(each[rule.mode], each[best])
+        kept = kept_modes(each, each.get("raw", [])) if choice in each else []
+        best = min(kept, key=means.__getitem__, default=choice)
+        if best == choice:
+            return f"a new recording's bias: {choice}{judged}"
+        behind, se = behind_by(each[choice], each[best])
         return (
-            f"a new recording's bias: {rule.mode}{judged}; {best} is ahead by {behind:.2f}°, no more than "
-            f"its standard error over these recordings ({se:.2f}°), so the simpler {rule.mode} is taken"
+            f"a new recording's bias: {choice}{judged}; {best} is ahead by {behind:.2f}°, no more than "
+            f"its standard error over these recordings ({se:.2f}°), so the simpler {choice} is taken"
         )
-    best = min((m for m in MODES if m in means), key=means.__getitem__)
+    best = min((m for m in CHOICES if m in means), key=means.__getitem__)
     worse = ", ".join(
         f"{name} {v:.2f}° against {raw:.2f}°"
         for name, v, raw in zip(names, each.get(best, []), each.get("raw", []), strict=False)

@@ -32,12 +32,21 @@ _LEVELLING_ROWS = 20
 
 
 def estimate(
-    imu: ImuIncrements, track: Array, prior: Array, sigma: Array, sigma_v_mps: float, sigma_accel_mps2: float
+    imu: ImuIncrements,
+    track: Array,
+    prior: Array,
+    sigma: Array,
+    sigma_v_mps: float,
+    sigma_accel_mps2: float,
+    components: Array | None = None,
 ) -> Array:
     """The bias (n, 3) rad/s of each step of ``imu`` (corrected increments): ``track`` before the first
     update, then ``prior`` plus the estimate every :data:`UPDATE_S` from the readings before it, its
     change from ``prior`` held to ``sigma`` (3,), the true velocity taken as noise of ``sigma_v_mps`` and
-    the accelerometer's bias held to ``sigma_accel_mps2`` (module docstring)."""
+    the accelerometer's bias held to ``sigma_accel_mps2`` (module docstring). With ``components`` (k, 3),
+    the bias's prior is their mixture instead, each of width ``sigma``, equally likely beforehand: each
+    one's estimate is made as above and they are weighed by their evidence so far
+    (:func:`_mixture`)."""
     dt = np.diff(imu.t)
     step = max(1, round(UPDATE_S / float(np.median(dt))))
     at = np.arange(step, len(imu.t), step)
@@ -61,11 +70,35 @@ def estimate(
     # Running sums of the normal equations: the estimate at each update from the rows before it.
     grams = prior_rows.T @ prior_rows + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
     rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
-    thetas = np.linalg.solve(grams, rhss[:, :, None])[:, :, 0]
+    if components is None:
+        change = np.linalg.solve(grams, rhss[:, :, None])[:, 4:7, 0]
+    else:
+        squares = np.cumsum(np.einsum("mr,mr->m", target, target))
+        change = _mixture(grams, rhss, squares, prior_rows.T @ prior_rows, components - prior)
     out = track.copy()
     ends = np.r_[at[1:], len(out)]
-    out[at[0] :] = np.repeat(prior + thetas[:, 4:7], ends - at, axis=0)
+    out[at[0] :] = np.repeat(prior + change, ends - at, axis=0)
     return out
+
+
+def _mixture(grams: Array, rhss: Array, squares: Array, lam0: Array, centres: Array) -> Array:
+    """The bias change (m, 3) at each update under a prior that is a mixture of Gaussians: the unknowns'
+    prior precision ``lam0`` (10, 10) about means that differ in the bias change alone (``centres``,
+    (k, 3)). Each component's posterior mean solves the same normal equations (``grams`` (m, 10, 10),
+    ``rhss`` (m, 10): the rows so far) from its own prior mean; its evidence is the Gaussian marginal
+    likelihood of the rows so far (``squares``: their targets' sum of squares), up to a factor all
+    components share (one precision, so one determinant). The estimate is the posterior mixture's mean:
+    each component's weighted by its evidence."""
+    mu = np.zeros((len(centres), lam0.shape[0]))
+    mu[:, 4:7] = centres
+    eta = (mu @ lam0)[None, :, :] + rhss[:, None, :]  # (m, k, 10): Λ₀μ + Hᵀy
+    post = np.linalg.solve(grams[:, None, :, :], eta[..., None])[..., 0]
+    # -2 log evidence = yᵀy + μᵀΛ₀μ − ηᵀ G⁻¹ η (the common log-determinants left out)
+    prior_term = np.einsum("ka,ab,kb->k", mu, lam0, mu)
+    q = squares[:, None] + prior_term[None, :] - np.einsum("mka,mka->mk", eta, post)
+    w = np.exp(-0.5 * (q - q.min(axis=1, keepdims=True)))
+    w /= w.sum(axis=1, keepdims=True)
+    return np.asarray(np.einsum("mk,mka->ma", w, post[:, :, 4:7]), dtype=float)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sins.compensation.unit_bias import MODES, READINGS
+from sins.compensation.unit_bias import CHOICES, READINGS
 
 #: A held-back mean within this share of the readings' ties with them: a rounding's difference, no gain.
 TIE = 1e-9
@@ -21,11 +21,12 @@ def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
     kept. Kept: no worse than the readings on any of them, and better on their mean (by more than
     :data:`TIE`): a correction worse than the readings on a recording it was not fitted on may be so on
     the next, and one that only ties with them (a ``bias_only`` prior that gives back the bias it takes)
-    adds nothing. Of those, the first in :data:`MODES`' order (simplest first: what it takes from the
-    training recordings and from the recording grows along it) whose mean lies within one standard error
-    of the best one's, the error that of their differences recording by recording (the one-standard-error
-    rule of cross-validation): three or six held-back recordings cannot tell modes closer than that apart,
-    and the simpler one is less of a guess on a unit the recordings have not shown."""
+    adds nothing. Of those, the first in :data:`~sins.compensation.unit_bias.CHOICES`' order (simplest
+    first: what it takes from the training recordings and from the recording grows along it) whose mean
+    lies within one standard error of the best one's, the error that of their differences recording by
+    recording (the one-standard-error rule of cross-validation): three or six held-back recordings cannot
+    tell modes closer than that apart, and the simpler one is less of a guess on a unit the recordings
+    have not shown."""
     kept = kept_modes(scores, raw)
     if not kept:
         return READINGS
@@ -41,9 +42,10 @@ def chosen_mode(scores: dict[str, list[float]], raw: list[float]) -> str:
 
 
 def kept_modes(scores: dict[str, list[float]], raw: list[float]) -> list[str]:
-    """The modes of ``scores`` (in :data:`MODES`' order) :func:`chosen_mode` keeps: no worse than the
-    readings on any held-back recording, and better on their mean by more than :data:`TIE`."""
-    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in MODES if m in scores]
+    """The modes of ``scores`` (in :data:`~sins.compensation.unit_bias.CHOICES`' order) that
+    :func:`chosen_mode` keeps: no worse than the readings on any held-back recording, and better on their
+    mean by more than :data:`TIE`."""
+    bar, given = (1.0 - TIE) * float(np.mean(raw)), [m for m in CHOICES if m in scores]
     return [m for m in given if np.all(np.array(scores[m]) <= raw) and np.mean(scores[m]) < bar]
 
 

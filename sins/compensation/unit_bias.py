@@ -63,6 +63,14 @@ Array = NDArray[np.float64]
 
 #: The ways of estimating a recording's bias (see the module docstring).
 MODES = ("pooled", "rest", "online", "rest+online", "nearest", "nearest+online")
+#: The modes that estimate the bias online (:mod:`sins.compensation.online_bias`).
+ONLINE_MODES = ("online", "rest+online", "nearest+online")
+#: What a choice's name adds where its online estimate starts from the training recordings' biases'
+#: mixture (:attr:`BiasRule.mixture`) rather than the pooled Gaussian.
+MIXTURE = " (mixture)"
+#: Every choice a rule is chosen among on held-back recordings, simplest first: the modes, then the
+#: online ones from the mixture prior.
+CHOICES = (*MODES, *(m + MIXTURE for m in ONLINE_MODES))
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -96,7 +104,10 @@ class BiasRule:
     accelerometer biases' spread, :func:`accel_spread`); ``held_back_deg``: the
     open-loop attitude error of each mode on the held-back training recordings (mean), what chose it,
     and (``raw``) of their readings as they are; ``held_back_each_deg``: the same per recording, in the
-    order the model was fitted on them.
+    order the model was fitted on them; ``components`` (k, 3): each training recording's bias, shifted
+    as ``prior`` is, and ``component_width`` (3,): the width of each about it (:func:`mixture_width`),
+    the prior of the online estimate where the pooled one would be under ``mixture`` (else, or with
+    fewer than :data:`MIXTURE_MIN` of them, the pooled prior's Gaussian).
     """
 
     mode: str = "pooled"
@@ -111,13 +122,16 @@ class BiasRule:
     rest_biases: Array = field(default_factory=lambda: np.zeros((0, 3)))
     nearest_spread: Array = field(default_factory=lambda: np.full(3, 1e-3))
     nearest_blend: bool = False
+    components: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    component_width: Array = field(default_factory=lambda: np.full(3, 1e-3))
+    mixture: bool = False
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
             raise ValueError(f"bias rule mode {self.mode!r} (known: {', '.join((*MODES, READINGS))})")
-        for key in ("prior", "spread", "rest_offset", "rest_spread", "nearest_spread"):
+        for key in ("prior", "spread", "rest_offset", "rest_spread", "nearest_spread", "component_width"):
             value = np.asarray(getattr(self, key), dtype=float)
             if value.shape != (3,) or not np.isfinite(value).all():
                 raise ValueError(f"bias rule {key}: expected 3 finite numbers")
@@ -132,12 +146,20 @@ class BiasRule:
             object.__setattr__(self, key, value)
         if np.any(self.rest_rates_se <= 0.0) or np.any(self.nearest_spread <= 0.0):
             raise ValueError("bias rule: rest_rates_se and nearest_spread must be positive")
+        components = np.asarray(self.components, dtype=float)
+        components = components.reshape(0, 3) if components.size == 0 else components
+        if components.ndim != 2 or components.shape[1] != 3 or not np.isfinite(components).all():
+            raise ValueError("bias rule components: expected rows of 3 finite numbers")
+        object.__setattr__(self, "components", components)
+        if np.any(self.component_width <= 0.0):
+            raise ValueError("bias rule: component_width must be positive")
         if not (0.0 < self.sigma_v_mps < 1e3 and 0.0 < self.sigma_accel_mps2 < 1e3):
             raise ValueError("bias rule: sigma_v_mps and sigma_accel_mps2 must be in (0, 1000)")
         if np.any(self.spread <= 0.0) or np.any(self.rest_spread <= 0.0):
             raise ValueError("bias rule: spreads must be positive")
-        if not isinstance(self.nearest_blend, bool):
-            raise ValueError("bias rule nearest_blend: expected true or false")
+        for key in ("nearest_blend", "mixture"):
+            if not isinstance(getattr(self, key), bool):
+                raise ValueError(f"bias rule {key}: expected true or false")
 
     def to_dict(self) -> dict[str, Any]:
         """The rule as a JSON object (what a model file keeps)."""
@@ -147,9 +169,17 @@ class BiasRule:
             "sigma_v_mps": self.sigma_v_mps, "sigma_accel_mps2": self.sigma_accel_mps2,
             "rest_rates": self.rest_rates.tolist(), "rest_rates_se": self.rest_rates_se.tolist(),
             "rest_biases": self.rest_biases.tolist(), "nearest_spread": self.nearest_spread.tolist(),
-            "nearest_blend": self.nearest_blend, "held_back_deg": dict(self.held_back_deg),
+            "nearest_blend": self.nearest_blend, "components": self.components.tolist(),
+            "component_width": self.component_width.tolist(), "mixture": self.mixture,
+            "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
         }  # fmt: skip
+
+    @property
+    def choice(self) -> str:
+        """The rule's name among :data:`CHOICES`: its mode, and whether its online estimate starts from
+        the mixture prior."""
+        return self.mode + MIXTURE if self.mixture and self.mode in ONLINE_MODES else self.mode
 
     @property
     def misses_measured(self) -> bool:
@@ -233,8 +263,12 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     prior = rule.prior if own is None else own
     if own is not None:  # before the rest has ended nothing better than the pooled prior is known
         track[rest:] = own
-    if rule.mode in ("online", "rest+online", "nearest+online"):
-        track = online_bias.estimate(imu, track, prior, sigma, rule.sigma_v_mps, rule.sigma_accel_mps2)
+    if rule.mode in ONLINE_MODES:
+        mixed = own is None and _mixed(rule)
+        track = online_bias.estimate(
+            imu, track, prior, rule.component_width if mixed else sigma, rule.sigma_v_mps,
+            rule.sigma_accel_mps2, rule.components if mixed else None,
+        )  # fmt: skip
     if rest:  # while the unit rests, its own readings so far tell its bias (the rest's, not the flight's)
         track[:rest] = _resting(rule, imu, rest)
     return track
@@ -267,12 +301,13 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     if rule.mode not in _FROM_REST:
         return ""
     rest, own, _ = _rest_prior(rule, imu)
-    head = f"a new recording's gyro bias (rule {rule.mode}): "
+    head = f"a new recording's gyro bias (rule {rule.choice}): "
     if not rest:
-        return head + (
-            "it opens moving, so its prior is the training recordings' mean bias as far as they "
-            "determine it (none on an axis where they cannot tell it from zero: shrunk)"
-        )
+        return head + "it opens moving, so its prior is " + (
+            _MIXED_SAID if _mixed(rule)
+            else "the training recordings' mean bias as far as they determine it (none on an axis where "
+            "they cannot tell it from zero: shrunk)"
+        )  # fmt: skip
     rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
     head += f"{rest_s}'s mean rate so far while it rests; "
     if rule.mode.startswith("rest"):
@@ -280,10 +315,23 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     if own is None:
         far = _rest_distance(rule, imu, rest)
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
-        return head + f"the rest reads like no training recording's{said}, so after it their mean"
+        after = _MIXED_SAID if _mixed(rule) else "their mean"
+        return head + f"the rest reads like no training recording's{said}, so after it {after}"
     said = "the rest reads like some training recordings' rests: after it, their bias"
     weighed = rule.nearest_blend and rule.misses_measured
     return head + said + (" weighed against the rest's own reading by what each missed by" if weighed else "")
+
+
+#: What ``prior_said`` adds where the online estimate starts from the mixture prior.
+_MIXED_SAID = (
+    "each training recording's own bias (shifted as their mean is), as a mixture whose components the "
+    "online estimate weighs by how well each explains the velocity so far"
+)
+
+
+def _mixed(rule: BiasRule) -> bool:
+    """Whether the rule's online estimate starts from the mixture prior where the pooled one would be."""
+    return rule.mixture and rule.mode in ONLINE_MODES and len(rule.components) >= MIXTURE_MIN
 
 
 def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
@@ -389,8 +437,10 @@ def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
 
 
 def with_mode(rule: BiasRule, mode: str) -> BiasRule:
-    """``rule`` with another mode."""
-    return replace(rule, mode=mode)
+    """``rule`` with another mode, or another of :data:`CHOICES` (its mode and its prior)."""
+    if mode.endswith(MIXTURE):
+        return replace(rule, mode=mode.removesuffix(MIXTURE), mixture=True)
+    return replace(rule, mode=mode, mixture=False)
 
 
 def applied(
@@ -440,7 +490,7 @@ def rule_from(
     :data:`_MIN_SPREAD`); the rest offset the mean of bias less opening-rest rate over the recordings
     that open with a rest; with ``accel_biases`` (r, 3), each recording's own accelerometer bias (m/s²),
     the online estimate's prior on the accelerometer's bias is their spread's upper bound
-    (:func:`accel_spread`)."""
+    (:func:`accel_spread`); ``mode`` one of :data:`CHOICES` (or :data:`READINGS`)."""
     offsets, rates, ses, rested = [], [], [], []
     for b, s in zip(biases, streams, strict=True):
         dt = np.diff(s.t)
@@ -458,13 +508,17 @@ def rule_from(
     if model_bias is not None and len(biases) > 1:
         prior = prior - shrunk(np.asarray(model_bias, dtype=float), spread, len(biases))
     rule = BiasRule(
-        mode=mode, prior=prior, spread=spread, rest_offset=off.mean(axis=0),
+        prior=prior, spread=spread, rest_offset=off.mean(axis=0),
         rest_spread=rest_spread, rest_rates=np.array(rates).reshape(-1, 3),
         rest_rates_se=np.array(ses).reshape(-1, 3), rest_biases=np.array(rested).reshape(-1, 3),
         held_back_deg=held_back_deg or {}, held_back_each_deg=held_back_each_deg or {},
     )  # fmt: skip
     if accel_biases is not None and len(accel_biases) > 1:
         rule = replace(rule, sigma_accel_mps2=accel_spread(accel_biases))
+    if len(biases) >= MIXTURE_MIN:
+        shifted = biases - biases.mean(axis=0) + prior
+        rule = replace(rule, components=shifted, component_width=mixture_width(biases, spread))
+    rule = with_mode(rule, mode)
     return replace(rule, nearest_spread=_nearest_spread(rule, spread), nearest_blend=True)
 
 
@@ -501,6 +555,33 @@ def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
         near = nearest_prior(rule, rule.rest_rates[i], rule.rest_rates_se[i], leave_out=i)
         misses.append(rule.rest_biases[i] - (rule.prior if near is None else near))
     return np.asarray(np.maximum(np.sqrt(np.mean(np.square(misses), axis=0)), _MIN_SPREAD), dtype=float)
+
+
+#: The training recordings the online estimate's mixture prior needs (each one's bias predicted from at
+#: least two others when its width is chosen); with fewer, the pooled prior's Gaussian.
+MIXTURE_MIN = 3
+#: The widths :func:`mixture_width` tries, as shares of the training recordings' spread.
+_WIDTH_SHARES = 2.0 ** np.linspace(-6.0, 0.0, 61)
+
+
+def mixture_width(biases: Array, spread: Array) -> Array:
+    """The width (3,) rad/s of each training recording's component in the online estimate's mixture
+    prior: ``h × spread``, ``h`` in (0, 1] the share that best predicts each recording's bias (``biases``
+    (r, 3)) from the mixture of the others' (leave one out, the log-likelihood summed over the
+    recordings): where the recordings' biases fall in clusters (days, power-ups) a new one's is likely
+    near one of them and the width is the clusters'; where each is a draw of its own, the widest."""
+    from scipy.special import logsumexp
+
+    z = np.asarray(biases, dtype=float) / spread  # each axis in its spread
+    d2 = ((z[:, None, :] - z[None, :, :]) ** 2).sum(axis=2)
+    others = ~np.eye(len(z), dtype=bool)
+
+    def score(h: float) -> float:
+        logs = np.where(others, -0.5 * d2 / h**2 - 3.0 * np.log(h), -np.inf)
+        return float(np.sum(logsumexp(logs, axis=1)))
+
+    best = max(_WIDTH_SHARES, key=score)
+    return np.asarray(np.maximum(best * spread, _MIN_SPREAD), dtype=float)
 
 
 def shrunk(mean_bias: Array, spread: Array, count: int) -> Array:
@@ -547,11 +628,15 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 
 
 __all__ = [
+    "CHOICES",
     "DETERMINED",
     "MEASURED_RESTS",
     "MIN_REST_S",
+    "MIXTURE",
+    "MIXTURE_MIN",
     "MODES",
     "NEAREST_CHI2",
+    "ONLINE_MODES",
     "READINGS",
     "REST_MAX_RATE_STEP",
     "REST_MAX_TILT_DEG",
@@ -563,6 +648,7 @@ __all__ = [
     "blended_nearest_prior",
     "corrected",
     "corrected_any",
+    "mixture_width",
     "nearest_prior",
     "open_loop_deg",
     "opening_rest",
