@@ -92,7 +92,9 @@ def _mixture(grams: Array, rhss: Array, squares: Array, lam0: Array, centres: Ar
     mu = np.zeros((len(centres), lam0.shape[0]))
     mu[:, 4:7] = centres
     eta = (mu @ lam0)[None, :, :] + rhss[:, None, :]  # (m, k, 10): Λ₀μ + Hᵀy
-    post = np.linalg.solve(grams[:, None, :, :], eta[..., None])[..., 0]
+    # One factorisation per update for every component (its right-hand sides side by side): memory of
+    # (m, 10, k), where broadcasting the matrices to each component would make (m, k, 10, 10).
+    post = np.linalg.solve(grams, eta.transpose(0, 2, 1)).transpose(0, 2, 1)
     # -2 log evidence = yᵀy + μᵀΛ₀μ − ηᵀ G⁻¹ η (the common log-determinants left out)
     prior_term = np.einsum("ka,ab,kb->k", mu, lam0, mu)
     q = squares[:, None] + prior_term[None, :] - np.einsum("mka,mka->mk", eta, post)
