@@ -38,6 +38,14 @@ the rest's mean rate so far, weighted against the pooled prior by their precisio
 error from its rates' spread so far): the bias at rest is what a resting unit's readings tell, and a
 recording that never moves is corrected by its own readings, not by the prior.
 
+Each ``+online`` mode has a twin among :data:`CHOICES`, ``online (mixture)`` and so on, whose online
+estimate, where it would start from the pooled prior, starts instead from a mixture: one Gaussian about
+each training recording's own bias (:func:`mixture_width`), weighed at every update by how well each
+explains the velocity so far (:func:`sins.compensation.online_bias.estimate`). A unit whose biases recur
+by day or power-up has a new recording of a day it saw placed on that day's bias sooner; one of a new day
+is led astray for tens of seconds, so the twins are chosen like the modes, on held-back recordings, and
+only where the folds hold :data:`MIXTURE_MIN` recordings or more.
+
 The mode is chosen on held-back training recordings (``sins.compensation.referenced.choose_rule``): each
 recording judged by its open-loop attitude with the seed model and the prior made from the others, never
 from its own reference. A mode is taken only where it is no worse than the readings as they are on every
@@ -71,6 +79,11 @@ MIXTURE = " (mixture)"
 #: Every choice a rule is chosen among on held-back recordings, simplest first: the modes, then the
 #: online ones from the mixture prior.
 CHOICES = (*MODES, *(m + MIXTURE for m in ONLINE_MODES))
+#: The training recordings the online estimate's mixture prior needs (each one's bias predicted from at
+#: least two others when its width is chosen); with fewer, the pooled prior's Gaussian.
+MIXTURE_MIN = 3
+#: The widths :func:`mixture_width` tries, as shares of the training recordings' spread.
+_WIDTH_SHARES = 2.0 ** np.linspace(-6.0, 0.0, 61)
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -557,19 +570,13 @@ def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
     return np.asarray(np.maximum(np.sqrt(np.mean(np.square(misses), axis=0)), _MIN_SPREAD), dtype=float)
 
 
-#: The training recordings the online estimate's mixture prior needs (each one's bias predicted from at
-#: least two others when its width is chosen); with fewer, the pooled prior's Gaussian.
-MIXTURE_MIN = 3
-#: The widths :func:`mixture_width` tries, as shares of the training recordings' spread.
-_WIDTH_SHARES = 2.0 ** np.linspace(-6.0, 0.0, 61)
-
-
 def mixture_width(biases: Array, spread: Array) -> Array:
     """The width (3,) rad/s of each training recording's component in the online estimate's mixture
     prior: ``h × spread``, ``h`` in (0, 1] the share that best predicts each recording's bias (``biases``
     (r, 3)) from the mixture of the others' (leave one out, the log-likelihood summed over the
     recordings): where the recordings' biases fall in clusters (days, power-ups) a new one's is likely
-    near one of them and the width is the clusters'; where each is a draw of its own, the widest."""
+    near one of them and the width is the clusters'; where each is a draw of its own, of the order of
+    their distances apart (at most the spread)."""
     from scipy.special import logsumexp
 
     z = np.asarray(biases, dtype=float) / spread  # each axis in its spread
