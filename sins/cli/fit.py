@@ -201,7 +201,8 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--bias-rule", choices=("pooled", "rest", "online", "rest+online", "nearest", "nearest+online"),
         help="several recordings: how a new recording's gyro bias is taken (default: the one that does best "
-        "on held-back recordings; the gyro left as read where each leaves one worse than its raw readings)",
+        "on held-back recordings, the online modes also from a mixture of the training recordings' biases; "
+        "the gyro left as read where each leaves one worse than its raw readings)",
     )  # fmt: skip
     p.add_argument(
         "--json", type=Path, metavar="OUT.json", help="also write the coefficients and the fit's figures"
