@@ -68,13 +68,14 @@ def estimate(
         np.r_[1 / 2.0, 1 / 2.0, 1 / 0.2, 1 / 0.2, 1 / sigma, np.full(3, 1 / sigma_accel_mps2)]
     )
     # Running sums of the normal equations: the estimate at each update from the rows before it.
-    grams = prior_rows.T @ prior_rows + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
+    lam0 = prior_rows.T @ prior_rows  # the unknowns' prior precision
+    grams = lam0 + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
     rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
     if components is None:
         change = np.linalg.solve(grams, rhss[:, :, None])[:, 4:7, 0]
     else:
         squares = np.cumsum(np.einsum("mr,mr->m", target, target))
-        change = _mixture(grams, rhss, squares, prior_rows.T @ prior_rows, components - prior)
+        change = _mixture(grams, rhss, squares, lam0, components - prior)
     out = track.copy()
     ends = np.r_[at[1:], len(out)]
     out[at[0] :] = np.repeat(prior + change, ends - at, axis=0)

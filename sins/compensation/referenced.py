@@ -319,7 +319,10 @@ def choose_rule(
     held: dict[str, float] = {}
     each: dict[str, list[float]] = {}
     if mode is None and len(recs) >= 3:
-        scores: dict[str, list[float]] = {m: [] for m in unit_bias.CHOICES}
+        # A fold holds all recordings but one: the mixture choices where that is enough for a mixture.
+        mixed = len(recs) - 1 >= unit_bias.MIXTURE_MIN
+        judged = [m for m in unit_bias.CHOICES if mixed or not m.endswith(unit_bias.MIXTURE)]
+        scores: dict[str, list[float]] = {m: [] for m in judged}
         raw: list[float] = []
         biases_alone = getattr(strategy, "variant", None) == BIAS_ONLY  # its own correction, held back too
         for k, rec in enumerate(recs):
@@ -338,10 +341,7 @@ def choose_rule(
             base = unit_bias.rule_from(rel, own, model_bias=seed.B0_, accel_biases=part.accel_bias)
             stream = seed.correct_increments(rec.imu)
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
-            for m in unit_bias.CHOICES:
-                if m.endswith(unit_bias.MIXTURE) and len(base.components) < unit_bias.MIXTURE_MIN:
-                    scores.pop(m, None)  # the folds hold too few recordings for a mixture: not judged
-                    continue
+            for m in judged:
                 scores[m].append(
                     unit_bias.open_loop_deg(unit_bias.corrected(unit_bias.with_mode(base, m), stream), rec)
                 )
