@@ -17,7 +17,8 @@ Effects (added to the readings from the true inputs, each sensor reading its own
 ``gyro.scale_asymmetry`` ``ka |ω_i|``; ``gyro.motion_bias`` ``b |ω|² / (|ω|² + ω₀²)``, ω₀ = 5 °/s;
 ``gyro.time_offset`` the gyro's input ``τ`` late; ``accel.time_offset`` the accelerometer's 5 ms late on
 every axis, ``accel.time_offset (both signs)`` +5, -5 and +5 ms on x, y and z (no one clock); ``gyro.y step``
-a bias step on gyro y half way;
+a bias step on gyro y half way; ``gyro y←x`` 20 mrad more of the x rate read on gyro y (a recording whose
+misalignment is not the unit's);
 ``gyro.bias_instability`` a first-order Gauss-Markov bias on every gyro axis (τ = 10 s, 0.3 °/s);
 ``gyro.rate_random_walk`` a walk on every gyro axis (:data:`WALK_DENSITY`).
 """
@@ -98,6 +99,8 @@ def recording(
         pass  # read late above
     elif effect == "gyro.y step":
         gyro[:, 1] += size * 0.3 * DEG * (t >= 0.5 * t[-1])
+    elif effect == "gyro y←x":  # this recording's misalignment, not the unit's
+        gyro[:, 1] += size * 20e-3 * w[:, 0]
     elif effect == "gyro.bias_instability":
         phi = np.exp(-1.0 / (rate_hz * 10.0))
         drive = size * 0.3 * DEG * np.sqrt(1.0 - phi * phi) * rng.normal(0.0, 1.0, gyro.shape)

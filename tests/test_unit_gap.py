@@ -700,3 +700,72 @@ def test_sizes_of_opposite_signs_on_all_recordings_are_labelled() -> None:
     assert "sizes of opposite signs between recordings" in "\n".join(across.lines(found))
     same = across.verdicts([("a", report(2.87e-3, 1e-3)), ("b", report(2.01e-3, 2e-3))])
     assert same["effects"]["accel.time_offset"]["signs_differ_on"] == []
+
+
+def test_a_recordings_own_misalignment_is_said_to_differ_and_it_is_named_apart(tmp_path: Path) -> None:
+    """A model of a unit, and a simulation of it, hold one misalignment. Three recordings of one unit
+    (three motions) agree; with 20 mrad more of the x rate read on gyro y in one of them, that term alone
+    is said to differ between the recordings, near the 20 mrad added, and that recording is named apart.
+    Each recording's seed model is its baseline fit on its reference's intervals, as
+    :func:`~sins.unit_gap.search.baseline_fit` gives it."""
+    from sins.unit_gap.across import lines, verdicts
+
+    def diagnosed(motion: int, effect: str = "clean") -> Any:
+        path = nu.write(tmp_path / f"{motion}_{effect}.npz", nu.recording(motion, effect, duration_s=60.0))
+        found = diagnose_one(read_gap_input(path))
+        return f"m{motion}" + ("_yx" if effect != "clean" else ""), found.report
+
+    clean = [diagnosed(m) for m in (3, 4, 5)]
+    agree = verdicts(clean)["seed_terms"]
+    assert agree == {"compared": ["m3", "m4", "m5"], "differ": []}
+    assert "agree between the 3 recordings" in "\n".join(lines(verdicts(clean)))
+    across = verdicts([*clean[:2], diagnosed(5, "gyro y←x")])
+    differ = across["seed_terms"]["differ"]
+    assert [d["term"] for d in differ] == ["gyro misalignment y←x"] and differ[0]["apart"] == "m5_yx"
+    values = {n: v for n, (v, _) in differ[0]["values"].items()}
+    assert values["m5_yx"] - np.mean([values["m3"], values["m4"]]) == pytest.approx(20.0, abs=1.0)
+    assert "m5_yx apart from the others" in "\n".join(lines(across))
+
+
+def test_seed_terms_differ_by_both_tests_and_no_fewer() -> None:
+    """A term differs where its values are not one value within their standard errors (chi-square above
+    scipy's 99.9 % quantile, written here from the weighted mean by hand) and span more than a consumer
+    unit's spread (gyro: misalignment 10 mrad, scale 2 %; accelerometer: 5 mrad, 1 %); either alone is not
+    enough. A value beyond the class's bound (five spreads) is said so. A term not fitted on a recording
+    (standard error zero) is left out there, and a recording without a seed model is not compared."""
+    from scipy.stats import chi2
+
+    from sins.gap.report import GapReport
+    from sins.unit_gap.seed_terms import differing
+
+    def report(y_from_x: float, se: float, scale_y: float = 0.0) -> GapReport:
+        matrix, errors = np.zeros((3, 3)), np.full((3, 3), 1e-4)
+        matrix[1, 0], errors[1, 0], matrix[1, 1] = y_from_x, se, scale_y
+        seed = {s: {"matrix": matrix.tolist(), "se": errors.tolist()} for s in ("gyro", "accel")}
+        return GapReport({}, [], [], [], [], statistic={"seed_model": seed})
+
+    def terms(*reports: GapReport) -> list[str]:
+        found = differing([(f"r{i}", r) for i, r in enumerate(reports)])
+        return [d["term"] for d in found["differ"]]
+
+    both = ["gyro misalignment y←x", "accel misalignment y←x"]
+    # Two values 12 mrad apart: chi-square (12/√2 / se)² against the quantile on one degree of freedom.
+    se_at = 12e-3 / np.sqrt(2.0 * chi2.ppf(0.999, 1))  # the standard error that puts it at the quantile
+    assert terms(report(0.0, 0.9 * se_at), report(12e-3, 0.9 * se_at)) == both
+    assert terms(report(0.0, 1.1 * se_at), report(12e-3, 1.1 * se_at)) == []
+    # Many standard errors apart: beyond the accelerometer's spread alone (7 mrad), within both (4 mrad).
+    assert terms(report(0.0, 1e-5), report(7e-3, 1e-5)) == ["accel misalignment y←x"]
+    assert terms(report(0.0, 1e-5), report(4e-3, 1e-5)) == []
+    # Scales 1.5 % and 2.5 % apart, standard errors of 1e-4.
+    assert terms(report(0.0, 1e-4, 0.0), report(0.0, 1e-4, 1.5e-2)) == ["accel scale y"]
+    assert terms(report(0.0, 1e-4, 0.0), report(0.0, 1e-4, 2.5e-2)) == ["gyro scale y", "accel scale y"]
+    # A value beyond the class's bound (five spreads: the gyro's misalignment 50 mrad) is said so.
+    found = differing([("a", report(0.0, 1e-5)), ("b", report(60e-3, 1e-5))])["differ"]
+    assert [d["beyond_bound"] for d in found] == [["b"], ["b"]]
+    assert (
+        differing([("a", report(0.0, 1e-5)), ("b", report(40e-3, 1e-5))])["differ"][0]["beyond_bound"] == []
+    )
+    # Not fitted (standard error zero) on one of two: nothing to compare; no seed model: not compared.
+    assert terms(report(0.0, 0.0), report(12e-3, 1e-5)) == []
+    bare = GapReport({}, [], [], [], [])
+    assert differing([("a", bare), ("b", report(0.0, 1e-5))])["compared"] == ["b"]

@@ -19,6 +19,7 @@ import numpy as np
 from sins.core.text import fixed_width
 from sins.gap.candidates import processes
 from sins.gap.report import GapReport, in_units
+from sins.unit_gap import seed_terms
 from sins.unit_gap.clock import of_the_clock
 
 #: The labels, by on how many of the recordings an effect was accepted.
@@ -60,6 +61,8 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
         "on_all": [e for e, v in effects.items() if v["holds_on"] == ALL],
         "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
         "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
+        # The seed model's scale and misalignment terms compared between the recordings.
+        "seed_terms": seed_terms.differing(reports),
     }
 
 
@@ -143,8 +146,9 @@ def table_rows(across: dict[str, Any]) -> list[list[str]]:
 def lines(across: dict[str, Any]) -> list[str]:
     """The verdicts across the recordings as lines: each accepted effect, on which, its sizes side by side."""
     out = [f"\nacross {len(across['recordings'])} recordings of the unit:"]
+    seed = seed_terms.lines(across["seed_terms"]) if "seed_terms" in across else []
     if not across["effects"]:
-        return [*out, "  no effect accepted on any"]
+        return [*out, "  no effect accepted on any", *seed]
     out.append(fixed_width(["effect", "holds on", *across["recordings"]], table_rows(across)))
     if across["on_one_only"]:
         out.append(f"found on one recording only: {', '.join(across['on_one_only'])}")
@@ -160,7 +164,7 @@ def lines(across: dict[str, Any]) -> list[str]:
         out.append(
             f"sizes of opposite signs between recordings (a unit's effect has one): {', '.join(differ)}"
         )
-    return out
+    return out + seed
 
 
 __all__ = [

@@ -19,7 +19,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE, CHANNELS
 from sins.io.filled import spans_said
-from sins.unit_gap import across, clock, delays, plausible, shrink, statistic, through_attitude
+from sins.unit_gap import across, clock, delays, plausible, seed_terms, shrink, statistic, through_attitude
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import BLOCK_S, baseline_fit, diagnose_intervals
@@ -73,6 +73,26 @@ def diagnose_one(
             f"{inp.name}: --statistic intervals needs a reference trajectory; this one is per-sample inputs"
         )
     baseline, unfitted = _baseline(inp, interval_s) if inp.referenced is not None else (None, "")
+    found = _diagnosed(inp, baseline, unfitted, holdout, model, asked, interval_s, progress)
+    if baseline is None:
+        return found
+    # Each recording's seed model beside its verdicts: what the verdicts across recordings compare.
+    seed = {**found.report.statistic, "seed_model": seed_terms.of_fit(baseline.seed)}
+    return dataclasses.replace(found, report=_with_statistic(found.report, seed))
+
+
+def _diagnosed(
+    inp: GapInput,
+    baseline: IntervalFit | None,
+    unfitted: str,
+    holdout: float,
+    model: tuple[str, ...],
+    asked: str,
+    interval_s: float,
+    progress: Callable[[str], None] | None,
+) -> Diagnosed:
+    """``inp`` diagnosed on the statistic ``asked`` for, its baseline on intervals given (or None and
+    why not: ``unfitted``)."""
     data = _samples(inp, asked)
     trajectory = inp.referenced.reference if inp.referenced is not None else None
     chosen = statistic.choose(
