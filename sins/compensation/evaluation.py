@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation import terms_left
 from sins.core import rotation
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError
@@ -205,6 +206,10 @@ def evaluate_referenced(
         lines.append(GYRO_AS_READ)
     elif said := _prior_said(strategy, rec):
         lines.append(said)
+    if stage is not None:
+        stage("the gyro terms the model leaves")
+    left = terms_left.gyro_terms_left(None if as_read else strategy, rec)
+    lines += [terms_left.said(left)] if left["terms"] else []
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
     document: dict[str, Any] = {
@@ -216,6 +221,7 @@ def evaluate_referenced(
         "share_in_fit": share,
         "gyro_as_read": as_read,
         "beyond_training_box": beyond,
+        "gyro_terms_left": left,
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
