@@ -4,7 +4,7 @@ the bias or beyond it.
 Usage::
 
     .venv/bin/python tools/euroc_networks_bias.py [--strategies mlp_seed kohonen_pure mlp_pure]
-        [--folder euroc] [--json OUT.json]
+        [--folder euroc] [--recordings NAME ...] [--json OUT.json]
 
 Each of the published split's six training recordings is held back in turn; least squares (``regression``)
 and each network, its guard lifted, are fitted on the other five (``sins.compensation.referenced.
@@ -15,7 +15,8 @@ bias that gives each model the least AOE, found against the held-back recording'
 oracle, not a method: what the model leaves once the bias is perfect, as ``tools/euroc_bias_ceiling.py``
 finds it). Prints each recording's figures and, per way, each network's mean gain over least squares
 (positive: the network is better) with its standard error over the six. No judged sequence is read.
-About 3 min on 2 cores.
+About 3 min on 2 cores. ``--recordings`` (names in ``--folder``) holds other recordings back in turn: a
+unit's parts that ``tools/another_unit.py --keep DIR`` wrote, say.
 """
 
 from __future__ import annotations
@@ -39,13 +40,15 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--strategies", nargs="+", default=["mlp_seed", "kohonen_pure", "mlp_pure"])
     p.add_argument("--folder", default="euroc", help="the data root's folder of the .npz recordings")
+    p.add_argument("--recordings", nargs="+", default=TRAIN, help="held back in turn (default: EuRoC's six)")
     p.add_argument("--json", type=Path, help="write every figure here")
     args = p.parse_args()
     strategies = ["regression", *args.strategies]
-    recs = [io.read(dataset=f"{args.folder}/{name}").beside_reference() for name in TRAIN]
+    names = list(args.recordings)
+    recs = [io.read(dataset=f"{args.folder}/{name}").beside_reference() for name in names]
     guarded = set(registry.strategy_names(taking="guard"))
     aoe = {s: {w: [] for w in WAYS} for s in strategies}
-    for k, (name, rec) in enumerate(zip(TRAIN, recs, strict=True)):
+    for k, (name, rec) in enumerate(zip(names, recs, strict=True)):
         others = [r for i, r in enumerate(recs) if i != k]
         ls_track = np.zeros(0)
         for s in strategies:
@@ -73,7 +76,7 @@ def main() -> None:
             print(f"{way:<21} {s:<13} gain over least squares {gain.mean():+.3f}° ± {se:.3f}° "
                   f"({gain.mean() / se:.1f} standard errors)")  # fmt: skip
     if args.json:
-        args.json.write_text(json.dumps({"recordings": TRAIN, "aoe_deg": aoe}, indent=1))
+        args.json.write_text(json.dumps({"recordings": names, "aoe_deg": aoe}, indent=1))
 
 
 if __name__ == "__main__":
