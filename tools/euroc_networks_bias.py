@@ -22,7 +22,6 @@ unit's parts that ``tools/another_unit.py --keep DIR`` wrote, say.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -76,7 +75,7 @@ def main() -> None:
             print(f"{way:<21} {s:<13} gain over least squares {gain.mean():+.3f}° ± {se:.3f}° "
                   f"({gain.mean() / se:.1f} standard errors)")  # fmt: skip
     if args.json:
-        args.json.write_text(json.dumps({"recordings": names, "aoe_deg": aoe}, indent=1))
+        io.write_report(args.json, {"recordings": names, "aoe_deg": aoe})  # atomic; never a user's own file
 
 
 if __name__ == "__main__":
