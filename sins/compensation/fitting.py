@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sins.compensation import coefficients
+from sins.compensation import coefficients, interval_fit, seed_terms
 from sins.core.text import fixed_width
 from sins.errors import SinsInputError, naming
 from sins.io import frame_check
@@ -423,6 +423,8 @@ def fit_several(
     lines = [f"{n}: reference: {t.says}" for n, (_, t) in zip(names, tilts, strict=True)]
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)
+    document["seed_terms"] = _own_seed_terms(list(recs), list(names), interval_s)
+    lines += seed_terms.lines(document["seed_terms"])
     document["reference_tilt"] = {n: t.to_dict() for n, (_, t) in zip(names, tilts, strict=True)}
     fitted.strategy.fitted_on_["reference_tilt"] = document["reference_tilt"]
     aside = [(n, a) for n, a in zip(names, fitted.set_aside, strict=True) if a.found()]
@@ -441,6 +443,22 @@ def fit_several(
     held = _held_lines(fitted.review, grade, "the recordings do", lines)
     document |= {"grade": grade, "held": held}
     return FitOutcome(fitted.strategy, lines, document)
+
+
+def _own_seed_terms(recs: list[ReferencedRecording], names: list[str], interval_s: float) -> dict[str, Any]:
+    """Each recording's own seed model, fitted on it alone, compared with the others'
+    (:func:`sins.compensation.seed_terms.differing`): the shared fit takes them as one, and says where
+    they are not. A recording whose intervals alone cannot be fitted is not compared."""
+    own = {}
+    for name, rec in zip(names, recs, strict=True):
+        try:
+            fit = interval_fit.fit_intervals(
+                rec, interval_s=interval_s, time_offset=False, g_sensitivity=False
+            )
+        except ValueError:
+            continue
+        own[name] = seed_terms.of_fit(fit.seed)
+    return seed_terms.differing(own)
 
 
 #: Said under the shared seed model of a strategy that corrects with a fit of its own.

@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from sins.compensation import seed_terms
 from sins.core.text import fixed_width
 from sins.gap.candidates import processes
 from sins.gap.report import GapReport, in_units
-from sins.unit_gap import seed_terms
 from sins.unit_gap.clock import of_the_clock
 
 #: The labels, by on how many of the recordings an effect was accepted.
@@ -62,7 +62,9 @@ def verdicts(reports: list[tuple[str, GapReport]]) -> dict[str, Any]:
         "on_some": [e for e, v in effects.items() if v["holds_on"] == SOME],
         "on_one_only": [e for e, v in effects.items() if v["holds_on"] == ONE],
         # The seed model's scale and misalignment terms compared between the recordings.
-        "seed_terms": seed_terms.differing(reports),
+        "seed_terms": seed_terms.differing(
+            {n: r.statistic["seed_model"] for n, r in reports if "seed_model" in r.statistic}
+        ),
     }
 
 

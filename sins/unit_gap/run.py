@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sins.compensation import seed_terms
 from sins.compensation.interval_fit import IntervalFit
 from sins.compensation.intervals import INTERVAL_S
 from sins.core.series import CalibrationData, NavSeries
@@ -19,7 +20,7 @@ from sins.errors import SinsInputError
 from sins.gap import GapReport, diagnose
 from sins.imu import BASELINE, CHANNELS
 from sins.io.filled import spans_said
-from sins.unit_gap import across, clock, delays, plausible, seed_terms, shrink, statistic, through_attitude
+from sins.unit_gap import across, clock, delays, plausible, shrink, statistic, through_attitude
 from sins.unit_gap.inputs import GapInput
 from sins.unit_gap.report import interval_report
 from sins.unit_gap.search import BLOCK_S, baseline_fit, diagnose_intervals
