@@ -48,3 +48,17 @@ def test_a_recordings_own_misalignment_is_named_with_its_size(
     assert term["unit"] == "mrad" and term["value"] == pytest.approx(20.0, abs=2.0)
     assert abs(term["value"]) > terms_left.Z_DETERMINED * term["se"]
     assert "the model leaves this recording's gyro misalignment y←x" in capsys.readouterr().out
+
+
+def test_several_judged_say_which_are_left_a_term(
+    model: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Judged together, the recordings left a term are named side by side under the mean
+    (``gyro_terms_left_on``); the clean one is not among them."""
+    clean = nu.write(tmp_path / "clean.npz", nu.recording(5, duration_s=90.0))
+    own = nu.write(tmp_path / "own.npz", nu.recording(5, "gyro y←x", duration_s=90.0))
+    out = tmp_path / "both.json"
+    assert main(["evaluate", str(model), str(clean), str(own), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["gyro_terms_left_on"] == [str(own)]
+    printed = capsys.readouterr().out
+    assert f"gyro terms the model leaves beyond a unit's spread: {own} (gyro misalignment y←x 20" in printed

@@ -313,13 +313,23 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
     if worse:  # a mean better than raw had hidden them (a walk's unit: +0.35° on one of three)
         said = ", ".join(f"{n} (+{d:.3g}°)" for n, d in worse.items())
         lines.append(f"worse than the raw readings on {len(worse)} of the {len(judged)}: {said}")
+    left = {n: e.document["gyro_terms_left"]["terms"] for n, e in judged.items()}
+    if any(left.values()):  # each recording's own line said it; here, which of them, side by side
+        said = "; ".join(f"{n} ({_terms_text(terms)})" for n, terms in left.items() if terms)
+        lines.append(f"gyro terms the model leaves beyond a unit's spread: {said}")
     document = {
         "recordings": [{"recording": name, **e.to_dict()} for name, e in judged.items()],
         "mean": {"open_loop_attitude": {"aoe_deg": mean}, "open_loop_attitude_raw": {"aoe_deg": mean_raw}},
         "fitted_on": fitted,
         "worse_than_raw": list(worse),
+        "gyro_terms_left_on": [n for n, terms in left.items() if terms],
     }
     return Evaluation(lines, document, table=table)
+
+
+def _terms_text(terms: list[dict[str, Any]]) -> str:
+    """Gyro terms left (:func:`sins.compensation.terms_left.gyro_terms_left`'s), short."""
+    return ", ".join(f"{t['name']} {t['value']:.3g} {t['unit']}" for t in terms)
 
 
 def _in_fit(strategy: Strategy, digest: str, marks: list[str]) -> tuple[bool | None, float | None]:
