@@ -313,7 +313,7 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
     if worse:  # a mean better than raw had hidden them (a walk's unit: +0.35° on one of three)
         said = ", ".join(f"{n} (+{d:.3g}°)" for n, d in worse.items())
         lines.append(f"worse than the raw readings on {len(worse)} of the {len(judged)}: {said}")
-    left = {n: e.document["gyro_terms_left"]["terms"] for n, e in judged.items()}
+    left = {n: e.document.get("gyro_terms_left", {}).get("terms", []) for n, e in judged.items()}
     if any(left.values()):  # each recording's own line said it; here, which of them, side by side
         said = "; ".join(f"{n} ({_terms_text(terms)})" for n, terms in left.items() if terms)
         lines.append(f"gyro terms the model leaves beyond a unit's spread: {said}")
