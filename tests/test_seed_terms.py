@@ -34,8 +34,8 @@ def test_seed_terms_differ_by_both_tests_and_no_fewer() -> None:
     """A term differs where its values are not one value within their standard errors (chi-square above
     scipy's 99.9 % quantile, written here from the weighted mean by hand) and span more than a consumer
     unit's spread (gyro: misalignment 10 mrad, scale 2 %; accelerometer: 5 mrad, 1 %); either alone is not
-    enough. A value beyond the class's bound (five spreads) is said so. A term not fitted on a recording
-    (standard error zero) is left out there."""
+    enough; another class's spreads where asked. A value beyond the class's bound (five spreads) is said
+    so. A term not fitted on a recording (standard error zero) is left out there."""
     both = ["gyro misalignment y←x", "accel misalignment y←x"]
     # Two values 12 mrad apart: chi-square (12/√2 / se)² against the quantile on one degree of freedom.
     se_at = 12e-3 / np.sqrt(2.0 * chi2.ppf(0.999, 1))  # the standard error that puts it at the quantile
@@ -51,6 +51,9 @@ def test_seed_terms_differ_by_both_tests_and_no_fewer() -> None:
     found = differing({"a": _model(0.0, 1e-5), "b": _model(60e-3, 1e-5)})["differ"]
     assert [d["beyond_bound"] for d in found] == [["b"], ["b"]]
     assert differing({"a": _model(0.0, 1e-5), "b": _model(40e-3, 1e-5)})["differ"][0]["beyond_bound"] == []
+    # By an industrial unit's spreads (1 mrad, 0.8 mrad) the 4 mrad that a consumer unit's take is not.
+    industrial = differing({"a": _model(0.0, 1e-5), "b": _model(4e-3, 1e-5)}, "industrial")
+    assert [d["term"] for d in industrial["differ"]] == both and industrial["grade"] == "industrial"
     # Not fitted (standard error zero) on one of two: nothing to compare.
     assert _terms(_model(0.0, 0.0), _model(12e-3, 1e-5)) == []
 

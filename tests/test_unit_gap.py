@@ -717,7 +717,7 @@ def test_a_recordings_own_misalignment_is_said_to_differ_and_it_is_named_apart(t
 
     clean = [diagnosed(m) for m in (3, 4, 5)]
     agree = verdicts(clean)["seed_terms"]
-    assert agree == {"compared": ["m3", "m4", "m5"], "differ": []}
+    assert agree == {"compared": ["m3", "m4", "m5"], "differ": [], "grade": "consumer"}
     assert "agree between the 3 recordings" in "\n".join(lines(verdicts(clean)))
     across = verdicts([*clean[:2], diagnosed(5, "gyro y←x")])
     differ = across["seed_terms"]["differ"]

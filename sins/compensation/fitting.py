@@ -423,7 +423,7 @@ def fit_several(
     lines = [f"{n}: reference: {t.says}" for n, (_, t) in zip(names, tilts, strict=True)]
     lags = [None if c is None else c.lag_s for c in clocks]
     document = _several_document(fitted, list(names), lags, grade, lines)
-    document["seed_terms"] = _own_seed_terms(list(recs), list(names), interval_s)
+    document["seed_terms"] = _own_seed_terms(list(recs), list(names), interval_s, grade)
     lines += seed_terms.lines(document["seed_terms"])
     document["reference_tilt"] = {n: t.to_dict() for n, (_, t) in zip(names, tilts, strict=True)}
     fitted.strategy.fitted_on_["reference_tilt"] = document["reference_tilt"]
@@ -445,10 +445,12 @@ def fit_several(
     return FitOutcome(fitted.strategy, lines, document)
 
 
-def _own_seed_terms(recs: list[ReferencedRecording], names: list[str], interval_s: float) -> dict[str, Any]:
-    """Each recording's own seed model, fitted on it alone, compared with the others'
-    (:func:`sins.compensation.seed_terms.differing`): the shared fit takes them as one, and says where
-    they are not. A recording whose intervals alone cannot be fitted is not compared."""
+def _own_seed_terms(
+    recs: list[ReferencedRecording], names: list[str], interval_s: float, grade: str
+) -> dict[str, Any]:
+    """Each recording's own seed model, fitted on it alone, compared with the others' by ``grade``'s
+    spreads (:func:`sins.compensation.seed_terms.differing`): the shared fit takes them as one, and says
+    where they are not. A recording whose intervals alone cannot be fitted is not compared."""
     own = {}
     for name, rec in zip(names, recs, strict=True):
         try:
@@ -458,7 +460,7 @@ def _own_seed_terms(recs: list[ReferencedRecording], names: list[str], interval_
         except ValueError:
             continue
         own[name] = seed_terms.of_fit(fit.seed)
-    return seed_terms.differing(own)
+    return seed_terms.differing(own, grade)
 
 
 #: Said under the shared seed model of a strategy that corrects with a fit of its own.

@@ -68,14 +68,15 @@ def _differs(values: Array, se: Array, spread: float) -> tuple[bool, float]:
     return bool(wide and stat > chi2.ppf(CONFIDENCE, len(values) - 1)), stat
 
 
-def differing(seed_models: Mapping[str, dict[str, Any]]) -> dict[str, Any]:
+def differing(seed_models: Mapping[str, dict[str, Any]], grade: str = DEFAULT_GRADE) -> dict[str, Any]:
     """The recordings ``compared`` (the names of ``seed_models``, each as :func:`of_fit` gives it) and the
-    terms that ``differ`` between them (see the module docstring): each with its values and standard
+    terms that ``differ`` between them (see the module docstring; the spreads and bounds ``grade``'s, the
+    class's ``grade`` kept): each with its values and standard
     errors per recording (mrad for a misalignment, ppm for a scale), its chi-square and degrees of
     freedom, the recording apart or None, and the recordings where its value is beyond the class's bound
     (``beyond_bound``: no unit of the class has it). A term not fitted on a recording (a standard error
     of zero, or not finite) is left out there."""
-    bounds = class_bounds(DEFAULT_GRADE)
+    bounds = class_bounds(grade)
     kept = list(seed_models.items())
     out: list[dict[str, Any]] = []
     for sensor in _MATRICES:
@@ -104,7 +105,7 @@ def differing(seed_models: Mapping[str, dict[str, Any]]) -> dict[str, Any]:
                     "apart": _apart(each, limit),
                     "beyond_bound": [n for n, (v, _) in each.items() if abs(v) > bounds.bound[term]],
                 })  # fmt: skip
-    return {"compared": [n for n, _ in kept], "differ": out}
+    return {"compared": [n for n, _ in kept], "differ": out, "grade": grade}
 
 
 def _apart(each: dict[str, tuple[float, float]], spread: float) -> str | None:
@@ -128,12 +129,12 @@ def lines(found: dict[str, Any]) -> list[str]:
     if not found["differ"]:
         return [
             f"each recording's own seed model (fitted on it alone): its scale and misalignment agree between "
-            f"the {len(found['compared'])} recordings (within their standard errors or a {DEFAULT_GRADE} "
+            f"the {len(found['compared'])} recordings (within their standard errors or a {found['grade']} "
             "unit's spread)"
         ]
     out = [
         "each recording's own seed model (fitted on it alone): terms that differ between the recordings by "
-        f"more than their standard errors and a {DEFAULT_GRADE} unit's spread (a model of the unit, and a "
+        f"more than their standard errors and a {found['grade']} unit's spread (a model of the unit, and a "
         "simulation of it, hold one value):"
     ]
     for d in found["differ"]:
@@ -143,7 +144,7 @@ def lines(found: dict[str, Any]) -> list[str]:
         out.append(f"  {d['term']} ({d['unit']}): {each}; {stat}{apart}")
         if d["beyond_bound"]:
             out.append(
-                f"    beyond what a {DEFAULT_GRADE} unit has on {', '.join(d['beyond_bound'])}: more likely "
+                f"    beyond what a {found['grade']} unit has on {', '.join(d['beyond_bound'])}: more likely "
                 "its columns absorb the reference's error or an effect the model lacks than the unit's term"
             )
     return out
