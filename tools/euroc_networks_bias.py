@@ -6,17 +6,19 @@ Usage::
     .venv/bin/python tools/euroc_networks_bias.py [--strategies mlp_seed kohonen_pure mlp_pure]
         [--folder euroc] [--recordings NAME ...] [--json OUT.json]
 
-Each of the published split's six training recordings is held back in turn; least squares (``regression``)
-and each network, its guard lifted, are fitted on the other five (``sins.compensation.referenced.
-fit_several``, each its own bias rule) and the held-back recording's open-loop attitude (AOE) is taken
-three ways: with each model's own rule for the recording's bias (what ``sins evaluate`` does); with least
-squares' rule's bias track for every model (the same bias taken out of each); and with the one constant
-bias that gives each model the least AOE, found against the held-back recording's own reference (an
-oracle, not a method: what the model leaves once the bias is perfect, as ``tools/euroc_bias_ceiling.py``
-finds it). Prints each recording's figures and, per way, each network's mean gain over least squares
-(positive: the network is better) with its standard error over the six. No judged sequence is read.
-About 3 min on 2 cores. ``--recordings`` (names in ``--folder``) holds other recordings back in turn: a
-unit's parts that ``tools/another_unit.py --keep DIR`` wrote, say.
+Each of the published split's six training recordings is held back in turn (their references levelled
+first where their world frame tilts from gravity, as ``sins fit`` levels them); least squares
+(``regression``) and each network, its guard lifted, are fitted on the other five
+(``sins.compensation.referenced.fit_several``, each its own bias rule) and the held-back recording's
+open-loop attitude (AOE) is taken three ways: with each model's own rule for the recording's bias (what
+``sins evaluate`` does); with least squares' rule's bias track for every model (the same bias taken out
+of each); and with the one constant bias that gives each model the least AOE, found against the
+held-back recording's own reference (an oracle, not a method: what the model leaves once the bias is
+perfect, as ``tools/euroc_bias_ceiling.py`` finds it). Prints each recording's figures and, per way,
+each network's mean gain over least squares (positive: the network is better) with its standard error
+over the six. No judged sequence is read. About 3 min on 2 cores. ``--recordings`` (names in
+``--folder``) holds other recordings back in turn: a unit's parts that ``tools/another_unit.py --keep
+DIR`` wrote, say.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from euroc_benchmark import TRAIN  # the published split's training sequences (t
 from euroc_bias_ceiling import _best_constant, _without
 
 from sins import io
-from sins.compensation import referenced, registry, unit_bias
+from sins.compensation import referenced, registry, unit_bias, world_tilt
 
 WAYS = ("own rule", "least squares' track", "oracle constant")
 
@@ -44,7 +46,11 @@ def main() -> None:
     args = p.parse_args()
     strategies = ["regression", *args.strategies]
     names = list(args.recordings)
-    recs = [io.read(dataset=f"{args.folder}/{name}").beside_reference() for name in names]
+    # Each reference levelled where its world frame tilts from gravity, as sins fit levels them before
+    # its fits and its guard's folds (fitting.fit_several).
+    recs = [
+        world_tilt.levelled(io.read(dataset=f"{args.folder}/{n}").beside_reference(), 1.0)[0] for n in names
+    ]
     guarded = set(registry.strategy_names(taking="guard"))
     aoe = {s: {w: [] for w in WAYS} for s in strategies}
     for k, (name, rec) in enumerate(zip(names, recs, strict=True)):
