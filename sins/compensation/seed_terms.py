@@ -10,10 +10,10 @@ input, ``i←j``) are compared. A term *differs between the recordings* where bo
 
 * its values are not one value within their standard errors: the chi-square of their weighted mean above
   scipy's 99.9 % quantile on ``n − 1`` degrees of freedom, and
-* its values span more than a consumer unit's unit-to-unit spread of that term
-  (:func:`sins.compensation.identifiability.class_bounds`: the gyro's misalignment 10 mrad and scale
-  2 %, the accelerometer's 5 mrad and 1 %): a difference between one unit's recordings as large as
-  between two units is not the unit's.
+* its values span more than the unit-to-unit spread of that term in the unit's class
+  (:func:`sins.compensation.identifiability.class_bounds`; a consumer unit's, the loosest, unless a fit's
+  ``--grade`` says otherwise: the gyro's misalignment 10 mrad and scale 2 %, the accelerometer's 5 mrad
+  and 1 %): a difference between one unit's recordings as large as between two units is not the unit's.
 
 A recording is named *apart* where, without it, the others do not differ by the same test: the term is
 that recording's (its reference's, its mounting's), not a unit whose term wanders. A value beyond the
@@ -69,13 +69,12 @@ def _differs(values: Array, se: Array, spread: float) -> tuple[bool, float]:
 
 
 def differing(seed_models: Mapping[str, dict[str, Any]], grade: str = DEFAULT_GRADE) -> dict[str, Any]:
-    """The recordings ``compared`` (the names of ``seed_models``, each as :func:`of_fit` gives it) and the
-    terms that ``differ`` between them (see the module docstring; the spreads and bounds ``grade``'s, the
-    class's ``grade`` kept): each with its values and standard
-    errors per recording (mrad for a misalignment, ppm for a scale), its chi-square and degrees of
-    freedom, the recording apart or None, and the recordings where its value is beyond the class's bound
-    (``beyond_bound``: no unit of the class has it). A term not fitted on a recording (a standard error
-    of zero, or not finite) is left out there."""
+    """The recordings ``compared`` (the names of ``seed_models``, each as :func:`of_fit` gives it), the
+    ``grade`` whose spreads and bounds judge them, and the terms that ``differ`` between them (see the
+    module docstring): each with its values and standard errors per recording (mrad for a misalignment,
+    ppm for a scale), its chi-square and degrees of freedom, the recording apart or None, and the
+    recordings where its value is beyond the class's bound (``beyond_bound``: no unit of the class has
+    it). A term not fitted on a recording (a standard error of zero, or not finite) is left out there."""
     bounds = class_bounds(grade)
     kept = list(seed_models.items())
     out: list[dict[str, Any]] = []

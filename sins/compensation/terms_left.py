@@ -11,7 +11,7 @@ offset, no g-sensitivity; the bias is taken up by the fit's own) and names each 
   (:func:`sins.compensation.identifiability.class_bounds`: 10 mrad of misalignment, 2 % of scale): a
   difference from the model as large as between two units, which no model of the unit would hold, and
 * it is determined: more than :data:`Z_DETERMINED` standard errors (99.9 %, two-sided), the test of
-  :mod:`sins.unit_gap.seed_terms` for one value.
+  :mod:`sins.compensation.seed_terms` for one value.
 
 EuRoC's V1_01, judged by least squares fitted on the published split's six training sequences, is left
 24.1 ± 2.6 mrad of its x rate on its gyro y (on the 0.2 s intervals of ``tools/euroc_bias_ceiling.py``,
@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.stats import norm
 
-from sins.compensation import interval_fit
+from sins.compensation import interval_fit, seed_terms
 from sins.compensation.identifiability import DEFAULT_GRADE, class_bounds
 
 if TYPE_CHECKING:
@@ -56,9 +56,8 @@ def gyro_terms_left(strategy: Strategy | None, rec: ReferencedRecording) -> dict
             value, se = float(fit.seed.B[i, j]), float(fit.seed.B_se[i, j])
             limit = spread["gyro.scale" if i == j else "gyro.misalignment"]
             if abs(value) > limit and np.isfinite(se) and abs(value) > Z_DETERMINED * se:
-                scale = 1e6 if i == j else 1e3
-                name = f"gyro scale {'xyz'[i]}" if i == j else f"gyro misalignment {'xyz'[i]}←{'xyz'[j]}"
-                unit = "ppm" if i == j else "mrad"
+                scale, unit = (1e6, "ppm") if i == j else (1e3, "mrad")
+                name = seed_terms.term_name("gyro", i, j)
                 terms.append({"name": name, "value": value * scale, "se": se * scale, "unit": unit})
     return {"terms": terms, "intervals": fit.intervals}
 
