@@ -5,7 +5,8 @@ Usage::
     .venv/bin/python tools/euroc_held_back.py [--strategies regression kohonen mlp] [--guard]
         [--folder euroc] [--channels]
 
-Each of the published split's six training recordings is held back in turn: every strategy is fitted on
+Each of the published split's six training recordings is held back in turn (the references levelled
+first where their world frame tilts from gravity, as ``sins fit`` levels them): every strategy is fitted on
 the other five (``sins.compensation.referenced.fit_several``, its own bias rule chosen on them), the
 learners with their guard lifted unless ``--guard`` (with it, the seed paper's networks are fitted as
 ``sins fit`` fits them, ``sins.compensation.fitting.fit_several``: their own guard holds each of the five
@@ -32,7 +33,7 @@ from euroc_benchmark import TRAIN  # the published split's training sequences (t
 from euroc_channels import CHANNELS, SCALE, residuals
 
 from sins import io
-from sins.compensation import fitting, network_guard, referenced, registry, unit_bias
+from sins.compensation import fitting, network_guard, referenced, registry, unit_bias, world_tilt
 
 
 def main() -> None:
@@ -42,7 +43,11 @@ def main() -> None:
     p.add_argument("--folder", default="euroc", help="the data root's folder of the .npz recordings")
     p.add_argument("--channels", action="store_true", help="also every channel on the intervals")
     args = p.parse_args()
-    recs = [io.read(dataset=f"{args.folder}/{name}").beside_reference() for name in TRAIN]
+    # Each reference levelled where its world frame tilts from gravity, as sins fit levels them before its
+    # fits and its guards' folds (fitting.fit_several).
+    recs = [
+        world_tilt.levelled(io.read(dataset=f"{args.folder}/{n}").beside_reference(), 1.0)[0] for n in TRAIN
+    ]
     guarded = set(registry.strategy_names(taking="guard"))
     aoe: dict[str, list[float]] = {s: [] for s in args.strategies}
     left: dict[str, list[np.ndarray]] = {s: [] for s in args.strategies}  # per channel, less the mean
