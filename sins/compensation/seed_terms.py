@@ -27,7 +27,7 @@ between it and the best published figure (``tools/euroc_bias_ceiling.py``).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,10 +53,24 @@ def of_fit(seed: SeedModelFit) -> dict[str, dict[str, list[list[float]]]]:
     }
 
 
-def term_name(sensor: str, i: int, j: int) -> str:
-    """``gyro scale y`` on the diagonal, ``gyro misalignment y←x`` off it."""
+class Term(NamedTuple):
+    """One term of a sensor's seed-model matrix, ``M[i, j]``: its ``name`` (``gyro scale y`` on the
+    diagonal, ``gyro misalignment y←x`` off it), the key of its class's spread and bound
+    (:func:`~sins.compensation.identifiability.class_bounds`: ``gyro.scale``, ``gyro.misalignment``) and
+    how it is shown (``scale`` × the dimensionless value, in ``unit``: ppm, mrad)."""
+
+    name: str
+    kind: str
+    scale: float
+    unit: str
+
+
+def term(sensor: str, i: int, j: int) -> Term:
+    """The term ``M[i, j]`` of ``sensor``'s matrix (:class:`Term`)."""
     axes = "xyz"
-    return f"{sensor} scale {axes[i]}" if i == j else f"{sensor} misalignment {axes[i]}←{axes[j]}"
+    if i == j:
+        return Term(f"{sensor} scale {axes[i]}", f"{sensor}.scale", 1e6, "ppm")
+    return Term(f"{sensor} misalignment {axes[i]}←{axes[j]}", f"{sensor}.misalignment", 1e3, "mrad")
 
 
 def _differs(values: Array, se: Array, spread: float) -> tuple[bool, float]:
@@ -88,21 +102,20 @@ def differing(seed_models: Mapping[str, dict[str, Any]], grade: str = DEFAULT_GR
                 }
                 if len(each) < 2:
                     continue
-                term = f"{sensor}.{'scale' if i == j else 'misalignment'}"
-                limit = bounds.spread[term]
+                t = term(sensor, i, j)
+                limit = bounds.spread[t.kind]
                 values, se = (np.array(v) for v in zip(*each.values(), strict=True))
                 found, stat = _differs(values, se, limit)
                 if not found:
                     continue
-                scale = 1e6 if i == j else 1e3
                 out.append({
-                    "term": term_name(sensor, i, j),
-                    "unit": "ppm" if i == j else "mrad",
-                    "values": {n: [v * scale, s * scale] for n, (v, s) in each.items()},
+                    "term": t.name,
+                    "unit": t.unit,
+                    "values": {n: [v * t.scale, s * t.scale] for n, (v, s) in each.items()},
                     "chi_square": stat,
                     "dof": len(each) - 1,
                     "apart": _apart(each, limit),
-                    "beyond_bound": [n for n, (v, _) in each.items() if abs(v) > bounds.bound[term]],
+                    "beyond_bound": [n for n, (v, _) in each.items() if abs(v) > bounds.bound[t.kind]],
                 })  # fmt: skip
     return {"compared": [n for n, _ in kept], "differ": out, "grade": grade}
 
@@ -151,8 +164,9 @@ def lines(found: dict[str, Any]) -> list[str]:
 
 __all__ = [
     "CONFIDENCE",
+    "Term",
     "differing",
     "lines",
     "of_fit",
-    "term_name",
+    "term",
 ]

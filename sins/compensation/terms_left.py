@@ -53,12 +53,9 @@ def gyro_terms_left(strategy: Strategy | None, rec: ReferencedRecording) -> dict
     terms = []
     for i in range(3):
         for j in range(3):
-            value, se = float(fit.seed.B[i, j]), float(fit.seed.B_se[i, j])
-            limit = spread["gyro.scale" if i == j else "gyro.misalignment"]
-            if abs(value) > limit and np.isfinite(se) and abs(value) > Z_DETERMINED * se:
-                scale, unit = (1e6, "ppm") if i == j else (1e3, "mrad")
-                name = seed_terms.term_name("gyro", i, j)
-                terms.append({"name": name, "value": value * scale, "se": se * scale, "unit": unit})
+            value, se, t = float(fit.seed.B[i, j]), float(fit.seed.B_se[i, j]), seed_terms.term("gyro", i, j)
+            if abs(value) > spread[t.kind] and np.isfinite(se) and abs(value) > Z_DETERMINED * se:
+                terms.append({"name": t.name, "value": value * t.scale, "se": se * t.scale, "unit": t.unit})
     return {"terms": terms, "intervals": fit.intervals}
 
 
