@@ -344,7 +344,7 @@ _MIXED_SAID = (
 
 def _mixed(rule: BiasRule) -> bool:
     """Whether the rule's online estimate starts from the mixture prior where the pooled one would be."""
-    return rule.mixture and rule.mode in ONLINE_MODES and len(rule.components) >= MIXTURE_MIN
+    return rule.choice.endswith(MIXTURE) and len(rule.components) >= MIXTURE_MIN
 
 
 def _rest_distance(rule: BiasRule, imu: ImuIncrements, rest: int) -> float:
