@@ -46,7 +46,7 @@ from sins.nav import attitude
 _OWN_SPAN_S = 0.2
 
 
-def _without(readings: ImuIncrements, bias_rad_s: np.ndarray) -> ImuIncrements:
+def without(readings: ImuIncrements, bias_rad_s: np.ndarray) -> ImuIncrements:
     """``readings`` less a bias (constant (3,) or one per step (n, 3)), rad/s."""
     dt = np.diff(readings.t)[:, None]
     return ImuIncrements(t=readings.t, dtheta_b=readings.dtheta_b - bias_rad_s * dt, dv_b=readings.dv_b)
@@ -70,13 +70,13 @@ def _own_matrix(readings: ImuIncrements, rec: ReferencedRecording) -> tuple[floa
     m = coef[1:].T
     scaled = ImuIncrements(readings.t, readings.dtheta_b - readings.dtheta_b @ m.T, readings.dv_b)
     i, j = np.unravel_index(int(np.argmax(np.abs(m))), m.shape)
-    return _best_constant(scaled, rec, coef[0]).fun, f"{'xyz'[i]}←{'xyz'[j]} {m[i, j] * 1e3:.1f} mrad"
+    return best_constant(scaled, rec, coef[0]).fun, f"{'xyz'[i]}←{'xyz'[j]} {m[i, j] * 1e3:.1f} mrad"
 
 
-def _best_constant(readings: ImuIncrements, rec: ReferencedRecording, start_rad_s: np.ndarray) -> Any:
+def best_constant(readings: ImuIncrements, rec: ReferencedRecording, start_rad_s: np.ndarray) -> Any:
     """The constant bias of least AOE (Nelder–Mead on the AOE itself, from ``start_rad_s``)."""
     return minimize(
-        lambda b_mrad_s: unit_bias.open_loop_deg(_without(readings, np.asarray(b_mrad_s) * 1e-3), rec),
+        lambda b_mrad_s: unit_bias.open_loop_deg(without(readings, np.asarray(b_mrad_s) * 1e-3), rec),
         start_rad_s * 1e3,
         method="Nelder-Mead",
         options={"xatol": 1e-3, "fatol": 1e-3, "maxfev": 600},
@@ -105,14 +105,14 @@ def main(argv: list[str] | None = None) -> int:
             rec = io.read(dataset=f"{args.folder}/{name}").beside_reference()
             out = model.correct_increments(rec.imu)
             track = unit_bias.bias_track(rule, out)
-            by_rule.append(unit_bias.open_loop_deg(_without(out, track), rec))
-            found = _best_constant(out, rec, track[-1])  # the rule's last estimate, a start near the answer
+            by_rule.append(unit_bias.open_loop_deg(without(out, track), rec))
+            found = best_constant(out, rec, track[-1])  # the rule's last estimate, a start near the answer
             best.append(float(found.fun))
             up = out.dv_b.sum(axis=0) / np.linalg.norm(out.dv_b.sum(axis=0))  # gravity's reaction, body
             oracle = np.asarray(found.x) * 1e-3
             rule_along, oracle_along = np.outer(track @ up, up), np.outer(oracle @ up, up)
-            across.append(unit_bias.open_loop_deg(_without(out, track - rule_along + oracle @ up * up), rec))
-            along.append(unit_bias.open_loop_deg(_without(out, oracle - oracle_along + rule_along), rec))
+            across.append(unit_bias.open_loop_deg(without(out, track - rule_along + oracle @ up * up), rec))
+            along.append(unit_bias.open_loop_deg(without(out, oracle - oracle_along + rule_along), rec))
             own_deg, largest = _own_matrix(out, rec)
             own.append(own_deg)
             print(f"  {name:<18} {by_rule[-1]:7.2f} {best[-1]:14.2f} {across[-1]:12.2f} {along[-1]:11.2f}"

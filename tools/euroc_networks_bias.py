@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 from euroc_benchmark import TRAIN  # the published split's training sequences (tools/ is on the path)
-from euroc_bias_ceiling import _best_constant, _without
+from euroc_bias_ceiling import best_constant, without
 
 from sins import io
 from sins.compensation import referenced, registry, unit_bias, world_tilt
@@ -65,8 +65,8 @@ def main() -> None:
                 ls_track = unit_bias.bias_track(unit_bias.BiasRule.from_dict(model.unit_bias_), corrected)
             figures = (
                 unit_bias.open_loop_deg(model.correct_recording(rec.imu), rec),
-                unit_bias.open_loop_deg(_without(corrected, ls_track), rec),
-                float(_best_constant(corrected, rec, ls_track[-1]).fun),
+                unit_bias.open_loop_deg(without(corrected, ls_track), rec),
+                float(best_constant(corrected, rec, ls_track[-1]).fun),
             )
             for way, value in zip(WAYS, figures, strict=True):
                 aoe[s][way].append(value)
