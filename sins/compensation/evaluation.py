@@ -202,13 +202,15 @@ def evaluate_referenced(
     beyond, beyond_said = beyond_training(strategy, rec.imu)
     lines += [beyond_said] if beyond_said else []
     as_read = strategy.leaves_gyro_as_read()
+    # The readings as the model corrects them (before its bias rule), once for what reads them below.
+    model_corrected = rec.imu if as_read else strategy.correct_increments(rec.imu)
     if as_read:
         lines.append(GYRO_AS_READ)
-    elif said := _prior_said(strategy, rec):
+    elif said := _prior_said(strategy, model_corrected):
         lines.append(said)
     if stage is not None:
         stage("the gyro terms the model leaves")
-    left = terms_left.gyro_terms_left(None if as_read else strategy, rec)
+    left = terms_left.gyro_terms_left(model_corrected, rec)
     lines += [terms_left.said(left)] if left["terms"] else []
     table = fixed_width(OPEN_LOOP_HEAD, rows)
     lines.append(table)
@@ -230,15 +232,16 @@ def evaluate_referenced(
     return Evaluation(lines, document, runs=runs, table=table)
 
 
-def _prior_said(strategy: Strategy, rec: ReferencedRecording) -> str:
+def _prior_said(strategy: Strategy, corrected: ImuIncrements) -> str:
     """Where a model fitted on several recordings took this recording's gyro bias prior, in words
-    (:func:`sins.compensation.unit_bias.prior_said`); "" for another model."""
+    (:func:`sins.compensation.unit_bias.prior_said`, on the readings as the model ``corrected`` them);
+    "" for another model."""
     rule = getattr(strategy, "unit_bias_", None)
     if not isinstance(rule, dict):
         return ""
     from sins.compensation import unit_bias
 
-    return unit_bias.prior_said(unit_bias.BiasRule.from_dict(rule), strategy.correct_increments(rec.imu))
+    return unit_bias.prior_said(unit_bias.BiasRule.from_dict(rule), corrected)
 
 
 def _reference_notes(

@@ -31,20 +31,19 @@ from sins.compensation import interval_fit, seed_terms
 from sins.compensation.identifiability import DEFAULT_GRADE, class_bounds
 
 if TYPE_CHECKING:
-    from sins.compensation.base import Strategy
-    from sins.core.series import ReferencedRecording
+    from sins.core.series import ImuIncrements, ReferencedRecording
 
 #: A term left is determined beyond this many standard errors (99.9 %, two-sided).
 Z_DETERMINED = float(norm.ppf(1.0 - 0.001 / 2.0))
 
 
-def gyro_terms_left(strategy: Strategy | None, rec: ReferencedRecording) -> dict[str, Any]:
-    """The gyro terms ``strategy`` (None: the readings as they are) leaves of ``rec`` (see the module
-    docstring): ``terms``, each with its ``name`` (``gyro misalignment y←x``, ``gyro scale z``),
-    ``value`` and ``se`` (mrad or ppm, ``unit``); ``intervals`` the fit's. Where the recording's
+def gyro_terms_left(corrected_imu: ImuIncrements, rec: ReferencedRecording) -> dict[str, Any]:
+    """The gyro terms a model leaves of ``rec`` (see the module docstring), ``corrected_imu`` its
+    readings as the model corrects them (before any bias rule; the readings as they are where the model
+    leaves the gyro as read): ``terms``, each with its ``name`` (``gyro misalignment y←x``, ``gyro scale
+    z``), ``value`` and ``se`` (mrad or ppm, ``unit``); ``intervals`` the fit's. Where the recording's
     intervals cannot be fitted, ``not_judged`` says why and ``terms`` is empty."""
-    imu = rec.imu if strategy is None else strategy.correct_increments(rec.imu)
-    corrected = dataclasses.replace(rec, imu=imu)
+    corrected = dataclasses.replace(rec, imu=corrected_imu)
     try:
         fit = interval_fit.fit_intervals(corrected, time_offset=False, g_sensitivity=False)
     except ValueError as exc:
