@@ -4,13 +4,14 @@ position error of short free-inertial windows on the parts no model was fitted o
 Usage::
 
     .venv/bin/python tools/broad_free_inertial.py [--strategies regression kohonen_pure mlp_seed]
-        [--windows 2 5] [--every 1] [--json OUT.json]
+        [--windows 2 5] [--every 1] [--train 05_1 18_1 18_3] [--judge 05_2 05_3 18_2] [--json OUT.json]
 
 The two BROAD trials of unit B are cut into three parts each as ``tools/another_unit.py`` cuts them, the
-models fitted on its training parts (``05_1 18_1 18_3``) as ``sins fit`` fits several recordings
-(``sins.compensation.fitting.fit_several``, the networks' guard on: on this unit it writes their
-accelerometer beside least squares' gyro and bias rule) and each judged part (``05_2 05_3 18_2``)
-corrected by each model as ``sins evaluate`` corrects it (``correct_recording``) and by none. From every
+models fitted on its training parts (``--train``, default ``05_1 18_1 18_3``) as ``sins fit`` fits
+several recordings (``sins.compensation.fitting.fit_several``, the networks' guard on: on this unit it
+writes their accelerometer beside least squares' gyro and bias rule) and each judged part (``--judge``,
+default ``05_2 05_3 18_2``) corrected by each model as ``sins evaluate`` corrects it
+(``correct_recording``) and by none. From every
 ``--every`` seconds of a judged part, a window of each ``--windows`` length is navigated free-inertial
 from the reference's attitude and velocity at its start: the attitude composed step by step from the
 corrected gyro's increments (scipy's ``Rotation``), each velocity increment turned into the reference's
@@ -87,6 +88,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--strategies", nargs="+", default=["regression", "kohonen_pure", "mlp_seed"])
     p.add_argument("--windows", nargs="+", type=float, default=[2.0, 5.0], help="window lengths, s")
     p.add_argument("--every", type=float, default=1.0, help="a window starts every this many seconds")
+    p.add_argument("--train", nargs="+", default=TRAIN, help="the parts the models are fitted on")
+    p.add_argument("--judge", nargs="+", default=JUDGE, help="the parts they are judged on")
     p.add_argument("--json", type=Path, help="write every window's error here")
     args = p.parse_args(argv)
     strategies = ["regression", *[s for s in args.strategies if s != "regression"]]
@@ -94,14 +97,14 @@ def main(argv: list[str] | None = None) -> int:
         folder = Path(tmp)
         for trial in ("05", "18"):
             write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, 3, folder)
-        recs = {n: io.read(str(folder / f"{n}.npz")).beside_reference() for n in TRAIN + JUDGE}
-        parts = {n: dict(np.load(folder / f"{n}.npz")) for n in JUDGE}
+        recs = {n: io.read(str(folder / f"{n}.npz")).beside_reference() for n in args.train + args.judge}
+        parts = {n: dict(np.load(folder / f"{n}.npz")) for n in args.judge}
     models: dict[str, Any] = {"none": None}
     for s in strategies:
-        outcome = fitting.fit_several(s, [recs[n] for n in TRAIN], TRAIN)
+        outcome = fitting.fit_several(s, [recs[n] for n in args.train], args.train)
         guard = outcome.document.get("network_guard")
         said = f" (its guard: accelerometer {guard['accelerometer']}, gyro {guard['gyro']})" if guard else ""
-        print(f"fitted {s} on {', '.join(TRAIN)}{said}", flush=True)
+        print(f"fitted {s} on {', '.join(args.train)}{said}", flush=True)
         models[s] = outcome.strategy
     errors: dict[str, dict[str, dict[str, list[float]]]] = {}
     for length in args.windows:
@@ -110,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\n{key} windows, horizontal position error at the end, RMS over the windows, mm")
         print("| part | windows | " + " | ".join(models) + " |")
         print("|---" * (len(models) + 2) + "|")
-        for n in JUDGE:
+        for n in args.judge:
             imu = recs[n].imu
             errors[key][n] = {
                 m: window_errors(
@@ -122,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"| {n} | {len(errors[key][n]['none'])} | " + " | ".join(f"{r:.1f}" for r in rms) + " |")
         for s in strategies[1:]:
             per = np.array(
-                [np.mean(np.subtract(errors[key][n][s], errors[key][n]["regression"])) for n in JUDGE]
+                [np.mean(np.subtract(errors[key][n][s], errors[key][n]["regression"])) for n in args.judge]
             )
             se = per.std(ddof=1) / np.sqrt(len(per))
             cells = ", ".join(f"{1e3 * x:+.1f}" for x in per)
