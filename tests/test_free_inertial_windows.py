@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 from sins.core.series import ImuIncrements
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-from broad_free_inertial import G_M_S2, window_errors
+from broad_free_inertial import G_M_S2, at_imu, window_errors
 
 DT_S = 0.005
 ROLL = Rotation.from_euler("x", 30.0, degrees=True)
@@ -78,3 +78,24 @@ def test_an_accelerometer_bias_leaves_its_double_integral(omega: float) -> None:
     ex = np.cos(theta0) - np.cos(theta0 + wt) - wt * np.sin(theta0)
     ey = np.cos(np.radians(30.0)) * (wt * np.cos(theta0) - np.sin(theta0 + wt) + np.sin(theta0))
     np.testing.assert_allclose(errors, bias / omega**2 * np.hypot(ex, ey), rtol=5e-3)
+
+
+def test_an_imu_off_the_references_point_is_judged_at_its_own_point() -> None:
+    """A level unit turning about z at 1 rad/s about the reference's point, which stays still, its IMU
+    0.1 m out along the body's x: the IMU reads the centripetal ω²r inwards beside gravity. Against the
+    reference's own point each 2 s window starts still where the IMU runs at ω r, and ends the double
+    integral of that centripetal force from rest away, r √((1 − cos ωT)² + (ωT − sin ωT)²) = 178.7 mm;
+    against the reference moved to the IMU by ``at_imu`` (the velocity C (ω × r)), it ends within 0.1 mm
+    (the steps' second-order terms)."""
+    omega, arm_m = 1.0, 0.1
+    t = 100.0 + DT_S * np.arange(round(12.0 / DT_S) + 1)
+    steps = len(t) - 1
+    dv_b = np.tile([-(omega**2) * arm_m * DT_S, 0.0, G_M_S2 * DT_S], (steps, 1))
+    imu = ImuIncrements(t=t - t[0], dtheta_b=np.tile([0.0, 0.0, omega * DT_S], (steps, 1)), dv_b=dv_b)
+    turn = Rotation.from_euler("z", omega * (t - t[0])[:, None])
+    part = {"t_s": t, "q_wxyz": turn.as_quat(scalar_first=True), "v_m_s": np.zeros((len(t), 3))}
+    at_point = window_errors(imu, part, 2.0, 1.0)
+    wt = omega * 2.0
+    np.testing.assert_allclose(at_point, arm_m * np.hypot(1.0 - np.cos(wt), wt - np.sin(wt)), rtol=1e-4)
+    moved = window_errors(imu, at_imu(part, np.array([arm_m, 0.0, 0.0])), 2.0, 1.0)
+    assert moved.max() < 1e-4, moved.max()

@@ -4,7 +4,8 @@ position error of short free-inertial windows on the parts no model was fitted o
 Usage::
 
     .venv/bin/python tools/broad_free_inertial.py [--strategies regression kohonen_pure mlp_seed]
-        [--windows 2 5] [--every 1] [--train 05_1 18_1 18_3] [--judge 05_2 05_3 18_2] [--json OUT.json]
+        [--windows 2 5] [--every 1] [--train 05_1 18_1 18_3] [--judge 05_2 05_3 18_2] [--at-imu]
+        [--json OUT.json]
 
 The two BROAD trials of unit B are cut into three parts each as ``tools/another_unit.py`` cuts them, the
 models fitted on its training parts (``--train``, default ``05_1 18_1 18_3``) as ``sins fit`` fits
@@ -21,6 +22,12 @@ a twentieth of a degree in 5 s). The error is the horizontal distance from the r
 velocity integrated by the trapezoid rule: the parts hold none) at the window's end, where an outage of
 that length would leave a position fix's aiding; its vertical holds the gravity model's error and is
 not judged. Nothing of ``sins.nav`` is used: numpy and scipy judge sins's corrections.
+
+``--at-imu``: the reference moved from the motion capture's point to the IMU by the lever arm least
+squares' fit on the training parts estimates (``sins.compensation.referenced.fit_several``'s
+``lever_arm_m``, body frame; the velocity ``v + C (ω × r)``, ``ω`` the reference attitude's own rate),
+so that what a model may have learned of the arm (``ω̇ × r + ω × (ω × r)``, which the seed model cannot
+express) is not counted as its gain.
 
 Prints per judged part the RMS over its windows for each model (mm), and each strategy's mean paired
 difference from least squares (``regression``) per part, with the mean over the three parts and its
@@ -44,7 +51,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from another_unit import write_parts
 
 from sins import io
-from sins.compensation import fitting
+from sins.compensation import fitting, referenced, world_tilt
 from sins.core.series import ImuIncrements
 
 TRAIN = ["05_1", "18_1", "18_3"]
@@ -83,6 +90,18 @@ def window_errors(
     return np.asarray(np.hypot(error[:, 0], error[:, 1]))
 
 
+def at_imu(part: dict[str, np.ndarray], arm_b_m: np.ndarray) -> dict[str, np.ndarray]:
+    """``part`` with its reference's velocity moved to a point ``arm_b_m`` (m, body frame) from its own:
+    ``v + C (ω × r)``, ``ω`` the body rate of the reference's attitude (each step's, averaged at the
+    samples). Its integral is the moved position less its start's (``C r`` at the start), which the
+    windows, judging differences, do not see."""
+    t_s = part["t_s"]
+    attitude = Rotation.from_quat(part["q_wxyz"], scalar_first=True)
+    step_rate = (attitude[:-1].inv() * attitude[1:]).as_rotvec() / np.diff(t_s)[:, None]
+    rate = np.vstack([step_rate[:1], 0.5 * (step_rate[1:] + step_rate[:-1]), step_rate[-1:]])
+    return {**part, "v_m_s": part["v_m_s"] + attitude.apply(np.cross(rate, arm_b_m))}
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--strategies", nargs="+", default=["regression", "kohonen_pure", "mlp_seed"])
@@ -90,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--every", type=float, default=1.0, help="a window starts every this many seconds")
     p.add_argument("--train", nargs="+", default=TRAIN, help="the parts the models are fitted on")
     p.add_argument("--judge", nargs="+", default=JUDGE, help="the parts they are judged on")
+    p.add_argument("--at-imu", action="store_true", help="the reference moved to the IMU by the fitted arm")
     p.add_argument("--json", type=Path, help="write every window's error here")
     args = p.parse_args(argv)
     strategies = ["regression", *[s for s in args.strategies if s != "regression"]]
@@ -99,6 +119,12 @@ def main(argv: list[str] | None = None) -> int:
             write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, 3, folder)
         recs = {n: io.read(str(folder / f"{n}.npz")).beside_reference() for n in args.train + args.judge}
         parts = {n: dict(np.load(folder / f"{n}.npz")) for n in args.judge}
+    if args.at_imu:
+        levelled = [world_tilt.levelled(recs[n], 1.0)[0] for n in args.train]  # as sins fit levels them
+        arm_b_m = referenced.fit_several("regression", levelled).several.lever_arm_m
+        arm = ", ".join(f"{1e3 * x:.2f}" for x in arm_b_m)
+        print(f"the reference moved to the IMU by {arm} mm (body x y z)")
+        parts = {n: at_imu(part, arm_b_m) for n, part in parts.items()}
     models: dict[str, Any] = {"none": None}
     for s in strategies:
         outcome = fitting.fit_several(s, [recs[n] for n in args.train], args.train)
