@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from typing import Any
 
 import numpy as np
 from euroc_benchmark import TRAIN  # the published split's training sequences (tools/ is on the path)
@@ -60,8 +61,7 @@ def main() -> None:
             if args.guard and network_guard.guards(s):  # as sins fit writes it, its guard five-fold
                 names = [n for i, n in enumerate(TRAIN) if i != k]
                 model = fitting.fit_several(s, others, names).strategy
-                accel = "least squares'" if hasattr(model, "accel_seed_") else "its own"
-                written = f"  wrote {model.name}" + (f", {accel} accelerometer" if model.name == s else "")
+                written = f"  wrote {model.name}" + (f", {_parts(model)}" if model.name == s else "")
             else:
                 model = referenced.fit_several(s, others, params=params).strategy
             aoe[s].append(unit_bias.open_loop_deg(model.correct_recording(rec.imu), rec))
@@ -95,6 +95,16 @@ def _channels(left: dict[str, list[np.ndarray]], first: str) -> None:
                 cell += f" ({d.mean():+.1f} ± {d.std(ddof=1) / np.sqrt(len(d)):.1f} %)"
             cells.append(cell)
         print(f"  {s:<12} " + "  ".join(cells))
+
+
+def _parts(model: Any) -> str:
+    """Which of a network its guard wrote: whole, its gyro with least squares' accelerometer, or its
+    accelerometer beside least squares' gyro and bias rule (``network_guard``)."""
+    if "gyro_seed_" in vars(model):
+        return "its accelerometer beside least squares' gyro"
+    if "accel_seed_" in vars(model):
+        return "its gyro with least squares' accelerometer"
+    return "whole"
 
 
 if __name__ == "__main__":
