@@ -2,7 +2,8 @@
 numpy alone: readings that are the reference's own leave nothing; an accelerometer bias ``b`` along the
 body's x leaves its double integral, ``b T²/2`` held level and still, and on a unit rolled 30° and
 turning about its own z at ``ω`` the double integral of ``b`` turned with it (which a turn composed on
-the wrong side, about the world's z, would not give)."""
+the wrong side, about the world's z, would not give); and an IMU off the reference's point is judged at
+its own point once the reference is moved there (``at_imu``)."""
 
 from __future__ import annotations
 
