@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -75,7 +75,7 @@ def window_errors(
     steps = round(length_s / float(np.median(dt)))
     starts = np.searchsorted(t_s, np.arange(t_s[0] + 1.0, t_s[-1] - length_s, every_s))
     starts = starts[starts + steps < len(t_s)]
-    turn = Slerp(t_s, attitude)(t_s[starts])
+    turn = attitude[starts]  # the windows start on the part's own samples
     v = part["v_m_s"][starts].copy()
     p = p_ref[starts].copy()
     for k in range(steps):
@@ -132,6 +132,11 @@ def main(argv: list[str] | None = None) -> int:
         said = f" (its guard: accelerometer {guard['accelerometer']}, gyro {guard['gyro']})" if guard else ""
         print(f"fitted {s} on {', '.join(args.train)}{said}", flush=True)
         models[s] = outcome.strategy
+    # Each judged part corrected once by each model, for every window length.
+    corrected = {
+        n: {m: recs[n].imu if s is None else s.correct_recording(recs[n].imu) for m, s in models.items()}
+        for n in args.judge
+    }
     errors: dict[str, dict[str, dict[str, list[float]]]] = {}
     for length in args.windows:
         key = f"{length:g} s"
@@ -140,12 +145,9 @@ def main(argv: list[str] | None = None) -> int:
         print("| part | windows | " + " | ".join(models) + " |")
         print("|---" * (len(models) + 2) + "|")
         for n in args.judge:
-            imu = recs[n].imu
             errors[key][n] = {
-                m: window_errors(
-                    imu if s is None else s.correct_recording(imu), parts[n], length, args.every
-                ).tolist()
-                for m, s in models.items()
+                m: window_errors(imu, parts[n], length, args.every).tolist()
+                for m, imu in corrected[n].items()
             }
             rms = [1e3 * np.sqrt(np.mean(np.square(errors[key][n][m]))) for m in models]
             print(f"| {n} | {len(errors[key][n]['none'])} | " + " | ".join(f"{r:.1f}" for r in rms) + " |")
