@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
+from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation
 
 from sins.compensation import referenced
@@ -42,8 +43,10 @@ def recordings(
     return recs, unit, np.array(biases)
 
 
-def write_npz(folder: Path, name: str, rec: referenced.ReferencedRecording) -> None:
-    """A numpy recording written in the .npz form (rates at the step boundaries, the reference there)."""
+def write_npz(folder: Path, name: str, rec: referenced.ReferencedRecording, positions: bool = False) -> None:
+    """A numpy recording written in the .npz form (rates at the step boundaries, the reference there);
+    its positions zero, or with ``positions`` its velocity's integral (east, north, up from its start), as
+    ``sins evaluate --outage`` needs them."""
     keep = int(np.searchsorted(rec.imu.t, rec.reference.t[-1], side="right"))
     t = rec.imu.t[:keep]
     dt = np.diff(t)[:, None]
@@ -52,8 +55,15 @@ def write_npz(folder: Path, name: str, rec: referenced.ReferencedRecording) -> N
     ref = rec.reference.interpolate(t)
     q = Rotation.from_quat(ref.q_nb)
     ned_to_enu = Rotation.from_matrix([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    v_enu = ref.v_n[:, [1, 0, 2]] * [1, 1, -1]
     np.savez(
         folder / f"{name}.npz", t_s=t, gyro_rad_s=rate, accel_m_s2=force,
-        q_wxyz=(ned_to_enu * q).as_quat(scalar_first=True), v_m_s=ref.v_n[:, [1, 0, 2]] * [1, 1, -1],
-        p_m=np.zeros((len(t), 3)),
+        q_wxyz=(ned_to_enu * q).as_quat(scalar_first=True), v_m_s=v_enu,
+        p_m=_enu_from_start(t, v_enu) if positions else np.zeros((len(t), 3)),
     )  # fmt: skip
+
+
+def _enu_from_start(t: np.ndarray, v_enu: np.ndarray) -> np.ndarray:
+    """Positions from the start, east, north, up, m: the reference's velocity integrated by the trapezoid
+    rule (:func:`numpy_referenced.session` moves the unit by its velocity alone, its latitude held)."""
+    return np.asarray(cumulative_trapezoid(v_enu, t, axis=0, initial=0.0))

@@ -637,7 +637,9 @@ def test_an_empty_path_is_refused_as_empty(
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("flag", [["--rerun", "R"], ["--drive", "0:1"], ["--bias-from-rest"]])
+@pytest.mark.parametrize(
+    "flag", [["--rerun", "R"], ["--drive", "0:1"], ["--outage", "2"], ["--bias-from-rest"]]
+)
 def test_what_judges_against_a_trajectory_is_refused_on_a_rig(
     files: Path, tmp_path: Path, flag: list[str]
 ) -> None:

@@ -477,7 +477,7 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     recs, _, _ = recordings(9)
     (tmp_path / "unit").mkdir()
     for k, rec in enumerate(recs):
-        write_npz(tmp_path / "unit", f"r{k}", rec)
+        write_npz(tmp_path / "unit", f"r{k}", rec, positions=True)
     monkeypatch.setenv("SINS_DATA", str(tmp_path))
     model, fit_json, out = tmp_path / "m.json", tmp_path / "fit.json", tmp_path / "e.json"
     args = [
@@ -534,6 +534,25 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     said = capsys.readouterr().out
     window = re.search(r"free inertial from the reference's state at (\S+) s to (\S+) s", said)
     assert window is not None and 0.0 < float(window[2]) < 1e3, said  # 120 s recordings
+    # --outage: each recording's outages from every second, then the mean of their RMS over the
+    # recordings; an outage longer than a recording's reference is one line naming it, and no file.
+    both = ["evaluate", str(model), "--dataset", "unit/r2", "--dataset", "unit/r1", "--json", str(out)]
+    assert main([*both, "--outage", "2", "--outage", "5"]) == 0
+    document = json.loads(out.read_text())
+    each = [r["free_inertial_outages"] for r in document["recordings"]]
+    for k, length in enumerate((2.0, 5.0)):
+        assert [e[k]["length_s"] for e in each] == [length, length] and each[0][k]["outages"] > 100
+        for side in ("raw", "corrected"):
+            mean = document["mean"]["free_inertial_outages"][k][side]["rms_m"]
+            assert mean == pytest.approx(np.mean([e[k][side]["rms_m"] for e in each]), rel=1e-12)
+        # The unit's raw scale factors, misalignments and biases carry it further than corrected.
+        assert all(e[k]["corrected"]["rms_m"] < e[k]["raw"]["rms_m"] for e in each), each
+    assert "free-inertial outages: the RMS horizontal error at their ends, m" in capsys.readouterr().out
+    out.unlink()
+    assert main([*both, "--outage", "1e4"]) == 2
+    err = capsys.readouterr().err
+    assert "an outage of 10000 s does not fit within the reference's 119 s" in err and "r2.npz" in err, err
+    assert err.count("\n") == 1 and not out.exists()
     raw, pooled = judged["open_loop_attitude_raw"]["aoe_deg"], judged["open_loop_attitude"]["aoe_deg"]
     # The third recording's bias was drawn anew (0.1 °/s apart): the training recordings' mean corrects
     # the unit's scale and misalignment but not that; the online rule, from the recording's own bounded

@@ -83,7 +83,7 @@ def write_parts(rec: ReferencedRecording, stem: str, parts: int, folder: Path) -
     return names
 
 
-def _with_positions(path: Path) -> dict[str, np.ndarray]:
+def with_positions(path: Path) -> dict[str, np.ndarray]:
     """The part at ``path`` with its positions: its reference's velocity integrated by the trapezoid rule
     (the parts are written with none)."""
     from scipy.integrate import cumulative_trapezoid
@@ -96,7 +96,7 @@ def _with_positions(path: Path) -> dict[str, np.ndarray]:
 def backward(path: Path) -> None:
     """The part at ``path`` written again with positions and a backward-difference velocity
     (``--backward``)."""
-    a = _with_positions(path)
+    a = with_positions(path)
     v = np.zeros_like(a["p_m"])
     v[1:] = np.diff(a["p_m"], axis=0) / np.diff(a["t_s"])[:, None]
     np.savez(path, **{**a, "v_m_s": v})
@@ -107,7 +107,7 @@ def mocap120(path: Path) -> None:
     published preprocessing (``--mocap120``)."""
     import gap_real_cases
 
-    np.savez(path, **gap_real_cases.as_mocap120(_with_positions(path)))
+    np.savez(path, **gap_real_cases.as_mocap120(with_positions(path)))
 
 
 def with_gaps(path: Path, gaps: int, rng: np.random.Generator) -> None:

@@ -5,7 +5,7 @@ Usage::
 
     .venv/bin/python tools/broad_free_inertial.py [--strategies regression kohonen_pure mlp_seed]
         [--windows 2 5] [--every 1] [--train 05_1 18_1 18_3] [--judge 05_2 05_3 18_2] [--at-imu]
-        [--json OUT.json]
+        [--json OUT.json] [--keep DIR]
 
 The two BROAD trials of unit B are cut into three parts each as ``tools/another_unit.py`` cuts them, the
 models fitted on its training parts (``--train``, default ``05_1 18_1 18_3``) as ``sins fit`` fits
@@ -29,6 +29,12 @@ squares' fit on the training parts estimates (``sins.compensation.referenced.fit
 so that what a model may have learned of the arm (``ω̇ × r + ω × (ω × r)``, which the seed model cannot
 express) is not counted as its gain.
 
+``--keep DIR``: the parts written to a new folder, the judged ones with positions (their velocity's
+integral), so that sins's own commands give the same figures: ``sins fit DIR/05_1.npz DIR/18_1.npz
+DIR/18_3.npz --strategy kohonen_pure --out m.json``, then ``sins evaluate m.json DIR/05_2.npz
+DIR/05_3.npz DIR/18_2.npz --outage 2 --outage 5`` (``sins.compensation.outages``: sins's navigation,
+with Earth's rate at a nominal latitude, from every second of the part rather than from its second).
+
 Prints per judged part the RMS over its windows for each model (mm), and each strategy's mean paired
 difference from least squares (``regression``) per part, with the mean over the three parts and its
 standard error. About 1 min on 2 cores.
@@ -37,6 +43,7 @@ standard error. About 1 min on 2 cores.
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -48,7 +55,7 @@ from scipy.spatial.transform import Rotation
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from another_unit import write_parts
+from another_unit import with_positions, write_parts
 
 from sins import io
 from sins.compensation import fitting, referenced, world_tilt
@@ -111,7 +118,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--judge", nargs="+", default=JUDGE, help="the parts they are judged on")
     p.add_argument("--at-imu", action="store_true", help="the reference moved to the IMU by the fitted arm")
     p.add_argument("--json", type=Path, help="write every window's error here")
+    p.add_argument(
+        "--keep", type=Path, metavar="DIR",
+        help="write the parts to DIR (a new folder) for sins's own commands, the judged ones with positions",
+    )  # fmt: skip
     args = p.parse_args(argv)
+    if args.keep is not None:
+        if args.keep.exists():  # a new folder: nothing of the user's is written over
+            p.error(f"--keep {args.keep}: exists; give a new folder")
+        args.keep.mkdir(parents=True)
     strategies = ["regression", *[s for s in args.strategies if s != "regression"]]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -119,6 +134,11 @@ def main(argv: list[str] | None = None) -> int:
             write_parts(io.read(dataset=f"broad_{trial}").beside_reference(), trial, 3, folder)
         recs = {n: io.read(str(folder / f"{n}.npz")).beside_reference() for n in args.train + args.judge}
         parts = {n: dict(np.load(folder / f"{n}.npz")) for n in args.judge}
+        if args.keep is not None:
+            for n in args.train:
+                shutil.copy(folder / f"{n}.npz", args.keep / f"{n}.npz")
+            for n in args.judge:  # `sins evaluate --outage` judges by position: the velocity's integral
+                np.savez(args.keep / f"{n}.npz", **with_positions(folder / f"{n}.npz"))
     if args.at_imu:
         levelled = [world_tilt.levelled(recs[n], 1.0)[0] for n in args.train]  # as sins fit levels them
         arm_b_m = referenced.fit_several("regression", levelled).several.lever_arm_m

@@ -23,6 +23,7 @@ from sins.cli.options import (
     check_distinct,
     dataset_inputs,
     fraction,
+    positive,
     read_recording,
 )
 from sins.cli.progress import progress_bar
@@ -120,7 +121,7 @@ def _evaluate_rig(
     from sins.compensation import evaluation
 
     given = [f for f, v in (("--bias-from-rest", args.bias_from_rest), ("--drive", args.drive),
-                            ("--rerun", args.rerun)) if v]  # fmt: skip
+                            ("--outage", args.outage), ("--rerun", args.rerun)) if v]  # fmt: skip
     if given:  # --rerun had been ignored: no file, exit 0
         raise SinsInputError(f"{', '.join(given)}: against a trajectory only; {where} is a rig recording")
     with progress_bar("judging", ""):
@@ -157,7 +158,7 @@ def _evaluate_referenced(
     with progress_bar("open loop", "") as bar:
         result = evaluation.evaluate_referenced(
             strategy, rec, title, last=args.last, bias_from_rest=args.bias_from_rest, drive=drive,
-            stage=bar.set_description,
+            outage_s=tuple(args.outage or ()), stage=bar.set_description,
         )  # fmt: skip
     print("\n".join(result.lines))
     if args.rerun:
@@ -198,6 +199,11 @@ def add(sub: Subparsers) -> None:
     p.add_argument(
         "--drive", metavar="START:END",
         help="against a trajectory: also navigate free inertial from the reference's state over START:END s",
+    )  # fmt: skip
+    p.add_argument(
+        "--outage", type=positive, action="append", metavar="SECONDS",
+        help="against a trajectory: also navigate free inertial for SECONDS from every second of the "
+        "reference and give the horizontal error at each end (RMS, median, 95 %%); repeat for several",
     )  # fmt: skip
     p.add_argument("--json", type=Path, metavar="OUT.json")
     p.add_argument(

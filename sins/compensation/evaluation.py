@@ -36,6 +36,8 @@ if TYPE_CHECKING:
 OPEN_LOOP_HEAD = ["readings", "total", "heading", "inclination", "AOE"]
 #: The label of the raw readings' row.
 RAW = "none (raw readings)"
+#: The figures of a length's outages in ``sins evaluate --outage``'s document, m.
+OUTAGE_FIGURES = ("rms_m", "median_m", "p95_m")
 #: Said of a judgement on readings the model was fitted on (:func:`_fitted_here`).
 FITTED_HERE = (
     "the model was fitted on these readings: the figures say how it fits its own data, not how it does on "
@@ -158,13 +160,14 @@ def evaluate_referenced(
     last: float | None = None,
     bias_from_rest: bool = False,
     drive: tuple[float, float] | None = None,
+    outage_s: tuple[float, ...] = (),
     stage: Callable[[str], None] | None = None,
 ) -> Evaluation:
-    """The gyro integrated alone from the reference's first attitude (the raw readings, the corrected
-    ones and, with ``bias_from_rest``, the corrected ones less the opening rest's bias), RMS and AOE
-    against the reference; over the ``last`` fraction of the recording or all of it; with ``drive``
-    (start, end s) the corrected unit's free-inertial drift over that window beside the raw one's.
-    ``stage(text)`` is told each open loop as it starts."""
+    """The gyro integrated alone from the reference's first attitude (raw, corrected and, with
+    ``bias_from_rest``, corrected less the opening rest's bias), RMS and AOE against the reference, over
+    the ``last`` fraction or all; with ``drive`` (start, end s) the free-inertial drift over that window
+    and with ``outage_s`` outages of each length (:mod:`sins.compensation.outages`), raw and corrected.
+    ``stage(text)`` is told each step as it starts."""
     from sins.compensation import fitted_on, referenced
 
     fitted_here, share = _in_fit(strategy, fitted_on.readings_of(rec), fitted_on.marks_of(rec))
@@ -227,8 +230,8 @@ def evaluate_referenced(
     }
     if bias_from_rest:
         document["open_loop_attitude_bias_from_rest"] = attitude[variants[-1][0]]
-    if drive is not None:
-        document["drive"] = _drive(strategy, rec, drive, lines, stage)
+    document |= {"drive": _drive(strategy, rec, drive, lines, stage)} if drive is not None else {}
+    document |= {"free_inertial_outages": _outages(strategy, rec, outage_s, lines, stage)} if outage_s else {}
     return Evaluation(lines, document, runs=runs, table=table)
 
 
@@ -320,14 +323,39 @@ def across(judged: dict[str, Evaluation], label: str) -> Evaluation:
     if any(left.values()):  # each recording's own line said it; here, which of them, side by side
         said = "; ".join(f"{n} ({_terms_text(terms)})" for n, terms in left.items() if terms)
         lines.append(f"gyro terms the model leaves beyond a unit's spread: {said}")
+    mean_outages = _outages_across(judged, label, lines)
     document = {
         "recordings": [{"recording": name, **e.to_dict()} for name, e in judged.items()],
-        "mean": {"open_loop_attitude": {"aoe_deg": mean}, "open_loop_attitude_raw": {"aoe_deg": mean_raw}},
+        "mean": {
+            "open_loop_attitude": {"aoe_deg": mean},
+            "open_loop_attitude_raw": {"aoe_deg": mean_raw},
+            **({"free_inertial_outages": mean_outages} if mean_outages else {}),
+        },
         "fitted_on": fitted,
         "worse_than_raw": list(worse),
         "gyro_terms_left_on": [n for n, terms in left.items() if terms],
     }
     return Evaluation(lines, document, table=table)
+
+
+def _outages_across(judged: dict[str, Evaluation], label: str, lines: list[str]) -> list[dict[str, Any]]:
+    """Each outage length's RMS horizontal error, raw and corrected, per recording and their means over
+    the recordings (each weighing the same); its table added to ``lines``. Nothing where none was asked."""
+    per = [e.document.get("free_inertial_outages", []) for e in judged.values()]
+    if not per[0]:
+        return []
+    out, rows = [], []
+    for k, first in enumerate(per[0]):
+        raw = [p[k]["raw"]["rms_m"] for p in per]
+        fixed = [p[k]["corrected"]["rms_m"] for p in per]
+        length = f"{first['length_s']:g}"
+        rows += [[n, length, f"{r:.4f}", f"{c:.4f}"] for n, r, c in zip(judged, raw, fixed, strict=True)]
+        rows.append(["mean", length, f"{np.mean(raw):.4f}", f"{np.mean(fixed):.4f}"])
+        out.append({"length_s": first["length_s"], "raw": {"rms_m": float(np.mean(raw))},
+                    "corrected": {"rms_m": float(np.mean(fixed))}})  # fmt: skip
+    lines += ["\nfree-inertial outages: the RMS horizontal error at their ends, m",
+              fixed_width(["recording", "outage s", f"{RAW}: RMS", f"{label}: RMS"], rows)]  # fmt: skip
+    return out
 
 
 def _terms_text(terms: list[dict[str, Any]]) -> str:
@@ -406,11 +434,46 @@ def _drive(
     return out
 
 
+def _outages(
+    strategy: Strategy,
+    rec: ReferencedRecording,
+    lengths_s: tuple[float, ...],
+    lines: list[str],
+    stage: Callable[[str], None] | None,
+) -> list[dict[str, Any]]:
+    """The raw and corrected readings' free-inertial outages of each length; their table added to
+    ``lines``."""
+    from sins.compensation import outages, referenced
+
+    streams = {RAW: rec.imu, strategy.label: referenced.corrected(strategy, rec)}
+    out, rows = [], []
+    for length in lengths_s:
+        figures = {}
+        for label, imu in streams.items():
+            if stage is not None:
+                stage(f"outages of {length:g} s: {label}")
+            figures[label] = outages.outages(imu, rec, length).summary()
+        raw, fixed = figures[RAW], figures[strategy.label]
+        out.append({"length_s": length, "outages": raw["outages"], "every_s": outages.EVERY_S,
+                    "raw": {k: raw[k] for k in OUTAGE_FIGURES},
+                    "corrected": {k: fixed[k] for k in OUTAGE_FIGURES}})  # fmt: skip
+        rows.append([f"{length:g}", str(raw["outages"]), *(f"{f[k]:.4f}" for f in (raw, fixed)
+                                                          for k in OUTAGE_FIGURES)])  # fmt: skip
+    lines.append(
+        f"\nfree-inertial outages from every {outages.EVERY_S:g} s of the reference (vertical held): the "
+        "horizontal error at each outage's end, m"
+    )
+    head = ["outage s", "outages", "raw: RMS", "median", "95 %", f"{strategy.label}: RMS", "median", "95 %"]
+    lines.append(fixed_width(head, rows))
+    return out
+
+
 __all__ = [
     "BEYOND_TRAINING",
     "FITTED_HERE",
     "GYRO_AS_READ",
     "OPEN_LOOP_HEAD",
+    "OUTAGE_FIGURES",
     "PART_FITTED_HERE",
     "RAW",
     "STEEP_PITCH_DEG",

@@ -33,7 +33,7 @@ from sins.errors import SinsInputError, naming
 from sins.io.recording import beside_trajectory
 from sins.nav import attitude, strapdown
 from sins.nav.attitude import AttitudeRmse
-from sins.nav.metrics import nav_errors
+from sins.nav.metrics import NavErrors, nav_errors
 
 Array = NDArray[np.float64]
 
@@ -551,15 +551,14 @@ class DriveErrors:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self.__dict__.items()}
 
 
-def drive_errors(
-    strategy: Strategy | None, rec: ReferencedRecording, start_s: float, end_s: float
-) -> DriveErrors:
-    """The corrected unit navigating free inertial over ``[start_s, end_s]`` from the reference's state
-    there (attitude, velocity, position at the reference's point), errors against the reference at
-    its epochs in the window; ``end_s`` is clipped to the reference's last epoch. The vertical channel
-    is held to the reference's height (a free vertical channel diverges and says nothing of the
-    compensation)."""
-    imu = corrected(strategy, rec)
+def free_inertial(
+    imu: ImuIncrements, rec: ReferencedRecording, start_s: float, end_s: float
+) -> tuple[NavSeries, NavSeries, NavErrors]:
+    """Readings ``imu`` (``rec``'s, as corrected) navigating free inertial over ``[start_s, end_s]`` from
+    the reference's state there (attitude, velocity, position at the reference's point): the solution,
+    the reference on its times, and its errors; ``end_s`` is clipped to the reference's last epoch. The
+    vertical channel is held to the reference's height (a free vertical channel diverges and says
+    nothing of the compensation)."""
     a = int(np.searchsorted(imu.t, start_s))
     b = int(np.searchsorted(imu.t, min(end_s, rec.reference.t[-1]), side="right")) - 1
     if b - a < 10 or imu.t[a] < rec.reference.t[0] or imu.t[b] > rec.reference.t[-1]:
@@ -572,15 +571,24 @@ def drive_errors(
     solution = strapdown.integrate(
         seg, strapdown.InitialState.from_series(truth, 0), vertical="hold", h_ref=truth.h
     )
-    err = nav_errors(solution, truth)
-    inside = (rec.reference.t >= seg.t[0]) & (rec.reference.t <= seg.t[-1])
-    rows = np.searchsorted(seg.t, rec.reference.t[inside])
-    rows = rows[rows < len(seg.t)]
+    return solution, truth, nav_errors(solution, truth)
+
+
+def drive_errors(
+    strategy: Strategy | None, rec: ReferencedRecording, start_s: float, end_s: float
+) -> DriveErrors:
+    """The corrected unit navigating free inertial over ``[start_s, end_s]``
+    (:func:`free_inertial`), its errors against the reference at its epochs in the window."""
+    solution, truth, err = free_inertial(corrected(strategy, rec), rec, start_s, end_s)
+    t = solution.t  # the window's steps' times
+    inside = (rec.reference.t >= t[0]) & (rec.reference.t <= t[-1])
+    rows = np.searchsorted(t, rec.reference.t[inside])
+    rows = rows[rows < len(t)]
     att, vel = np.degrees(err.att_rpy_rad[rows]), err.vel_ned_mps[rows]
     angle, _, _ = attitude.attitude_errors(solution.q_nb[rows], truth.q_nb[rows])
     three = lambda x: (float(x[0]), float(x[1]), float(x[2]))  # noqa: E731
     return DriveErrors(
-        start_s=float(seg.t[0]), end_s=float(seg.t[-1]),
+        start_s=float(t[0]), end_s=float(t[-1]),
         attitude_rms_deg=three(np.sqrt(np.mean(att * att, axis=0))), attitude_final_deg=three(att[-1]),
         velocity_rms_mps=three(np.sqrt(np.mean(vel * vel, axis=0))), velocity_final_mps=three(vel[-1]),
         horizontal_final_m=float(err.horizontal_m[-1]),
@@ -632,6 +640,7 @@ __all__ = [
     "fit",
     "fit_several",
     "frame_turn",
+    "free_inertial",
     "from_recording",
     "open_loop",
     "open_loop_attitude",
