@@ -126,6 +126,23 @@ def test_a_unit_whose_errors_are_the_seed_models_gets_least_squares_not_the_netw
     assert "the guard is off: kohonen_pure is written without being judged held back" in unguarded.lines
 
 
+def test_the_guard_judges_the_velocity_change_over_the_fits_own_intervals() -> None:
+    """Three 16 s recordings, fitted with ``--interval-s 0.5`` (16 intervals of 1 s each, 20 needed):
+    the guard judged each held-back recording's velocity change over intervals of 1 s whatever the fit's,
+    and the fit ended in a traceback (PSINS's vehicle MEMS cut into six parts). Now over the fit's: every
+    fold judged, least squares' model written (the numpy unit's errors are the seed model's)."""
+    from sins.compensation import referenced
+
+    recs, _, _ = recordings(4)
+    short = [referenced.between(r, r.imu.t[0] + 5.0, r.imu.t[0] + 21.0) for r in recs]
+    with pytest.raises(ValueError, match="16 intervals of 1 s"):
+        network_guard.velocity_spread(short[0].imu, short[0])
+    outcome = fitting.fit_several("kohonen_pure", short, ["a", "b", "c"], interval_s=0.5)
+    doc = outcome.document["network_guard"]
+    assert doc["recordings"] == ["a", "b", "c"] and doc["mean_gain_deg"] is not None, doc
+    assert len(network_guard.velocity_spread(short[0].imu, short[0], 0.5)) == 3
+
+
 def test_two_recordings_cannot_judge_a_network_and_least_squares_is_written() -> None:
     """Held back whole, one of two recordings leaves one to fit on, which a fit on several refuses: the
     network has not shown what it adds, and least squares' model is written, the fit saying why."""

@@ -474,7 +474,7 @@ def test_fit_says_each_references_clock_and_names_one_that_lags(
 def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    recs, _, _ = recordings(9)
+    recs, unit, _ = recordings(9)
     (tmp_path / "unit").mkdir()
     for k, rec in enumerate(recs):
         write_npz(tmp_path / "unit", f"r{k}", rec, positions=True)
@@ -494,6 +494,14 @@ def test_fit_on_several_datasets_then_evaluate_writes_the_aoe(
     assert main([*args, "--json", str(fit_json), "--bias-rule", "pooled"]) == 0
     doc = json.loads(fit_json.read_text())
     assert doc["recordings"] == ["unit/r0", "unit/r1"] and doc["bias_rule"]["mode"] == "pooled"
+    # The shared time offsets and lever arm, said and written as one recording's fit says them: each
+    # sensor's delay less half a 100 Hz step (the .npz holds each step's mean rate at its start) within
+    # 4 standard errors (0.5 and 0.2 seen), and no arm (the numpy unit's accelerometer is at the
+    # reference's point: 1.4 mm seen).
+    for sensor, delay_s in (("gyro", unit.gyro_delay_s), ("accel", unit.accel_delay_s)):  # type: ignore[attr-defined]
+        got, se = doc["time_offset_ms"][sensor], doc["time_offset_se_ms"][sensor]
+        assert abs(got - (1e3 * delay_s - 5.0)) < 4 * se, (sensor, got, se, delay_s)
+    assert np.linalg.norm(doc["lever_arm_mm"]) < 5.0, doc["lever_arm_mm"]
     # A recording given twice would weigh twice and be held back against a copy of itself: refused
     # before anything is read or written.
     capsys.readouterr()

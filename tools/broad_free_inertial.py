@@ -24,10 +24,9 @@ that length would leave a position fix's aiding; its vertical holds the gravity 
 not judged. Nothing of ``sins.nav`` is used: numpy and scipy judge sins's corrections.
 
 ``--at-imu``: the reference moved from the motion capture's point to the IMU by the lever arm least
-squares' fit on the training parts estimates (``sins.compensation.referenced.fit_several``'s
-``lever_arm_m``, body frame; the velocity ``v + C (ω × r)``, ``ω`` the reference attitude's own rate),
-so that what a model may have learned of the arm (``ω̇ × r + ω × (ω × r)``, which the seed model cannot
-express) is not counted as its gain.
+squares' fit on the training parts estimates (``sins fit``'s ``lever_arm_mm``, body frame; the velocity
+``v + C (ω × r)``, ``ω`` the reference attitude's own rate), so that what a model may have learned of the
+arm (``ω̇ × r + ω × (ω × r)``, which the seed model cannot express) is not counted as its gain.
 
 ``--keep DIR``: the parts written to a new folder, the judged ones with positions (their velocity's
 integral), so that sins's own commands give the same figures: ``sins fit DIR/05_1.npz DIR/18_1.npz
@@ -58,7 +57,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from another_unit import with_positions, write_parts
 
 from sins import io
-from sins.compensation import fitting, referenced, world_tilt
+from sins.compensation import fitting
 from sins.core.series import ImuIncrements
 
 TRAIN = ["05_1", "18_1", "18_3"]
@@ -139,12 +138,6 @@ def main(argv: list[str] | None = None) -> int:
                 shutil.copy(folder / f"{n}.npz", args.keep / f"{n}.npz")
             for n in args.judge:  # `sins evaluate --outage` judges by position: the velocity's integral
                 np.savez(args.keep / f"{n}.npz", **with_positions(folder / f"{n}.npz"))
-    if args.at_imu:
-        levelled = [world_tilt.levelled(recs[n], 1.0)[0] for n in args.train]  # as sins fit levels them
-        arm_b_m = referenced.fit_several("regression", levelled).several.lever_arm_m
-        arm = ", ".join(f"{1e3 * x:.2f}" for x in arm_b_m)
-        print(f"the reference moved to the IMU by {arm} mm (body x y z)")
-        parts = {n: at_imu(part, arm_b_m) for n, part in parts.items()}
     models: dict[str, Any] = {"none": None}
     for s in strategies:
         outcome = fitting.fit_several(s, [recs[n] for n in args.train], args.train)
@@ -152,6 +145,11 @@ def main(argv: list[str] | None = None) -> int:
         said = f" (its guard: accelerometer {guard['accelerometer']}, gyro {guard['gyro']})" if guard else ""
         print(f"fitted {s} on {', '.join(args.train)}{said}", flush=True)
         models[s] = outcome.strategy
+        if s == "regression" and args.at_imu:  # the arm least squares' fit found, as `sins fit` says it
+            arm_b_m = 1e-3 * np.asarray(outcome.document["lever_arm_mm"])
+            arm = ", ".join(f"{1e3 * x:.2f}" for x in arm_b_m)
+            print(f"the reference moved to the IMU by {arm} mm (body x y z)")
+            parts = {n: at_imu(part, arm_b_m) for n, part in parts.items()}
     # Each judged part corrected once by each model, for every window length.
     corrected = {
         n: {m: recs[n].imu if s is None else s.correct_recording(recs[n].imu) for m, s in models.items()}

@@ -406,7 +406,7 @@ def fit_several(
     with _clock_named(list(zip(names, clocks, strict=True))):
         if guard and network_guard.guards(name):
             verdict = network_guard.judged(
-                name, list(recs), list(names), lambda n, on: fit(n, on).strategy, stage
+                name, list(recs), list(names), lambda n, on: fit(n, on).strategy, stage, interval_s
             )
         network = verdict is None or verdict.kept or verdict.accel_alone
         fitted = fit(name if network else network_guard.BASELINE, list(recs), progress=progress, stage=stage)
@@ -521,8 +521,7 @@ def _several_document(
     document: dict[str, Any] = {
         "strategy": fitted.strategy.label, "recordings": names, "intervals": list(fit.intervals),
         "interval_s": fit.interval_s, "coefficients": [c.to_dict() for c in table],
-        "recording_biases": biases,
-        "time_offset_ms": {"gyro": fit.time_offset_s * 1e3, "accel": fit.accel_time_offset_s * 1e3},
+        "recording_biases": biases, **_offsets(fit, lines),  # shared by the recordings, as one fit's
     }  # fmt: skip
     if fitted.rule is not None:
         rule = fitted.rule

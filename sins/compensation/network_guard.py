@@ -229,16 +229,18 @@ def _mean_and_error(gains: np.ndarray) -> tuple[float, float]:
     return float(gains.mean()), float(sum_standard_error(gains)) / len(gains)
 
 
-def velocity_spread(corrected: ImuIncrements, rec: ReferencedRecording) -> np.ndarray:
+def velocity_spread(
+    corrected: ImuIncrements, rec: ReferencedRecording, interval_s: float | None = None
+) -> np.ndarray:
     """What ``corrected`` (``rec``'s readings corrected) leaves of each interval's velocity change
-    (:func:`sins.compensation.intervals.velocity_residual`, intervals of
-    :data:`~sins.compensation.intervals.INTERVAL_S`), its spread over the intervals per axis, m/s (3,):
-    each recording's own mean left out, as its own accelerometer bias is no model's (the models correct
-    at the recordings' mean bias)."""
+    (:func:`sins.compensation.intervals.velocity_residual`, intervals of ``interval_s``: the fit's, by
+    default :data:`~sins.compensation.intervals.INTERVAL_S`), its spread over the intervals per axis, m/s
+    (3,): each recording's own mean left out, as its own accelerometer bias is no model's (the models
+    correct at the recordings' mean bias)."""
     from sins.compensation import intervals
     from sins.nav import attitude
 
-    iv = intervals.choose_intervals(rec, intervals.INTERVAL_S)
+    iv = intervals.choose_intervals(rec, interval_s or intervals.INTERVAL_S)
     q_nb = attitude.propagate_increments(corrected.dtheta_b, np.array([0.0, 0.0, 0.0, 1.0]))
     residual = intervals.velocity_residual(iv, intervals.dcm(q_nb), corrected.dv_b, np.diff(corrected.t))
     return np.asarray(residual.std(axis=0))
@@ -258,12 +260,14 @@ def judged(
     names: list[str],
     fit: Callable[[str, list[ReferencedRecording]], Strategy],
     stage: Callable[[str], Any] | None = None,
+    interval_s: float | None = None,
 ) -> NetworkGuard:
     """Network ``name`` judged against least squares on ``recs`` (``names`` name them), each held back in
     turn: ``fit(strategy_name, recordings)`` fits a strategy on the others as the whole fit does (its
-    settings, its screen, its bias rule). No figures with fewer than :data:`MIN_RECORDINGS`, nor where a
-    fit on the others is refused (its reason kept): a recording held back leaves fewer to determine the
-    shared model, and a fit the whole set determines may not be determined without one of them."""
+    settings, its screen, its bias rule), the velocity change judged over the fit's ``interval_s``. No
+    figures with fewer than :data:`MIN_RECORDINGS`, nor where a fit on the others is refused (its reason
+    kept): a recording held back leaves fewer to determine the shared model, and a fit the whole set
+    determines may not be determined without one of them."""
     from sins.errors import SinsInputError
 
     if len(recs) < MIN_RECORDINGS:
@@ -280,7 +284,7 @@ def judged(
         except SinsInputError as exc:
             why = f"with {names[k]} held back, the fit on the others was refused ({exc})"
             return NetworkGuard(name, (), (), (), unjudged=why)
-        folds.append(_fold(network, baseline, rec))
+        folds.append(_fold(network, baseline, rec, interval_s))
     network_deg, baseline_deg, hybrid_deg, seed_gyro_deg, accel_network, accel_baseline = zip(
         *folds, strict=True
     )
@@ -290,7 +294,9 @@ def judged(
     )  # fmt: skip
 
 
-def _fold(network: Strategy, baseline: Strategy, rec: ReferencedRecording) -> tuple[Any, ...]:
+def _fold(
+    network: Strategy, baseline: Strategy, rec: ReferencedRecording, interval_s: float | None = None
+) -> tuple[Any, ...]:
     """One held-back recording's figures: the AOE of ``rec`` corrected by the network, by least squares,
     by the network with least squares' accelerometer, and by the network's accelerometer beside least
     squares' gyro and bias rule (:func:`with_seed_gyro`), deg; the spread of the velocity change the
@@ -312,7 +318,9 @@ def _fold(network: Strategy, baseline: Strategy, rec: ReferencedRecording) -> tu
         corrected[key] = imu
     aoe = {key: unit_bias.open_loop_deg(imu, rec) for key, imu in corrected.items()}
     # Least squares' accelerometer is judged beside the network's gyro (the hybrid), not its own.
-    spread = {key: tuple(velocity_spread(corrected[key], rec).tolist()) for key in ("network", "hybrid")}
+    spread = {
+        k: tuple(velocity_spread(corrected[k], rec, interval_s).tolist()) for k in ("network", "hybrid")
+    }
     return (
         aoe["network"],
         aoe["baseline"],
