@@ -945,3 +945,23 @@ def test_the_strategies_that_replace_the_seed_model_are_told_apart(
             made[name] = compensation.make(name)
     replacing = {name for name, s in made.items() if referenced.replaces_seed_model(s)}
     assert replacing == {"regression_extended", "mlp_pure", "mlp_seed", "kohonen_pure", "ferraris"}
+
+
+def test_none_fitted_against_references_is_written_and_corrects_nothing(tmp_path: Path) -> None:
+    """``sins fit --dataset A [--dataset B] --strategy none`` ended in a traceback (its model said nothing
+    of what it was fitted on, which the fit then wrote into): now it is written, on one recording or
+    several, names what it was fitted on and, loaded, leaves every reading as read (the baseline a judged
+    table's raw row is)."""
+    from sins.compensation import fitting
+
+    recs, _, _ = recordings(9, count=2)
+    several = fitting.fit_several("none", recs, ["a", "b"]).strategy
+    one = fitting.fit_referenced("none", recs[0], where="a").strategy
+    assert several.fitted_on_["recordings"] == [r.source for r in recs]
+    assert "reference_tilt" in several.fitted_on_ and "reference_tilt" in one.fitted_on_
+    for k, strategy in enumerate((several, one)):
+        path = tmp_path / f"none{k}.json"
+        compensation.save(strategy, path)
+        again = compensation.load(path).correct_recording(recs[1].imu)
+        np.testing.assert_array_equal(again.dtheta_b, recs[1].imu.dtheta_b)
+        np.testing.assert_array_equal(again.dv_b, recs[1].imu.dv_b)

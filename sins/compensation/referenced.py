@@ -105,7 +105,8 @@ def fit(
             return replace(made, set_aside=aside)
         fitted, review = made
         strategy = compensation.make(name, **(params or {}))
-        if name == "none":
+        if name == "none":  # nothing learned: what it was fitted on, as every model says
+            strategy.fitted_on_ = {**fitted_on(rec), "checks": review.to_dict()}
             return Fitted(strategy, fitted, review, aside)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
@@ -195,7 +196,8 @@ def fit_several(
             offsets = np.zeros(2)
         else:
             strategy = compensation.make(name, **(params or {}))
-        if name == "none":
+        if name == "none":  # nothing learned, no rule: what it was fitted on, as every model says
+            strategy.fitted_on_ = _several_fitted_on(recs, review)
             return FittedSeveral(strategy, fit_all, None, review, aside)
         if name in _SEED_ONLY:
             assert isinstance(strategy, Regression)
@@ -209,12 +211,18 @@ def fit_several(
             raise
         raise naming(where, exc) from None
     strategy.unit_bias_ = rule.to_dict()
-    strategy.fitted_on_ = {
+    strategy.fitted_on_ = _several_fitted_on(recs, review)
+    return FittedSeveral(strategy, fit_all, rule, review, aside)
+
+
+def _several_fitted_on(recs: list[ReferencedRecording], review: identifiability.Review) -> dict[str, Any]:
+    """What a model fitted on ``recs`` was fitted on (``fitted_on_``): the unit, each recording and its
+    readings' digest, and the fit's checks."""
+    return {
         **fitted_on(recs[0]), "recordings": [rec.source for rec in recs],
         "readings": [readings_of(rec) for rec in recs], "marks": [marks_of(rec) for rec in recs],
         "checks": review.to_dict(),
     }  # fmt: skip
-    return FittedSeveral(strategy, fit_all, rule, review, aside)
 
 
 def _several_determined(
