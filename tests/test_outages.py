@@ -94,7 +94,7 @@ def test_a_bad_length_is_one_line_naming_the_recording() -> None:
 def test_a_reference_whose_positions_do_not_follow_its_velocities_is_refused() -> None:
     """Outages are judged by position: a reference moving 0.5 m/s north whose positions stay put (a file
     written without positions) is refused, one line naming it; the same with its positions moving is
-    judged."""
+    judged, and how far its positions are from its velocities' integral is given beside."""
     rec = _at_rest(6.0)
     ref = rec.reference
     moving = replace(ref, v_n=np.tile([0.5, 0.0, 0.0], (len(ref.t), 1)))
@@ -103,7 +103,13 @@ def test_a_reference_whose_positions_do_not_follow_its_velocities_is_refused() -
     assert "numpy unit" in str(refused.value) and "\n" not in str(refused.value)
     r_m, _ = earth.radii(LAT)
     placed = replace(moving, lat=LAT + 0.5 * ref.t / r_m)
-    assert outages.outages(rec.imu, replace(rec, reference=placed), 2.0).summary()["outages"] == 5
+    summary = outages.outages(rec.imu, replace(rec, reference=placed), 2.0).summary()
+    assert summary["outages"] == 5 and summary["reference_mismatch_m"] < 1e-6, summary
+    # Positions 2 % ahead of the velocities (a reference of its own making): judged, and the 2 cm by
+    # which the reference itself disagrees over each 2 s outage said beside the figures.
+    ahead = replace(moving, lat=LAT + 0.51 * ref.t / r_m)
+    summary = outages.outages(rec.imu, replace(rec, reference=ahead), 2.0).summary()
+    assert summary["reference_mismatch_m"] == pytest.approx(0.02, rel=1e-3), summary
 
 
 def test_sins_outages_match_an_independent_navigation_on_a_real_recording() -> None:

@@ -505,3 +505,39 @@ def test_seed_models_read_the_sensors_at_their_fitted_time_offsets(name: str) ->
         np.abs(direct.dtheta_b - plain.dtheta_b).max()
         > 100 * np.abs(direct.dtheta_b - through_rates.dtheta_b).max()
     )
+
+
+def _turning(bias_x: float, ref_offset_s: float) -> Any:
+    """A unit turning about its own z at 0.3 rad/s for 20 s at 100 Hz (readings exact, plus ``bias_x``
+    rad/s about x), its reference at 10 Hz ``ref_offset_s`` past the readings' grid; Earth's rate left
+    out (a room's frame of unknown place)."""
+    from sins.core.series import ReferencedRecording
+
+    t = np.arange(2001) * 0.01
+    rate = np.array([bias_x, 0.0, 0.3])
+    imu = ImuIncrements(
+        t=t, dtheta_b=np.tile(rate * 0.01, (2000, 1)), dv_b=np.tile([0.0, 0.0, -0.098], (2000, 1))
+    )
+    t_ref = np.arange(ref_offset_s, 20.0, 0.1)
+    q = Rotation.from_rotvec(np.outer(0.3 * t_ref, [0.0, 0.0, 1.0])).as_quat()
+    m = len(t_ref)
+    reference = NavSeries(t=t_ref, lat=np.full(m, 0.8), lon=np.zeros(m), h=np.zeros(m),
+                          v_n=np.zeros((m, 3)), q_nb=q)  # fmt: skip
+    return ReferencedRecording(imu=imu, reference=reference, source="numpy turn", heading_known=False,
+                               latitude_known=False)  # fmt: skip
+
+
+def test_the_open_loop_is_judged_at_reference_epochs_off_the_readings_grid() -> None:
+    """A reference at 10 Hz 4.5 ms off a 100 Hz MEMS's grid (PSINS's FOG-INS beside its MEMS) had no epoch
+    judged ("no judged row has a reference on the readings' times"). Now every epoch is, the readings'
+    attitude slerped between the two around it and started from the reference's slerped at the first
+    reading: a unit's own readings leave nothing (1e-12 rad: constant-rate turns slerp exactly); a gyro
+    bias ``b`` about x, turned round by the turn ``ω`` about z, leaves an angle ``2 b sin(ω τ / 2) / ω``
+    after ``τ`` (to first order in ``b``), on grid and off alike."""
+    for offset in (0.0, 0.0045):
+        own = referenced.open_loop(None, _turning(0.0, offset))
+        assert len(own.t) == 200 - (offset > 0) and np.max(own.total) < 1e-12, (offset, np.max(own.total))
+        biased = referenced.open_loop(None, _turning(1e-3, offset))
+        start = np.ceil(offset / 0.01 - 1e-9) * 0.01  # the first reading at or after the first epoch
+        want = 2e-3 * np.sin(0.3 * (biased.t - start) / 2.0) / 0.3
+        np.testing.assert_allclose(biased.total, want, rtol=1e-4, atol=1e-6)  # second order: 2e-7 seen

@@ -455,6 +455,7 @@ def _outages(
             figures[label] = outages.outages(imu, rec, length).summary()
         raw, fixed = figures[RAW], figures[strategy.label]
         out.append({"length_s": length, "outages": raw["outages"], "every_s": outages.EVERY_S,
+                    "reference_mismatch_m": raw["reference_mismatch_m"],
                     "raw": {k: raw[k] for k in OUTAGE_FIGURES},
                     "corrected": {k: fixed[k] for k in OUTAGE_FIGURES}})  # fmt: skip
         rows.append([f"{length:g}", str(raw["outages"]), *(f"{f[k]:.4f}" for f in (raw, fixed)
@@ -465,6 +466,9 @@ def _outages(
     )
     head = ["outage s", "outages", "raw: RMS", "median", "95 %", f"{strategy.label}: RMS", "median", "95 %"]
     lines.append(fixed_width(head, rows))
+    floor = ", ".join(f"{1e3 * o['reference_mismatch_m']:.1f} mm over {o['length_s']:g} s" for o in out)
+    lines.append(f"the reference's positions and its velocities' integral differ by {floor} (RMS): errors "
+                 "near that are the reference's as much as the unit's")  # fmt: skip
     return out
 
 

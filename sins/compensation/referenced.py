@@ -468,7 +468,7 @@ def opening_rest(rec: ReferencedRecording) -> slice:
 
 @dataclass(frozen=True)
 class OpenLoop:
-    """The open-loop attitude's errors at the reference's epochs on the readings' grid: ``t`` (m,) s,
+    """The open-loop attitude's errors at the reference's epochs within the readings: ``t`` (m,) s,
     ``total``, ``heading``, ``inclination`` (m,) rad, ``judged`` (m,) the rows the figures count."""
 
     t: Array
@@ -499,21 +499,35 @@ def open_loop(
     Raises
     ------
     SinsInputError
-        when no judged row has a reference on the readings' grid.
+        when no judged row has a reference within the readings.
     """
     imu = corrected(strategy, rec, bias_from_rest=bias_from_rest)
     ref = rec.reference
-    first = int(np.searchsorted(imu.t, ref.t[0]))
-    q = attitude.propagate_increments(imu.dtheta_b[first:], ref.q_nb[0], frame_turn(rec)[first:])
-    at = np.searchsorted(imu.t, ref.t)
-    on_grid = np.abs(imu.t[np.minimum(at, len(imu.t) - 1)] - ref.t) <= 1e-9 * np.maximum(1.0, np.abs(ref.t))
-    total, heading, inclination = attitude.attitude_errors(q[at[on_grid] - first], ref.q_nb[on_grid])
-    judged = np.ones(int(on_grid.sum()), dtype=bool) if rec.judged is None else rec.judged[at[on_grid]]
+    on_grid = 1e-9 * max(1.0, float(np.abs(ref.t).max()))  # a reference epoch at a reading's time, s
+    first = int(np.searchsorted(imu.t, ref.t[0] - on_grid))
+    # From the reference's attitude at the first reading within its span (its first epoch's where that is
+    # on the readings' grid, slerped between its epochs where not: a FOG-INS at 10 Hz off a MEMS's grid).
+    start = (
+        ref.q_nb[0]
+        if abs(imu.t[first] - ref.t[0]) <= on_grid
+        else ref.interpolate(imu.t[first : first + 1]).q_nb[0]
+    )
+    q = attitude.propagate_increments(imu.dtheta_b[first:], start, frame_turn(rec)[first:])
+    # Judged at every reference epoch from there on: the readings' attitude where the epoch is on their
+    # grid, slerped between the two readings around it where not (before, such epochs were left out, and
+    # a reference wholly off the grid could not be judged).
+    inside = (ref.t >= imu.t[first] - on_grid) & (ref.t <= imu.t[-1] + on_grid)
+    t_ref = np.clip(ref.t[inside], imu.t[first], imu.t[-1])
+    flat = np.zeros(len(q))
+    estimate = NavSeries(t=imu.t[first:], lat=flat, lon=flat, h=flat, v_n=np.zeros((len(q), 3)), q_nb=q)
+    total, heading, inclination = attitude.attitude_errors(estimate.interpolate(t_ref).q_nb, ref.q_nb[inside])
+    row = np.clip(np.searchsorted(imu.t, t_ref + on_grid, side="right") - 1, 0, len(imu.t) - 1)
+    judged = np.ones(len(t_ref), dtype=bool) if rec.judged is None else rec.judged[row]
     if not judged.any():
         raise SinsInputError(
-            f"{rec.source or 'recording'}: no judged row has a reference on the readings' times"
+            f"{rec.source or 'recording'}: no judged row has a reference within the readings"
         )
-    return OpenLoop(ref.t[on_grid], total, heading, inclination, np.asarray(judged, dtype=bool))
+    return OpenLoop(ref.t[inside], total, heading, inclination, np.asarray(judged, dtype=bool))
 
 
 def open_loop_attitude(
