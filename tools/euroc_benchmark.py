@@ -4,6 +4,7 @@ Usage::
 
     .venv/bin/python tools/euroc_benchmark.py [--strategies regression mlp ...] [--root DATA_ROOT]
         [--folder euroc] [--train A B ...] [--judge X Y ...] [--json OUT.json] [--models DIR]
+        [--outage SECONDS]
 
 The protocol of Brossard et al. 2020 (``shared/data/euroc/SOURCE.md``): every strategy fitted with
 ``sins fit --dataset euroc/A --dataset euroc/B ... --strategy S --out M`` on the six training sequences,
@@ -12,7 +13,8 @@ others by its absolute orientation error (AOE: the corrected gyro integrated alo
 first attitude, RMS of the angle over every sample, no Earth rate). Nothing of a judged sequence is read
 by a fit. Prints one row per judged sequence (raw, every strategy once, Brossard 2020 as SOURCE.md cites
 it) and the mean, each fit's wall time, and checks the raw row against SOURCE.md's independent scipy
-integration (within 1 %).
+integration (within 1 %). ``--outage SECONDS``: also ``sins evaluate --outage SECONDS``, and a second
+table of the RMS horizontal error at the outages' ends, m.
 
 ``--folder``, ``--train`` and ``--judge`` run the same commands on another unit's ``.npz`` recordings
 (``--folder myunit --train a b c --judge d e f``); the published columns are then left out.
@@ -59,12 +61,23 @@ def _run(argv: list[str], quiet: bool = True) -> int:
     return code
 
 
-def _evaluate(model: Path, folder: str, names: list[str], out: Path) -> dict[str, dict[str, Any]]:
+def _evaluate(
+    model: Path, folder: str, names: list[str], out: Path, outage: float | None = None
+) -> dict[str, dict[str, Any]]:
     """Every judged recording's document by its name: one ``sins evaluate`` of them all (several
-    ``--dataset``: each judged as alone, the documents under ``recordings``)."""
+    ``--dataset``: each judged as alone, the documents under ``recordings``), with ``--outage`` where
+    given."""
     datasets = [f"{folder}/{n}" for n in names]
+    outages = ["--outage", str(outage)] if outage else []
     code = _run(
-        ["evaluate", str(model), *(a for d in datasets for a in ("--dataset", d)), "--json", str(out)]
+        [
+            "evaluate",
+            str(model),
+            *(a for d in datasets for a in ("--dataset", d)),
+            "--json",
+            str(out),
+            *outages,
+        ]
     )
     if code:
         raise SystemExit(f"sins evaluate {model} on {', '.join(datasets)} failed ({code})")
@@ -85,6 +98,7 @@ def main_(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--screen", choices=("refused", "always", "never"), help="sins fit --screen (default its own)"
     )
+    p.add_argument("--outage", type=float, metavar="SECONDS", help="also sins evaluate --outage SECONDS")
     args = p.parse_args(argv)
     if args.root is not None:
         os.environ["SINS_DATA"] = str(args.root)
@@ -122,15 +136,22 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
         wrote = "" if guard is None else f"; its guard wrote {guard['written']}"
         print(f"fitted {strategy} in {seconds:.1f} s (bias rule: {mode}{wrote})", file=sys.stderr)
         for name, judged in _evaluate(
-            model, args.folder, args.judge, work / f"{strategy}.judged.json"
+            model, args.folder, args.judge, work / f"{strategy}.judged.json", args.outage
         ).items():
             results["aoe_deg"].setdefault(name, {})["none"] = judged["open_loop_attitude_raw"]["aoe_deg"]
             results["aoe_deg"][name][strategy] = judged["open_loop_attitude"]["aoe_deg"]
+            if args.outage:  # the RMS horizontal error at the outages' ends, m
+                outage = judged["free_inertial_outages"][0]
+                results.setdefault("outage_m", {}).setdefault(name, {})["none"] = outage["raw"]["rms_m"]
+                results["outage_m"][name][strategy] = outage["corrected"]["rms_m"]
     fitted = [s for s in strategies if s != "none" and not results["fits"][s].get("refused")]
     if not fitted:
         raise SystemExit("every sins fit was refused")
     refused = [s for s in strategies if results["fits"].get(s, {}).get("refused")]
     _table(results, fitted, published)  # the raw column is "none"
+    if args.outage:
+        print(f"\n{args.outage:g} s free-inertial outages from every second, RMS horizontal error, m")
+        _table(results, fitted, False, key="outage_m", digits=4)
     if refused:
         print("refused by sins fit (see above): " + ", ".join(refused))
     # Their columns are least squares' correction: the networks' held-back guard wrote its model.
@@ -147,6 +168,7 @@ def _benchmark(args: argparse.Namespace, work: Path) -> int:
 def run_on_unit(
     write: Callable[[Path], None], folder: str, train: list[str], judge: list[str], strategies: list[str],
     *, json_out: Path | None = None, keep: Path | None = None, screen: str | None = None,
+    outage: float | None = None,
 ) -> int:  # fmt: skip
     """The benchmark on recordings of another unit: ``write`` puts them into ``ROOT/folder`` of a data root,
     ``keep`` or a temporary one, removed after (the recordings written for the run, not the user's)."""
@@ -156,7 +178,8 @@ def run_on_unit(
         write(root / folder)
         bench = ["--root", str(root), "--folder", folder, "--train", *train, "--judge", *judge,
                  "--strategies", *strategies, *(["--json", str(json_out)] if json_out else []),
-                 *(["--screen", screen] if screen else [])]  # fmt: skip
+                 *(["--screen", screen] if screen else []),
+                 *(["--outage", str(outage)] if outage else [])]  # fmt: skip
         return main_(bench)
     finally:
         if keep is None:
@@ -189,28 +212,34 @@ def run_on_euroc_as(
     )
 
 
-def _table(results: dict[str, Any], strategies: list[str], published: bool) -> None:
+def _table(
+    results: dict[str, Any], strategies: list[str], published: bool, key: str = "aoe_deg", digits: int = 2
+) -> None:
+    """One row per judged sequence of ``results[key]`` and the mean (with the fit times under the AOE)."""
     cols = ["none", *strategies]
     head = ["sequence", *cols] + (["Brossard 2020", "raw (SOURCE.md)"] if published else [])
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     sums = dict.fromkeys(cols, 0.0)
-    names = list(results["aoe_deg"])
+    names = list(results[key])
     for name in names:
-        row = results["aoe_deg"][name]
+        row = results[key][name]
         for c in cols:
             sums[c] += row[c]
-        cells = [f"{row[c]:.2f}" for c in cols]
+        cells = [f"{row[c]:.{digits}f}" for c in cols]
         if published:
             raw = row["none"]
             off = 100 * (raw / RAW_SOURCE[name] - 1)
             cells += [f"{BROSSARD[name]:.2f}", f"{RAW_SOURCE[name]:.1f} ({off:+.2f} %)"]
         print(f"| {name} | " + " | ".join(cells) + " |")
-    mean = [f"**{sums[c] / len(names):.2f}**" for c in cols]
+    mean = [f"**{sums[c] / len(names):.{digits}f}**" for c in cols]
     if published:
         mean += [f"**{sum(BROSSARD.values()) / len(BROSSARD):.2f}**", ""]
     print("| mean | " + " | ".join(mean) + " |")
-    print("\nfit wall time: " + ", ".join(f"{s} {results['fits'][s]['seconds']:.0f} s" for s in strategies))
+    if key == "aoe_deg":
+        print(
+            "\nfit wall time: " + ", ".join(f"{s} {results['fits'][s]['seconds']:.0f} s" for s in strategies)
+        )
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ change to the bias rule or to a strategy, on units nobody tuned to.
 Usage::
 
     .venv/bin/python tools/euroc_units.py [--seeds 301 302 ...] [--kinds calib power ...]
-        [--strategies regression bias_only ...] [--fit N] [--json OUT.json] [--keep DIR]
+        [--strategies regression bias_only ...] [--fit N] [--json OUT.json] [--keep DIR] [--outage S]
 
 Issue 40 asks that the same commands, on recordings of a unit sins does not hold, fitted on three and
 judged on three others, leave no judged recording worse than its raw readings. This tool makes such
@@ -31,7 +31,8 @@ drawn (sorted names, ``rng.choice`` without replacement): the first three fitted
 (``--fit N``: ``N + 3`` drawn, the first ``N`` fitted: a unit of more recordings draws other sequences),
 each strategy fitted with ``sins fit --dataset`` and judged with ``sins evaluate`` as
 ``tools/euroc_benchmark.py`` does. Prints each unit's table, then per strategy the judged recordings
-left worse than their raw readings and the mean AOE.
+left worse than their raw readings and the mean AOE (``--outage S``: the same of the RMS horizontal error
+of ``sins evaluate --outage S``, the units keeping EuRoC's positions).
 
 The default seeds 301-310 (kinds in the order above, two each) are the ones a helper drew to judge a
 change of the bias rule, so they have been looked at: to judge a new change, draw new seeds and fix them
@@ -130,17 +131,22 @@ def make_unit(seed: int, kind: str, source: Path, out: Path, fitted: int = 3) ->
         np.savez_compressed(out / f"{name}.npz", **{k: np.asarray(rec[k]).astype(types[k]) for k in _KEYS})
 
 
-def _summary(units: dict[str, dict[str, Any]], strategies: list[str]) -> None:
-    """Per strategy: the judged recordings worse than raw, and the mean AOE over those it was judged on."""
-    print("\n| strategy | judged | worse than raw | mean raw | mean corrected |")
-    print("|---|---|---|---|---|")
+def _summary(units: dict[str, dict[str, Any]], strategies: list[str], key: str = "aoe_deg") -> None:
+    """Per strategy: the judged recordings worse than raw, and the mean AOE (``key``: or the outages' RMS
+    horizontal error, ``outage_m``) over those it was judged on; beside least squares where it was run."""
+    print(
+        f"\n{key}\n| strategy | judged | worse than raw | mean raw | mean corrected | worse than regression |"
+    )
+    print("|---|---|---|---|---|---|")
     for s in strategies:
-        pairs = [(row["none"], row[s]) for u in units.values() for row in u["aoe_deg"].values() if s in row]
-        if not pairs:
-            print(f"| {s} | 0 | refused everywhere | | |")
+        rows = [row for u in units.values() for row in u.get(key, {}).values() if s in row]
+        if not rows:
+            print(f"| {s} | 0 | refused everywhere | | | |")
             continue
-        raw, got = np.array(pairs).T
-        print(f"| {s} | {len(pairs)} | {int((got > raw).sum())} | {raw.mean():.2f} | {got.mean():.2f} |")
+        raw, got = np.array([(row["none"], row[s]) for row in rows]).T
+        least = [row[s] > row["regression"] for row in rows if "regression" in row]
+        print(f"| {s} | {len(rows)} | {int((got > raw).sum())} | {raw.mean():.4g} | {got.mean():.4g} | "
+              f"{sum(least)} of {len(least)} |")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -158,6 +164,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--json", type=Path, help="write every unit's figures here")
     p.add_argument("--keep", type=Path, help="write the units here (a data root) and keep them")
+    p.add_argument("--outage", type=float, metavar="SECONDS", help="also judge outages of SECONDS")
     args = p.parse_args(argv)
     kinds = args.kinds or [KINDS[(i // 2) % len(KINDS)] for i in range(len(args.seeds))]
     source = data_root() / "euroc"
@@ -172,9 +179,12 @@ def main(argv: list[str] | None = None) -> int:
             euroc_benchmark.run_on_unit(
                 functools.partial(make_unit, seed, kind, source, fitted=args.fit),
                 folder, train, judge, args.strategies, json_out=out_json, keep=args.keep,
+                outage=args.outage,
             )  # fmt: skip
             units[folder] = {"seed": seed, "kind": kind, **json.loads(out_json.read_text())}
     _summary(units, args.strategies)
+    if args.outage:
+        _summary(units, args.strategies, "outage_m")
     if args.json:
         args.json.write_text(json.dumps(units, indent=2))
     return 0
