@@ -38,24 +38,40 @@ def _guard(
     )
 
 
-def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors() -> None:
-    """The accelerometer first. Spreads 0.90, 0.92, 0.88 of least squares': gains 10, 8, 12 %, mean 10 %,
-    standard error 2/√3 = 1.15 %: kept, and the gyro judged with the network whole: gains 0.3, 0.1,
-    0.2°, mean 0.2°, standard error 0.1/√3 = 0.0577°, 3.5 of them: kept. Spreads 0.90, 1.05, 0.95: gains
-    10, -5, 5 %, mean 3.3 %, standard error 4.4 %: least squares' accelerometer, and the gyro judged
-    with it (``hybrid``): gains 0.3, -0.2, 0.2°, mean 0.1°, standard deviation √(0.14/2) = 0.2646°,
-    standard error 0.1528°: refused; gains 0.3, 0.1, 0.2° with it: written with least squares'
-    accelerometer."""
-    kept = _guard("kohonen_pure", (1.0, 2.0, 3.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88))
+def test_the_network_is_kept_only_where_its_mean_gain_clears_students_t_over_the_recordings() -> None:
+    """The threshold is Student's t over the recordings at the normal's level of 2 standard errors:
+    4.53 over three recordings (t with 2 degrees of freedom, ``scipy.stats.t``), 2.65 over six. The
+    accelerometer first. Spreads 0.90, 0.92, 0.88 of least squares': gains 10, 8, 12 %, mean 10 %,
+    standard error 2/√3 = 1.15 % (8.7 of them): kept, and the gyro judged with the network whole: gains
+    0.21, 0.19, 0.20°, mean 0.2°, standard error 0.01/√3 = 0.00577° (34.6): kept. Gains 0.3, 0.1, 0.2°
+    (3.46 standard errors: kept by the normal's 2, one null gain in eleven passing it over three
+    recordings): refused. Spreads 0.90, 1.05, 0.95: gains 10, -5, 5 %, mean 3.3 %, standard error 4.4 %:
+    least squares' accelerometer, and the gyro judged with it (``hybrid``): gains 0.3, -0.2, 0.2°, mean
+    0.1°, standard deviation √(0.14/2) = 0.2646°, standard error 0.1528°: refused; gains 0.21, 0.19,
+    0.20° with it: written with least squares' accelerometer."""
+    from scipy.stats import norm, t
+
+    assert _guard("x", (1.0,) * 3, (1.0,) * 3, (1.0,) * 3).threshold == pytest.approx(
+        t.ppf(norm.cdf(2.0), 2), rel=1e-12
+    )
+    assert compensation.base.recordings_threshold(2.0, 3) == pytest.approx(4.5265, abs=1e-4)
+    assert compensation.base.recordings_threshold(2.0, 6) == pytest.approx(2.6486, abs=1e-4)
+    assert compensation.base.recordings_threshold(2.0, 1) == np.inf
+    kept = _guard("kohonen_pure", (1.09, 1.91, 3.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88))
     assert kept.accel_gains_pct == pytest.approx([10.0, 8.0, 12.0])
     assert kept.accel_kept and kept.mean_gain_deg == pytest.approx(0.2)
-    assert kept.standard_error_deg == pytest.approx(0.1 / np.sqrt(3.0))
+    assert kept.standard_error_deg == pytest.approx(0.01 / np.sqrt(3.0))
+    wide = _guard("kohonen_pure", (1.0, 2.0, 3.0), (9.0, 9.0, 9.0), (0.90, 0.92, 0.88))
+    assert wide.mean_gain_deg / wide.standard_error_deg == pytest.approx(2.0 * np.sqrt(3.0))
+    assert not wide.kept and wide.to_dict()["written"] == "regression"
     doc = kept.to_dict()
     assert kept.kept and doc["written"] == "kohonen_pure" and doc["accelerometer"] == "kohonen_pure"
     assert doc["accel_mean_gain_pct"] == pytest.approx(10.0)
     assert doc["accel_standard_error_pct"] == pytest.approx(2.0 / np.sqrt(3.0))
-    assert kept.lines()[-1].endswith("above 2 standard errors: kohonen_pure is written")
-    assert kept.lines()[-2].endswith("above 2 standard errors: the network's is kept")
+    bar = "above 4.53 standard errors (Student's t over 3 recordings)"
+    assert kept.lines()[-1].endswith(f"{bar}: kohonen_pure is written"), kept.lines()[-1]
+    assert kept.lines()[-2].endswith(f"{bar}: the network's is kept")
+    assert kept.to_dict()["threshold"] == pytest.approx(4.5265, abs=1e-4)
     refused = _guard("mlp_seed", (9.0, 9.0, 9.0), (1.0, 2.3, 3.0), (0.90, 1.05, 0.95))
     assert refused.accel_gains_pct == pytest.approx([10.0, -5.0, 5.0])
     assert not refused.accel_kept and refused.mean_gain_deg == pytest.approx(0.1)
@@ -70,7 +86,7 @@ def test_the_network_is_kept_only_where_its_mean_gain_clears_two_standard_errors
     assert refused.lines()[2] == (
         "  b: accelerometer 1050.0 1050.0 1050.0 against 1000.0 1000.0 1000.0 mm/s; AOE 2.300° against 2.100°"
     )
-    hybrid = _guard("mlp_pure", (9.0, 9.0, 9.0), (1.0, 2.0, 3.0), (0.90, 1.05, 0.95))
+    hybrid = _guard("mlp_pure", (9.0, 9.0, 9.0), (1.09, 1.91, 3.0), (0.90, 1.05, 0.95))
     doc = hybrid.to_dict()
     assert hybrid.kept and doc["written"] == "mlp_pure" and doc["accelerometer"] == "regression"
     assert hybrid.lines()[-1].endswith("mlp_pure is written with least squares' accelerometer")
@@ -254,21 +270,22 @@ class _Seeded(Strategy):
 
 
 def test_a_network_whose_accelerometer_loses_held_back_is_judged_with_least_squares_one() -> None:
-    """Three recordings of a calibrated numpy unit (no gyro bias, scale or delay; accelerometer
+    """Four recordings of a calibrated numpy unit (no gyro bias, scale or delay; accelerometer
     misalignment of 0.3 %). The stand-in network corrects the gyro exactly and the accelerometer with a
     scale 2 % off; least squares the other way round (gyro 1 % off, accelerometer exact). Held back, the
     network's accelerometer leaves more of every recording's velocity change (a 2 % scale of gravity's
     and the motion's changing share, against the sensor's 1 cm/s noise), so least squares' replaces it,
-    and the gyro, judged with it, wins on every recording: the network is written with least squares'
-    accelerometer. The accelerometer does not move the AOE here (no bias rule reads it)."""
-    recs, unit, _ = recordings(8, calibrated=True)
+    and the gyro, judged with it, wins on every recording (4.4 standard errors, above Student's 3.31 over
+    four; over the first three, 3.2 of 4.53): the network is written with least squares' accelerometer.
+    The accelerometer does not move the AOE here (no bias rule reads it)."""
+    recs, unit, _ = recordings(8, count=4, calibrated=True)
     a_true = unit.A  # type: ignore[attr-defined]
     baseline = Regression()
     baseline.B0_, baseline.B_, baseline.K_ = np.zeros(3), 0.01 * np.eye(3), np.zeros((3, 3))
     baseline.A0_, baseline.A_ = np.zeros(3), a_true
     network = _Seeded(np.zeros((3, 3)), a_true + 0.02 * np.eye(3))
     fits = {network_guard.BASELINE: baseline, "mlp_pure": network}
-    verdict = network_guard.judged("mlp_pure", recs, ["a", "b", "c"], lambda name, on: fits[name])
+    verdict = network_guard.judged("mlp_pure", recs, ["a", "b", "c", "d"], lambda name, on: fits[name])
     assert (verdict.accel_gains_pct < 0.0).all() and not verdict.accel_kept, verdict
     assert verdict.hybrid_deg == pytest.approx(verdict.network_deg, rel=1e-9)
     assert (verdict.gains_deg > 0.0).all() and verdict.kept, verdict
@@ -284,7 +301,7 @@ def test_the_written_network_corrects_its_accelerometer_as_least_squares_does(
     (4, 3) is refused in one line naming the file."""
     recs, _, _ = recordings(4)
     names = ["a", "b", "c"]
-    verdict = _guard("kohonen_pure", (9.0, 9.0, 9.0), (1.0, 2.0, 3.0), (0.90, 1.05, 0.95))
+    verdict = _guard("kohonen_pure", (9.0, 9.0, 9.0), (1.09, 1.91, 3.0), (0.90, 1.05, 0.95))
     monkeypatch.setattr(network_guard, "judged", lambda *args: verdict)
     written = fitting.fit_several("kohonen_pure", recs, names).strategy
     least_squares = fitting.fit_several("regression", recs, names).strategy

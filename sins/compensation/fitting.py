@@ -154,6 +154,8 @@ def _learner_lines(strategy: Any, how: str, by_recording: bool = False) -> list[
     """What a learned strategy chose (``how``: on what it was chosen), then its guard per channel: the
     physics terms each took, the learner's held-back gain over them, what the model uses there (the
     learner where the guard kept it, or everywhere with the guard off), and the same in words."""
+    from sins.compensation.base import recordings_threshold
+
     chosen = "; ".join(f"{s} {_settings(c)}" for s, c in strategy.configs_.items())
     lines, learned = [f"{how}: {chosen}"], []
     for k, (ch, g) in enumerate(strategy.guard_.items()):
@@ -164,7 +166,12 @@ def _learner_lines(strategy: Any, how: str, by_recording: bool = False) -> list[
         gain, se = 100 * g["gain_fraction"], 100 * g["gain_se_fraction"]
         lines.append(f"{ch:<8} {base:<26} learner's held-back gain {gain:+7.2f} % ± {se:.2f} %  -> "
                      f"{'learned' if used else base}{forced}")  # fmt: skip
-    over = " over the held-back recordings" if by_recording else ""
+    over = (
+        f" over the held-back recordings (Student's t over {strategy.cv_folds_}: "
+        f"{recordings_threshold(strategy.guard_z, strategy.cv_folds_):.3g})"
+        if by_recording
+        else ""
+    )
     rule = (
         "the guard is off: the learner corrects every channel, whatever its held-back gain"
         if not strategy.guard

@@ -90,6 +90,14 @@ class NetworkGuard:
             raise ValueError(f"{self.label}'s guard: every figure one per recording ({len(self.sources)})")
 
     @property
+    def threshold(self) -> float:
+        """The standard errors a mean gain must exceed: :attr:`guard_z` as Student's t over the recordings
+        (:func:`~sins.compensation.base.recordings_threshold`)."""
+        from sins.compensation.base import recordings_threshold
+
+        return recordings_threshold(self.guard_z, len(self.sources))
+
+    @property
     def judged(self) -> bool:
         """Whether there were recordings enough to hold back (:data:`MIN_RECORDINGS`)."""
         return len(self.sources) >= MIN_RECORDINGS
@@ -105,9 +113,9 @@ class NetworkGuard:
     @property
     def accel_kept(self) -> bool:
         """Whether the network's accelerometer earns its place: judged, its mean gain above
-        :attr:`guard_z` standard errors."""
+        :attr:`threshold` standard errors."""
         mean, error = _mean_and_error(self.accel_gains_pct)
-        return self.judged and mean > self.guard_z * error
+        return self.judged and mean > self.threshold * error
 
     @property
     def written_deg(self) -> tuple[float, ...]:
@@ -149,9 +157,9 @@ class NetworkGuard:
 
     @property
     def kept(self) -> bool:
-        """Whether the network earns its place: judged, its mean gain above :attr:`guard_z` standard
+        """Whether the network earns its place: judged, its mean gain above :attr:`threshold` standard
         errors. Not judged (too few recordings to hold one back), it has not shown it."""
-        return self.judged and self.mean_gain_deg > self.guard_z * self.standard_error_deg
+        return self.judged and self.mean_gain_deg > self.threshold * self.standard_error_deg
 
     def lines(self) -> list[str]:
         """What the guard found, in words: each recording's figures, then the verdicts."""
@@ -174,26 +182,27 @@ class NetworkGuard:
             "it would write (with least squares' accelerometer where the network's is not kept)"
         )
         mean, error = _mean_and_error(self.accel_gains_pct)
+        bar = f"{self.threshold:.3g} standard errors (Student's t over {len(self.sources)} recordings)"
         accel = f"accelerometer: mean gain {mean:+.1f} % ± {error:.1f} %, " + (
-            f"above {self.guard_z:g} standard errors: the network's is kept"
+            f"above {bar}: the network's is kept"
             if self.accel_kept
-            else f"not above {self.guard_z:g} standard errors: least squares' replaces the network's"
+            else f"not above {bar}: least squares' replaces the network's"
         )
         gain = f"gyro: mean gain {self.mean_gain_deg:+.3f}° ± {self.standard_error_deg:.3f}°"
         if self.kept:
             how = "" if self.accel_kept else " with least squares' accelerometer"
-            verdict = f"{gain}, above {self.guard_z:g} standard errors: {self.label} is written{how}"
+            verdict = f"{gain}, above {bar}: {self.label} is written{how}"
         elif self.accel_alone:
             held = self.seed_gyro_gain_deg
             said = f"{held:+.3f}° on the mean" if abs(held) >= 5e-4 else "the same to 0.001°"
             verdict = (
-                f"{gain}, not above {self.guard_z:g} standard errors: {self.label}'s accelerometer is "
+                f"{gain}, not above {bar}: {self.label}'s accelerometer is "
                 f"written beside least squares' gyro and bias rule (held back, their AOE against least "
                 f"squares' own: {said})"
             )
         else:
             verdict = (
-                f"{gain}, not above {self.guard_z:g} standard errors: least squares' model ({BASELINE}) is "
+                f"{gain}, not above {bar}: least squares' model ({BASELINE}) is "
                 f"written, not {self.label}'s (--no-guard writes the network unjudged)"
             )
         return [head, *rows, accel, verdict]
@@ -212,7 +221,8 @@ class NetworkGuard:
             "accel_mean_gain_pct": judged(mean), "accel_standard_error_pct": judged(error),
             "accel_earns_its_place": self.accel_kept, "mean_gain_deg": judged(self.mean_gain_deg),
             "standard_error_deg": judged(self.standard_error_deg),
-            "guard_z": self.guard_z, "earns_its_place": self.kept,
+            "guard_z": self.guard_z, "threshold": self.threshold if self.judged else None,
+            "earns_its_place": self.kept,
             "written": self.label if self.kept or self.accel_alone else BASELINE,
             "accelerometer": self.label if self.accel_kept and (self.kept or self.accel_alone) else BASELINE,
             "gyro": self.label if self.kept else BASELINE,

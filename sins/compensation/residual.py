@@ -32,13 +32,13 @@ reason for the design:
   training length; it stops once ``PATIENCE`` lengths in a row have not lowered its held-back loss
   summed over the folds (longer training then fits the training folds' noise closer: the lengths it
   would have gone on to are not chosen unless the held-back loss turns down again after rising twice).
-* **An honest guard.** Per channel, the chosen learner's held-back gain over
-  regression and the terms (sum of squared residuals) is compared with its
-  sampling error over the held-back blocks, or, where the folds are recordings, over the recordings
-  (a new recording is the draw a model meets; blocks of one recording share its day, its motion and
-  its reference, and their spread had passed a learner that gained on one of three recordings and
-  lost on the other two); a channel whose gain is not above ``guard_z`` standard errors predicts
-  their correction (unless ``guard=False``). The terms pass the same test against regression alone.
+* **An honest guard.** Per channel, the chosen learner's held-back gain over regression and the terms
+  (sum of squared residuals) is compared with its sampling error over the held-back blocks, or, where
+  the folds are recordings, over the recordings (a new recording is the draw a model meets; blocks of
+  one recording share its day, its motion and its reference, and their spread had passed a learner that
+  gained on one of three recordings and lost on the other two), ``guard_z`` then as Student's t over
+  them; a channel not above it predicts their correction (unless ``guard=False``). The terms pass the
+  same test against regression alone (at ``guard_z`` itself).
 
 Subclasses supply the learner: its candidate settings, training and prediction.
 """
@@ -63,6 +63,7 @@ from sins.compensation.base import (
     SEED_RANGE,
     ParamRange,
     Strategy,
+    recordings_threshold,
     state_array,
     sum_standard_error,
 )
@@ -93,8 +94,7 @@ EDGE_STEP = 1e-3
 BEYOND_SAID = 0.05
 #: Fixed-point passes of a correction after the first (see ``correct``).
 _PASSES = 2
-#: Rows a correction solves at a time: its passes run chunk by chunk (every step is row by row), in a few
-#: MB a chunk whatever the recording's length.
+#: Rows a correction solves at a time, chunk by chunk (each step is row by row): a few MB whatever its length.
 CORRECT_ROWS = 65_536
 #: The rows from which a correction solves its chunks on two threads by default (``n_jobs=None``): numpy,
 #: the maps' compiled kernels and scipy's k-d tree let go of the GIL for a chunk's work; below a few
@@ -179,8 +179,8 @@ class _Trial:
     def verdicts(self, z: float, by_fold: bool = False) -> list[dict[str, Any]]:
         """Per channel: the gain and its standard error as fractions of regression's sum of squares,
         and whether the gain is above ``z`` of them: the held-back blocks taken as independent draws, or
-        (``by_fold``, where each fold is a recording) the folds, each its blocks' sum."""
-        base = np.vstack(self.base)
+        (``by_fold``) the recordings, each its blocks' sum, ``z`` then as Student's t over them."""
+        base, z = np.vstack(self.base), recordings_threshold(z, len(self.gains)) if by_fold else z
         gains = np.array([g.sum(axis=0) for g in self.gains]) if by_fold else np.vstack(self.gains)
         out = []
         for c in range(gains.shape[1]):
