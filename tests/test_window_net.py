@@ -144,3 +144,17 @@ def test_parameters_out_of_bounds_are_refused() -> None:
     with pytest.raises(ValueError, match="ensemble is 0, expected a whole number from 1 to 16"):
         WindowNet(ensemble=0).check_params()
     assert window_net.FEATURES == 8 * (len(EDGES_S) - 1)
+
+
+def test_the_guard_over_recordings_judges_by_students_t(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Held back over three recordings, open-loop gains of 0.3, 0.1 and 0.2° are 3.46 standard errors of
+    their mean: kept at 2, refused at 2 standard errors' level as Student's t over three (4.53, their
+    spread estimated from them); gains of 0.21, 0.19 and 0.20° (34.6) are kept. The gains are set by hand
+    (``_open_loop_gain``), the networks trained as they are."""
+    parts = [_recording(s, 0.0) for s in range(3)]
+    for gains, kept in (((0.3, 0.1, 0.2), False), ((0.21, 0.19, 0.20), True)):
+        given = iter(gains)
+        monkeypatch.setattr(WindowNet, "_open_loop_gain", lambda self, nets, rec, it=given: next(it))
+        net = _seeded().fit_recordings(parts, recordings=[object()] * 3)  # type: ignore[list-item]
+        assert net.held_back_gain_[0] == pytest.approx(0.2)
+        assert (net.window_axes == ["x", "y", "z"]) is kept, (gains, net.window_axes)

@@ -22,9 +22,10 @@ thermal state the accelerometer's level betrays). This strategy gives the missio
   held-back recording is judged by what the network is for: the open-loop attitude of its gyro
   integrated alone (:func:`~sins.compensation.unit_bias.open_loop_deg`), with and without the network;
   the network is kept only where the mean gain over the held-back recordings is above ``guard_z``
-  standard errors (their own spread). Without them (one recording: its first part against its last
-  :data:`HOLD_LAST`), each gyro axis by the held-back intervals' squared error, as the other learners'
-  guard does. Held-back folds train two at a time (threads; torch on one thread each).
+  standard errors' level as Student's t over them (their own spread;
+  :func:`~sins.compensation.base.recordings_threshold`). Without them (one recording: its first part
+  against its last :data:`HOLD_LAST`), each gyro axis by the held-back intervals' squared error, as the
+  other learners' guard does. Held-back folds train two at a time (threads; torch on one thread each).
 
 ``correct`` (sample by sample) applies the seed model only; ``correct_increments`` and ``correct_rates``,
 which see a recording in order, apply the network too.
@@ -44,6 +45,7 @@ from sins.compensation.base import (
     SEED_RANGE,
     ParamRange,
     checked_array,
+    recordings_threshold,
     state_array,
     sum_standard_error,
 )
@@ -151,14 +153,14 @@ class WindowNet(GyroWindow):
                               strict=True) for i in held])  # fmt: skip
             self.held_back_gain_ = np.full(3, gains.mean())
             self.held_back_gain_se_ = np.full(3, sum_standard_error(gains) / len(gains))  # of the mean
+            bar = recordings_threshold(self.guard_z, len(gains))  # their spread estimated from them
         else:
             per_fold = np.array([sum(_sse_gain(nets, sets[i]) for i in held) for nets, held in
                                  zip(trained, folds, strict=True)])  # fmt: skip
             self.held_back_gain_ = per_fold.sum(axis=0)
             self.held_back_gain_se_ = sum_standard_error(per_fold)
-        keep = (
-            self.held_back_gain_ > self.guard_z * self.held_back_gain_se_ if self.guard else np.ones(3, bool)
-        )
+            bar = self.guard_z
+        keep = self.held_back_gain_ > bar * self.held_back_gain_se_ if self.guard else np.ones(3, bool)
         self.axes_ = keep.astype(float)
         with one_thread():
             self.networks_ = self._train(sets, total=total) if keep.any() else []
