@@ -28,6 +28,7 @@ from sins.compensation.residual import ResidualStrategy
 from sins.compensation.several import SeveralFit
 from sins.compensation.unit_bias import BiasRule
 from sins.compensation.window_net import WindowNet
+from sins.core import rotation
 from sins.core.series import CalibrationData, ImuIncrements, ImuRates, NavSeries, ReferencedRecording
 from sins.errors import SinsInputError, naming
 from sins.io.recording import beside_trajectory
@@ -517,10 +518,10 @@ def open_loop(
     # grid, slerped between the two readings around it where not (before, such epochs were left out, and
     # a reference wholly off the grid could not be judged).
     inside = (ref.t >= imu.t[first] - on_grid) & (ref.t <= imu.t[-1] + on_grid)
-    t_ref = np.clip(ref.t[inside], imu.t[first], imu.t[-1])
-    flat = np.zeros(len(q))
-    estimate = NavSeries(t=imu.t[first:], lat=flat, lon=flat, h=flat, v_n=np.zeros((len(q), 3)), q_nb=q)
-    total, heading, inclination = attitude.attitude_errors(estimate.interpolate(t_ref).q_nb, ref.q_nb[inside])
+    t_ref, t_q = np.clip(ref.t[inside], imu.t[first], imu.t[-1]), imu.t[first:]
+    i = np.clip(np.searchsorted(t_q, t_ref, side="right") - 1, 0, len(t_q) - 2)
+    at_ref = rotation.slerp(q[i], q[i + 1], (t_ref - t_q[i]) / (t_q[i + 1] - t_q[i]))
+    total, heading, inclination = attitude.attitude_errors(at_ref, ref.q_nb[inside])
     row = np.clip(np.searchsorted(imu.t, t_ref + on_grid, side="right") - 1, 0, len(imu.t) - 1)
     judged = np.ones(len(t_ref), dtype=bool) if rec.judged is None else rec.judged[row]
     if not judged.any():

@@ -118,6 +118,13 @@ def turn_between(q0: ArrayLike, q1: ArrayLike) -> Array:
     return rotvec_from_quat(quat_multiply(quat_conjugate(q0), q1))
 
 
+def slerp(q0: ArrayLike, q1: ArrayLike, w: ArrayLike) -> Array:
+    """The attitude a fraction ``w`` (...,) of the way from ``q0`` to ``q1`` along the shortest turn:
+    ``q0 ⊗ exp(w · log(q0⁻¹ ⊗ q1))``, shape (..., 4)."""
+    w = np.asarray(w, dtype=float)
+    return quat_multiply(q0, quat_from_rotvec(turn_between(q0, q1) * w[..., None]))
+
+
 def dcm_from_quat(q: ArrayLike) -> Array:
     """Direction cosine matrix of a unit quaternion: ``q_nb`` → ``C_nb``, shape (..., 3, 3)."""
     q = np.asarray(q, dtype=float)
@@ -325,6 +332,7 @@ __all__ = [
     "rotate",
     "rotvec_from_quat",
     "skew",
+    "slerp",
     "turn_between",
     "wrap_angle",
 ]

@@ -124,15 +124,13 @@ class NavSeries:
         i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2)
         w = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
         lerp = lambda a: a[i] + (a[i + 1] - a[i]) * (w if a.ndim == 1 else w[:, None])  # noqa: E731
-        dq = rotation.quat_multiply(rotation.quat_conjugate(self.q_nb[i]), self.q_nb[i + 1])
-        step = rotation.quat_from_rotvec(rotation.rotvec_from_quat(dq) * w[:, None])
         return NavSeries(
             t=t,
             lat=lerp(self.lat),
             lon=lerp(self.lon),
             h=lerp(self.h),
             v_n=lerp(self.v_n),
-            q_nb=rotation.quat_multiply(self.q_nb[i], step),
+            q_nb=rotation.slerp(self.q_nb[i], self.q_nb[i + 1], w),
         )
 
 
