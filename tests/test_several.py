@@ -790,7 +790,7 @@ def test_a_mode_that_only_ties_with_the_readings_is_not_taken() -> None:
     rule = unit_bias.BiasRule(
         mode="online", held_back_each_deg=each, held_back_deg={m: float(np.mean(v)) for m, v in each.items()}
     )
-    said = fitting._rule_line(rule, ["a", "b", "c"], "")
+    said = fitting._rule_lines(rule, ["a", "b", "c"], "")[0]
     assert said == (
         "a new recording's bias: online; rest+online is ahead by 0.90°, no more than its standard error "
         "over these recordings (0.90°), so the simpler online is taken"

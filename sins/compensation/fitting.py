@@ -540,7 +540,7 @@ def _several_document(
             else " (as named)" if len(names) >= 3
             else f" (not chosen on held-back recordings: that takes three or more, here {len(names)})"
         )  # fmt: skip
-        lines.append(_rule_line(rule, names, judged))
+        lines += _rule_lines(rule, names, judged)
         document["bias_rule"] = rule.to_dict()
     return document
 
@@ -568,9 +568,31 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
     return out
 
 
-def _rule_line(rule: BiasRule, names: list[str], judged: str) -> str:
-    """What ``sins fit`` says of a new recording's bias: the rule's mode, or, where the model leaves the
-    gyro as read, the held-back recordings the best rule left worse than their raw readings."""
+def _rule_lines(rule: BiasRule, names: list[str], judged: str) -> list[str]:
+    """What ``sins fit`` says of a new recording's bias (:func:`_mode_line`), and of one that opens moving:
+    the rule on the held-back recordings from their first motion, beside their raw readings there."""
+    from sins.compensation.unit_bias import MIN_REST_S
+
+    moving = rule.moving_held_back_deg
+    if not moving:
+        return [_mode_line(rule, names, judged)]
+    pairs = list(zip(names, moving["rule"], moving["raw"], strict=False))
+    worse = [f"{name} {v:.2f}° against {raw:.2f}°" for name, v, raw in pairs if v > raw]
+    said = (
+        f"; worse than raw on {', '.join(worse)}: a recording that opens with a rest of "
+        f"{MIN_REST_S:g} s or more has its bias read there" if worse else ", worse than raw on none"
+    )  # fmt: skip
+    return [
+        _mode_line(rule, names, judged),
+        f"a recording that opens moving: held back from their first motion (opening rests cut away), "
+        f"{rule.choice} leaves {np.mean(moving['rule']):.2f}° against the raw readings' "
+        f"{np.mean(moving['raw']):.2f}°{said}",
+    ]
+
+
+def _mode_line(rule: BiasRule, names: list[str], judged: str) -> str:
+    """The rule's mode, or, where the model leaves the gyro as read, the held-back recordings the best
+    rule left worse than their raw readings."""
     from sins.compensation.rule_choice import behind_by, kept_modes
     from sins.compensation.unit_bias import CHOICES, READINGS
 

@@ -319,7 +319,8 @@ def choose_rule(
     mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the seed
     model and the rule made from the others) by ``rule_choice.chosen_mode``: the simplest within one
     standard error of the best of those no worse than the readings on any, else ``READINGS`` (the gyro as
-    read)."""
+    read); the mode taken judged once more from each held-back recording's first motion
+    (:func:`_from_first_motion`: reported, not used)."""
     from sins.compensation import interval_fit, rule_choice, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
@@ -327,6 +328,7 @@ def choose_rule(
                      for rec, s in zip(recs, streams, strict=True)])  # fmt: skip
     held: dict[str, float] = {}
     each: dict[str, list[float]] = {}
+    folds: list[tuple[Regression, BiasRule, ReferencedRecording]] = []  # each held back, with its fold's
     if mode is None and len(recs) >= 3:
         # A fold holds all recordings but one: the mixture choices where that is enough for a mixture.
         mixed = len(recs) - 1 >= unit_bias.MIXTURE_MIN
@@ -349,6 +351,7 @@ def choose_rule(
             rel = part.gyro_bias - part.gyro_bias.mean(axis=0)
             base = unit_bias.rule_from(rel, own, model_bias=seed.B0_, accel_biases=part.accel_bias)
             stream = seed.correct_increments(rec.imu)
+            folds.append((seed, base, rec))
             raw.append(unit_bias.open_loop_deg(rec.imu, rec))
             for m in judged:
                 scores[m].append(
@@ -358,9 +361,32 @@ def choose_rule(
         mode = rule_choice.chosen_mode(scores, raw)
         held["raw"] = float(np.mean(raw))  # the readings as they are
         each = {**scores, "raw": raw}
-    return unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
+    rule = unit_bias.rule_from(left, streams, mode=mode or "pooled", model_bias=fit_all.seed.B0,
                                accel_biases=fit_all.accel_bias, held_back_deg=held,
                                held_back_each_deg=each)  # fmt: skip
+    if folds and rule.mode != unit_bias.READINGS:
+        rule = replace(rule, moving_held_back_deg=_from_first_motion(folds, rule.choice))
+    return rule
+
+
+def _from_first_motion(
+    folds: list[tuple[Regression, BiasRule, ReferencedRecording]], choice: str
+) -> dict[str, list[float]]:
+    """The open-loop attitude (deg) of each held-back recording from its first motion (its opening rest
+    cut away; one that opens moving as it is), under ``choice`` with the seed model and rule of its fold
+    (``rule``), and of its readings as read over the same span (``raw``): what the rule does with a new
+    recording that opens moving, which a recording held back whole with its rest does not show."""
+    from sins.compensation import unit_bias
+
+    out: dict[str, list[float]] = {"rule": [], "raw": []}
+    for seed, base, rec in folds:
+        _, omega, force = rec.imu.mean_rates()
+        rest = unit_bias.opening_rest(omega, force, float(np.median(np.diff(rec.imu.t))))
+        moving = between(rec, float(rec.imu.t[rest]), float(rec.imu.t[-1])) if rest else rec
+        stream = unit_bias.corrected(unit_bias.with_mode(base, choice), seed.correct_increments(moving.imu))
+        out["rule"].append(unit_bias.open_loop_deg(stream, moving))
+        out["raw"].append(unit_bias.open_loop_deg(moving.imu, moving))
+    return out
 
 
 def _biases_only(seed: Any) -> Any:

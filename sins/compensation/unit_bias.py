@@ -120,7 +120,10 @@ class BiasRule:
     order the model was fitted on them; ``components`` (k, 3): each training recording's bias, shifted
     as ``prior`` is, and ``component_width`` (3,): the width of each about it (:func:`mixture_width`),
     the prior of the online estimate where the pooled one would be under ``mixture`` (else, or with
-    fewer than :data:`MIXTURE_MIN` of them, the pooled prior's Gaussian).
+    fewer than :data:`MIXTURE_MIN` of them, the pooled prior's Gaussian); ``moving_held_back_deg``: the
+    open-loop attitude of the rule (``rule``) and of the raw readings (``raw``) on each held-back
+    recording from its first motion (its opening rest cut away), deg: what the rule does with a new
+    recording that opens moving, said by ``sins fit`` (reported, not used).
     """
 
     mode: str = "pooled"
@@ -140,6 +143,7 @@ class BiasRule:
     mixture: bool = False
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
+    moving_held_back_deg: dict[str, list[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
@@ -186,6 +190,7 @@ class BiasRule:
             "component_width": self.component_width.tolist(), "mixture": self.mixture,
             "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
+            "moving_held_back_deg": {k: list(v) for k, v in self.moving_held_back_deg.items()},
         }  # fmt: skip
 
     @property
@@ -207,14 +212,16 @@ class BiasRule:
         odd = [k for k in doc if k not in known]
         if odd:
             raise ValueError(f"bias rule: unknown key {odd[0]!r}")
-        held, each = doc.get("held_back_deg", {}), doc.get("held_back_each_deg", {})
+        held = doc.get("held_back_deg", {})
         if not isinstance(held, dict):
             raise ValueError("bias rule held_back_deg: expected an object")
-        if not isinstance(each, dict) or not all(isinstance(v, list) for v in each.values()):
-            raise ValueError("bias rule held_back_each_deg: expected an object of lists")
+        lists = {k: doc.get(k, {}) for k in ("held_back_each_deg", "moving_held_back_deg")}
+        for key, got in lists.items():
+            if not isinstance(got, dict) or not all(isinstance(v, list) for v in got.values()):
+                raise ValueError(f"bias rule {key}: expected an object of lists")
         return cls(**{
             **doc, "held_back_deg": {str(k): float(v) for k, v in held.items()},
-            "held_back_each_deg": {str(k): [float(x) for x in v] for k, v in each.items()},
+            **{key: {str(k): [float(x) for x in v] for k, v in got.items()} for key, got in lists.items()},
         })  # fmt: skip
 
 
