@@ -319,8 +319,8 @@ def choose_rule(
     mode (or ``mode``) is chosen on the open-loop attitude of held-back recordings (each in turn, the seed
     model and the rule made from the others) by ``rule_choice.chosen_mode``: the simplest within one
     standard error of the best of those no worse than the readings on any, else ``READINGS`` (the gyro as
-    read); the mode taken judged once more from each held-back recording's first motion
-    (:func:`_from_first_motion`: reported, not used)."""
+    read). The mode taken is judged once more from each held-back recording's first motion
+    (:func:`_from_first_motion`), which is reported, not used."""
     from sins.compensation import interval_fit, rule_choice, several, unit_bias
 
     streams = [corrected(strategy, rec) for rec in recs]
