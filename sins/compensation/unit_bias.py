@@ -12,12 +12,13 @@ estimated from the recording itself, by one of these :data:`MODES`:
     the mean rate over the recording's opening rest (:func:`opening_rest`, found from the readings: the
     specific force's direction and the mean rate both steady), plus the training recordings' own
     difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
-    tremor: the bias at rest is not the bias in motion); ``pooled`` where the recording opens moving.
+    tremor: the bias at rest is not the bias in motion); where the recording opens moving, ``online``
+    (below): no reading tells a pooled prior alone anything.
 ``nearest``
     the bias of the training recordings whose opening rests read most like this recording's: each
     training recording weighted by how likely its rest's mean rate is this one's, given the two rests'
     own noise and how far a rest says what the bias in flight will be (the training recordings' spread
-    of bias in motion less bias at rest); ``pooled`` where the recording opens moving, no training
+    of bias in motion less bias at rest); ``online`` where the recording opens moving, no training
     recording opened with a rest, or none lies within reach (:data:`NEAREST_CHI2`). A unit's bias moves
     most between power-ups and days, and a rest of a few seconds tells the day's bias apart where the
     days differ by more than a rest's noise and its motors' effect: the prior is then the day's, not the
@@ -283,7 +284,9 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
     prior = rule.prior if own is None else own
     if own is not None:  # before the rest has ended nothing better than the pooled prior is known
         track[rest:] = own
-    if rule.mode in ONLINE_MODES:
+    # A rest mode whose recording gives it no prior (it opens moving, or its rest reads like no training
+    # recording's) estimates the bias online from the pooled prior, as its +online twin does there.
+    if rule.mode in ONLINE_MODES or (own is None and rule.mode in _FROM_REST):
         mixed = own is None and _mixed(rule)
         track = online_bias.estimate(
             imu, track, prior, rule.component_width if mixed else sigma, rule.sigma_v_mps,
@@ -326,7 +329,7 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
         return head + "it opens moving, so its prior is " + (
             _MIXED_SAID if _mixed(rule)
             else "the training recordings' mean bias as far as they determine it (none on an axis where "
-            "they cannot tell it from zero: shrunk)"
+            "they cannot tell it from zero: shrunk), estimated online from there"
         )  # fmt: skip
     rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
     head += f"{rest_s}'s mean rate so far while it rests; "
@@ -335,7 +338,7 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     if own is None:
         far = _rest_distance(rule, imu, rest)
         said = f" ({far:.3g} standard deviations from the nearest: another unit, a new day?)" if far else ""
-        after = _MIXED_SAID if _mixed(rule) else "their mean"
+        after = _MIXED_SAID if _mixed(rule) else "their mean, estimated online from there"
         return head + f"the rest reads like no training recording's{said}, so after it {after}"
     said = "the rest reads like some training recordings' rests: after it, their bias"
     weighed = rule.nearest_blend and rule.misses_measured
