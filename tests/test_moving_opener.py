@@ -34,6 +34,29 @@ def test_the_figures_are_kept_in_the_rules_file() -> None:
         unit_bias.BiasRule.from_dict({**rule.to_dict(), "moving_held_back_deg": {"rule": 1.0}})
 
 
+def test_the_advice_to_open_at_rest_is_given_where_the_rule_reads_a_rest() -> None:
+    """The line names every held-back recording left worse from its first motion; it advises an opening
+    rest only under a rule that reads one (``rest``, ``nearest`` and their ``+online``), not under
+    ``online`` or ``pooled``, which a rest would not change."""
+    from sins.compensation import fitting
+
+    moving = {"rule": [2.0, 1.0, 4.5], "raw": [1.5, 3.0, 4.0]}
+    lines = {
+        mode: fitting._rule_lines(
+            unit_bias.BiasRule(mode=mode, moving_held_back_deg=moving), ["a", "b", "c"], ""
+        )
+        for mode in unit_bias.MODES
+    }
+    for mode, said in lines.items():
+        assert len(said) == 2 and "a 2.00° against 1.50°, c 4.50° against 4.00°" in said[1], said
+        assert "leaves 2.50° against the raw readings' 2.83°" in said[1], said
+        assert ("has its bias read there" in said[1]) == mode.startswith(("rest", "nearest")), (mode, said)
+    calm = fitting._rule_lines(
+        unit_bias.BiasRule(mode="rest", moving_held_back_deg={"rule": [1.0], "raw": [2.0]}), ["a"], ""
+    )
+    assert calm[1].endswith("rest leaves 1.00° against the raw readings' 2.00°, worse than raw on none")
+
+
 def _raw_from_first_motion(path: Path) -> float:
     """The AOE (deg) of a recording's raw gyro from the end of its opening rest (the rest as sins finds
     it), integrated with scipy's ``Rotation`` alone: each step the mean of its two readings, from the

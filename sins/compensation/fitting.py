@@ -578,9 +578,12 @@ def _rule_lines(rule: BiasRule, names: list[str], judged: str) -> list[str]:
         return [_mode_line(rule, names, judged)]
     pairs = list(zip(names, moving["rule"], moving["raw"], strict=False))
     worse = [f"{name} {v:.2f}° against {raw:.2f}°" for name, v, raw in pairs if v > raw]
+    # The advice holds for a rule that reads a rest; pooled and online read none.
+    reads_rest = rule.mode.startswith(("rest", "nearest"))
+    advice = f": a recording that opens with a rest of {MIN_REST_S:g} s or more has its bias read there"
     said = (
-        f"; worse than raw on {', '.join(worse)}: a recording that opens with a rest of "
-        f"{MIN_REST_S:g} s or more has its bias read there" if worse else ", worse than raw on none"
+        f"; worse than raw on {', '.join(worse)}{advice if reads_rest else ''}" if worse
+        else ", worse than raw on none"
     )  # fmt: skip
     return [
         _mode_line(rule, names, judged),
