@@ -571,22 +571,21 @@ def _noisy_recording_lines(fit: Any, names: list[str], grade: str) -> list[str]:
 def _rule_lines(rule: BiasRule, names: list[str], judged: str) -> list[str]:
     """What ``sins fit`` says of a new recording's bias (:func:`_mode_line`), and of one that opens moving:
     the rule on the held-back recordings from their first motion, beside their raw readings there."""
-    from sins.compensation.unit_bias import MIN_REST_S
+    from sins.compensation.unit_bias import FROM_REST, MIN_REST_S
 
-    moving = rule.moving_held_back_deg
+    line, moving = _mode_line(rule, names, judged), rule.moving_held_back_deg
     if not moving:
-        return [_mode_line(rule, names, judged)]
+        return [line]
     pairs = list(zip(names, moving["rule"], moving["raw"], strict=False))
     worse = [f"{name} {v:.2f}° against {raw:.2f}°" for name, v, raw in pairs if v > raw]
     # The advice holds for a rule that reads a rest; pooled and online read none.
-    reads_rest = rule.mode.startswith(("rest", "nearest"))
     advice = f": a recording that opens with a rest of {MIN_REST_S:g} s or more has its bias read there"
     said = (
-        f"; worse than raw on {', '.join(worse)}{advice if reads_rest else ''}" if worse
+        f"; worse than raw on {', '.join(worse)}{advice if rule.mode in FROM_REST else ''}" if worse
         else ", worse than raw on none"
     )  # fmt: skip
     return [
-        _mode_line(rule, names, judged),
+        line,
         f"a recording that opens moving: held back from their first motion (opening rests cut away), "
         f"{rule.choice} leaves {np.mean(moving['rule']):.2f}° against the raw readings' "
         f"{np.mean(moving['raw']):.2f}°{said}",

@@ -13,7 +13,7 @@ estimated from the recording itself, by one of these :data:`MODES`:
     specific force's direction and the mean rate both steady), plus the training recordings' own
     difference between their bias in motion and at their opening rest (a vehicle's motors, a hand's
     tremor: the bias at rest is not the bias in motion); where the recording opens moving, ``online``
-    (below): no reading tells a pooled prior alone anything.
+    (below) from the pooled prior, which alone would read nothing of the recording.
 ``nearest``
     the bias of the training recordings whose opening rests read most like this recording's: each
     training recording weighted by how likely its rest's mean rate is this one's, given the two rests'
@@ -250,7 +250,7 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
 
 
 #: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`).
-_FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
+FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
 
 
 def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, Array]:
@@ -258,7 +258,7 @@ def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, 
     rest's length in steps (0: it opens moving, or the mode takes nothing from a rest), the prior it
     gives with its spread (``rest``: the rest's mean rate plus the training recordings' motion offset;
     ``nearest``: :func:`nearest_prior`), or None and the pooled spread where it gives none."""
-    if rule.mode not in _FROM_REST:
+    if rule.mode not in FROM_REST:
         return 0, None, rule.spread
     dt = np.diff(imu.t)
     omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
@@ -286,7 +286,7 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
         track[rest:] = own
     # A rest mode whose recording gives it no prior (it opens moving, or its rest reads like no training
     # recording's) estimates the bias online from the pooled prior, as its +online twin does there.
-    if rule.mode in ONLINE_MODES or (own is None and rule.mode in _FROM_REST):
+    if rule.mode in ONLINE_MODES or (own is None and rule.mode in FROM_REST):
         mixed = own is None and _mixed(rule)
         track = online_bias.estimate(
             imu, track, prior, rule.component_width if mixed else sigma, rule.sigma_v_mps,
@@ -321,7 +321,7 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     """Where the rule took the prior of a recording's gyro bias (its corrected increments ``imu``), in
     words ("" for a rule that takes no prior from the recording): what ``sins evaluate`` says, so that a
     judged figure can be read with the rule's reason beside it."""
-    if rule.mode not in _FROM_REST:
+    if rule.mode not in FROM_REST:
         return ""
     rest, own, _ = _rest_prior(rule, imu)
     head = f"a new recording's gyro bias (rule {rule.choice}): "
@@ -647,6 +647,7 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 __all__ = [
     "CHOICES",
     "DETERMINED",
+    "FROM_REST",
     "MEASURED_RESTS",
     "MIN_REST_S",
     "MIXTURE",
