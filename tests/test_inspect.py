@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import dataset_folder
+from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation, Slerp
 
 from sins import io
@@ -74,7 +75,26 @@ def drive(rate: float = 100.0, seed: int = 2) -> dict:
         "t": np.arange(n) / rate,
         "w": w + 4.8e-6 + 2.9e-4 * rng.standard_normal((n, 3)),
         "f": f + [0.005, -0.004, 0.006] + 0.01 * rng.standard_normal((n, 3)),
-    }
+        "speed": speed, "yaw_rate": yaw_rate,
+    }  # fmt: skip
+
+
+def drive_npz(path: Path) -> dict:
+    """:func:`drive` in the ``.npz`` form with its exact reference, on z-up axes: the FRD body and NED world
+    turned half a turn about north (x kept, y and z negated), so the body reads ``(f_x, −f_y, −f_z)`` and
+    turns by minus the yaw about the world's up. Returns the arrays written."""
+    d = drive()
+    yaw = np.radians(10.0) + cumulative_trapezoid(d["yaw_rate"], dx=0.01, initial=0.0)  # the rate's integral
+    heading = np.column_stack([np.cos(yaw), -np.sin(yaw), np.zeros(len(yaw))])
+    v = d["speed"][:, None] * heading
+    flip = np.array([1.0, -1.0, -1.0])
+    arrays = {
+        "t_s": d["t"], "gyro_rad_s": d["w"] * flip, "accel_m_s2": d["f"] * flip,
+        "q_wxyz": Rotation.from_euler("z", -yaw[:, None]).as_quat(scalar_first=True),
+        "v_m_s": v, "p_m": np.cumsum(v, axis=0) / 100.0,
+    }  # fmt: skip
+    np.savez(path, **arrays)
+    return arrays
 
 
 def write(path: Path, t: np.ndarray, a: np.ndarray, b: np.ndarray, names: tuple[str, ...] = RATE) -> Path:
@@ -131,6 +151,20 @@ def test_a_clean_drive_is_silent_and_its_axes_are_frd(tmp_path: Path) -> None:
     assert doc["findings"] == []
     assert doc["axes"] == "frd"  # gravity at rest gives d, the turns' lateral force r, and so f
     assert doc["rest"]["seconds"] >= 30.0
+
+
+def test_beside_a_reference_a_steady_cruise_is_not_rest(tmp_path: Path) -> None:
+    """The drive's 62 s of straight cruise at up to 15 m/s read like rest to the readings alone (level,
+    steady, no turn: a CSV without a reference counts them in); beside a reference that moves, only its
+    30 s standing start and 15 s final stop are rest. (A vehicle cruising was reported at rest: PSINS's
+    drive, 45 s of it at 11-16 m/s.)"""
+    arrays = drive_npz(tmp_path / "drive.npz")
+    csv = write(tmp_path / "drive.csv", arrays["t_s"], arrays["gyro_rad_s"], arrays["accel_m_s2"])
+    alone = inspect_cli(csv)
+    assert alone["rest"]["seconds"] > 80.0, alone["rest"]
+    doc = inspect_cli(tmp_path / "drive.npz")
+    assert doc["rest"]["seconds"] == pytest.approx(45.0, abs=2.0), doc["rest"]
+    assert doc["findings"] == []
 
 
 # --------------------------------------------------------------------------- planted mistakes
@@ -350,6 +384,18 @@ def test_a_real_ring_laser_unit_shows_earth_rate_and_gravity() -> None:
     assert [(f.code, f.value) for f in inspection.inspect(in_degrees).findings] == [
         ("gyro_unit", "gyro=deg/s")
     ]
+
+
+PSINS_VEHICLE = dataset_folder("psins_fog_mems_vehicle")
+
+
+@pytest.mark.skipif(not PSINS_VEHICLE.is_dir(), reason=f"real data absent: {PSINS_VEHICLE}")
+def test_a_real_vehicle_that_never_stops_has_no_rest() -> None:
+    """PSINS's drive: its reference moves at 11.5-15.8 m/s throughout (its own velocities), and a steady
+    stretch of it had been reported as 45 s at rest (its readings alone are as still as a stop's)."""
+    rec = io.read(dataset="psins_vehicle")
+    assert rec.truth is not None and np.linalg.norm(rec.truth.v_n, axis=1).min() > 11.0
+    assert inspection.inspect(rec).rest is None
 
 
 BROAD = dataset_folder("broad_mocap")

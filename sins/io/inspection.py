@@ -16,7 +16,8 @@ no option does; a clean recording gives none.
 
 Rest is found from the data: among the one-second windows whose readings vary least (within 3× the
 quietest 5 %), the largest group whose means agree (within 6 standard errors), two seconds at least;
-beside a reference, none where it turns (a steady turn reads as a still unit with a large bias).
+beside a reference, none where it turns or travels (a steady turn reads as a still unit with a large
+bias, a straight cruise as a still unit).
 Where a fifth of the quiet windows hold gravity 20° or more away from it (a rig session, a hand-held
 unit), the axes are not judged.
 """
@@ -92,8 +93,8 @@ def inspect(rec: Recording, rate_hz: float | None = None) -> Inspection:
     findings: list[Finding] = []
     findings += _time_findings(rec, med, jitter, gaps, stated, rate_hz is not None)
     windows = _windows(w, f, med)
-    turning = _turning(rec, t, windows) if windows is not None and rec.truth is not None else None
-    rest = _rest(windows, med, turning) if windows is not None else None
+    moving = _moving(rec, t, windows) if windows is not None and rec.truth is not None else None
+    rest = _rest(windows, med, moving) if windows is not None else None
     findings += _rest_findings(rec, rest, med)
     frame = frame_check.seen_axes(windows, rest, f)
     # Beside a reference attitude, the readings' axes are its body's, whatever they are called: the
@@ -292,11 +293,11 @@ def _windows(w: Array, f: Array, med: float) -> Windows | None:
     )  # fmt: skip
 
 
-def _rest(win: Windows, med: float, turning: NDArray[np.bool_] | None = None) -> Rest | None:
+def _rest(win: Windows, med: float, moving: NDArray[np.bool_] | None = None) -> Rest | None:
     """The windows at rest (see the module docstring) and their means, or None (less than two seconds).
-    ``turning``: windows a reference shows turning, never at rest (a steady turn reads as a still unit
-    with a large bias)."""
-    candidate = np.ones(len(win.mean_w), dtype=bool) if turning is None else ~turning
+    ``moving``: windows a reference shows turning or travelling, never at rest (a steady turn reads as a
+    still unit with a large bias, a straight cruise as a still unit)."""
+    candidate = np.ones(len(win.mean_w), dtype=bool) if moving is None else ~moving
     if candidate.sum() < 2:
         return None
     quiet = candidate.copy()
@@ -338,22 +339,30 @@ def _rest(win: Windows, med: float, turning: NDArray[np.bool_] | None = None) ->
 
 #: A window a reference shows turning faster than this, °/s, is not at rest, whatever its readings say.
 REST_TURN_DPS = 0.5
+#: ... or moving faster than this at both its ends, m/s: a vehicle creeping (a motion capture's velocity,
+#: differenced from its positions, scatters by a few cm/s at rest).
+REST_SPEED_MPS = 0.1
 
 
-def _turning(rec: Recording, t: Array, win: Windows) -> NDArray[np.bool_]:
+def _moving(rec: Recording, t: Array, win: Windows) -> NDArray[np.bool_]:
     """The windows whose reference turns faster than :data:`REST_TURN_DPS` between their first and last
-    readings (those outside the reference's span are not judged)."""
+    readings, or moves faster than :data:`REST_SPEED_MPS` at both: judged over the part within the
+    reference's span where that is half the window or more (a reference that starts a few stamps after
+    the readings still judges their first window), not judged elsewhere."""
     truth = rec.truth
     assert truth is not None
     first = np.arange(len(win.mean_w)) * win.length
-    last = first + win.length - 1
+    t0 = np.maximum(t[first], truth.t[0])
+    t1 = np.minimum(t[first + win.length - 1], truth.t[-1])
     out = np.zeros(len(first), dtype=bool)
-    inside = (t[first] >= truth.t[0]) & (t[last] <= truth.t[-1]) & (t[last] > t[first])
+    inside = (t1 - t0) >= 0.5 * (t[first + win.length - 1] - t[first])
+    inside &= t1 > t0
     if inside.any():
-        q0, q1 = truth.interpolate(t[first[inside]]).q_nb, truth.interpolate(t[last[inside]]).q_nb
-        turn = rotation.turn_between(q0, q1)
-        rate = np.linalg.norm(turn, axis=1) / (t[last[inside]] - t[first[inside]])
-        out[inside] = rate > np.radians(REST_TURN_DPS)
+        start, end = truth.interpolate(t0[inside]), truth.interpolate(t1[inside])
+        turn = rotation.turn_between(start.q_nb, end.q_nb)
+        rate = np.linalg.norm(turn, axis=1) / (t1[inside] - t0[inside])
+        speed = np.minimum(np.linalg.norm(start.v_n, axis=1), np.linalg.norm(end.v_n, axis=1))
+        out[inside] = (rate > np.radians(REST_TURN_DPS)) | (speed > REST_SPEED_MPS)
     return out
 
 
@@ -521,6 +530,7 @@ __all__ = [
     "MAX_GYRO_RADPS",
     "PLAUSIBLE_HZ",
     "RATE_TOL",
+    "REST_SPEED_MPS",
     "REST_TURN_DPS",
     "UNIT_TOL",
     "Clipping",
