@@ -390,12 +390,16 @@ PSINS_VEHICLE = dataset_folder("psins_fog_mems_vehicle")
 
 
 @pytest.mark.skipif(not PSINS_VEHICLE.is_dir(), reason=f"real data absent: {PSINS_VEHICLE}")
-def test_a_real_vehicle_that_never_stops_has_no_rest() -> None:
+def test_a_real_vehicle_that_never_stops_has_no_rest(capsys: pytest.CaptureFixture[str]) -> None:
     """PSINS's drive: its reference moves at 11.5-15.8 m/s throughout (its own velocities), and a steady
-    stretch of it had been reported as 45 s at rest (its readings alone are as still as a stop's)."""
+    stretch of it had been reported as 45 s at rest (its readings alone are as still as a stop's); the
+    report says why none is found."""
     rec = io.read(dataset="psins_vehicle")
     assert rec.truth is not None and np.linalg.norm(rec.truth.v_n, axis=1).min() > 11.0
     assert inspection.inspect(rec).rest is None
+    assert main(["inspect", "--dataset", "psins_vehicle"]) == 0
+    said = capsys.readouterr().out
+    assert "at rest: no stretch of two seconds or more found (beside the reference: where it shows" in said
 
 
 BROAD = dataset_folder("broad_mocap")

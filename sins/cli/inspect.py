@@ -70,7 +70,9 @@ def format_inspection(rec: Recording, result: Inspection, tilt: WorldTilt | None
     ]
     lines += [f"  {note}" for note in rec.notes]
     if result.rest is None:
-        lines.append("at rest: no stretch of two seconds or more found")
+        beside = " (beside the reference: where it shows the unit neither turning nor travelling)"
+        said = beside if rec.truth is not None else ""
+        lines.append("at rest: no stretch of two seconds or more found" + said)
     else:
         r = result.rest
         resolved = "" if r.rate_resolved else ", not resolved"
