@@ -87,9 +87,8 @@ def drive_npz(path: Path) -> dict:
     yaw = np.radians(10.0) + cumulative_trapezoid(d["yaw_rate"], dx=0.01, initial=0.0)  # the rate's integral
     heading = np.column_stack([np.cos(yaw), -np.sin(yaw), np.zeros(len(yaw))])
     v = d["speed"][:, None] * heading
-    flip = np.array([1.0, -1.0, -1.0])
     arrays = {
-        "t_s": d["t"], "gyro_rad_s": d["w"] * flip, "accel_m_s2": d["f"] * flip,
+        "t_s": d["t"], "gyro_rad_s": d["w"] * FLU, "accel_m_s2": d["f"] * FLU,
         "q_wxyz": Rotation.from_euler("z", -yaw[:, None]).as_quat(scalar_first=True),
         "v_m_s": v, "p_m": np.cumsum(v, axis=0) / 100.0,
     }  # fmt: skip
@@ -154,7 +153,7 @@ def test_a_clean_drive_is_silent_and_its_axes_are_frd(tmp_path: Path) -> None:
 
 
 def test_beside_a_reference_a_steady_cruise_is_not_rest(tmp_path: Path) -> None:
-    """The drive's 62 s of straight cruise at up to 15 m/s read like rest to the readings alone (level,
+    """The drive's 47 s of straight cruise at 15 m/s read like rest to the readings alone (level,
     steady, no turn: a CSV without a reference counts them in); beside a reference that moves, only its
     30 s standing start and 15 s final stop are rest. (A vehicle cruising was reported at rest: PSINS's
     drive, 45 s of it at 11-16 m/s.)"""
