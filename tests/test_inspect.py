@@ -79,18 +79,23 @@ def drive(rate: float = 100.0, seed: int = 2) -> dict:
     }  # fmt: skip
 
 
-def drive_npz(path: Path) -> dict:
+def drive_npz(path: Path, position_noise_m: float = 0.0) -> dict:
     """:func:`drive` in the ``.npz`` form with its exact reference, on z-up axes: the FRD body and NED world
     turned half a turn about north (x kept, y and z negated), so the body reads ``(f_x, −f_y, −f_z)`` and
-    turns by minus the yaw about the world's up. Returns the arrays written."""
+    turns by minus the yaw about the world's up. With ``position_noise_m``, the positions carry white noise
+    of that size and the velocity is differenced from them (numpy's gradient), as a motion capture's
+    poses converted by a user would be. Returns the arrays written."""
     d = drive()
     yaw = np.radians(10.0) + cumulative_trapezoid(d["yaw_rate"], dx=0.01, initial=0.0)  # the rate's integral
     heading = np.column_stack([np.cos(yaw), -np.sin(yaw), np.zeros(len(yaw))])
     v = d["speed"][:, None] * heading
+    p = np.cumsum(v, axis=0) / 100.0
+    if position_noise_m:
+        p = p + np.random.default_rng(5).normal(0.0, position_noise_m, p.shape)
+        v = np.gradient(p, d["t"], axis=0)
     arrays = {
         "t_s": d["t"], "gyro_rad_s": d["w"] * FLU, "accel_m_s2": d["f"] * FLU,
-        "q_wxyz": Rotation.from_euler("z", -yaw[:, None]).as_quat(scalar_first=True),
-        "v_m_s": v, "p_m": np.cumsum(v, axis=0) / 100.0,
+        "q_wxyz": Rotation.from_euler("z", -yaw[:, None]).as_quat(scalar_first=True), "v_m_s": v, "p_m": p,
     }  # fmt: skip
     np.savez(path, **arrays)
     return arrays
@@ -152,12 +157,15 @@ def test_a_clean_drive_is_silent_and_its_axes_are_frd(tmp_path: Path) -> None:
     assert doc["rest"]["seconds"] >= 30.0
 
 
-def test_beside_a_reference_a_steady_cruise_is_not_rest(tmp_path: Path) -> None:
+@pytest.mark.parametrize("position_noise_m", [0.0, 1e-3])
+def test_beside_a_reference_a_steady_cruise_is_not_rest(tmp_path: Path, position_noise_m: float) -> None:
     """The drive's 47 s of straight cruise at 15 m/s read like rest to the readings alone (level,
     steady, no turn: a CSV without a reference counts them in); beside a reference that moves, only its
     30 s standing start and 15 s final stop are rest. (A vehicle cruising was reported at rest: PSINS's
-    drive, 45 s of it at 11-16 m/s.)"""
-    arrays = drive_npz(tmp_path / "drive.npz")
+    drive, 45 s of it at 11-16 m/s.) The same with 1 mm of noise on the positions and the velocity
+    differenced from them (0.07 m/s of noise on each axis at rest): travel is judged by the chord over
+    the window, not by a velocity."""
+    arrays = drive_npz(tmp_path / "drive.npz", position_noise_m)
     csv = write(tmp_path / "drive.csv", arrays["t_s"], arrays["gyro_rad_s"], arrays["accel_m_s2"])
     alone = inspect_cli(csv)
     assert alone["rest"]["seconds"] > 80.0, alone["rest"]
