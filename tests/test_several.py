@@ -211,7 +211,10 @@ def test_the_nearest_rule_takes_the_prior_of_the_day_whose_rests_read_alike() ->
     # 0.03 rad/s from its day on every axis, against rests that differ by their noise and motors (3e-4):
     # tens of standard deviations, said (before, no figure).
     assert float(said.split("recording's (")[1].split(" standard")[0]) > 20.0, said
-    assert "opens moving" in unit_bias.prior_said(rule, moving)
+    said = unit_bias.prior_said(rule, moving)
+    # A calibrated numpy unit's moving opener (tools/euroc_units.py --seeds 3312): 85.71° of its 86.21°
+    # lay along gravity, where the prior alone had set the bias; evaluate says where that part comes from.
+    assert "opens moving" in said and "along gravity turns the heading" in said, said
 
 
 def test_nearest_weighs_the_matched_days_bias_against_the_rests_own_reading() -> None:

@@ -330,7 +330,7 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
             _MIXED_SAID if _mixed(rule)
             else "the training recordings' mean bias as far as they determine it (none on an axis where "
             "they cannot tell it from zero: shrunk), estimated online from there"
-        )  # fmt: skip
+        ) + _ALONG_SAID  # fmt: skip
     rest_s = f"its opening rest of {rest * float(np.median(np.diff(imu.t))):.1f} s"
     head += f"{rest_s}'s mean rate so far while it rests; "
     if rule.mode.startswith("rest"):
@@ -345,6 +345,11 @@ def prior_said(rule: BiasRule, imu: ImuIncrements) -> str:
     return head + said + (" weighed against the rest's own reading by what each missed by" if weighed else "")
 
 
+#: What ``prior_said`` adds of a recording that opens moving: the part no velocity shows.
+_ALONG_SAID = (
+    "; its part along gravity turns the heading, which the velocity shows only through the vehicle's "
+    "tilts: where they are small, the heading's error is the prior's"
+)
 #: What ``prior_said`` adds where the online estimate starts from the mixture prior.
 _MIXED_SAID = (
     "each training recording's own bias (shifted as their mean is), as a mixture whose components the "
