@@ -353,11 +353,10 @@ def _moving(rec: Recording, t: Array, win: Windows) -> NDArray[np.bool_]:
     truth = rec.truth
     assert truth is not None
     first = np.arange(len(win.mean_w)) * win.length
-    t0 = np.maximum(t[first], truth.t[0])
-    t1 = np.minimum(t[first + win.length - 1], truth.t[-1])
+    last = first + win.length - 1
+    t0, t1 = np.maximum(t[first], truth.t[0]), np.minimum(t[last], truth.t[-1])
     out = np.zeros(len(first), dtype=bool)
-    inside = (t1 - t0) >= 0.5 * (t[first + win.length - 1] - t[first])
-    inside &= t1 > t0
+    inside = (t1 > t0) & (t1 - t0 >= 0.5 * (t[last] - t[first]))
     if inside.any():
         start, end = truth.interpolate(t0[inside]), truth.interpolate(t1[inside])
         turn = rotation.turn_between(start.q_nb, end.q_nb)
