@@ -365,27 +365,28 @@ def choose_rule(
                                accel_biases=fit_all.accel_bias, held_back_deg=held,
                                held_back_each_deg=each)  # fmt: skip
     if folds and rule.mode != unit_bias.READINGS:
-        rule = replace(rule, moving_held_back_deg=_from_first_motion(folds, rule.choice))
+        rule = replace(rule, moving_held_back_deg=_from_first_motion(folds, rule.choice, each))
     return rule
 
 
 def _from_first_motion(
-    folds: list[tuple[Regression, BiasRule, ReferencedRecording]], choice: str
+    folds: list[tuple[Regression, BiasRule, ReferencedRecording]], choice: str, whole: dict[str, list[float]]
 ) -> dict[str, list[float]]:
-    """The open-loop attitude (deg) of each held-back recording from its first motion (its opening rest
-    cut away; one that opens moving as it is), under ``choice`` with the seed model and rule of its fold
-    (``rule``), and of its readings as read over the same span (``raw``): what the rule does with a new
-    recording that opens moving, which a recording held back whole with its rest does not show."""
+    """The open-loop attitude (deg) of each held-back recording from its first motion (its opening rest cut
+    away) under ``choice`` with its fold's seed model and rule (``rule``), and of its readings as read there
+    (``raw``): what a new recording that opens moving gets, which one held back whole with its rest does not
+    show. One that opens moving keeps its figures held back whole (``whole``: the same open loops)."""
     from sins.compensation import unit_bias
 
-    out: dict[str, list[float]] = {"rule": [], "raw": []}
-    for seed, base, rec in folds:
+    out: dict[str, list[float]] = {"rule": list(whole[choice]), "raw": list(whole["raw"])}
+    for k, (seed, base, rec) in enumerate(folds):
         _, omega, force = rec.imu.mean_rates()
         rest = unit_bias.opening_rest(omega, force, float(np.median(np.diff(rec.imu.t))))
-        moving = between(rec, float(rec.imu.t[rest]), float(rec.imu.t[-1])) if rest else rec
-        stream = unit_bias.corrected(unit_bias.with_mode(base, choice), seed.correct_increments(moving.imu))
-        out["rule"].append(unit_bias.open_loop_deg(stream, moving))
-        out["raw"].append(unit_bias.open_loop_deg(moving.imu, moving))
+        if rest:
+            moving = between(rec, float(rec.imu.t[rest]), float(rec.imu.t[-1]))
+            rule, stream = unit_bias.with_mode(base, choice), seed.correct_increments(moving.imu)
+            out["rule"][k] = unit_bias.open_loop_deg(unit_bias.corrected(rule, stream), moving)
+            out["raw"][k] = unit_bias.open_loop_deg(moving.imu, moving)
     return out
 
 
