@@ -380,8 +380,7 @@ def _from_first_motion(
 
     out: dict[str, list[float]] = {"rule": list(whole[choice]), "raw": list(whole["raw"])}
     for k, (seed, base, rec) in enumerate(folds):
-        _, omega, force = rec.imu.mean_rates()
-        rest = unit_bias.opening_rest(omega, force, float(np.median(np.diff(rec.imu.t))))
+        rest = unit_bias.rest_of(rec.imu)[0]
         if rest:
             moving = between(rec, float(rec.imu.t[rest]), float(rec.imu.t[-1]))
             rule, stream = unit_bias.with_mode(base, choice), seed.correct_increments(moving.imu)

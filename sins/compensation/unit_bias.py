@@ -249,6 +249,14 @@ def opening_rest(omega_ib_b: Array, f_ib_b: Array, dt: float) -> int:
     return k * n if k * n * dt >= MIN_REST_S else 0
 
 
+def rest_of(imu: ImuIncrements) -> tuple[int, Array, float]:
+    """:func:`opening_rest` of increments ``imu``: its length in steps, with the readings as rates
+    (n, 3) rad/s and their median interval, s, that it was found from."""
+    _, omega_ib_b, f_ib_b = imu.mean_rates()
+    dt = float(np.median(np.diff(imu.t)))
+    return opening_rest(omega_ib_b, f_ib_b, dt), omega_ib_b, dt
+
+
 #: The modes that take a recording's prior from its opening rest (:func:`_rest_prior`).
 FROM_REST = ("rest", "rest+online", "nearest", "nearest+online")
 
@@ -260,16 +268,14 @@ def _rest_prior(rule: BiasRule, imu: ImuIncrements) -> tuple[int, Array | None, 
     ``nearest``: :func:`nearest_prior`), or None and the pooled spread where it gives none."""
     if rule.mode not in FROM_REST:
         return 0, None, rule.spread
-    dt = np.diff(imu.t)
-    omega, force = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
-    rest = opening_rest(omega, force, float(np.median(dt)))
+    rest, omega, dt = rest_of(imu)
     if not rest:
         return 0, None, rule.spread
     still = omega[:rest]
     if rule.mode.startswith("rest"):
         return rest, still.mean(axis=0) + rule.rest_offset, rule.rest_spread
     prior_of = blended_nearest_prior if rule.nearest_blend else nearest_prior
-    near = prior_of(rule, still.mean(axis=0), _rest_se(still, float(np.median(dt))))
+    near = prior_of(rule, still.mean(axis=0), _rest_se(still, dt))
     return rest, near, (rule.spread if near is None else rule.nearest_spread)
 
 
@@ -521,13 +527,11 @@ def rule_from(
     (:func:`accel_spread`); ``mode`` one of :data:`CHOICES` (or :data:`READINGS`)."""
     offsets, rates, ses, rested = [], [], [], []
     for b, s in zip(biases, streams, strict=True):
-        dt = np.diff(s.t)
-        omega, force = s.dtheta_b / dt[:, None], s.dv_b / dt[:, None]
-        rest = opening_rest(omega, force, float(np.median(dt)))
+        rest, omega, dt = rest_of(s)
         if rest:
             offsets.append(b - omega[:rest].mean(axis=0))
             rates.append(omega[:rest].mean(axis=0))
-            ses.append(_rest_se(omega[:rest], float(np.median(dt))))
+            ses.append(_rest_se(omega[:rest], dt))
             rested.append(b)
     spread = np.maximum(biases.std(axis=0, ddof=1) if len(biases) > 1 else np.full(3, 1e-3), _MIN_SPREAD)
     off = np.array(offsets) if offsets else np.zeros((1, 3))
@@ -676,6 +680,7 @@ __all__ = [
     "open_loop_deg",
     "opening_rest",
     "prior_said",
+    "rest_of",
     "rule_from",
     "shrunk",
     "with_mode",
