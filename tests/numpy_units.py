@@ -12,7 +12,7 @@ from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit
 from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation
 
-from sins.compensation import referenced
+from sins.compensation import judging, referenced
 from sins.core.series import ImuRates, NavSeries
 
 
@@ -35,9 +35,7 @@ def recordings(
             t=s.t_ref, lat=np.full(len(s.t_ref), math.radians(LAT_DEG)), lon=np.zeros(len(s.t_ref)),
             h=np.full(len(s.t_ref), HEIGHT_M), v_n=s.v_n, q_nb=s.q_nb,
         )  # fmt: skip
-        rec = referenced.from_recording(
-            ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"numpy {k}"
-        )
+        rec = judging.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"numpy {k}")
         recs.append(rec)
         biases.append(own.B0)
     return recs, unit, np.array(biases)

@@ -147,10 +147,10 @@ def test_the_guard_judges_the_velocity_change_over_the_fits_own_intervals() -> N
     the guard judged each held-back recording's velocity change over intervals of 1 s whatever the fit's,
     and the fit ended in a traceback (PSINS's vehicle MEMS cut into six parts). Now over the fit's: every
     fold judged, least squares' model written (the numpy unit's errors are the seed model's)."""
-    from sins.compensation import referenced
+    from sins.compensation import judging
 
     recs, _, _ = recordings(4)
-    short = [referenced.between(r, r.imu.t[0] + 5.0, r.imu.t[0] + 21.0) for r in recs]
+    short = [judging.between(r, r.imu.t[0] + 5.0, r.imu.t[0] + 21.0) for r in recs]
     with pytest.raises(ValueError, match="16 intervals of 1 s"):
         network_guard.velocity_spread(short[0].imu, short[0])
     outcome = fitting.fit_several("kohonen_pure", short, ["a", "b", "c"], interval_s=0.5)

@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import io
 from sins.cli import main
-from sins.compensation import referenced
+from sins.compensation import judging, referenced
 from sins.core import earth
 from sins.core.series import NavSeries
 from sins.errors import SinsInputError
@@ -585,7 +585,7 @@ def test_earth_rate_is_left_out_where_the_latitude_is_unknown(tmp_path: Path) ->
     )  # fmt: skip
     rec = io.read(dataset="unit/exact", root=tmp_path).beside_reference()
     # Earth's rate (7.3e-5 rad/s) over 10 s would leave 0.04°; the exact readings leave rounding.
-    assert referenced.open_loop_attitude(None, rec).total_deg < 1e-6
+    assert judging.open_loop_attitude(None, rec).total_deg < 1e-6
 
 
 @needs_euroc
@@ -594,7 +594,7 @@ def test_raw_open_loop_matches_source_md(name: str, published: float) -> None:
     """SOURCE.md's raw figures come from an independent scipy integration (rectangle rule, nothing
     fitted); sins integrates the trapezoid increments: the same within 1 %."""
     rec = io.read(dataset=f"euroc/{name}").beside_reference()
-    assert referenced.open_loop_attitude(None, rec).total_deg == pytest.approx(published, rel=0.01)
+    assert judging.open_loop_attitude(None, rec).total_deg == pytest.approx(published, rel=0.01)
 
 
 @pytest.fixture(scope="module")
@@ -782,7 +782,7 @@ def test_a_drive_where_the_reference_pitches_steeply_reads_its_angle() -> None:
     from sins.compensation import evaluation
 
     rec = io.read(dataset="euroc/MH_01_easy", root=EUROC.parent).beside_reference()
-    rec = referenced.between(rec, 10.0, 30.0)
+    rec = judging.between(rec, 10.0, 30.0)
     result = evaluation.evaluate_referenced(compensation.make("none"), rec, "MH_01", drive=(12.0, 28.0))
     text = "\n".join(result.lines)
     inside = (rec.reference.t >= 12.0) & (rec.reference.t <= 28.0)

@@ -247,7 +247,7 @@ def test_the_aided_rows_hold_the_filters_envelopes_and_the_budget_its_bias_terms
 def test_open_loop_runs_get_their_own_axes() -> None:
     """The raw readings' 34° and a correction's 1.2° in panels of their own: the corrected curve keeps
     its scale instead of lying flat under the raw one."""
-    from sins.compensation.referenced import OpenLoop
+    from sins.compensation.judging import OpenLoop
 
     t = np.linspace(0.0, 100.0, 101)
     raw = OpenLoop(t, np.radians(0.34 * t), np.radians(0.3 * t), np.radians(0.1 * t), np.ones(101, bool))

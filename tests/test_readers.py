@@ -646,7 +646,7 @@ def test_one_motion_as_npz_euroc_folder_and_bag_without_a_fix_is_read_and_judged
     notes did not say it. The open loop's errors agree within float32 rounding of
     the attitude written (1e-7 rad; Earth's rate over these 10 s is 7e-4 rad), and so do the
     integrations (``sins integrate``, which puts Earth's rate in at 45° N in any frame, alike)."""
-    from sins.compensation.referenced import frame_turn, open_loop
+    from sins.compensation.judging import frame_turn, open_loop
     from sins.runs import pipeline
 
     paths = _three_forms(tmp_path, _turning_unit())

@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from sins import compensation
 from sins.cli import main
-from sins.compensation import coefficients, interval_fit, referenced
+from sins.compensation import coefficients, interval_fit, judging, referenced
 from sins.core import earth
 from sins.core.series import ImuIncrements, ImuRates, NavSeries
 from sins.imu.calibration import SeedModelFit
@@ -48,7 +48,7 @@ def _recording(seed: int, **kwargs: float) -> tuple[referenced.ReferencedRecordi
         v_n=s.v_n,
         q_nb=s.q_nb,
     )
-    rec = referenced.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, "numpy unit")
+    rec = judging.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, "numpy unit")
     return rec, unit
 
 
@@ -423,11 +423,11 @@ def test_psins_drive_fitted_on_70_s_and_judged_on_the_last_30() -> None:
     from sins.io.datasets.psins_reference import psins_file_biases
 
     rec = io.read(dataset="psins_vehicle").beside_reference()
-    fitted = referenced.fit("regression", referenced.between(rec, rec.imu.t[0], 70.0))
+    fitted = referenced.fit("regression", judging.between(rec, rec.imu.t[0], 70.0))
     eb0, _ = psins_file_biases()
     assert np.all(np.abs(np.degrees(fitted.intervals.seed.B0 - eb0)) < 0.005)
-    raw = referenced.drive_errors(None, rec, 70.0, 100.0)
-    fixed = referenced.drive_errors(fitted.strategy, rec, 70.0, 100.0)
+    raw = judging.drive_errors(None, rec, 70.0, 100.0)
+    fixed = judging.drive_errors(fitted.strategy, rec, 70.0, 100.0)
     assert fixed.horizontal_final_m < 0.1 * raw.horizontal_final_m
 
 
@@ -535,9 +535,9 @@ def test_the_open_loop_is_judged_at_reference_epochs_off_the_readings_grid() -> 
     bias ``b`` about x, turned round by the turn ``ω`` about z, leaves an angle ``2 b sin(ω τ / 2) / ω``
     after ``τ`` (to first order in ``b``), on grid and off alike."""
     for offset in (0.0, 0.0045):
-        own = referenced.open_loop(None, _turning(0.0, offset))
+        own = judging.open_loop(None, _turning(0.0, offset))
         assert len(own.t) == 200 - (offset > 0) and np.max(own.total) < 1e-12, (offset, np.max(own.total))
-        biased = referenced.open_loop(None, _turning(1e-3, offset))
+        biased = judging.open_loop(None, _turning(1e-3, offset))
         start = np.ceil(offset / 0.01 - 1e-9) * 0.01  # the first reading at or after the first epoch
         want = 2e-3 * np.sin(0.3 * (biased.t - start) / 2.0) / 0.3
         np.testing.assert_allclose(biased.total, want, rtol=1e-4, atol=1e-6)  # second order: 2e-7 seen

@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from sins import compensation, imu, io
 from sins.cli import main
-from sins.compensation import evaluation, referenced, screening
+from sins.compensation import evaluation, judging, referenced, screening
 from sins.core.series import ImuRates, NavSeries
 from sins.imu import calibration
 from sins.imu import spec as imu_spec
@@ -53,7 +53,7 @@ def _beside(
         t=t_ref, lat=np.full(n, math.radians(LAT_DEG)), lon=np.zeros(n), h=np.full(n, HEIGHT_M), v_n=v_n,
         q_nb=q_nb,
     )  # fmt: skip
-    return referenced.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, source)
+    return judging.from_recording(ImuRates(t=t, omega_ib_b=gyro, f_ib_b=accel), truth, source)
 
 
 def _z_scores(fitted: referenced.Fitted, unit: object) -> np.ndarray:

@@ -28,6 +28,7 @@ from sins.cli import main
 from sins.compensation import (
     evaluation,
     interval_fit,
+    judging,
     online_bias,
     referenced,
     rule_choice,
@@ -754,7 +755,7 @@ def test_a_fit_on_several_takes_recordings_of_one_unit_each_once() -> None:
             "copy.npz: the same readings as a.npz: a fit on several recordings takes each once")  # fmt: skip
     several.check_one_unit([a, b])
     # A part of one (its middle minute): what a copy does, it does, and it is refused alike.
-    part = replace(referenced.between(a, 30.0, 90.0), source="part.npz")
+    part = replace(judging.between(a, 30.0, 90.0), source="part.npz")
     refusal(lambda: several.check_one_unit([a, b, part]),
             "part.npz: about 100% of its readings are a.npz's (a part of it): a fit on several recordings "
             "takes each reading once")  # fmt: skip

@@ -440,11 +440,11 @@ def test_free_inertial_attitude_is_the_rotation_angle(tmp_path: Path) -> None:
     mechanisation turns with the Earth (0.04° over 10 s), scipy's integration does not."""
     from scipy.spatial.transform import Rotation
 
-    from sins.compensation import referenced
+    from sins.compensation import judging
 
     nu.write(tmp_path / "w.npz", nu.recording(3))
     rec = io.read(tmp_path / "w.npz").beside_reference()
-    drive = referenced.drive_errors(None, rec, 20.0, 30.0)
+    drive = judging.drive_errors(None, rec, 20.0, 30.0)
     a = int(np.searchsorted(rec.imu.t, drive.start_s))
     b = int(np.searchsorted(rec.imu.t, drive.end_s))
     ref = rec.reference.interpolate(rec.imu.t[a : b + 1])

@@ -149,7 +149,7 @@ def scaling(strategies: list[str], rows: list[int], repeat: int) -> None:
 
 def real(strategies: list[str]) -> None:
     """Fit and judge on BROAD (05 -> 18) and on the PSINS drive (first 70 s -> last 30 s)."""
-    from sins.compensation import referenced
+    from sins.compensation import judging, referenced
     from sins.errors import SinsInputError
 
     try:
@@ -162,12 +162,12 @@ def real(strategies: list[str]) -> None:
         sys.exit(f"bench_compensation: the real recordings are not there ({exc})")
     print(f"BROAD 05: {len(fit_on.imu.t) - 1} steps; PSINS drive: {len(drive.imu.t) - 1} steps")
     start = drive.imu.t[0]
-    first = referenced.between(drive, start, start + 70.0)
+    first = judging.between(drive, start, start + 70.0)
     for name in strategies:
         wall_f, cpu_f, fitted = timed(lambda n=name: referenced.fit(n, fit_on, interval_s=1.0))
-        wall_e, cpu_e, score = timed(lambda f=fitted: referenced.open_loop_attitude(f.strategy, judge_on))
+        wall_e, cpu_e, score = timed(lambda f=fitted: judging.open_loop_attitude(f.strategy, judge_on))
         wall_p, cpu_p, on_drive = timed(lambda n=name: referenced.fit(n, first, interval_s=1.0))
-        errors = referenced.drive_errors(on_drive.strategy, drive, start + 70.0, start + 100.0)
+        errors = judging.drive_errors(on_drive.strategy, drive, start + 70.0, start + 100.0)
         print(
             f"{name:<20} BROAD fit {wall_f:6.1f} s ({cpu_f:5.1f} s CPU) + evaluate {wall_e:4.1f} s "
             f"({cpu_e:4.1f} s CPU): {score.total_deg:.2f}° on 18   PSINS fit {wall_p:6.1f} s ({cpu_p:5.1f} "

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from sins import compensation, io
-from sins.compensation import referenced
+from sins.compensation import judging
 from sins.core.series import ReferencedRecording
 from sins.imu.calibration import SeedModelFit
 from sins.unit_gap.intervals import interval_residuals
@@ -50,7 +50,7 @@ def _nothing() -> SeedModelFit:
 
 def residuals(model: compensation.Strategy | None, rec: ReferencedRecording) -> np.ndarray:
     """Per interval (k, 6): gyro rad, accelerometer m/s, of ``rec`` corrected by ``model`` (None: raw)."""
-    imu = referenced.corrected(model, rec)
+    imu = judging.corrected(model, rec)
     res = interval_residuals(dataclasses.replace(rec, imu=imu), _nothing(), 1.0)
     return np.hstack([res.residual["gyro"], res.residual["accel"]])
 

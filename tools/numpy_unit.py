@@ -33,7 +33,7 @@ import euroc_benchmark  # noqa: E402
 from numpy_referenced import HEIGHT_M, LAT_DEG, session, typical_unit  # noqa: E402
 from numpy_units import write_npz  # noqa: E402
 
-from sins.compensation import referenced  # noqa: E402
+from sins.compensation import judging  # noqa: E402
 from sins.core.series import ImuRates, NavSeries  # noqa: E402
 
 
@@ -55,7 +55,7 @@ def write_unit(folder: Path, grade: str, seed: int, count: int = 6) -> None:
             t=s.t_ref, lat=np.full(len(s.t_ref), math.radians(LAT_DEG)), lon=np.zeros(len(s.t_ref)),
             h=np.full(len(s.t_ref), HEIGHT_M), v_n=s.v_n, q_nb=s.q_nb,
         )  # fmt: skip
-        rec = referenced.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"r{k}")
+        rec = judging.from_recording(ImuRates(t=s.t, omega_ib_b=s.gyro, f_ib_b=s.accel), truth, f"r{k}")
         write_npz(folder, f"r{k}", rec)
 
 

@@ -8,13 +8,13 @@ Usage::
 
 * **BROAD** (unit B, optical motion capture): fitted on trial 05, judged on 18, and the other way round:
   the gyro integrated alone from the first optical orientation, BROAD's total / heading / inclination
-  RMSE over the movement rows (``sins.compensation.referenced.open_loop_attitude``), as fitted and with the
+  RMSE over the movement rows (``sins.compensation.judging.open_loop_attitude``), as fitted and with the
   gyro bias
   taken again from the judged trial's opening rest (what a user does with a calibration from another
   day). The time to fit on one trial and judge the other is printed beside each strategy.
 * **PSINS drive** (MEMS against the FOG-INS): fitted on the first 70 s, judged over the last 30 s: the
   corrected MEMS navigating free inertial from the FOG-INS state at 70 s (vertical held), RMS attitude and
-  velocity errors and the horizontal error at the end (``sins.compensation.referenced.drive_errors``);
+  velocity errors and the horizontal error at the end (``sins.compensation.judging.drive_errors``);
   beside the raw
   MEMS, the file's own ``eb0``/``db0`` and ``bias_only`` (the PSINS demo filter's model fitted here).
 
@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from sins import io
-from sins.compensation import Regression, referenced
+from sins.compensation import Regression, judging, referenced
 from sins.errors import SinsInputError
 from sins.imu.calibration import SeedModelFit
 from sins.io.formats import write_json
@@ -63,8 +63,8 @@ def broad(strategies: tuple[str, ...], interval_s: float) -> dict[str, Any]:
             except SinsInputError as exc:
                 row[f"{fit_on}_{judge}"] = {"error": str(exc)}
                 continue
-            row[f"{fit_on}_{judge}"] = referenced.open_loop_attitude(strategy, judge_rec).to_dict()
-            row[f"{fit_on}_{judge}_rest_bias"] = referenced.open_loop_attitude(
+            row[f"{fit_on}_{judge}"] = judging.open_loop_attitude(strategy, judge_rec).to_dict()
+            row[f"{fit_on}_{judge}_rest_bias"] = judging.open_loop_attitude(
                 strategy, judge_rec, bias_from_rest=True
             ).to_dict()
         row["seconds"] = time.perf_counter() - start
@@ -87,7 +87,7 @@ def psins(strategies: tuple[str, ...], interval_s: float) -> dict[str, Any]:
 
     rec = io.read(dataset="psins_vehicle").beside_reference()
     assert rec is not None
-    train = referenced.between(rec, rec.imu.t[0], 70.0)
+    train = judging.between(rec, rec.imu.t[0], 70.0)
     eb0, db0 = psins_file_biases()
     z, nan3 = np.zeros((3, 3)), np.full(3, np.nan)
     file_model = Regression(g_sensitivity=False).set_fit(
@@ -114,7 +114,7 @@ def psins(strategies: tuple[str, ...], interval_s: float) -> dict[str, Any]:
             out[name] = {"error": str(exc)}
             print(f"{name:<22} not fitted: {exc}")
             continue
-        d = referenced.drive_errors(strategy, rec, 70.0, 100.0)
+        d = judging.drive_errors(strategy, rec, 70.0, 100.0)
         seconds = time.perf_counter() - start
         out[name] = {**d.to_dict(), "seconds": seconds}
         att = " / ".join(f"{x:.3f}" for x in d.attitude_rms_deg)

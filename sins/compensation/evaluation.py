@@ -29,7 +29,7 @@ from sins.io.provenance import PART_SHARE
 
 if TYPE_CHECKING:
     from sins.compensation.base import Strategy
-    from sins.compensation.referenced import OpenLoop
+    from sins.compensation.judging import OpenLoop
     from sins.core.series import CalibrationData, ImuIncrements, ImuRates, ReferencedRecording
 
 #: The open-loop table's columns.
@@ -168,12 +168,12 @@ def evaluate_referenced(
     the ``last`` fraction or all; with ``drive`` (start, end s) the free-inertial drift over that window
     and with ``outage_s`` outages of each length (:mod:`sins.compensation.outages`), raw and corrected.
     ``stage(text)`` is told each step as it starts."""
-    from sins.compensation import fitted_on, referenced
+    from sins.compensation import fitted_on, judging
 
     fitted_here, share = _in_fit(strategy, fitted_on.readings_of(rec), fitted_on.marks_of(rec))
     if last:
         span = rec.imu.t[-1] - rec.imu.t[0]
-        rec = referenced.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
+        rec = judging.between(rec, rec.imu.t[-1] - last * span, rec.imu.t[-1])
     rows, attitude, runs = [], {}, {}
     variants: list[tuple[str, Strategy | None, bool]] = [
         (RAW, None, False),
@@ -184,7 +184,7 @@ def evaluate_referenced(
     for label, s, rest in variants:
         if stage is not None:
             stage(f"open loop: {label}")
-        runs[label] = referenced.open_loop(s, rec, bias_from_rest=rest)
+        runs[label] = judging.open_loop(s, rec, bias_from_rest=rest)
         r = runs[label].rmse()
         aoe = runs[label].aoe_deg()
         attitude[label] = {**r.to_dict(), "aoe_deg": aoe}
@@ -406,14 +406,14 @@ def _drive(
     stage: Callable[[str], None] | None,
 ) -> dict[str, Any]:
     """The raw and corrected units' free-inertial drift over ``window``; its table added to ``lines``."""
-    from sins.compensation import referenced
+    from sins.compensation import judging
 
     start, end = window
     out, rows = {}, []
     for label, s in ((RAW, None), (strategy.label, strategy)):
         if stage is not None:
             stage(f"free inertial: {label}")
-        d = referenced.drive_errors(s, rec, start, end)
+        d = judging.drive_errors(s, rec, start, end)
         out[label] = d.to_dict()
         figures = [*d.attitude_rms_deg, d.attitude_angle_rms_deg, *d.velocity_rms_mps]
         rows.append([label, *(f"{x:.4f}" for x in figures), f"{d.horizontal_final_m:.3f}"])
@@ -443,9 +443,9 @@ def _outages(
 ) -> list[dict[str, Any]]:
     """The raw and corrected readings' free-inertial outages of each length; their table added to
     ``lines``."""
-    from sins.compensation import outages, referenced
+    from sins.compensation import judging, outages
 
-    streams = {RAW: rec.imu, strategy.label: referenced.corrected(strategy, rec)}
+    streams = {RAW: rec.imu, strategy.label: judging.corrected(strategy, rec)}
     out, rows = [], []
     for length in lengths_s:
         figures = {}

@@ -253,12 +253,12 @@ def fit_referenced(
     """Strategy ``name`` fitted on a recording beside its reference trajectory: the seed model on
     intervals of ``interval_s``, then the strategy (the last ``validation`` of the span held back);
     ``screen``: when the reference's gross errors are set aside (:mod:`sins.compensation.screening`)."""
-    from sins.compensation import referenced, world_tilt
+    from sins.compensation import judging, referenced, world_tilt
 
     part = rec
     if validation:
         span = rec.imu.t[-1] - rec.imu.t[0]
-        part = referenced.between(rec, rec.imu.t[0], rec.imu.t[-1] - validation * span)
+        part = judging.between(rec, rec.imu.t[0], rec.imu.t[-1] - validation * span)
     # The reference levelled where tilted from gravity, estimated on what the fit reads.
     part, tilt = world_tilt.levelled(part, interval_s)
     rec = world_tilt.level(rec, tilt)

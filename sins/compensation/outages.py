@@ -3,7 +3,7 @@ when its aiding drops out for ``length_s``, from every second of the recording.
 
 From each start, every :data:`EVERY_S` from the reference's first epoch while an outage fits within it,
 the readings navigate free inertial from the reference's state there for ``length_s``
-(:func:`sins.compensation.referenced.free_inertial`: attitude, velocity and position at the reference's
+(:func:`sins.compensation.judging.free_inertial`: attitude, velocity and position at the reference's
 point, the vertical held to its height); the error is the horizontal distance from the reference's
 position at the outage's end, where a position fix would return. The figures are its RMS, median and 95th
 percentile over the outages, beside how far the reference's own positions are from its velocities'
@@ -73,7 +73,7 @@ def outages(
         naming the recording: a length that is not positive and finite, or longer than the reference;
         a reference whose positions do not follow its velocities.
     """
-    from sins.compensation import referenced
+    from sins.compensation import judging
 
     where = rec.source or "recording"
     if not (np.isfinite(length_s) and length_s > 0):
@@ -86,7 +86,7 @@ def outages(
             f"{where}: an outage of {length_s:g} s does not fit within the reference's {last - first:.3g} s"
         )
     mismatch = _check_positions(rec, starts, length_s)
-    errors = [referenced.free_inertial(imu, rec, s, s + length_s)[2].horizontal_m[-1] for s in starts]
+    errors = [judging.free_inertial(imu, rec, s, s + length_s)[2].horizontal_m[-1] for s in starts]
     return Outages(float(length_s), starts, np.asarray(errors, dtype=float), mismatch)
 
 

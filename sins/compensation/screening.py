@@ -26,7 +26,7 @@ a converter filled by interpolation (:func:`filled`, :mod:`sins.io.filled`: one 
 0.25 s or longer while the gyro's readings do not). Three 1 s gaps slerped into each of three EuRoC
 recordings cost 1-4° of judged attitude, and an error of the unit cannot look like this.
 
-What judges a model (:func:`sins.compensation.referenced.open_loop`, ``sins evaluate``) is not screened:
+What judges a model (:func:`sins.compensation.judging.open_loop`, ``sins evaluate``) is not screened:
 it judges against the reference as it is.
 """
 

@@ -6,8 +6,8 @@ B's readings (read later by the fitted time offsets, the effects' errors taken a
 the seed model inverted). B's gyro bias is then taken from B's opening rest, as a user does with a
 calibration from another day (a MEMS bias moves between recordings: 0.08 rad/s between EuRoC's); without
 such a rest it is fitted on B's intervals, and the report says so. Judged on B, open loop
-(:func:`sins.compensation.referenced.open_loop`: the corrected gyro integrated alone from B's first reference
-attitude) and free inertial over windows (:func:`sins.compensation.referenced.drive_errors`: attitude and
+(:func:`sins.compensation.judging.open_loop`: the corrected gyro integrated alone from B's first reference
+attitude) and free inertial over windows (:func:`sins.compensation.judging.drive_errors`: attitude and
 velocity).
 Random biases and output maps predict nothing of another recording; they are named and left out.
 """
@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sins.compensation import referenced
+from sins.compensation import judging
 from sins.compensation.interval_fit import fit_biases
 from sins.compensation.intervals import correct_increments, shifted
 from sins.core.series import ImuIncrements, ReferencedRecording
@@ -121,8 +121,8 @@ def judged(rec: ReferencedRecording, model: UnitModel, interval_s: float = 1.0) 
     imu = model.correct(rec.imu)
     corrected = dataclasses.replace(rec, imu=imu)
     try:
-        open_loop = referenced.open_loop(None, corrected, bias_from_rest=True)
-        rest = referenced.opening_rest(corrected)
+        open_loop = judging.open_loop(None, corrected, bias_from_rest=True)
+        rest = judging.opening_rest(corrected)
         bias = imu.dtheta_b[rest].sum(axis=0) / np.diff(imu.t)[rest].sum()
         source = "its opening rest"
     except SinsInputError:
@@ -132,7 +132,7 @@ def judged(rec: ReferencedRecording, model: UnitModel, interval_s: float = 1.0) 
     imu = ImuIncrements(t=imu.t, dtheta_b=imu.dtheta_b - bias * np.diff(imu.t)[:, None], dv_b=imu.dv_b)
     corrected = dataclasses.replace(rec, imu=imu)
     if open_loop is None:
-        open_loop = referenced.open_loop(None, corrected)
+        open_loop = judging.open_loop(None, corrected)
     rmse = open_loop.rmse()
     out: dict[str, Any] = {
         "open_loop_attitude_deg": {"total": rmse.total_deg, "heading": rmse.heading_deg,
@@ -149,7 +149,7 @@ def _windows(rec: ReferencedRecording) -> dict[str, Any]:
     att, vel = [], []
     start = t0
     while start + WINDOW_S <= t1:
-        drive = referenced.drive_errors(None, rec, start, start + WINDOW_S)
+        drive = judging.drive_errors(None, rec, start, start + WINDOW_S)
         att.append(drive.attitude_angle_rms_deg)  # the rotation angle, as the open loop's (not Euler's)
         vel.append(float(np.sqrt(np.mean(np.square(drive.velocity_rms_mps)))))
         start += WINDOW_S

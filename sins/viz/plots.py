@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from sins.characterise.analysis import ChannelResult, Characterisation
     from sins.characterise.bias import BiasEstimate
     from sins.characterise.check import ClosingCheck
-    from sins.compensation.referenced import OpenLoop
+    from sins.compensation.judging import OpenLoop
     from sins.core.series import NavSeries
     from sins.nav.metrics import NavErrors
     from sins.runs.results import AidedRun, ScenarioRun, StrategyRun
@@ -327,7 +327,7 @@ def evaluate_figure(channels: Mapping[str, Mapping[str, float]], title: str) -> 
 def open_loop_figure(runs: Mapping[str, OpenLoop], title: str) -> Figure:
     """``sins evaluate`` against a trajectory: per correction, in a panel of its own (so a correction to
     a degree stays readable below the raw readings' tens), the open-loop attitude's total, heading and
-    inclination errors against time, degrees (:func:`sins.compensation.referenced.open_loop`; blank where not
+    inclination errors against time, degrees (:func:`sins.compensation.judging.open_loop`; blank where not
     judged)."""
     fig, axes = _panels(len(runs), title)
     for ax, (name, run) in zip(axes, runs.items(), strict=True):

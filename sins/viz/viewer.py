@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from sins.characterise import Characterisation
 from sins.characterise.check import ClosingCheck
-from sins.compensation.referenced import OpenLoop
+from sins.compensation.judging import OpenLoop
 from sins.core import earth
 from sins.core.series import NavSeries
 from sins.errors import SinsInputError
@@ -526,7 +526,7 @@ def _gap_panel(report: GapReport, prefix: str, name: str) -> Any:
 
 
 def save_open_loop(runs: dict[str, OpenLoop], path: str | os.PathLike[str], *, summary: str = "") -> Path:
-    """Open-loop attitude errors (:func:`sins.compensation.referenced.open_loop`) of several corrections in
+    """Open-loop attitude errors (:func:`sins.compensation.judging.open_loop`) of several corrections in
     a ``.rrd``
     file: per correction, its total, heading and inclination error over time, degrees (NaN outside the
     judged rows, so that the rests the benchmark does not count show as gaps)."""
