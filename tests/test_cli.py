@@ -394,7 +394,8 @@ def test_usage_errors_are_argparse_exit_2(capsys: pytest.CaptureFixture[str]) ->
     # An output file named as a folder (argparse's Path drops the slash: model.json was written).
     for argv in (["fit", "a.npz", "--strategy", "regression", "--out", "m.json/"],
                  ["evaluate", "m.json", "a.npz", "--json=e.json/"],
-                 ["simulate", "static", "--imu", "i.csv/", "--truth", "t.csv"]):  # fmt: skip
+                 ["simulate", "static", "--imu", "i.csv/", "--truth", "t.csv"],
+                 ["check", "quality", "--update-baseline", "--baseline", "b.json/"]):  # fmt: skip
         with pytest.raises(SystemExit) as info:
             main(argv)
         err = capsys.readouterr().err

@@ -19,6 +19,7 @@ import sys
 import warnings
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -1135,3 +1136,51 @@ def test_a_commands_own_stream_is_not_an_output(tmp_path: Path) -> None:
                 pass
         finally:
             os.close(1000)
+
+
+def test_a_rename_that_fails_at_the_end_leaves_every_output_as_it_was(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The outputs' renames come last (:mod:`sins.core.deferred`); where one of them fails, those renamed
+    before it are put back and no temporary file is left. Before, a folder made at the second output's
+    name while the command ran left the first output replaced and the second's temporary file behind
+    (``sins simulate --imu a.csv --truth b.csv``: "b.csv: Is a directory", a.csv new)."""
+    from sins.core import deferred
+    from sins.io.atomic import atomic_text
+
+    a, b, c = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "c.csv"
+    a.write_text("old a\n")
+    discarded: list[Path] = []
+    with pytest.raises(IsADirectoryError, match=r"b\.csv"), deferred.all_or_nothing(discarded):
+        for path in (a, b):
+            with atomic_text(path) as fh:
+                fh.write("new\n")
+        b.mkdir()  # made by someone else after the write, before the renames
+    assert a.read_text() == "old a\n" and discarded == [a, b]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]
+    # A rename that fails after one has landed (the one check above cannot see it: a disk gone, say):
+    # the first put back, a new third one removed, the kept copies gone.
+    b.rmdir()
+    b.write_text("old b\n")
+    real = os.replace
+
+    def failing(src: Any, dst: Any) -> None:
+        if Path(dst) == b and Path(src).name.startswith(".b.csv."):
+            raise PermissionError(13, "Permission denied")
+        real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(PermissionError, match=r"b\.csv"), deferred.all_or_nothing():
+        for path in (a, c, b):
+            with atomic_text(path) as fh:
+                fh.write("new\n")
+    monkeypatch.setattr(os, "replace", real)
+    assert a.read_text() == "old a\n" and b.read_text() == "old b\n" and not c.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]
+    # All land where all can: the kept second names are removed.
+    with deferred.all_or_nothing():
+        for path in (a, c, b):
+            with atomic_text(path) as fh:
+                fh.write("new\n")
+    assert [p.read_text() for p in (a, b, c)] == ["new\n"] * 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv", "c.csv"]

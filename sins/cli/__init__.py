@@ -143,8 +143,9 @@ def _negatives_joined(parser: argparse.ArgumentParser, argv: list[str]) -> list[
 
 
 #: The options that name a file sins writes (a campaign's ``--out DIR`` names a folder: not among them;
-#: ``--imu`` and ``--truth`` are outputs of ``simulate`` alone).
-_FILE_OUTPUTS = ("--out", "--json", "--plot", "--rerun")
+#: ``--imu`` and ``--truth`` are outputs of ``simulate`` alone; ``check``'s ``--baseline`` is read, or
+#: written with ``--update-baseline``: a folder's name is neither).
+_FILE_OUTPUTS = ("--out", "--json", "--plot", "--rerun", "--baseline")
 
 
 def _check_file_names(command: argparse.ArgumentParser, argv: list[str]) -> None:

@@ -20,9 +20,9 @@ could hold once read (:data:`READ_FACTOR` times its size) is refused too.
   socket or a block device is refused; a symbolic link is followed to its target (which is written;
   the link stays);
 * not an input: an output that is the same file as any input of the command (same device and inode,
-  or the same path once links are resolved: a hard link, ``./x`` beside ``x``), a file inside an input
-  folder, or the same file as another output of the command, is refused. sins never writes over
-  what it reads;
+  or the same path once links are resolved: a hard link, ``./x`` beside ``x``), a file that exists
+  inside an input folder, or the same file as another output of the command, is refused (a new file
+  in an input folder replaces nothing, and is written). sins never writes over what it reads;
 * not a campaign's: a file in a campaign's results folder (one holding a ``campaign.json`` of
   :data:`CAMPAIGN_FORMAT`, or a folder of it) is written by that campaign alone (``sins campaign --out
   DIR``, which names it among its folders): a report or a table of another command there had replaced
