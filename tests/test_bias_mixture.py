@@ -1,4 +1,4 @@
-"""The online bias estimate from a mixture prior (sins.compensation.online_bias, unit_bias.mixture_width):
+"""The online bias estimate from a mixture prior (sins.compensation.online_bias, bias_spread.mixture_width):
 its posterior against the linear-Gaussian formulas written independently (covariance form, scipy's
 multivariate normal for the evidence), its behaviour on numpy flights whose bias lies near a training
 recording's, and how a fit chooses it on held-back recordings (which is what keeps it off a unit whose
@@ -13,7 +13,7 @@ from numpy_units import recordings
 from scipy.stats import multivariate_normal
 from test_several import _bounded_flight
 
-from sins.compensation import online_bias, referenced, unit_bias
+from sins.compensation import bias_spread, online_bias, referenced, unit_bias
 
 BIAS = np.array([0.02, -0.01, 0.005])
 
@@ -57,7 +57,7 @@ def _tracks(seed: int, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     pooled = unit_bias.BiasRule(mode="online", prior=prior, spread=spread)
     mixed = unit_bias.BiasRule(
         mode="online", prior=prior, spread=spread, components=biases,
-        component_width=unit_bias.mixture_width(biases, spread), mixture=True,
+        component_width=bias_spread.mixture_width(biases, spread), mixture=True,
     )  # fmt: skip
     return unit_bias.bias_track(pooled, imu), unit_bias.bias_track(mixed, imu), imu.t[:-1]
 
@@ -93,9 +93,9 @@ def test_the_width_is_the_clusters_where_the_biases_cluster() -> None:
     in three axes peaks at d/√3); and the width is the maximum of the leave-one-out likelihood written
     with scipy's multivariate normal."""
     spread = DAYS.std(axis=0, ddof=1)
-    assert np.all(unit_bias.mixture_width(DAYS, spread) < 0.2 * spread)  # measured 0.117
+    assert np.all(bias_spread.mixture_width(DAYS, spread) < 0.2 * spread)  # measured 0.117
     apart = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]) * 1e-3
-    assert np.all(unit_bias.mixture_width(apart, np.full(3, 1e-3)) > 0.5e-3)  # measured 0.66e-3
+    assert np.all(bias_spread.mixture_width(apart, np.full(3, 1e-3)) > 0.5e-3)  # measured 0.66e-3
 
     def loo(share: float) -> float:
         total = 0.0
@@ -107,7 +107,7 @@ def test_the_width_is_the_clusters_where_the_biases_cluster() -> None:
 
     shares = 2.0 ** np.linspace(-6.0, 0.0, 61)
     best = shares[int(np.argmax([loo(s) for s in shares]))]
-    np.testing.assert_allclose(unit_bias.mixture_width(DAYS, spread), best * spread, rtol=1e-12)
+    np.testing.assert_allclose(bias_spread.mixture_width(DAYS, spread), best * spread, rtol=1e-12)
 
 
 def test_the_mixture_is_chosen_on_held_back_recordings_only_where_they_can_judge_it() -> None:

@@ -88,7 +88,7 @@ def test_a_unit_fitted_on_recordings_that_open_at_rest_says_what_a_moving_opener
     back whole they chose ``rest``, whose branch for a recording that opens moving (the online estimate
     from the pooled prior) none of them judged. From their first motion it leaves V1_01 worse than its
     readings (36.98° against 35.30°), and ``sins fit`` says so. Judged, MH_03, which opens moving, goes
-    from 22.01° to 9.06° (under the pooled prior alone, as sins took it before: 22.95°), and V2_01, which
+    from 22.01° to 8.75° (under the pooled prior alone, as sins took it before: 22.95°), and V2_01, which
     opens with a rest, from 23.61° to 9.78°. The raw figure from the first motion is checked against
     scipy's ``Rotation`` integrating the readings."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))

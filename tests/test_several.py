@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 from sins import compensation, io
 from sins.cli import main
 from sins.compensation import (
+    bias_spread,
     evaluation,
     interval_fit,
     judging,
@@ -260,22 +261,22 @@ def test_nearest_weighs_the_matched_days_bias_against_the_rests_own_reading() ->
 
 def test_a_mean_bias_the_training_recordings_do_not_determine_is_left_to_the_readings() -> None:
     """A new recording's prior keeps of the model's mean gyro bias what the training recordings determine
-    (``unit_bias.shrunk``): all of it but a sliver where they agree on a bias far from zero (EuRoC's six:
+    (``bias_spread.shrunk``): all of it but a sliver where they agree on a bias far from zero (EuRoC's six:
     2-80 mrad/s, 2 mrad/s apart), none where each power-up draws its own about a mean that Student's t
     of ``n − 1`` degrees of freedom cannot tell from zero (a walkthrough's BROAD unit with 0.05-0.5 °/s
     added to each of three parts took a recording whose own bias was small from 3.7° to 17.0°); and
     between, the share that least squares' expected error over a new draw keeps, m² / (m² + s²/n)."""
-    euroc = unit_bias.shrunk(np.array([-2.35e-3, 21.9e-3, 78.6e-3]), np.array([0.59e-3, 1.9e-3, 2.3e-3]), 6)
+    euroc = bias_spread.shrunk(np.array([-2.35e-3, 21.9e-3, 78.6e-3]), np.array([0.59e-3, 1.9e-3, 2.3e-3]), 6)
     assert np.all(np.abs(euroc) < 0.011 * np.abs([2.35e-3, 21.9e-3, 78.6e-3])), euroc
     # Three draws about zero: 1148, -448, -1503 °/h means with spreads of 1076-1292 °/h (the walkthrough's).
     mean, spread = (
         np.radians(np.array([1148.0, -448.0, -1503.0]) / 3600),
         np.radians(np.array([1076.0, 1292.0, 1142.0]) / 3600),
     )
-    np.testing.assert_array_equal(unit_bias.shrunk(mean, spread, 3), mean)  # t(2) at 97.5 %: 4.30 SE
+    np.testing.assert_array_equal(bias_spread.shrunk(mean, spread, 3), mean)  # t(2) at 97.5 %: 4.30 SE
     # Determined, but not by much: what least squares' expected error keeps (3.4 SE with six, t(5) 2.57).
     m, s = 2.0e-3, np.sqrt(6) * 2.0e-3 / 3.4
-    kept = 1.0 - unit_bias.shrunk(np.array([m]), np.array([s]), 6)[0] / m
+    kept = 1.0 - bias_spread.shrunk(np.array([m]), np.array([s]), 6)[0] / m
     assert kept == pytest.approx(m**2 / (m**2 + s**2 / 6))
 
 

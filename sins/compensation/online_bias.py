@@ -39,6 +39,7 @@ def estimate(
     sigma_v_mps: float,
     sigma_accel_mps2: float,
     components: Array | None = None,
+    across: float = 1.0,
 ) -> Array:
     """The bias (n, 3) rad/s of each step of ``imu`` (corrected increments): ``track`` before the first
     update, then ``prior`` plus the estimate every :data:`UPDATE_S` from the readings before it, its
@@ -46,7 +47,9 @@ def estimate(
     the accelerometer's bias held to ``sigma_accel_mps2`` (module docstring). With ``components`` (k, 3),
     the bias's prior is their mixture instead, each of width ``sigma``, equally likely beforehand: each
     one's estimate is made as above and they are weighed by their evidence so far
-    (:func:`_mixture`)."""
+    (:func:`_mixture`). ``across`` ≥ 1 widens the bias change's prior across gravity alone (the body's
+    up at the start, as levelling finds it): ``sigma`` along it, ``across`` times wider in every direction
+    orthogonal to it in ``sigma``'s units (:func:`_bias_precision`)."""
     dt = np.diff(imu.t)
     step = max(1, round(UPDATE_S / float(np.median(dt))))
     at = np.arange(step, len(imu.t), step)
@@ -69,6 +72,8 @@ def estimate(
     )
     # Running sums of the normal equations: the estimate at each update from the rows before it.
     lam0 = prior_rows.T @ prior_rows  # the unknowns' prior precision
+    if across != 1.0:
+        lam0[4:7, 4:7] = _bias_precision(np.asarray(sigma, dtype=float), c0[2], across)
     grams = lam0 + np.cumsum(np.einsum("mra,mrb->mab", design, design), axis=0)
     rhss = np.cumsum(np.einsum("mra,mr->ma", design, target), axis=0)
     if components is None:
@@ -80,6 +85,19 @@ def estimate(
     ends = np.r_[at[1:], len(out)]
     out[at[0] :] = np.repeat(prior + change, ends - at, axis=0)
     return out
+
+
+def _bias_precision(sigma: Array, up_b: Array, across: float) -> Array:
+    """The bias change's prior precision (3, 3) for covariance ``D (k² I − (k² − 1) ũũᵀ) D``, ``D =
+    diag(sigma)``, ``ũ = D up_b / |D up_b|``, ``k = across``: the variance along ``up_b`` (the body's up)
+    that ``sigma`` gives it, ``k²`` times more across it. Along gravity the bias turns only the heading,
+    which the velocity barely sees, so a wider prior there lets it wander; across it the velocity pins
+    it down."""
+    d_inv = np.diag(1.0 / sigma)
+    u = sigma * up_b
+    u = u / np.linalg.norm(u)
+    inner = np.eye(3) / across**2 + (1.0 - 1.0 / across**2) * np.outer(u, u)
+    return np.asarray(d_inv @ inner @ d_inv, dtype=float)
 
 
 def _mixture(grams: Array, rhss: Array, squares: Array, lam0: Array, centres: Array) -> Array:

@@ -65,6 +65,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sins.compensation import online_bias
+from sins.compensation.bias_spread import (
+    MIN_SPREAD,
+    accel_spread,
+    mixture_width,
+    predictive_bound,
+    shrunk,
+)
 from sins.core.series import ImuIncrements, ImuRates, ReferencedRecording
 from sins.nav import attitude
 
@@ -83,8 +90,6 @@ CHOICES = (*MODES, *(m + MIXTURE for m in ONLINE_MODES))
 #: The training recordings the online estimate's mixture prior needs (each one's bias predicted from at
 #: least two others when its width is chosen); with fewer, the pooled prior's Gaussian.
 MIXTURE_MIN = 3
-#: The widths :func:`mixture_width` tries, as shares of the training recordings' spread.
-_WIDTH_SHARES = 2.0 ** np.linspace(-6.0, 0.0, 61)
 #: The rule where every mode was worse than the readings on a held-back recording: the gyro as read.
 READINGS = "readings"
 #: Window of the rest detection, s.
@@ -124,7 +129,11 @@ class BiasRule:
     fewer than :data:`MIXTURE_MIN` of them, the pooled prior's Gaussian); ``moving_held_back_deg``: the
     open-loop attitude of the rule (``rule``) and of the raw readings (``raw``) on each held-back
     recording from its first motion (its opening rest cut away), deg: what the rule does with a new
-    recording that opens moving, said by ``sins fit`` (reported, not used).
+    recording that opens moving, said by ``sins fit`` (reported, not used); ``online_across``: how many
+    times wider than ``spread`` the online estimate's prior is across gravity where it starts from the
+    pooled prior's Gaussian (:func:`predictive_bound` of the training recordings: a few recordings' spread is
+    often far below the unit's; along gravity the velocity barely sees the bias, so it keeps ``spread``);
+    1 in files written before it.
     """
 
     mode: str = "pooled"
@@ -145,6 +154,7 @@ class BiasRule:
     held_back_deg: dict[str, float] = field(default_factory=dict)
     held_back_each_deg: dict[str, list[float]] = field(default_factory=dict)
     moving_held_back_deg: dict[str, list[float]] = field(default_factory=dict)
+    online_across: float = 1.0
 
     def __post_init__(self) -> None:
         if self.mode not in (*MODES, READINGS):
@@ -173,6 +183,8 @@ class BiasRule:
             raise ValueError("bias rule: component_width must be positive")
         if not (0.0 < self.sigma_v_mps < 1e3 and 0.0 < self.sigma_accel_mps2 < 1e3):
             raise ValueError("bias rule: sigma_v_mps and sigma_accel_mps2 must be in (0, 1000)")
+        if not 1.0 <= self.online_across < 1e3:
+            raise ValueError("bias rule online_across: expected a number in [1, 1000)")
         if np.any(self.spread <= 0.0) or np.any(self.rest_spread <= 0.0):
             raise ValueError("bias rule: spreads must be positive")
         for key in ("nearest_blend", "mixture"):
@@ -192,6 +204,7 @@ class BiasRule:
             "held_back_deg": dict(self.held_back_deg),
             "held_back_each_deg": {k: list(v) for k, v in self.held_back_each_deg.items()},
             "moving_held_back_deg": {k: list(v) for k, v in self.moving_held_back_deg.items()},
+            "online_across": self.online_across,
         }  # fmt: skip
 
     @property
@@ -297,6 +310,7 @@ def bias_track(rule: BiasRule, imu: ImuIncrements) -> Array:
         track = online_bias.estimate(
             imu, track, prior, rule.component_width if mixed else sigma, rule.sigma_v_mps,
             rule.sigma_accel_mps2, rule.components if mixed else None,
+            rule.online_across if own is None and not mixed else 1.0,
         )  # fmt: skip
     if rest:  # while the unit rests, its own readings so far tell its bias (the rest's, not the flight's)
         track[:rest] = _resting(rule, imu, rest)
@@ -317,7 +331,7 @@ def _resting(rule: BiasRule, imu: ImuIncrements, rest: int) -> Array:
     count = np.arange(first, rest)[:, None]  # step k's estimate takes the steps before it
     mean = np.cumsum(omega, axis=0)[first - 1 : rest - 1] / count
     square = np.cumsum(omega**2, axis=0)[first - 1 : rest - 1] / count
-    se2 = np.maximum(square - mean**2, _MIN_SPREAD**2) / count
+    se2 = np.maximum(square - mean**2, MIN_SPREAD**2) / count
     w_prior, w_rest = 1.0 / rule.spread**2, 1.0 / se2
     out[first:] = (w_prior * rule.prior + w_rest * mean) / (w_prior + w_rest)
     return out
@@ -459,9 +473,9 @@ def _rest_se(omega: Array, dt: float) -> Array:
     k = len(omega) // n
     white = omega.std(axis=0) / np.sqrt(len(omega))
     if k < 2:
-        return np.maximum(white, _MIN_SPREAD)
+        return np.maximum(white, MIN_SPREAD)
     means = omega[: k * n].reshape(k, n, 3).mean(axis=1)
-    return np.maximum(np.maximum(means.std(axis=0, ddof=1) / np.sqrt(k), white), _MIN_SPREAD)
+    return np.maximum(np.maximum(means.std(axis=0, ddof=1) / np.sqrt(k), white), MIN_SPREAD)
 
 
 def corrected(rule: BiasRule, imu: ImuIncrements) -> ImuIncrements:
@@ -521,7 +535,7 @@ def rule_from(
     model's corrected readings) still hold, fitted against its reference. The prior is their mean,
     less what of ``model_bias`` (the gyro bias the model takes away, rad/s, the training recordings'
     mean bias) they do not determine (:func:`shrunk`); the spread their standard deviation (at least
-    :data:`_MIN_SPREAD`); the rest offset the mean of bias less opening-rest rate over the recordings
+    :data:`MIN_SPREAD`); the rest offset the mean of bias less opening-rest rate over the recordings
     that open with a rest; with ``accel_biases`` (r, 3), each recording's own accelerometer bias (m/s²),
     the online estimate's prior on the accelerometer's bias is their spread's upper bound
     (:func:`accel_spread`); ``mode`` one of :data:`CHOICES` (or :data:`READINGS`)."""
@@ -533,9 +547,9 @@ def rule_from(
             rates.append(omega[:rest].mean(axis=0))
             ses.append(_rest_se(omega[:rest], dt))
             rested.append(b)
-    spread = np.maximum(biases.std(axis=0, ddof=1) if len(biases) > 1 else np.full(3, 1e-3), _MIN_SPREAD)
+    spread = np.maximum(biases.std(axis=0, ddof=1) if len(biases) > 1 else np.full(3, 1e-3), MIN_SPREAD)
     off = np.array(offsets) if offsets else np.zeros((1, 3))
-    rest_spread = np.maximum(off.std(axis=0, ddof=1), _MIN_SPREAD) if len(off) > 1 else spread
+    rest_spread = np.maximum(off.std(axis=0, ddof=1), MIN_SPREAD) if len(off) > 1 else spread
     prior = biases.mean(axis=0)
     if model_bias is not None and len(biases) > 1:
         prior = prior - shrunk(np.asarray(model_bias, dtype=float), spread, len(biases))
@@ -547,33 +561,13 @@ def rule_from(
     )  # fmt: skip
     if accel_biases is not None and len(accel_biases) > 1:
         rule = replace(rule, sigma_accel_mps2=accel_spread(accel_biases))
+    if len(biases) >= MIXTURE_MIN:  # two recordings' spread is one difference
+        rule = replace(rule, online_across=predictive_bound(len(biases)))
     if len(biases) >= MIXTURE_MIN:
         shifted = biases - biases.mean(axis=0) + prior
         rule = replace(rule, components=shifted, component_width=mixture_width(biases, spread))
     rule = with_mode(rule, mode)
     return replace(rule, nearest_spread=_nearest_spread(rule, spread), nearest_blend=True)
-
-
-#: The least accelerometer-bias prior the online estimate takes, m/s² (0.1 mg): recordings whose biases
-#: happen to agree say little more.
-_MIN_ACCEL_SPREAD = 1e-3
-
-
-def accel_spread(accel_biases: Array) -> float:
-    """The online estimate's prior on a new recording's accelerometer bias, m/s²: the training
-    recordings' own biases (r, 3) about their mean (which the model takes away), their standard deviation
-    as the root mean square over the axes, raised to its upper 95 % bound (chi-squared of ``r − 1``
-    degrees of freedom: × 2.1 for six recordings, × 4.4 for three, × 16 for two) and at least
-    :data:`_MIN_ACCEL_SPREAD`. A few recordings say little of a spread, and a prior held too tight makes
-    the gyro's bias take up what the accelerometer's does. A fixed 0.2 m/s² had let the estimate trade
-    the gyro's bias for an accelerometer bias ten times any EuRoC recording's (0.011-0.018 m/s² about
-    their mean)."""
-    from scipy.stats import chi2
-
-    biases = np.asarray(accel_biases, dtype=float)
-    dof = len(biases) - 1
-    spread = float(np.sqrt(np.mean(biases.std(axis=0, ddof=1) ** 2)))
-    return float(max(spread * np.sqrt(dof / chi2.ppf(1.0 - DETERMINED, dof)), _MIN_ACCEL_SPREAD))
 
 
 def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
@@ -586,59 +580,7 @@ def _nearest_spread(rule: BiasRule, pooled: Array) -> Array:
     for i in range(len(rule.rest_rates)):
         near = nearest_prior(rule, rule.rest_rates[i], rule.rest_rates_se[i], leave_out=i)
         misses.append(rule.rest_biases[i] - (rule.prior if near is None else near))
-    return np.asarray(np.maximum(np.sqrt(np.mean(np.square(misses), axis=0)), _MIN_SPREAD), dtype=float)
-
-
-def mixture_width(biases: Array, spread: Array) -> Array:
-    """The width (3,) rad/s of each training recording's component in the online estimate's mixture
-    prior: ``h × spread``, ``h`` in (0, 1] the share that best predicts each recording's bias (``biases``
-    (r, 3)) from the mixture of the others' (leave one out, the log-likelihood summed over the
-    recordings): where the recordings' biases fall in clusters (days, power-ups) a new one's is likely
-    near one of them and the width is the clusters'; where each is a draw of its own, of the order of
-    their distances apart (at most the spread)."""
-    from scipy.special import logsumexp
-
-    z = np.asarray(biases, dtype=float) / spread  # each axis in its spread
-    d2 = ((z[:, None, :] - z[None, :, :]) ** 2).sum(axis=2)
-    others = ~np.eye(len(z), dtype=bool)
-
-    def score(h: float) -> float:
-        logs = np.where(others, -0.5 * d2 / h**2 - 3.0 * np.log(h), -np.inf)
-        return float(np.sum(logsumexp(logs, axis=1)))
-
-    best = max(_WIDTH_SHARES, key=score)
-    return np.asarray(np.maximum(best * spread, _MIN_SPREAD), dtype=float)
-
-
-def shrunk(mean_bias: Array, spread: Array, count: int) -> Array:
-    """What of a model's gyro bias ``mean_bias`` (rad/s, the mean of ``count`` training recordings'
-    biases, which differ by ``spread``) a new recording's prior leaves out, per axis. A new power-up's
-    bias is the unit's mean give or take ``spread``, and the mean of ``count`` is itself uncertain by
-    ``spread / √count``. Where the mean is not determined (Student's t of ``count − 1`` degrees of freedom,
-    the spread being estimated from the same recordings, not beyond its two-sided :data:`DETERMINED`
-    quantile: 4.30 standard errors for three recordings, 2.57 for six) all of it is left out: each
-    power-up draws its own bias about a mean the recordings cannot tell from zero, and the readings' own
-    bias stands (which the online estimate may still correct). Elsewhere the prior keeps
-    ``λ = m² / (m² + spread² / count)`` of it, what minimises a new recording's expected squared error with
-    ``m`` the mean itself (plug-in shrinkage, as empirical Bayes does): EuRoC's six recordings agree on
-    biases of 2-80 mrad/s two mrad/s apart, and keep all but 1e-4 to 1e-2 of them. A walkthrough's unit
-    (BROAD's unit B with 0.05-0.5 °/s added to each of three parts) had the mean of three such draws take
-    a recording whose bias happened to be small from 3.7° to 17.0° of open-loop attitude; now 2.2°."""
-    from scipy.stats import t as student
-
-    m2, uncertain = mean_bias**2, spread**2 / max(count, 1)
-    keep = m2 / np.maximum(m2 + uncertain, 1e-300)
-    critical = float(student.ppf(0.5 + DETERMINED / 2.0, max(count - 1, 1)))
-    keep = np.where(m2 > critical**2 * uncertain, keep, 0.0)
-    return np.asarray(mean_bias * (1.0 - keep), dtype=float)
-
-
-#: The confidence at which the training recordings' mean bias is taken as the unit's (two-sided).
-DETERMINED = 0.95
-
-
-#: The least spread a rule takes, rad/s (0.2 °/h): two recordings that happen to agree say little more.
-_MIN_SPREAD = 1e-6
+    return np.asarray(np.maximum(np.sqrt(np.mean(np.square(misses), axis=0)), MIN_SPREAD), dtype=float)
 
 
 def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
@@ -655,7 +597,6 @@ def open_loop_deg(readings: ImuIncrements, rec: ReferencedRecording) -> float:
 
 __all__ = [
     "CHOICES",
-    "DETERMINED",
     "FROM_REST",
     "MEASURED_RESTS",
     "MIN_REST_S",
@@ -669,19 +610,16 @@ __all__ = [
     "REST_MAX_TILT_DEG",
     "REST_WINDOW_S",
     "BiasRule",
-    "accel_spread",
     "applied",
     "bias_track",
     "blended_nearest_prior",
     "corrected",
     "corrected_any",
-    "mixture_width",
     "nearest_prior",
     "open_loop_deg",
     "opening_rest",
     "prior_said",
     "rest_of",
     "rule_from",
-    "shrunk",
     "with_mode",
 ]
