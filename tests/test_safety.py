@@ -1184,3 +1184,27 @@ def test_a_rename_that_fails_at_the_end_leaves_every_output_as_it_was(
                 fh.write("new\n")
     assert [p.read_text() for p in (a, b, c)] == ["new\n"] * 3
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv", "c.csv"]
+
+
+def test_a_command_stopped_before_it_wrote_an_output_names_that_one_among_those_kept(tmp_path: Path) -> None:
+    """An interrupt while the second of two outputs was being written: both are kept as they were, and
+    the message named the first alone ("none of its outputs written (a.csv: not replaced)"); the outputs
+    the command declared before its work (:func:`sins.io.paths.check_outputs`) that exist are named too,
+    a new one that was never begun is not (it replaces nothing)."""
+    from sins.core import deferred
+    from sins.io.atomic import atomic_text
+    from sins.io.paths import check_outputs
+
+    a, b, c = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "c.json"
+    a.write_text("old a\n")
+    b.write_text("old b\n")
+    discarded: list[Path] = []
+    with pytest.raises(KeyboardInterrupt), deferred.all_or_nothing(discarded):
+        check_outputs({"--imu": a, "--truth": b, "--json": c})
+        with atomic_text(a) as fh:
+            fh.write("new\n")
+        with atomic_text(b) as fh:
+            fh.write("half")
+            raise KeyboardInterrupt
+    assert discarded == [a, b] and a.read_text() == "old a\n" and b.read_text() == "old b\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]

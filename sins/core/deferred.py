@@ -20,6 +20,8 @@ from pathlib import Path
 
 #: The renames deferred to the end of an :func:`all_or_nothing` block (temporary file, target), or None.
 _PENDING: ContextVar[list[tuple[Path, Path]] | None] = ContextVar("sins_pending_renames", default=None)
+#: The outputs the block's command said it will write (:func:`declare`), or None outside a block.
+_DECLARED: ContextVar[list[Path] | None] = ContextVar("sins_declared_outputs", default=None)
 
 
 @contextlib.contextmanager
@@ -31,23 +33,34 @@ def all_or_nothing(discarded: list[Path] | None = None) -> Iterator[None]:
     end fails (:func:`_rename`). Each temporary file is then removed, and the targets it would have
     replaced are added to ``discarded``, for the message."""
     pending: list[tuple[Path, Path]] = []
-    token = _PENDING.set(pending)
+    declared: list[Path] = []
+    token, said = _PENDING.set(pending), _DECLARED.set(declared)
     try:
         yield
     except BaseException:
-        for tmp, path in pending:
-            tmp.unlink(missing_ok=True)
-            if discarded is not None:
-                discarded.append(path)
+        _remove(tmp for tmp, _ in pending)
+        if discarded is not None:  # those written, then those it had not come to that exist
+            discarded.extend(path for _, path in pending)
+            discarded.extend(p for p in declared if p.is_file() and p not in discarded)
         raise
     finally:
         _PENDING.reset(token)
+        _DECLARED.reset(said)
     try:
         _rename(pending)
     except OSError:
         if discarded is not None:
             discarded.extend(path for _, path in pending)
         raise
+
+
+def declare(paths: Iterable[Path]) -> None:
+    """The files the current block's command will write (their targets, links followed), said before its
+    work: where it fails or is interrupted before writing one of them, the message names it among those
+    not replaced too. Outside a block, nothing to do."""
+    found = _DECLARED.get()
+    if found is not None:
+        found.extend(p for p in paths if p not in found)
 
 
 def land() -> None:
@@ -123,4 +136,4 @@ def pending() -> list[tuple[Path, Path]] | None:
     return _PENDING.get()
 
 
-__all__ = ["all_or_nothing", "land", "pending"]
+__all__ = ["all_or_nothing", "declare", "land", "pending"]

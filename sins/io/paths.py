@@ -38,6 +38,7 @@ import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from sins.core import deferred
 from sins.errors import SinsInputError
 from sins.io.limits import available_memory, format_size
 
@@ -467,6 +468,7 @@ def check_outputs(
             if os.path.isfile(real):
                 replaceable(Path(real), f"{flag} {path}", kind)
             check_named(path, kind, flag)
+    deferred.declare(target(p) for p in files.values() if not writes_in_place(p))
     for flag, path in dirs.items():
         real = os.path.realpath(path)
         for source, _, source_real in read:
