@@ -66,11 +66,14 @@ def declare(paths: Iterable[Path]) -> None:
 def land() -> None:
     """Rename the current block's outputs written so far now, not at its end: for a command that then
     waits until it is interrupted (``sins run --serve``), whose outputs, said to be written, the interrupt
-    had removed. Outside a block, nothing to do."""
-    found = _PENDING.get()
+    had removed; an interrupt after it names none of them as not written. Outside a block, nothing to
+    do."""
+    found, declared = _PENDING.get(), _DECLARED.get()
     if found:
         _rename(found)
         found.clear()
+    if declared:
+        declared.clear()
 
 
 def _rename(pending: list[tuple[Path, Path]]) -> None:
